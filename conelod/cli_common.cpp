@@ -1,0 +1,128 @@
+// ConeLOD CLI — shared helpers (see cli_common.h).
+#include "cli_common.h"
+
+#include <cmath>
+#include <cstdlib>
+
+namespace conelod {
+namespace cli {
+
+Args::Args(int argc, char** argv, const std::vector<std::string>& valueOptions,
+           const std::vector<std::string>& flagOptions) {
+  auto contains = [](const std::vector<std::string>& v, const std::string& s) {
+    for (const auto& x : v)
+      if (x == s) return true;
+    return false;
+  };
+  for (int i = 0; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a.size() > 1 && a[0] == '-' && !(a.size() > 1 && (std::isdigit((unsigned char)a[1]) || a[1] == '.'))) {
+      if (contains(flagOptions, a)) {
+        values_[a] = "1";
+      } else if (contains(valueOptions, a)) {
+        if (i + 1 >= argc) { error_ = "option " + a + " needs a value"; return; }
+        values_[a] = argv[++i];
+      } else {
+        error_ = "unknown option " + a;
+        return;
+      }
+    } else {
+      positional_.push_back(a);
+    }
+  }
+}
+
+std::string Args::str(const std::string& name, const std::string& def) const {
+  auto it = values_.find(name);
+  return it == values_.end() ? def : it->second;
+}
+
+double Args::num(const std::string& name, double def) {
+  auto it = values_.find(name);
+  if (it == values_.end()) return def;
+  char* end = nullptr;
+  const double v = std::strtod(it->second.c_str(), &end);
+  if (end == it->second.c_str() || *end != '\0' || !std::isfinite(v)) {
+    if (error_.empty()) error_ = "option " + name + " expects a number, got '" + it->second + "'";
+    return def;
+  }
+  return v;
+}
+
+int Args::integer(const std::string& name, int def) {
+  auto it = values_.find(name);
+  if (it == values_.end()) return def;
+  char* end = nullptr;
+  const long v = std::strtol(it->second.c_str(), &end, 10);
+  if (end == it->second.c_str() || *end != '\0' || v < -2147483647L || v > 2147483647L) {
+    if (error_.empty()) error_ = "option " + name + " expects an integer, got '" + it->second + "'";
+    return def;
+  }
+  return int(v);
+}
+
+void Json::separator() {
+  if (afterKey_) { afterKey_ = false; return; }
+  if (!first_.back()) out_ += ",";
+  first_.back() = false;
+}
+
+Json& Json::key(const std::string& k) {
+  separator();
+  out_ += "\"" + k + "\":";
+  afterKey_ = true;
+  return *this;
+}
+
+Json& Json::value(double v) {
+  separator();
+  if (!std::isfinite(v)) { out_ += "null"; return *this; }
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  out_ += buf;
+  return *this;
+}
+
+Json& Json::value(long long v) {
+  separator();
+  out_ += std::to_string(v);
+  return *this;
+}
+
+Json& Json::value(bool v) {
+  separator();
+  out_ += v ? "true" : "false";
+  return *this;
+}
+
+Json& Json::value(const std::string& v) {
+  separator();
+  out_ += "\"";
+  for (char c : v) {
+    if (c == '"' || c == '\\') { out_ += '\\'; out_ += c; }
+    else if ((unsigned char)c < 0x20) { char b[8]; std::snprintf(b, sizeof b, "\\u%04x", c); out_ += b; }
+    else out_ += c;
+  }
+  out_ += "\"";
+  return *this;
+}
+
+Json& Json::beginObject() { separator(); out_ += "{"; first_.push_back(true); return *this; }
+Json& Json::endObject() { out_ += "}"; first_.pop_back(); return *this; }
+Json& Json::beginArray() { separator(); out_ += "["; first_.push_back(true); return *this; }
+Json& Json::endArray() { out_ += "]"; first_.pop_back(); return *this; }
+
+std::string LoadInput(const std::string& path, CMesh& mesh, IndexedMesh& indexed, std::vector<size_t>& faceOfIndex) {
+  const std::string err = LoadPly(mesh, path);
+  if (!err.empty()) return err;
+  indexed = ToIndexedMesh(mesh, &faceOfIndex);
+  return "";
+}
+
+int Fail(int code, const std::string& message) {
+  std::fprintf(stderr, "conelod: %s\n", message.c_str());
+  return code;
+}
+
+}  // namespace cli
+}  // namespace conelod

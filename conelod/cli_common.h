@@ -1,0 +1,85 @@
+// ConeLOD CLI — small helpers shared by the subcommands: argument parsing, JSON output, timing,
+// loading a mesh into the core's form.
+#pragma once
+
+#include <chrono>
+#include <cstdio>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "conelod/indexed_mesh.h"
+#include "conelod/vcg_bridge.h"
+#include "conelod/vcg_mesh.h"
+
+namespace conelod {
+namespace cli {
+
+// Exit codes: scripts tell a usage mistake from bad input from an I/O failure.
+enum Exit { kOk = 0, kUsage = 1, kBadInput = 2, kIoError = 3 };
+
+// "--name value" and "--flag" options plus positional arguments. Options are declared up front
+// so that a misspelt option is an error, not silently ignored.
+class Args {
+ public:
+  Args(int argc, char** argv, const std::vector<std::string>& valueOptions,
+       const std::vector<std::string>& flagOptions);
+  bool ok() const { return error_.empty(); }
+  const std::string& error() const { return error_; }
+  const std::vector<std::string>& positional() const { return positional_; }
+  bool has(const std::string& name) const { return values_.count(name) > 0; }
+  std::string str(const std::string& name, const std::string& def = "") const;
+  // Numeric getters record an error (see ok()) when the value does not parse.
+  double num(const std::string& name, double def);
+  int integer(const std::string& name, int def);
+
+ private:
+  std::map<std::string, std::string> values_;
+  std::vector<std::string> positional_;
+  std::string error_;
+};
+
+// A flat JSON object writer: enough for our outputs (numbers, strings, bools, arrays of objects).
+class Json {
+ public:
+  Json& key(const std::string& k);
+  Json& value(double v);
+  Json& value(long long v);
+  Json& value(int v) { return value((long long)v); }
+  Json& value(size_t v) { return value((long long)v); }
+  Json& value(bool v);
+  Json& value(const std::string& v);
+  Json& value(const char* v) { return value(std::string(v)); }
+  Json& beginObject();
+  Json& endObject();
+  Json& beginArray();
+  Json& endArray();
+  template <class T>
+  Json& field(const std::string& k, const T& v) { return key(k).value(v); }
+  const std::string& str() const { return out_; }
+
+ private:
+  void separator();
+  std::string out_;
+  std::vector<bool> first_{true};
+  bool afterKey_ = false;
+};
+
+class Timer {
+ public:
+  Timer() : start_(std::chrono::steady_clock::now()) {}
+  double seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+
+ private:
+  std::chrono::steady_clock::time_point start_;
+};
+
+// Loads `path` into `mesh` and its indexed form. Returns "" or an error message.
+std::string LoadInput(const std::string& path, CMesh& mesh, IndexedMesh& indexed, std::vector<size_t>& faceOfIndex);
+
+int Fail(int code, const std::string& message);  // prints "conelod: message" to stderr
+
+}  // namespace cli
+}  // namespace conelod

@@ -1,0 +1,183 @@
+// ConeLOD CLI — `conelod group` and `conelod cull-cost`: normal-cone face grouping (SPEC §1) and
+// the culling-cost experiment of the paper's §5.
+#include <cstdio>
+
+#include "cli_common.h"
+#include "commands.h"
+#include "conelod/cone_grouping.h"
+#include "conelod/culling_cost.h"
+
+namespace conelod {
+namespace cli {
+namespace {
+
+const std::vector<std::string> kGroupingOptions = {"--cone-weight", "--shape-weight", "--size-weight",
+                                                    "--threshold",   "--growth",       "--max-levels",
+                                                    "--min-top-groups"};
+
+ConeGroupingParams ReadGroupingParams(Args& a) {
+  ConeGroupingParams p;
+  p.coneWeight = a.num("--cone-weight", p.coneWeight);
+  p.shapeWeight = a.num("--shape-weight", p.shapeWeight);
+  p.sizeWeight = a.num("--size-weight", p.sizeWeight);
+  p.coneThresholdDeg = a.num("--threshold", p.coneThresholdDeg);
+  p.thresholdGrowth = a.num("--growth", p.thresholdGrowth);
+  p.maxLevels = a.integer("--max-levels", p.maxLevels);
+  p.minTopGroups = a.integer("--min-top-groups", p.minTopGroups);
+  return p;
+}
+
+std::vector<std::string> With(std::vector<std::string> v, const std::vector<std::string>& more) {
+  v.insert(v.end(), more.begin(), more.end());
+  return v;
+}
+
+void WriteParams(Json& j, const ConeGroupingParams& p) {
+  j.key("params").beginObject()
+      .field("cone_weight", p.coneWeight).field("shape_weight", p.shapeWeight).field("size_weight", p.sizeWeight)
+      .field("threshold_deg", p.coneThresholdDeg).field("growth", p.thresholdGrowth)
+      .field("max_levels", p.maxLevels).field("min_top_groups", p.minTopGroups)
+      .endObject();
+}
+
+}  // namespace
+
+const char* kGroupUsage =
+    "conelod group IN.ply [-o OUT.ply] [--level L] [grouping options] [--json]\n"
+    "  Groups faces by normal cones into a hierarchy (Kamiya-Suzuki-Kawachi). Writes OUT.ply with\n"
+    "  per-face quality = group id at level L (default 1) and a distinct colour per group.\n"
+    "grouping options (defaults in brackets):\n"
+    "  --cone-weight K    k_c [1]     --shape-weight K  k_s [0.5]    --size-weight K  k_n [0.5]\n"
+    "  --threshold DEG    level-1 limit on the cone half-angle [15]; >= 180: no limit\n"
+    "  --growth F         the limit grows by this factor per level [1.6]\n"
+    "  --max-levels N     [8]         --min-top-groups N  stop at this many groups [8]\n";
+
+const char* kCullCostUsage =
+    "conelod cull-cost IN.ply [--views N] [--camera-distance R] [grouping options] [--json]\n"
+    "  Builds the hierarchy (options as for `group`) and measures the cost of hierarchical\n"
+    "  back-face culling over N view directions uniform on the sphere [1000]: orthographic, or a\n"
+    "  perspective eye at R bounding-sphere radii (R > 1) from the model's centre.\n";
+
+int CmdGroup(int argc, char** argv) {
+  Args a(argc, argv, With(kGroupingOptions, {"-o", "--level"}), {"--json"});
+  ConeGroupingParams params = ReadGroupingParams(a);
+  const int displayLevel = a.integer("--level", 1);
+  if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kGroupUsage);
+  if (a.positional().size() != 1) return Fail(kUsage, std::string("expected one input mesh\n") + kGroupUsage);
+  const bool json = a.has("--json");
+
+  CMesh mesh;
+  IndexedMesh im;
+  std::vector<size_t> faceOf;
+  std::string err = LoadInput(a.positional()[0], mesh, im, faceOf);
+  if (!err.empty()) return Fail(kIoError, err);
+
+  GroupHierarchy h;
+  Timer timer;
+  const Status s = BuildConeHierarchy(im, params, h);
+  const double seconds = timer.seconds();
+  if (!s.ok()) return Fail(kBadInput, a.positional()[0] + ": " + s.message);
+  if (displayLevel < 1 || displayLevel > h.levelCount())
+    return Fail(kUsage, "--level must be between 1 and " + std::to_string(h.levelCount()) + " (levels built)");
+
+  const FaceAdjacency adj = BuildFaceAdjacency(im);
+  if (a.has("-o")) {
+    WriteGroupResults(mesh, faceOf, h, displayLevel);
+    err = SavePly(mesh, a.str("-o"));
+    if (!err.empty()) return Fail(kIoError, err);
+  }
+
+  if (json) {
+    Json j;
+    j.beginObject().field("input", a.positional()[0]).field("faces", im.faceCount()).field("seconds", seconds);
+    j.field("faces_per_second", seconds > 0 ? double(im.faceCount()) / seconds : 0.0);
+    WriteParams(j, params);
+    j.key("levels").beginArray();
+    for (int l = 1; l <= h.levelCount(); ++l) {
+      const GroupLevel& lv = h.level(l);
+      j.beginObject().field("level", l).field("groups", lv.groups.size())
+          .field("max_cone_deg", lv.maxConeDeg()).field("mean_cone_deg", lv.meanConeDeg())
+          .field("threshold_deg", lv.thresholdDeg).field("uncullable_groups", lv.uncullableGroups())
+          .field("all_connected", GroupsAreEdgeConnected(adj, lv.faceGroup))
+          .endObject();
+    }
+    j.endArray();
+    if (a.has("-o")) j.field("output", a.str("-o")).field("display_level", displayLevel);
+    j.endObject();
+    std::printf("%s\n", j.str().c_str());
+  } else {
+    std::printf("%s: %zu faces, %d levels in %.3f s (%.0f faces/s)\n", a.positional()[0].c_str(), im.faceCount(),
+                h.levelCount(), seconds, seconds > 0 ? double(im.faceCount()) / seconds : 0.0);
+    std::printf("%5s %10s %8s %13s %14s %10s %9s\n", "level", "limit_deg", "groups", "max_cone_deg", "mean_cone_deg",
+                "uncullable", "connected");
+    for (int l = 1; l <= h.levelCount(); ++l) {
+      const GroupLevel& lv = h.level(l);
+      std::printf("%5d %10.1f %8zu %13.2f %14.2f %10d %9s\n", l, lv.thresholdDeg, lv.groups.size(), lv.maxConeDeg(),
+                  lv.meanConeDeg(), lv.uncullableGroups(), GroupsAreEdgeConnected(adj, lv.faceGroup) ? "yes" : "NO");
+    }
+    if (a.has("-o")) std::printf("wrote %s (quality and colour = group at level %d)\n", a.str("-o").c_str(), displayLevel);
+  }
+  return kOk;
+}
+
+int CmdCullCost(int argc, char** argv) {
+  Args a(argc, argv, With(kGroupingOptions, {"--views", "--camera-distance"}), {"--json"});
+  ConeGroupingParams params = ReadGroupingParams(a);
+  CullingCostParams cp;
+  cp.views = a.integer("--views", cp.views);
+  cp.cameraDistance = a.num("--camera-distance", cp.cameraDistance);
+  if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kCullCostUsage);
+  if (a.positional().size() != 1) return Fail(kUsage, std::string("expected one input mesh\n") + kCullCostUsage);
+
+  CMesh mesh;
+  IndexedMesh im;
+  std::vector<size_t> faceOf;
+  const std::string err = LoadInput(a.positional()[0], mesh, im, faceOf);
+  if (!err.empty()) return Fail(kIoError, err);
+
+  GroupHierarchy h;
+  Timer timer;
+  Status s = BuildConeHierarchy(im, params, h);
+  const double groupSeconds = timer.seconds();
+  if (!s.ok()) return Fail(kBadInput, a.positional()[0] + ": " + s.message);
+  CullingCostResult r;
+  Timer costTimer;
+  s = EvaluateCullingCost(im, h, cp, r);
+  if (!s.ok()) return Fail(kUsage, s.message);
+
+  if (a.has("--json")) {
+    Json j;
+    j.beginObject().field("input", a.positional()[0]).field("faces", im.faceCount())
+        .field("views", r.views).field("perspective", r.perspective).field("camera_distance", r.cameraDistance)
+        .field("two_state_cost", r.twoState.mean).field("two_state_min", r.twoState.min)
+        .field("two_state_max", r.twoState.max)
+        .field("three_state_cost", r.threeState.mean).field("three_state_min", r.threeState.min)
+        .field("three_state_max", r.threeState.max)
+        .field("rejected_fraction", r.rejectedFraction).field("ideal_fraction", r.idealFraction)
+        .field("culled_of_ideal", r.idealFraction > 0 ? r.rejectedFraction / r.idealFraction : 0.0)
+        .field("front_accepted_fraction", r.frontAcceptedFraction)
+        .field("mean_group_tests", r.meanGroupTests)
+        .field("levels", h.levelCount())
+        .field("level1_groups", h.level(1).groups.size())
+        .field("top_groups", h.level(h.levelCount()).groups.size())
+        .field("grouping_seconds", groupSeconds).field("cost_seconds", costTimer.seconds());
+    WriteParams(j, params);
+    j.endObject();
+    std::printf("%s\n", j.str().c_str());
+  } else {
+    std::printf("%s: %zu faces, %d levels (%zu groups at level 1, %zu at the top), %d %s views\n",
+                a.positional()[0].c_str(), im.faceCount(), h.levelCount(), h.level(1).groups.size(),
+                h.level(h.levelCount()).groups.size(), r.views, r.perspective ? "perspective" : "orthographic");
+    std::printf("culling cost (tests / faces; per-face culling = 1):\n");
+    std::printf("  %-12s mean %.4f  min %.4f  max %.4f\n", "two-state", r.twoState.mean, r.twoState.min, r.twoState.max);
+    std::printf("  %-12s mean %.4f  min %.4f  max %.4f\n", "three-state", r.threeState.mean, r.threeState.min,
+                r.threeState.max);
+    std::printf("faces culled at group level: %.4f of all faces; faces that draw nothing (ideal): %.4f (%.1f%% of ideal)\n",
+                r.rejectedFraction, r.idealFraction, r.idealFraction > 0 ? 100 * r.rejectedFraction / r.idealFraction : 0.0);
+    std::printf("faces accepted by a fully-front group test (three-state): %.4f\n", r.frontAcceptedFraction);
+  }
+  return kOk;
+}
+
+}  // namespace cli
+}  // namespace conelod

@@ -1,0 +1,15 @@
+// ConeLOD CLI — the subcommands. Each takes the arguments after its name.
+#pragma once
+
+namespace conelod {
+namespace cli {
+
+int CmdGroup(int argc, char** argv);
+int CmdCullCost(int argc, char** argv);
+int CmdInfo(int argc, char** argv);
+extern const char* kGroupUsage;
+extern const char* kCullCostUsage;
+extern const char* kInfoUsage;
+
+}  // namespace cli
+}  // namespace conelod

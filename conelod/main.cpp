@@ -1,0 +1,46 @@
+// ConeLOD command-line tool: the same core as the MeshLab plugin, with no X server.
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+#include "commands.h"
+
+namespace {
+
+struct Command {
+  const char* name;
+  int (*run)(int, char**);
+  const char* const* usage;
+};
+
+const Command kCommands[] = {
+    {"group", conelod::cli::CmdGroup, &conelod::cli::kGroupUsage},
+    {"cull-cost", conelod::cli::CmdCullCost, &conelod::cli::kCullCostUsage},
+    {"info", conelod::cli::CmdInfo, &conelod::cli::kInfoUsage},
+};
+
+void PrintUsage(FILE* out) {
+  std::fprintf(out, "usage: conelod COMMAND [arguments]   (conelod COMMAND --help for details)\n\ncommands:\n");
+  for (const auto& c : kCommands) std::fprintf(out, "%s", *c.usage);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
+    PrintUsage(argc < 2 ? stderr : stdout);
+    return argc < 2 ? 1 : 0;
+  }
+  for (const auto& c : kCommands) {
+    if (std::strcmp(argv[1], c.name) != 0) continue;
+    for (int i = 2; i < argc; ++i)
+      if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
+        std::printf("%s", *c.usage);
+        return 0;
+      }
+    return c.run(argc - 2, argv + 2);
+  }
+  std::fprintf(stderr, "conelod: unknown command '%s'\n", argv[1]);
+  PrintUsage(stderr);
+  return 1;
+}

@@ -1,0 +1,74 @@
+#!/usr/bin/env bash
+# ConeLOD set-up for a fresh Debian bookworm machine (run as root; idempotent).
+#  1. installs the Debian packages the build, the tests and the screenshots need;
+#  2. fetches MeshLab 2020.09's plugin headers and vcglib from Debian's own `meshlab`
+#     source package (the ABI of the installed /usr/bin/meshlab) into deps/meshlab-src;
+#  3. builds ConeLOD in Release (build/), installs the plugin into MeshLab's plugin folder
+#     and `conelod` into /usr/local/bin.
+# Every step fails loudly: the script stops at the first error and says which step failed.
+set -euo pipefail
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+DEPS="$ROOT/deps"
+SRC="$DEPS/meshlab-src"
+BUILD="${CONELOD_BUILD_DIR:-$ROOT/build}"
+JOBS="$(nproc)"
+
+step() { printf '\n==> %s\n' "$*"; }
+fail() { printf '\nsetup.sh: FAILED: %s\n' "$*" >&2; exit 1; }
+trap 'fail "command \"$BASH_COMMAND\" exited with status $? (line $LINENO)"' ERR
+
+[ "$(id -u)" = 0 ] || fail "run as root (it installs Debian packages and the MeshLab plugin)"
+grep -q bookworm /etc/os-release || echo "setup.sh: warning: written for Debian bookworm; continuing" >&2
+
+PKGS=(meshlab qtbase5-dev libqt5opengl5-dev libeigen3-dev libglew-dev xvfb xauth dpkg-dev
+      xz-utils cmake g++ make libgtest-dev libgmock-dev libbenchmark-dev imagemagick xdotool
+      python3 gnuplot-nox)
+
+step "Debian packages"
+missing=()
+for p in "${PKGS[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -qq || fail "apt-get update"
+  apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null \
+    || fail "apt-get install ${missing[*]}"
+fi
+echo "all ${#PKGS[@]} packages present"
+
+step "MeshLab 2020.09 source (headers + vcglib) from Debian's source package"
+if [ ! -f "$SRC/src/common/interfaces.h" ] || [ ! -f "$SRC/vcglib/vcg/complex/complex.h" ]; then
+  if ! grep -rqs '^Types:.*deb-src' /etc/apt/sources.list.d/ && ! grep -qs '^deb-src' /etc/apt/sources.list; then
+    # Copy the first stanza of the binary sources with Types: deb-src.
+    awk 'BEGIN{RS="";ORS="\n\n"} NR==1{sub(/Types: deb/,"Types: deb-src"); print}' \
+      /etc/apt/sources.list.d/debian.sources > /etc/apt/sources.list.d/conelod-deb-src.sources \
+      || fail "could not write a deb-src entry"
+    apt-get update -qq || fail "apt-get update (deb-src)"
+  fi
+  mkdir -p "$DEPS/download"
+  ( cd "$DEPS/download" && apt-get source --download-only meshlab >/dev/null 2>&1 ) \
+    || { apt-get update -qq; ( cd "$DEPS/download" && apt-get source --download-only meshlab ); } \
+    || fail "apt-get source --download-only meshlab"
+  tarball="$(ls "$DEPS"/download/meshlab_2020.09*.orig.tar.xz 2>/dev/null | head -1)"
+  [ -n "$tarball" ] || fail "meshlab 2020.09 orig tarball not found in $DEPS/download"
+  rm -rf "$SRC"; mkdir -p "$SRC"
+  tar xJf "$tarball" -C "$SRC" --strip-components=1 --wildcards 'meshlab-*/vcglib' 'meshlab-*/src/common' \
+    || fail "unpacking $tarball"
+fi
+echo "headers in $SRC"
+
+step "Build (Release) in $BUILD"
+cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DMESHLAB_SRC="$SRC" >/dev/null \
+  || fail "cmake configure"
+cmake --build "$BUILD" -j "$JOBS" || fail "build"
+
+step "Install the plugin and the conelod CLI"
+cmake --install "$BUILD" >/dev/null || fail "install"
+PLUGDIR=/usr/lib/x86_64-linux-gnu/meshlab/plugins
+[ -f "$PLUGDIR/libfilter_conelod.so" ] || fail "plugin not installed in $PLUGDIR"
+command -v conelod >/dev/null || fail "conelod not on PATH"
+echo "plugin: $PLUGDIR/libfilter_conelod.so"
+echo "cli:    $(command -v conelod)"
+echo "setup.sh: done"

@@ -1,0 +1,50 @@
+// ConeLOD — hierarchical face grouping by an evaluation function.
+//
+// Kamiya, Suzuki, Kawachi, "LODs for efficient displaying triangle meshes" (§4): adjacent units
+// (faces at level 1, groups of the previous level above) are merged greedily, best pair first,
+// by  v = k_c v_c + k_s v_s + k_n v_n  (eq. 2), with
+//   v_c = (pi - c) / pi     c = the merged group's cone HALF-angle, in radians (the paper's
+//                           "cone": the largest angle between the group normal and a face normal);
+//                           the same half-angle is bounded by the cone threshold;
+//   v_s = S_p / S_c         projected area over the area of the enclosing circle; S_p is the
+//                           length of the group's vector area (its area projected on the plane
+//                           normal to its mean normal, exact while the projection does not fold)
+//                           and S_c = pi r^2 with r the radius of the group's bounding sphere, an
+//                           upper bound of the projection's enclosing circle (so v_s is a lower
+//                           bound, computed in O(1) per candidate);
+//   v_n = (N - n) / N       N faces in the mesh, n faces in the merged group.
+// Pairs whose merged cone reaches the level's threshold are not merged. A level ends when no pair
+// is left or when the number of groups reaches minTopGroups; the next level repeats the process
+// on the groups with the threshold multiplied by thresholdGrowth.
+//
+// Candidate cones are the exact union of the two units' cones (an upper bound of the merged
+// normals' minimal cone, so the threshold is never exceeded); a group's cone is recomputed
+// exactly (MinimalCone, Welzl) whenever its face count has doubled since the last exact
+// computation — amortized O(N log N) — and every group of the output has its exact cone.
+#pragma once
+
+#include "conelod/group_hierarchy.h"
+#include "conelod/indexed_mesh.h"
+#include "conelod/status.h"
+
+namespace conelod {
+
+struct ConeGroupingParams {
+  double coneWeight = 1.0;         // k_c
+  double shapeWeight = 0.5;        // k_s
+  double sizeWeight = 0.5;         // k_n
+  double coneThresholdDeg = 15.0;  // level-1 limit on the group cone half-angle; >= 180: no limit
+  double thresholdGrowth = 1.6;    // the limit is multiplied by this at each level above the first
+  int maxLevels = 8;               // at most this many levels
+  int minTopGroups = 8;            // stop merging once a level has this many groups (or fewer)
+};
+
+// Checks the parameters; Ok or a message naming the bad one.
+Status ValidateParams(const ConeGroupingParams& p);
+
+// Builds the hierarchy. The mesh must pass RequireValidForFaces (checked here too). On failure or
+// cancellation `out` is left empty.
+Status BuildConeHierarchy(const IndexedMesh& mesh, const ConeGroupingParams& params,
+                          GroupHierarchy& out, const Progress& progress = Progress());
+
+}  // namespace conelod

@@ -1,0 +1,55 @@
+// ConeLOD — input checks (see mesh_check.h).
+#include "conelod/mesh_check.h"
+
+#include <cmath>
+
+namespace conelod {
+
+MeshReport CheckMesh(const IndexedMesh& m, bool withTopology) {
+  MeshReport r;
+  r.vertices = m.positions.size();
+  r.faces = m.faces.size();
+  std::vector<char> used(m.positions.size(), 0);
+  for (const auto& t : m.faces) {
+    bool ok = true;
+    for (uint32_t v : t)
+      if (v >= m.positions.size()) ok = false;
+    if (!ok) { ++r.badIndexFaces; continue; }
+    for (uint32_t v : t) used[v] = 1;
+  }
+  for (size_t v = 0; v < m.positions.size(); ++v) {
+    if (!used[v]) { ++r.unreferencedVertices; continue; }
+    const auto& p = m.positions[v];
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) ++r.nonFiniteVertices;
+  }
+  if (r.badIndexFaces || r.nonFiniteVertices) return r;
+  std::vector<vcg::Point3d> normals;
+  std::vector<double> areas;
+  ComputeFaceNormalsAndAreas(m, normals, areas);
+  for (double a : areas)
+    if (a == 0) ++r.degenerateFaces;
+  if (!withTopology) return r;
+  const FaceAdjacency adj = BuildFaceAdjacency(m);
+  r.borderEdges = adj.borderEdges;
+  r.nonManifoldEdges = adj.nonManifoldEdges;
+  std::vector<int> comp;
+  r.components = m.faces.empty() ? 0 : ConnectedComponents(adj, comp);
+  return r;
+}
+
+Status RequireValidForFaces(const MeshReport& r) {
+  if (r.faces == 0)
+    return Status::Invalid("the mesh has no faces (" + std::to_string(r.vertices) +
+                           " vertices): this filter works on triangle meshes");
+  if (r.badIndexFaces)
+    return Status::Invalid(std::to_string(r.badIndexFaces) + " faces refer to vertices that do not exist");
+  if (r.nonFiniteVertices)
+    return Status::Invalid(std::to_string(r.nonFiniteVertices) +
+                           " vertices used by faces have NaN or infinite coordinates; remove them first "
+                           "(e.g. Filters > Cleaning and Repairing)");
+  if (r.degenerateFaces == r.faces)
+    return Status::Invalid("every face of the mesh has zero area: there is no normal to group by");
+  return Status::Ok();
+}
+
+}  // namespace conelod

@@ -1,0 +1,74 @@
+// ConeLOD — conversions between any vcg triangle mesh (MeshLab's CMeshO, the CLI's mesh) and the
+// core's IndexedMesh, and the writing of group results back as named per-face attributes,
+// per-face quality and per-face colour.
+//
+// Requirements: per-face quality and colour for WriteGroupResults (checked with vcg's Require*).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <vcg/complex/complex.h>
+
+#include "conelod/group_colors.h"
+#include "conelod/group_hierarchy.h"
+#include "conelod/indexed_mesh.h"
+
+namespace conelod {
+
+// Name of the per-face int attribute holding the group id at hierarchy level `level` (1-based).
+inline std::string GroupAttributeName(int level) { return "conelod_group_L" + std::to_string(level); }
+
+// Live (non-deleted) faces and the vertices they and the live vertices use. faceOfIndex[i] is the
+// mesh face that became IndexedMesh face i.
+template <class MeshType>
+IndexedMesh ToIndexedMesh(const MeshType& m, std::vector<size_t>* faceOfIndex = nullptr) {
+  IndexedMesh out;
+  std::vector<uint32_t> remap(m.vert.size(), UINT32_MAX);
+  out.positions.reserve(size_t(m.vn));
+  for (size_t i = 0; i < m.vert.size(); ++i) {
+    if (m.vert[i].IsD()) continue;
+    remap[i] = uint32_t(out.positions.size());
+    const auto& p = m.vert[i].cP();
+    out.positions.emplace_back(float(p[0]), float(p[1]), float(p[2]));
+  }
+  out.faces.reserve(size_t(m.fn));
+  if (faceOfIndex) { faceOfIndex->clear(); faceOfIndex->reserve(size_t(m.fn)); }
+  for (size_t i = 0; i < m.face.size(); ++i) {
+    const auto& f = m.face[i];
+    if (f.IsD()) continue;
+    std::array<uint32_t, 3> t;
+    for (int k = 0; k < 3; ++k) {
+      const auto* v = f.cV(k);
+      const size_t vi = size_t(v - &m.vert[0]);
+      t[size_t(k)] = (v && vi < m.vert.size()) ? remap[vi] : UINT32_MAX;
+    }
+    out.faces.push_back(t);
+    if (faceOfIndex) faceOfIndex->push_back(i);
+  }
+  return out;
+}
+
+// Writes, for every level k, the per-face int attribute GroupAttributeName(k); per-face quality =
+// group id at `displayLevel` and a distinct colour per group. Only call on success: the mesh is
+// changed here and nowhere else.
+template <class MeshType>
+void WriteGroupResults(MeshType& m, const std::vector<size_t>& faceOfIndex, const GroupHierarchy& h,
+                       int displayLevel) {
+  vcg::tri::RequirePerFaceQuality(m);
+  vcg::tri::RequirePerFaceColor(m);
+  for (int level = 1; level <= h.levelCount(); ++level) {
+    auto attr = vcg::tri::Allocator<MeshType>::template GetPerFaceAttribute<int>(m, GroupAttributeName(level));
+    const auto& fg = h.level(level).faceGroup;
+    for (auto& f : m.face) attr[f] = -1;
+    for (size_t i = 0; i < faceOfIndex.size(); ++i) attr[m.face[faceOfIndex[i]]] = fg[i];
+  }
+  const auto& fg = h.level(displayLevel).faceGroup;
+  for (size_t i = 0; i < faceOfIndex.size(); ++i) {
+    auto& f = m.face[faceOfIndex[i]];
+    f.Q() = typename MeshType::FaceType::QualityType(fg[i]);
+    f.C() = GroupColor(fg[i]);
+  }
+}
+
+}  // namespace conelod
