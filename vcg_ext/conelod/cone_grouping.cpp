@@ -76,8 +76,14 @@ struct alignas(64) Unit {
     Sphere s; s.c = vcg::Point3d(center[0], center[1], center[2]); s.r = radius; return s;
   }
   void setSphere(const Sphere& s) {
-    for (int k = 0; k < 3; ++k) center[k] = float(s.c[k]);
-    radius = float(s.r) * (1.0f + 1e-6f);  // float rounding must not shrink it
+    double magnitude = 0;
+    for (int k = 0; k < 3; ++k) {
+      center[k] = float(s.c[k]);
+      magnitude = std::max(magnitude, std::abs(s.c[k]));
+    }
+    // Rounding the centre and radius to float must not let a vertex out: pad by a few float
+    // ulps of the coordinates.
+    radius = float(s.r * (1 + 1e-6) + 1e-6 * magnitude);
   }
 };
 

@@ -15,7 +15,7 @@ std::vector<vcg::Point3d> ViewDirections(int count) {
   for (int i = 0; i < count; ++i) {
     const double z = 1.0 - (2.0 * i + 1.0) / count;
     const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
-    const double phi = golden * i;
+    const double phi = golden * (i + 0.5);  // the half step keeps i = 0 off the plane y = 0
     dirs.emplace_back(r * std::cos(phi), r * std::sin(phi), z);
   }
   return dirs;

@@ -1,0 +1,34 @@
+// ConeLOD MeshLab plugin: a thin adapter from MeshLab's filter interface to the core in vcg_ext/.
+// Each filter maps its parameters to the core's Params, enables the mesh components it writes,
+// calls the core with MeshLab's progress callback, logs its figures, and reports bad input with
+// errorMessage (and the log, since meshlabserver prints only the log). On failure the mesh is
+// left exactly as it was: the core works on a copy and results are written only on success.
+#pragma once
+
+#include <common/interfaces.h>
+
+class FilterConeLodPlugin : public QObject, public MeshFilterInterface {
+  Q_OBJECT
+  MESHLAB_PLUGIN_IID_EXPORTER(MESH_FILTER_INTERFACE_IID)
+  Q_INTERFACES(MeshFilterInterface)
+
+ public:
+  // Ids are stable: scripts name filters by their names, which never change either.
+  enum { FP_CONE_GROUPING, FP_CULLING_COST };
+
+  FilterConeLodPlugin();
+  QString pluginName() const override;
+  QString filterName(FilterIDType filter) const override;
+  QString filterInfo(FilterIDType filter) const override;
+  FilterClass getClass(QAction* a) override;
+  FILTER_ARITY filterArity(QAction*) const override { return SINGLE_MESH; }
+  int getRequirements(QAction* a) override;
+  int postCondition(QAction* a) const override;
+  void initParameterSet(QAction* a, MeshModel& m, RichParameterList& par) override;
+  bool applyFilter(QAction* a, MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb) override;
+
+ private:
+  bool applyConeGrouping(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb);
+  bool applyCullingCost(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb);
+  bool fail(const QString& message);  // logs and sets errorMessage; returns false
+};
