@@ -42,11 +42,12 @@ Status RequireValidForFaces(const MeshReport& r) {
     return Status::Invalid("the mesh has no faces (" + std::to_string(r.vertices) +
                            " vertices): this filter works on triangle meshes");
   if (r.badIndexFaces)
-    return Status::Invalid(std::to_string(r.badIndexFaces) + " faces refer to vertices that do not exist");
+    return Status::Invalid(std::to_string(r.badIndexFaces) + (r.badIndexFaces == 1 ? " face refers" : " faces refer") +
+                           " to vertices that do not exist");
   if (r.nonFiniteVertices)
     return Status::Invalid(std::to_string(r.nonFiniteVertices) +
-                           " vertices used by faces have NaN or infinite coordinates; remove them first "
-                           "(e.g. Filters > Cleaning and Repairing)");
+                           (r.nonFiniteVertices == 1 ? " vertex used by faces has" : " vertices used by faces have") +
+                           " NaN or infinite coordinates; remove them first (e.g. Filters > Cleaning and Repairing)");
   if (r.degenerateFaces == r.faces)
     return Status::Invalid("every face of the mesh has zero area: there is no normal to group by");
   return Status::Ok();

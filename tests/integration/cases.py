@@ -1,0 +1,288 @@
+#!/usr/bin/env python3
+"""ConeLOD integration tests: the real meshlabserver (under xvfb-run) and the conelod CLI on real
+and bad meshes. One ctest test per case:  cases.py CASE --build BUILD_DIR --source SOURCE_DIR
+
+meshlabserver runs from a private copy (BUILD/meshlab) that loads the plugin of the build tree.
+"""
+import argparse
+import json
+import os
+import re
+import struct
+import subprocess
+import sys
+import tempfile
+import xml.etree.ElementTree as ET
+
+CASES = {}
+
+
+def case(fn):
+    CASES[fn.__name__] = fn
+    return fn
+
+
+class Ctx:
+    def __init__(self, build, source):
+        self.build = os.path.abspath(build)
+        self.source = os.path.abspath(source)
+        self.meshes = os.environ.get("CONELOD_TEST_MESHES", os.path.join(self.source, "..", "shared", "test_meshes"))
+        self.tmp = tempfile.mkdtemp(prefix="conelod_it_")
+        self.cli = os.path.join(self.build, "conelod", "conelod")
+        self.server = os.path.join(self.build, "meshlab", "bin", "meshlabserver")
+
+    def mesh(self, name):
+        path = os.path.join(self.meshes, name)
+        if not os.path.exists(path):
+            path = os.path.join(self.source, "test_meshes", name)
+        assert os.path.exists(path), "missing test mesh " + name
+        return path
+
+    def mlx(self, name):
+        return os.path.join(self.source, "scripts", "mlx", name)
+
+    def out(self, name):
+        return os.path.join(self.tmp, name)
+
+    def meshlab(self, inputs, script, output=None, expect_ok=True):
+        """Runs meshlabserver; returns (exit code, log text)."""
+        log = self.out("meshlab.log")
+        if os.path.exists(log):
+            os.remove(log)
+        cmd = ["xvfb-run", "-a", self.server, "-l", log, "-i"] + inputs + ["-s", script]
+        if output:
+            cmd += ["-o", output, "-m", "fq", "fc"]
+        p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=600, cwd=self.tmp)
+        text = open(log, errors="replace").read() if os.path.exists(log) else ""
+        if expect_ok and p.returncode != 0:
+            raise AssertionError("meshlabserver failed (%d):\n%s\n%s" % (p.returncode, p.stdout.decode(errors="replace")[-3000:], text[-3000:]))
+        return p.returncode, text
+
+    def conelod(self, *args, expect=0):
+        p = subprocess.run([self.cli] + list(args), stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=600)
+        assert p.returncode == expect, "conelod %s: exit %d (expected %d)\n%s%s" % (
+            " ".join(args), p.returncode, expect, p.stdout.decode(), p.stderr.decode())
+        return p
+
+
+def read_ply(path):
+    """Minimal PLY reader (ASCII and binary little endian): vertex count, faces, per-face quality."""
+    with open(path, "rb") as f:
+        header = []
+        while True:
+            line = f.readline().decode("ascii", "replace").strip()
+            header.append(line)
+            if line == "end_header":
+                break
+        body = f.read()
+    fmt = [l.split()[1] for l in header if l.startswith("format")][0]
+    elements, current = [], None
+    for l in header:
+        w = l.split()
+        if w and w[0] == "element":
+            current = {"name": w[1], "count": int(w[2]), "props": []}
+            elements.append(current)
+        elif w and w[0] == "property":
+            current["props"].append(w[1:])
+    sizes = {"char": "b", "uchar": "B", "int8": "b", "uint8": "B", "short": "h", "ushort": "H", "int": "i",
+             "int32": "i", "uint": "I", "uint32": "I", "float": "f", "float32": "f", "double": "d", "float64": "d"}
+    result = {"vertices": 0, "faces": [], "quality": []}
+    if fmt == "ascii":
+        tokens = body.decode().split()
+        pos = 0
+        for el in elements:
+            for _ in range(el["count"]):
+                rec = {}
+                for prop in el["props"]:
+                    if prop[0] == "list":
+                        n = int(tokens[pos]); pos += 1
+                        rec[prop[-1]] = [int(t) for t in tokens[pos:pos + n]]; pos += n
+                    else:
+                        rec[prop[-1]] = float(tokens[pos]); pos += 1
+                if el["name"] == "face":
+                    result["faces"].append(rec["vertex_indices"])
+                    if "quality" in rec:
+                        result["quality"].append(rec["quality"])
+            if el["name"] == "vertex":
+                result["vertices"] = el["count"]
+        return result
+    assert fmt == "binary_little_endian", fmt
+    pos = 0
+    for el in elements:
+        if el["name"] == "vertex":
+            result["vertices"] = el["count"]
+        simple = all(p[0] != "list" for p in el["props"])
+        if simple:
+            st = struct.Struct("<" + "".join(sizes[p[0]] for p in el["props"]))
+            names = [p[-1] for p in el["props"]]
+            for _ in range(el["count"]):
+                rec = dict(zip(names, st.unpack_from(body, pos)))
+                pos += st.size
+            continue
+        for _ in range(el["count"]):
+            rec = {}
+            for prop in el["props"]:
+                if prop[0] == "list":
+                    cs, vs = struct.Struct("<" + sizes[prop[1]]), struct.Struct("<" + sizes[prop[2]])
+                    n = cs.unpack_from(body, pos)[0]; pos += cs.size
+                    rec[prop[-1]] = list(struct.unpack_from("<%d%s" % (n, sizes[prop[2]]), body, pos)); pos += n * vs.size
+                else:
+                    s = struct.Struct("<" + sizes[prop[0]])
+                    rec[prop[-1]] = s.unpack_from(body, pos)[0]; pos += s.size
+            if el["name"] == "face":
+                result["faces"].append(rec["vertex_indices"])
+                if "quality" in rec:
+                    result["quality"].append(rec["quality"])
+    return result
+
+
+def last_float(log, key):
+    vals = re.findall(re.escape(key) + r"\s+([0-9.eE+-]+)", log)
+    assert vals, "'%s' not found in the log:\n%s" % (key, log[-2000:])
+    return float(vals[-1])
+
+
+# --- MeshLab integration -------------------------------------------------------------------
+
+@case
+def meshlab_lists_filters(c):
+    dump = c.out("dump.txt")
+    subprocess.run(["xvfb-run", "-a", c.server, "-d", dump], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                   timeout=300, cwd=c.tmp, check=True)
+    text = open(dump, errors="replace").read()
+    for name in ["Cone LOD: Normal Cone Face Grouping", "Cone LOD: Cluster Culling Cost"]:
+        assert name in text, name + " not listed by meshlabserver -d"
+
+
+@case
+def mlx_scripts_in_sync(c):
+    """scripts/mlx/ holds exactly one script per filter, each equal to the plugin's defaults."""
+    gen = c.out("mlx")
+    env = dict(os.environ, QT_QPA_PLATFORM="offscreen", XDG_RUNTIME_DIR=c.tmp)
+    subprocess.run([os.path.join(c.build, "tests", "mlx_defaults"),
+                    os.path.join(c.build, "filter_conelod", "libfilter_conelod.so"), gen],
+                   check=True, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    shipped = sorted(f for f in os.listdir(os.path.join(c.source, "scripts", "mlx")) if f.endswith(".mlx"))
+    generated = sorted(os.listdir(gen))
+    assert shipped == generated, "scripts/mlx has %s, the plugin has %s (run scripts/update_mlx.sh)" % (shipped, generated)
+    def params(path):  # Qt writes XML attributes in a random order: compare their content
+        root = ET.parse(path).getroot()
+        return [(flt.get("name"), [sorted(p.attrib.items()) for p in flt]) for flt in root]
+    for f in generated:
+        assert params(os.path.join(gen, f)) == params(c.mlx(f)), \
+            "scripts/mlx/%s differs from the plugin's parameters (run scripts/update_mlx.sh)" % f
+
+
+@case
+def meshlab_grouping_bunny(c):
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    out = c.out("ml_bunny.ply")
+    _, log = c.meshlab([bunny], c.mlx("normal_cone_face_grouping.mlx"), out)
+    ply = read_ply(out)
+    assert len(ply["faces"]) == 69451, len(ply["faces"])
+    assert len(ply["quality"]) == 69451, "per-face quality missing from the saved PLY"
+    # The same core through the CLI: same groups, face by face.
+    cli_out = c.out("cli_bunny.ply")
+    info = json.loads(c.conelod("group", bunny, "-o", cli_out, "--json").stdout)
+    level1 = info["levels"][0]
+    assert len(set(ply["quality"])) == level1["groups"], (len(set(ply["quality"])), level1["groups"])
+    assert ply["quality"] == read_ply(cli_out)["quality"], "MeshLab and the CLI disagree on the groups"
+    # The logged table (last occurrence: meshlabserver repeats the log).
+    rows = re.findall(r"^\s*1\s+15\.0\s+(\d+)\s+([0-9.]+)", log, re.M)
+    assert rows and int(rows[-1][0]) == level1["groups"], log[-2000:]
+    assert len(info["levels"]) >= 4
+    for lv in info["levels"]:
+        assert lv["all_connected"], lv
+        assert lv["threshold_deg"] >= 180 or lv["max_cone_deg"] < lv["threshold_deg"], lv
+
+
+@case
+def meshlab_culling_cost_bunny(c):
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    _, log = c.meshlab([bunny], c.mlx("cluster_culling_cost.mlx"))
+    two, three = last_float(log, "two_state_cost"), last_float(log, "three_state_cost")
+    rejected, ideal = last_float(log, "rejected_fraction"), last_float(log, "ideal_fraction")
+    cli = json.loads(c.conelod("cull-cost", bunny, "--json").stdout)
+    assert abs(two - cli["two_state_cost"]) < 1e-4 and abs(three - cli["three_state_cost"]) < 1e-4, (two, three, cli)
+    assert three < two < 1.0, (two, three)
+    assert rejected <= ideal, (rejected, ideal)
+
+
+@case
+def meshlab_bad_inputs(c):
+    """Bad input: a clear message in the log and a failed filter, never a crash."""
+    for mesh, message in [("no_faces.ply", "has no faces"), ("nan_vertex.ply", "NaN or infinite")]:
+        for script in ["normal_cone_face_grouping.mlx", "cluster_culling_cost.mlx"]:
+            rc, log = c.meshlab([c.mesh(mesh)], c.mlx(script), c.out("bad.ply"), expect_ok=False)
+            assert rc == 255, "%s/%s: expected a failed filter (255), got %d\n%s" % (mesh, script, rc, log[-1500:])
+            assert "ConeLOD error" in log and message in log, "%s/%s: no clear message:\n%s" % (mesh, script, log[-1500:])
+
+
+@case
+def meshlab_awkward_inputs(c):
+    """Inputs that must work: zero-area faces, non-manifold edges, several components."""
+    for mesh, faces in [("zero_area_faces.ply", 4), ("stanford_bunny_bun_zipper_res4.ply", 948), ("boeing.ply", 2564)]:
+        out = c.out("ok.ply")
+        c.meshlab([c.mesh(mesh)], c.mlx("normal_cone_face_grouping.mlx"), out)
+        ply = read_ply(out)
+        assert len(ply["faces"]) == faces and len(ply["quality"]) == faces, mesh
+        info = json.loads(c.conelod("group", c.mesh(mesh), "--json").stdout)
+        assert all(lv["all_connected"] for lv in info["levels"]), mesh
+
+
+# --- CLI ----------------------------------------------------------------------------------
+
+@case
+def cli_info(c):
+    boeing = json.loads(c.conelod("info", c.mesh("boeing.ply"), "--json").stdout)
+    assert boeing["components"] == 122 and boeing["faces"] == 2564, boeing
+    res4 = json.loads(c.conelod("info", c.mesh("stanford_bunny_bun_zipper_res4.ply"), "--json").stdout)
+    assert res4["non_manifold_edges"] == 70, res4
+    bunny = json.loads(c.conelod("info", c.mesh("stanford_bunny_bun_zipper.ply"), "--json").stdout)
+    assert bunny["unreferenced_vertices"] == 1113 and bunny["components"] == 1, bunny
+
+
+@case
+def cli_bad_inputs(c):
+    for mesh, message in [("no_faces.ply", "has no faces"), ("nan_vertex.ply", "NaN or infinite")]:
+        for cmd in ["group", "cull-cost"]:
+            p = c.conelod(cmd, c.mesh(mesh), expect=2)
+            assert message in p.stderr.decode(), p.stderr.decode()
+    p = c.conelod("group", c.mesh("stanford_bunny_bun_zipper.ply"), "--threshold", "-3", expect=2)
+    assert "ConeThresholdDeg" in p.stderr.decode()
+    c.conelod("group", c.out("missing.ply"), expect=3)
+    c.conelod("group", "--bogus", expect=1)
+
+
+@case
+def cli_cull_cost_perspective(c):
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    ortho = json.loads(c.conelod("cull-cost", bunny, "--views", "200", "--json").stdout)
+    near = json.loads(c.conelod("cull-cost", bunny, "--views", "200", "--camera-distance", "3", "--json").stdout)
+    for r in (ortho, near):
+        for key in ["views", "two_state_cost", "three_state_cost", "rejected_fraction", "ideal_fraction"]:
+            assert key in r, key
+        assert r["rejected_fraction"] <= r["ideal_fraction"]
+    assert near["perspective"] and not ortho["perspective"]
+    # An eye at 3 radii sees less than half of a closed-ish surface; far views see about half.
+    assert near["ideal_fraction"] > ortho["ideal_fraction"] + 0.02, (near, ortho)
+    assert abs(ortho["ideal_fraction"] - 0.5) < 0.02, ortho
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("case", choices=sorted(CASES))
+    ap.add_argument("--build", required=True)
+    ap.add_argument("--source", required=True)
+    a = ap.parse_args()
+    try:
+        CASES[a.case](Ctx(a.build, a.source))
+    except AssertionError as e:
+        print("FAIL %s: %s" % (a.case, e))
+        return 1
+    print("ok %s" % a.case)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
