@@ -182,11 +182,10 @@ bool FilterConeLodPlugin::applyConeGrouping(MeshModel& mm, const RichParameterLi
 
   Log("Normal cone grouping: %d faces, %d levels in %.3f s; quality and colour = groups of level %d",
       int(im.faceCount()), h.levelCount(), seconds, displayLevel);
-  Log("level  limit_deg  groups  max_cone_deg  mean_cone_deg  uncullable");
   for (int l = 1; l <= h.levelCount(); ++l) {
     const GroupLevel& lv = h.level(l);
-    Log("%5d  %9.1f  %6d  %12.2f  %13.2f  %10d", l, lv.thresholdDeg, int(lv.groups.size()), lv.maxConeDeg(),
-        lv.meanConeDeg(), lv.uncullableGroups());
+    Log("level %d: groups %d, max_cone_deg %.2f, mean_cone_deg %.2f, limit_deg %.1f, uncullable %d", l,
+        int(lv.groups.size()), lv.maxConeDeg(), lv.meanConeDeg(), lv.thresholdDeg, lv.uncullableGroups());
   }
   return true;
 }
