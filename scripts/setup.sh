@@ -13,6 +13,8 @@ DEPS="$ROOT/deps"
 SRC="$DEPS/meshlab-src"
 BUILD="${CONELOD_BUILD_DIR:-$ROOT/build}"
 JOBS="$(nproc)"
+# shellcheck source=scripts/lib.sh
+. "$ROOT/scripts/lib.sh"
 
 step() { printf '\n==> %s\n' "$*"; }
 fail() { printf '\nsetup.sh: FAILED: %s\n' "$*" >&2; exit 1; }
@@ -26,31 +28,13 @@ PKGS=(meshlab qtbase5-dev libqt5opengl5-dev libeigen3-dev libglew-dev xvfb xauth
       python3 gnuplot-nox)
 
 step "Debian packages"
-missing=()
-for p in "${PKGS[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  export DEBIAN_FRONTEND=noninteractive
-  apt-get update -qq || fail "apt-get update"
-  apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null \
-    || fail "apt-get install ${missing[*]}"
-fi
+apt_install_missing "${PKGS[@]}" || fail "Debian packages"
 echo "all ${#PKGS[@]} packages present"
 
 step "MeshLab 2020.09 source (headers + vcglib) from Debian's source package"
 if [ ! -f "$SRC/src/common/interfaces.h" ] || [ ! -f "$SRC/vcglib/vcg/complex/complex.h" ]; then
-  if ! grep -rqs '^Types:.*deb-src' /etc/apt/sources.list.d/ && ! grep -qs '^deb-src' /etc/apt/sources.list; then
-    # Copy the first stanza of the binary sources with Types: deb-src.
-    awk 'BEGIN{RS="";ORS="\n\n"} NR==1{sub(/Types: deb/,"Types: deb-src"); print}' \
-      /etc/apt/sources.list.d/debian.sources > /etc/apt/sources.list.d/conelod-deb-src.sources \
-      || fail "could not write a deb-src entry"
-    apt-get update -qq || fail "apt-get update (deb-src)"
-  fi
-  mkdir -p "$DEPS/download"
-  ( cd "$DEPS/download" && apt-get source --download-only meshlab >/dev/null 2>&1 ) \
-    || { apt-get update -qq; ( cd "$DEPS/download" && apt-get source --download-only meshlab ); } \
-    || fail "apt-get source --download-only meshlab"
+  ensure_deb_src || fail "deb-src entry for apt-get source"
+  apt_get_in "$DEPS/download" source --download-only meshlab || fail "apt-get source --download-only meshlab"
   tarball="$(ls "$DEPS"/download/meshlab_2020.09*.orig.tar.xz 2>/dev/null | head -1)"
   [ -n "$tarball" ] || fail "meshlab 2020.09 orig tarball not found in $DEPS/download"
   rm -rf "$SRC"; mkdir -p "$SRC"
