@@ -142,6 +142,7 @@ bool FilterConeLodPlugin::fail(const QString& message) {
 
 bool FilterConeLodPlugin::applyFilter(QAction* a, MeshDocument& md, const RichParameterList& par,
                                       vcg::CallBackPos* cb) {
+  errorMessage.clear();
   // Never let an exception reach MeshLab: it would lose the user's unsaved work.
   try {
     MeshModel* mm = md.mm();

@@ -63,6 +63,12 @@ void WriteGroupResults(MeshType& m, const std::vector<size_t>& faceOfIndex, cons
     for (auto& f : m.face) attr[f] = -1;
     for (size_t i = 0; i < faceOfIndex.size(); ++i) attr[m.face[faceOfIndex[i]]] = fg[i];
   }
+  // Levels of an earlier run above this run's top would be stale: remove them.
+  for (int level = h.levelCount() + 1;; ++level) {
+    auto stale = vcg::tri::Allocator<MeshType>::template FindPerFaceAttribute<int>(m, GroupAttributeName(level));
+    if (!vcg::tri::Allocator<MeshType>::IsValidHandle(m, stale)) break;
+    vcg::tri::Allocator<MeshType>::DeletePerFaceAttribute(m, stale);
+  }
   const auto& fg = h.level(displayLevel).faceGroup;
   for (size_t i = 0; i < faceOfIndex.size(); ++i) {
     auto& f = m.face[faceOfIndex[i]];

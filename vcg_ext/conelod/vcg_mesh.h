@@ -17,7 +17,12 @@ class CVertex : public vcg::Vertex<CUsedTypes, vcg::vertex::Coord3f, vcg::vertex
                                    vcg::vertex::Color4b, vcg::vertex::BitFlags> {};
 class CFace : public vcg::Face<CUsedTypes, vcg::face::VertexRef, vcg::face::Normal3f, vcg::face::Qualityf,
                                vcg::face::Color4b, vcg::face::BitFlags> {};
-class CMesh : public vcg::tri::TriMesh<std::vector<CVertex>, std::vector<CFace>> {};
+class CMesh : public vcg::tri::TriMesh<std::vector<CVertex>, std::vector<CFace>> {
+ public:
+  // vcglib 2020.09's ~TriMesh leaves named attributes allocated (its ClearAttributes call is
+  // commented out): free them here.
+  ~CMesh() { ClearAttributes(); }
+};
 
 // Loads a PLY (or any format vcg's PLY importer reads). Returns "" or the error message.
 inline std::string LoadPly(CMesh& m, const std::string& path, int* loadMask = nullptr) {

@@ -292,6 +292,17 @@ TEST(ConeGrouping, WriteGroupResultsSetsQualityColourAndAttributes) {
     ids.insert(int(f.cQ()));
   }
   EXPECT_EQ(ids.size(), h.level(2).groups.size());
+
+  // A second run with fewer levels removes the attributes of the levels it no longer has.
+  ConeGroupingParams one;
+  one.maxLevels = 1;
+  GroupHierarchy h1;
+  ASSERT_TRUE(BuildConeHierarchy(im, one, h1).ok());
+  WriteGroupResults(m, faceOf, h1, 1);
+  EXPECT_TRUE(vcg::tri::Allocator<CMesh>::IsValidHandle(
+      m, vcg::tri::Allocator<CMesh>::FindPerFaceAttribute<int>(m, GroupAttributeName(1))));
+  EXPECT_FALSE(vcg::tri::Allocator<CMesh>::IsValidHandle(
+      m, vcg::tri::Allocator<CMesh>::FindPerFaceAttribute<int>(m, GroupAttributeName(2))));
 }
 
 }  // namespace
