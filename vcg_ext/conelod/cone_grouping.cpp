@@ -154,6 +154,7 @@ struct Link {
 struct Chain {
   int tail;       // last face of the unit's circular face list (faceNext_); -1: dead unit
   int exactSize;  // faceCount when the cone was last computed exactly
+  int capacity;   // room of the unit's list slot in the arena (>= Link::nbCount)
 };
 
 // A neighbour in a unit's adjacency list, with the score of the pair (-inf: not mergeable).
@@ -161,6 +162,44 @@ struct Chain {
 struct Neighbour {
   int id;
   float score;
+};
+
+// The neighbour lists' storage: a vector without initialisation or per-element checks (a
+// merge appends to it in its innermost loop, and pages never written cost no memory).
+class Arena {
+ public:
+  Arena() = default;
+  Arena(const Arena&) = delete;
+  Arena& operator=(const Arena&) = delete;
+  ~Arena() { release(); }
+  Neighbour* data() { return data_; }
+  size_t size() const { return size_; }
+  size_t capacity() const { return capacity_; }
+  // Appends n entries (capacity permitting) and returns the offset of the first.
+  size_t grow(size_t n) { const size_t at = size_; size_ += n; return at; }
+  void shrink(size_t n) { size_ = n; }
+  void reserve(size_t n) {
+    if (n <= capacity_) return;
+    Neighbour* fresh = BigAlloc<Neighbour>().allocate(n);
+    if (size_) std::memcpy(fresh, data_, size_ * sizeof(Neighbour));
+    release();
+    data_ = fresh;
+    capacity_ = n;
+  }
+  void swap(Arena& o) {
+    std::swap(data_, o.data_);
+    std::swap(size_, o.size_);
+    std::swap(capacity_, o.capacity_);
+  }
+
+ private:
+  void release() {
+    if (data_) BigAlloc<Neighbour>().deallocate(data_, capacity_);
+    data_ = nullptr;
+    size_ = capacity_ = 0;
+  }
+  Neighbour* data_ = nullptr;
+  size_t size_ = 0, capacity_ = 0;
 };
 
 constexpr float kNoPair = -std::numeric_limits<float>::infinity();
@@ -278,6 +317,9 @@ class HierarchyBuilder {
   const int faceCount_;
 
   BigVector<int> faceNext_;  // circular face lists, one per unit (Chain::tail)
+  // Face normals, from level 2 on: level 1 recomputes them from the mesh (its arrays leave no
+  // room for these), the levels above, with fewer units, can afford the array.
+  BigVector<vcg::Point3d> faceNormal_;
 
   BigVector<Unit> units_;
   BigVector<Link> links_;
@@ -285,13 +327,14 @@ class HierarchyBuilder {
   BestTree tree_;
   // Neighbour lists. The lists at [0, prefixEnd_) are those of arenaOrder_'s units (in that
   // order; empty: every unit in index order), those after were appended in appendLog_'s order.
-  BigVector<Neighbour> arena_;
+  Arena arena_;
   size_t prefixEnd_ = 0;
   std::vector<int> arenaOrder_;
   std::vector<std::pair<int, uint32_t>> appendLog_;  // (unit, offset)
   uint32_t stampCounter_ = 0;
   std::vector<int> scratchFaces_;
   std::vector<vcg::Point3d> scratchNormals_;
+  std::vector<Neighbour> scratchList_;
   // Filled by emitLevel for the next level: the level's group of each unit, the unit of each group.
   std::vector<int> idOfUnit_, rootOfGroup_;
   double thresholdRad_ = kPi;
@@ -336,20 +379,31 @@ void HierarchyBuilder::setBest(int u) {
 }
 
 void HierarchyBuilder::makeConeExact(int u) {
-  // Walk the list first, then compute the normals: the walk is a chain of dependent loads, the
-  // normals are independent of each other and overlap their misses.
   const int tail = chains_[size_t(u)].tail;
-  scratchFaces_.clear();
   int f = tail;
-  do {
-    f = faceNext_[size_t(f)];
-    scratchFaces_.push_back(f);
-  } while (f != tail);
-  scratchNormals_.resize(scratchFaces_.size());
-  double area;
-  for (size_t i = 0; i < scratchFaces_.size(); ++i) {
-    if (i + 8 < scratchFaces_.size()) Prefetch(&mesh_.faces[size_t(scratchFaces_[i + 8])]);
-    FaceNormalAndArea(mesh_, size_t(scratchFaces_[i]), scratchNormals_[i], area);
+  if (!faceNormal_.empty()) {
+    scratchNormals_.clear();
+    do {
+      f = faceNext_[size_t(f)];
+      scratchNormals_.push_back(faceNormal_[size_t(f)]);
+    } while (f != tail);
+  } else {
+    // Walk the list first, then compute the normals: the walk is a chain of dependent loads, the
+    // normals are independent of each other and their misses overlap (prefetched ahead).
+    scratchFaces_.clear();
+    do {
+      f = faceNext_[size_t(f)];
+      scratchFaces_.push_back(f);
+    } while (f != tail);
+    const size_t n = scratchFaces_.size();
+    scratchNormals_.resize(n);
+    double area;
+    for (size_t i = 0; i < n; ++i) {
+      if (i + 8 < n) Prefetch(&mesh_.faces[size_t(scratchFaces_[i + 8])]);
+      if (i + 4 < n)
+        for (const uint32_t v : mesh_.faces[size_t(scratchFaces_[i + 4])]) Prefetch(&mesh_.positions[v]);
+      FaceNormalAndArea(mesh_, size_t(scratchFaces_[i]), scratchNormals_[i], area);
+    }
   }
   units_[size_t(u)].setCone(MinimalCone(scratchNormals_));
   chains_[size_t(u)].exactSize = units_[size_t(u)].faceCount;
@@ -358,10 +412,14 @@ void HierarchyBuilder::makeConeExact(int u) {
 void HierarchyBuilder::mergeUnits(int u, int p) {
   Link& lu = links_[size_t(u)];
   Link& lp = links_[size_t(p)];
-  const size_t room = size_t(lu.nbCount) + size_t(lp.nbCount);
-  if (arena_.size() + room > arena_.capacity()) compactArena(room);  // while p is alive
+  // Room for the merged list with its slack, should it not fit u's slot; made while p is alive.
+  const size_t room = 2 * (size_t(lu.nbCount) + size_t(lp.nbCount));
+  if (arena_.size() + room > arena_.capacity()) compactArena(room);
   // A merge is bound by memory latency: ask for every neighbour's state and geometry now, so
   // that the misses overlap each other and the cone arithmetic below.
+  Prefetch(&units_[size_t(p)]);
+  Prefetch(&chains_[size_t(u)]);
+  Prefetch(&chains_[size_t(p)]);
   for (const Link* src : {&lu, &lp}) {
     const Neighbour* list = arena_.data() + src->nbOffset;
     for (int i = 0; i < src->nbCount; ++i) {
@@ -396,40 +454,45 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
   if (stillExact) ac.exactSize = a.faceCount;
   else if (a.faceCount >= 2 * ac.exactSize) makeConeExact(u);  // amortized: each face O(log N) times
 
-  // The merged unit's list: both lists without u and p, deduplicated, each pair re-scored.
+  // The merged unit's list: both lists without u and p, deduplicated, each pair re-scored. It
+  // goes back into u's slot when it fits (a unit absorbing a small neighbour rarely gains
+  // neighbours), else to the end of the arena with room to grow.
   tree_.set(p, kNoPair);
   --aliveCount_;
-  const uint32_t offset = uint32_t(arena_.size());
   const uint32_t st = ++stampCounter_;
   lu.stamp = st;
   lp.stamp = st;
+  scratchList_.clear();
   for (const Link* src : {&lu, &lp}) {
-    const Neighbour* list = arena_.data() + src->nbOffset;  // arena_ has the room: no reallocation
+    const Neighbour* list = arena_.data() + src->nbOffset;
     for (int i = 0; i < src->nbCount; ++i) {
       const int w = list[i].id;
       Link& lw = links_[size_t(w)];
       if (lw.stamp == st) continue;
       lw.stamp = st;
-      arena_.push_back({w, evaluate(a, units_[size_t(w)])});
+      scratchList_.push_back({w, evaluate(a, units_[size_t(w)])});
     }
   }
-  lu.nbOffset = offset;
-  lu.nbCount = int(arena_.size() - offset);
+  const int count = int(scratchList_.size());
+  if (count > ac.capacity) {
+    ac.capacity = count + count / 2;
+    lu.nbOffset = uint32_t(arena_.grow(size_t(ac.capacity)));
+    appendLog_.emplace_back(u, lu.nbOffset);
+  }
+  lu.nbCount = count;
   lp.nbCount = 0;
-  appendLog_.emplace_back(u, offset);
-  const size_t end = offset + size_t(lu.nbCount);
-  for (size_t i = offset; i < end; ++i) {  // second wave: the neighbours' lists and keys
-    const int w = arena_[i].id;
-    Prefetch(arena_.data() + links_[size_t(w)].nbOffset);
-    tree_.prefetch(w);
+  std::memcpy(arena_.data() + lu.nbOffset, scratchList_.data(), size_t(count) * sizeof(Neighbour));
+  for (const Neighbour& e : scratchList_) {  // second wave: the neighbours' lists and keys
+    Prefetch(arena_.data() + links_[size_t(e.id)].nbOffset);
+    tree_.prefetch(e.id);
   }
   setBest(u);
 
   // Each neighbour: its entries for u and p become one entry for u with the new score; pairs not
   // involving u are unchanged, so its best is either kept, replaced by u, or rescanned (cached).
-  for (size_t i = offset; i < end; ++i) {
-    const int w = arena_[i].id;
-    const float s = arena_[i].score;
+  for (const Neighbour& e : scratchList_) {
+    const int w = e.id;
+    const float s = e.score;
     Link& lw = links_[size_t(w)];
     Neighbour* nb = arena_.data() + lw.nbOffset;
     int n = lw.nbCount;
@@ -465,6 +528,7 @@ void HierarchyBuilder::compactArena(size_t room) {
     if (l.nbOffset != write)
       std::memmove(arena_.data() + write, arena_.data() + l.nbOffset, size_t(l.nbCount) * sizeof(Neighbour));
     l.nbOffset = uint32_t(write);
+    chains_[size_t(u)].capacity = l.nbCount;
     write += size_t(l.nbCount);
     order.push_back(u);
   };
@@ -478,7 +542,7 @@ void HierarchyBuilder::compactArena(size_t room) {
   }
   for (const auto& e : appendLog_)
     if (alive(e.first) && links_[size_t(e.first)].nbOffset == e.second) slide(e.first);
-  arena_.resize(write);
+  arena_.shrink(write);
   prefixEnd_ = write;
   arenaOrder_.swap(order);
   appendLog_.clear();
@@ -621,15 +685,17 @@ void HierarchyBuilder::nextLevelUnits(const GroupLevel& lv) {
   BigVector<Chain> chains(g);
   size_t entries = 0;
   for (size_t id = 0; id < g; ++id) entries += size_t(links_[size_t(rootOfGroup_[id])].nbCount);
-  BigVector<Neighbour> arena;
-  arena.reserve(entries + entries / 2 + 16);
+  Arena arena;
+  arena.reserve(2 * entries + 16);
   for (size_t id = 0; id < g; ++id) {
     const int u = rootOfGroup_[id];
     units[id] = units_[size_t(u)];
     chains[id] = chains_[size_t(u)];
-    links[id] = Link{-1, uint32_t(arena.size()), 0, 0};
-    for (const Neighbour* w = nbBegin(u); w != nbEnd(u); ++w) arena.push_back({idOfUnit_[size_t(w->id)], kNoPair});
-    links[id].nbCount = int(arena.size() - links[id].nbOffset);
+    const int count = links_[size_t(u)].nbCount;
+    links[id] = Link{-1, uint32_t(arena.grow(size_t(count))), count, 0};
+    chains[id].capacity = count;
+    Neighbour* list = arena.data() + links[id].nbOffset;
+    for (const Neighbour* w = nbBegin(u); w != nbEnd(u); ++w) *list++ = {idOfUnit_[size_t(w->id)], kNoPair};
   }
   units_.swap(units);
   links_.swap(links);
@@ -648,8 +714,9 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     const FaceAdjacency adj = BuildFaceAdjacency(mesh_);
     if (adj.neighbours.size() > size_t(std::numeric_limits<uint32_t>::max() / 2))
       throw std::bad_alloc();  // list offsets are 32-bit
-    arena_.reserve(adj.neighbours.size() + adj.neighbours.size() / 2 + 16);
-    for (const uint32_t w : adj.neighbours) arena_.push_back({int(w), kNoPair});
+    arena_.reserve(2 * adj.neighbours.size() + 16);
+    Neighbour* list = arena_.data() + arena_.grow(adj.neighbours.size());
+    for (const uint32_t w : adj.neighbours) *list++ = {int(w), kNoPair};
     links_.resize(size_t(nf));
     for (int f = 0; f < nf; ++f)
       links_[size_t(f)] = Link{-1, adj.offsets[size_t(f)], int(adj.degree(uint32_t(f))), 0};
@@ -673,7 +740,7 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
                                vcg::Point3d::Construct(mesh_.positions[t[2]])));
     u.faceCount = 1;
     faceNext_[size_t(f)] = f;
-    chains_[size_t(f)] = Chain{f, 1};
+    chains_[size_t(f)] = Chain{f, 1, links_[size_t(f)].nbCount};
   }
   if (progress_ && !progress_(0, "grouping faces by normal cones")) return Status::Cancelled();
 
@@ -687,6 +754,11 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     if (int(out.levels.back().groups.size()) <= std::max(1, params_.minTopGroups)) break;
     if (level == params_.maxLevels) break;
     nextLevelUnits(out.levels.back());
+    if (faceNormal_.empty()) {
+      faceNormal_.resize(size_t(nf));
+      double area;
+      for (int f = 0; f < nf; ++f) FaceNormalAndArea(mesh_, size_t(f), faceNormal_[size_t(f)], area);
+    }
     threshold *= params_.thresholdGrowth;
   }
 
