@@ -5,11 +5,12 @@
 //   default meshes: <repo>/../shared/test_meshes/{stanford_bunny_bun_zipper,stanford_dragon_vrip_binary}.ply
 //
 // Memory is read from /proc/self/status. "Loaded mesh" is what loading costs in a real caller: the
-// vcg mesh (LoadPly) plus the core's IndexedMesh (ToIndexedMesh), both kept alive. The build's
-// peak is VmHWM after the timed runs minus VmRSS before them, the high-water mark having been
-// reset by writing "5" to /proc/self/clear_refs; it includes the GroupHierarchy being built.
-// Freed heap is handed back to the system (malloc_trim) before every reading, so memory freed by
-// an earlier step does not hide the growth of the next one. Target: build peak < 2x loaded mesh.
+// vcg mesh (LoadPly) plus the core's IndexedMesh (ToIndexedMesh), both kept alive. A build's peak
+// is VmHWM after it minus VmRSS before it, the high-water mark having been reset by writing "5"
+// to /proc/self/clear_refs (outside the timed region); it includes the GroupHierarchy being
+// built, and the largest over the iterations is reported. Freed heap is handed back to the
+// system (malloc_trim) before every reading, so that memory freed by an earlier step does not
+// hide the growth of the next one. Target: build peak < 2x loaded mesh.
 #include <malloc.h>
 
 #include <algorithm>
@@ -68,14 +69,21 @@ struct Loaded {
 
 void BM_BuildConeHierarchy(benchmark::State& state, Loaded* m) {
   const ConeGroupingParams params;
-  const double rssBefore = SettledRss();
-  m->peakReset = ResetPeakRss();
-  double seconds = 0;
+  double seconds = 0, peak = 0;
   for (auto _ : state) {
+    // Memory is measured per build, outside the timed region: heap left over by the previous
+    // iteration is handed back first, so each build's growth is its own.
+    state.PauseTiming();
+    const double rssBefore = SettledRss();
+    m->peakReset = ResetPeakRss();
+    state.ResumeTiming();
     GroupHierarchy h;
     const auto t0 = std::chrono::steady_clock::now();
     const Status s = BuildConeHierarchy(m->mesh, params, h);
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    state.PauseTiming();
+    peak = std::max(peak, ProcStatusBytes("VmHWM") - rssBefore);
+    state.ResumeTiming();
     if (!s.ok()) {
       m->error = s.message;
       state.SkipWithError(s.message.c_str());
@@ -85,7 +93,6 @@ void BM_BuildConeHierarchy(benchmark::State& state, Loaded* m) {
     m->level1Groups = h.levelCount() > 0 ? int(h.level(1).groups.size()) : 0;
   }
   if (!m->error.empty()) return;
-  const double peak = ProcStatusBytes("VmHWM") - rssBefore;
   const double faces = double(m->mesh.faceCount());
   m->ran = true;
   m->secondsPerBuild = seconds / double(state.iterations());

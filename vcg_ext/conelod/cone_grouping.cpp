@@ -22,11 +22,10 @@
 #include <new>
 #include <utility>
 
+#include "conelod/big_alloc.h"
+#include "conelod/face_adjacency.h"
 #include "conelod/mesh_check.h"
 
-#ifdef __linux__
-#include <sys/mman.h>
-#endif
 
 namespace conelod {
 
@@ -73,52 +72,6 @@ Sphere TriangleSphere(const vcg::Point3d& a, const vcg::Point3d& b, const vcg::P
   s.r = std::max({Distance(s.c, a), Distance(s.c, b), Distance(s.c, c)});
   return s;
 }
-
-// The builder's large arrays are read at random, all over: backed by 2 MiB pages where the kernel
-// offers transparent huge pages on request, they cost far fewer TLB misses (and page faults).
-// Every block is also cache-line aligned (C++14's operator new does not honour alignas(64)).
-template <class T>
-struct BigAlloc {
-  using value_type = T;
-  BigAlloc() = default;
-  template <class U>
-  BigAlloc(const BigAlloc<U>&) {}
-  static constexpr size_t kHugePage = size_t(2) << 20;
-  static size_t Rounded(size_t bytes) { return (bytes + kHugePage - 1) / kHugePage * kHugePage; }
-  T* allocate(size_t n) {
-    const size_t bytes = n * sizeof(T);
-#ifdef __linux__
-    if (bytes >= 2 * kHugePage) {
-      // Map one huge page more than needed and trim it to a huge-page-aligned block.
-      const size_t size = Rounded(bytes);
-      void* raw = mmap(nullptr, size + kHugePage, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-      if (raw == MAP_FAILED) throw std::bad_alloc();
-      const uintptr_t begin = reinterpret_cast<uintptr_t>(raw);
-      const uintptr_t aligned = (begin + kHugePage - 1) / kHugePage * kHugePage;
-      if (aligned > begin) munmap(raw, aligned - begin);
-      if (aligned + size < begin + size + kHugePage)
-        munmap(reinterpret_cast<void*>(aligned + size), begin + size + kHugePage - (aligned + size));
-      madvise(reinterpret_cast<void*>(aligned), size, MADV_HUGEPAGE);
-      return reinterpret_cast<T*>(aligned);
-    }
-#endif
-    void* p = nullptr;
-    if (posix_memalign(&p, 64, std::max<size_t>(bytes, 1)) != 0) throw std::bad_alloc();
-    return static_cast<T*>(p);
-  }
-  void deallocate(T* p, size_t n) {
-#ifdef __linux__
-    if (n * sizeof(T) >= 2 * kHugePage) { munmap(p, Rounded(n * sizeof(T))); return; }
-#endif
-    free(p);
-  }
-};
-template <class T, class U>
-bool operator==(const BigAlloc<T>&, const BigAlloc<U>&) { return true; }
-template <class T, class U>
-bool operator!=(const BigAlloc<T>&, const BigAlloc<U>&) { return false; }
-template <class T>
-using BigVector = std::vector<T, BigAlloc<T>>;
 
 // One unit of the greedy merge (a face at level 1, a group above): the data every candidate
 // evaluation reads, packed in one cache line.
@@ -234,6 +187,10 @@ class BestTree {
     for (size_t level = 1; level <= levelBegin_.size(); ++level)
       for (size_t i = 0; i < levelCount_[level - 1]; ++i) node(level, i) = winner(level, i);
   }
+  void release() {
+    BigVector<float>().swap(key_);
+    BigVector<Node>().swap(nodes_);
+  }
   bool empty() const { return nodes_.back().key == kNoPair; }
   int top() const { return nodes_.back().unit; }
   void set(int u, float k) {
@@ -304,7 +261,7 @@ class HierarchyBuilder {
   void mergeUnits(int u, int p);
   bool runLevel(double thresholdDeg, long& mergesSoFar);
   void emitLevel(double thresholdDeg, GroupHierarchy& out, bool firstLevel);
-  void nextLevelUnits(const GroupLevel& lv);
+  void nextLevelUnits();
   void makeConeExact(int u);
   bool alive(int u) const { return chains_[size_t(u)].tail >= 0; }
   Neighbour* nbBegin(int u) { return arena_.data() + links_[size_t(u)].nbOffset; }
@@ -335,7 +292,7 @@ class HierarchyBuilder {
   std::vector<int> scratchFaces_;
   std::vector<vcg::Point3d> scratchNormals_;
   std::vector<Neighbour> scratchList_;
-  // Filled by emitLevel for the next level: the level's group of each unit, the unit of each group.
+  // Found by emitLevel: the level's group of each unit, the unit of each group.
   std::vector<int> idOfUnit_, rootOfGroup_;
   double thresholdRad_ = kPi;
   bool thresholdOn_ = false;
@@ -517,11 +474,11 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
 }
 
 // Slides the live lists down over the dead ones, in arena order (no copy of the arena), and makes
-// sure `room` more entries fit.
+// sure `room` more entries fit. The new order overwrites the old one as it is read.
 void HierarchyBuilder::compactArena(size_t room) {
-  std::vector<int> order;
-  order.reserve(size_t(aliveCount_));
-  size_t write = 0;
+  const bool identity = arenaOrder_.empty();
+  if (identity) arenaOrder_.reserve(size_t(aliveCount_));
+  size_t write = 0, kept = 0;
   auto slide = [&](int u) {
     Link& l = links_[size_t(u)];
     if (l.nbCount == 0) return;
@@ -530,21 +487,24 @@ void HierarchyBuilder::compactArena(size_t room) {
     l.nbOffset = uint32_t(write);
     chains_[size_t(u)].capacity = l.nbCount;
     write += size_t(l.nbCount);
-    order.push_back(u);
+    if (kept < arenaOrder_.size()) arenaOrder_[kept] = u;
+    else arenaOrder_.push_back(u);
+    ++kept;
   };
   auto inPrefix = [&](int u) { return alive(u) && links_[size_t(u)].nbOffset < prefixEnd_; };
-  if (arenaOrder_.empty()) {
+  if (identity) {
     for (int u = 0; u < int(units_.size()); ++u)
       if (inPrefix(u)) slide(u);
   } else {
-    for (const int u : arenaOrder_)
-      if (inPrefix(u)) slide(u);
+    const size_t oldCount = arenaOrder_.size();
+    for (size_t i = 0; i < oldCount; ++i)
+      if (inPrefix(arenaOrder_[i])) slide(arenaOrder_[i]);
   }
   for (const auto& e : appendLog_)
     if (alive(e.first) && links_[size_t(e.first)].nbOffset == e.second) slide(e.first);
+  arenaOrder_.resize(kept);
   arena_.shrink(write);
   prefixEnd_ = write;
-  arenaOrder_.swap(order);
   appendLog_.clear();
   if (write + room > arena_.capacity()) arena_.reserve(write + room + write / 2);
 }
@@ -613,6 +573,9 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     g = id;
   }
   const size_t groupCount = rootOfGroup_.size();
+  // The groups become the units of the next level now, indexed by group: the arrays of this
+  // level go before the level's output grows.
+  nextLevelUnits();
   level.groups.resize(groupCount);
 
   // Children: faces (level 1) or previous groups, bucketed by new group. A previous group's new
@@ -647,11 +610,10 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   // Exact cones; boxes and tight spheres from the vertices, in face order (min and max do not
   // depend on the order, and face order reads the mesh sequentially).
   for (size_t g = 0; g < groupCount; ++g) {
-    const int u = rootOfGroup_[g];
-    if (chains_[size_t(u)].exactSize != units_[size_t(u)].faceCount) makeConeExact(u);
+    if (chains_[g].exactSize != units_[g].faceCount) makeConeExact(int(g));
     Group& grp = level.groups[g];
-    grp.cone = units_[size_t(u)].cone();
-    grp.faceCount = units_[size_t(u)].faceCount;
+    grp.cone = units_[g].cone();
+    grp.faceCount = units_[g].faceCount;
     grp.box.SetNull();
   }
   for (size_t f = 0; f < size_t(faceCount_); ++f) {
@@ -668,7 +630,7 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
       r2[g] = std::max(r2[g], (vcg::Point3d::Construct(mesh_.positions[v]) - boxCenter[g]).SquaredNorm());
   }
   for (size_t g = 0; g < groupCount; ++g) {
-    Unit& unit = units_[size_t(rootOfGroup_[g])];
+    Unit& unit = units_[g];
     if (std::sqrt(r2[g]) < unit.radius) unit.setSphere(Sphere{boxCenter[g], std::sqrt(r2[g])});
     level.groups[g].center = vcg::Point3f(unit.center[0], unit.center[1], unit.center[2]);
     level.groups[g].radius = unit.radius;
@@ -676,10 +638,10 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   out.levels.push_back(std::move(level));
 }
 
-// The groups just emitted become the units of the next level (their lists already name live
-// units only); the previous level's arrays are released.
-void HierarchyBuilder::nextLevelUnits(const GroupLevel& lv) {
-  const size_t g = lv.groups.size();
+// The groups found by emitLevel (rootOfGroup_, idOfUnit_) become the units of the next level
+// (their lists already name live units only); this level's arrays are released.
+void HierarchyBuilder::nextLevelUnits() {
+  const size_t g = rootOfGroup_.size();
   BigVector<Unit> units(g);
   BigVector<Link> links(g);
   BigVector<Chain> chains(g);
@@ -702,24 +664,28 @@ void HierarchyBuilder::nextLevelUnits(const GroupLevel& lv) {
   chains_.swap(chains);
   arena_.swap(arena);
   prefixEnd_ = arena_.size();
-  arenaOrder_.clear();
-  arenaOrder_.shrink_to_fit();
-  appendLog_.clear();
+  std::vector<int>().swap(arenaOrder_);
+  std::vector<std::pair<int, uint32_t>>().swap(appendLog_);
+  std::vector<int>().swap(idOfUnit_);
+  tree_.release();
 }
 
 Status HierarchyBuilder::run(GroupHierarchy& out) {
   const int nf = faceCount_;
   // Adjacency first, while nothing else is allocated: it is the largest temporary.
   {
-    const FaceAdjacency adj = BuildFaceAdjacency(mesh_);
-    if (adj.neighbours.size() > size_t(std::numeric_limits<uint32_t>::max() / 2))
+    BigVector<uint32_t> offsets, neighbours;
+    size_t borderEdges, nonManifoldEdges;
+    BuildFaceAdjacencyInto(mesh_, offsets, neighbours, borderEdges, nonManifoldEdges);
+    if (neighbours.size() > size_t(std::numeric_limits<uint32_t>::max() / 2))
       throw std::bad_alloc();  // list offsets are 32-bit
-    arena_.reserve(2 * adj.neighbours.size() + 16);
-    Neighbour* list = arena_.data() + arena_.grow(adj.neighbours.size());
-    for (const uint32_t w : adj.neighbours) *list++ = {int(w), kNoPair};
+    // The arena's high-water mark is what it costs in memory: a quarter of slack, no more.
+    arena_.reserve(neighbours.size() + neighbours.size() / 4 + 16);
+    Neighbour* list = arena_.data() + arena_.grow(neighbours.size());
+    for (const uint32_t w : neighbours) *list++ = {int(w), kNoPair};
     links_.resize(size_t(nf));
     for (int f = 0; f < nf; ++f)
-      links_[size_t(f)] = Link{-1, adj.offsets[size_t(f)], int(adj.degree(uint32_t(f))), 0};
+      links_[size_t(f)] = Link{-1, offsets[size_t(f)], int(offsets[size_t(f) + 1] - offsets[size_t(f)]), 0};
     prefixEnd_ = arena_.size();
   }
 
@@ -753,7 +719,6 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     emitLevel(std::min(threshold, 180.0), out, level == 1);
     if (int(out.levels.back().groups.size()) <= std::max(1, params_.minTopGroups)) break;
     if (level == params_.maxLevels) break;
-    nextLevelUnits(out.levels.back());
     if (faceNormal_.empty()) {
       faceNormal_.resize(size_t(nf));
       double area;

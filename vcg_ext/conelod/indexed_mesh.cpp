@@ -1,6 +1,8 @@
 // ConeLOD — indexed mesh helpers and face adjacency (see indexed_mesh.h).
 #include "conelod/indexed_mesh.h"
 
+#include "conelod/face_adjacency.h"
+
 #include <algorithm>
 #include <numeric>
 
@@ -15,55 +17,8 @@ void ComputeFaceNormalsAndAreas(const IndexedMesh& m, std::vector<vcg::Point3d>&
 }
 
 FaceAdjacency BuildFaceAdjacency(const IndexedMesh& m) {
-  const uint32_t nv = uint32_t(m.positions.size());
-  const uint32_t nf = uint32_t(m.faces.size());
-  // Vertex -> incident corners, CSR (counting sort: no per-vertex allocation). A corner carries
-  // its face's two other vertices, so that finding the faces on an edge reads the ring only,
-  // not the faces of the ring (scattered reads that made this the slow part).
-  struct Corner {
-    uint32_t face, other1, other2;
-  };
-  std::vector<uint32_t> vfStart(nv + 1, 0);
-  std::vector<Corner> vf(size_t(nf) * 3);
-  for (const auto& t : m.faces)
-    for (uint32_t v : t) ++vfStart[v + 1];
-  for (uint32_t v = 0; v < nv; ++v) vfStart[v + 1] += vfStart[v];
-  {
-    std::vector<uint32_t> fill(vfStart.begin(), vfStart.end() - 1);
-    for (uint32_t f = 0; f < nf; ++f) {
-      const auto& t = m.faces[f];
-      for (int k = 0; k < 3; ++k) vf[fill[t[k]]++] = Corner{f, t[(k + 1) % 3], t[(k + 2) % 3]};
-    }
-  }
-
   FaceAdjacency adj;
-  adj.offsets.assign(nf + 1, 0);
-  adj.neighbours.reserve(size_t(nf) * 3);
-  for (uint32_t f = 0; f < nf; ++f) {
-    const auto& t = m.faces[f];
-    const size_t listBegin = adj.neighbours.size();
-    for (int e = 0; e < 3; ++e) {
-      const uint32_t a = t[e], b = t[(e + 1) % 3];
-      if (a == b) continue;  // a degenerate face's collapsed edge is no edge
-      // The faces on edge (a,b) are those around a that also use b (b != a: among the others).
-      uint32_t sharers = 1, lowest = f;
-      for (uint32_t i = vfStart[a]; i < vfStart[a + 1]; ++i) {
-        const Corner& c = vf[i];
-        const uint32_t g = c.face;
-        if (g == f || (i > vfStart[a] && vf[i - 1].face == g)) continue;  // a face listed twice at a
-        if (c.other1 != b && c.other2 != b) continue;
-        ++sharers;
-        lowest = std::min(lowest, g);
-        if (std::find(adj.neighbours.begin() + listBegin, adj.neighbours.end(), g) == adj.neighbours.end())
-          adj.neighbours.push_back(g);
-      }
-      if (lowest == f) {  // count each undirected edge once, at its lowest face
-        if (sharers == 1) ++adj.borderEdges;
-        else if (sharers > 2) ++adj.nonManifoldEdges;
-      }
-    }
-    adj.offsets[f + 1] = uint32_t(adj.neighbours.size());
-  }
+  BuildFaceAdjacencyInto(m, adj.offsets, adj.neighbours, adj.borderEdges, adj.nonManifoldEdges);
   return adj;
 }
 
