@@ -5,9 +5,13 @@
 // Guarantees checked: every face in exactly one group per level, ids by first appearance,
 // parent/child links consistent, every group edge-connected, no cone above the level's
 // threshold (threshold >= 180: no limit), every cone equal to the exact minimal cone of the
-// group's normals, spheres and boxes enclosing the group's vertices, deterministic output.
+// group's normals (to 1e-9 rad: Welzl's last bits depend on the order of the normals) and
+// holding them (to MinimalCone's slack of 1e-10 on cosines), boxes
+// equal to the vertices' box, spheres enclosing the vertices (to the rounding of the float
+// centre), deterministic output (two builds, same digests).
 //
 // Usage: check_grouping MESH.ply...   exit status 0 when every check passed.
+#include <algorithm>
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
@@ -88,22 +92,34 @@ std::vector<std::string> CheckHierarchy(const IndexedMesh& m, const FaceAdjacenc
       for (uint32_t f : facesOf[g]) scratch.push_back(normals[f]);
       const NormalCone exact = MinimalCone(scratch);
       // Welzl's result depends on the order of the normals in its last bits: compare with a
-      // tolerance, and check that the group's own cone holds every normal.
+      // tolerance, and check that the group's own cone holds every normal, with MinimalCone's
+      // own slack on cosines (an angle slack of up to 1.4e-5 rad for a cone of half-angle 0).
       bool same = exact.empty() == grp.cone.empty() && exact.cullable() == grp.cone.cullable() &&
                   (!exact.cullable() || std::fabs(exact.halfAngle - grp.cone.halfAngle) <= 1e-9);
-      for (uint32_t f : facesOf[g])
-        if (normals[f].SquaredNorm() > 0.5 && !grp.cone.contains(normals[f], 1e-9)) same = false;
+      if (grp.cone.cullable() && !grp.cone.empty()) {
+        const double minCos = std::cos(grp.cone.halfAngle) - 1e-9;
+        for (uint32_t f : facesOf[g])
+          if (normals[f].SquaredNorm() > 0.5 && normals[f] * grp.cone.axis < minCos) same = false;
+      }
       if (!same) Fail(at + "cone of group " + std::to_string(g) + " is not the exact minimal cone");
       const double deg = grp.cone.cullable() ? std::max(0.0, grp.cone.halfAngle) * 180 / NormalCone::kPi : 180;
       maxDeg = std::max(maxDeg, deg);
       vcg::Box3f box;
+      // In double; the slack is the rounding of a float coordinate (the centre is stored in float).
+      const vcg::Point3d center = vcg::Point3d::Construct(grp.center);
+      const double slack = 1e-6 * grp.radius + std::ldexp(std::max({std::fabs(center[0]), std::fabs(center[1]),
+                                                                    std::fabs(center[2])}), -23);
+      double miss = 0;
       for (uint32_t f : facesOf[g])
         for (uint32_t v : m.faces[f]) {
           box.Add(m.positions[v]);
-          if (Distance(m.positions[v], grp.center) > grp.radius * (1 + 1e-5f))
-            Fail(at + "sphere of group " + std::to_string(g) + " misses a vertex by " +
-                 std::to_string(Distance(m.positions[v], grp.center) - grp.radius));
+          miss = std::max(miss, Distance(vcg::Point3d::Construct(m.positions[v]), center) - grp.radius);
         }
+      if (miss > slack) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf, "sphere of group %zu (radius %g) misses a vertex by %g", g, grp.radius, miss);
+        Fail(at + buf);
+      }
       if (!(box.min == grp.box.min && box.max == grp.box.max)) Fail(at + "box of group " + std::to_string(g));
       geometry.add(grp.cone.axis); geometry.add(grp.cone.halfAngle);
       geometry.add(grp.center); geometry.add(grp.radius);

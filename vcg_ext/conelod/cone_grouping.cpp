@@ -6,17 +6,20 @@
 // a neighbour whose best partner was one of the merged units rescans its own neighbours, the
 // others compare their pair with the new unit against their best.
 //
-// The loop is bound by memory latency (each merge touches ~20 scattered units), so the per-unit
-// state is split by access pattern and packed: the geometry every evaluation reads (one cache
-// line), the greedy state read for every neighbour (a quarter line), the face chain touched only
-// by the merging units. Neighbour lists live in one append-only arena, compacted in place when
-// full. Face normals are recomputed from the mesh when an exact cone needs them, and areas at
-// the end, rather than kept in arrays: the build's memory stays below twice the mesh's.
+// The loop is bound by memory latency (each merge touches ~20 units scattered over the mesh), so
+// the per-unit state is split by access pattern and packed: the geometry every evaluation reads
+// (one cache line), the greedy state read for every neighbour (a quarter line), the face chain
+// touched only by the merging units; and a merge prefetches all its neighbours' data before it
+// uses any of it. Neighbour lists live in one arena: a merged list goes back into its unit's
+// slot when it fits, else to the end; the arena is compacted in place when full. Level 1
+// recomputes face normals from the mesh when an exact cone needs them and areas come from the
+// faces at the end, rather than from arrays: the build's peak memory stays under twice the
+// loaded mesh's. The output is the same, bit for bit, as that of the straightforward version
+// this replaced (std::vector everywhere, binary heap, normals array).
 #include "conelod/cone_grouping.h"
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <new>
@@ -25,7 +28,6 @@
 #include "conelod/big_alloc.h"
 #include "conelod/face_adjacency.h"
 #include "conelod/mesh_check.h"
-
 
 namespace conelod {
 
@@ -117,8 +119,8 @@ struct Neighbour {
   float score;
 };
 
-// The neighbour lists' storage: a vector without initialisation or per-element checks (a
-// merge appends to it in its innermost loop, and pages never written cost no memory).
+// The neighbour lists' storage: a vector without initialisation (lists are written in bulk, and
+// reserved pages never written cost no memory).
 class Arena {
  public:
   Arena() = default;
@@ -181,7 +183,10 @@ class BestTree {
     nodes_.assign(total, Node{kNoPair, std::numeric_limits<int>::max()});  // padding never wins
   }
   float key(int u) const { return key_[size_t(u)]; }
-  void prefetch(int u) const { Prefetch(&key_[size_t(u)]); }
+  void prefetch(int u) const {  // the leaf and its parent (level 1 starts nodes_)
+    Prefetch(&key_[size_t(u)]);
+    Prefetch(&nodes_[size_t(u) / kArity]);
+  }
   void setKey(int u, float k) { key_[size_t(u)] = k; }
   void build() {
     for (size_t level = 1; level <= levelBegin_.size(); ++level)
@@ -242,10 +247,10 @@ class BestTree {
     return best;
   }
 
-  BigVector<float> key_;           // leaves, padded to a multiple of kArity
-  BigVector<Node> nodes_;          // levels 1.. (each padded to a multiple of kArity), root last
-  std::vector<size_t> levelBegin_;   // first node of level 1, 2, ... in nodes_
-  std::vector<size_t> levelCount_;   // live nodes per level
+  BigVector<float> key_;            // leaves, padded to a multiple of kArity
+  BigVector<Node> nodes_;           // levels 1.. (each padded to a multiple of kArity), root last
+  std::vector<size_t> levelBegin_;  // first node of level 1, 2, ... in nodes_
+  std::vector<size_t> levelCount_;  // live nodes per level
 };
 
 class HierarchyBuilder {
@@ -274,8 +279,8 @@ class HierarchyBuilder {
   const int faceCount_;
 
   BigVector<int> faceNext_;  // circular face lists, one per unit (Chain::tail)
-  // Face normals, from level 2 on: level 1 recomputes them from the mesh (its arrays leave no
-  // room for these), the levels above, with fewer units, can afford the array.
+  // Face normals, from level 2 on. Level 1 recomputes them from the mesh: its arrays leave no
+  // room for these under the memory target; above it, with far fewer units, there is.
   BigVector<vcg::Point3d> faceNormal_;
 
   BigVector<Unit> units_;
@@ -427,6 +432,8 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
       Link& lw = links_[size_t(w)];
       if (lw.stamp == st) continue;
       lw.stamp = st;
+      Prefetch(arena_.data() + lw.nbOffset);  // for the update below, now that its offset is here
+      tree_.prefetch(w);
       scratchList_.push_back({w, evaluate(a, units_[size_t(w)])});
     }
   }
@@ -439,10 +446,6 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
   lu.nbCount = count;
   lp.nbCount = 0;
   std::memcpy(arena_.data() + lu.nbOffset, scratchList_.data(), size_t(count) * sizeof(Neighbour));
-  for (const Neighbour& e : scratchList_) {  // second wave: the neighbours' lists and keys
-    Prefetch(arena_.data() + links_[size_t(e.id)].nbOffset);
-    tree_.prefetch(e.id);
-  }
   setBest(u);
 
   // Each neighbour: its entries for u and p become one entry for u with the new score; pairs not
