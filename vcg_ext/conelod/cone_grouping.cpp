@@ -1,19 +1,32 @@
 // ConeLOD — hierarchical face grouping by an evaluation function (see cone_grouping.h).
 //
 // Implementation notes. The greedy loop keeps, for every live unit, its best partner and that
-// pair's score; an indexed max-heap over units (not over pairs) gives the global best pair. A
+// pair's score; a tournament tree over units (not over pairs) gives the global best pair. A
 // merge only changes pairs that involve the merged unit, so only its neighbours are revisited:
 // a neighbour whose best partner was one of the merged units rescans its own neighbours, the
-// others compare their pair with the new unit against their best. Neighbour lists live in one
-// append-only arena (no allocation per unit), compacted when it grows past a few times the live
-// size.
+// others compare their pair with the new unit against their best.
+//
+// The loop is bound by memory latency (each merge touches ~20 units scattered over the mesh), so
+// the per-unit state is split by access pattern and packed: the geometry every evaluation reads
+// (one cache line), the greedy state read for every neighbour (a quarter line), the face chain
+// touched only by the merging units; and a merge prefetches all its neighbours' data before it
+// uses any of it. Neighbour lists live in one arena: a merged list goes back into its unit's
+// slot when it fits, else to the end; the arena is compacted in place when full. Level 1
+// recomputes face normals from the mesh when an exact cone needs them and areas come from the
+// faces at the end, rather than from arrays: the build's peak memory stays under twice the
+// loaded mesh's. The output is the same, bit for bit, as that of the straightforward version
+// this replaced (std::vector everywhere, binary heap, normals array).
 #include "conelod/cone_grouping.h"
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
-#include <cstdio>
+#include <new>
+#include <utility>
 
+#include "conelod/big_alloc.h"
+#include "conelod/face_adjacency.h"
 #include "conelod/mesh_check.h"
 
 namespace conelod {
@@ -22,6 +35,8 @@ namespace {
 
 constexpr double kPi = NormalCone::kPi;
 constexpr double kDeg = kPi / 180.0;
+
+inline void Prefetch(const void* p) { __builtin_prefetch(p); }
 
 struct Sphere {
   vcg::Point3d c;
@@ -87,10 +102,20 @@ struct alignas(64) Unit {
   }
 };
 
-// Data touched only when a unit merges.
-struct UnitFaces {
-  int exactSize = 0;         // faceCount when the cone was last computed exactly
-  int head = -1, tail = -1;  // the unit's faces, a list through faceNext_
+// The greedy state of a unit that a merge reads and writes for every neighbour of the merged
+// unit: a quarter of a cache line. (The best pair's score is the unit's key in BestTree.)
+struct Link {
+  int bestPartner;    // -1: no mergeable pair
+  uint32_t nbOffset;  // the neighbour list is arena_[nbOffset, nbOffset + nbCount)
+  int nbCount;
+  uint32_t stamp;     // deduplicates neighbours while two lists are joined
+};
+
+// The state of a unit touched only when the unit itself merges.
+struct Chain {
+  int tail;       // last face of the unit's circular face list (faceNext_); -1: dead unit
+  int exactSize;  // faceCount when the cone was last computed exactly
+  int capacity;   // room of the unit's list slot in the arena (>= Link::nbCount)
 };
 
 // A neighbour in a unit's adjacency list, with the score of the pair (-inf: not mergeable).
@@ -100,78 +125,138 @@ struct Neighbour {
   float score;
 };
 
-constexpr float kNoPair = -std::numeric_limits<float>::infinity();
-
-// Indexed binary max-heap of units keyed by the score of their best pair.
-class UnitHeap {
+// The neighbour lists' storage: a vector without initialisation (lists are written in bulk, and
+// reserved pages never written cost no memory).
+class Arena {
  public:
-  void reset(size_t n) { heap_.clear(); pos_.assign(n, -1); }
-  bool empty() const { return heap_.empty(); }
-  int top() const { return heap_[0].unit; }
-  void set(int u, float key) {
-    int i = pos_[size_t(u)];
-    if (i < 0) {
-      i = int(heap_.size());
-      heap_.push_back({key, u});
-      pos_[size_t(u)] = i;
-      up(size_t(i));
-      return;
-    }
-    const float old = heap_[size_t(i)].key;
-    heap_[size_t(i)].key = key;
-    if (key > old) up(size_t(i));
-    else down(size_t(i));
+  Arena() = default;
+  Arena(const Arena&) = delete;
+  Arena& operator=(const Arena&) = delete;
+  ~Arena() { release(); }
+  Neighbour* data() { return data_; }
+  size_t size() const { return size_; }
+  size_t capacity() const { return capacity_; }
+  // Appends n entries (capacity permitting) and returns the offset of the first.
+  size_t grow(size_t n) { const size_t at = size_; size_ += n; return at; }
+  void shrink(size_t n) { size_ = n; }
+  void reserve(size_t n) {
+    if (n <= capacity_) return;
+    Neighbour* fresh = BigAlloc<Neighbour>().allocate(n);
+    if (size_) std::memcpy(fresh, data_, size_ * sizeof(Neighbour));
+    release();
+    data_ = fresh;
+    capacity_ = n;
   }
-  void remove(int u) {
-    const int i = pos_[size_t(u)];
-    if (i < 0) return;
-    pos_[size_t(u)] = -1;
-    const Entry last = heap_.back();
-    heap_.pop_back();
-    if (last.unit == u) return;
-    heap_[size_t(i)] = last;
-    pos_[size_t(last.unit)] = i;
-    up(size_t(i));
-    down(size_t(pos_[size_t(last.unit)]));
+  void swap(Arena& o) {
+    std::swap(data_, o.data_);
+    std::swap(size_, o.size_);
+    std::swap(capacity_, o.capacity_);
   }
 
  private:
-  struct Entry {
+  void release() {
+    if (data_) BigAlloc<Neighbour>().deallocate(data_, capacity_);
+    data_ = nullptr;
+    size_ = capacity_ = 0;
+  }
+  Neighbour* data_ = nullptr;
+  size_t size_ = 0, capacity_ = 0;
+};
+
+constexpr float kNoPair = -std::numeric_limits<float>::infinity();
+
+// The unit with the best pair: an 8-ary tournament tree over the units' keys (the score of each
+// unit's best pair; kNoPair: none). A unit's leaf sits at its own index, so the neighbours of a
+// merged unit, close in index, share the lower nodes of their paths, and an update that does
+// not change a node's winner stops there: cheaper on memory than a heap, where positions are
+// scattered. Ties go to the lower unit id (deterministic output).
+class BestTree {
+ public:
+  // n units, none with a pair yet; setKey then build, or set.
+  void reset(size_t n) {
+    key_.assign(RoundUp(std::max<size_t>(n, 1)), kNoPair);
+    levelBegin_.clear();
+    levelCount_.clear();
+    size_t below = key_.size(), total = 0;
+    for (;;) {
+      const size_t count = below / kArity;
+      levelBegin_.push_back(total);
+      levelCount_.push_back(count);
+      if (count == 1) { total += 1; break; }
+      below = RoundUp(count);
+      total += below;
+    }
+    nodes_.assign(total, Node{kNoPair, std::numeric_limits<int>::max()});  // padding never wins
+  }
+  float key(int u) const { return key_[size_t(u)]; }
+  void prefetch(int u) const {  // the leaf and its parent (level 1 starts nodes_)
+    Prefetch(&key_[size_t(u)]);
+    Prefetch(&nodes_[size_t(u) / kArity]);
+  }
+  void setKey(int u, float k) { key_[size_t(u)] = k; }
+  void build() {
+    for (size_t level = 1; level <= levelBegin_.size(); ++level)
+      for (size_t i = 0; i < levelCount_[level - 1]; ++i) node(level, i) = winner(level, i);
+  }
+  void release() {
+    BigVector<float>().swap(key_);
+    BigVector<Node>().swap(nodes_);
+  }
+  bool empty() const { return nodes_.back().key == kNoPair; }
+  int top() const { return nodes_.back().unit; }
+  void set(int u, float k) {
+    const float old = key_[size_t(u)];
+    key_[size_t(u)] = k;
+    size_t i = size_t(u);
+    if (k > old) {  // u can only win more nodes
+      const Node e{k, u};
+      for (size_t level = 1; level <= levelBegin_.size(); ++level) {
+        i /= kArity;
+        Node& n = node(level, i);
+        if (n.unit != u && !Better(e, n)) return;
+        n = e;
+      }
+    } else if (k < old) {  // only the nodes u was winning change
+      for (size_t level = 1; level <= levelBegin_.size(); ++level) {
+        i /= kArity;
+        Node& n = node(level, i);
+        if (n.unit != u) return;
+        n = winner(level, i);
+      }
+    }
+  }
+
+ private:
+  static constexpr size_t kArity = 8;  // 8 nodes = one cache line
+  struct Node {
     float key;
     int unit;
   };
-  static bool better(const Entry& a, const Entry& b) {
-    return a.key > b.key || (a.key == b.key && a.unit < b.unit);  // deterministic ties
+  static size_t RoundUp(size_t n) { return (n + kArity - 1) / kArity * kArity; }
+  static bool Better(const Node& a, const Node& b) {
+    return a.key > b.key || (a.key == b.key && a.unit < b.unit);
   }
-  void up(size_t i) {
-    const Entry e = heap_[i];
-    while (i > 0) {
-      const size_t p = (i - 1) / 2;
-      if (!better(e, heap_[p])) break;
-      heap_[i] = heap_[p];
-      pos_[size_t(heap_[i].unit)] = int(i);
-      i = p;
+  Node& node(size_t level, size_t i) { return nodes_[levelBegin_[level - 1] + i]; }
+  // The best of the children of node i at `level` (children in index order: ties to the first).
+  Node winner(size_t level, size_t i) {
+    if (level == 1) {
+      const float* k = &key_[i * kArity];
+      size_t best = 0;
+      for (size_t j = 1; j < kArity; ++j)
+        if (k[j] > k[best]) best = j;
+      return Node{k[best], int(i * kArity + best)};
     }
-    heap_[i] = e;
-    pos_[size_t(e.unit)] = int(i);
+    const Node* c = &node(level - 1, i * kArity);
+    Node best = c[0];
+    for (size_t j = 1; j < kArity; ++j)
+      if (Better(c[j], best)) best = c[j];
+    return best;
   }
-  void down(size_t i) {
-    const Entry e = heap_[i];
-    const size_t n = heap_.size();
-    for (;;) {
-      size_t c = 2 * i + 1;
-      if (c >= n) break;
-      if (c + 1 < n && better(heap_[c + 1], heap_[c])) ++c;
-      if (!better(heap_[c], e)) break;
-      heap_[i] = heap_[c];
-      pos_[size_t(heap_[i].unit)] = int(i);
-      i = c;
-    }
-    heap_[i] = e;
-    pos_[size_t(e.unit)] = int(i);
-  }
-  std::vector<Entry> heap_;
-  std::vector<int> pos_;
+
+  BigVector<float> key_;            // leaves, padded to a multiple of kArity
+  BigVector<Node> nodes_;           // levels 1.. (each padded to a multiple of kArity), root last
+  std::vector<size_t> levelBegin_;  // first node of level 1, 2, ... in nodes_
+  std::vector<size_t> levelCount_;  // live nodes per level
 };
 
 class HierarchyBuilder {
@@ -187,44 +272,43 @@ class HierarchyBuilder {
   void mergeUnits(int u, int p);
   bool runLevel(double thresholdDeg, long& mergesSoFar);
   void emitLevel(double thresholdDeg, GroupHierarchy& out, bool firstLevel);
+  void nextLevelUnits();
   void makeConeExact(int u);
-  Neighbour* nbBegin(int u) { return arena_.data() + nbOffset_[size_t(u)]; }
-  Neighbour* nbEnd(int u) { return nbBegin(u) + nbCount_[size_t(u)]; }
-  void compactArena();
+  bool alive(int u) const { return chains_[size_t(u)].tail >= 0; }
+  Neighbour* nbBegin(int u) { return arena_.data() + links_[size_t(u)].nbOffset; }
+  Neighbour* nbEnd(int u) { return nbBegin(u) + links_[size_t(u)].nbCount; }
+  void compactArena(size_t room);
 
   const IndexedMesh& mesh_;
   const ConeGroupingParams& params_;
   const Progress& progress_;
   const int faceCount_;
 
-  std::vector<vcg::Point3d> faceNormal_;
-  std::vector<int> faceNext_;
+  BigVector<int> faceNext_;  // circular face lists, one per unit (Chain::tail)
+  // Face normals, from level 2 on. Level 1 recomputes them from the mesh: its arrays leave no
+  // room for these under the memory target; above it, with far fewer units, there is.
+  BigVector<vcg::Point3d> faceNormal_;
 
-  std::vector<Unit> units_;
-  std::vector<UnitFaces> unitFaces_;
-  std::vector<int> mergedInto_;  // the unit a dead unit merged into (resolves the previous level)
-  std::vector<char> alive_;
-  std::vector<float> bestScore_;
-  std::vector<int> bestPartner_;
-  UnitHeap heap_;
-  std::vector<Neighbour> arena_;
-  std::vector<size_t> nbOffset_;
-  std::vector<int> nbCount_;
-  std::vector<unsigned> stamp_;
-  unsigned stampCounter_ = 0;
+  BigVector<Unit> units_;
+  BigVector<Link> links_;
+  BigVector<Chain> chains_;
+  BestTree tree_;
+  // Neighbour lists. The lists at [0, prefixEnd_) are those of arenaOrder_'s units (in that
+  // order; empty: every unit in index order), those after were appended in appendLog_'s order.
+  Arena arena_;
+  size_t prefixEnd_ = 0;
+  std::vector<int> arenaOrder_;
+  std::vector<std::pair<int, uint32_t>> appendLog_;  // (unit, offset)
+  uint32_t stampCounter_ = 0;
+  std::vector<int> scratchFaces_;
   std::vector<vcg::Point3d> scratchNormals_;
+  std::vector<Neighbour> scratchList_;
+  // Found by emitLevel: the level's group of each unit, the unit of each group.
+  std::vector<int> idOfUnit_, rootOfGroup_;
   double thresholdRad_ = kPi;
   bool thresholdOn_ = false;
   int aliveCount_ = 0;
   bool cancelled_ = false;
-
-  int find(int u) {  // with path halving: merge chains can be long
-    while (mergedInto_[size_t(u)] != u) {
-      mergedInto_[size_t(u)] = mergedInto_[size_t(mergedInto_[size_t(u)])];
-      u = mergedInto_[size_t(u)];
-    }
-    return u;
-  }
 };
 
 float HierarchyBuilder::evaluate(const Unit& a, const Unit& b) const {
@@ -258,73 +342,126 @@ void HierarchyBuilder::setBest(int u) {
       best = n->score;
       partner = n->id;
     }
-  bestScore_[size_t(u)] = best;
-  bestPartner_[size_t(u)] = partner;
-  if (partner >= 0) heap_.set(u, best);
-  else heap_.remove(u);
+  links_[size_t(u)].bestPartner = partner;
+  tree_.set(u, best);
 }
 
 void HierarchyBuilder::makeConeExact(int u) {
-  UnitFaces& uf = unitFaces_[size_t(u)];
-  scratchNormals_.clear();
-  for (int f = uf.head; f >= 0; f = faceNext_[size_t(f)]) scratchNormals_.push_back(faceNormal_[size_t(f)]);
+  const int tail = chains_[size_t(u)].tail;
+  int f = tail;
+  if (!faceNormal_.empty()) {
+    scratchNormals_.clear();
+    do {
+      f = faceNext_[size_t(f)];
+      scratchNormals_.push_back(faceNormal_[size_t(f)]);
+    } while (f != tail);
+  } else {
+    // Walk the list first, then compute the normals: the walk is a chain of dependent loads, the
+    // normals are independent of each other and their misses overlap (prefetched ahead).
+    scratchFaces_.clear();
+    do {
+      f = faceNext_[size_t(f)];
+      scratchFaces_.push_back(f);
+    } while (f != tail);
+    const size_t n = scratchFaces_.size();
+    scratchNormals_.resize(n);
+    double area;
+    for (size_t i = 0; i < n; ++i) {
+      if (i + 8 < n) Prefetch(&mesh_.faces[size_t(scratchFaces_[i + 8])]);
+      if (i + 4 < n)
+        for (const uint32_t v : mesh_.faces[size_t(scratchFaces_[i + 4])]) Prefetch(&mesh_.positions[v]);
+      FaceNormalAndArea(mesh_, size_t(scratchFaces_[i]), scratchNormals_[i], area);
+    }
+  }
   units_[size_t(u)].setCone(MinimalCone(scratchNormals_));
-  uf.exactSize = units_[size_t(u)].faceCount;
+  chains_[size_t(u)].exactSize = units_[size_t(u)].faceCount;
 }
 
 void HierarchyBuilder::mergeUnits(int u, int p) {
+  Link& lu = links_[size_t(u)];
+  Link& lp = links_[size_t(p)];
+  // Room for the merged list with its slack, should it not fit u's slot; made while p is alive.
+  const size_t room = 2 * (size_t(lu.nbCount) + size_t(lp.nbCount));
+  if (arena_.size() + room > arena_.capacity()) compactArena(room);
+  // A merge is bound by memory latency: ask for every neighbour's state and geometry now, so
+  // that the misses overlap each other and the cone arithmetic below.
+  Prefetch(&units_[size_t(p)]);
+  Prefetch(&chains_[size_t(u)]);
+  Prefetch(&chains_[size_t(p)]);
+  for (const Link* src : {&lu, &lp}) {
+    const Neighbour* list = arena_.data() + src->nbOffset;
+    for (int i = 0; i < src->nbCount; ++i) {
+      Prefetch(&links_[size_t(list[i].id)]);
+      Prefetch(&units_[size_t(list[i].id)]);
+    }
+  }
+
   Unit& a = units_[size_t(u)];
   const Unit& b = units_[size_t(p)];
-  UnitFaces& af = unitFaces_[size_t(u)];
-  UnitFaces& bf = unitFaces_[size_t(p)];
-
+  Chain& ac = chains_[size_t(u)];
+  Chain& bc = chains_[size_t(p)];
   const NormalCone ca = a.cone(), cb = b.cone();
   const NormalCone merged = UnionCone(ca, cb);
-  // The union is still the exact minimal cone when it is one of two exact inputs unchanged.
+  const bool exactA = ac.exactSize == a.faceCount, exactB = bc.exactSize == b.faceCount;
+  // The union is still the exact minimal cone when it is one of two exact inputs unchanged, or
+  // when an exact input cannot be culled: then neither can the union, and MinimalCone would
+  // return the very same Uncullable() cone that UnionCone did.
   const bool grew = !(merged.halfAngle == ca.halfAngle && merged.axis == ca.axis) &&
                     !(merged.halfAngle == cb.halfAngle && merged.axis == cb.axis);
-  const bool bothExact = af.exactSize == a.faceCount && bf.exactSize == b.faceCount;
+  const bool stillExact = (!grew && exactA && exactB) || (exactA && !ca.cullable()) || (exactB && !cb.cullable());
   a.setCone(merged);
   for (int k = 0; k < 3; ++k) a.vecArea[k] += b.vecArea[k];
   a.setSphere(UnionSphere(a.sphere(), b.sphere()));
   a.faceCount += b.faceCount;
-  faceNext_[size_t(af.tail)] = bf.head;
-  af.tail = bf.tail;
-  if (!grew && bothExact) af.exactSize = a.faceCount;
-  else if (a.faceCount >= 2 * af.exactSize) makeConeExact(u);  // amortized: each face O(log N) times
+  // Splice the circular face lists: u's faces, then p's.
+  const int headA = faceNext_[size_t(ac.tail)];
+  faceNext_[size_t(ac.tail)] = faceNext_[size_t(bc.tail)];
+  faceNext_[size_t(bc.tail)] = headA;
+  ac.tail = bc.tail;
+  bc.tail = -1;
+  if (stillExact) ac.exactSize = a.faceCount;
+  else if (a.faceCount >= 2 * ac.exactSize) makeConeExact(u);  // amortized: each face O(log N) times
 
-  // The merged unit's list: both lists without u and p, deduplicated, each pair re-scored.
-  if (arena_.size() > 32 * size_t(aliveCount_) + (1u << 20)) compactArena();  // p still alive here
-  alive_[size_t(p)] = 0;
-  mergedInto_[size_t(p)] = u;
-  heap_.remove(p);
+  // The merged unit's list: both lists without u and p, deduplicated, each pair re-scored. It
+  // goes back into u's slot when it fits (a unit absorbing a small neighbour rarely gains
+  // neighbours), else to the end of the arena with room to grow.
+  tree_.set(p, kNoPair);
   --aliveCount_;
-  const size_t offset = arena_.size();
-  const unsigned st = ++stampCounter_;
-  stamp_[size_t(u)] = st;
-  stamp_[size_t(p)] = st;
-  for (const int src : {u, p}) {
-    const size_t begin = nbOffset_[size_t(src)];
-    const int count = nbCount_[size_t(src)];
-    for (int i = 0; i < count; ++i) {
-      const int w = arena_[begin + size_t(i)].id;  // index, not pointer: arena_ grows here
-      if (stamp_[size_t(w)] == st) continue;
-      stamp_[size_t(w)] = st;
-      arena_.push_back({w, evaluate(units_[size_t(u)], units_[size_t(w)])});
+  const uint32_t st = ++stampCounter_;
+  lu.stamp = st;
+  lp.stamp = st;
+  scratchList_.clear();
+  for (const Link* src : {&lu, &lp}) {
+    const Neighbour* list = arena_.data() + src->nbOffset;
+    for (int i = 0; i < src->nbCount; ++i) {
+      const int w = list[i].id;
+      Link& lw = links_[size_t(w)];
+      if (lw.stamp == st) continue;
+      lw.stamp = st;
+      Prefetch(arena_.data() + lw.nbOffset);  // for the update below, now that its offset is here
+      tree_.prefetch(w);
+      scratchList_.push_back({w, evaluate(a, units_[size_t(w)])});
     }
   }
-  nbOffset_[size_t(u)] = offset;
-  nbCount_[size_t(u)] = int(arena_.size() - offset);
-  nbCount_[size_t(p)] = 0;
+  const int count = int(scratchList_.size());
+  if (count > ac.capacity) {
+    ac.capacity = count + count / 2;
+    lu.nbOffset = uint32_t(arena_.grow(size_t(ac.capacity)));
+    appendLog_.emplace_back(u, lu.nbOffset);
+  }
+  lu.nbCount = count;
+  lp.nbCount = 0;
+  std::memcpy(arena_.data() + lu.nbOffset, scratchList_.data(), size_t(count) * sizeof(Neighbour));
   setBest(u);
 
   // Each neighbour: its entries for u and p become one entry for u with the new score; pairs not
   // involving u are unchanged, so its best is either kept, replaced by u, or rescanned (cached).
-  for (size_t i = offset; i < offset + size_t(nbCount_[size_t(u)]); ++i) {
-    const int w = arena_[i].id;
-    const float s = arena_[i].score;
-    Neighbour* nb = nbBegin(w);
-    int n = nbCount_[size_t(w)];
+  for (const Neighbour& e : scratchList_) {
+    const int w = e.id;
+    const float s = e.score;
+    Link& lw = links_[size_t(w)];
+    Neighbour* nb = arena_.data() + lw.nbOffset;
+    int n = lw.nbCount;
     bool seen = false;
     for (int k = 0; k < n;) {
       if (nb[k].id == u || nb[k].id == p) {
@@ -334,54 +471,82 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
         ++k;
       }
     }
-    nbCount_[size_t(w)] = n;
-    const int bp = bestPartner_[size_t(w)];
+    lw.nbCount = n;
+    const int bp = lw.bestPartner;
     if (bp == u || bp == p) {
       setBest(w);
-    } else if (s != kNoPair && (s > bestScore_[size_t(w)] || (s == bestScore_[size_t(w)] && u < bp))) {
-      bestScore_[size_t(w)] = s;
-      bestPartner_[size_t(w)] = u;
-      heap_.set(w, s);
+    } else if (s != kNoPair && (s > tree_.key(w) || (s == tree_.key(w) && u < bp))) {
+      lw.bestPartner = u;
+      tree_.set(w, s);
     }
   }
 }
 
-void HierarchyBuilder::compactArena() {
-  std::vector<Neighbour> fresh;
-  fresh.reserve(size_t(aliveCount_) * 8);
-  for (size_t u = 0; u < units_.size(); ++u) {
-    if (!alive_[u]) continue;
-    const size_t begin = nbOffset_[u];
-    nbOffset_[u] = fresh.size();
-    fresh.insert(fresh.end(), arena_.begin() + long(begin), arena_.begin() + long(begin) + nbCount_[u]);
+// Slides the live lists down over the dead ones, in arena order (no copy of the arena), and makes
+// sure `room` more entries fit. The new order overwrites the old one as it is read.
+void HierarchyBuilder::compactArena(size_t room) {
+  const bool identity = arenaOrder_.empty();
+  if (identity) arenaOrder_.reserve(size_t(aliveCount_));
+  size_t write = 0, kept = 0;
+  auto slide = [&](int u) {
+    Link& l = links_[size_t(u)];
+    if (l.nbCount == 0) return;
+    if (l.nbOffset != write)
+      std::memmove(arena_.data() + write, arena_.data() + l.nbOffset, size_t(l.nbCount) * sizeof(Neighbour));
+    l.nbOffset = uint32_t(write);
+    chains_[size_t(u)].capacity = l.nbCount;
+    write += size_t(l.nbCount);
+    if (kept < arenaOrder_.size()) arenaOrder_[kept] = u;
+    else arenaOrder_.push_back(u);
+    ++kept;
+  };
+  auto inPrefix = [&](int u) { return alive(u) && links_[size_t(u)].nbOffset < prefixEnd_; };
+  if (identity) {
+    for (int u = 0; u < int(units_.size()); ++u)
+      if (inPrefix(u)) slide(u);
+  } else {
+    const size_t oldCount = arenaOrder_.size();
+    for (size_t i = 0; i < oldCount; ++i)
+      if (inPrefix(arenaOrder_[i])) slide(arenaOrder_[i]);
   }
-  arena_.swap(fresh);
+  for (const auto& e : appendLog_)
+    if (alive(e.first) && links_[size_t(e.first)].nbOffset == e.second) slide(e.first);
+  arenaOrder_.resize(kept);
+  arena_.shrink(write);
+  prefixEnd_ = write;
+  appendLog_.clear();
+  if (write + room > arena_.capacity()) arena_.reserve(write + room + write / 2);
 }
 
 bool HierarchyBuilder::runLevel(double thresholdDeg, long& mergesSoFar) {
   thresholdOn_ = thresholdDeg < 180.0;
   thresholdRad_ = thresholdDeg * kDeg;
   const size_t n = units_.size();
-  mergedInto_.resize(n);
-  for (size_t i = 0; i < n; ++i) mergedInto_[i] = int(i);
-  alive_.assign(n, 1);
   aliveCount_ = int(n);
-  bestScore_.assign(n, kNoPair);
-  bestPartner_.assign(n, -1);
-  stamp_.assign(n, 0);
   stampCounter_ = 0;
-  heap_.reset(n);
+  tree_.reset(n);
   for (size_t u = 0; u < n; ++u) {
-    for (Neighbour* nb = nbBegin(int(u)); nb != nbEnd(int(u)); ++nb)
+    Link& l = links_[u];
+    l.stamp = 0;
+    float best = kNoPair;
+    int partner = -1;
+    for (Neighbour* nb = nbBegin(int(u)); nb != nbEnd(int(u)); ++nb) {
       nb->score = evaluate(units_[u], units_[size_t(nb->id)]);
-    setBest(int(u));
+      if (nb->score > best || (nb->score == best && nb->score != kNoPair && nb->id < partner)) {
+        best = nb->score;
+        partner = nb->id;
+      }
+    }
+    l.bestPartner = partner;
+    tree_.setKey(int(u), best);
   }
+  tree_.build();
 
   const int minGroups = std::max(1, params_.minTopGroups);
   long merges = 0;
-  while (!heap_.empty() && aliveCount_ > minGroups) {
-    const int u = heap_.top();
-    mergeUnits(u, bestPartner_[size_t(u)]);
+  while (!tree_.empty() && aliveCount_ > minGroups) {
+    const int u = tree_.top();
+    mergeUnits(u, links_[size_t(u)].bestPartner);
     ++merges;
     if ((merges & 0x3FFF) == 0 && progress_) {
       const int pct = int(95.0 * double(mergesSoFar + merges) / std::max(1, faceCount_ - 1));
@@ -396,29 +561,44 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   const size_t n = units_.size();
   GroupLevel level;
   level.thresholdDeg = thresholdDeg;
-  // Ids in order of first appearance over faces: deterministic and cache-friendly.
-  std::vector<int> idOfUnit(n, -1);
+  // The unit of every face, from the live units' face lists.
   level.faceGroup.resize(size_t(faceCount_));
-  std::vector<int> rootOfGroup;
-  // Faces are reached through the previous level's group of each face.
-  const std::vector<int>* prevFaceGroup = firstLevel ? nullptr : &out.levels.back().faceGroup;
-  for (int f = 0; f < faceCount_; ++f) {
-    const int unit = find(prevFaceGroup ? (*prevFaceGroup)[size_t(f)] : f);
-    int& id = idOfUnit[size_t(unit)];
-    if (id < 0) { id = int(rootOfGroup.size()); rootOfGroup.push_back(unit); }
-    level.faceGroup[size_t(f)] = id;
+  std::vector<int>& faceGroup = level.faceGroup;
+  for (int u = 0; u < int(n); ++u) {
+    if (!alive(u)) continue;
+    const int tail = chains_[size_t(u)].tail;
+    int f = tail;
+    do {
+      f = faceNext_[size_t(f)];
+      faceGroup[size_t(f)] = u;
+    } while (f != tail);
   }
-  const size_t groupCount = rootOfGroup.size();
+  // Ids in order of first appearance over faces: deterministic and cache-friendly.
+  idOfUnit_.assign(n, -1);
+  rootOfGroup_.clear();
+  for (int& g : faceGroup) {
+    int& id = idOfUnit_[size_t(g)];
+    if (id < 0) { id = int(rootOfGroup_.size()); rootOfGroup_.push_back(g); }
+    g = id;
+  }
+  const size_t groupCount = rootOfGroup_.size();
+  // The groups become the units of the next level now, indexed by group: the arrays of this
+  // level go before the level's output grows.
+  nextLevelUnits();
   level.groups.resize(groupCount);
 
-  // Children: faces (level 1) or previous groups, bucketed by new group.
-  std::vector<int> childCount(groupCount, 0);
+  // Children: faces (level 1) or previous groups, bucketed by new group. A previous group's new
+  // group is that of any of its faces.
   const size_t childTotal = firstLevel ? size_t(faceCount_) : n;
-  std::vector<int> childGroup(childTotal);
-  for (size_t c = 0; c < childTotal; ++c) {
-    childGroup[c] = firstLevel ? level.faceGroup[c] : idOfUnit[size_t(find(int(c)))];
-    ++childCount[size_t(childGroup[c])];
+  std::vector<int> childGroupAbove;
+  if (!firstLevel) {
+    childGroupAbove.assign(childTotal, -1);
+    const std::vector<int>& prevFaceGroup = out.levels.back().faceGroup;
+    for (size_t f = 0; f < size_t(faceCount_); ++f) childGroupAbove[size_t(prevFaceGroup[f])] = faceGroup[f];
   }
+  const std::vector<int>& childGroup = firstLevel ? faceGroup : childGroupAbove;
+  std::vector<int> childCount(groupCount, 0);
+  for (size_t c = 0; c < childTotal; ++c) ++childCount[size_t(childGroup[c])];
   int running = 0;
   for (size_t g = 0; g < groupCount; ++g) {
     level.groups[g].firstChild = running;
@@ -427,7 +607,7 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   }
   level.children.resize(childTotal);
   {
-    std::vector<int> fill(groupCount);
+    std::vector<int>& fill = childCount;
     for (size_t g = 0; g < groupCount; ++g) fill[g] = level.groups[g].firstChild;
     for (size_t c = 0; c < childTotal; ++c) level.children[size_t(fill[size_t(childGroup[c])]++)] = int(c);
   }
@@ -436,62 +616,106 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     for (size_t c = 0; c < childTotal; ++c) prev[c].parent = childGroup[c];
   }
 
-  // Exact cones, boxes and tight spheres.
+  // Exact cones; boxes and tight spheres from the vertices, in face order (min and max do not
+  // depend on the order, and face order reads the mesh sequentially).
   for (size_t g = 0; g < groupCount; ++g) {
-    const int u = rootOfGroup[g];
-    Unit& unit = units_[size_t(u)];
-    const UnitFaces& uf = unitFaces_[size_t(u)];
-    if (uf.exactSize != unit.faceCount) makeConeExact(u);
+    if (chains_[g].exactSize != units_[g].faceCount) makeConeExact(int(g));
     Group& grp = level.groups[g];
-    grp.cone = unit.cone();
-    grp.faceCount = unit.faceCount;
+    grp.cone = units_[g].cone();
+    grp.faceCount = units_[g].faceCount;
     grp.box.SetNull();
-    for (int f = uf.head; f >= 0; f = faceNext_[size_t(f)])
-      for (uint32_t v : mesh_.faces[size_t(f)]) grp.box.Add(mesh_.positions[v]);
-    // A second sphere around the box centre; keep the smaller of it and the merged bound.
-    const vcg::Point3d bc = vcg::Point3d::Construct(grp.box.Center());
-    double r2 = 0;
-    for (int f = uf.head; f >= 0; f = faceNext_[size_t(f)])
-      for (uint32_t v : mesh_.faces[size_t(f)])
-        r2 = std::max(r2, (vcg::Point3d::Construct(mesh_.positions[v]) - bc).SquaredNorm());
-    if (std::sqrt(r2) < unit.radius) unit.setSphere(Sphere{bc, std::sqrt(r2)});
-    grp.center = vcg::Point3f(unit.center[0], unit.center[1], unit.center[2]);
-    grp.radius = unit.radius;
+  }
+  for (size_t f = 0; f < size_t(faceCount_); ++f) {
+    vcg::Box3f& box = level.groups[size_t(faceGroup[f])].box;
+    for (uint32_t v : mesh_.faces[f]) box.Add(mesh_.positions[v]);
+  }
+  // A second sphere around the box centre; keep the smaller of it and the merged bound.
+  std::vector<vcg::Point3d> boxCenter(groupCount);
+  for (size_t g = 0; g < groupCount; ++g) boxCenter[g] = vcg::Point3d::Construct(level.groups[g].box.Center());
+  std::vector<double> r2(groupCount, 0.0);
+  for (size_t f = 0; f < size_t(faceCount_); ++f) {
+    const size_t g = size_t(faceGroup[f]);
+    for (uint32_t v : mesh_.faces[f])
+      r2[g] = std::max(r2[g], (vcg::Point3d::Construct(mesh_.positions[v]) - boxCenter[g]).SquaredNorm());
+  }
+  for (size_t g = 0; g < groupCount; ++g) {
+    Unit& unit = units_[g];
+    if (std::sqrt(r2[g]) < unit.radius) unit.setSphere(Sphere{boxCenter[g], std::sqrt(r2[g])});
+    level.groups[g].center = vcg::Point3f(unit.center[0], unit.center[1], unit.center[2]);
+    level.groups[g].radius = unit.radius;
   }
   out.levels.push_back(std::move(level));
 }
 
+// The groups found by emitLevel (rootOfGroup_, idOfUnit_) become the units of the next level
+// (their lists already name live units only); this level's arrays are released.
+void HierarchyBuilder::nextLevelUnits() {
+  const size_t g = rootOfGroup_.size();
+  BigVector<Unit> units(g);
+  BigVector<Link> links(g);
+  BigVector<Chain> chains(g);
+  size_t entries = 0;
+  for (size_t id = 0; id < g; ++id) entries += size_t(links_[size_t(rootOfGroup_[id])].nbCount);
+  Arena arena;
+  arena.reserve(2 * entries + 16);
+  for (size_t id = 0; id < g; ++id) {
+    const int u = rootOfGroup_[id];
+    units[id] = units_[size_t(u)];
+    chains[id] = chains_[size_t(u)];
+    const int count = links_[size_t(u)].nbCount;
+    links[id] = Link{-1, uint32_t(arena.grow(size_t(count))), count, 0};
+    chains[id].capacity = count;
+    Neighbour* list = arena.data() + links[id].nbOffset;
+    for (const Neighbour* w = nbBegin(u); w != nbEnd(u); ++w) *list++ = {idOfUnit_[size_t(w->id)], kNoPair};
+  }
+  units_.swap(units);
+  links_.swap(links);
+  chains_.swap(chains);
+  arena_.swap(arena);
+  prefixEnd_ = arena_.size();
+  std::vector<int>().swap(arenaOrder_);
+  std::vector<std::pair<int, uint32_t>>().swap(appendLog_);
+  std::vector<int>().swap(idOfUnit_);
+  tree_.release();
+}
+
 Status HierarchyBuilder::run(GroupHierarchy& out) {
   const int nf = faceCount_;
-  std::vector<double> areas;
-  ComputeFaceNormalsAndAreas(mesh_, faceNormal_, areas);
-  faceNext_.assign(size_t(nf), -1);
+  // Adjacency first, while nothing else is allocated: it is the largest temporary.
+  {
+    BigVector<uint32_t> offsets, neighbours;
+    size_t borderEdges, nonManifoldEdges;
+    BuildFaceAdjacencyInto(mesh_, offsets, neighbours, borderEdges, nonManifoldEdges);
+    if (neighbours.size() > size_t(std::numeric_limits<uint32_t>::max() / 2))
+      throw std::bad_alloc();  // list offsets are 32-bit
+    // The arena's high-water mark is what it costs in memory: a quarter of slack, no more.
+    arena_.reserve(neighbours.size() + neighbours.size() / 4 + 16);
+    Neighbour* list = arena_.data() + arena_.grow(neighbours.size());
+    for (const uint32_t w : neighbours) *list++ = {int(w), kNoPair};
+    links_.resize(size_t(nf));
+    for (int f = 0; f < nf; ++f)
+      links_[size_t(f)] = Link{-1, offsets[size_t(f)], int(offsets[size_t(f) + 1] - offsets[size_t(f)]), 0};
+    prefixEnd_ = arena_.size();
+  }
 
   // Level-1 units: one per face.
+  faceNext_.resize(size_t(nf));
   units_.resize(size_t(nf));
-  unitFaces_.resize(size_t(nf));
+  chains_.resize(size_t(nf));
   for (int f = 0; f < nf; ++f) {
     Unit& u = units_[size_t(f)];
     const auto& t = mesh_.faces[size_t(f)];
-    const vcg::Point3d& n = faceNormal_[size_t(f)];
+    vcg::Point3d n;
+    double area;
+    FaceNormalAndArea(mesh_, size_t(f), n, area);
     u.setCone(n.SquaredNorm() > 0.5 ? NormalCone::Of(n) : NormalCone::Empty());
-    for (int k = 0; k < 3; ++k) u.vecArea[k] = float(n[k] * areas[size_t(f)]);
+    for (int k = 0; k < 3; ++k) u.vecArea[k] = float(n[k] * area);
     u.setSphere(TriangleSphere(vcg::Point3d::Construct(mesh_.positions[t[0]]),
                                vcg::Point3d::Construct(mesh_.positions[t[1]]),
                                vcg::Point3d::Construct(mesh_.positions[t[2]])));
     u.faceCount = 1;
-    unitFaces_[size_t(f)] = UnitFaces{1, f, f};
-  }
-  {
-    const FaceAdjacency adj = BuildFaceAdjacency(mesh_);
-    arena_.resize(adj.neighbours.size());
-    for (size_t i = 0; i < adj.neighbours.size(); ++i) arena_[i] = {int(adj.neighbours[i]), kNoPair};
-    nbOffset_.resize(size_t(nf));
-    nbCount_.resize(size_t(nf));
-    for (int f = 0; f < nf; ++f) {
-      nbOffset_[size_t(f)] = adj.offsets[size_t(f)];
-      nbCount_[size_t(f)] = int(adj.degree(uint32_t(f)));
-    }
+    faceNext_[size_t(f)] = f;
+    chains_[size_t(f)] = Chain{f, 1, links_[size_t(f)].nbCount};
   }
   if (progress_ && !progress_(0, "grouping faces by normal cones")) return Status::Cancelled();
 
@@ -504,38 +728,21 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     emitLevel(std::min(threshold, 180.0), out, level == 1);
     if (int(out.levels.back().groups.size()) <= std::max(1, params_.minTopGroups)) break;
     if (level == params_.maxLevels) break;
-
-    // The groups become the units of the next level (their lists already name live units only).
-    const GroupLevel& lv = out.levels.back();
-    const size_t g = lv.groups.size();
-    std::vector<Unit> next(g);
-    std::vector<UnitFaces> nextFaces(g);
-    std::vector<Neighbour> fresh;
-    std::vector<size_t> offs(g);
-    std::vector<int> counts(g);
-    std::vector<int> rootOf(g);
-    for (size_t u = 0; u < units_.size(); ++u)
-      if (alive_[u]) rootOf[size_t(lv.faceGroup[size_t(unitFaces_[u].head)])] = int(u);
-    for (size_t id = 0; id < g; ++id) {
-      const int u = rootOf[id];
-      next[id] = units_[size_t(u)];
-      nextFaces[id] = unitFaces_[size_t(u)];
-      offs[id] = fresh.size();
-      for (const Neighbour* w = nbBegin(u); w != nbEnd(u); ++w)
-        fresh.push_back({lv.faceGroup[size_t(unitFaces_[size_t(w->id)].head)], kNoPair});
-      counts[id] = int(fresh.size() - offs[id]);
+    if (faceNormal_.empty()) {
+      faceNormal_.resize(size_t(nf));
+      double area;
+      for (int f = 0; f < nf; ++f) FaceNormalAndArea(mesh_, size_t(f), faceNormal_[size_t(f)], area);
     }
-    units_.swap(next);
-    unitFaces_.swap(nextFaces);
-    arena_.swap(fresh);
-    nbOffset_.swap(offs);
-    nbCount_.swap(counts);
     threshold *= params_.thresholdGrowth;
   }
 
-  // Areas per group, from the faces.
-  for (auto& lv : out.levels)
-    for (int f = 0; f < nf; ++f) lv.groups[size_t(lv.faceGroup[size_t(f)])].area += areas[size_t(f)];
+  // Areas per group, from the faces (in face order: the same sums on every run).
+  for (int f = 0; f < nf; ++f) {
+    vcg::Point3d n;
+    double area;
+    FaceNormalAndArea(mesh_, size_t(f), n, area);
+    for (auto& lv : out.levels) lv.groups[size_t(lv.faceGroup[size_t(f)])].area += area;
+  }
   out.faceCount = nf;
   if (progress_ && !progress_(100, "grouping done")) { out = GroupHierarchy(); return Status::Cancelled(); }
   return Status::Ok();

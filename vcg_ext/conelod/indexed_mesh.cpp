@@ -1,6 +1,8 @@
 // ConeLOD — indexed mesh helpers and face adjacency (see indexed_mesh.h).
 #include "conelod/indexed_mesh.h"
 
+#include "conelod/face_adjacency.h"
+
 #include <algorithm>
 #include <numeric>
 
@@ -11,68 +13,12 @@ void ComputeFaceNormalsAndAreas(const IndexedMesh& m, std::vector<vcg::Point3d>&
   const size_t nf = m.faces.size();
   normals.resize(nf);
   areas.resize(nf);
-  for (size_t f = 0; f < nf; ++f) {
-    const auto& t = m.faces[f];
-    const vcg::Point3d a = vcg::Point3d::Construct(m.positions[t[0]]);
-    const vcg::Point3d b = vcg::Point3d::Construct(m.positions[t[1]]);
-    const vcg::Point3d c = vcg::Point3d::Construct(m.positions[t[2]]);
-    vcg::Point3d n = (b - a) ^ (c - a);
-    const double len = n.Norm();
-    // A face is degenerate when its area is negligible against its edge lengths (relative test,
-    // so that it does not depend on the model's scale).
-    const double scale = std::max({(b - a).SquaredNorm(), (c - a).SquaredNorm(), (c - b).SquaredNorm()});
-    if (!(len > 1e-12 * scale) || !(len > 0)) {
-      normals[f] = vcg::Point3d(0, 0, 0);
-      areas[f] = 0;
-    } else {
-      normals[f] = n / len;
-      areas[f] = 0.5 * len;
-    }
-  }
+  for (size_t f = 0; f < nf; ++f) FaceNormalAndArea(m, f, normals[f], areas[f]);
 }
 
 FaceAdjacency BuildFaceAdjacency(const IndexedMesh& m) {
-  const uint32_t nv = uint32_t(m.positions.size());
-  const uint32_t nf = uint32_t(m.faces.size());
-  // Vertex -> incident faces, CSR (counting sort: no per-vertex allocation).
-  std::vector<uint32_t> vfStart(nv + 1, 0), vf(size_t(nf) * 3);
-  for (const auto& t : m.faces)
-    for (uint32_t v : t) ++vfStart[v + 1];
-  for (uint32_t v = 0; v < nv; ++v) vfStart[v + 1] += vfStart[v];
-  {
-    std::vector<uint32_t> fill(vfStart.begin(), vfStart.end() - 1);
-    for (uint32_t f = 0; f < nf; ++f)
-      for (uint32_t v : m.faces[f]) vf[fill[v]++] = f;
-  }
-
   FaceAdjacency adj;
-  adj.offsets.assign(nf + 1, 0);
-  adj.neighbours.reserve(size_t(nf) * 3);
-  for (uint32_t f = 0; f < nf; ++f) {
-    const auto& t = m.faces[f];
-    const size_t listBegin = adj.neighbours.size();
-    for (int e = 0; e < 3; ++e) {
-      const uint32_t a = t[e], b = t[(e + 1) % 3];
-      if (a == b) continue;  // a degenerate face's collapsed edge is no edge
-      // The faces on edge (a,b) are those around a that also use b.
-      uint32_t sharers = 1, lowest = f;
-      for (uint32_t i = vfStart[a]; i < vfStart[a + 1]; ++i) {
-        const uint32_t g = vf[i];
-        if (g == f || (i > vfStart[a] && vf[i - 1] == g)) continue;  // a face listed twice at a
-        const auto& u = m.faces[g];
-        if (u[0] != b && u[1] != b && u[2] != b) continue;
-        ++sharers;
-        lowest = std::min(lowest, g);
-        if (std::find(adj.neighbours.begin() + listBegin, adj.neighbours.end(), g) == adj.neighbours.end())
-          adj.neighbours.push_back(g);
-      }
-      if (lowest == f) {  // count each undirected edge once, at its lowest face
-        if (sharers == 1) ++adj.borderEdges;
-        else if (sharers > 2) ++adj.nonManifoldEdges;
-      }
-    }
-    adj.offsets[f + 1] = uint32_t(adj.neighbours.size());
-  }
+  BuildFaceAdjacencyInto(m, adj.offsets, adj.neighbours, adj.borderEdges, adj.nonManifoldEdges);
   return adj;
 }
 

@@ -5,6 +5,7 @@
 // CLI's mesh): vcg_bridge.h converts both ways.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -21,7 +22,29 @@ struct IndexedMesh {
   size_t faceCount() const { return faces.size(); }
 };
 
-// Per-face unit normal (zero vector for a zero-area or degenerate face) and area, in double.
+// The unit normal (zero vector for a zero-area or degenerate face) and the area of face f, in
+// double. Inline and bit-for-bit the same everywhere: the grouping recomputes normals on demand
+// instead of keeping an array of them, and must get exactly the values the array would hold.
+inline void FaceNormalAndArea(const IndexedMesh& m, size_t f, vcg::Point3d& normal, double& area) {
+  const auto& t = m.faces[f];
+  const vcg::Point3d a = vcg::Point3d::Construct(m.positions[t[0]]);
+  const vcg::Point3d b = vcg::Point3d::Construct(m.positions[t[1]]);
+  const vcg::Point3d c = vcg::Point3d::Construct(m.positions[t[2]]);
+  const vcg::Point3d n = (b - a) ^ (c - a);
+  const double len = n.Norm();
+  // A face is degenerate when its area is negligible against its edge lengths (relative test,
+  // so that it does not depend on the model's scale).
+  const double scale = std::max({(b - a).SquaredNorm(), (c - a).SquaredNorm(), (c - b).SquaredNorm()});
+  if (!(len > 1e-12 * scale) || !(len > 0)) {
+    normal = vcg::Point3d(0, 0, 0);
+    area = 0;
+  } else {
+    normal = n / len;
+    area = 0.5 * len;
+  }
+}
+
+// Per-face unit normal and area (FaceNormalAndArea) of every face.
 void ComputeFaceNormalsAndAreas(const IndexedMesh& m, std::vector<vcg::Point3d>& normals,
                                 std::vector<double>& areas);
 

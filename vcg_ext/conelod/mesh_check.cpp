@@ -23,11 +23,12 @@ MeshReport CheckMesh(const IndexedMesh& m, bool withTopology) {
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) ++r.nonFiniteVertices;
   }
   if (r.badIndexFaces || r.nonFiniteVertices) return r;
-  std::vector<vcg::Point3d> normals;
-  std::vector<double> areas;
-  ComputeFaceNormalsAndAreas(m, normals, areas);
-  for (double a : areas)
+  for (size_t f = 0; f < m.faces.size(); ++f) {
+    vcg::Point3d n;
+    double a;
+    FaceNormalAndArea(m, f, n, a);
     if (a == 0) ++r.degenerateFaces;
+  }
   if (!withTopology) return r;
   const FaceAdjacency adj = BuildFaceAdjacency(m);
   r.borderEdges = adj.borderEdges;

@@ -1,0 +1,168 @@
+// ConeLOD — benchmark of BuildConeHierarchy on real meshes: speed (faces/s, real time, one core)
+// and memory (peak RSS growth of the build against the RSS growth of loading the mesh).
+//
+// Usage: bench_grouping [google-benchmark flags] [MESH.ply...]
+//   default meshes: <repo>/../shared/test_meshes/{stanford_bunny_bun_zipper,stanford_dragon_vrip_binary}.ply
+//
+// Memory is read from /proc/self/status. "Loaded mesh" is what loading costs in a real caller: the
+// vcg mesh (LoadPly) plus the core's IndexedMesh (ToIndexedMesh), both kept alive. A build's peak
+// is VmHWM after it minus VmRSS before it, the high-water mark having been reset by writing "5"
+// to /proc/self/clear_refs (outside the timed region); it includes the GroupHierarchy being
+// built, and the largest over the iterations is reported. Freed heap is handed back to the
+// system (malloc_trim) before every reading, so that memory freed by an earlier step does not
+// hide the growth of the next one. Target: build peak < 2x loaded mesh.
+#include <malloc.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+#include "conelod/cone_grouping.h"
+#include "conelod/vcg_bridge.h"
+#include "conelod/vcg_mesh.h"
+
+namespace {
+
+using namespace conelod;
+
+// A "VmXXX:  1234 kB" line of /proc/self/status, in bytes (0 if missing).
+double ProcStatusBytes(const char* field) {
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  const size_t n = std::strlen(field);
+  while (std::getline(in, line))
+    if (line.compare(0, n, field) == 0 && line.size() > n && line[n] == ':') return 1024.0 * std::atof(line.c_str() + n + 1);
+  return 0;
+}
+
+double SettledRss() {
+  malloc_trim(0);
+  return ProcStatusBytes("VmRSS");
+}
+
+bool ResetPeakRss() {
+  std::ofstream out("/proc/self/clear_refs");
+  out << "5";
+  out.close();
+  return bool(out);
+}
+
+struct Loaded {
+  std::string path, name;
+  CMesh vcgMesh;
+  IndexedMesh mesh;
+  double loadBytes = 0;     // RSS growth of LoadPly + ToIndexedMesh
+  double indexedBytes = 0;  // the IndexedMesh's own arrays
+  // Results of the last benchmark run on this mesh.
+  bool ran = false, peakReset = false;
+  std::string error;
+  int levels = 0, level1Groups = 0;
+  double secondsPerBuild = 0, facesPerSecond = 0, buildPeakBytes = 0;
+};
+
+void BM_BuildConeHierarchy(benchmark::State& state, Loaded* m) {
+  const ConeGroupingParams params;
+  double seconds = 0, peak = 0;
+  for (auto _ : state) {
+    // Memory is measured per build, outside the timed region: heap left over by the previous
+    // iteration is handed back first, so each build's growth is its own.
+    state.PauseTiming();
+    const double rssBefore = SettledRss();
+    m->peakReset = ResetPeakRss();
+    state.ResumeTiming();
+    GroupHierarchy h;
+    const auto t0 = std::chrono::steady_clock::now();
+    const Status s = BuildConeHierarchy(m->mesh, params, h);
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    state.PauseTiming();
+    peak = std::max(peak, ProcStatusBytes("VmHWM") - rssBefore);
+    state.ResumeTiming();
+    if (!s.ok()) {
+      m->error = s.message;
+      state.SkipWithError(s.message.c_str());
+      break;
+    }
+    m->levels = h.levelCount();
+    m->level1Groups = h.levelCount() > 0 ? int(h.level(1).groups.size()) : 0;
+  }
+  if (!m->error.empty()) return;
+  const double faces = double(m->mesh.faceCount());
+  m->ran = true;
+  m->secondsPerBuild = seconds / double(state.iterations());
+  m->facesPerSecond = faces / m->secondsPerBuild;
+  m->buildPeakBytes = peak;
+  state.counters["faces"] = faces;
+  state.counters["faces_per_s"] = m->facesPerSecond;
+  state.counters["load_MiB"] = m->loadBytes / (1 << 20);
+  state.counters["build_peak_MiB"] = peak / (1 << 20);
+  state.counters["peak_over_load"] = m->loadBytes > 0 ? peak / m->loadBytes : 0;
+}
+
+std::string BaseName(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
+  const size_t dot = name.rfind('.');
+  return dot == std::string::npos ? name : name.substr(0, dot);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);  // removes the --benchmark_* flags it knows
+  std::vector<std::string> paths(argv + 1, argv + argc);
+  if (paths.empty()) {
+    const std::string dir = std::string(CONELOD_SOURCE_DIR) + "/../shared/test_meshes/";
+    paths = {dir + "stanford_bunny_bun_zipper.ply", dir + "stanford_dragon_vrip_binary.ply"};
+  }
+
+  std::vector<std::unique_ptr<Loaded>> meshes;
+  for (const std::string& path : paths) {
+    std::unique_ptr<Loaded> m(new Loaded);
+    m->path = path;
+    m->name = BaseName(path);
+    const double before = SettledRss();
+    const std::string err = LoadPly(m->vcgMesh, path);
+    if (!err.empty()) {
+      std::fprintf(stderr, "bench_grouping: %s\n", err.c_str());
+      return 1;
+    }
+    m->mesh = ToIndexedMesh(m->vcgMesh);
+    m->loadBytes = SettledRss() - before;
+    m->indexedBytes = double(m->mesh.positions.capacity() * sizeof(m->mesh.positions[0]) +
+                             m->mesh.faces.capacity() * sizeof(m->mesh.faces[0]));
+    meshes.push_back(std::move(m));
+  }
+  for (auto& m : meshes)
+    benchmark::RegisterBenchmark(("BuildConeHierarchy/" + m->name).c_str(), BM_BuildConeHierarchy, m.get())
+        ->UseRealTime()
+        ->Unit(benchmark::kMillisecond)
+        ->MinTime(3.0);
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+
+  std::printf("\nBuildConeHierarchy, default parameters, one thread. Memory: RSS growth in MiB; target: build peak < 2x loaded mesh.\n");
+  std::printf("%-30s %9s %7s %9s %12s %10s %10s %11s %10s %7s\n", "mesh", "faces", "levels", "L1 groups", "ms/build",
+              "faces/s", "load MiB", "(indexed)", "peak MiB", "ratio");
+  bool allOk = true;
+  for (const auto& m : meshes) {
+    if (!m->ran) {
+      std::printf("%-30s %s\n", m->name.c_str(), m->error.empty() ? "not run (filtered out)" : m->error.c_str());
+      continue;
+    }
+    const double ratio = m->loadBytes > 0 ? m->buildPeakBytes / m->loadBytes : 0;
+    allOk = allOk && ratio < 2.0 && m->peakReset;
+    std::printf("%-30s %9zu %7d %9d %12.1f %10.0f %10.1f %11.1f %10.1f %6.2fx%s\n", m->name.c_str(), m->mesh.faceCount(),
+                m->levels, m->level1Groups, 1e3 * m->secondsPerBuild, m->facesPerSecond, m->loadBytes / (1 << 20),
+                m->indexedBytes / (1 << 20), m->buildPeakBytes / (1 << 20), ratio,
+                m->peakReset ? "" : "  (peak not reset: clear_refs failed)");
+  }
+  std::printf("memory target (peak < 2x loaded mesh): %s\n", allOk ? "met" : "NOT met");
+  return 0;
+}

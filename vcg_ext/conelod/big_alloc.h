@@ -1,0 +1,76 @@
+// ConeLOD — an allocator for the large temporary arrays of the core algorithms (see BigAlloc).
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdlib>
+#include <new>
+#include <vector>
+
+#ifdef __linux__
+#include <sys/mman.h>
+#endif
+
+namespace conelod {
+
+// Large arrays of the grouping are read at random, all over: backed by 2 MiB pages where the
+// kernel offers transparent huge pages on request, they cost far fewer TLB misses (and page
+// faults). Mid-sized arrays are mapped too, so that they go back to the system when freed instead
+// of staying in the heap as holes the next allocations may not fit (the builder's peak memory is
+// then what it uses, whatever the caller's heap looks like). Every block is cache-line aligned
+// (C++14's operator new does not honour alignas(64)).
+template <class T>
+struct BigAlloc {
+  using value_type = T;
+  BigAlloc() = default;
+  template <class U>
+  BigAlloc(const BigAlloc<U>&) {}
+  static constexpr size_t kPage = 4096;
+  static constexpr size_t kHugePage = size_t(2) << 20;
+  static constexpr size_t kMapped = 64 * kPage;  // mapped from this size on
+  static constexpr size_t kHuge = 4 * kHugePage;  // huge pages from this size on: below, the
+                                                  // TLB's reach suffices and rounding costs
+  static size_t MappedSize(size_t bytes) {
+    const size_t unit = bytes >= kHuge ? kHugePage : kPage;
+    return (bytes + unit - 1) / unit * unit;
+  }
+  T* allocate(size_t n) {
+    const size_t bytes = n * sizeof(T);
+#ifdef __linux__
+    if (bytes >= kMapped) {
+      const size_t size = MappedSize(bytes);
+      if (bytes < kHuge) {
+        void* p = mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+        if (p == MAP_FAILED) throw std::bad_alloc();
+        return static_cast<T*>(p);
+      }
+      // Map one huge page more than needed and trim it to a huge-page-aligned block.
+      void* raw = mmap(nullptr, size + kHugePage, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+      if (raw == MAP_FAILED) throw std::bad_alloc();
+      const uintptr_t begin = reinterpret_cast<uintptr_t>(raw);
+      const uintptr_t aligned = (begin + kHugePage - 1) / kHugePage * kHugePage;
+      if (aligned > begin) munmap(raw, aligned - begin);
+      munmap(reinterpret_cast<void*>(aligned + size), begin + kHugePage - aligned);
+      madvise(reinterpret_cast<void*>(aligned), size, MADV_HUGEPAGE);
+      return reinterpret_cast<T*>(aligned);
+    }
+#endif
+    void* p = nullptr;
+    if (posix_memalign(&p, 64, std::max<size_t>(bytes, 1)) != 0) throw std::bad_alloc();
+    return static_cast<T*>(p);
+  }
+  void deallocate(T* p, size_t n) {
+#ifdef __linux__
+    if (n * sizeof(T) >= kMapped) { munmap(p, MappedSize(n * sizeof(T))); return; }
+#endif
+    free(p);
+  }
+};
+template <class T, class U>
+bool operator==(const BigAlloc<T>&, const BigAlloc<U>&) { return true; }
+template <class T, class U>
+bool operator!=(const BigAlloc<T>&, const BigAlloc<U>&) { return false; }
+template <class T>
+using BigVector = std::vector<T, BigAlloc<T>>;
+
+}  // namespace conelod
