@@ -693,8 +693,8 @@ Status Simplifier::run(const Progress& progress, GroupQemStats& stats) {
   const double maxErrorSq = p_.maxError > 0 ? (p_.maxError * diag_) * (p_.maxError * diag_) : -1;
   const size_t toRemove = stats.facesIn > target ? stats.facesIn - target : 1;
   size_t nextReport = 0;
-  // Superseded entries are dropped in one sweep when the heap outgrows the mesh.
-  size_t compactAt = 4 * stats.facesIn + 1024;
+  // Superseded entries are dropped in one sequential sweep when the heap outgrows the mesh.
+  size_t compactFloor = 0;
   stats.stop = GroupQemStats::Stop::NoMoreCollapses;
   while (!heap_.empty()) {
     if (liveFaces_ <= target) break;
@@ -734,12 +734,12 @@ Status Simplifier::run(const Progress& progress, GroupQemStats& stats) {
     collapse(c);
     ++stats.collapses;
     stats.maxCollapseError = std::max(stats.maxCollapseError, std::sqrt(c.error) / diag_);
-    if (heap_.size() > compactAt) {
+    if (heap_.size() > std::max(4 * liveFaces_ + 1024, compactFloor)) {
       heap_.removeIf([&](const HeapEntry& h) {
         const uint32_t e = h.tag & kEpochMask;
         return vs_[h.a].dead || vs_[h.b].dead || e < vs_[h.a].lastSurvive || e < vs_[h.b].lastSurvive;
       });
-      compactAt = std::max(4 * liveFaces_ + 1024, 2 * heap_.size());
+      compactFloor = 2 * heap_.size();
     }
   }
   if (liveFaces_ <= target && stats.stop != GroupQemStats::Stop::Cancelled) stats.stop = GroupQemStats::Stop::TargetReached;
