@@ -414,8 +414,11 @@ TEST(Simplify, ZeroAreaFacesAreLeftAlone) {
   EXPECT_EQ(r.mesh.positions.size(), r.sourceVertex.size());
   for (const auto& t : r.mesh.faces)
     for (uint32_t v : t) EXPECT_LT(v, r.mesh.positions.size());
-  for (size_t o = 0; o < r.sourceVertex.size(); ++o)
-    if (r.sourceVertex[o] == 0 || r.sourceVertex[o] == 1) EXPECT_EQ(r.mesh.positions[o], m.positions[r.sourceVertex[o]]);
+  for (size_t o = 0; o < r.sourceVertex.size(); ++o) {
+    if (r.sourceVertex[o] == 0 || r.sourceVertex[o] == 1) {
+      EXPECT_EQ(r.mesh.positions[o], m.positions[r.sourceVertex[o]]);
+    }
+  }
 }
 
 }  // namespace
