@@ -7,9 +7,11 @@ namespace cli {
 int CmdGroup(int argc, char** argv);
 int CmdCullCost(int argc, char** argv);
 int CmdInfo(int argc, char** argv);
+int CmdSimplify(int argc, char** argv);
 extern const char* kGroupUsage;
 extern const char* kCullCostUsage;
 extern const char* kInfoUsage;
+extern const char* kSimplifyUsage;
 
 }  // namespace cli
 }  // namespace conelod

@@ -17,6 +17,7 @@ const Command kCommands[] = {
     {"group", conelod::cli::CmdGroup, &conelod::cli::kGroupUsage},
     {"cull-cost", conelod::cli::CmdCullCost, &conelod::cli::kCullCostUsage},
     {"info", conelod::cli::CmdInfo, &conelod::cli::kInfoUsage},
+    {"simplify", conelod::cli::CmdSimplify, &conelod::cli::kSimplifyUsage},
 };
 
 void PrintUsage(FILE* out) {

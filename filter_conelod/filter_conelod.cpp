@@ -7,6 +7,8 @@
 
 #include "conelod/cone_grouping.h"
 #include "conelod/culling_cost.h"
+#include "conelod/group_integrity.h"
+#include "conelod/group_qem.h"
 #include "conelod/mesh_check.h"
 #include "conelod/vcg_bridge.h"
 
@@ -56,10 +58,28 @@ Progress FromCallback(vcg::CallBackPos* cb) {
   return [cb](int percent, const char* stage) { return cb(percent, stage); };
 }
 
+// Per-face quality of the live faces, in ToIndexedMesh order.
+std::vector<float> FaceQualities(const CMeshO& m) {
+  std::vector<float> q;
+  q.reserve(size_t(m.fn));
+  for (const auto& f : m.face)
+    if (!f.IsD()) q.push_back(float(f.cQ()));
+  return q;
+}
+
+const char* StopName(GroupQemStats::Stop s) {
+  switch (s) {
+    case GroupQemStats::Stop::TargetReached: return "target reached";
+    case GroupQemStats::Stop::NoMoreCollapses: return "no allowed collapse left";
+    case GroupQemStats::Stop::Cancelled: return "cancelled";
+  }
+  return "?";
+}
+
 }  // namespace
 
 FilterConeLodPlugin::FilterConeLodPlugin() {
-  typeList << FP_CONE_GROUPING << FP_CULLING_COST;
+  typeList << FP_CONE_GROUPING << FP_CULLING_COST << FP_GROUP_QEM << FP_GROUP_INTEGRITY;
   for (FilterIDType tt : types()) actionList << new QAction(filterName(tt), this);
 }
 
@@ -69,6 +89,8 @@ QString FilterConeLodPlugin::filterName(FilterIDType filter) const {
   switch (filter) {
     case FP_CONE_GROUPING: return "Cone LOD: Normal Cone Face Grouping";
     case FP_CULLING_COST: return "Cone LOD: Cluster Culling Cost";
+    case FP_GROUP_QEM: return "Cone LOD: Group-Preserving Quadric Edge Collapse";
+    case FP_GROUP_INTEGRITY: return "Cone LOD: Group Integrity";
   }
   return "";
 }
@@ -96,6 +118,29 @@ QString FilterConeLodPlugin::filterInfo(FilterIDType filter) const {
                  "draw nothing). Orthographic views, or a perspective eye at <i>CameraDistance</i> "
                  "bounding-sphere radii. The mesh is not changed.<br>") +
              kPaperKamiya;
+    case FP_GROUP_QEM:
+      return QString(
+                 "Quadric edge collapse simplification (Garland-Heckbert, as the built-in <i>Quadric Edge "
+                 "Collapse Decimation</i>) that keeps face groups intact (the paper's section 6): "
+                 "<b>condition 1</b> refuses every collapse that would split a group or remove its last faces; "
+                 "<b>condition 2</b> refuses every collapse that would create a vertex where three or more "
+                 "groups meet. Group contours still simplify (a contour edge collapses onto the contour; "
+                 "group corners never move). <i>LockGroupBoundaries</i> keeps every contour vertex where it "
+                 "is (crack-free refinement between groups, less reduction).<br>"
+                 "Groups: the per-face quality (e.g. from <i>Cone LOD: Normal Cone Face Grouping</i>; equal "
+                 "values = one group), or the normal-cone groups of a hierarchy level computed here (then "
+                 "written to per-face quality and colour). Faces keep their quality, colour and attributes. "
+                 "The log lists faces, groups before/after, groups split or vanished, and the time.<br>") +
+             kPaperKamiya;
+    case FP_GROUP_INTEGRITY:
+      return QString(
+                 "Measures whether the face groups of the current mesh are those of <i>ReferenceMesh</i> "
+                 "(usually the mesh before a simplification), group ids being the per-face quality: groups "
+                 "before and after, groups that vanished, groups split into more edge-connected pieces than "
+                 "they had, groups already in several pieces in the reference (reported, not counted as "
+                 "split). With the current mesh as reference it counts groups and their pieces. The meshes "
+                 "are not changed.<br>") +
+             kPaperKamiya;
   }
   return "";
 }
@@ -104,6 +149,8 @@ MeshFilterInterface::FilterClass FilterConeLodPlugin::getClass(QAction* a) {
   switch (ID(a)) {
     case FP_CONE_GROUPING: return MeshFilterInterface::FaceColoring;
     case FP_CULLING_COST: return MeshFilterInterface::Measure;
+    case FP_GROUP_QEM: return MeshFilterInterface::Remeshing;
+    case FP_GROUP_INTEGRITY: return MeshFilterInterface::Measure;
   }
   return MeshFilterInterface::Measure;
 }
@@ -113,10 +160,14 @@ int FilterConeLodPlugin::getRequirements(QAction* a) {
 }
 
 int FilterConeLodPlugin::postCondition(QAction* a) const {
-  return ID(a) == FP_CONE_GROUPING ? (MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR) : MeshModel::MM_NONE;
+  switch (ID(a)) {
+    case FP_CONE_GROUPING: return MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR;
+    case FP_GROUP_QEM: return MeshModel::MM_GEOMETRY_AND_TOPOLOGY_CHANGE | MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR;
+  }
+  return MeshModel::MM_NONE;
 }
 
-void FilterConeLodPlugin::initParameterSet(QAction* a, MeshModel& /*m*/, RichParameterList& par) {
+void FilterConeLodPlugin::initParameterSet(QAction* a, MeshModel& m, RichParameterList& par) {
   switch (ID(a)) {
     case FP_CONE_GROUPING:
       AddGroupingParameters(par);
@@ -131,7 +182,54 @@ void FilterConeLodPlugin::initParameterSet(QAction* a, MeshModel& /*m*/, RichPar
                              "0: orthographic views (the paper's test). Otherwise a perspective eye at this many "
                              "bounding-sphere radii (> 1) from the model's centre."));
       break;
+    case FP_GROUP_QEM: {
+      const GroupQemParams d;
+      par.addParam(RichInt("TargetFaceNum", m.cm.fn / 2, "Target number of faces",
+                           "The simplification stops at this many faces (or earlier when no collapse is left "
+                           "that keeps the groups intact)."));
+      par.addParam(RichFloat("TargetPerc", 0.f, "Percentage reduction (0..1)",
+                             "If non zero, the target is this fraction of the current face count (0.1 = 10%)."));
+      par.addParam(RichFloat("MaxErrorPerc", 0.f, "Max error (% of bbox diagonal)",
+                             "If non zero, no collapse whose quadric error (RMS distance) exceeds this percentage of "
+                             "the bounding-box diagonal is done. 0: no limit."));
+      par.addParam(RichEnum("GroupSource", 0, QStringList() << "Per-face quality" << "Normal cone groups",
+                            "Groups", "Per-face quality: the ids already on the mesh (e.g. from Cone LOD: Normal "
+                            "Cone Face Grouping). Normal cone groups: computed now at GroupLevel with the default "
+                            "grouping parameters."));
+      par.addParam(RichInt("GroupLevel", 1, "Normal cone level",
+                           "Hierarchy level of the normal cone groups (1 = finest); used with GroupSource = Normal "
+                           "cone groups."));
+      par.addParam(RichBool("Condition1", d.condition1, "Condition 1: keep groups whole",
+                            "Refuse collapses that split a group or remove its last faces."));
+      par.addParam(RichBool("Condition2", d.condition2, "Condition 2: no new group corners",
+                            "Refuse collapses that create a vertex where 3 or more groups meet."));
+      par.addParam(RichBool("LockGroupBoundaries", d.lockGroupBoundaries, "Lock group boundaries",
+                            "No vertex on a group boundary moves: group contours stay exactly as they are."));
+      par.addParam(RichFloat("QualityThr", float(d.qualityThr), "Quality threshold",
+                             "Collapses creating faces of quality (2 area / longest edge^2) below this are "
+                             "penalised, as in the built-in filter. 0: no penalty."));
+      par.addParam(RichBool("OptimalPlacement", d.optimalPlacement, "Optimal position of simplified vertices",
+                            "The merged vertex goes where the quadric error is least; otherwise to the better "
+                            "endpoint."));
+      par.addParam(RichBool("PreserveBoundary", d.preserveBoundary, "Preserve Boundary of the mesh",
+                            "Vertices on the mesh border never move."));
+      par.addParam(RichFloat("BoundaryWeight", float(d.boundaryWeight), "Boundary Preserving Weight",
+                             "Weight of the quadrics that keep mesh borders (and group contours) in place."));
+      par.addParam(RichBool("PreserveNormal", d.preserveNormal, "Preserve Normal",
+                            "Refuse collapses that turn a face's normal by more than about 78 degrees (fold-overs)."));
+      break;
+    }
   }
+}
+
+void FilterConeLodPlugin::initParameterSet(QAction* a, MeshDocument& md, RichParameterList& par) {
+  if (ID(a) == FP_GROUP_INTEGRITY) {
+    par.addParam(RichMesh("ReferenceMesh", md.mm(), &md, "Reference mesh",
+                          "The mesh whose groups (per-face quality) are the reference, e.g. the mesh before "
+                          "simplification. The current mesh is measured against it."));
+    return;
+  }
+  if (md.mm()) initParameterSet(a, *md.mm(), par);
 }
 
 bool FilterConeLodPlugin::fail(const QString& message) {
@@ -150,6 +248,8 @@ bool FilterConeLodPlugin::applyFilter(QAction* a, MeshDocument& md, const RichPa
     switch (ID(a)) {
       case FP_CONE_GROUPING: return applyConeGrouping(*mm, par, cb);
       case FP_CULLING_COST: return applyCullingCost(*mm, par, cb);
+      case FP_GROUP_QEM: return applyGroupQem(*mm, par, cb);
+      case FP_GROUP_INTEGRITY: return applyGroupIntegrity(md, par);
     }
     return fail("unknown filter");
   } catch (const std::bad_alloc&) {
@@ -213,6 +313,126 @@ bool FilterConeLodPlugin::applyCullingCost(MeshModel& mm, const RichParameterLis
   Log("rejected_fraction %.4f  ideal_fraction %.4f  (%.1f%% of the ideal culled at group level)",
       r.rejectedFraction, r.idealFraction, r.idealFraction > 0 ? 100 * r.rejectedFraction / r.idealFraction : 0.0);
   Log("front_accepted_fraction %.4f  mean_group_tests %.1f", r.frontAcceptedFraction, r.meanGroupTests);
+  return true;
+}
+
+bool FilterConeLodPlugin::applyGroupQem(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb) {
+  GroupQemParams p;
+  const float perc = par.getFloat("TargetPerc");
+  const int targetFaceNum = par.getInt("TargetFaceNum");
+  if (perc < 0 || perc > 1) return fail("TargetPerc must be between 0 and 1");
+  if (targetFaceNum < 0) return fail("TargetFaceNum must be >= 0");
+  p.targetFaces = perc > 0 ? std::max<size_t>(1, size_t(double(perc) * mm.cm.fn)) : size_t(targetFaceNum);
+  p.maxError = par.getFloat("MaxErrorPerc") / 100.0;
+  p.condition1 = par.getBool("Condition1");
+  p.condition2 = par.getBool("Condition2");
+  p.lockGroupBoundaries = par.getBool("LockGroupBoundaries");
+  p.qualityThr = par.getFloat("QualityThr");
+  p.optimalPlacement = par.getBool("OptimalPlacement");
+  p.preserveBoundary = par.getBool("PreserveBoundary");
+  p.boundaryWeight = par.getFloat("BoundaryWeight");
+  p.preserveNormal = par.getBool("PreserveNormal");
+  Status s = ValidateParams(p);
+  if (!s.ok()) return fail(QString::fromStdString(s.message));
+
+  std::vector<size_t> faceOf;
+  const IndexedMesh im = ToIndexedMesh(mm.cm, &faceOf);
+  s = RequireValidForFaces(CheckMesh(im, false));
+  if (!s.ok()) return fail(QString::fromStdString(s.message) + " (the mesh was not changed)");
+  QElapsedTimer timer;
+  timer.start();
+  std::vector<int> groups;
+  const bool coneSource = par.getEnum("GroupSource") == 1;
+  int level = par.getInt("GroupLevel");
+  Progress progress = FromCallback(cb);
+  if (coneSource) {
+    GroupHierarchy h;
+    s = BuildConeHierarchy(im, ConeGroupingParams(), h, SubProgress(progress, 0, 30));
+    if (!s.ok()) return fail(QString::fromStdString(s.message) + " (the mesh was not changed)");
+    if (level < 1 || level > h.levelCount()) {
+      Log("GroupLevel %d is outside the %d levels built: using level %d", level, h.levelCount(),
+          std::min(std::max(level, 1), h.levelCount()));
+      level = std::min(std::max(level, 1), h.levelCount());
+    }
+    groups = h.level(level).faceGroup;
+    progress = SubProgress(progress, 30, 100);
+  } else {
+    if (!mm.hasDataMask(MeshModel::MM_FACEQUALITY))
+      return fail("the mesh has no per-face quality to use as group ids: run Cone LOD: Normal Cone Face Grouping "
+                  "first, or set GroupSource to Normal cone groups (the mesh was not changed)");
+    const std::vector<float> q = FaceQualities(mm.cm);
+    std::vector<std::vector<int>> ids;
+    s = GroupIdsFromValues({&q}, ids);
+    if (!s.ok()) return fail(QString::fromStdString(s.message) + " (the mesh was not changed)");
+    groups = std::move(ids[0]);
+  }
+  GroupQemResult r;
+  s = SimplifyPreservingGroups(im, groups, p, r, progress);
+  if (!s.ok()) return fail(QString::fromStdString(s.message) + " (the mesh was not changed)");
+  const double seconds = timer.elapsed() / 1000.0;
+
+  std::vector<int> groupsAfter(r.sourceFace.size());
+  for (size_t f = 0; f < r.sourceFace.size(); ++f) groupsAfter[f] = groups[r.sourceFace[f]];
+  GroupIntegrity gi;
+  MeasureGroupIntegrity(im, groups, r.mesh, groupsAfter, gi);
+
+  mm.updateDataMask(MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR);
+  ApplySimplifiedMesh(mm.cm, faceOf, r.mesh, r.sourceFace, r.sourceVertex);
+  if (coneSource)  // faces are in the same order as the groups after compaction
+    for (size_t f = 0; f < groupsAfter.size(); ++f) {
+      mm.cm.face[f].Q() = CMeshO::FaceType::QualityType(groupsAfter[f]);
+      mm.cm.face[f].C() = GroupColor(groupsAfter[f]);
+    }
+  if (mm.hasDataMask(MeshModel::MM_FACEFACETOPO)) vcg::tri::UpdateTopology<CMeshO>::FaceFace(mm.cm);
+  if (mm.hasDataMask(MeshModel::MM_VERTFACETOPO)) vcg::tri::UpdateTopology<CMeshO>::VertexFace(mm.cm);
+  mm.UpdateBoxAndNormals();
+
+  const std::string source = coneSource ? "normal cone groups, level " + std::to_string(level) : "per-face quality groups";
+  Log("Group-preserving QEM (%s): faces_in %d faces_out %d target %d (%s) seconds %.3f", source.c_str(),
+      int(im.faceCount()), int(r.mesh.faceCount()), int(p.targetFaces), StopName(r.stats.stop), seconds);
+  Log("groups_before %d groups_after %d groups_split %d groups_vanished %d groups_disconnected_in %d "
+      "integrity_percent %.2f",
+      gi.groupsBefore, gi.groupsAfter, gi.groupsSplit, gi.groupsVanished, gi.groupsDisconnectedBefore,
+      100 * gi.intact());
+  if (gi.groupsDisconnectedBefore)
+    Log("%d groups were already in several pieces in the input: each piece was kept as it was",
+        gi.groupsDisconnectedBefore);
+  Log("collapses %d; refused evaluations: topology %d, condition 1 %d, condition 2 %d, lock %d, fixed %d, geometry %d",
+      int(r.stats.collapses), int(r.stats.refusedTopology), int(r.stats.refusedCondition1),
+      int(r.stats.refusedCondition2), int(r.stats.refusedLock), int(r.stats.refusedFixed),
+      int(r.stats.refusedGeometry));
+  return true;
+}
+
+bool FilterConeLodPlugin::applyGroupIntegrity(MeshDocument& md, const RichParameterList& par) {
+  MeshModel* cur = md.mm();
+  MeshModel* ref = par.getMesh("ReferenceMesh");
+  if (!ref) return fail("ReferenceMesh is not a mesh of this document");
+  for (MeshModel* m : {ref, cur})
+    if (!m->hasDataMask(MeshModel::MM_FACEQUALITY))
+      return fail(QString("layer '%1' has no per-face quality to read group ids from").arg(m->label()));
+  std::vector<size_t> refFaces, curFaces;
+  const IndexedMesh refMesh = ToIndexedMesh(ref->cm), curMesh = ToIndexedMesh(cur->cm);
+  const std::vector<float> qr = FaceQualities(ref->cm), qc = FaceQualities(cur->cm);
+  std::vector<std::vector<int>> ids;
+  Status s = GroupIdsFromValues({&qr, &qc}, ids);
+  if (!s.ok()) return fail(QString::fromStdString(s.message));
+  GroupIntegrity gi;
+  s = MeasureGroupIntegrity(refMesh, ids[0], curMesh, ids[1], gi);
+  if (!s.ok()) return fail(QString::fromStdString(s.message));
+  Log("Group integrity of '%s' against '%s' (group id = per-face quality):", qUtf8Printable(cur->label()),
+      qUtf8Printable(ref->label()));
+  Log("groups_before %d groups_after %d groups_split %d groups_vanished %d groups_disconnected_before %d "
+      "groups_disconnected_after %d groups_new %d integrity_percent %.2f",
+      gi.groupsBefore, gi.groupsAfter, gi.groupsSplit, gi.groupsVanished, gi.groupsDisconnectedBefore,
+      gi.groupsDisconnectedAfter, gi.groupsNew, 100 * gi.intact());
+  auto list = [](const std::vector<int>& v) {
+    QStringList l;
+    for (int id : v) l << QString::number(id);
+    return l.join(" ");
+  };
+  if (!gi.splitIds.empty()) Log("split groups (first ones): %s", qUtf8Printable(list(gi.splitIds)));
+  if (!gi.vanishedIds.empty()) Log("vanished groups (first ones): %s", qUtf8Printable(list(gi.vanishedIds)));
   return true;
 }
 

@@ -14,7 +14,7 @@ class FilterConeLodPlugin : public QObject, public MeshFilterInterface {
 
  public:
   // Ids are stable: scripts name filters by their names, which never change either.
-  enum { FP_CONE_GROUPING, FP_CULLING_COST };
+  enum { FP_CONE_GROUPING, FP_CULLING_COST, FP_GROUP_QEM, FP_GROUP_INTEGRITY };
 
   FilterConeLodPlugin();
   QString pluginName() const override;
@@ -25,10 +25,13 @@ class FilterConeLodPlugin : public QObject, public MeshFilterInterface {
   int getRequirements(QAction* a) override;
   int postCondition(QAction* a) const override;
   void initParameterSet(QAction* a, MeshModel& m, RichParameterList& par) override;
+  void initParameterSet(QAction* a, MeshDocument& md, RichParameterList& par) override;
   bool applyFilter(QAction* a, MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb) override;
 
  private:
   bool applyConeGrouping(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb);
   bool applyCullingCost(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb);
+  bool applyGroupQem(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb);
+  bool applyGroupIntegrity(MeshDocument& md, const RichParameterList& par);
   bool fail(const QString& message);  // logs and sets errorMessage; returns false
 };

@@ -142,6 +142,34 @@ def last_float(log, key):
     return float(vals[-1])
 
 
+def mlx_with(c, name, overrides=None, before="", after=""):
+    """A script made of the shipped scripts/mlx/NAME filter with some parameter values replaced,
+    with raw filter XML before and after it. Returns the script's path."""
+    root = ET.parse(c.mlx(name)).getroot()
+    for flt in root:
+        for p in flt:
+            if overrides and p.get("name") in overrides:
+                p.set("value", str(overrides[p.get("name")]))
+    body = "".join(ET.tostring(flt, encoding="unicode") for flt in root)
+    path = c.out("script_%d.mlx" % len(os.listdir(c.tmp)))
+    with open(path, "w") as f:
+        f.write("<!DOCTYPE FilterScript>\n<FilterScript>\n%s%s%s</FilterScript>\n" % (before, body, after))
+    return path
+
+
+def integrity_filter(c):
+    """The Group Integrity filter (reference = layer 0) as raw XML."""
+    root = ET.parse(c.mlx("group_integrity.mlx")).getroot()
+    return "".join(ET.tostring(flt, encoding="unicode") for flt in root)
+
+
+DUPLICATE = '<filter name="Duplicate Current layer"/>\n'
+
+
+def last_int(log, key):
+    return int(last_float(log, key))
+
+
 # --- MeshLab integration -------------------------------------------------------------------
 
 @case
@@ -234,6 +262,87 @@ def meshlab_awkward_inputs(c):
         assert all(lv["all_connected"] for lv in info["levels"]), mesh
 
 
+@case
+def meshlab_group_qem_bunny(c):
+    """Our filter on cone groups (level 4, as per-face quality) at 10%: every group intact, the
+    same result as the CLI, quality = group ids in the saved mesh."""
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    grouped = c.out("grouped.ply")
+    c.conelod("group", bunny, "--level", "4", "-o", grouped)
+    out = c.out("ours10.ply")
+    script = mlx_with(c, "group_preserving_quadric_edge_collapse.mlx", {"TargetPerc": 0.1},
+                      before=DUPLICATE, after=integrity_filter(c))
+    _, log = c.meshlab([grouped], script, out)
+    faces_out, target = last_int(log, "faces_out"), last_int(log, "target")
+    assert target == 6945 and faces_out <= target, log[-2000:]
+    assert last_float(log, "integrity_percent") == 100.0, log[-2000:]
+    assert last_int(log, "groups_split") == 0 and last_int(log, "groups_vanished") == 0, log[-2000:]
+    groups = last_int(log, "groups_before")
+    assert last_int(log, "groups_after") == groups and groups > 50, log[-2000:]
+    ply = read_ply(out)
+    assert len(ply["faces"]) == faces_out and len(set(ply["quality"])) == groups, (len(ply["faces"]), faces_out)
+    cli = json.loads(c.conelod("simplify", grouped, "--target-ratio", "0.1", "--json").stdout)
+    assert cli["faces_out"] == faces_out and cli["groups_after"] == groups, cli
+    # Normal cone groups computed by the filter itself, on the raw bunny: the same groups.
+    out2 = c.out("ours10_cone.ply")
+    script = mlx_with(c, "group_preserving_quadric_edge_collapse.mlx",
+                      {"TargetPerc": 0.1, "GroupSource": 1, "GroupLevel": 4})
+    _, log = c.meshlab([bunny], script, out2)
+    assert last_int(log, "faces_out") == faces_out, log[-2000:]
+    assert last_float(log, "integrity_percent") == 100.0, log[-2000:]
+    assert len(set(read_ply(out2)["quality"])) == groups
+
+
+@case
+def meshlab_group_qem_locked_and_builtin(c):
+    """Locked boundaries keep more faces; the built-in QEM at the same target breaks groups, and
+    the Group Integrity filter says so."""
+    grouped = c.out("grouped.ply")
+    c.conelod("group", c.mesh("stanford_bunny_bun_zipper.ply"), "--level", "3", "-o", grouped)
+    script = mlx_with(c, "group_preserving_quadric_edge_collapse.mlx", {"TargetPerc": 0.05, "LockGroupBoundaries": "true"},
+                      before=DUPLICATE, after=integrity_filter(c))
+    _, log = c.meshlab([grouped], script, c.out("locked.ply"))
+    locked = last_int(log, "faces_out")
+    assert last_float(log, "integrity_percent") == 100.0, log[-2000:]
+    free = json.loads(c.conelod("simplify", grouped, "--target-ratio", "0.05", "--json").stdout)
+    assert locked > free["faces_out"], (locked, free)
+    builtin = (DUPLICATE + '<filter name="Simplification: Quadric Edge Collapse Decimation">'
+               '<Param type="RichInt" value="0" name="TargetFaceNum"/><Param type="RichFloat" value="0.05" name="TargetPerc"/>'
+               '<Param type="RichFloat" value="0.3" name="QualityThr"/><Param type="RichBool" value="false" name="PreserveBoundary"/>'
+               '<Param type="RichFloat" value="1" name="BoundaryWeight"/><Param type="RichBool" value="false" name="PreserveNormal"/>'
+               '<Param type="RichBool" value="false" name="PreserveTopology"/><Param type="RichBool" value="true" name="OptimalPlacement"/>'
+               '<Param type="RichBool" value="false" name="PlanarQuadric"/><Param type="RichFloat" value="0.001" name="PlanarWeight"/>'
+               '<Param type="RichBool" value="false" name="QualityWeight"/><Param type="RichBool" value="true" name="AutoClean"/>'
+               '<Param type="RichBool" value="false" name="Selected"/></filter>\n')
+    path = c.out("builtin.mlx")
+    with open(path, "w") as f:
+        f.write("<!DOCTYPE FilterScript>\n<FilterScript>\n%s%s</FilterScript>\n" % (builtin, integrity_filter(c)))
+    _, log = c.meshlab([grouped], path)
+    assert last_int(log, "groups_split") + last_int(log, "groups_vanished") > 0, log[-2000:]
+    assert last_float(log, "integrity_percent") < 100.0
+
+
+@case
+def meshlab_group_qem_bad_inputs(c):
+    """Bad input and a mesh without group ids: a clear message, a failed filter, never a crash."""
+    qem = mlx_with(c, "group_preserving_quadric_edge_collapse.mlx", {"TargetPerc": 0.5, "GroupSource": 1})
+    for mesh, message in [("no_faces.ply", "has no faces"), ("nan_vertex.ply", "NaN or infinite")]:
+        rc, log = c.meshlab([c.mesh(mesh)], qem, c.out("bad.ply"), expect_ok=False)
+        assert rc == 255 and "ConeLOD error" in log and message in log, "%s: %d\n%s" % (mesh, rc, log[-1500:])
+    quality = mlx_with(c, "group_preserving_quadric_edge_collapse.mlx", {"TargetPerc": 0.5})
+    rc, log = c.meshlab([c.mesh("stanford_bunny_bun_zipper.ply")], quality, c.out("bad.ply"), expect_ok=False)
+    assert rc == 255 and "no per-face quality" in log, log[-1500:]
+    rc, log = c.meshlab([c.mesh("stanford_bunny_bun_zipper.ply")], c.mlx("group_integrity.mlx"), expect_ok=False)
+    assert rc == 255 and "no per-face quality" in log, log[-1500:]
+    # Awkward but valid: non-manifold edges, 122 components, zero-area faces.
+    for mesh in ["stanford_bunny_bun_zipper_res4.ply", "boeing.ply", "zero_area_faces.ply"]:
+        out = c.out("ok.ply")
+        _, log = c.meshlab([c.mesh(mesh)], mlx_with(c, "group_preserving_quadric_edge_collapse.mlx",
+                                                    {"TargetPerc": 0.3, "GroupSource": 1, "GroupLevel": 2}), out)
+        assert last_float(log, "integrity_percent") == 100.0, "%s\n%s" % (mesh, log[-1500:])
+        assert len(read_ply(out)["faces"]) == last_int(log, "faces_out"), mesh
+
+
 # --- CLI ----------------------------------------------------------------------------------
 
 @case
@@ -271,6 +380,76 @@ def cli_cull_cost_perspective(c):
     # An eye at 3 radii sees less than half of a closed-ish surface; far views see about half.
     assert near["ideal_fraction"] > ortho["ideal_fraction"] + 0.02, (near, ortho)
     assert abs(ortho["ideal_fraction"] - 0.5) < 0.02, ortho
+
+
+@case
+def cli_simplify(c):
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    out = c.out("s.ply")
+    r = json.loads(c.conelod("simplify", bunny, "--groups", "cone:4", "--target-faces", "5000", "-o", out, "--json").stdout)
+    for key in ["faces_in", "faces_out", "groups_before", "groups_after", "groups_split", "groups_vanished", "seconds"]:
+        assert key in r, key
+    assert r["faces_in"] == 69451 and r["faces_out"] <= 5000, r
+    assert r["groups_split"] == 0 and r["groups_vanished"] == 0 and r["groups_after"] == r["groups_before"], r
+    ply = read_ply(out)
+    assert len(ply["faces"]) == r["faces_out"] and len(set(ply["quality"])) == r["groups_after"]
+    # The saved mesh's quality is usable as groups again: nothing left to split.
+    again = json.loads(c.conelod("simplify", out, "--target-faces", "2000", "--json").stdout)
+    assert again["groups_before"] == r["groups_after"] and again["groups_split"] == 0, again
+    # Locked contours: fewer collapses possible.
+    locked = json.loads(c.conelod("simplify", bunny, "--groups", "cone:4", "--target-faces", "5000", "--lock-boundaries",
+                                  "--json").stdout)
+    assert locked["faces_out"] > r["faces_out"] and locked["groups_split"] == 0, locked
+    # Without the conditions the same target breaks groups.
+    plain = json.loads(c.conelod("simplify", bunny, "--groups", "cone:3", "--target-faces", "1000", "--no-condition1",
+                                 "--no-condition2", "--json").stdout)
+    assert plain["groups_split"] + plain["groups_vanished"] > 0, plain
+    human = c.conelod("simplify", bunny, "--groups", "cone:4", "--target-ratio", "0.5").stdout.decode()
+    assert "100.00% intact" in human, human
+
+
+@case
+def cli_simplify_bad_inputs(c):
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    p = c.conelod("simplify", bunny, "--target-faces", "100", expect=2)  # no quality in the file
+    assert "no per-face quality" in p.stderr.decode(), p.stderr.decode()
+    p = c.conelod("simplify", bunny, "--target-faces", "100", "--groups", "pca:8", expect=1)
+    assert "PCA" in p.stderr.decode()
+    p = c.conelod("simplify", bunny, "--target-faces", "100", "--groups", "cone:99", expect=1)
+    assert "levels" in p.stderr.decode()
+    c.conelod("simplify", bunny, "--groups", "cone:1", expect=1)  # no target
+    c.conelod("simplify", bunny, "--groups", "cone:1", "--target-ratio", "2", expect=1)
+    c.conelod("simplify", c.out("missing.ply"), "--target-faces", "10", expect=3)
+    for mesh, message in [("no_faces.ply", "has no faces"), ("nan_vertex.ply", "NaN or infinite")]:
+        p = c.conelod("simplify", c.mesh(mesh), "--groups", "cone:1", "--target-faces", "1", expect=2)
+        assert message in p.stderr.decode(), p.stderr.decode()
+    # Groups already in two pieces on input: reported, and kept as two pieces.
+    two = c.out("two_pieces.ply")
+    with open(two, "w") as f:
+        f.write("ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\nproperty float z\n"
+                "element face 4\nproperty list uchar int vertex_indices\nproperty float quality\nend_header\n"
+                "0 0 0\n1 0 0\n1 1 0\n0 1 0\n5 0 0\n6 0 0\n6 1 0\n5 1 0\n"
+                "3 0 1 2 7\n3 0 2 3 7\n3 4 5 6 7\n3 4 6 7 7\n")
+    r = json.loads(c.conelod("simplify", two, "--target-faces", "1", "--json").stdout)
+    assert r["groups_disconnected_in"] == 1 and r["groups_split"] == 0 and r["groups_vanished"] == 0, r
+    human = c.conelod("simplify", two, "--target-faces", "1").stdout.decode()
+    assert "already in several pieces" in human, human
+
+
+@case
+def cli_simplify_hierarchy(c):
+    prefix = c.out("lod")
+    r = json.loads(c.conelod("simplify", c.mesh("stanford_bunny_bun_zipper.ply"), "--hierarchy", "-o", prefix,
+                             "--json").stdout)
+    levels = r["levels"]
+    assert len(levels) >= 4, r
+    below = r["faces_in"]
+    for lv in levels:
+        assert lv["faces_out"] <= below and lv["groups_split"] == 0 and lv["groups_vanished"] == 0, lv
+        below = lv["faces_out"]
+        ply = read_ply("%s_L%d.ply" % (prefix, lv["level"]))
+        assert len(ply["faces"]) == lv["faces_out"] and len(set(ply["quality"])) == lv["groups_after"], lv
+    assert levels[-1]["faces_out"] < levels[0]["faces_out"] / 4, levels
 
 
 def main():

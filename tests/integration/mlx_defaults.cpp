@@ -30,10 +30,10 @@ int main(int argc, char** argv) {
   if (!plugin) { std::fprintf(stderr, "cannot load %s: %s\n", argv[1], qPrintable(loader.errorString())); return 1; }
   QDir().mkpath(argv[2]);
   MeshDocument md;
-  MeshModel* mm = md.addNewMesh("", "empty");
+  md.addNewMesh("", "empty");  // the current mesh of every filter's defaults
   for (QAction* a : plugin->actions()) {
     RichParameterList par;
-    plugin->initParameterSet(a, *mm, par);
+    plugin->initParameterSet(a, md, par);  // the document form: filters with mesh parameters need it
     FilterScript script;
     FilterNameParameterValuesPair pair;
     pair.first = plugin->filterName(a);

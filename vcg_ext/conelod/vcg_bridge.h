@@ -77,4 +77,38 @@ void WriteGroupResults(MeshType& m, const std::vector<size_t>& faceOfIndex, cons
   }
 }
 
+// Applies a simplification computed on ToIndexedMesh(m, &faceOfIndex) to `m` in place: the faces
+// and vertices that the simplification removed are deleted, the kept vertices take their new
+// positions and the kept faces their new vertices; then the vectors are compacted. Kept faces and
+// vertices keep all their data (quality, colour, named attributes). sourceFace/sourceVertex: per
+// face/vertex of `simplified`, the IndexedMesh face/vertex it was (group_qem.h's GroupQemResult).
+// Topology (FF/VF adjacency), bounding box and normals are the caller's to update.
+template <class MeshType>
+void ApplySimplifiedMesh(MeshType& m, const std::vector<size_t>& faceOfIndex, const IndexedMesh& simplified,
+                         const std::vector<uint32_t>& sourceFace, const std::vector<uint32_t>& sourceVertex) {
+  using CoordType = typename MeshType::CoordType;
+  using ScalarType = typename MeshType::ScalarType;
+  std::vector<size_t> vertOfIndex;  // ToIndexedMesh keeps the live vertices in order
+  vertOfIndex.reserve(size_t(m.vn));
+  for (size_t i = 0; i < m.vert.size(); ++i)
+    if (!m.vert[i].IsD()) vertOfIndex.push_back(i);
+  std::vector<char> keepVertex(m.vert.size(), 0), keepFace(m.face.size(), 0);
+  for (size_t o = 0; o < sourceVertex.size(); ++o) {
+    auto& v = m.vert[vertOfIndex[sourceVertex[o]]];
+    keepVertex[vertOfIndex[sourceVertex[o]]] = 1;
+    const auto& p = simplified.positions[o];
+    v.P() = CoordType(ScalarType(p[0]), ScalarType(p[1]), ScalarType(p[2]));
+  }
+  for (size_t o = 0; o < sourceFace.size(); ++o) {
+    auto& f = m.face[faceOfIndex[sourceFace[o]]];
+    keepFace[faceOfIndex[sourceFace[o]]] = 1;
+    for (int k = 0; k < 3; ++k) f.V(k) = &m.vert[vertOfIndex[sourceVertex[simplified.faces[o][size_t(k)]]]];
+  }
+  for (size_t i = 0; i < m.face.size(); ++i)
+    if (!m.face[i].IsD() && !keepFace[i]) vcg::tri::Allocator<MeshType>::DeleteFace(m, m.face[i]);
+  for (size_t i = 0; i < m.vert.size(); ++i)
+    if (!m.vert[i].IsD() && !keepVertex[i]) vcg::tri::Allocator<MeshType>::DeleteVertex(m, m.vert[i]);
+  vcg::tri::Allocator<MeshType>::CompactEveryVector(m);
+}
+
 }  // namespace conelod

@@ -1,0 +1,174 @@
+// ConeLOD benchmark — our group-preserving quadric edge collapse against vcglib's
+// TriEdgeCollapseQuadric (what MeshLab's "Simplification: Quadric Edge Collapse Decimation" runs),
+// on the same mesh, in the same run, at the same targets.
+//
+//   bench_simplify [MESH.ply] [--benchmark_* options]
+//   (default mesh: the dragon in CONELOD_TEST_MESHES)
+//
+// Both sides time the whole work of their MeshLab filter on an already-loaded mesh:
+//   vcglib: VF topology + border flags, LocalOptimization Init, DoOptimization to the target,
+//           Finalize, with the filter's default parameters (QualityThr 0.3, OptimalPlacement,
+//           BoundaryWeight 1, no normal check, no topology check);
+//   ours:   ToIndexedMesh, SimplifyPreservingGroups (conditions 1 and 2 on the normal-cone groups
+//           of level --level, or no condition), ApplySimplifiedMesh back into the vcg mesh.
+// The groups are computed once, outside the timings. Each run starts from a fresh copy (the copy
+// is not timed). At the end the CPU-time ratio ours / vcglib is printed per target: <= 1 means
+// ours is at least as fast while enforcing the conditions.
+#include <benchmark/benchmark.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <string>
+
+#include <vcg/complex/algorithms/local_optimization.h>
+#include <vcg/complex/algorithms/local_optimization/tri_edge_collapse_quadric.h>
+#include <vcg/complex/complex.h>
+#include <wrap/io_trimesh/import_ply.h>
+
+#include "conelod/cone_grouping.h"
+#include "conelod/group_qem.h"
+#include "conelod/vcg_bridge.h"
+
+namespace {
+
+// The vertex/face types of vcglib's decimation sample (tridecimator): VF adjacency, mark, quadric.
+class QVertex;
+class QFace;
+struct QUsedTypes : public vcg::UsedTypes<vcg::Use<QVertex>::AsVertexType, vcg::Use<QFace>::AsFaceType> {};
+class QVertex : public vcg::Vertex<QUsedTypes, vcg::vertex::VFAdj, vcg::vertex::Coord3f, vcg::vertex::Normal3f,
+                                   vcg::vertex::Mark, vcg::vertex::Qualityf, vcg::vertex::BitFlags> {
+ public:
+  vcg::math::Quadric<double>& Qd() { return q_; }
+
+ private:
+  vcg::math::Quadric<double> q_;
+};
+class QFace : public vcg::Face<QUsedTypes, vcg::face::VFAdj, vcg::face::VertexRef, vcg::face::Normal3f,
+                               vcg::face::Qualityf, vcg::face::BitFlags> {};
+class QMesh : public vcg::tri::TriMesh<std::vector<QVertex>, std::vector<QFace>> {};
+using QPair = vcg::tri::BasicVertexPair<QVertex>;
+class QCollapse : public vcg::tri::TriEdgeCollapseQuadric<QMesh, QPair, QCollapse, vcg::tri::QInfoStandard<QVertex>> {
+ public:
+  using Base = vcg::tri::TriEdgeCollapseQuadric<QMesh, QPair, QCollapse, vcg::tri::QInfoStandard<QVertex>>;
+  QCollapse(const QPair& p, int mark, vcg::BaseParameterClass* pp) : Base(p, mark, pp) {}
+};
+
+QMesh g_mesh;
+std::vector<int> g_groups;  // normal-cone groups at g_level, per face of g_mesh
+int g_level = 4;
+std::string g_path;
+std::map<std::string, double> g_cpu;  // benchmark name -> CPU seconds per iteration
+
+// MeshLab 2020.09's filter: QuadricSimplification() with the filter's default parameters.
+size_t RunVcg(QMesh& m, int targetFaces) {
+  vcg::tri::UpdateTopology<QMesh>::VertexFace(m);
+  vcg::tri::UpdateFlags<QMesh>::FaceBorderFromVF(m);
+  vcg::tri::TriEdgeCollapseQuadricParameter pp;
+  pp.QualityThr = 0.3;
+  pp.PreserveBoundary = false;
+  pp.BoundaryQuadricWeight = pp.BoundaryQuadricWeight * 1.0;
+  pp.PreserveTopology = false;
+  pp.QualityWeight = false;
+  pp.NormalCheck = false;
+  pp.OptimalPlacement = true;
+  pp.QualityQuadric = false;
+  vcg::LocalOptimization<QMesh> session(m, &pp);
+  session.Init<QCollapse>();
+  session.SetTargetSimplices(targetFaces);
+  session.SetTimeBudget(0.1f);
+  while (session.DoOptimization() && m.fn > targetFaces) {
+  }
+  session.Finalize<QCollapse>();
+  return size_t(m.fn);
+}
+
+size_t RunOurs(QMesh& m, int targetFaces, bool conditions) {
+  std::vector<size_t> faceOf;
+  const conelod::IndexedMesh im = conelod::ToIndexedMesh(m, &faceOf);
+  conelod::GroupQemParams p;
+  p.targetFaces = size_t(targetFaces);
+  p.condition1 = p.condition2 = conditions;
+  conelod::GroupQemResult r;
+  const conelod::Status s = conelod::SimplifyPreservingGroups(im, g_groups, p, r);
+  if (!s.ok()) { std::fprintf(stderr, "%s\n", s.message.c_str()); std::exit(1); }
+  conelod::ApplySimplifiedMesh(m, faceOf, r.mesh, r.sourceFace, r.sourceVertex);
+  return size_t(m.fn);
+}
+
+// kind: 0 = vcglib, 1 = ours with conditions 1 and 2, 2 = ours without conditions.
+void BM_Simplify(benchmark::State& state, int kind, double ratio, const std::string& name) {
+  const int target = int(ratio * g_mesh.fn);
+  size_t faces = 0;
+  double cpu = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    QMesh m;
+    vcg::tri::Append<QMesh, QMesh>::MeshCopy(m, g_mesh);
+    state.ResumeTiming();
+    const std::clock_t c0 = std::clock();
+    faces = kind == 0 ? RunVcg(m, target) : RunOurs(m, target, kind == 1);
+    cpu += double(std::clock() - c0) / CLOCKS_PER_SEC;
+    state.PauseTiming();
+    m.Clear();
+    state.ResumeTiming();
+  }
+  state.counters["faces_in"] = g_mesh.fn;
+  state.counters["faces_out"] = double(faces);
+  state.counters["target"] = target;
+  state.counters["faces_removed_per_s"] =
+      benchmark::Counter(double(g_mesh.fn - int(faces)) * double(state.iterations()), benchmark::Counter::kIsRate);
+  g_cpu[name] = cpu / double(state.iterations());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Our own arguments first: [MESH.ply] [--level L]; the rest goes to Google Benchmark.
+  std::vector<char*> rest = {argv[0]};
+  g_path = std::string(CONELOD_TEST_MESHES) + "/stanford_dragon_vrip_binary.ply";
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--level") && i + 1 < argc) g_level = std::atoi(argv[++i]);
+    else if (std::strncmp(argv[i], "--benchmark", 11) == 0) rest.push_back(argv[i]);
+    else g_path = argv[i];
+  }
+  int mask = 0;
+  if (vcg::tri::io::ImporterPLY<QMesh>::Open(g_mesh, g_path.c_str(), mask) != 0 && g_mesh.fn == 0) {
+    std::fprintf(stderr, "cannot read %s\n", g_path.c_str());
+    return 1;
+  }
+  {
+    conelod::GroupHierarchy h;
+    const conelod::IndexedMesh im = conelod::ToIndexedMesh(g_mesh);
+    if (!conelod::BuildConeHierarchy(im, conelod::ConeGroupingParams(), h).ok()) return 1;
+    g_level = std::min(std::max(1, g_level), h.levelCount());
+    g_groups = h.level(g_level).faceGroup;
+    std::printf("%s: %d faces; normal-cone groups of level %d: %zu\n", g_path.c_str(), g_mesh.fn, g_level,
+                h.level(g_level).groups.size());
+  }
+  const double ratios[] = {0.5, 0.1, 0.01};
+  for (double r : ratios) {
+    const std::string pct = std::to_string(int(r * 100 + 0.5)) + "%";
+    const char* names[] = {"vcglib_quadric/", "ours_conditions_1_2/", "ours_no_condition/"};
+    for (int kind = 0; kind < 3; ++kind) {
+      const std::string name = names[kind] + pct;
+      benchmark::RegisterBenchmark(name.c_str(), BM_Simplify, kind, r, name)
+          ->Unit(benchmark::kMillisecond)->Iterations(1);
+    }
+  }
+  int n = int(rest.size());
+  benchmark::Initialize(&n, rest.data());
+  benchmark::RunSpecifiedBenchmarks();
+  std::printf("\nCPU-time ratio ours / vcglib (<= 1: ours at least as fast):\n");
+  for (double r : ratios) {
+    const std::string pct = std::to_string(int(r * 100 + 0.5)) + "%";
+    const double v = g_cpu["vcglib_quadric/" + pct];
+    const double c = g_cpu["ours_conditions_1_2/" + pct];
+    const double f = g_cpu["ours_no_condition/" + pct];
+    if (v > 0)
+      std::printf("  target %4s: vcglib %.3f s, ours (conditions 1+2) %.3f s = %.2fx, ours (none) %.3f s = %.2fx\n",
+                  pct.c_str(), v, c, c / v, f, f / v);
+  }
+  return 0;
+}

@@ -1,0 +1,228 @@
+// ConeLOD CLI — `conelod simplify`: group-preserving quadric edge collapse (SPEC §3), one target
+// or one simplified mesh per level of the normal-cone hierarchy (--hierarchy).
+#include <cstdio>
+#include <cstdlib>
+
+#include "cli_common.h"
+#include "commands.h"
+#include "conelod/cone_grouping.h"
+#include "conelod/group_colors.h"
+#include "conelod/group_integrity.h"
+#include "conelod/group_qem.h"
+#include "conelod/hierarchical_simplification.h"
+#include "conelod/mesh_check.h"
+
+namespace conelod {
+namespace cli {
+namespace {
+
+const char* StopName(GroupQemStats::Stop s) {
+  switch (s) {
+    case GroupQemStats::Stop::TargetReached: return "target reached";
+    case GroupQemStats::Stop::NoMoreCollapses: return "no allowed collapse left";
+    case GroupQemStats::Stop::Cancelled: return "cancelled";
+  }
+  return "?";
+}
+
+void WriteStats(Json& j, const GroupQemStats& s) {
+  j.field("collapses", s.collapses).field("evaluations", s.evaluations).field("stop", StopName(s.stop))
+      .field("max_collapse_error", s.maxCollapseError);
+  j.key("refused").beginObject()
+      .field("topology", s.refusedTopology).field("condition1", s.refusedCondition1)
+      .field("condition2", s.refusedCondition2).field("lock", s.refusedLock).field("fixed", s.refusedFixed)
+      .field("geometry", s.refusedGeometry)
+      .endObject();
+}
+
+// Per-face quality and colour of the saved mesh: the face's group.
+void WriteGroupsToFaces(CMesh& mesh, const std::vector<int>& faceGroup, bool setQuality) {
+  for (size_t f = 0; f < mesh.face.size(); ++f) {
+    if (setQuality) mesh.face[f].Q() = float(faceGroup[f]);
+    mesh.face[f].C() = GroupColor(faceGroup[f]);
+  }
+}
+
+}  // namespace
+
+const char* kSimplifyUsage =
+    "conelod simplify IN.ply (--target-faces N | --target-ratio F | --max-error E) [--groups SOURCE]\n"
+    "                 [--lock-boundaries] [options] [-o OUT.ply] [--json]\n"
+    "conelod simplify IN.ply --hierarchy [--level-ratio R] [options] [-o PREFIX] [--json]\n"
+    "  Quadric edge collapse that keeps the face groups intact (Kamiya-Suzuki-Kawachi, §6):\n"
+    "  condition 1 (no group split or removed) and condition 2 (no new vertex where 3+ groups meet).\n"
+    "  OUT.ply keeps per-face quality = group id (colour = group). --hierarchy simplifies once per\n"
+    "  level of the normal-cone hierarchy, each level from the one below (PREFIX_L<k>.ply).\n"
+    "  --groups quality    per-face quality of IN.ply (default; equal values = one group)\n"
+    "  --groups cone:L     level L of the normal-cone hierarchy, default grouping parameters\n"
+    "  --groups pca:K      PCA clusters (not in this build yet)\n"
+    "  --target-ratio F    target = F x faces (0 < F <= 1)     --max-error E  fraction of bbox diag\n"
+    "options (defaults in brackets): --no-condition1 --no-condition2 --lock-boundaries\n"
+    "  --quality-thr Q [0.3]  --no-optimal-placement  --preserve-boundary  --boundary-weight W [1]\n"
+    "  --no-preserve-normal (allow face flips)  --level-ratio R [0.5] (--hierarchy)\n";
+
+int CmdSimplify(int argc, char** argv) {
+  Args a(argc, argv,
+         {"-o", "--target-faces", "--target-ratio", "--max-error", "--groups", "--quality-thr", "--boundary-weight",
+          "--level-ratio"},
+         {"--json", "--no-condition1", "--no-condition2", "--lock-boundaries", "--no-optimal-placement",
+          "--preserve-boundary", "--no-preserve-normal", "--hierarchy"});
+  GroupQemParams p;
+  const int targetFaces = a.integer("--target-faces", 0);
+  const double targetRatio = a.num("--target-ratio", 0);
+  p.maxError = a.num("--max-error", 0);
+  p.qualityThr = a.num("--quality-thr", p.qualityThr);
+  p.boundaryWeight = a.num("--boundary-weight", p.boundaryWeight);
+  const double levelRatio = a.num("--level-ratio", 0.5);
+  p.condition1 = !a.has("--no-condition1");
+  p.condition2 = !a.has("--no-condition2");
+  p.lockGroupBoundaries = a.has("--lock-boundaries");
+  p.optimalPlacement = !a.has("--no-optimal-placement");
+  p.preserveBoundary = a.has("--preserve-boundary");
+  p.preserveNormal = !a.has("--no-preserve-normal");
+  const bool hierarchy = a.has("--hierarchy");
+  const bool json = a.has("--json");
+  if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kSimplifyUsage);
+  if (a.positional().size() != 1) return Fail(kUsage, std::string("expected one input mesh\n") + kSimplifyUsage);
+  if (targetFaces < 0) return Fail(kUsage, "--target-faces must be >= 0");
+  if (a.has("--target-ratio") && !(targetRatio > 0 && targetRatio <= 1)) return Fail(kUsage, "--target-ratio must be in (0, 1]");
+  if (!hierarchy && !targetFaces && !a.has("--target-ratio") && !a.has("--max-error"))
+    return Fail(kUsage, std::string("give --target-faces, --target-ratio or --max-error\n") + kSimplifyUsage);
+  std::string source = a.str("--groups", hierarchy ? "cone:1" : "quality");
+  int coneLevel = 0;
+  if (source.compare(0, 5, "cone:") == 0) {
+    char* end = nullptr;
+    coneLevel = int(std::strtol(source.c_str() + 5, &end, 10));
+    if (*end || coneLevel < 1) return Fail(kUsage, "--groups cone:L needs a level L >= 1");
+  } else if (source.compare(0, 4, "pca:") == 0) {
+    return Fail(kUsage, "--groups pca:K: the PCA partition is not in this build yet; use quality or cone:L");
+  } else if (source != "quality") {
+    return Fail(kUsage, "--groups must be quality, cone:L or pca:K\n" + std::string(kSimplifyUsage));
+  }
+  if (hierarchy && source == "quality") return Fail(kUsage, "--hierarchy simplifies the levels of the normal-cone hierarchy: drop --groups quality");
+  const std::string& input = a.positional()[0];
+
+  CMesh mesh;
+  int loadMask = 0;
+  std::string err = LoadPly(mesh, input, &loadMask);
+  if (!err.empty()) return Fail(kIoError, err);
+  std::vector<size_t> faceOf;
+  const IndexedMesh im = ToIndexedMesh(mesh, &faceOf);
+  Status s = RequireValidForFaces(CheckMesh(im, false));
+  if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
+
+  // Group ids per face of `im`.
+  std::vector<int> groups;
+  GroupHierarchy h;
+  if (coneLevel > 0) {
+    s = BuildConeHierarchy(im, ConeGroupingParams(), h);
+    if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
+    if (!hierarchy && coneLevel > h.levelCount())
+      return Fail(kUsage, "--groups " + source + ": the normal-cone hierarchy of this mesh has " +
+                              std::to_string(h.levelCount()) + " levels");
+    if (!hierarchy) groups = h.level(coneLevel).faceGroup;
+  } else {
+    if (!(loadMask & vcg::tri::io::Mask::IOM_FACEQUALITY))
+      return Fail(kBadInput, input + " has no per-face quality to use as group ids: group it first (conelod group " +
+                                 input + " -o grouped.ply) or pass --groups cone:1");
+    std::vector<float> quality(im.faceCount());
+    for (size_t f = 0; f < faceOf.size(); ++f) quality[f] = mesh.face[faceOf[f]].Q();
+    std::vector<std::vector<int>> ids;
+    s = GroupIdsFromValues({&quality}, ids);
+    if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
+    groups = std::move(ids[0]);
+  }
+
+  if (hierarchy) {
+    HierarchicalSimplificationParams hp;
+    hp.qem = p;
+    hp.levelRatio = levelRatio;
+    std::vector<SimplifiedLevel> levels;
+    Timer timer;
+    s = BuildSimplifiedLevels(im, h, hp, levels);
+    const double seconds = timer.seconds();
+    if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
+    Json j;
+    j.beginObject().field("input", input).field("faces_in", im.faceCount()).field("seconds", seconds);
+    j.key("levels").beginArray();
+    if (!json)
+      std::printf("%s: %zu faces, %d levels in %.3f s\n%5s %8s %8s %8s %8s %8s %9s\n", input.c_str(), im.faceCount(),
+                  int(levels.size()), seconds, "level", "groups", "target", "faces", "split", "vanished", "intact%");
+    for (const SimplifiedLevel& L : levels) {
+      GroupIntegrity gi;
+      MeasureGroupIntegrity(im, h.level(L.level).faceGroup, L.mesh, L.faceGroup, gi);
+      j.beginObject().field("level", L.level).field("groups_before", gi.groupsBefore).field("groups_after", gi.groupsAfter)
+          .field("target_faces", L.targetFaces).field("faces_out", L.mesh.faceCount())
+          .field("groups_split", gi.groupsSplit).field("groups_vanished", gi.groupsVanished);
+      WriteStats(j, L.stats);
+      j.endObject();
+      if (!json)
+        std::printf("%5d %8d %8zu %8zu %8d %8d %9.2f\n", L.level, gi.groupsBefore, L.targetFaces, L.mesh.faceCount(),
+                    gi.groupsSplit, gi.groupsVanished, 100 * gi.intact());
+      if (a.has("-o")) {
+        CMesh copy;
+        vcg::tri::Append<CMesh, CMesh>::MeshCopy(copy, mesh);
+        ApplySimplifiedMesh(copy, faceOf, L.mesh, L.sourceFace, L.sourceVertex);
+        WriteGroupsToFaces(copy, L.faceGroup, true);
+        const std::string path = a.str("-o") + "_L" + std::to_string(L.level) + ".ply";
+        err = SavePly(copy, path);
+        if (!err.empty()) return Fail(kIoError, err);
+      }
+    }
+    j.endArray().endObject();
+    if (json) std::printf("%s\n", j.str().c_str());
+    return kOk;
+  }
+
+  if (a.has("--target-ratio")) p.targetFaces = std::max<size_t>(1, size_t(targetRatio * double(im.faceCount())));
+  else p.targetFaces = size_t(targetFaces);
+  GroupQemResult r;
+  Timer timer;
+  s = SimplifyPreservingGroups(im, groups, p, r);
+  const double seconds = timer.seconds();
+  if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
+
+  std::vector<int> groupsAfter(r.sourceFace.size());
+  for (size_t f = 0; f < r.sourceFace.size(); ++f) groupsAfter[f] = groups[r.sourceFace[f]];
+  GroupIntegrity gi;
+  MeasureGroupIntegrity(im, groups, r.mesh, groupsAfter, gi);
+
+  if (a.has("-o")) {
+    ApplySimplifiedMesh(mesh, faceOf, r.mesh, r.sourceFace, r.sourceVertex);
+    WriteGroupsToFaces(mesh, groupsAfter, coneLevel > 0);  // quality source: faces keep their quality
+    err = SavePly(mesh, a.str("-o"));
+    if (!err.empty()) return Fail(kIoError, err);
+  }
+
+  if (json) {
+    Json j;
+    j.beginObject().field("input", input).field("group_source", source)
+        .field("faces_in", im.faceCount()).field("faces_out", r.mesh.faceCount()).field("target_faces", p.targetFaces)
+        .field("groups_before", gi.groupsBefore).field("groups_after", gi.groupsAfter)
+        .field("groups_split", gi.groupsSplit).field("groups_vanished", gi.groupsVanished)
+        .field("groups_disconnected_in", gi.groupsDisconnectedBefore).field("integrity", gi.intact())
+        .field("seconds", seconds)
+        .field("condition1", p.condition1).field("condition2", p.condition2)
+        .field("lock_boundaries", p.lockGroupBoundaries);
+    WriteStats(j, r.stats);
+    if (a.has("-o")) j.field("output", a.str("-o"));
+    j.endObject();
+    std::printf("%s\n", j.str().c_str());
+  } else {
+    std::printf("%s: %zu -> %zu faces (target %zu, %s) in %.3f s, %zu collapses\n", input.c_str(), im.faceCount(),
+                r.mesh.faceCount(), p.targetFaces, StopName(r.stats.stop), seconds, r.stats.collapses);
+    std::printf("groups (%s): %d before, %d after, %d split, %d vanished: %.2f%% intact\n", source.c_str(),
+                gi.groupsBefore, gi.groupsAfter, gi.groupsSplit, gi.groupsVanished, 100 * gi.intact());
+    if (gi.groupsDisconnectedBefore)
+      std::printf("note: %d groups were already in several pieces in the input; each piece is kept as it is\n",
+                  gi.groupsDisconnectedBefore);
+    std::printf("refused evaluations: topology %zu, condition 1 %zu, condition 2 %zu, lock %zu, fixed %zu, geometry %zu\n",
+                r.stats.refusedTopology, r.stats.refusedCondition1, r.stats.refusedCondition2, r.stats.refusedLock,
+                r.stats.refusedFixed, r.stats.refusedGeometry);
+    if (a.has("-o")) std::printf("wrote %s (quality and colour = group)\n", a.str("-o").c_str());
+  }
+  return kOk;
+}
+
+}  // namespace cli
+}  // namespace conelod
