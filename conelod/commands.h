@@ -7,9 +7,15 @@ namespace cli {
 int CmdGroup(int argc, char** argv);
 int CmdCullCost(int argc, char** argv);
 int CmdInfo(int argc, char** argv);
+int CmdFeatureSimplify(int argc, char** argv);
+int CmdFeatureEdges(int argc, char** argv);
+int CmdBudget(int argc, char** argv);
 extern const char* kGroupUsage;
 extern const char* kCullCostUsage;
 extern const char* kInfoUsage;
+extern const char* kFeatureSimplifyUsage;
+extern const char* kFeatureEdgesUsage;
+extern const char* kBudgetUsage;
 
 }  // namespace cli
 }  // namespace conelod

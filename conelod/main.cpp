@@ -17,6 +17,9 @@ const Command kCommands[] = {
     {"group", conelod::cli::CmdGroup, &conelod::cli::kGroupUsage},
     {"cull-cost", conelod::cli::CmdCullCost, &conelod::cli::kCullCostUsage},
     {"info", conelod::cli::CmdInfo, &conelod::cli::kInfoUsage},
+    {"feature-simplify", conelod::cli::CmdFeatureSimplify, &conelod::cli::kFeatureSimplifyUsage},
+    {"feature-edges", conelod::cli::CmdFeatureEdges, &conelod::cli::kFeatureEdgesUsage},
+    {"budget", conelod::cli::CmdBudget, &conelod::cli::kBudgetUsage},
 };
 
 void PrintUsage(FILE* out) {
