@@ -173,7 +173,8 @@ class Work {
 
   double CurvatureK(uint32_t v) const;
   double CurvatureM(uint32_t v) const;
-  bool IsManifoldVertex(uint32_t v) const;
+  bool IsManifoldVertex(uint32_t v, std::vector<uint32_t>& verts, std::vector<uint32_t>& parent,
+                        std::vector<int>& degree) const;
   void ExtendFeatureLines(double featureAngleDeg);
   void Classify(const FeatureSimplifyParams& p);
   void FillInfo();
@@ -201,12 +202,14 @@ double Work::CurvatureM(uint32_t v) const {
 
 // One fan (a disk or a half-disk) around v: every link vertex used at most twice and the link
 // connected.
-bool Work::IsManifoldVertex(uint32_t v) const {
+bool Work::IsManifoldVertex(uint32_t v, std::vector<uint32_t>& verts, std::vector<uint32_t>& parent,
+                            std::vector<int>& degree) const {
   const auto& fan = VF[v];
   if (fan.size() <= 1) return true;
-  // local link: vertices and union-find parents (fans are small)
-  std::vector<uint32_t> verts, parent;
-  std::vector<int> degree;
+  // Local link: its vertices, their degrees and union-find parents (fans are small).
+  verts.clear();
+  parent.clear();
+  degree.clear();
   auto local = [&](uint32_t x) {
     for (size_t i = 0; i < verts.size(); ++i)
       if (verts[i] == x) return int(i);
@@ -303,8 +306,12 @@ Status Work::Build(const IndexedMesh& in, const FeatureSimplifyParams& p) {
     }
     i = j;
   }
-  for (uint32_t v = 0; v < nv; ++v)
-    if (!locked[v] && !IsManifoldVertex(v)) locked[v] = 1;
+  {
+    std::vector<uint32_t> verts, parent;  // scratch for the fan test, allocated once
+    std::vector<int> degree;
+    for (uint32_t v = 0; v < nv; ++v)
+      if (!locked[v] && !IsManifoldVertex(v, verts, parent, degree)) locked[v] = 1;
+  }
 
   if (p.extendFeatureLines) ExtendFeatureLines(p.featureAngleDeg);
   Classify(p);
