@@ -12,15 +12,17 @@ namespace conelod {
 namespace cli {
 
 const char* kBudgetUsage =
-    "conelod budget IN.ply [--width W --height H --factor F] [--view V] [--fill S] [-o OUT.ply] [--json]\n"
+    "conelod budget IN.ply [--width W --height H --factor F] [--view V] [--fill S] [-o OUT.ply] [--mask M.pgm]\n"
+    "               [--json]\n"
     "  Counts the pixels the model covers at W x H [1920 x 1080] (orthographic, framed on its\n"
     "  bounding sphere: the bounding-box diagonal spans S x min(W, H) pixels [1]) and prints the\n"
     "  face budget F x pixels [50] (Mizuno-Okumoto-Takata-Joe). V: worst [default: the most pixels\n"
     "  over the six axis directions], +x, -x, +y, -y, +z, -z, or a direction X,Y,Z (eye -> model).\n"
-    "  -o: simplifies to the budget with feature-simplify (defaults) and writes OUT.ply.\n";
+    "  -o: simplifies to the budget with feature-simplify (defaults) and writes OUT.ply.\n"
+    "  --mask: writes the covered pixels of the view used as a W x H image (PGM, covered = black).\n";
 
 int CmdBudget(int argc, char** argv) {
-  Args a(argc, argv, {"--width", "--height", "--factor", "--view", "--fill", "-o"}, {"--json"});
+  Args a(argc, argv, {"--width", "--height", "--factor", "--view", "--fill", "-o", "--mask"}, {"--json"});
   PixelBudgetParams p;
   p.width = a.integer("--width", p.width);
   p.height = a.integer("--height", p.height);
@@ -43,6 +45,17 @@ int CmdBudget(int argc, char** argv) {
   s = ComputePixelBudget(im, p, r);
   const double seconds = timer.seconds();
   if (!s.ok()) return Fail(kBadInput, a.positional()[0] + ": " + s.message);
+
+  if (a.has("--mask")) {
+    std::vector<uint8_t> mask;
+    CountCoveredPixels(im, FramedView(im, r.viewDirection, p.width, p.height, p.fill), &mask);
+    FILE* f = std::fopen(a.str("--mask").c_str(), "wb");
+    if (!f) return Fail(kIoError, "cannot write '" + a.str("--mask") + "'");
+    std::fprintf(f, "P5\n%d %d\n255\n", p.width, p.height);
+    for (uint8_t& m : mask) m = m ? 0 : 255;
+    std::fwrite(mask.data(), 1, mask.size(), f);
+    std::fclose(f);
+  }
 
   FeatureSimplifyResult fr;
   bool simplified = false;

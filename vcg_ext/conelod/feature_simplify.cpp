@@ -459,6 +459,7 @@ class Simplifier {
     double error;  // the smallest error bound under which one of v's collapses fits
     uint32_t v;
     uint32_t stamp;
+    uint32_t to;   // the edge v -> to that was tried (the smallest d the topology allowed)
     bool operator<(const Deferred& o) const { return error > o.error; }  // min-heap
   };
   void Push(uint32_t v, bool recompute);
@@ -492,6 +493,8 @@ class Simplifier {
   uint32_t mark_ = 0;
   std::vector<char> queued_;     // v has a valid entry in its queue
   std::vector<char> fanChanged_;    // v's fan changed while it was deferred
+  std::vector<uint32_t> retry_;     // readmitted with an unchanged fan: its ranking of edges (d, flips,
+                                    // shapes: all from its own fan) is unchanged, so its edge is known
   std::vector<char> deferredMark_;  // v waits in deferred_ for a larger bound (its stored error may
                                     // be stale once its neighbourhood changes: it is re-evaluated
                                     // when the bound reaches it)
@@ -762,6 +765,7 @@ void Simplifier::Push(uint32_t v, bool recompute) {
   Work& w = w_;
   ++stamp_[v];
   deferredMark_[v] = 0;
+  retry_[v] = kNone;
   recompute = recompute || fanChanged_[v];
   fanChanged_[v] = 0;
   if (w.cls[v] == VertexClass::Smooth) {
@@ -775,13 +779,13 @@ void Simplifier::Push(uint32_t v, bool recompute) {
   }
 }
 
-// Raises the error bound to admit the deferred vertex with the smallest error (at least x1.5,
+// Raises the error bound to admit the deferred vertex with the smallest error (at least x1.25,
 // so that each round admits many vertices) and puts the deferred vertices under it back in their
 // queues. False when nothing is deferred or the next bound passes maxErrorDistance.
 bool Simplifier::RaiseBound() {
   while (!deferred_.empty() && deferred_.top().stamp != stamp_[deferred_.top().v]) deferred_.pop();
   if (deferred_.empty()) return false;
-  double next = std::max(bound_ * 1.5, deferred_.top().error);
+  double next = std::max(bound_ * 1.25, deferred_.top().error);
   if (p_.maxErrorDistance > 0) {
     if (deferred_.top().error > p_.maxErrorDistance) return false;
     next = std::min(next, p_.maxErrorDistance);
@@ -790,7 +794,11 @@ bool Simplifier::RaiseBound() {
   while (!deferred_.empty() && deferred_.top().error <= bound_) {
     const Deferred d = deferred_.top();
     deferred_.pop();
-    if (d.stamp == stamp_[d.v] && !queued_[d.v]) Push(d.v, false);
+    if (d.stamp == stamp_[d.v] && !queued_[d.v]) {
+      const bool same = !fanChanged_[d.v];
+      Push(d.v, false);
+      if (same) retry_[d.v] = d.to;
+    }
   }
   return true;
 }
@@ -803,6 +811,7 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
   queued_.assign(nv, 0);
   deferredMark_.assign(nv, 0);
   fanChanged_.assign(nv, 0);
+  retry_.assign(nv, kNone);
   faces_ = 0;
   for (char a : w.alive) faces_ += a ? 1 : 0;
   const size_t facesIn = faces_;
@@ -857,21 +866,30 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
       const double curv = c == VertexClass::Smooth ? std::abs(w.K[v]) * d2 : std::abs(w.M[v]) * d1;
       if (curv >= p_.curvatureThreshold) continue;
     }
-    // Candidate edges: all of them for V_K, the two line edges for V_M.
-    nbrs.clear();
-    if (c == VertexClass::FeatureLine) {
-      nbrs = w.feat[v];
-    } else {
-      BuildFan(v);
-      for (const FanFace& ff : fan_) {
-        if (std::find(nbrs.begin(), nbrs.end(), ff.x) == nbrs.end()) nbrs.push_back(ff.x);
-        if (std::find(nbrs.begin(), nbrs.end(), ff.y) == nbrs.end()) nbrs.push_back(ff.y);
-      }
-    }
+    // Candidate edges: all of them for V_K, the two line edges for V_M (or the one edge known).
     cands.clear();
-    for (uint32_t u : nbrs) {
+    if (retry_[v] != kNone) {
       double d = 0;
-      if (Check(v, u, &d, nullptr, false) == CollapseRefusal::None) cands.push_back({d, -1.0, u});
+      const uint32_t u = retry_[v];
+      retry_[v] = kNone;
+      if (Check(v, u, &d, nullptr, false) == CollapseRefusal::None && CheckTopology(v, u) == CollapseRefusal::None)
+        cands.push_back({d, 1.0, u});
+    }
+    if (cands.empty()) {
+      nbrs.clear();
+      if (c == VertexClass::FeatureLine) {
+        nbrs = w.feat[v];
+      } else {
+        BuildFan(v);
+        for (const FanFace& ff : fan_) {
+          if (std::find(nbrs.begin(), nbrs.end(), ff.x) == nbrs.end()) nbrs.push_back(ff.x);
+          if (std::find(nbrs.begin(), nbrs.end(), ff.y) == nbrs.end()) nbrs.push_back(ff.y);
+        }
+      }
+      for (uint32_t u : nbrs) {
+        double d = 0;
+        if (Check(v, u, &d, nullptr, false) == CollapseRefusal::None) cands.push_back({d, -1.0, u});
+      }
     }
     if (cands.empty()) continue;
     // Smallest error distance d (Fig. 8); near-ties (flat regions) go to the better triangle shape.
@@ -885,6 +903,7 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
       return a.q > b.q;
     });
     double smallestError = std::numeric_limits<double>::infinity();
+    uint32_t triedTo = kNone;
     bool done = false;
     for (const Candidate& cd : cands) {
       // The paper's rule: the edge with the smallest d (among those the topology allows) is the
@@ -893,9 +912,9 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
       double outErr = 0;
       if (track_) {
         const double err = CollapseError(v, cd.to, cd.d, bound_);
-        if (err > bound_) { smallestError = err; break; }
+        if (err > bound_) { smallestError = err; triedTo = cd.to; break; }
         outErr = OutwardError(v, cd.to, bound_);
-        if (outErr > bound_) { smallestError = outErr; break; }
+        if (outErr > bound_) { smallestError = outErr; triedTo = cd.to; break; }
       }
       maxD_ = std::max(maxD_, cd.d);
       Collapse(v, cd.to, outErr);
@@ -904,7 +923,7 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
       break;
     }
     if (!done && grow_ && std::isfinite(smallestError)) {
-      deferred_.push({smallestError, v, stamp_[v]});
+      deferred_.push({smallestError, v, stamp_[v], triedTo});
       deferredMark_[v] = 1;
     }
     reached = target > 0 && faces_ <= target;

@@ -39,7 +39,7 @@
 //  - BEYOND: with a target face count, the paper's pure curvature order ignores the error and
 //    wrecks curved regions of zero Gaussian curvature (cylinders: K = 0). By default
 //    (growErrorBound) the target is reached under an error bound that starts tiny and grows
-//    x1.5 only when no collapse fits; within a bound, vertices still go by |K| / |M| and edges
+//    x1.25 only when no collapse fits; within a bound, vertices still go by |K| / |M| and edges
 //    by d. growErrorBound = false runs the paper's pure order.
 //  - An extension swap must continue the line (the new edge turns by at most 45 deg from the
 //    line's last edge), must not flip a face, and never undoes a swap it made.
@@ -69,7 +69,7 @@ struct FeatureSimplifyParams {
                                    // within this distance of the output; 0 = off
   size_t targetFaceCount = 0;      // stop criterion 2: stop at this many faces (or fewer); 0 = off
   bool growErrorBound = true;      // with a target face count: simplify under an error bound on the
-                                   // original vertices that starts tiny and grows x1.5 only when no
+                                   // original vertices that starts tiny and grows x1.25 only when no
                                    // collapse fits (BEYOND the paper); false = the paper's pure
                                    // curvature order up to the target
 };
