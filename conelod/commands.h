@@ -12,6 +12,12 @@ extern const char* kGroupUsage;
 extern const char* kCullCostUsage;
 extern const char* kInfoUsage;
 extern const char* kSimplifyUsage;
+int CmdFeatureSimplify(int argc, char** argv);
+int CmdFeatureEdges(int argc, char** argv);
+int CmdBudget(int argc, char** argv);
+extern const char* kFeatureSimplifyUsage;
+extern const char* kFeatureEdgesUsage;
+extern const char* kBudgetUsage;
 
 }  // namespace cli
 }  // namespace conelod

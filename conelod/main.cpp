@@ -18,6 +18,9 @@ const Command kCommands[] = {
     {"cull-cost", conelod::cli::CmdCullCost, &conelod::cli::kCullCostUsage},
     {"info", conelod::cli::CmdInfo, &conelod::cli::kInfoUsage},
     {"simplify", conelod::cli::CmdSimplify, &conelod::cli::kSimplifyUsage},
+    {"feature-simplify", conelod::cli::CmdFeatureSimplify, &conelod::cli::kFeatureSimplifyUsage},
+    {"feature-edges", conelod::cli::CmdFeatureEdges, &conelod::cli::kFeatureEdgesUsage},
+    {"budget", conelod::cli::CmdBudget, &conelod::cli::kBudgetUsage},
 };
 
 void PrintUsage(FILE* out) {

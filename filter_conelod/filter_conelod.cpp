@@ -5,11 +5,15 @@
 #include <exception>
 #include <new>
 
+#include "builtin_qem.h"
 #include "conelod/cone_grouping.h"
 #include "conelod/culling_cost.h"
 #include "conelod/group_integrity.h"
 #include "conelod/group_qem.h"
+#include "conelod/feature_simplify.h"
 #include "conelod/mesh_check.h"
+#include "conelod/pixel_budget.h"
+#include "conelod/simplify_bridge.h"
 #include "conelod/vcg_bridge.h"
 
 using namespace conelod;
@@ -19,6 +23,15 @@ namespace {
 const char* const kPaperKamiya =
     "M. Kamiya, H. Suzuki, K. Kawachi, <i>LODs for efficient displaying triangle meshes</i> "
     "(University of Tokyo).";
+const char* const kPaperHayano =
+    "M. Hayano, T. Matsuoka, K. Ueda, <i>Mesh Simplification Using Edge Operation with Feature Detection</i> "
+    "(Ricoh Software Research Center).";
+const char* const kPaperMizuno =
+    "S. Mizuno, M. Okumoto, M. Takata, K. Joe, <i>Polygon reduction for effective 3D model rendering on "
+    "different platforms</i>, IPSJ SIG Technical Report 2011-MPS-86.";
+
+const char* const kBudgetSimplifiers[] = {"None (log the budget only)", "Feature-Preserving Edge Simplification",
+                                          "Quadric Edge Collapse Decimation (MeshLab's, default parameters)"};
 
 // The grouping parameters shared by the grouping and the culling-cost filters.
 void AddGroupingParameters(RichParameterList& par) {
@@ -79,7 +92,7 @@ const char* StopName(GroupQemStats::Stop s) {
 }  // namespace
 
 FilterConeLodPlugin::FilterConeLodPlugin() {
-  typeList << FP_CONE_GROUPING << FP_CULLING_COST << FP_GROUP_QEM << FP_GROUP_INTEGRITY;
+  typeList << FP_CONE_GROUPING << FP_CULLING_COST << FP_GROUP_QEM << FP_GROUP_INTEGRITY << FP_FEATURE_SIMPLIFY << FP_PIXEL_BUDGET;
   for (FilterIDType tt : types()) actionList << new QAction(filterName(tt), this);
 }
 
@@ -91,6 +104,8 @@ QString FilterConeLodPlugin::filterName(FilterIDType filter) const {
     case FP_CULLING_COST: return "Cone LOD: Cluster Culling Cost";
     case FP_GROUP_QEM: return "Cone LOD: Group-Preserving Quadric Edge Collapse";
     case FP_GROUP_INTEGRITY: return "Cone LOD: Group Integrity";
+    case FP_FEATURE_SIMPLIFY: return "Cone LOD: Feature-Preserving Edge Simplification";
+    case FP_PIXEL_BUDGET: return "Cone LOD: Face Budget from Screen Pixels";
   }
   return "";
 }
@@ -141,6 +156,32 @@ QString FilterConeLodPlugin::filterInfo(FilterIDType filter) const {
                  "split). With the current mesh as reference it counts groups and their pieces. The meshes "
                  "are not changed.<br>") +
              kPaperKamiya;
+    case FP_FEATURE_SIMPLIFY:
+      return QString(
+                 "Simplifies the mesh by half-edge collapses (vertices never move) while keeping its sharp "
+                 "features. An edge is a <i>feature edge</i> when its dihedral angle A - the angle the two "
+                 "faces make at the edge, 180 deg on a flat region, 90 deg on a cube edge - is at most "
+                 "<i>FeatureAngleDeg</i>; broken feature lines are extended by edge swaps; border edges are "
+                 "feature lines too. Vertices with 1 or 3+ feature edges (corners) are never removed; vertices "
+                 "on a feature line are removed only along it; the others go smoothest first (smallest "
+                 "discrete Gaussian curvature), each into the neighbour whose collapse moves the surface "
+                 "least. Stops at <i>TargetFaceNum</i> faces (when 0: <i>TargetPerc</i> x the faces) or when no "
+                 "collapse keeps "
+                 "every removed vertex within <i>MaxErrorDistance</i> of the result. With a target, the "
+                 "error bound grows from tiny until the target is reached (<i>GrowErrorBound</i>, beyond the "
+                 "paper). <i>MarkFeatures</i> selects and colours the feature vertices and makes the other "
+                 "edges faux, so that the wireframe view shows the feature lines.<br>") +
+             kPaperHayano;
+    case FP_PIXEL_BUDGET:
+      return QString(
+                 "Counts the pixels the model covers on a screen of <i>Width</i> x <i>Height</i> (orthographic "
+                 "view framed on the bounding sphere, from an axis or the worst of the six axis directions) "
+                 "and logs the face budget <i>PixelFactor</i> x pixels: the paper found that 50 faces per "
+                 "covered pixel display a scanned model without visible loss at 1920x1080, 1600x900, "
+                 "1280x720 and 800x600. Optionally simplifies the mesh to the budget with the "
+                 "feature-preserving simplifier or with MeshLab's Quadric Edge Collapse Decimation (its "
+                 "default parameters). Says so when the budget is above the current face count.<br>") +
+             kPaperMizuno;
   }
   return "";
 }
@@ -151,6 +192,8 @@ MeshFilterInterface::FilterClass FilterConeLodPlugin::getClass(QAction* a) {
     case FP_CULLING_COST: return MeshFilterInterface::Measure;
     case FP_GROUP_QEM: return MeshFilterInterface::Remeshing;
     case FP_GROUP_INTEGRITY: return MeshFilterInterface::Measure;
+    case FP_FEATURE_SIMPLIFY: return MeshFilterInterface::Remeshing;
+    case FP_PIXEL_BUDGET: return MeshFilterInterface::Remeshing;
   }
   return MeshFilterInterface::Measure;
 }
@@ -163,6 +206,10 @@ int FilterConeLodPlugin::postCondition(QAction* a) const {
   switch (ID(a)) {
     case FP_CONE_GROUPING: return MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR;
     case FP_GROUP_QEM: return MeshModel::MM_GEOMETRY_AND_TOPOLOGY_CHANGE | MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR;
+    case FP_FEATURE_SIMPLIFY:
+      return MeshModel::MM_GEOMETRY_AND_TOPOLOGY_CHANGE | MeshModel::MM_VERTCOLOR | MeshModel::MM_VERTFLAGSELECT |
+             MeshModel::MM_FACEFLAG;
+    case FP_PIXEL_BUDGET: return MeshModel::MM_GEOMETRY_AND_TOPOLOGY_CHANGE;
   }
   return MeshModel::MM_NONE;
 }
@@ -217,6 +264,60 @@ void FilterConeLodPlugin::initParameterSet(QAction* a, MeshModel& m, RichParamet
                              "Weight of the quadrics that keep mesh borders (and group contours) in place."));
       par.addParam(RichBool("PreserveNormal", d.preserveNormal, "Preserve Normal",
                             "Refuse collapses that turn a face's normal by more than about 78 degrees (fold-overs)."));
+    case FP_FEATURE_SIMPLIFY: {
+      const FeatureSimplifyParams d;
+      const float diag = m.cm.bbox.IsNull() ? 0.0f : m.cm.bbox.Diag();
+      par.addParam(RichFloat("FeatureAngleDeg", float(d.featureAngleDeg), "Feature angle A_t (deg)",
+                             "An edge is a feature edge when its dihedral angle A is at most this. A is the angle the "
+                             "two faces make at the edge (the paper's definition): 180 on a flat region, 90 on a "
+                             "cube edge, near 0 on a knife edge."));
+      par.addParam(RichBool("ExtendFeatureLines", d.extendFeatureLines, "Extend feature lines",
+                            "Close gaps in feature lines by edge swaps when the swapped edge is itself a feature "
+                            "edge (the paper's 3.1)."));
+      par.addParam(RichFloat("FeatureCurvature", float(d.featureCurvature), "Feature vertex curvature K_t",
+                             "A vertex without feature edges whose |K| D^2 reaches this is a feature vertex (kept); "
+                             "K = discrete Gaussian curvature, D = bounding-box diagonal. 0 = off."));
+      par.addParam(RichFloat("CurvatureThreshold", float(d.curvatureThreshold), "Curvature threshold",
+                             "Vertices whose |K| D^2 (smooth) or |M| D (on a feature line; M = turning angle over "
+                             "half the two edges' length) reaches this are not removed: only the flatter parts are "
+                             "simplified. 0 = no limit."));
+      par.addParam(RichAbsPerc("MaxErrorDistance", 0.0f, 0.0f, diag, "Max error distance",
+                               "Stop criterion: a collapse is applied only if every removed vertex of the original "
+                               "mesh stays within this distance of the result (absolute, or % of the bounding-box "
+                               "diagonal). 0 = off."));
+      par.addParam(RichInt("TargetFaceNum", m.cm.fn / 2, "Target number of faces",
+                           "Stop criterion: stop at this many faces. 0 = use TargetPerc."));
+      par.addParam(RichFloat("TargetPerc", 0.5f, "Target fraction (0..1)",
+                             "Used when TargetFaceNum is 0: the target is this fraction of the current face count. "
+                             "0 (with TargetFaceNum 0) = no target: stop by MaxErrorDistance only."));
+      par.addParam(RichBool("GrowErrorBound", d.growErrorBound, "Grow the error bound",
+                            "With a target face count: simplify under an error bound that starts tiny and grows only "
+                            "when no collapse fits (beyond the paper; much closer to the original). Off: the paper's "
+                            "pure curvature order up to the target."));
+      par.addParam(RichBool("MarkFeatures", true, "Mark the features",
+                            "Select the feature vertices, colour the vertices (red: feature line, blue: feature "
+                            "vertex) and make every non-feature edge faux, so that the wireframe view shows the "
+                            "feature lines."));
+      break;
+    }
+    case FP_PIXEL_BUDGET: {
+      const PixelBudgetParams d;
+      par.addParam(RichInt("Width", d.width, "Screen width (pixels)", "Width of the screen the model is shown on."));
+      par.addParam(RichInt("Height", d.height, "Screen height (pixels)", "Height of the screen the model is shown on."));
+      par.addParam(RichFloat("PixelFactor", float(d.pixelFactor), "Faces per covered pixel",
+                             "The budget is this many faces per pixel the model covers (the paper's finding: 50)."));
+      par.addParam(RichEnum("View", 0,
+                            QStringList() << "Worst of the six axis directions" << "+X" << "-X" << "+Y" << "-Y"
+                                          << "+Z" << "-Z" << "Direction below",
+                            "View", "Direction the model is looked at (orthographic, framed on its bounding "
+                            "sphere). The worst case counts the most pixels."));
+      par.addParam(RichPoint3f("ViewDirection", vcg::Point3f(0, 0, -1), "View direction",
+                               "Used when View is 'Direction below': the direction from the eye to the model."));
+      par.addParam(RichEnum("Simplifier", 0,
+                            QStringList() << kBudgetSimplifiers[0] << kBudgetSimplifiers[1] << kBudgetSimplifiers[2],
+                            "Simplify to the budget with",
+                            "None: only log the pixels and the budget. Otherwise the mesh is simplified to the budget "
+                            "(when it has more faces)."));
       break;
     }
   }
@@ -250,6 +351,8 @@ bool FilterConeLodPlugin::applyFilter(QAction* a, MeshDocument& md, const RichPa
       case FP_CULLING_COST: return applyCullingCost(*mm, par, cb);
       case FP_GROUP_QEM: return applyGroupQem(*mm, par, cb);
       case FP_GROUP_INTEGRITY: return applyGroupIntegrity(md, par);
+      case FP_FEATURE_SIMPLIFY: return applyFeatureSimplify(*mm, par, cb);
+      case FP_PIXEL_BUDGET: return applyPixelBudget(*mm, par, cb);
     }
     return fail("unknown filter");
   } catch (const std::bad_alloc&) {
@@ -433,6 +536,96 @@ bool FilterConeLodPlugin::applyGroupIntegrity(MeshDocument& md, const RichParame
   };
   if (!gi.splitIds.empty()) Log("split groups (first ones): %s", qUtf8Printable(list(gi.splitIds)));
   if (!gi.vanishedIds.empty()) Log("vanished groups (first ones): %s", qUtf8Printable(list(gi.vanishedIds)));
+bool FilterConeLodPlugin::applyFeatureSimplify(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb) {
+  FeatureSimplifyParams params;
+  params.featureAngleDeg = par.getFloat("FeatureAngleDeg");
+  params.extendFeatureLines = par.getBool("ExtendFeatureLines");
+  params.featureCurvature = par.getFloat("FeatureCurvature");
+  params.curvatureThreshold = par.getFloat("CurvatureThreshold");
+  params.maxErrorDistance = par.getAbsPerc("MaxErrorDistance");
+  params.growErrorBound = par.getBool("GrowErrorBound");
+  const int targetFaces = par.getInt("TargetFaceNum");
+  const float targetPerc = par.getFloat("TargetPerc");
+  if (targetFaces < 0 || targetPerc < 0 || targetPerc > 1)
+    return fail("TargetFaceNum must be >= 0 and TargetPerc between 0 and 1 (the mesh was not changed)");
+  params.targetFaceCount = targetFaces > 0 ? size_t(targetFaces) : size_t(std::lround(double(mm.cm.fn) * targetPerc));
+  if (targetFaces == 0 && targetPerc > 0 && params.targetFaceCount == 0) params.targetFaceCount = 1;
+  const bool mark = par.getBool("MarkFeatures");
+
+  std::vector<size_t> faceOf;
+  const IndexedMesh im = ToIndexedMesh(mm.cm, &faceOf);
+  FeatureSimplifyResult r;
+  QElapsedTimer timer;
+  timer.start();
+  const Status s = FeatureSimplify(im, params, r, FromCallback(cb));
+  if (!s.ok()) return fail(QString::fromStdString(s.message) + " (the mesh was not changed)");
+  const double seconds = timer.elapsed() / 1000.0;
+
+  if (mark) mm.updateDataMask(MeshModel::MM_VERTCOLOR);
+  mm.clearDataMask(MeshModel::MM_FACEFACETOPO | MeshModel::MM_VERTFACETOPO);
+  WriteSimplifiedMesh(mm.cm, faceOf, r, mark);
+  mm.UpdateBoxAndNormals();
+
+  Log("Feature-preserving simplification: %d -> %d faces in %.3f s (%d collapses)%s", int(r.facesIn),
+      int(r.facesOut), seconds, int(r.collapses),
+      params.targetFaceCount == 0 ? ""
+      : r.targetReached           ? ", target reached"
+                                  : ", target NOT reached: no allowed collapse left");
+  Log("faces_out %d", int(r.facesOut));
+  Log("feature_edges %d (%d made by extension swaps) -> feature_edges_out %d", int(r.featureEdgesIn),
+      int(r.swapEdges), int(r.featureEdges.size()));
+  Log("feature_vertices %d (kept), feature-line vertices %d, smooth vertices %d", int(r.featureVertices),
+      int(r.lineVerticesIn), int(r.smoothVerticesIn));
+  if (r.finalErrorBound > 0)
+    Log("error bound at the end %g (%.4f %% of the diagonal)", r.finalErrorBound,
+        100.0 * r.finalErrorBound / std::max(1e-30, BoundingBoxDiagonal(im)));
+  if (mark) Log("feature vertices selected and coloured; non-feature edges faux (wireframe shows the feature lines)");
+  return true;
+}
+
+bool FilterConeLodPlugin::applyPixelBudget(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb) {
+  PixelBudgetParams params;
+  params.width = par.getInt("Width");
+  params.height = par.getInt("Height");
+  params.pixelFactor = par.getFloat("PixelFactor");
+  const int view = par.getEnum("View");
+  if (view < 0 || view > 7) return fail("View must be one of the listed directions (the mesh was not changed)");
+  params.view = view == 7 ? BudgetView::Direction : BudgetView(view);
+  params.direction = vcg::Point3d::Construct(par.getPoint3f("ViewDirection"));
+  const int simplifier = par.getEnum("Simplifier");
+  if (simplifier < 0 || simplifier > 2) return fail("Simplifier must be 0, 1 or 2 (the mesh was not changed)");
+
+  const IndexedMesh im = ToIndexedMesh(mm.cm);
+  PixelBudgetResult r;
+  Status s = ComputePixelBudget(im, params, r, SubProgress(FromCallback(cb), 0, simplifier == 0 ? 100 : 10));
+  if (!s.ok()) return fail(QString::fromStdString(s.message) + " (the mesh was not changed)");
+  Log("Face budget at %d x %d, view %s: covered_pixels %d (%.1f %% of the screen)", params.width, params.height,
+      BudgetViewName(params.view, params.direction).c_str(), int(r.coveredPixels),
+      100.0 * double(r.coveredPixels) / (double(params.width) * params.height));
+  Log("target_faces %d (= %g x %d pixels); the mesh has %d faces", int(r.targetFaces), params.pixelFactor,
+      int(r.coveredPixels), int(r.currentFaces));
+  if (r.aboveCurrent) {
+    Log("The budget is ABOVE the current face count: no reduction is needed%s",
+        simplifier ? " (the mesh was not changed)" : "");
+    return true;
+  }
+  if (simplifier == 0) return true;
+  const int target = std::max(1, int(r.targetFaces));
+  if (simplifier == 1) {
+    std::vector<size_t> faceOf;
+    const IndexedMesh again = ToIndexedMesh(mm.cm, &faceOf);
+    FeatureSimplifyParams fp;
+    fp.targetFaceCount = size_t(target);
+    FeatureSimplifyResult fr;
+    s = FeatureSimplify(again, fp, fr, SubProgress(FromCallback(cb), 10, 100));
+    if (!s.ok()) return fail(QString::fromStdString(s.message) + " (the mesh was not changed)");
+    mm.clearDataMask(MeshModel::MM_FACEFACETOPO | MeshModel::MM_VERTFACETOPO);
+    WriteSimplifiedMesh(mm.cm, faceOf, fr, false);
+    mm.UpdateBoxAndNormals();
+  } else {
+    conelod_plugin::RunBuiltinQuadric(mm, target, cb);
+  }
+  Log("Simplified to the budget with %s: faces_out %d", kBudgetSimplifiers[simplifier], mm.cm.fn);
   return true;
 }
 

@@ -14,7 +14,14 @@ class FilterConeLodPlugin : public QObject, public MeshFilterInterface {
 
  public:
   // Ids are stable: scripts name filters by their names, which never change either.
-  enum { FP_CONE_GROUPING, FP_CULLING_COST, FP_GROUP_QEM, FP_GROUP_INTEGRITY };
+  enum {
+    FP_CONE_GROUPING,
+    FP_CULLING_COST,
+    FP_GROUP_QEM,
+    FP_GROUP_INTEGRITY,
+    FP_FEATURE_SIMPLIFY,
+    FP_PIXEL_BUDGET,
+  };
 
   FilterConeLodPlugin();
   QString pluginName() const override;
@@ -33,5 +40,7 @@ class FilterConeLodPlugin : public QObject, public MeshFilterInterface {
   bool applyCullingCost(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb);
   bool applyGroupQem(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb);
   bool applyGroupIntegrity(MeshDocument& md, const RichParameterList& par);
+  bool applyFeatureSimplify(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb);
+  bool applyPixelBudget(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb);
   bool fail(const QString& message);  // logs and sets errorMessage; returns false
 };

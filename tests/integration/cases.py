@@ -136,6 +136,19 @@ def read_ply(path):
     return result
 
 
+def mlx_with(c, name, **values):
+    """A copy of scripts/mlx/NAME in the test's folder with some parameter values changed."""
+    tree = ET.parse(c.mlx(name))
+    for key, value in values.items():
+        found = [p for p in tree.getroot().iter("Param") if p.get("name") == key]
+        assert found, "no parameter %s in %s" % (key, name)
+        for p in found:
+            p.set("value", str(value).lower() if isinstance(value, bool) else str(value))
+    path = c.out("%s_%d.mlx" % (name[:-4], len(os.listdir(c.tmp))))
+    tree.write(path)
+    return path
+
+
 def last_float(log, key):
     vals = re.findall(re.escape(key) + r"\s+([0-9.eE+-]+)", log)
     assert vals, "'%s' not found in the log:\n%s" % (key, log[-2000:])
@@ -184,6 +197,9 @@ def meshlab_lists_filters(c):
     assert len(names) >= 2, names
     for name in names:
         assert "\\section f" in text and (" " + name + " ") in text, name + " not listed by meshlabserver -d"
+    for name in ["Cone LOD: Normal Cone Face Grouping", "Cone LOD: Cluster Culling Cost",
+                 "Cone LOD: Feature-Preserving Edge Simplification", "Cone LOD: Face Budget from Screen Pixels"]:
+        assert name in text, name + " not listed by meshlabserver -d"
 
 
 @case
@@ -341,6 +357,123 @@ def meshlab_group_qem_bad_inputs(c):
                                                     {"TargetPerc": 0.3, "GroupSource": 1, "GroupLevel": 2}), out)
         assert last_float(log, "integrity_percent") == 100.0, "%s\n%s" % (mesh, log[-1500:])
         assert len(read_ply(out)["faces"]) == last_int(log, "faces_out"), mesh
+def meshlab_feature_simplify_fandisk(c):
+    """The filter and the CLI run the same core: same faces; the feature lines survive."""
+    fandisk = c.mesh("fandisk.ply")
+    out = c.out("ml_fandisk.ply")
+    _, log = c.meshlab([fandisk], mlx_with(c, "feature_preserving_edge_simplification.mlx", TargetFaceNum=1294), out)
+    ply = read_ply(out)
+    assert len(ply["faces"]) == 1294, len(ply["faces"])
+    assert last_float(log, "faces_out") == 1294
+    assert last_float(log, "feature_edges") == 706, log[-2000:]
+    cli_out = c.out("cli_fandisk.ply")
+    r = json.loads(c.conelod("feature-simplify", fandisk, "--target-faces", "1294", "-o", cli_out, "--json").stdout)
+    assert r["faces_out"] == 1294 and r["faces_in"] == 12946 and r["feature_edges"] == 706, r
+    assert r["feature_vertices"] == 24, r
+    assert read_ply(cli_out)["faces"] == ply["faces"], "MeshLab and the CLI disagree on the result"
+    # Feature lines: the output's sharp edges lie on the input's, and cover them.
+    assert r["output_line_edges_on_input_lines"] >= 0.95 * r["output_line_edges"], r
+    assert r["input_line_length_covered"] >= 0.97, r
+    assert "feature vertices selected and coloured" in log, log[-1500:]  # MarkFeatures (default on)
+
+
+@case
+def meshlab_feature_simplify_error_bound(c):
+    """Stop at an error distance only (no target): fewer faces, the bound is reported."""
+    fandisk = c.mesh("fandisk.ply")
+    diag = json.loads(c.conelod("feature-simplify", fandisk, "--target-faces", "12946", "--json").stdout)["diagonal"]
+    bound = 0.002 * diag
+    out = c.out("ml_err.ply")
+    _, log = c.meshlab([fandisk], mlx_with(c, "feature_preserving_edge_simplification.mlx", TargetFaceNum=0,
+                                           TargetPerc=0, MaxErrorDistance=bound, MarkFeatures=False), out)
+    faces = len(read_ply(out)["faces"])
+    assert faces < 12946 // 3, faces
+    r = json.loads(c.conelod("feature-simplify", fandisk, "--max-error", "0.2%", "--json").stdout)
+    assert r["faces_out"] == faces, (r, faces)
+    assert abs(r["max_error_distance"] - bound) < 1e-6 * diag and r["max_tracked_error"] <= bound * (1 + 1e-6), r
+    assert "target" not in log.split("Feature-preserving simplification:")[-1].split("\n")[0], log[-1500:]
+
+
+@case
+def meshlab_feature_simplify_needs_a_stop(c):
+    rc, log = c.meshlab([c.mesh("fandisk.ply")], mlx_with(c, "feature_preserving_edge_simplification.mlx",
+                                                           TargetFaceNum=0, TargetPerc=0, MaxErrorDistance=0),
+                        c.out("x.ply"), expect_ok=False)
+    assert rc == 255 and "give a stop criterion" in log and "the mesh was not changed" in log, (rc, log[-1500:])
+
+
+@case
+def meshlab_budget_bunny(c):
+    """The logged pixels and budget equal the CLI's; the budget above the face count is said plainly."""
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    out = c.out("ml_budget.ply")
+    _, log = c.meshlab([bunny], c.mlx("face_budget_from_screen_pixels.mlx"), out)
+    r = json.loads(c.conelod("budget", bunny, "--json").stdout)
+    assert last_float(log, "covered_pixels") == r["covered_pixels"], (log[-1500:], r)
+    assert last_float(log, "target_faces") == r["target_faces"] == 50 * r["covered_pixels"], r
+    assert "ABOVE the current face count" in log and r["above_current"], log[-1500:]
+    assert len(read_ply(out)["faces"]) == 69451
+
+
+@case
+def meshlab_budget_builtin_qem_matches_meshlab(c):
+    """Simplifying to the budget with the built-in QEM from inside the plugin gives exactly what
+    MeshLab's own "Simplification: Quadric Edge Collapse Decimation" gives at that face count."""
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    ours = c.out("budget_qem.ply")
+    _, log = c.meshlab([bunny], mlx_with(c, "face_budget_from_screen_pixels.mlx", Width=320, Height=240,
+                                         PixelFactor=0.5, Simplifier=2), ours)
+    target = int(last_float(log, "target_faces"))
+    assert 1000 < target < 69451, target
+    qem_mlx = c.out("qem.mlx")
+    with open(qem_mlx, "w") as f:
+        f.write("""<!DOCTYPE FilterScript>
+<FilterScript>
+ <filter name="Simplification: Quadric Edge Collapse Decimation">
+  <Param type="RichInt" value="%d" name="TargetFaceNum"/>
+  <Param type="RichFloat" value="0" name="TargetPerc"/>
+  <Param type="RichFloat" value="0.3" name="QualityThr"/>
+  <Param type="RichBool" value="false" name="PreserveBoundary"/>
+  <Param type="RichFloat" value="1" name="BoundaryWeight"/>
+  <Param type="RichBool" value="false" name="PreserveNormal"/>
+  <Param type="RichBool" value="false" name="PreserveTopology"/>
+  <Param type="RichBool" value="true" name="OptimalPlacement"/>
+  <Param type="RichBool" value="false" name="PlanarQuadric"/>
+  <Param type="RichFloat" value="0.001" name="PlanarWeight"/>
+  <Param type="RichBool" value="false" name="QualityWeight"/>
+  <Param type="RichBool" value="true" name="AutoClean"/>
+  <Param type="RichBool" value="false" name="Selected"/>
+ </filter>
+</FilterScript>
+""" % target)
+    builtin = c.out("builtin_qem.ply")
+    c.meshlab([bunny], qem_mlx, builtin)
+    a, b = read_ply(ours), read_ply(builtin)
+    assert len(a["faces"]) == len(b["faces"]) == target, (len(a["faces"]), len(b["faces"]), target)
+    assert a["vertices"] == b["vertices"] and a["faces"] == b["faces"], "different meshes"
+    # And our simplifier reaches the same budget.
+    _, log = c.meshlab([bunny], mlx_with(c, "face_budget_from_screen_pixels.mlx", Width=320, Height=240,
+                                         PixelFactor=0.5, Simplifier=1), c.out("budget_ours.ply"))
+    assert len(read_ply(c.out("budget_ours.ply"))["faces"]) == target
+
+
+@case
+def meshlab_feature_budget_bad_inputs(c):
+    """Bad input: a clear message and a failed filter for both new filters, never a crash."""
+    scripts = ["feature_preserving_edge_simplification.mlx", "face_budget_from_screen_pixels.mlx"]
+    for mesh, message in [("no_faces.ply", "has no faces"), ("nan_vertex.ply", "NaN or infinite")]:
+        for script in scripts:
+            rc, log = c.meshlab([c.mesh(mesh)], c.mlx(script), c.out("bad.ply"), expect_ok=False)
+            assert rc == 255, "%s/%s: expected a failed filter (255), got %d\n%s" % (mesh, script, rc, log[-1500:])
+            assert "ConeLOD error" in log and message in log, "%s/%s: no clear message:\n%s" % (mesh, script, log[-1500:])
+    rc, log = c.meshlab([c.mesh("fandisk.ply")], mlx_with(c, scripts[1], Width=0), c.out("bad.ply"), expect_ok=False)
+    assert rc == 255 and "Width and Height" in log, log[-1500:]
+    # Awkward but valid inputs work: zero-area faces, non-manifold edges, many components.
+    for mesh in ["zero_area_faces.ply", "stanford_bunny_bun_zipper_res4.ply", "boeing.ply"]:
+        for script in scripts:
+            c.meshlab([c.mesh(mesh)], c.mlx(script), c.out("ok.ply"))
+        faces = len(read_ply(c.out("ok.ply"))["faces"])
+        assert faces > 0, mesh
 
 
 # --- CLI ----------------------------------------------------------------------------------
@@ -450,6 +583,72 @@ def cli_simplify_hierarchy(c):
         ply = read_ply("%s_L%d.ply" % (prefix, lv["level"]))
         assert len(ply["faces"]) == lv["faces_out"] and len(set(ply["quality"])) == lv["groups_after"], lv
     assert levels[-1]["faces_out"] < levels[0]["faces_out"] / 4, levels
+def cli_feature_simplify(c):
+    fandisk = c.mesh("fandisk.ply")
+    r = json.loads(c.conelod("feature-simplify", fandisk, "--target-percent", "10", "--json").stdout)
+    for key in ["faces_in", "faces_out", "feature_edges", "feature_vertices", "seconds"]:
+        assert key in r, key
+    assert r["target_faces"] == 1295 and r["faces_out"] in (1294, 1295) and r["target_reached"], r  # 10 % of 12946
+    # The paper's pure curvature order also reaches the target, further from the input.
+    pure = json.loads(c.conelod("feature-simplify", fandisk, "--target-percent", "10", "--no-grow", "--json").stdout)
+    assert pure["faces_out"] in (1294, 1295) and pure["final_error_bound"] == 0, pure
+    # Error distance as % of the diagonal.
+    e = json.loads(c.conelod("feature-simplify", fandisk, "--max-error", "0.5%", "--json").stdout)
+    assert abs(e["max_error_distance"] - 0.005 * e["diagonal"]) < 1e-5 * e["diagonal"] and e["faces_out"] < 12946 // 4, e
+    text = c.conelod("feature-simplify", fandisk, "--target-faces", "5000").stdout.decode()
+    assert "12946 -> 5000 faces" in text and "target reached" in text, text
+    # Bad input and usage.
+    for mesh, message in [("no_faces.ply", "has no faces"), ("nan_vertex.ply", "NaN or infinite")]:
+        p = c.conelod("feature-simplify", c.mesh(mesh), "--target-faces", "10", expect=2)
+        assert message in p.stderr.decode(), p.stderr.decode()
+    p = c.conelod("feature-simplify", fandisk, "--target-faces", "10", "--angle", "200", expect=2)
+    assert "FeatureAngleDeg" in p.stderr.decode()
+    c.conelod("feature-simplify", fandisk, expect=1)  # no stop criterion
+    c.conelod("feature-simplify", fandisk, "--max-error", "lots", expect=1)
+    c.conelod("feature-simplify", c.out("missing.ply"), "--target-faces", "10", expect=3)
+    for mesh in ["zero_area_faces.ply", "stanford_bunny_bun_zipper_res4.ply", "boeing.ply"]:
+        r = json.loads(c.conelod("feature-simplify", c.mesh(mesh), "--target-percent", "50", "--json").stdout)
+        assert 0 < r["faces_out"] <= r["faces_in"], (mesh, r)
+
+
+@case
+def cli_feature_edges(c):
+    fandisk = c.mesh("fandisk.ply")
+    r = json.loads(c.conelod("feature-edges", fandisk, "--json").stdout)
+    assert r["feature_edges"] == 706 and r["border_edges"] == 0 and r["feature_vertices"] == 24, r
+    shark = json.loads(c.conelod("feature-edges", c.mesh("mech_holes_shark.ply"), "--json").stdout)
+    assert shark["border_edges"] == 304, shark
+    same = json.loads(c.conelod("feature-edges", fandisk, "--reference", fandisk, "--no-extend", "--json").stdout)
+    assert same["line_edges_on_reference_lines"] == same["line_edges"] == same["reference_line_edges"], same
+    assert same["reference_line_length_covered"] == 1.0, same
+
+
+@case
+def cli_budget(c):
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    full = json.loads(c.conelod("budget", bunny, "--json").stdout)
+    for key in ["covered_pixels", "target_faces"]:
+        assert key in full, key
+    assert full["target_faces"] == 50 * full["covered_pixels"] and full["above_current"], full
+    assert max(full["axis_pixels"]) == full["covered_pixels"], full
+    # Table 1's relation: at the same framing the pixels scale with the screen (16:9: its area).
+    hd = json.loads(c.conelod("budget", bunny, "--width", "1280", "--height", "720", "--json").stdout)
+    ratio = hd["covered_pixels"] / full["covered_pixels"]
+    assert abs(ratio - (1280 * 720) / (1920 * 1080)) < 0.01, ratio
+    text = c.conelod("budget", bunny).stdout.decode()
+    assert "ABOVE the current face count" in text, text
+    # A small screen: the budget is below the face count; -o simplifies to it.
+    out = c.out("budget.ply")
+    small = json.loads(c.conelod("budget", bunny, "--width", "320", "--height", "240", "--factor", "0.5", "-o", out,
+                                 "--json").stdout)
+    assert not small["above_current"] and small["faces_out"] == small["target_faces"], small
+    assert len(read_ply(out)["faces"]) == small["target_faces"]
+    one = json.loads(c.conelod("budget", bunny, "--view", "+z", "--json").stdout)
+    assert one["covered_pixels"] == full["axis_pixels"][4], (one, full)
+    c.conelod("budget", bunny, "--view", "sideways", expect=1)
+    c.conelod("budget", bunny, "--width", "0", expect=1)
+    p = c.conelod("budget", c.mesh("no_faces.ply"), expect=2)
+    assert "has no faces" in p.stderr.decode()
 
 
 def main():

@@ -1,0 +1,1145 @@
+// ConeLOD — feature-preserving simplification by edge operations (see feature_simplify.h).
+#include "conelod/feature_simplify.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <queue>
+#include <unordered_map>
+#include <unordered_set>
+
+#include <vcg/space/box3.h>
+
+#include "conelod/mesh_check.h"
+
+namespace conelod {
+namespace {
+
+using P3 = vcg::Point3d;
+constexpr double kPi = 3.14159265358979323846;
+constexpr uint32_t kNone = UINT32_MAX;
+
+inline uint64_t EdgeKey(uint32_t a, uint32_t b) {
+  return a < b ? (uint64_t(a) << 32) | b : (uint64_t(b) << 32) | a;
+}
+
+inline double Clamp1(double x) { return std::max(-1.0, std::min(1.0, x)); }
+
+inline double AngleBetween(const P3& a, const P3& b) {
+  const double la = a.Norm(), lb = b.Norm();
+  if (!(la > 0) || !(lb > 0)) return 0;
+  return std::acos(Clamp1((a * b) / (la * lb)));
+}
+
+// Squared distance from p to the triangle (a, b, c) (Ericson, Real-Time Collision Detection 5.1.5).
+double PointTriangleDistance2(const P3& p, const P3& a, const P3& b, const P3& c) {
+  const P3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab * ap, d2 = ac * ap;
+  if (d1 <= 0 && d2 <= 0) return ap.SquaredNorm();
+  const P3 bp = p - b;
+  const double d3 = ab * bp, d4 = ac * bp;
+  if (d3 >= 0 && d4 <= d3) return bp.SquaredNorm();
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+    const double v = d1 / (d1 - d3);
+    return (ap - ab * v).SquaredNorm();
+  }
+  const P3 cp = p - c;
+  const double d5 = ab * cp, d6 = ac * cp;
+  if (d6 >= 0 && d5 <= d6) return cp.SquaredNorm();
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+    const double w = d2 / (d2 - d6);
+    return (ap - ac * w).SquaredNorm();
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return (bp - (c - b) * w).SquaredNorm();
+  }
+  const double denom = 1.0 / (va + vb + vc);
+  const double v = vb * denom, w = vc * denom;
+  return (ap - ab * v - ac * w).SquaredNorm();
+}
+
+double PointSegmentDistance2(const P3& p, const P3& a, const P3& b) {
+  const P3 ab = b - a;
+  const double len2 = ab.SquaredNorm();
+  double t = len2 > 0 ? ((p - a) * ab) / len2 : 0;
+  t = std::max(0.0, std::min(1.0, t));
+  return (p - (a + ab * t)).SquaredNorm();
+}
+
+// Triangle shape in [0,1]: 4 sqrt(3) area / (sum of squared edge lengths); 1 = equilateral.
+double TriangleQuality(const P3& a, const P3& b, const P3& c) {
+  const double s = (b - a).SquaredNorm() + (c - b).SquaredNorm() + (a - c).SquaredNorm();
+  if (!(s > 0)) return 0;
+  return 2.0 * std::sqrt(3.0) * ((b - a) ^ (c - a)).Norm() / s;
+}
+
+// A triangle with its unit normal (zero when degenerate), for repeated distance queries: the
+// distance to its plane is a cheap lower bound of the distance to it.
+struct Tri {
+  P3 a, b, c, n;
+  uint32_t face;
+};
+
+Tri MakeTri(const P3& a, const P3& b, const P3& c, uint32_t face) {
+  P3 n = (b - a) ^ (c - a);
+  const double len = n.Norm();
+  return {a, b, c, len > 0 ? n / len : P3(0, 0, 0), face};
+}
+
+// Squared distance from p to the nearest of `tris` (index in *nearest); stops once within `enough2`.
+double DistanceToTris2(const P3& p, const std::vector<Tri>& tris, double enough2, size_t* nearest = nullptr) {
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < tris.size(); ++i) {
+    const Tri& t = tris[i];
+    const double h = (p - t.a) * t.n;
+    if (h * h >= best) continue;
+    const double d2 = PointTriangleDistance2(p, t.a, t.b, t.c);
+    if (d2 < best) {
+      best = d2;
+      if (nearest) *nearest = i;
+      if (best <= enough2) break;
+    }
+  }
+  return best;
+}
+
+// The working mesh shared by the detection and the simplification: positions, faces with their
+// alive flags, per-vertex incident faces and per-vertex feature neighbours.
+class Work {
+ public:
+  std::vector<P3> P;
+  std::vector<std::array<uint32_t, 3>> F;
+  std::vector<char> alive;
+  std::vector<std::vector<uint32_t>> VF;
+  std::vector<std::vector<uint32_t>> feat;
+  std::vector<char> locked;
+  std::unordered_set<uint64_t> swapMade;  // feature edges created by extension swaps
+  double diag = 0;
+  double degenerateArea2 = 0;  // squared |cross| below which a face counts as degenerate
+
+  FeatureInfo info;  // counts, classes and curvatures (mesh and featureEdges filled at the end)
+  std::vector<VertexClass> cls;
+  std::vector<double> K, M;
+
+  Status Build(const IndexedMesh& in, const FeatureSimplifyParams& p);
+
+  bool IsFeature(uint32_t a, uint32_t b) const {
+    for (uint32_t x : feat[a])
+      if (x == b) return true;
+    return false;
+  }
+  void AddFeature(uint32_t a, uint32_t b) {
+    if (!IsFeature(a, b)) { feat[a].push_back(b); feat[b].push_back(a); }
+  }
+  void RemoveFeature(uint32_t a, uint32_t b) {
+    auto drop = [](std::vector<uint32_t>& v, uint32_t x) {
+      auto it = std::find(v.begin(), v.end(), x);
+      if (it != v.end()) { *it = v.back(); v.pop_back(); }
+    };
+    drop(feat[a], b);
+    drop(feat[b], a);
+  }
+  P3 Cross(uint32_t f) const {
+    const auto& t = F[f];
+    return (P[t[1]] - P[t[0]]) ^ (P[t[2]] - P[t[0]]);
+  }
+  bool Contains(uint32_t f, uint32_t v) const { return F[f][0] == v || F[f][1] == v || F[f][2] == v; }
+  // Faces containing both a and b, written to out (at most `cap`); returns the count.
+  int EdgeFaces(uint32_t a, uint32_t b, uint32_t* out, int cap) const {
+    int n = 0;
+    for (uint32_t f : VF[a])
+      if (Contains(f, b)) { if (n < cap) out[n] = f; ++n; }
+    return n;
+  }
+  uint32_t Third(uint32_t f, uint32_t a, uint32_t b) const {
+    for (uint32_t v : F[f])
+      if (v != a && v != b) return v;
+    return kNone;
+  }
+  bool HasEdge(uint32_t a, uint32_t b) const {
+    for (uint32_t f : VF[a])
+      if (Contains(f, b)) return true;
+    return false;
+  }
+  void RemoveFaceFrom(uint32_t v, uint32_t f) {
+    auto& l = VF[v];
+    auto it = std::find(l.begin(), l.end(), f);
+    if (it != l.end()) { *it = l.back(); l.pop_back(); }
+  }
+
+  double CurvatureK(uint32_t v) const;
+  double CurvatureM(uint32_t v) const;
+  bool IsManifoldVertex(uint32_t v, std::vector<uint32_t>& verts, std::vector<uint32_t>& parent,
+                        std::vector<int>& degree) const;
+  void ExtendFeatureLines(double featureAngleDeg);
+  void Classify(const FeatureSimplifyParams& p);
+  void FillInfo();
+};
+
+double Work::CurvatureK(uint32_t v) const {
+  double angles = 0, area = 0;
+  for (uint32_t f : VF[v]) {
+    const auto& t = F[f];
+    const int i = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+    const P3& p = P[v];
+    angles += AngleBetween(P[t[(i + 1) % 3]] - p, P[t[(i + 2) % 3]] - p);
+    area += 0.5 * Cross(f).Norm();
+  }
+  const double S = area / 3.0;
+  return S > 0 ? (2 * kPi - angles) / S : 0.0;
+}
+
+double Work::CurvatureM(uint32_t v) const {
+  if (feat[v].size() != 2) return 0;
+  const P3 el = P[feat[v][0]] - P[v], er = P[feat[v][1]] - P[v];
+  const double L = 0.5 * (el.Norm() + er.Norm());
+  return L > 0 ? (kPi - AngleBetween(el, er)) / L : 0.0;
+}
+
+// One fan (a disk or a half-disk) around v: every link vertex used at most twice and the link
+// connected.
+bool Work::IsManifoldVertex(uint32_t v, std::vector<uint32_t>& verts, std::vector<uint32_t>& parent,
+                            std::vector<int>& degree) const {
+  const auto& fan = VF[v];
+  if (fan.size() <= 1) return true;
+  // Local link: its vertices, their degrees and union-find parents (fans are small).
+  verts.clear();
+  parent.clear();
+  degree.clear();
+  auto local = [&](uint32_t x) {
+    for (size_t i = 0; i < verts.size(); ++i)
+      if (verts[i] == x) return int(i);
+    verts.push_back(x);
+    parent.push_back(uint32_t(verts.size() - 1));
+    degree.push_back(0);
+    return int(verts.size() - 1);
+  };
+  auto find = [&](uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (uint32_t f : fan) {
+    const auto& t = F[f];
+    const int i = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+    const int a = local(t[(i + 1) % 3]), b = local(t[(i + 2) % 3]);
+    if (++degree[size_t(a)] > 2 || ++degree[size_t(b)] > 2) return false;
+    const uint32_t ra = find(uint32_t(a)), rb = find(uint32_t(b));
+    if (ra != rb) parent[ra] = rb;
+  }
+  const uint32_t root = find(0);
+  for (uint32_t i = 1; i < verts.size(); ++i)
+    if (find(i) != root) return false;
+  return true;
+}
+
+Status Work::Build(const IndexedMesh& in, const FeatureSimplifyParams& p) {
+  const size_t nv = in.positions.size(), nf = in.faces.size();
+  P.resize(nv);
+  for (size_t v = 0; v < nv; ++v) P[v] = P3::Construct(in.positions[v]);
+  F = in.faces;
+  alive.assign(nf, 1);
+  VF.assign(nv, {});
+  feat.assign(nv, {});
+  locked.assign(nv, 0);
+  diag = BoundingBoxDiagonal(in);
+  degenerateArea2 = std::pow(1e-12 * diag * diag, 2);
+
+  std::vector<uint32_t> valence(nv, 0);
+  for (const auto& t : F)
+    for (uint32_t v : t) ++valence[v];
+  for (size_t v = 0; v < nv; ++v) VF[v].reserve(valence[v] + 2);
+  for (uint32_t f = 0; f < nf; ++f) {
+    const auto& t = F[f];
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
+      // A face with a repeated vertex has no proper fan: keep it as it is, lock its vertices.
+      for (uint32_t v : t) locked[v] = 1;
+    }
+    VF[t[0]].push_back(f);
+    if (t[1] != t[0]) VF[t[1]].push_back(f);
+    if (t[2] != t[0] && t[2] != t[1]) VF[t[2]].push_back(f);
+  }
+
+  // Undirected edges with their faces: sort (key, face, directed-forward) records.
+  struct HalfEdge { uint64_t key; uint32_t face; uint32_t forward; };
+  std::vector<HalfEdge> he;
+  he.reserve(nf * 3);
+  for (uint32_t f = 0; f < nf; ++f) {
+    const auto& t = F[f];
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = t[k], b = t[(k + 1) % 3];
+      if (a == b) continue;
+      he.push_back({EdgeKey(a, b), f, a < b ? 1u : 0u});
+    }
+  }
+  std::sort(he.begin(), he.end(), [](const HalfEdge& x, const HalfEdge& y) {
+    return x.key != y.key ? x.key < y.key : x.face < y.face;
+  });
+  const double cosLimit = std::cos((180.0 - p.featureAngleDeg) * kPi / 180.0);  // A <= A_t <=> cos(normals) <= this
+  for (size_t i = 0; i < he.size();) {
+    size_t j = i;
+    while (j < he.size() && he[j].key == he[i].key) ++j;
+    const uint32_t a = uint32_t(he[i].key >> 32), b = uint32_t(he[i].key & 0xffffffffu);
+    const size_t n = j - i;
+    if (n == 1) {
+      AddFeature(a, b);
+      ++info.borderEdges;
+    } else if (n == 2) {
+      P3 n0 = Cross(he[i].face), n1 = Cross(he[i + 1].face);
+      const double l0 = n0.Norm(), l1 = n1.Norm();
+      if (l0 * l0 > degenerateArea2 && l1 * l1 > degenerateArea2) {
+        // Consistently oriented neighbours traverse the edge in opposite directions; otherwise
+        // one normal is reversed before measuring the angle.
+        if (he[i].forward == he[i + 1].forward) n1 = -n1;
+        if ((n0 * n1) / (l0 * l1) <= cosLimit) {
+          AddFeature(a, b);
+          ++info.dihedralEdges;
+        }
+      }
+    } else {
+      AddFeature(a, b);
+      locked[a] = locked[b] = 1;
+      ++info.nonManifoldEdges;
+    }
+    i = j;
+  }
+  {
+    std::vector<uint32_t> verts, parent;  // scratch for the fan test, allocated once
+    std::vector<int> degree;
+    for (uint32_t v = 0; v < nv; ++v)
+      if (!locked[v] && !IsManifoldVertex(v, verts, parent, degree)) locked[v] = 1;
+  }
+
+  if (p.extendFeatureLines) ExtendFeatureLines(p.featureAngleDeg);
+  Classify(p);
+  return Status::Ok();
+}
+
+// §3.1, Fig. 3: extends feature lines that end at a vertex with one feature edge.
+void Work::ExtendFeatureLines(double featureAngleDeg) {
+  const double cosLimit = std::cos((180.0 - featureAngleDeg) * kPi / 180.0);
+  const double cosTurn = std::cos(45.0 * kPi / 180.0);
+  std::vector<uint32_t> work;
+  for (uint32_t v = 0; v < P.size(); ++v)
+    if (feat[v].size() == 1 && !locked[v]) work.push_back(v);
+  size_t budget = F.size() * 3;  // every swap adds a swap-made edge, never swapped again
+  while (!work.empty() && budget > 0) {
+    const uint32_t c = work.back();
+    work.pop_back();
+    if (feat[c].size() != 1 || locked[c]) continue;
+    const P3 dir = P[c] - P[feat[c][0]];
+    if (!(dir.Norm() > 0)) continue;
+    // Best candidate: the smallest turn, then the sharpest new edge.
+    double bestTurn = -2, bestCos = 2;
+    uint32_t bestF1 = kNone, bestF2 = kNone, bestA = 0, bestB = 0, bestD = 0;
+    for (uint32_t f1 : VF[c]) {
+      const auto& t = F[f1];
+      const int i = t[0] == c ? 0 : (t[1] == c ? 1 : 2);
+      const uint32_t a = t[(i + 1) % 3], b = t[(i + 2) % 3];  // f1 = (a, b, c) up to rotation
+      if (a == b || a == c || b == c || locked[a] || locked[b]) continue;
+      if (swapMade.count(EdgeKey(a, b))) continue;
+      uint32_t ef[3];
+      if (EdgeFaces(a, b, ef, 3) != 2) continue;
+      const uint32_t f2 = ef[0] == f1 ? ef[1] : ef[0];
+      const auto& u = F[f2];
+      const int j = u[0] == b ? 0 : (u[1] == b ? 1 : 2);
+      if (u[(j + 1) % 3] != a) continue;  // f2 must be (b, a, d): consistent orientation
+      const uint32_t d = u[(j + 2) % 3];
+      if (d == c || HasEdge(c, d)) continue;
+      if (VF[a].size() < 4 || VF[b].size() < 4) continue;  // a and b keep a proper fan
+      const P3 e = P[d] - P[c];
+      const double turn = (dir * e) / (dir.Norm() * e.Norm());
+      if (!(turn >= cosTurn)) continue;
+      // New faces (a, d, c) and (d, b, c).
+      const P3 o = Cross(f1) + Cross(f2);
+      const P3 n1 = (P[d] - P[a]) ^ (P[c] - P[a]);
+      const P3 n2 = (P[b] - P[d]) ^ (P[c] - P[d]);
+      if (n1.SquaredNorm() <= degenerateArea2 || n2.SquaredNorm() <= degenerateArea2) continue;
+      if (!(n1 * o > 0) || !(n2 * o > 0)) continue;
+      const double cosN = (n1 * n2) / (n1.Norm() * n2.Norm());
+      if (cosN > cosLimit) continue;  // the new edge is not sharp enough
+      if (turn > bestTurn || (turn == bestTurn && cosN < bestCos)) {
+        bestTurn = turn; bestCos = cosN;
+        bestF1 = f1; bestF2 = f2; bestA = a; bestB = b; bestD = d;
+      }
+    }
+    if (bestF1 == kNone) continue;
+    const uint32_t a = bestA, b = bestB, d = bestD;
+    F[bestF1] = {a, d, c};
+    F[bestF2] = {d, b, c};
+    RemoveFaceFrom(a, bestF2);
+    RemoveFaceFrom(b, bestF1);
+    VF[c].push_back(bestF2);
+    VF[d].push_back(bestF1);
+    if (IsFeature(a, b)) {
+      RemoveFeature(a, b);
+      ++info.removedBySwaps;
+      if (feat[a].size() == 1) work.push_back(a);
+      if (feat[b].size() == 1) work.push_back(b);
+    }
+    AddFeature(c, d);
+    swapMade.insert(EdgeKey(c, d));
+    ++info.swapEdges;
+    --budget;
+    if (feat[d].size() == 1) work.push_back(d);
+  }
+}
+
+void Work::Classify(const FeatureSimplifyParams& p) {
+  const size_t nv = P.size();
+  cls.assign(nv, VertexClass::Unused);
+  K.assign(nv, 0.0);
+  M.assign(nv, 0.0);
+  const double d2 = diag * diag;
+  for (uint32_t v = 0; v < nv; ++v) {
+    if (VF[v].empty()) continue;
+    const size_t fc = feat[v].size();
+    if (locked[v] || fc == 1 || fc >= 3) {
+      cls[v] = VertexClass::Feature;
+    } else if (fc == 2) {
+      cls[v] = VertexClass::FeatureLine;
+      M[v] = CurvatureM(v);
+    } else {
+      K[v] = CurvatureK(v);
+      cls[v] = (p.featureCurvature > 0 && std::abs(K[v]) * d2 >= p.featureCurvature) ? VertexClass::Feature
+                                                                                        : VertexClass::Smooth;
+    }
+  }
+}
+
+void Work::FillInfo() {
+  info.vertexClass = cls;
+  info.curvatureK = K;
+  info.curvatureM = M;
+  info.mesh.positions.resize(P.size());
+  for (size_t v = 0; v < P.size(); ++v) info.mesh.positions[v] = vcg::Point3f::Construct(P[v]);
+  info.mesh.faces.clear();
+  for (size_t f = 0; f < F.size(); ++f)
+    if (alive[f]) info.mesh.faces.push_back(F[f]);
+  info.featureEdges.clear();
+  for (uint32_t a = 0; a < feat.size(); ++a)
+    for (uint32_t b : feat[a])
+      if (a < b) info.featureEdges.push_back({a, b});
+  std::sort(info.featureEdges.begin(), info.featureEdges.end());
+}
+
+// §3.3-3.4: the collapse engine on a Work.
+class Simplifier {
+ public:
+  Simplifier(Work& w, const FeatureSimplifyParams& p) : w_(w), p_(p), link_(w.P.size(), 0) {}
+
+  // Checks the half-edge collapse from -> to; on success fills d (the paper's error distance:
+  // from `from` to the nearest new face) and q (worst shape among the new faces). With
+  // `topology` false the link condition is left to CheckTopology (the engine runs it only on the
+  // candidate it is about to apply).
+  CollapseRefusal Check(uint32_t from, uint32_t to, double* d, double* q, bool topology = true);
+  CollapseRefusal CheckTopology(uint32_t from, uint32_t to);
+  double NewFanQuality(uint32_t from, uint32_t to);
+  void Collapse(uint32_t from, uint32_t to, double outErr);
+  Status Run(FeatureSimplifyResult& out, const Progress& progress);
+
+ private:
+  struct Entry {
+    float key;
+    uint32_t v;
+    uint32_t stamp;
+    bool operator<(const Entry& o) const { return key > o.key; }  // min-heap
+  };
+  struct FanFace {
+    uint32_t face, x, y;  // the face is (from, x, y) in its own order
+    P3 normal;            // its (unnormalised) normal before the collapse
+  };
+  void BuildFan(uint32_t from);
+  std::vector<FanFace> fan_;
+  uint32_t fanOf_ = kNone, oldFanOf_ = kNone;
+  struct Deferred {
+    double error;  // the smallest error bound under which one of v's collapses fits
+    uint32_t v;
+    uint32_t stamp;
+    uint32_t to;   // the edge v -> to that was tried (the smallest d the topology allowed)
+    bool operator<(const Deferred& o) const { return error > o.error; }  // min-heap
+  };
+  void Push(uint32_t v, bool recompute);
+  P3 Corner(uint32_t f, int k, uint32_t from, uint32_t to) const {
+    const uint32_t x = w_.F[f][size_t(k)];
+    return w_.P[x == from ? to : x];
+  }
+  void GatherNewFan(uint32_t from, uint32_t to);
+  double DistanceToNewFan2(const P3& p, uint32_t from, uint32_t to, double enough2) const;
+  double CollapseError(uint32_t from, uint32_t to, double d, double limit);
+  double OutwardError(uint32_t from, uint32_t to, double limit);
+  bool RaiseBound();
+
+  Work& w_;
+  const FeatureSimplifyParams& p_;
+  std::priority_queue<Entry> heapK_, heapM_;
+  std::priority_queue<Deferred> deferred_;
+  std::vector<uint32_t> stamp_;
+  bool track_ = false;           // original vertices are tracked (an error bound is in force)
+  bool grow_ = false;            // the bound grows until the target face count is reached
+  double bound_ = std::numeric_limits<double>::infinity();
+  std::vector<std::vector<uint32_t>> owned_;  // face -> removed original vertices it answers for
+  std::vector<double> outError_;  // face -> bound on the distance from its points to the input
+  std::vector<uint32_t> newFanIds_;   // faces around `to` after a collapse (GatherNewFan)
+  std::vector<Tri> newFan_, oldFan_;  // the same as triangles / the faces around `from` before it
+  std::vector<std::pair<uint32_t, uint32_t>> scratchPts_;  // (original vertex, face it answered for)
+  std::vector<uint32_t> scratchRing_;
+  std::vector<uint32_t> link_;   // link_[x] == linkStamp_: x is a neighbour of linkFrom_
+  uint32_t linkStamp_ = 0, linkFrom_ = kNone;
+  std::vector<uint32_t> visit_;  // visit_[v] == mark_: seen in the current collapse
+  uint32_t mark_ = 0;
+  std::vector<char> queued_;     // v has a valid entry in its queue
+  std::vector<char> fanChanged_;    // v's fan changed while it was deferred
+  std::vector<uint32_t> retry_;     // readmitted with an unchanged fan: its ranking of edges (d, flips,
+                                    // shapes: all from its own fan) is unchanged, so its edge is known
+  std::vector<char> deferredMark_;  // v waits in deferred_ for a larger bound (its stored error may
+                                    // be stale once its neighbourhood changes: it is re-evaluated
+                                    // when the bound reaches it)
+  size_t faces_ = 0;
+  double maxD_ = 0, maxTracked_ = 0;
+};
+
+// The faces around `from` as (face, x, y, old normal) with (from, x, y) in the face's order:
+// built once for all candidate edges of `from`.
+void Simplifier::BuildFan(uint32_t from) {
+  if (fanOf_ == from) return;
+  fanOf_ = from;
+  fan_.clear();
+  oldFanOf_ = kNone;
+  for (uint32_t f : w_.VF[from]) {
+    const auto& t = w_.F[f];
+    const int i = t[0] == from ? 0 : (t[1] == from ? 1 : 2);
+    fan_.push_back({f, t[size_t((i + 1) % 3)], t[size_t((i + 2) % 3)], w_.Cross(f)});
+  }
+}
+
+CollapseRefusal Simplifier::Check(uint32_t from, uint32_t to, double* dOut, double* qOut, bool topology) {
+  Work& w = w_;
+  if (from == to) return CollapseRefusal::NotAnEdge;
+  BuildFan(from);
+  int ne = 0;
+  for (const FanFace& ff : fan_) ne += (ff.x == to || ff.y == to) ? 1 : 0;
+  if (ne == 0) return CollapseRefusal::NotAnEdge;
+  if (w.locked[from] || w.cls[from] == VertexClass::Feature || w.cls[from] == VertexClass::Unused)
+    return CollapseRefusal::LockedVertex;
+  if (ne > 2) return CollapseRefusal::Topology;
+  if (w.cls[from] == VertexClass::FeatureLine) {
+    if (w.feat[from].size() != 2 || (w.feat[from][0] != to && w.feat[from][1] != to))
+      return CollapseRefusal::OffFeatureLine;
+    const uint32_t other = w.feat[from][0] == to ? w.feat[from][1] : w.feat[from][0];
+    if (w.IsFeature(to, other)) return CollapseRefusal::MergesFeatures;
+  } else if (!w.feat[from].empty()) {
+    return CollapseRefusal::OffFeatureLine;
+  }
+  // Geometry of the faces that stay, (from, x, y) -> (to, x, y): no flip, no degenerate face, no
+  // duplicate face.
+  const P3& pf = w.P[from];
+  const P3& pt = w.P[to];
+  double d2 = std::numeric_limits<double>::infinity();
+  int modified = 0;
+  for (const FanFace& ff : fan_) {
+    if (ff.x == to || ff.y == to) continue;
+    ++modified;
+    const P3& px = w.P[ff.x];
+    const P3& py = w.P[ff.y];
+    const P3 nNew = (px - pt) ^ (py - pt);
+    if (nNew.SquaredNorm() <= w.degenerateArea2) return CollapseRefusal::FlipsFace;
+    if (ff.normal.SquaredNorm() > w.degenerateArea2 && !(nNew * ff.normal > 0)) return CollapseRefusal::FlipsFace;
+    // The distance to the face's plane is a lower bound of the distance to the face.
+    const double h = (pf - pt) * nNew;
+    if (h * h < d2 * nNew.SquaredNorm()) d2 = std::min(d2, PointTriangleDistance2(pf, pt, px, py));
+    if (fan_.size() <= 3) {
+      // (to, x, y) must not already exist around `to` (a tetrahedron would fold onto itself).
+      for (uint32_t g : w.VF[to])
+        if (w.Contains(g, ff.x) && w.Contains(g, ff.y)) return CollapseRefusal::Topology;
+    }
+  }
+  if (modified == 0) {
+    // An ear (a border vertex with one face): measure against the faces left around `to`.
+    for (uint32_t f : w.VF[to]) {
+      if (w.Contains(f, from)) continue;
+      const auto& t = w.F[f];
+      d2 = std::min(d2, PointTriangleDistance2(pf, w.P[t[0]], w.P[t[1]], w.P[t[2]]));
+    }
+    if (!std::isfinite(d2)) return CollapseRefusal::Topology;  // would delete a whole piece
+  }
+  if (dOut) *dOut = std::sqrt(d2);
+  if (qOut) *qOut = NewFanQuality(from, to);
+  return topology ? CheckTopology(from, to) : CollapseRefusal::None;
+}
+
+// The worst shape among the faces (to, x, y) that replace (from, x, y).
+double Simplifier::NewFanQuality(uint32_t from, uint32_t to) {
+  BuildFan(from);
+  double q = 1;
+  for (const FanFace& ff : fan_)
+    if (ff.x != to && ff.y != to) q = std::min(q, TriangleQuality(w_.P[to], w_.P[ff.x], w_.P[ff.y]));
+  return q;
+}
+
+// The link condition (the common neighbours of `from` and `to` are the vertices opposite their
+// edge) and no pinch of the border.
+CollapseRefusal Simplifier::CheckTopology(uint32_t from, uint32_t to) {
+  Work& w = w_;
+  uint32_t ef[3];
+  const int ne = w.EdgeFaces(from, to, ef, 3);
+  uint32_t opp[2] = {kNone, kNone};
+  for (int i = 0; i < ne; ++i) opp[i] = w.Third(ef[i], from, to);
+  if (linkFrom_ != from) {  // mark from's neighbours once for all its candidate edges
+    linkFrom_ = from;
+    ++linkStamp_;
+    for (uint32_t f : w.VF[from])
+      for (uint32_t x : w.F[f]) link_[x] = linkStamp_;
+  }
+  for (uint32_t f : w.VF[to])
+    for (uint32_t x : w.F[f]) {
+      if (x == to || x == from || x == opp[0] || x == opp[1]) continue;
+      if (link_[x] == linkStamp_) return CollapseRefusal::Topology;
+    }
+  // An interior edge between two border vertices would pinch the surface.
+  if (ne == 2) {
+    auto onBorder = [&](uint32_t v) {
+      for (uint32_t x : w.feat[v]) {
+        uint32_t tmp[3];
+        if (w.EdgeFaces(v, x, tmp, 3) == 1) return true;
+      }
+      return false;
+    };
+    if (onBorder(from) && onBorder(to)) return CollapseRefusal::Topology;
+  }
+  return CollapseRefusal::None;
+}
+
+// The faces around `to` after the collapse: to's own faces that stay, then the modified faces
+// of `from` (from -> to). As face ids for the one-off checks, as triangles for the re-assignment.
+void Simplifier::GatherNewFan(uint32_t from, uint32_t to) {
+  newFanIds_.clear();
+  for (uint32_t f : w_.VF[to])
+    if (!w_.Contains(f, from)) newFanIds_.push_back(f);
+  for (uint32_t f : w_.VF[from])
+    if (!w_.Contains(f, to)) newFanIds_.push_back(f);
+}
+
+double Simplifier::DistanceToNewFan2(const P3& p, uint32_t from, uint32_t to, double enough2) const {
+  double best = std::numeric_limits<double>::infinity();
+  for (uint32_t f : newFanIds_) {
+    best = std::min(best, PointTriangleDistance2(p, Corner(f, 0, from, to), Corner(f, 1, from, to),
+                                                 Corner(f, 2, from, to)));
+    if (best <= enough2) break;
+  }
+  return best;
+}
+
+// The largest distance from `from` and the original vertices its faces answer for to the new
+// fan: exact when above `limit`, some value <= limit otherwise (points within the limit stop
+// their search early). `from` itself comes first (its distance to the nearest new face, d, is
+// known), then each point is tried first against the new version of the face it answered for.
+double Simplifier::CollapseError(uint32_t from, uint32_t to, double d, double limit) {
+  GatherNewFan(from, to);
+  if (newFanIds_.empty()) return std::numeric_limits<double>::infinity();
+  const double limit2 = limit * limit;
+  double worst = d <= limit ? d : std::sqrt(DistanceToNewFan2(w_.P[from], from, to, limit2));
+  if (worst > limit) return worst;
+  for (uint32_t f : w_.VF[from]) {
+    const bool survives = !w_.Contains(f, to);
+    for (uint32_t x : owned_[f]) {
+      if (survives && PointTriangleDistance2(w_.P[x], Corner(f, 0, from, to), Corner(f, 1, from, to),
+                                             Corner(f, 2, from, to)) <= limit2)
+        continue;
+      worst = std::max(worst, std::sqrt(DistanceToNewFan2(w_.P[x], from, to, limit2)));
+    }
+  }
+  return worst;
+}
+
+// The other direction (output -> input), which the original vertices cannot see (a new face may
+// overhang a concave edge while every removed vertex stays on it): sample points of the new faces
+// (centroid and the midpoints of the new edges) against the old faces around `from`, plus the
+// bound those old faces already carried. Sampled, so an estimate; accumulated, so conservative
+// along a chain of collapses. Returns early (some value > limit) once over `limit`.
+double Simplifier::OutwardError(uint32_t from, uint32_t to, double limit) {
+  BuildFan(from);
+  double old = 0;
+  for (uint32_t f : w_.VF[from]) old = std::max(old, outError_[f]);
+  if (old > limit) return old;
+  const double room2 = (limit - old) * (limit - old);
+  double worst2 = 0;
+  if (oldFanOf_ != from) {
+    oldFanOf_ = from;
+    oldFan_.clear();
+    for (const FanFace& ff : fan_) oldFan_.push_back(MakeTri(w_.P[from], w_.P[ff.x], w_.P[ff.y], ff.face));
+  }
+  auto distToOldFan2 = [&](const P3& p) { return DistanceToTris2(p, oldFan_, room2); };
+  const P3& u = w_.P[to];
+  for (const FanFace& ff : fan_) {
+    if (ff.x == to || ff.y == to) continue;
+    const P3 &px = w_.P[ff.x], &py = w_.P[ff.y];
+    worst2 = std::max(worst2, distToOldFan2((u + px + py) / 3.0));
+    // New edges (to, x): each is the x edge of one new face (the y edge of its neighbour).
+    worst2 = std::max(worst2, distToOldFan2((u + px) * 0.5));
+  }
+  return std::max(old, std::sqrt(worst2));
+}
+
+void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
+  Work& w = w_;
+  linkFrom_ = kNone;
+  fanOf_ = kNone;
+  const bool track = track_;
+  if (track) {
+    GatherNewFan(from, to);
+    newFan_.clear();
+    for (uint32_t f : newFanIds_)
+      newFan_.push_back(MakeTri(Corner(f, 0, from, to), Corner(f, 1, from, to), Corner(f, 2, from, to), f));
+    scratchPts_.clear();
+    scratchPts_.push_back({from, kNone});
+    for (uint32_t f : w.VF[from]) {
+      const uint32_t owner = w.Contains(f, to) ? kNone : f;
+      for (uint32_t x : owned_[f]) scratchPts_.push_back({x, owner});
+      owned_[f].clear();
+    }
+  }
+  scratchRing_.clear();
+  for (uint32_t f : w.VF[from])
+    for (uint32_t x : w.F[f])
+      if (x != from && x != to && std::find(scratchRing_.begin(), scratchRing_.end(), x) == scratchRing_.end())
+        scratchRing_.push_back(x);
+  // Feature edges: from's line edges (from, other) become (to, other).
+  if (w.cls[from] == VertexClass::FeatureLine) {
+    const uint32_t other = w.feat[from][0] == to ? w.feat[from][1] : w.feat[from][0];
+    w.RemoveFeature(from, to);
+    w.RemoveFeature(from, other);
+    w.AddFeature(to, other);
+  }
+  // Faces: those on the edge die, the others take `to` instead of `from`.
+  for (uint32_t f : w.VF[from]) {
+    auto& t = w.F[f];
+    if (w.Contains(f, to)) {
+      w.alive[f] = 0;
+      --faces_;
+      for (uint32_t x : t)
+        if (x != from) w.RemoveFaceFrom(x, f);
+    } else {
+      for (auto& x : t)
+        if (x == from) x = to;
+      w.VF[to].push_back(f);
+      if (track) outError_[f] = outErr;
+    }
+  }
+  w.VF[from].clear();
+  w.cls[from] = VertexClass::Unused;
+  if (track) {
+    // Each removed original vertex answers to its nearest face of the new fan.
+    double worst = 0;
+    for (const auto& pt : scratchPts_) {
+      size_t nearest = 0;
+      const double d2 = DistanceToTris2(w.P[pt.first], newFan_, 0.0, &nearest);
+      if (!newFan_.empty()) owned_[newFan_[nearest].face].push_back(pt.first);
+      worst = std::max(worst, std::sqrt(d2));
+    }
+    maxTracked_ = std::max(maxTracked_, worst);
+  }
+  // The fans of `to` and of from's old ring changed: their curvatures are recomputed. The rest of
+  // to's ring kept its fan, but its collapses into `to` may have become possible: vertices found
+  // stuck before go back into their queue.
+  ++mark_;
+  Push(to, true);
+  visit_[to] = mark_;
+  for (uint32_t x : scratchRing_) {
+    visit_[x] = mark_;
+    if (!deferredMark_[x]) Push(x, true);
+    else fanChanged_[x] = 1;  // its curvature is recomputed when the bound admits it again
+  }
+  for (uint32_t f : w.VF[to])
+    for (uint32_t x : w.F[f])
+      if (visit_[x] != mark_) {
+        visit_[x] = mark_;
+        if (!queued_[x] && !deferredMark_[x]) Push(x, false);
+      }
+}
+
+void Simplifier::Push(uint32_t v, bool recompute) {
+  Work& w = w_;
+  ++stamp_[v];
+  deferredMark_[v] = 0;
+  retry_[v] = kNone;
+  recompute = recompute || fanChanged_[v];
+  fanChanged_[v] = 0;
+  if (w.cls[v] == VertexClass::Smooth) {
+    if (recompute) w.K[v] = w.CurvatureK(v);
+    heapK_.push({float(std::abs(w.K[v])), v, stamp_[v]});
+    queued_[v] = 1;
+  } else if (w.cls[v] == VertexClass::FeatureLine) {
+    if (recompute) w.M[v] = w.CurvatureM(v);
+    heapM_.push({float(std::abs(w.M[v])), v, stamp_[v]});
+    queued_[v] = 1;
+  }
+}
+
+// Raises the error bound to admit the deferred vertex with the smallest error (at least x1.25,
+// so that each round admits many vertices) and puts the deferred vertices under it back in their
+// queues. False when nothing is deferred or the next bound passes maxErrorDistance.
+bool Simplifier::RaiseBound() {
+  while (!deferred_.empty() && deferred_.top().stamp != stamp_[deferred_.top().v]) deferred_.pop();
+  if (deferred_.empty()) return false;
+  double next = std::max(bound_ * 1.25, deferred_.top().error);
+  if (p_.maxErrorDistance > 0) {
+    if (deferred_.top().error > p_.maxErrorDistance) return false;
+    next = std::min(next, p_.maxErrorDistance);
+  }
+  bound_ = next;
+  while (!deferred_.empty() && deferred_.top().error <= bound_) {
+    const Deferred d = deferred_.top();
+    deferred_.pop();
+    if (d.stamp == stamp_[d.v] && !queued_[d.v]) {
+      const bool same = !fanChanged_[d.v];
+      Push(d.v, false);
+      if (same) retry_[d.v] = d.to;
+    }
+  }
+  return true;
+}
+
+Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
+  Work& w = w_;
+  const size_t nv = w.P.size();
+  stamp_.assign(nv, 0);
+  visit_.assign(nv, 0);
+  queued_.assign(nv, 0);
+  deferredMark_.assign(nv, 0);
+  fanChanged_.assign(nv, 0);
+  retry_.assign(nv, kNone);
+  faces_ = 0;
+  for (char a : w.alive) faces_ += a ? 1 : 0;
+  const size_t facesIn = faces_;
+  const size_t target = p_.targetFaceCount;
+  // Error bound: fixed at maxErrorDistance (§3.4), or, with a target face count and
+  // growErrorBound, starting tiny and raised only when no collapse fits (up to maxErrorDistance
+  // if given). Without either, the paper's pure curvature order runs untracked.
+  grow_ = target > 0 && p_.growErrorBound;
+  track_ = grow_ || p_.maxErrorDistance > 0;
+  bound_ = grow_ ? 1e-6 * w.diag : (p_.maxErrorDistance > 0 ? p_.maxErrorDistance
+                                                            : std::numeric_limits<double>::infinity());
+  if (grow_ && p_.maxErrorDistance > 0) bound_ = std::min(bound_, p_.maxErrorDistance);
+  if (track_) {
+    owned_.assign(w.F.size(), {});
+    outError_.assign(w.F.size(), 0.0);
+  }
+  size_t nK = 0, nM = 0;
+  for (uint32_t v = 0; v < nv; ++v) {
+    if (w.cls[v] == VertexClass::Smooth) ++nK;
+    if (w.cls[v] == VertexClass::FeatureLine) ++nM;
+    Push(v, true);
+  }
+  const double d2 = w.diag * w.diag, d1 = w.diag;
+  size_t popsK = 0, popsM = 0, iter = 0;
+  struct Candidate { double d, q; uint32_t to; };
+  std::vector<Candidate> cands;
+  std::vector<uint32_t> nbrs;
+  bool reached = target > 0 && faces_ <= target;
+  while (!reached) {
+    const bool haveK = !heapK_.empty(), haveM = !heapM_.empty();
+    if (!haveK && !haveM) {
+      if (grow_ && RaiseBound()) continue;
+      break;
+    }
+    // Interleave the two queues in proportion to their initial sizes.
+    const bool takeK = haveK && (!haveM || double(popsK + 1) * double(nM) <= double(popsM + 1) * double(nK));
+    auto& heap = takeK ? heapK_ : heapM_;
+    const Entry e = heap.top();
+    heap.pop();
+    const uint32_t v = e.v;
+    if (e.stamp != stamp_[v]) continue;  // stale
+    const VertexClass c = w.cls[v];
+    if (c != (takeK ? VertexClass::Smooth : VertexClass::FeatureLine)) continue;
+    queued_[v] = 0;
+    (takeK ? popsK : popsM) += 1;
+    if ((++iter & 1023) == 0 && progress) {
+      const int pct = target > 0 ? int(100.0 * double(facesIn - faces_) / double(facesIn - target))
+                                 : int(100.0 * double(popsK + popsM) / double(nK + nM + 1));
+      if (!progress(std::min(99, std::max(0, pct)), "feature-preserving simplification")) return Status::Cancelled();
+    }
+    if (p_.curvatureThreshold > 0) {
+      const double curv = c == VertexClass::Smooth ? std::abs(w.K[v]) * d2 : std::abs(w.M[v]) * d1;
+      if (curv >= p_.curvatureThreshold) continue;
+    }
+    // Candidate edges: all of them for V_K, the two line edges for V_M (or the one edge known).
+    cands.clear();
+    if (retry_[v] != kNone) {
+      double d = 0;
+      const uint32_t u = retry_[v];
+      retry_[v] = kNone;
+      if (Check(v, u, &d, nullptr, false) == CollapseRefusal::None && CheckTopology(v, u) == CollapseRefusal::None)
+        cands.push_back({d, 1.0, u});
+    }
+    if (cands.empty()) {
+      nbrs.clear();
+      if (c == VertexClass::FeatureLine) {
+        nbrs = w.feat[v];
+      } else {
+        BuildFan(v);
+        for (const FanFace& ff : fan_) {
+          if (std::find(nbrs.begin(), nbrs.end(), ff.x) == nbrs.end()) nbrs.push_back(ff.x);
+          if (std::find(nbrs.begin(), nbrs.end(), ff.y) == nbrs.end()) nbrs.push_back(ff.y);
+        }
+      }
+      for (uint32_t u : nbrs) {
+        double d = 0;
+        if (Check(v, u, &d, nullptr, false) == CollapseRefusal::None) cands.push_back({d, -1.0, u});
+      }
+    }
+    if (cands.empty()) continue;
+    // Smallest error distance d (Fig. 8); near-ties (flat regions) go to the better triangle shape.
+    const double tie = 1e-9 * w.diag;
+    double dMin = std::numeric_limits<double>::infinity();
+    for (const Candidate& cd : cands) dMin = std::min(dMin, cd.d);
+    for (Candidate& cd : cands)
+      if (cd.d <= dMin + tie) cd.q = NewFanQuality(v, cd.to);
+    std::sort(cands.begin(), cands.end(), [tie](const Candidate& a, const Candidate& b) {
+      if (std::abs(a.d - b.d) > tie) return a.d < b.d;
+      return a.q > b.q;
+    });
+    double smallestError = std::numeric_limits<double>::infinity();
+    uint32_t triedTo = kNone;
+    bool done = false;
+    for (const Candidate& cd : cands) {
+      // The paper's rule: the edge with the smallest d (among those the topology allows) is the
+      // one; under an error bound it is applied or the vertex waits for a larger bound.
+      if (CheckTopology(v, cd.to) != CollapseRefusal::None) continue;
+      double outErr = 0;
+      if (track_) {
+        const double err = CollapseError(v, cd.to, cd.d, bound_);
+        if (err > bound_) { smallestError = err; triedTo = cd.to; break; }
+        outErr = OutwardError(v, cd.to, bound_);
+        if (outErr > bound_) { smallestError = outErr; triedTo = cd.to; break; }
+      }
+      maxD_ = std::max(maxD_, cd.d);
+      Collapse(v, cd.to, outErr);
+      ++out.collapses;
+      done = true;
+      break;
+    }
+    if (!done && grow_ && std::isfinite(smallestError)) {
+      deferred_.push({smallestError, v, stamp_[v], triedTo});
+      deferredMark_[v] = 1;
+    }
+    reached = target > 0 && faces_ <= target;
+  }
+  out.finalErrorBound = track_ ? bound_ : 0.0;
+
+  // Output: live faces and the vertices they use, in input order.
+  std::vector<uint32_t> outIndex(nv, kNone);
+  std::vector<char> used(nv, 0);
+  out.mesh = IndexedMesh();
+  for (uint32_t f = 0; f < w.F.size(); ++f) {
+    if (!w.alive[f]) continue;
+    for (uint32_t v : w.F[f]) used[v] = 1;
+    out.mesh.faces.push_back(w.F[f]);
+    out.inputFace.push_back(f);
+  }
+  for (uint32_t v = 0; v < nv; ++v) {
+    if (!used[v]) continue;
+    outIndex[v] = uint32_t(out.mesh.positions.size());
+    out.mesh.positions.push_back(vcg::Point3f::Construct(w.P[v]));
+    out.inputVertex.push_back(v);
+    out.vertexClass.push_back(w.cls[v]);
+  }
+  for (auto& t : out.mesh.faces)
+    for (auto& v : t) v = outIndex[v];
+  for (uint32_t a = 0; a < nv; ++a)
+    for (uint32_t b : w.feat[a])
+      if (a < b && outIndex[a] != kNone && outIndex[b] != kNone) out.featureEdges.push_back({outIndex[a], outIndex[b]});
+  std::sort(out.featureEdges.begin(), out.featureEdges.end());
+  out.facesIn = facesIn;
+  out.facesOut = out.mesh.faces.size();
+  out.maxCollapseDistance = maxD_;
+  out.maxTrackedError = maxTracked_;
+  out.targetReached = target > 0 && faces_ <= target;
+  return Status::Ok();
+}
+
+Status ValidateAndCheckInput(const IndexedMesh& mesh, const FeatureSimplifyParams& p) {
+  Status s = ValidateParams(p);
+  if (!s.ok()) return s;
+  return RequireValidForFaces(CheckMesh(mesh, false));
+}
+
+}  // namespace
+
+double DihedralAngleDeg(const vcg::Point3d& n0, const vcg::Point3d& n1) {
+  return 180.0 - AngleBetween(n0, n1) * 180.0 / kPi;
+}
+
+double BoundingBoxDiagonal(const IndexedMesh& mesh) {
+  vcg::Box3d box;
+  std::vector<char> used(mesh.positions.size(), 0);
+  for (const auto& t : mesh.faces)
+    for (uint32_t v : t)
+      if (v < used.size()) used[v] = 1;
+  for (size_t v = 0; v < mesh.positions.size(); ++v)
+    if (used[v]) box.Add(P3::Construct(mesh.positions[v]));
+  return box.IsNull() ? 0.0 : box.Diag();
+}
+
+size_t FeatureInfo::count(VertexClass c) const {
+  return size_t(std::count(vertexClass.begin(), vertexClass.end(), c));
+}
+
+Status ValidateParams(const FeatureSimplifyParams& p) {
+  if (!(p.featureAngleDeg >= 0 && p.featureAngleDeg <= 180))
+    return Status::Invalid("FeatureAngleDeg must be between 0 and 180 degrees (got " +
+                           std::to_string(p.featureAngleDeg) + ")");
+  if (!(p.featureCurvature >= 0) || !std::isfinite(p.featureCurvature))
+    return Status::Invalid("FeatureCurvature must be >= 0 (0 = off)");
+  if (!(p.curvatureThreshold >= 0) || !std::isfinite(p.curvatureThreshold))
+    return Status::Invalid("CurvatureThreshold must be >= 0 (0 = no limit)");
+  if (!(p.maxErrorDistance >= 0) || !std::isfinite(p.maxErrorDistance))
+    return Status::Invalid("MaxErrorDistance must be >= 0 (0 = off)");
+  return Status::Ok();
+}
+
+Status DetectFeatures(const IndexedMesh& mesh, const FeatureSimplifyParams& params, FeatureInfo& out) {
+  out = FeatureInfo();
+  Status s = ValidateAndCheckInput(mesh, params);
+  if (!s.ok()) return s;
+  Work w;
+  s = w.Build(mesh, params);
+  if (!s.ok()) return s;
+  w.FillInfo();
+  out = std::move(w.info);
+  return Status::Ok();
+}
+
+Status FeatureSimplify(const IndexedMesh& mesh, const FeatureSimplifyParams& params, FeatureSimplifyResult& out,
+                       const Progress& progress) {
+  out = FeatureSimplifyResult();
+  Status s = ValidateAndCheckInput(mesh, params);
+  if (!s.ok()) return s;
+  if (params.targetFaceCount == 0 && params.maxErrorDistance == 0)
+    return Status::Invalid("give a stop criterion: a target face count (TargetFaceNum) or an error distance "
+                           "(MaxErrorDistance)");
+  if (progress && !progress(0, "feature detection")) return Status::Cancelled();
+  Work w;
+  s = w.Build(mesh, params);
+  if (!s.ok()) return s;
+  FeatureSimplifyResult r;
+  r.featureEdgesIn = 0;
+  for (uint32_t a = 0; a < w.feat.size(); ++a)
+    for (uint32_t b : w.feat[a]) r.featureEdgesIn += a < b ? 1 : 0;
+  r.swapEdges = w.info.swapEdges;
+  for (VertexClass c : w.cls) {
+    if (c == VertexClass::Feature) ++r.featureVertices;
+    if (c == VertexClass::FeatureLine) ++r.lineVerticesIn;
+    if (c == VertexClass::Smooth) ++r.smoothVerticesIn;
+  }
+  Simplifier simp(w, params);
+  s = simp.Run(r, progress);
+  if (!s.ok()) return s;
+  if (progress && !progress(100, "feature-preserving simplification")) return Status::Cancelled();
+  out = std::move(r);
+  return Status::Ok();
+}
+
+CollapseRefusal CheckFeatureCollapse(const IndexedMesh& mesh, const FeatureSimplifyParams& params, uint32_t from,
+                                     uint32_t to) {
+  Work w;
+  if (!ValidateAndCheckInput(mesh, params).ok() || !w.Build(mesh, params).ok()) return CollapseRefusal::NotAnEdge;
+  if (from >= w.P.size() || to >= w.P.size()) return CollapseRefusal::NotAnEdge;
+  Simplifier simp(w, params);
+  return simp.Check(from, to, nullptr, nullptr, true);
+}
+
+namespace {
+
+// Feature edges by dihedral angle (no extension) plus border and non-manifold edges, as segments.
+std::vector<std::array<P3, 2>> FeatureSegments(const IndexedMesh& m, double featureAngleDeg) {
+  FeatureSimplifyParams p;
+  p.featureAngleDeg = featureAngleDeg;
+  p.extendFeatureLines = false;
+  Work w;
+  w.Build(m, p);
+  std::vector<std::array<P3, 2>> segs;
+  for (uint32_t a = 0; a < w.feat.size(); ++a)
+    for (uint32_t b : w.feat[a])
+      if (a < b) segs.push_back({w.P[a], w.P[b]});
+  return segs;
+}
+
+// Uniform grid over segments for "is this point within tol of a segment" queries.
+class SegmentGrid {
+ public:
+  SegmentGrid(const std::vector<std::array<P3, 2>>& segs, double tol) : segs_(segs), tol_(tol) {
+    double total = 0;
+    for (const auto& s : segs) {
+      box_.Add(s[0]);
+      box_.Add(s[1]);
+      total += (s[1] - s[0]).Norm();
+    }
+    cell_ = std::max(tol * 2, segs.empty() ? 1.0 : total / double(segs.size()));
+    if (!(cell_ > 0)) cell_ = 1;
+    for (uint32_t i = 0; i < segs.size(); ++i) {
+      vcg::Box3d b;
+      b.Add(segs[i][0]);
+      b.Add(segs[i][1]);
+      b.Offset(tol);
+      const auto lo = CellOf(b.min), hi = CellOf(b.max);
+      for (long x = lo[0]; x <= hi[0]; ++x)
+        for (long y = lo[1]; y <= hi[1]; ++y)
+          for (long z = lo[2]; z <= hi[2]; ++z) cells_[Key(x, y, z)].push_back(i);
+    }
+  }
+  bool Near(const P3& p) const {
+    const auto c = CellOf(p);
+    auto it = cells_.find(Key(c[0], c[1], c[2]));
+    if (it == cells_.end()) return false;
+    for (uint32_t i : it->second)
+      if (PointSegmentDistance2(p, segs_[i][0], segs_[i][1]) <= tol_ * tol_) return true;
+    return false;
+  }
+
+ private:
+  std::array<long, 3> CellOf(const P3& p) const {
+    return {long(std::floor((p[0] - box_.min[0]) / cell_)), long(std::floor((p[1] - box_.min[1]) / cell_)),
+            long(std::floor((p[2] - box_.min[2]) / cell_))};
+  }
+  static uint64_t Key(long x, long y, long z) {
+    return (uint64_t(x + (1 << 20)) << 42) ^ (uint64_t(y + (1 << 20)) << 21) ^ uint64_t(z + (1 << 20));
+  }
+  const std::vector<std::array<P3, 2>>& segs_;
+  double tol_, cell_ = 1;
+  vcg::Box3d box_;
+  std::unordered_map<uint64_t, std::vector<uint32_t>> cells_;
+};
+
+}  // namespace
+
+Status CompareFeatureLines(const IndexedMesh& reference, const IndexedMesh& simplified, double featureAngleDeg,
+                           double tolerance, FeatureLineAgreement& out) {
+  out = FeatureLineAgreement();
+  FeatureSimplifyParams p;
+  p.featureAngleDeg = featureAngleDeg;
+  Status s = ValidateAndCheckInput(reference, p);
+  if (!s.ok()) return Status::Invalid("reference: " + s.message);
+  s = ValidateAndCheckInput(simplified, p);
+  if (!s.ok()) return Status::Invalid("simplified mesh: " + s.message);
+  if (!(tolerance > 0)) return Status::Invalid("the tolerance must be > 0");
+  const auto ref = FeatureSegments(reference, featureAngleDeg);
+  const auto simp = FeatureSegments(simplified, featureAngleDeg);
+  out.referenceEdges = ref.size();
+  out.simplifiedEdges = simp.size();
+  const SegmentGrid refGrid(ref, tolerance), simpGrid(simp, tolerance);
+  for (const auto& e : simp)
+    if (refGrid.Near(e[0]) && refGrid.Near(e[1]) && refGrid.Near((e[0] + e[1]) * 0.5)) ++out.simplifiedOnReference;
+  for (const auto& e : ref) {
+    const double len = (e[1] - e[0]).Norm();
+    out.referenceLength += len;
+    if (simpGrid.Near(e[0]) && simpGrid.Near(e[1]) && simpGrid.Near((e[0] + e[1]) * 0.5))
+      out.referenceLengthCovered += len;
+  }
+  return Status::Ok();
+}
+
+}  // namespace conelod
