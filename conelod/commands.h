@@ -7,9 +7,13 @@ namespace cli {
 int CmdGroup(int argc, char** argv);
 int CmdCullCost(int argc, char** argv);
 int CmdInfo(int argc, char** argv);
+int CmdPartition(int argc, char** argv);
+int CmdProgressive(int argc, char** argv);
 extern const char* kGroupUsage;
 extern const char* kCullCostUsage;
 extern const char* kInfoUsage;
+extern const char* kPartitionUsage;
+extern const char* kProgressiveUsage;
 
 }  // namespace cli
 }  // namespace conelod

@@ -17,6 +17,8 @@ const Command kCommands[] = {
     {"group", conelod::cli::CmdGroup, &conelod::cli::kGroupUsage},
     {"cull-cost", conelod::cli::CmdCullCost, &conelod::cli::kCullCostUsage},
     {"info", conelod::cli::CmdInfo, &conelod::cli::kInfoUsage},
+    {"partition", conelod::cli::CmdPartition, &conelod::cli::kPartitionUsage},
+    {"progressive", conelod::cli::CmdProgressive, &conelod::cli::kProgressiveUsage},
 };
 
 void PrintUsage(FILE* out) {
