@@ -14,7 +14,7 @@ class FilterConeLodPlugin : public QObject, public MeshFilterInterface {
 
  public:
   // Ids are stable: scripts name filters by their names, which never change either.
-  enum { FP_CONE_GROUPING, FP_CULLING_COST };
+  enum { FP_CONE_GROUPING, FP_CULLING_COST, FP_PCA_PARTITION, FP_PROGRESSIVE_MESH };
 
   FilterConeLodPlugin();
   QString pluginName() const override;
@@ -30,5 +30,7 @@ class FilterConeLodPlugin : public QObject, public MeshFilterInterface {
  private:
   bool applyConeGrouping(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb);
   bool applyCullingCost(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb);
+  bool applyPcaPartition(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb);
+  bool applyProgressiveMesh(MeshDocument& md, MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb);
   bool fail(const QString& message);  // logs and sets errorMessage; returns false
 };
