@@ -6,6 +6,7 @@
 #include "commands.h"
 #include "conelod/cone_grouping.h"
 #include "conelod/culling_cost.h"
+#include "conelod/pca_partition.h"
 
 namespace conelod {
 namespace cli {
@@ -53,10 +54,14 @@ const char* kGroupUsage =
     "  --max-levels N     [8]         --min-top-groups N  stop at this many groups [8]\n";
 
 const char* kCullCostUsage =
-    "conelod cull-cost IN.ply [--views N] [--camera-distance R] [grouping options] [--json]\n"
+    "conelod cull-cost IN.ply [--views N] [--camera-distance R] [grouping options | --pca K [--pca-levels L]]\n"
+    "                  [--json]\n"
     "  Builds the hierarchy (options as for `group`) and measures the cost of hierarchical\n"
     "  back-face culling over N view directions uniform on the sphere [1000]: orthographic, or a\n"
-    "  perspective eye at R bounding-sphere radii (R > 1) from the model's centre.\n";
+    "  perspective eye at R bounding-sphere radii (R > 1) from the model's centre.\n"
+    "  --pca K         groups = the K clusters of the recursive PCA partition (`conelod partition`),\n"
+    "                  each with its exact normal cone, instead of normal-cone grouping\n"
+    "  --pca-levels L  L nested levels: K clusters, then K/4, K/16, ... [1]\n";
 
 int CmdGroup(int argc, char** argv) {
   Args a(argc, argv, With(kGroupingOptions, {"-o", "--level"}), {"--json"});
@@ -121,13 +126,23 @@ int CmdGroup(int argc, char** argv) {
 }
 
 int CmdCullCost(int argc, char** argv) {
-  Args a(argc, argv, With(kGroupingOptions, {"--views", "--camera-distance"}), {"--json"});
+  Args a(argc, argv, With(kGroupingOptions, {"--views", "--camera-distance", "--pca", "--pca-levels"}), {"--json"});
   ConeGroupingParams params = ReadGroupingParams(a);
   CullingCostParams cp;
   cp.views = a.integer("--views", cp.views);
   cp.cameraDistance = a.num("--camera-distance", cp.cameraDistance);
+  const bool pca = a.has("--pca");
+  const int pcaClusters = a.integer("--pca", 0), pcaLevels = a.integer("--pca-levels", 1);
   if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kCullCostUsage);
   if (a.positional().size() != 1) return Fail(kUsage, std::string("expected one input mesh\n") + kCullCostUsage);
+  if (pca) {
+    for (const auto& o : kGroupingOptions)
+      if (a.has(o)) return Fail(kUsage, o + " is a normal-cone grouping option: it does not go with --pca");
+    if (pcaClusters < 1) return Fail(kUsage, "--pca needs a cluster count >= 1");
+    if (pcaLevels < 1 || pcaLevels > 16) return Fail(kUsage, "--pca-levels must be between 1 and 16");
+  } else if (a.has("--pca-levels")) {
+    return Fail(kUsage, "--pca-levels goes with --pca");
+  }
 
   CMesh mesh;
   IndexedMesh im;
@@ -137,7 +152,22 @@ int CmdCullCost(int argc, char** argv) {
 
   GroupHierarchy h;
   Timer timer;
-  Status s = BuildConeHierarchy(im, params, h);
+  Status s;
+  std::vector<int> pcaCounts;
+  if (pca) {
+    // The PCA tree, best-first to K clusters; the levels are nested cuts of it.
+    PcaPartitionParams pp;
+    pp.targetClusters = pcaClusters;
+    PcaTree tree;
+    s = BuildPcaTree(im, pp, tree);
+    if (s.ok()) {
+      for (int l = 0, k = pcaClusters; l < pcaLevels && k >= 1; ++l, k /= 4)
+        if (pcaCounts.empty() || k < pcaCounts.back()) pcaCounts.push_back(k);
+      s = PcaGroupHierarchy(im, tree, pcaCounts, h);
+    }
+  } else {
+    s = BuildConeHierarchy(im, params, h);
+  }
   const double groupSeconds = timer.seconds();
   if (!s.ok()) return Fail(kBadInput, a.positional()[0] + ": " + s.message);
   CullingCostResult r;
@@ -161,12 +191,19 @@ int CmdCullCost(int argc, char** argv) {
         .field("level1_groups", h.level(1).groups.size())
         .field("top_groups", h.level(h.levelCount()).groups.size())
         .field("grouping_seconds", groupSeconds).field("cost_seconds", costTimer.seconds());
-    WriteParams(j, params);
+    if (pca) {
+      j.field("grouping", "pca").field("pca_clusters", int(h.level(1).groups.size()));
+      j.key("params").beginObject().field("pca", pcaClusters).field("pca_levels", pcaLevels).endObject();
+    } else {
+      j.field("grouping", "normal_cone");
+      WriteParams(j, params);
+    }
     j.endObject();
     std::printf("%s\n", j.str().c_str());
   } else {
-    std::printf("%s: %zu faces, %d levels (%zu groups at level 1, %zu at the top), %d %s views\n",
-                a.positional()[0].c_str(), im.faceCount(), h.levelCount(), h.level(1).groups.size(),
+    std::printf("%s: %zu faces, %d levels of %s (%zu groups at level 1, %zu at the top), %d %s views\n",
+                a.positional()[0].c_str(), im.faceCount(), h.levelCount(),
+                pca ? "PCA clusters" : "normal-cone groups", h.level(1).groups.size(),
                 h.level(h.levelCount()).groups.size(), r.views, r.perspective ? "perspective" : "orthographic");
     std::printf("culling cost (tests / faces; per-face culling = 1):\n");
     std::printf("  %-12s mean %.4f  min %.4f  max %.4f\n", "two-state", r.twoState.mean, r.twoState.min, r.twoState.max);

@@ -18,6 +18,10 @@ int CmdBudget(int argc, char** argv);
 extern const char* kFeatureSimplifyUsage;
 extern const char* kFeatureEdgesUsage;
 extern const char* kBudgetUsage;
+int CmdPartition(int argc, char** argv);
+int CmdProgressive(int argc, char** argv);
+extern const char* kPartitionUsage;
+extern const char* kProgressiveUsage;
 
 }  // namespace cli
 }  // namespace conelod

@@ -21,6 +21,8 @@ const Command kCommands[] = {
     {"feature-simplify", conelod::cli::CmdFeatureSimplify, &conelod::cli::kFeatureSimplifyUsage},
     {"feature-edges", conelod::cli::CmdFeatureEdges, &conelod::cli::kFeatureEdgesUsage},
     {"budget", conelod::cli::CmdBudget, &conelod::cli::kBudgetUsage},
+    {"partition", conelod::cli::CmdPartition, &conelod::cli::kPartitionUsage},
+    {"progressive", conelod::cli::CmdProgressive, &conelod::cli::kProgressiveUsage},
 };
 
 void PrintUsage(FILE* out) {

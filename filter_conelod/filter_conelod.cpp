@@ -14,7 +14,15 @@
 #include "conelod/mesh_check.h"
 #include "conelod/pixel_budget.h"
 #include "conelod/simplify_bridge.h"
+#include "conelod/manifold_check.h"
+#include "conelod/mesh_check.h"
+#include "conelod/pca_partition.h"
+#include "conelod/progressive_cluster_mesh.h"
+#include "conelod/sampled_distance.h"
 #include "conelod/vcg_bridge.h"
+
+#include <vcg/complex/algorithms/update/bounding.h>
+#include <vcg/complex/algorithms/update/normal.h>
 
 using namespace conelod;
 
@@ -32,6 +40,9 @@ const char* const kPaperMizuno =
 
 const char* const kBudgetSimplifiers[] = {"None (log the budget only)", "Feature-Preserving Edge Simplification",
                                           "Quadric Edge Collapse Decimation (MeshLab's, default parameters)"};
+const char* const kPaperTsuji =
+    "T. Tsuji, H. Zha, R. Kurazume, T. Hasegawa, <i>Face clusters partitioning for hierarchical data "
+    "structure and high speed rendering</i> (Kyushu University).";
 
 // The grouping parameters shared by the grouping and the culling-cost filters.
 void AddGroupingParameters(RichParameterList& par) {
@@ -92,7 +103,7 @@ const char* StopName(GroupQemStats::Stop s) {
 }  // namespace
 
 FilterConeLodPlugin::FilterConeLodPlugin() {
-  typeList << FP_CONE_GROUPING << FP_CULLING_COST << FP_GROUP_QEM << FP_GROUP_INTEGRITY << FP_FEATURE_SIMPLIFY << FP_PIXEL_BUDGET;
+  typeList << FP_CONE_GROUPING << FP_CULLING_COST << FP_GROUP_QEM << FP_GROUP_INTEGRITY << FP_FEATURE_SIMPLIFY << FP_PIXEL_BUDGET << FP_PCA_PARTITION << FP_PROGRESSIVE_MESH;
   for (FilterIDType tt : types()) actionList << new QAction(filterName(tt), this);
 }
 
@@ -106,6 +117,8 @@ QString FilterConeLodPlugin::filterName(FilterIDType filter) const {
     case FP_GROUP_INTEGRITY: return "Cone LOD: Group Integrity";
     case FP_FEATURE_SIMPLIFY: return "Cone LOD: Feature-Preserving Edge Simplification";
     case FP_PIXEL_BUDGET: return "Cone LOD: Face Budget from Screen Pixels";
+    case FP_PCA_PARTITION: return "Cone LOD: PCA Recursive Face Partition";
+    case FP_PROGRESSIVE_MESH: return "Cone LOD: Progressive Cluster Mesh";
   }
   return "";
 }
@@ -182,6 +195,30 @@ QString FilterConeLodPlugin::filterInfo(FilterIDType filter) const {
                  "feature-preserving simplifier or with MeshLab's Quadric Edge Collapse Decimation (its "
                  "default parameters). Says so when the budget is above the current face count.<br>") +
              kPaperMizuno;
+    case FP_PCA_PARTITION:
+      return QString(
+                 "Splits the mesh recursively into edge-connected face clusters: each cluster is cut by the "
+                 "plane through its area centroid perpendicular to its principal axis, found by a "
+                 "<i>face-based</i> PCA (the covariance of the surface, exact per triangle, so that uneven "
+                 "vertex density does not bias it); the two halves grow from the faces farthest along the "
+                 "axis, and faces reached by neither join the half they touch, so both halves stay "
+                 "connected. The cluster of largest error (the smallest eigenvalue, the variance across the "
+                 "cluster) is split first, until <i>TargetClusters</i> clusters or another stop criterion. "
+                 "Several connected components are the first split.<br>"
+                 "Writes per-face quality = cluster id, a distinct colour per cluster and the per-face "
+                 "attribute <tt>conelod_pca_cluster</tt>; the log gives the cluster figures.<br>") +
+             kPaperTsuji;
+    case FP_PROGRESSIVE_MESH:
+      return QString(
+                 "Builds the PCA partition tree down to single triangles, then undoes its splits in order of "
+                 "increasing error down to <i>TargetClusters</i> clusters; after each merge every vertex that "
+                 "touches fewer than 3 clusters (the mesh border counting as one) is removed by a half-edge "
+                 "collapse onto its nearest neighbour along the cluster boundary. The result, a coarse mesh "
+                 "whose vertices are the cluster corners, is added as a new layer with per-face quality = "
+                 "cluster id and a colour per cluster. Collapses never break the 2-manifold, flip or turn a "
+                 "face by more than <i>MaxNormalTurnDeg</i>, or remove a cluster; non-manifold parts of the "
+                 "input are left as they are. The current mesh is not changed.<br>") +
+             kPaperTsuji;
   }
   return "";
 }
@@ -194,12 +231,15 @@ MeshFilterInterface::FilterClass FilterConeLodPlugin::getClass(QAction* a) {
     case FP_GROUP_INTEGRITY: return MeshFilterInterface::Measure;
     case FP_FEATURE_SIMPLIFY: return MeshFilterInterface::Remeshing;
     case FP_PIXEL_BUDGET: return MeshFilterInterface::Remeshing;
+    case FP_PCA_PARTITION: return MeshFilterInterface::FaceColoring;
+    case FP_PROGRESSIVE_MESH: return MeshFilterInterface::Remeshing;
   }
   return MeshFilterInterface::Measure;
 }
 
 int FilterConeLodPlugin::getRequirements(QAction* a) {
-  return ID(a) == FP_CONE_GROUPING ? (MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR) : MeshModel::MM_NONE;
+  return (ID(a) == FP_CONE_GROUPING || ID(a) == FP_PCA_PARTITION) ? (MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR)
+                                                                   : MeshModel::MM_NONE;
 }
 
 int FilterConeLodPlugin::postCondition(QAction* a) const {
@@ -212,6 +252,8 @@ int FilterConeLodPlugin::postCondition(QAction* a) const {
     case FP_PIXEL_BUDGET: return MeshModel::MM_GEOMETRY_AND_TOPOLOGY_CHANGE;
   }
   return MeshModel::MM_NONE;
+  return (ID(a) == FP_CONE_GROUPING || ID(a) == FP_PCA_PARTITION) ? (MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR)
+                                                                   : MeshModel::MM_NONE;
 }
 
 void FilterConeLodPlugin::initParameterSet(QAction* a, MeshModel& m, RichParameterList& par) {
@@ -318,6 +360,31 @@ void FilterConeLodPlugin::initParameterSet(QAction* a, MeshModel& m, RichParamet
                             "Simplify to the budget with",
                             "None: only log the pixels and the budget. Otherwise the mesh is simplified to the budget "
                             "(when it has more faces)."));
+    case FP_PCA_PARTITION: {
+      const PcaPartitionParams d;
+      par.addParam(RichInt("TargetClusters", 64, "Target clusters",
+                           "Split until there are this many clusters, largest error first (0: no limit, down "
+                           "to single triangles). A mesh with several components has at least one cluster "
+                           "per component."));
+      par.addParam(RichAbsPerc("MaxError", 0.0f, 0.0f, m.cm.bbox.Diag() * 0.1f, "Max error",
+                               "Clusters whose RMS distance to their best-fit plane (the square root of the "
+                               "smallest eigenvalue of their face-based covariance) is at most this length "
+                               "are not split. 0: no limit."));
+      par.addParam(RichInt("MinFaces", d.minFaces, "Min faces",
+                           "Clusters of this many faces or fewer are not split (1: down to triangles)."));
+      par.addParam(RichInt("MaxDepth", d.maxDepth, "Max depth",
+                           "Clusters at this depth of the binary tree are not split (the whole mesh is depth "
+                           "0). 0: no limit."));
+      break;
+    }
+    case FP_PROGRESSIVE_MESH: {
+      const ProgressiveMeshParams d;
+      par.addParam(RichInt("TargetClusters", d.targetClusters, "Target clusters",
+                           "Merge the finest clusters back down to this many clusters (never fewer than the "
+                           "connected components)."));
+      par.addParam(RichFloat("MaxNormalTurnDeg", float(d.maxNormalTurnDeg), "Max normal turn (deg)",
+                             "A collapse may not turn the normal of any face by this angle or more (in (0, "
+                             "180) degrees): no face ever flips."));
       break;
     }
   }
@@ -353,6 +420,8 @@ bool FilterConeLodPlugin::applyFilter(QAction* a, MeshDocument& md, const RichPa
       case FP_GROUP_INTEGRITY: return applyGroupIntegrity(md, par);
       case FP_FEATURE_SIMPLIFY: return applyFeatureSimplify(*mm, par, cb);
       case FP_PIXEL_BUDGET: return applyPixelBudget(*mm, par, cb);
+      case FP_PCA_PARTITION: return applyPcaPartition(*mm, par, cb);
+      case FP_PROGRESSIVE_MESH: return applyProgressiveMesh(md, *mm, par, cb);
     }
     return fail("unknown filter");
   } catch (const std::bad_alloc&) {
@@ -626,6 +695,96 @@ bool FilterConeLodPlugin::applyPixelBudget(MeshModel& mm, const RichParameterLis
     conelod_plugin::RunBuiltinQuadric(mm, target, cb);
   }
   Log("Simplified to the budget with %s: faces_out %d", kBudgetSimplifiers[simplifier], mm.cm.fn);
+bool FilterConeLodPlugin::applyPcaPartition(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb) {
+  PcaPartitionParams params;
+  params.targetClusters = par.getInt("TargetClusters");
+  params.maxErrorRms = par.getAbsPerc("MaxError");
+  params.minFaces = par.getInt("MinFaces");
+  params.maxDepth = par.getInt("MaxDepth");
+
+  std::vector<size_t> faceOf;
+  const IndexedMesh im = ToIndexedMesh(mm.cm, &faceOf);
+  PcaTree tree;
+  QElapsedTimer timer;
+  timer.start();
+  const Status s = BuildPcaTree(im, params, tree, FromCallback(cb));
+  if (!s.ok()) return fail(QString::fromStdString(s.message) + " (the mesh was not changed)");
+  const double seconds = timer.elapsed() / 1000.0;
+  const std::vector<PcaItem> cut = CutByCount(tree, params.targetClusters > 0 ? params.targetClusters : tree.faceCount);
+  std::vector<int> faceCluster;
+  FaceClustersOfCut(tree, cut, faceCluster);
+  const bool connected = GroupsAreEdgeConnected(BuildFaceAdjacency(im), faceCluster);
+
+  mm.updateDataMask(MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR);
+  WriteFaceClusters(mm.cm, faceOf, faceCluster, "conelod_pca_cluster");
+
+  uint32_t smallest = UINT32_MAX, largest = 0;
+  double maxError = 0, meanError = 0;
+  for (PcaItem item : cut) {
+    const uint32_t n = tree.itemFaceCount(item);
+    smallest = std::min(smallest, n);
+    largest = std::max(largest, n);
+    if (IsFaceItem(item)) continue;
+    const PcaNode& node = tree.nodes[size_t(item)];
+    const double e = std::sqrt(double(node.eigenvalues[0]));
+    maxError = std::max(maxError, e);
+    meanError += e * node.area;
+  }
+  meanError = tree.nodes[0].area > 0 ? meanError / tree.nodes[0].area : 0;
+  Log("PCA recursive face partition: %d faces, %d component(s), tree of %d nodes (depth %d) in %.3f s",
+      int(im.faceCount()), tree.componentCount, int(tree.nodes.size()), tree.maxDepth, seconds);
+  Log("pca_clusters %d", int(cut.size()));
+  Log("faces_per_cluster min %u  mean %.1f  max %u", smallest, double(im.faceCount()) / cut.size(), largest);
+  Log("error_rms max %.6g  area_weighted_mean %.6g  (RMS distance of a cluster to its plane)", maxError, meanError);
+  Log("all_connected %d", connected ? 1 : 0);
+  return true;
+}
+
+bool FilterConeLodPlugin::applyProgressiveMesh(MeshDocument& md, MeshModel& mm, const RichParameterList& par,
+                                               vcg::CallBackPos* cb) {
+  ProgressiveMeshParams params;
+  params.targetClusters = par.getInt("TargetClusters");
+  params.maxNormalTurnDeg = par.getFloat("MaxNormalTurnDeg");
+  const Status valid = ValidateParams(params);
+  if (!valid.ok()) return fail(QString::fromStdString(valid.message) + " (the mesh was not changed)");
+
+  const IndexedMesh im = ToIndexedMesh(mm.cm);
+  QElapsedTimer timer;
+  timer.start();
+  PcaTree tree;
+  Status s = BuildPcaTree(im, PcaPartitionParams(), tree, SubProgress(FromCallback(cb), 0, 40));
+  if (!s.ok()) return fail(QString::fromStdString(s.message) + " (the mesh was not changed)");
+  ProgressiveMeshResult r;
+  s = BuildProgressiveClusterMesh(im, tree, params, r, SubProgress(FromCallback(cb), 40, 90));
+  if (!s.ok()) return fail(QString::fromStdString(s.message) + " (the mesh was not changed)");
+  const double seconds = timer.elapsed() / 1000.0;
+  HausdorffResult h;
+  s = SampledHausdorff(im, r.mesh, 100000, h);
+  const ManifoldReport check = CheckManifold(r.mesh);
+
+  MeshModel* out = md.addNewMesh("", QString("%1 (%2 clusters)").arg(mm.label()).arg(r.clusters), true);
+  if (!out) return fail("could not add a layer (the mesh was not changed)");
+  out->updateDataMask(MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR);
+  AppendIndexedMesh(out->cm, r.mesh);
+  for (size_t f = 0; f < out->cm.face.size(); ++f) {
+    out->cm.face[f].Q() = CMeshO::FaceType::QualityType(r.faceCluster[f]);
+    out->cm.face[f].C() = GroupColor(r.faceCluster[f]);
+  }
+  vcg::tri::UpdateBounding<CMeshO>::Box(out->cm);
+  vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFaceNormalized(out->cm);
+  if (cb) cb(100, "progressive mesh: done");
+
+  Log("Progressive cluster mesh: %d faces -> %d faces, %d vertices at %d clusters in %.3f s (new layer)",
+      int(im.faceCount()), int(r.mesh.faceCount()), int(r.mesh.vertexCount()), r.clusters, seconds);
+  Log("progressive_faces %d", int(r.mesh.faceCount()));
+  Log("progressive_vertices %d", int(r.mesh.vertexCount()));
+  Log("collapses %d  blocked_vertices %d  locked_vertices %d", int(r.collapses), int(r.blockedVertices),
+      int(r.lockedVertices));
+  Log("non_manifold_edges %d  non_manifold_vertices %d  misoriented_edges %d", int(check.nonManifoldEdges),
+      int(check.nonManifoldVertices), int(check.misorientedEdges));
+  if (s.ok())
+    Log("hausdorff %.6g  hausdorff_percent %.4f  (sampled, %% of the bounding-box diagonal)", h.hausdorff,
+        h.diagonal > 0 ? 100 * h.hausdorff / h.diagonal : 0.0);
   return true;
 }
 

@@ -21,6 +21,8 @@ class FilterConeLodPlugin : public QObject, public MeshFilterInterface {
     FP_GROUP_INTEGRITY,
     FP_FEATURE_SIMPLIFY,
     FP_PIXEL_BUDGET,
+    FP_PCA_PARTITION,
+    FP_PROGRESSIVE_MESH,
   };
 
   FilterConeLodPlugin();
@@ -42,5 +44,7 @@ class FilterConeLodPlugin : public QObject, public MeshFilterInterface {
   bool applyGroupIntegrity(MeshDocument& md, const RichParameterList& par);
   bool applyFeatureSimplify(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb);
   bool applyPixelBudget(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb);
+  bool applyPcaPartition(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb);
+  bool applyProgressiveMesh(MeshDocument& md, MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb);
   bool fail(const QString& message);  // logs and sets errorMessage; returns false
 };

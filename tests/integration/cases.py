@@ -649,6 +649,129 @@ def cli_budget(c):
     c.conelod("budget", bunny, "--width", "0", expect=1)
     p = c.conelod("budget", c.mesh("no_faces.ply"), expect=2)
     assert "has no faces" in p.stderr.decode()
+# --- PCA partition and progressive cluster mesh (SPEC §2) ----------------------------------
+
+@case
+def meshlab_lists_pca_filters(c):
+    dump = c.out("dump.txt")
+    subprocess.run(["xvfb-run", "-a", c.server, "-d", dump], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                   timeout=300, cwd=c.tmp, check=True)
+    text = open(dump, errors="replace").read()
+    for name in ["Cone LOD: PCA Recursive Face Partition", "Cone LOD: Progressive Cluster Mesh"]:
+        assert name in text, name + " not listed by meshlabserver -d"
+
+
+@case
+def meshlab_pca_partition_bunny(c):
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    out = c.out("ml_pca.ply")
+    _, log = c.meshlab([bunny], c.mlx("pca_recursive_face_partition.mlx"), out)
+    ply = read_ply(out)
+    assert len(ply["faces"]) == 69451 and len(ply["quality"]) == 69451, len(ply["quality"])
+    assert len(set(ply["quality"])) == 64, len(set(ply["quality"]))
+    assert last_float(log, "pca_clusters") == 64 and last_float(log, "all_connected") == 1, log[-1500:]
+    # The same core through the CLI: the same clusters, face by face.
+    cli_out = c.out("cli_pca.ply")
+    info = json.loads(c.conelod("partition", bunny, "--clusters", "64", "-o", cli_out, "--json").stdout)
+    assert info["clusters"] == 64 and info["all_connected"], info
+    assert ply["quality"] == read_ply(cli_out)["quality"], "MeshLab and the CLI disagree on the clusters"
+
+
+@case
+def meshlab_progressive_bunny(c):
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    out = c.out("ml_progressive.ply")
+    _, log = c.meshlab([bunny], c.mlx("progressive_cluster_mesh.mlx"), out)
+    ply = read_ply(out)  # meshlabserver saves the new (current) layer
+    assert len(ply["faces"]) == last_float(log, "progressive_faces"), (len(ply["faces"]), log[-1500:])
+    assert ply["vertices"] == last_float(log, "progressive_vertices")
+    assert last_float(log, "misoriented_edges") == 0 and last_float(log, "non_manifold_edges") == 0, log[-1500:]
+    assert last_float(log, "hausdorff_percent") < 2.5, log[-1500:]
+    cli = json.loads(c.conelod("progressive", bunny, "--clusters", "1000", "-o", c.out("cli_prog.ply"),
+                               "--samples", "0", "--json").stdout)
+    assert cli["faces"] == len(ply["faces"]) and cli["clusters"] == 1000, cli
+    assert len(set(ply["quality"])) == 1000
+
+
+@case
+def cli_partition_every_cut_connected(c):
+    """Every node of the full tree is edge-connected and the ranges tile the faces: so every cut
+    partitions the faces into edge-connected clusters (bunny, dragon, boeing with 122 components)."""
+    for mesh, faces, components in [("stanford_bunny_bun_zipper.ply", 69451, 1),
+                                    ("stanford_dragon_vrip_binary.ply", 871414, 151),
+                                    ("boeing.ply", 2564, 122)]:
+        r = json.loads(c.conelod("partition", c.mesh(mesh), "--full", "--verify", "--clusters", "500",
+                                 "--json").stdout)
+        assert r["tree_valid"] and r["all_connected"], (mesh, r)
+        assert r["faces"] == faces and r["components"] == components, (mesh, r)
+        assert r["clusters"] == max(500, components), (mesh, r)
+
+
+@case
+def cli_progressive_bunny(c):
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    previous = 0
+    for k in [100, 1000, 10000]:
+        out = c.out("prog_%d.ply" % k)
+        r = json.loads(c.conelod("progressive", bunny, "--clusters", str(k), "-o", out, "--json").stdout)
+        for key in ["clusters", "faces", "vertices", "seconds"]:
+            assert key in r, key
+        assert r["clusters"] == k and r["manifold"] and r["input_manifold"], r
+        assert r["misoriented_edges"] == 0 and r["degenerate_faces"] == 0, r
+        assert r["faces"] > previous and r["hausdorff_percent"] < 6.0, r
+        previous = r["faces"]
+        ply = read_ply(out)
+        assert len(ply["faces"]) == r["faces"] and len(set(ply["quality"])) == k
+
+
+@case
+def cli_cull_cost_pca(c):
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    r = json.loads(c.conelod("cull-cost", bunny, "--pca", "500", "--views", "200", "--json").stdout)
+    assert r["grouping"] == "pca" and r["pca_clusters"] == 500 and r["levels"] == 1, r
+    assert r["rejected_fraction"] <= r["ideal_fraction"] and r["three_state_cost"] < r["two_state_cost"] < 1, r
+    r2 = json.loads(c.conelod("cull-cost", bunny, "--pca", "1024", "--pca-levels", "3", "--views", "200",
+                              "--json").stdout)
+    assert r2["levels"] == 3 and r2["level1_groups"] == 1024 and r2["top_groups"] == 64, r2
+    c.conelod("cull-cost", bunny, "--pca", "100", "--threshold", "10", expect=1)
+    c.conelod("cull-cost", bunny, "--pca", "0", expect=1)
+
+
+@case
+def cli_pca_bad_inputs(c):
+    for mesh, message in [("no_faces.ply", "has no faces"), ("nan_vertex.ply", "NaN or infinite")]:
+        p = c.conelod("partition", c.mesh(mesh), expect=2)
+        assert message in p.stderr.decode(), p.stderr.decode()
+        p = c.conelod("progressive", c.mesh(mesh), "--clusters", "10", "-o", c.out("x.ply"), expect=2)
+        assert message in p.stderr.decode(), p.stderr.decode()
+    for mesh in ["zero_area_faces.ply", "stanford_bunny_bun_zipper_res4.ply", "boeing.ply"]:
+        r = json.loads(c.conelod("partition", c.mesh(mesh), "--full", "--verify", "--json").stdout)
+        assert r["tree_valid"] and r["all_connected"], (mesh, r)
+        r = json.loads(c.conelod("progressive", c.mesh(mesh), "--clusters", "8", "-o", c.out("x.ply"),
+                                 "--json").stdout)
+        assert r["faces"] > 0 and r["non_manifold_edges"] <= 70, (mesh, r)
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    c.conelod("partition", bunny, "--min-faces", "0", expect=1)
+    c.conelod("partition", bunny, "--full", "--min-faces", "5", expect=1)
+    c.conelod("progressive", bunny, "--clusters", "10", expect=1)  # no -o
+    c.conelod("progressive", bunny, "--clusters", "10", "--max-normal-turn", "200", "-o", c.out("x.ply"), expect=1)
+
+
+@case
+def meshlab_pca_bad_inputs(c):
+    for mesh, message in [("no_faces.ply", "has no faces"), ("nan_vertex.ply", "NaN or infinite")]:
+        for script in ["pca_recursive_face_partition.mlx", "progressive_cluster_mesh.mlx"]:
+            rc, log = c.meshlab([c.mesh(mesh)], c.mlx(script), c.out("bad.ply"), expect_ok=False)
+            assert rc == 255, "%s/%s: expected a failed filter (255), got %d\n%s" % (mesh, script, rc, log[-1500:])
+            assert "ConeLOD error" in log and message in log, "%s/%s: no clear message:\n%s" % (mesh, script, log[-1500:])
+    for mesh, faces in [("zero_area_faces.ply", 4), ("stanford_bunny_bun_zipper_res4.ply", 948), ("boeing.ply", 2564)]:
+        out = c.out("ok.ply")
+        _, log = c.meshlab([c.mesh(mesh)], c.mlx("pca_recursive_face_partition.mlx"), out)
+        ply = read_ply(out)
+        assert len(ply["faces"]) == faces and len(ply["quality"]) == faces, mesh
+        assert last_float(log, "all_connected") == 1, log[-1500:]
+        _, log = c.meshlab([c.mesh(mesh)], c.mlx("progressive_cluster_mesh.mlx"), c.out("ok2.ply"))
+        assert last_float(log, "progressive_faces") > 0, log[-1500:]
 
 
 def main():

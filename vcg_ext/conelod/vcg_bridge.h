@@ -109,6 +109,37 @@ void ApplySimplifiedMesh(MeshType& m, const std::vector<size_t>& faceOfIndex, co
   for (size_t i = 0; i < m.vert.size(); ++i)
     if (!m.vert[i].IsD() && !keepVertex[i]) vcg::tri::Allocator<MeshType>::DeleteVertex(m, m.vert[i]);
   vcg::tri::Allocator<MeshType>::CompactEveryVector(m);
+// Per-face int attribute `attributeName` = cluster id (-1 for faces not in the indexed mesh), per-face
+// quality = cluster id and a distinct colour per cluster. Only call on success.
+template <class MeshType>
+void WriteFaceClusters(MeshType& m, const std::vector<size_t>& faceOfIndex, const std::vector<int>& faceCluster,
+                       const std::string& attributeName) {
+  vcg::tri::RequirePerFaceQuality(m);
+  vcg::tri::RequirePerFaceColor(m);
+  auto attr = vcg::tri::Allocator<MeshType>::template GetPerFaceAttribute<int>(m, attributeName);
+  for (auto& f : m.face) attr[f] = -1;
+  for (size_t i = 0; i < faceOfIndex.size(); ++i) {
+    auto& f = m.face[faceOfIndex[i]];
+    attr[f] = faceCluster[i];
+    f.Q() = typename MeshType::FaceType::QualityType(faceCluster[i]);
+    f.C() = GroupColor(faceCluster[i]);
+  }
+}
+
+// Appends the indexed mesh to `m` (an empty mesh normally): vertices, then faces in order.
+template <class MeshType>
+void AppendIndexedMesh(MeshType& m, const IndexedMesh& in) {
+  const size_t firstVertex = m.vert.size();
+  auto vi = vcg::tri::Allocator<MeshType>::AddVertices(m, in.positions.size());
+  for (const auto& p : in.positions) {
+    vi->P() = typename MeshType::CoordType(p[0], p[1], p[2]);
+    ++vi;
+  }
+  auto fi = vcg::tri::Allocator<MeshType>::AddFaces(m, in.faces.size());
+  for (const auto& t : in.faces) {
+    for (int k = 0; k < 3; ++k) fi->V(k) = &m.vert[firstVertex + t[size_t(k)]];
+    ++fi;
+  }
 }
 
 }  // namespace conelod
