@@ -109,6 +109,8 @@ void ApplySimplifiedMesh(MeshType& m, const std::vector<size_t>& faceOfIndex, co
   for (size_t i = 0; i < m.vert.size(); ++i)
     if (!m.vert[i].IsD() && !keepVertex[i]) vcg::tri::Allocator<MeshType>::DeleteVertex(m, m.vert[i]);
   vcg::tri::Allocator<MeshType>::CompactEveryVector(m);
+}
+
 // Per-face int attribute `attributeName` = cluster id (-1 for faces not in the indexed mesh), per-face
 // quality = cluster id and a distinct colour per cluster. Only call on success.
 template <class MeshType>
