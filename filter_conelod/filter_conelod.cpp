@@ -306,6 +306,8 @@ void FilterConeLodPlugin::initParameterSet(QAction* a, MeshModel& m, RichParamet
                              "Weight of the quadrics that keep mesh borders (and group contours) in place."));
       par.addParam(RichBool("PreserveNormal", d.preserveNormal, "Preserve Normal",
                             "Refuse collapses that turn a face's normal by more than about 78 degrees (fold-overs)."));
+      break;
+    }
     case FP_FEATURE_SIMPLIFY: {
       const FeatureSimplifyParams d;
       const float diag = m.cm.bbox.IsNull() ? 0.0f : m.cm.bbox.Diag();
@@ -360,6 +362,8 @@ void FilterConeLodPlugin::initParameterSet(QAction* a, MeshModel& m, RichParamet
                             "Simplify to the budget with",
                             "None: only log the pixels and the budget. Otherwise the mesh is simplified to the budget "
                             "(when it has more faces)."));
+      break;
+    }
     case FP_PCA_PARTITION: {
       const PcaPartitionParams d;
       par.addParam(RichInt("TargetClusters", 64, "Target clusters",
@@ -605,6 +609,9 @@ bool FilterConeLodPlugin::applyGroupIntegrity(MeshDocument& md, const RichParame
   };
   if (!gi.splitIds.empty()) Log("split groups (first ones): %s", qUtf8Printable(list(gi.splitIds)));
   if (!gi.vanishedIds.empty()) Log("vanished groups (first ones): %s", qUtf8Printable(list(gi.vanishedIds)));
+  return true;
+}
+
 bool FilterConeLodPlugin::applyFeatureSimplify(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb) {
   FeatureSimplifyParams params;
   params.featureAngleDeg = par.getFloat("FeatureAngleDeg");
@@ -695,6 +702,9 @@ bool FilterConeLodPlugin::applyPixelBudget(MeshModel& mm, const RichParameterLis
     conelod_plugin::RunBuiltinQuadric(mm, target, cb);
   }
   Log("Simplified to the budget with %s: faces_out %d", kBudgetSimplifiers[simplifier], mm.cm.fn);
+  return true;
+}
+
 bool FilterConeLodPlugin::applyPcaPartition(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb) {
   PcaPartitionParams params;
   params.targetClusters = par.getInt("TargetClusters");
