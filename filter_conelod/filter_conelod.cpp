@@ -587,7 +587,6 @@ bool FilterConeLodPlugin::applyGroupIntegrity(MeshDocument& md, const RichParame
   for (MeshModel* m : {ref, cur})
     if (!m->hasDataMask(MeshModel::MM_FACEQUALITY))
       return fail(QString("layer '%1' has no per-face quality to read group ids from").arg(m->label()));
-  std::vector<size_t> refFaces, curFaces;
   const IndexedMesh refMesh = ToIndexedMesh(ref->cm), curMesh = ToIndexedMesh(cur->cm);
   const std::vector<float> qr = FaceQualities(ref->cm), qc = FaceQualities(cur->cm);
   std::vector<std::vector<int>> ids;
