@@ -9,11 +9,13 @@ int CmdCullCost(int argc, char** argv);
 int CmdInfo(int argc, char** argv);
 int CmdPartition(int argc, char** argv);
 int CmdProgressive(int argc, char** argv);
+int CmdClusterShape(int argc, char** argv);
 extern const char* kGroupUsage;
 extern const char* kCullCostUsage;
 extern const char* kInfoUsage;
 extern const char* kPartitionUsage;
 extern const char* kProgressiveUsage;
+extern const char* kClusterShapeUsage;
 
 }  // namespace cli
 }  // namespace conelod

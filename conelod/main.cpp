@@ -19,6 +19,7 @@ const Command kCommands[] = {
     {"info", conelod::cli::CmdInfo, &conelod::cli::kInfoUsage},
     {"partition", conelod::cli::CmdPartition, &conelod::cli::kPartitionUsage},
     {"progressive", conelod::cli::CmdProgressive, &conelod::cli::kProgressiveUsage},
+    {"cluster-shape", conelod::cli::CmdClusterShape, &conelod::cli::kClusterShapeUsage},
 };
 
 void PrintUsage(FILE* out) {
