@@ -6,6 +6,7 @@
 
 #include "cli_common.h"
 #include "commands.h"
+#include "conelod/cluster_shape.h"
 #include "conelod/manifold_check.h"
 #include "conelod/pca_partition.h"
 #include "conelod/progressive_cluster_mesh.h"
@@ -37,6 +38,12 @@ const char* kProgressiveUsage =
     "  its sampled Hausdorff distance to the input.\n"
     "  --max-normal-turn DEG  a collapse may turn a face's normal by less than this [90]\n"
     "  --samples N            face samples per direction for the distance [200000]; 0: skip it\n";
+
+const char* kClusterShapeUsage =
+    "conelod cluster-shape IN.ply [--json]\n"
+    "  Shape of the clusters given by the per-face quality of IN.ply (as `partition -o` or `group -o`\n"
+    "  write it): boundary length against the sqrt(pi A K) that K round clusters would need (1 =\n"
+    "  round, larger = ragged), area-weighted compactness 4 pi area / perimeter^2, edge-connectivity.\n";
 
 namespace {
 
@@ -210,6 +217,40 @@ int CmdProgressive(int argc, char** argv) {
                   "faces against the surface %zu\n",
                   h.hausdorff, pct, h.ab.mean, h.ba.mean, against);
     std::printf("wrote %s\n", a.str("-o").c_str());
+  }
+  return kOk;
+}
+
+int CmdClusterShape(int argc, char** argv) {
+  Args a(argc, argv, {}, {"--json"});
+  if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kClusterShapeUsage);
+  if (a.positional().size() != 1) return Fail(kUsage, std::string("expected one input mesh\n") + kClusterShapeUsage);
+  CMesh mesh;
+  int mask = 0;
+  std::string err = LoadPly(mesh, a.positional()[0], &mask);
+  if (!err.empty()) return Fail(kIoError, err);
+  if (!(mask & vcg::tri::io::Mask::IOM_FACEQUALITY))
+    return Fail(kBadInput, a.positional()[0] + ": no per-face quality to read the clusters from");
+  std::vector<size_t> faceOf;
+  const IndexedMesh im = ToIndexedMesh(mesh, &faceOf);
+  std::vector<int> faceCluster(im.faceCount());
+  for (size_t i = 0; i < faceOf.size(); ++i) {
+    const float q = mesh.face[faceOf[i]].Q();
+    faceCluster[i] = std::isfinite(q) && q >= 0 ? int(std::lround(q)) : -1;
+  }
+  const ClusterShape shape = MeasureClusterShape(im, faceCluster);
+  const bool connected = GroupsAreEdgeConnected(BuildFaceAdjacency(im), faceCluster);
+  if (a.has("--json")) {
+    Json j;
+    j.beginObject().field("input", a.positional()[0]).field("faces", im.faceCount()).field("clusters", shape.clusters)
+        .field("boundary_length", shape.boundaryLength).field("boundary_ratio", shape.boundaryRatio)
+        .field("mean_compactness", shape.meanCompactness).field("all_connected", connected).endObject();
+    std::printf("%s\n", j.str().c_str());
+  } else {
+    std::printf("%s: %zu faces in %d clusters (all edge-connected: %s)\n", a.positional()[0].c_str(), im.faceCount(),
+                shape.clusters, connected ? "yes" : "NO");
+    std::printf("boundary length %.6g = %.3f x that of round clusters; area-weighted compactness %.3f\n",
+                shape.boundaryLength, shape.boundaryRatio, shape.meanCompactness);
   }
   return kOk;
 }

@@ -8,6 +8,9 @@ int CmdGroup(int argc, char** argv);
 int CmdCullCost(int argc, char** argv);
 int CmdInfo(int argc, char** argv);
 int CmdSimplify(int argc, char** argv);
+int CmdPartition(int argc, char** argv);
+int CmdProgressive(int argc, char** argv);
+int CmdClusterShape(int argc, char** argv);
 extern const char* kGroupUsage;
 extern const char* kCullCostUsage;
 extern const char* kInfoUsage;
@@ -22,6 +25,7 @@ int CmdPartition(int argc, char** argv);
 int CmdProgressive(int argc, char** argv);
 extern const char* kPartitionUsage;
 extern const char* kProgressiveUsage;
+extern const char* kClusterShapeUsage;
 
 }  // namespace cli
 }  // namespace conelod

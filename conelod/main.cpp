@@ -23,6 +23,7 @@ const Command kCommands[] = {
     {"budget", conelod::cli::CmdBudget, &conelod::cli::kBudgetUsage},
     {"partition", conelod::cli::CmdPartition, &conelod::cli::kPartitionUsage},
     {"progressive", conelod::cli::CmdProgressive, &conelod::cli::kProgressiveUsage},
+    {"cluster-shape", conelod::cli::CmdClusterShape, &conelod::cli::kClusterShapeUsage},
 };
 
 void PrintUsage(FILE* out) {

@@ -1,22 +1,25 @@
 #!/usr/bin/env python3
-"""Renders a triangle PLY with its per-face colours (e.g. ConeLOD's group colours) to a PNG:
-orthographic view, flat Lambert shading, z-buffer, optional wireframe. Python 3 standard library
-only (no numpy), for the pictures in docs/.
+"""Renders a triangle mesh PLY to a PNG, headless, with nothing but the Python standard library:
+an orthographic z-buffer with flat shading (a head light), per-face colours when the PLY has them,
+and optionally the triangle edges. Made for the pictures in docs/ (cluster colourings, coarse
+meshes); meshlabserver has no snapshot filter.
 
-  render_ply.py IN.ply OUT.png [--size 480] [--yaw 0] [--pitch 0] [--wire] [--title TEXT]
+  render_ply.py IN.ply OUT.png [--size 480] [--azimuth 0] [--elevation 0] [--edges] [--supersample 2]
+
+The view looks along -Z of the model rotated by azimuth (about Y) then elevation (about X), in
+degrees; the model is framed to fill the image.
 """
 import argparse
 import math
 import struct
-import sys
 import zlib
 
-SIZES = {"char": "b", "uchar": "B", "int8": "b", "uint8": "B", "short": "h", "ushort": "H", "int": "i",
-         "int32": "i", "uint": "I", "uint32": "I", "float": "f", "float32": "f", "double": "d", "float64": "d"}
+TYPES = {"char": "b", "uchar": "B", "int8": "b", "uint8": "B", "short": "h", "ushort": "H", "int16": "h",
+         "uint16": "H", "int": "i", "uint": "I", "int32": "i", "uint32": "I", "float": "f", "float32": "f",
+         "double": "d", "float64": "d"}
 
 
 def read_ply(path):
-    """Vertices [(x,y,z)], faces [[i,j,k]], face colours [(r,g,b)] or None."""
     with open(path, "rb") as f:
         header = []
         while True:
@@ -34,100 +37,113 @@ def read_ply(path):
             elements.append(cur)
         elif w and w[0] == "property":
             cur["props"].append(w[1:])
-    verts, faces, colours = [], [], []
+    verts, faces, colors = [], [], []
     if fmt == "ascii":
-        tok = body.decode().split()
+        tok = body.split()
         pos = 0
 
-        def take():
+        def nxt():
             nonlocal pos
             pos += 1
             return tok[pos - 1]
-        readers = None
+        read_scalar = lambda t: float(nxt())
+        read_count = lambda t: int(nxt())
     else:
         assert fmt == "binary_little_endian", fmt
         pos = 0
+
+        def read_scalar(t):
+            nonlocal pos
+            s = struct.Struct("<" + TYPES[t])
+            v = s.unpack_from(body, pos)[0]
+            pos += s.size
+            return v
+        read_count = read_scalar
     for el in elements:
         for _ in range(el["count"]):
             rec = {}
             for p in el["props"]:
                 if p[0] == "list":
-                    if fmt == "ascii":
-                        n = int(take())
-                        rec[p[-1]] = [int(take()) for _ in range(n)]
-                    else:
-                        cs = struct.calcsize("<" + SIZES[p[1]])
-                        n = struct.unpack_from("<" + SIZES[p[1]], body, pos)[0]
-                        pos += cs
-                        rec[p[-1]] = list(struct.unpack_from("<%d%s" % (n, SIZES[p[2]]), body, pos))
-                        pos += n * struct.calcsize("<" + SIZES[p[2]])
+                    n = int(read_count(p[1]))
+                    rec[p[-1]] = [int(read_scalar(p[2])) for _ in range(n)]
                 else:
-                    if fmt == "ascii":
-                        rec[p[-1]] = float(take())
-                    else:
-                        s = "<" + SIZES[p[0]]
-                        rec[p[-1]] = struct.unpack_from(s, body, pos)[0]
-                        pos += struct.calcsize(s)
+                    rec[p[-1]] = read_scalar(p[0])
             if el["name"] == "vertex":
                 verts.append((rec["x"], rec["y"], rec["z"]))
             elif el["name"] == "face":
                 idx = rec.get("vertex_indices", rec.get("vertex_index"))
                 for k in range(1, len(idx) - 1):
-                    faces.append([idx[0], idx[k], idx[k + 1]])
+                    faces.append((idx[0], idx[k], idx[k + 1]))
                     if "red" in rec:
-                        colours.append((rec["red"], rec["green"], rec["blue"]))
-    return verts, faces, (colours if len(colours) == len(faces) else None)
+                        colors.append((rec["red"], rec["green"], rec["blue"]))
+    return verts, faces, colors if len(colors) == len(faces) else None
 
 
-def write_png(path, width, height, rows):
-    raw = b"".join(b"\x00" + bytes(r) for r in rows)
+def write_png(path, width, height, rgb):
+    raw = b"".join(b"\x00" + bytes(rgb[y * width * 3:(y + 1) * width * 3]) for y in range(height))
 
-    def chunk(tag, data):
-        c = struct.pack(">I", len(data)) + tag + data
-        return c + struct.pack(">I", zlib.crc32(tag + data) & 0xffffffff)
+    def chunk(kind, data):
+        c = struct.pack(">I", len(data)) + kind + data
+        return c + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+    png = b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0))
+    png += chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b"")
     with open(path, "wb") as f:
-        f.write(b"\x89PNG\r\n\x1a\n")
-        f.write(chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)))
-        f.write(chunk(b"IDAT", zlib.compress(raw, 9)))
-        f.write(chunk(b"IEND", b""))
+        f.write(png)
 
 
-def render(verts, faces, colours, size, yaw, pitch, wire):
-    cy, sy, cp, sp = math.cos(yaw), math.sin(yaw), math.cos(pitch), math.sin(pitch)
-    used = sorted({i for f in faces for i in f})
-    view = {}
-    for i in used:
-        x, y, z = verts[i]
-        x, z = cy * x + sy * z, -sy * x + cy * z
-        y, z = cp * y - sp * z, sp * y + cp * z
-        view[i] = (x, y, z)
-    xs = [p[0] for p in view.values()]
-    ys = [p[1] for p in view.values()]
-    scale = 0.92 * size / max(max(xs) - min(xs), max(ys) - min(ys))
-    ox, oy = (max(xs) + min(xs)) / 2, (max(ys) + min(ys)) / 2
-    scr = {i: (size / 2 + (p[0] - ox) * scale, size / 2 - (p[1] - oy) * scale, p[2]) for i, p in view.items()}
-    img = [[255] * (3 * size) for _ in range(size)]
-    depth = [[-1e30] * size for _ in range(size)]
-    light = (0.3, 0.4, 0.866)
-    for fi, (a, b, c) in enumerate(faces):
-        pa, pb, pc = view[a], view[b], view[c]
-        ux, uy, uz = pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]
-        vx, vy, vz = pc[0] - pa[0], pc[1] - pa[1], pc[2] - pa[2]
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("input")
+    ap.add_argument("output")
+    ap.add_argument("--size", type=int, default=480)
+    ap.add_argument("--azimuth", type=float, default=0)
+    ap.add_argument("--elevation", type=float, default=0)
+    ap.add_argument("--edges", action="store_true", help="darken the triangle edges")
+    ap.add_argument("--supersample", type=int, default=2)
+    a = ap.parse_args()
+
+    verts, faces, colors = read_ply(a.input)
+    az, el = math.radians(a.azimuth), math.radians(a.elevation)
+    ca, sa, ce, se = math.cos(az), math.sin(az), math.cos(el), math.sin(el)
+
+    def view(p):  # rotate about Y by azimuth, then about X by elevation
+        x, y, z = p
+        x, z = ca * x + sa * z, -sa * x + ca * z
+        y, z = ce * y - se * z, se * y + ce * z
+        return x, y, z
+    used = set(i for f in faces for i in f)
+    pv = [view(p) for p in verts]
+    xs = [pv[i][0] for i in used]
+    ys = [pv[i][1] for i in used]
+    cx, cy = (min(xs) + max(xs)) / 2, (min(ys) + max(ys)) / 2
+    extent = max(max(xs) - min(xs), max(ys) - min(ys)) * 1.04
+    S = a.size * a.supersample
+    scale = S / extent
+    sp = [((x - cx) * scale + S / 2, S / 2 - (y - cy) * scale, z) for x, y, z in pv]
+
+    zbuf = [-1e300] * (S * S)
+    img = [255] * (S * S * 3)
+    for fi, (i0, i1, i2) in enumerate(faces):
+        (x0, y0, z0), (x1, y1, z1), (x2, y2, z2) = sp[i0], sp[i1], sp[i2]
+        # Normal in view space (y down on screen, so flip it back).
+        p0, p1, p2 = pv[i0], pv[i1], pv[i2]
+        ux, uy, uz = p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]
+        vx, vy, vz = p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]
         nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
-        nl = math.sqrt(nx * nx + ny * ny + nz * nz) or 1.0
-        shade = 0.35 + 0.65 * abs((nx * light[0] + ny * light[1] + nz * light[2]) / nl)
-        col = colours[fi] if colours else (200, 200, 200)
-        rgb = [min(255, int(ch * shade)) for ch in col]
-        (x0, y0, z0), (x1, y1, z1), (x2, y2, z2) = scr[a], scr[b], scr[c]
+        ln = math.sqrt(nx * nx + ny * ny + nz * nz)
+        shade = 0.25 + 0.75 * (abs(nz) / ln if ln > 0 else 0.0)
+        if nz < 0:
+            shade *= 0.6  # back faces darker
+        base = colors[fi] if colors else (200, 200, 200)
+        col = tuple(min(255, int(c * shade)) for c in base)
         area = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
         if area == 0:
             continue
-        minx, maxx = max(0, int(min(x0, x1, x2))), min(size - 1, int(max(x0, x1, x2)) + 1)
-        miny, maxy = max(0, int(min(y0, y1, y2))), min(size - 1, int(max(y0, y1, y2)) + 1)
-        edge = 1.2 / max(abs(area), 1e-9) ** 0.5 if wire else -1
+        minx, maxx = max(0, int(min(x0, x1, x2))), min(S - 1, int(max(x0, x1, x2)) + 1)
+        miny, maxy = max(0, int(min(y0, y1, y2))), min(S - 1, int(max(y0, y1, y2)) + 1)
+        edge_w = 1.2 * a.supersample  # pixels
         for py in range(miny, maxy + 1):
             fy = py + 0.5
-            row, drow = img[py], depth[py]
             for px in range(minx, maxx + 1):
                 fx = px + 0.5
                 w0 = ((x1 - fx) * (y2 - fy) - (x2 - fx) * (y1 - fy)) / area
@@ -136,31 +152,32 @@ def render(verts, faces, colours, size, yaw, pitch, wire):
                 if w0 < 0 or w1 < 0 or w2 < 0:
                     continue
                 z = w0 * z0 + w1 * z1 + w2 * z2
-                if z <= drow[px]:
+                k = py * S + px
+                if z <= zbuf[k]:
                     continue
-                drow[px] = z
-                k = 3 * px
-                if wire and min(w0, w1, w2) < edge * 0.5:
-                    row[k:k + 3] = [int(ch * 0.45) for ch in rgb]
-                else:
-                    row[k:k + 3] = rgb
-    return img
-
-
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("ply")
-    ap.add_argument("png")
-    ap.add_argument("--size", type=int, default=480)
-    ap.add_argument("--yaw", type=float, default=0.0, help="rotation about the vertical axis, degrees")
-    ap.add_argument("--pitch", type=float, default=0.0, help="rotation about the horizontal axis, degrees")
-    ap.add_argument("--wire", action="store_true", help="darken triangle edges")
-    a = ap.parse_args()
-    verts, faces, colours = read_ply(a.ply)
-    if not faces:
-        sys.exit("%s has no faces" % a.ply)
-    img = render(verts, faces, colours, a.size, math.radians(a.yaw), math.radians(a.pitch), a.wire)
-    write_png(a.png, a.size, a.size, img)
+                zbuf[k] = z
+                c = col
+                if a.edges:
+                    # Distance to the nearest edge in pixels: barycentric / gradient length.
+                    d = min(w0 * abs(area) / math.hypot(x2 - x1, y2 - y1),
+                            w1 * abs(area) / math.hypot(x0 - x2, y0 - y2),
+                            w2 * abs(area) / math.hypot(x1 - x0, y1 - y0))
+                    if d < edge_w:
+                        c = (int(c[0] * 0.35), int(c[1] * 0.35), int(c[2] * 0.35))
+                img[3 * k:3 * k + 3] = c
+    n = a.supersample
+    W = a.size
+    out = [0] * (W * W * 3)
+    for y in range(W):
+        for x in range(W):
+            for ch in range(3):
+                s = 0
+                for dy in range(n):
+                    row = (y * n + dy) * S
+                    for dx in range(n):
+                        s += img[3 * (row + x * n + dx) + ch]
+                out[3 * (y * W + x) + ch] = s // (n * n)
+    write_png(a.output, W, W, out)
 
 
 if __name__ == "__main__":

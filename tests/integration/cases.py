@@ -758,6 +758,18 @@ def cli_pca_bad_inputs(c):
 
 
 @case
+def cli_cluster_shape(c):
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    out = c.out("pca_75.ply")
+    c.conelod("partition", bunny, "--clusters", "75", "-o", out)
+    r = json.loads(c.conelod("cluster-shape", out, "--json").stdout)
+    assert r["clusters"] == 75 and r["all_connected"] and r["faces"] == 69451, r
+    assert 1.0 < r["boundary_ratio"] < 3.0 and 0.1 < r["mean_compactness"] < 1.0, r
+    p = c.conelod("cluster-shape", bunny, expect=2)  # no per-face quality
+    assert "quality" in p.stderr.decode(), p.stderr.decode()
+
+
+@case
 def meshlab_pca_bad_inputs(c):
     for mesh, message in [("no_faces.ply", "has no faces"), ("nan_vertex.ply", "NaN or infinite")]:
         for script in ["pca_recursive_face_partition.mlx", "progressive_cluster_mesh.mlx"]:

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <queue>
 #include <string>
 
 #include <Eigen/Eigenvalues>
@@ -89,6 +88,34 @@ void Decompose(const Eigen::Matrix3d& z, Vec3& eigenvalues, Eigen::Matrix3d& axe
     axes = Eigen::Matrix3d::Identity();
     eigenvalues.setZero();
   }
+}
+
+// The eigenvalues (ascending, with Decompose's rules) and x_max only: what a tree node stores.
+// Eigen computes the eigenvalues; x_max is the largest cross product of two rows of Z − λ_max I
+// (those rows span the plane orthogonal to x_max), which skips the two other eigenvectors.
+void EigenvaluesAndMajorAxis(const Eigen::Matrix3d& z, Vec3& eigenvalues, Vec3& axisMax) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+  es.computeDirect(z, Eigen::EigenvaluesOnly);
+  eigenvalues = es.eigenvalues();
+  for (int k = 0; k < 3; ++k) eigenvalues[k] = std::max(0.0, eigenvalues[k]);
+  if (eigenvalues[0] <= 1e-10 * eigenvalues[2]) eigenvalues[0] = 0;
+  auto kernel = [&z](double lambda, Vec3& out) {  // false when the kernel is more than a line
+    const Eigen::Matrix3d a = z - lambda * Eigen::Matrix3d::Identity();
+    const Vec3 c[3] = {a.row(0).cross(a.row(1)), a.row(0).cross(a.row(2)), a.row(1).cross(a.row(2))};
+    int best = 0;
+    for (int k = 1; k < 3; ++k)
+      if (c[k].squaredNorm() > c[best].squaredNorm()) best = k;
+    const double n2 = c[best].squaredNorm(), scale = a.squaredNorm();
+    if (!(n2 > 1e-20 * scale * scale)) return false;
+    out = c[best] / std::sqrt(n2);
+    return true;
+  };
+  const Vec3 ev = es.eigenvalues();
+  if (kernel(ev[2], axisMax)) return;
+  // λ_max is (nearly) double: any direction orthogonal to x_min is a major axis.
+  Vec3 axisMin;
+  if (!kernel(ev[0], axisMin)) { axisMax = Vec3(1, 0, 0); return; }  // isotropic
+  axisMax = axisMin.unitOrthogonal();
 }
 
 PcaFrame FrameFromSums(const MomentSums& s, const Vec3& p) {
@@ -323,7 +350,7 @@ class TreeBuilder {
   std::vector<uint32_t> side2_;        // the second half while it grows
   FaceAdjacency adj_;                  // kept only when some face has more than three neighbours
   uint32_t generation_ = 0;
-  std::vector<uint32_t> members_;      // the faces of a cluster split by growBoth()
+  std::vector<uint32_t> members_;      // the faces of the cluster being split
 };
 
 void TreeBuilder::renumber() {
@@ -379,14 +406,14 @@ void TreeBuilder::renumber() {
     const double area = FaceNormalOf(local_, f, n);
     rec_[f].area = float(area);
     rec_[f].mark = 0;
-    Eigen::Matrix3d own = Eigen::Matrix3d::Zero();
+    double o[6] = {0, 0, 0, 0, 0, 0};
     for (uint32_t v : t) {
-      const Vec3 u = ToVec(local_.positions[v]) - c;
-      own += u * u.transpose();
+      const double ux = local_.positions[v][0] - c[0], uy = local_.positions[v][1] - c[1],
+                   uz = local_.positions[v][2] - c[2];
+      o[0] += ux * ux; o[1] += ux * uy; o[2] += ux * uz; o[3] += uy * uy; o[4] += uy * uz; o[5] += uz * uz;
     }
-    own *= area / 12;
-    ownMoment_[f] = {float(own(0, 0)), float(own(0, 1)), float(own(0, 2)), float(own(1, 1)), float(own(1, 2)),
-                     float(own(2, 2))};
+    const double k = area / 12;
+    for (int i = 0; i < 6; ++i) ownMoment_[f][size_t(i)] = float(k * o[i]);
   }
 }
 
@@ -437,11 +464,10 @@ int32_t TreeBuilder::makeNode(int32_t parent, uint32_t firstFace, uint32_t faceC
   n.area = float(m.area);
   n.centroid = ToPoint(m.centroid);
   if (m.area > 0) {
-    Vec3 ev;
-    Eigen::Matrix3d axes;
-    Decompose(m.central / m.area, ev, axes);
+    Vec3 ev, axis;
+    EigenvaluesAndMajorAxis(m.central / m.area, ev, axis);
     n.eigenvalues = ToPoint(ev);
-    n.axis = ToPoint(axes.col(2));
+    n.axis = ToPoint(axis);
   } else {  // zero-area faces only: no PCA; split() grows both halves from two faces
     n.eigenvalues = vcg::Point3f(0, 0, 0);
     n.axis = vcg::Point3f(1, 0, 0);
@@ -499,13 +525,13 @@ void TreeBuilder::growBoth(uint32_t seed1, uint32_t seed2, uint32_t& left, uint3
 }
 
 // Faces reached by neither growth: each connected region of them joins, whole, the side it
-// shares more edges with (the side with fewer faces on a tie). Every region touches a side (the
-// cluster is connected), so the regions are found from the sides' neighbours. They are written
-// into the gap [left, right) of faceOrder and moved to the chosen side's end.
+// shares more edges with (the side with fewer faces on a tie). The regions are written into the
+// gap [left, right) of faceOrder and moved to the chosen side's end.
 void TreeBuilder::attachLeftovers(uint32_t begin, uint32_t end, uint32_t& left, uint32_t& right) {
   uint32_t* order = tree_.faceOrder.data();
   const uint32_t base = generation_ << kStateBits;
-  auto region = [&](uint32_t seed) {
+  for (uint32_t seed : members_) {
+    if ((rec_[seed].mark & kStateMask) > kNegative) continue;  // grown, or in a region already
     // Breadth-first over the region, queued at [left, left + size).
     uint32_t head = left, tail = left;
     rec_[seed].mark = base | kLeftover;
@@ -534,18 +560,8 @@ void TreeBuilder::attachLeftovers(uint32_t begin, uint32_t end, uint32_t& left, 
       std::memmove(order + right - size, order + left, size * sizeof(uint32_t));
       right -= size;
     }
-  };
-  auto visitSide = [&](uint32_t from, uint32_t to) {
-    for (uint32_t i = from; i < to && left < right; ++i)
-      forNeighbours(order[i], [&](uint32_t g) {
-        const uint32_t m = rec_[g].mark;
-        if ((m >> kStateBits) == generation_ && (m & kStateMask) <= kNegative) region(g);
-      });
-  };
-  // The regions land inside the gap, so the two original side ranges are not disturbed.
-  const uint32_t side1End = left, side2Begin = right;
-  visitSide(begin, side1End);
-  visitSide(side2Begin, end);
+    if (left == right) return;
+  }
 }
 
 // Splits p.node into two edge-connected halves; `out` receives the halves that are nodes.
@@ -559,6 +575,9 @@ void TreeBuilder::split(const Pending& p, Pending out[2], int& outCount) {
     tree_.nodes[size_t(p.node)].child[1] = ItemOfFace(order[begin + 1]);
     return;
   }
+  // The member list survives the growth, which overwrites this range of faceOrder: the
+  // leftover regions are searched in it.
+  members_.assign(order + begin, order + end);
   ++generation_;
   const uint32_t base = generation_ << kStateBits;
 
@@ -567,10 +586,9 @@ void TreeBuilder::split(const Pending& p, Pending out[2], int& outCount) {
   const vcg::Point3f c = ToPoint(ToVec(node.centroid) - origin_);
   const float offset = ax * c[0] + ay * c[1] + az * c[2];
   float rMax = -std::numeric_limits<float>::infinity(), rMin = std::numeric_limits<float>::infinity();
-  uint32_t seed1 = order[begin], seed2 = order[end - 1];
+  uint32_t seed1 = members_[0], seed2 = members_[n - 1];
   FaceRecord* rec = rec_.data();
-  for (uint32_t i = begin; i < end; ++i) {
-    const uint32_t f = order[i];
+  for (uint32_t f : members_) {
     FaceRecord& fr = rec[f];
     const float r = ax * fr.centroid[0] + ay * fr.centroid[1] + az * fr.centroid[2] - offset;
     fr.mark = base | uint32_t(r > 0) | (uint32_t(r < 0) << 1);  // kPositive, kNegative or kOnPlane
@@ -588,7 +606,6 @@ void TreeBuilder::split(const Pending& p, Pending out[2], int& outCount) {
     right -= n2;
     std::memcpy(order + right, side2_.data(), n2 * sizeof(uint32_t));
   } else {
-    members_.assign(order + begin, order + end);
     growBoth(members_[0], members_[n - 1], left, right);
   }
   if (left < right) attachLeftovers(begin, end, left, right);
@@ -648,10 +665,8 @@ NormalCone FastUnionCone(const NormalCone& a, const NormalCone& b) {
 // stop criterion held) gets the exact minimal cone of its normals.
 void TreeBuilder::computeBounds() {
   tree_.bounds.resize(tree_.nodes.size());
-  auto faceBox = [this](uint32_t f) {
-    vcg::Box3f b;
+  auto addFace = [this](vcg::Box3f& b, uint32_t f) {
     for (uint32_t v : local_.faces[f]) b.Add(local_.positions[v]);
-    return b;
   };
   auto store = [](PcaBounds& b, const NormalCone& cone) {
     if (cone.empty()) { b.coneHalfAngle = -1; return; }
@@ -673,7 +688,7 @@ void TreeBuilder::computeBounds() {
         vcg::Point3d nrm;
         FaceNormalOf(local_, f, nrm);
         normals.push_back(nrm);
-        bounds.box.Add(faceBox(f));
+        addFace(bounds.box, f);
       }
       store(bounds, MinimalCone(normals));
       continue;
@@ -684,7 +699,7 @@ void TreeBuilder::computeBounds() {
         vcg::Point3d nrm;
         if (FaceNormalOf(local_, FaceOfItem(c), nrm) > 0)
           cone = cone.empty() ? NormalCone::Of(nrm) : FastUnionCone(cone, NormalCone::Of(nrm));
-        bounds.box.Add(faceBox(FaceOfItem(c)));
+        addFace(bounds.box, FaceOfItem(c));
       } else {
         const NormalCone childCone = tree_.bounds[size_t(c)].cone();
         if (!childCone.empty()) cone = cone.empty() ? childCone : FastUnionCone(cone, childCone);
@@ -712,6 +727,14 @@ Status TreeBuilder::run(const Progress& progress) {
   tree_ = PcaTree();
   tree_.faceCount = int(nf);
   renumber();
+  bool anyArea = false;
+  for (uint32_t f = 0; f < nf && !anyArea; ++f) anyArea = rec_[f].area > 0;
+  if (!anyArea) {  // the last check of RequireValidForFaces(), with its message
+    MeshReport r;
+    r.vertices = mesh_.positions.size();
+    r.faces = r.degenerateFaces = nf;
+    return RequireValidForFaces(r);
+  }
   adj_ = BuildFaceAdjacency(local_);
   if (progress && !progress(5, "PCA partition: adjacency")) return Status::Cancelled();
 
@@ -827,8 +850,21 @@ Status BuildPcaTree(const IndexedMesh& mesh, const PcaPartitionParams& params, P
   out = PcaTree();
   Status s = ValidateParams(params);
   if (!s.ok()) return s;
-  s = RequireValidForFaces(CheckMesh(mesh, false));
-  if (!s.ok()) return s;
+  // CheckMesh() computes every normal; the build computes the areas anyway, so only the checks
+  // that must come first run here, and CheckMesh() words the message when one fails.
+  bool valid = !mesh.faces.empty();
+  for (const auto& t : mesh.faces) {
+    for (uint32_t v : t) {
+      if (v >= mesh.positions.size()) { valid = false; break; }
+      const auto& p = mesh.positions[v];
+      if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) valid = false;
+    }
+    if (!valid) break;
+  }
+  if (!valid) {
+    s = RequireValidForFaces(CheckMesh(mesh, false));
+    if (!s.ok()) return s;
+  }
   if (mesh.faces.size() >= (size_t(1) << (32 - kStateBits)))
     return Status::Invalid("the mesh has too many faces for the PCA partition (2^29 or more)");
   PcaTree tree;

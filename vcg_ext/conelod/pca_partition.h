@@ -22,9 +22,13 @@
 // length). Cuts of the tree "split the largest-error cluster first"; ties go to the larger area.
 //
 // Cost: a split touches each face of its cluster a constant number of times (one pass for R_i,
-// the region growing, one pass that writes the children's face ranges and sums their moments),
-// so the full tree costs O(N · depth) with depth ≈ log2 N on real meshes. The work arrays are
-// allocated once; clusters are contiguous ranges of one face permutation (no per-node lists).
+// the region growing, the moment sums of the smaller half only: the larger half is the parent
+// minus the smaller, by the parallel-axis theorem), so the full tree costs O(N · depth), depth ≈
+// log2 N on real meshes (mean leaf depth 21.7 on the 871k-face dragon). The work arrays are
+// allocated once; faces are renumbered in Morton order so that clusters are compact in memory;
+// clusters are contiguous ranges of one face permutation (no per-node lists); single faces are
+// leaves without a node. Precision: the sums are in double from per-face float data (centroid,
+// area, own second moment), i.e. as accurate as the input's float coordinates.
 #pragma once
 
 #include <cstdint>

@@ -28,8 +28,7 @@ struct Ring {
   std::vector<RingEdge> edges;
   bool manifold = true;  // one fan (closed, or open with two border edges), every edge on 1-2 faces
   bool border = false;
-  int clusters = 0;      // distinct clusters of the faces around
-  PcaItem firstLabel = 0;
+  int clusters = 0;      // distinct clusters of the faces around, counted up to 3
 };
 
 class Simplifier {
@@ -174,7 +173,6 @@ class Simplifier {
       else if (l != labels[0] && r.clusters == 1) { labels[1] = l; r.clusters = 2; }
       else if (l != labels[0] && l != labels[1]) r.clusters = 3;
     }
-    r.firstLabel = labels[0];
     int borderEdges = 0;
     for (const RingEdge& e : r.edges) {
       if (e.faces > 2) r.manifold = false;
