@@ -136,33 +136,26 @@ def read_ply(path):
     return result
 
 
-def mlx_with(c, name, **values):
-    """A copy of scripts/mlx/NAME in the test's folder with some parameter values changed."""
-    tree = ET.parse(c.mlx(name))
-    for key, value in values.items():
-        found = [p for p in tree.getroot().iter("Param") if p.get("name") == key]
-        assert found, "no parameter %s in %s" % (key, name)
-        for p in found:
-            p.set("value", str(value).lower() if isinstance(value, bool) else str(value))
-    path = c.out("%s_%d.mlx" % (name[:-4], len(os.listdir(c.tmp))))
-    tree.write(path)
-    return path
-
-
 def last_float(log, key):
     vals = re.findall(re.escape(key) + r"\s+([0-9.eE+-]+)", log)
     assert vals, "'%s' not found in the log:\n%s" % (key, log[-2000:])
     return float(vals[-1])
 
 
-def mlx_with(c, name, overrides=None, before="", after=""):
-    """A script made of the shipped scripts/mlx/NAME filter with some parameter values replaced,
-    with raw filter XML before and after it. Returns the script's path."""
+def mlx_with(c, name, overrides=None, before="", after="", **values):
+    """A script made of the shipped scripts/mlx/NAME filter with some parameter values replaced
+    (`overrides` dict and/or keyword arguments), with raw filter XML before and after it. Returns
+    the script's path."""
     root = ET.parse(c.mlx(name)).getroot()
+    changes = dict(overrides or {}, **values)
+    names = {p.get("name") for flt in root for p in flt}
+    for key in changes:
+        assert key in names, "no parameter %s in %s" % (key, name)
     for flt in root:
         for p in flt:
-            if overrides and p.get("name") in overrides:
-                p.set("value", str(overrides[p.get("name")]))
+            if p.get("name") in changes:
+                v = changes[p.get("name")]
+                p.set("value", str(v).lower() if isinstance(v, bool) else str(v))
     body = "".join(ET.tostring(flt, encoding="unicode") for flt in root)
     path = c.out("script_%d.mlx" % len(os.listdir(c.tmp)))
     with open(path, "w") as f:
@@ -357,6 +350,9 @@ def meshlab_group_qem_bad_inputs(c):
                                                     {"TargetPerc": 0.3, "GroupSource": 1, "GroupLevel": 2}), out)
         assert last_float(log, "integrity_percent") == 100.0, "%s\n%s" % (mesh, log[-1500:])
         assert len(read_ply(out)["faces"]) == last_int(log, "faces_out"), mesh
+
+
+@case
 def meshlab_feature_simplify_fandisk(c):
     """The filter and the CLI run the same core: same faces; the feature lines survive."""
     fandisk = c.mesh("fandisk.ply")
@@ -583,6 +579,9 @@ def cli_simplify_hierarchy(c):
         ply = read_ply("%s_L%d.ply" % (prefix, lv["level"]))
         assert len(ply["faces"]) == lv["faces_out"] and len(set(ply["quality"])) == lv["groups_after"], lv
     assert levels[-1]["faces_out"] < levels[0]["faces_out"] / 4, levels
+
+
+@case
 def cli_feature_simplify(c):
     fandisk = c.mesh("fandisk.ply")
     r = json.loads(c.conelod("feature-simplify", fandisk, "--target-percent", "10", "--json").stdout)
