@@ -485,7 +485,7 @@ class Simplifier {
   std::vector<double> outError_;  // face -> bound on the distance from its points to the input
   std::vector<uint32_t> newFanIds_;   // faces around `to` after a collapse (GatherNewFan)
   std::vector<Tri> newFan_, oldFan_;  // the same as triangles / the faces around `from` before it
-  std::vector<std::pair<uint32_t, uint32_t>> scratchPts_;  // (original vertex, face it answered for)
+  std::vector<uint32_t> scratchPts_;  // original vertices to re-assign after a collapse
   std::vector<uint32_t> scratchRing_;
   std::vector<uint32_t> link_;   // link_[x] == linkStamp_: x is a neighbour of linkFrom_
   uint32_t linkStamp_ = 0, linkFrom_ = kNone;
@@ -695,10 +695,9 @@ void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
     for (uint32_t f : newFanIds_)
       newFan_.push_back(MakeTri(Corner(f, 0, from, to), Corner(f, 1, from, to), Corner(f, 2, from, to), f));
     scratchPts_.clear();
-    scratchPts_.push_back({from, kNone});
+    scratchPts_.push_back(from);
     for (uint32_t f : w.VF[from]) {
-      const uint32_t owner = w.Contains(f, to) ? kNone : f;
-      for (uint32_t x : owned_[f]) scratchPts_.push_back({x, owner});
+      scratchPts_.insert(scratchPts_.end(), owned_[f].begin(), owned_[f].end());
       owned_[f].clear();
     }
   }
@@ -734,10 +733,10 @@ void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
   if (track) {
     // Each removed original vertex answers to its nearest face of the new fan.
     double worst = 0;
-    for (const auto& pt : scratchPts_) {
+    for (uint32_t x : scratchPts_) {
       size_t nearest = 0;
-      const double d2 = DistanceToTris2(w.P[pt.first], newFan_, 0.0, &nearest);
-      if (!newFan_.empty()) owned_[newFan_[nearest].face].push_back(pt.first);
+      const double d2 = DistanceToTris2(w.P[x], newFan_, 0.0, &nearest);
+      if (!newFan_.empty()) owned_[newFan_[nearest].face].push_back(x);
       worst = std::max(worst, std::sqrt(d2));
     }
     maxTracked_ = std::max(maxTracked_, worst);

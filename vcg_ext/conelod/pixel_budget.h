@@ -44,7 +44,7 @@ Status ValidateParams(const PixelBudgetParams& p);
 //   x = width/2 + pixelsPerUnit (p - centre).right,  y = height/2 - pixelsPerUnit (p - centre).up
 // (pixel (i, j) covers [i, i+1) x [j, j+1), its centre is (i + 0.5, j + 0.5)).
 struct OrthoView {
-  vcg::Point3d centre, right, up, direction;
+  vcg::Point3d centre = {0.0, 0.0, 0.0}, right = {1.0, 0.0, 0.0}, up = {0.0, 1.0, 0.0}, direction = {0.0, 0.0, -1.0};
   double pixelsPerUnit = 1;
   int width = 0, height = 0;
 };
@@ -61,7 +61,7 @@ struct PixelBudgetResult {
   size_t targetFaces = 0;        // round(pixelFactor x coveredPixels)
   size_t currentFaces = 0;
   bool aboveCurrent = false;     // targetFaces >= currentFaces: no reduction needed
-  vcg::Point3d viewDirection;    // the direction used (the worst one for WorstAxis)
+  vcg::Point3d viewDirection = {0.0, 0.0, 0.0};  // the direction used (the worst one for WorstAxis)
   std::array<size_t, 6> axisPixels{};  // +X, -X, +Y, -Y, +Z, -Z (WorstAxis only)
   double pixelsPerUnit = 0;
 };
