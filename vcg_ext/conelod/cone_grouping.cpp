@@ -610,8 +610,9 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     for (size_t c = 0; c < childTotal; ++c) prev[c].parent = childGroup[c];
   }
 
-  // Exact cones; boxes and tight spheres from the vertices, in face order (min and max do not
-  // depend on the order, and face order reads the mesh sequentially).
+  // Exact cones; boxes from the vertices at level 1, from the children's boxes above (min and
+  // max do not depend on the order: the same boxes); tight spheres from the vertices, in face
+  // order (which reads the mesh sequentially).
   for (size_t g = 0; g < groupCount; ++g) {
     if (chains_[g].exactSize != units_[g].faceCount) makeConeExact(int(g));
     Group& grp = level.groups[g];
@@ -619,9 +620,14 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     grp.faceCount = units_[g].faceCount;
     grp.box.SetNull();
   }
-  for (size_t f = 0; f < size_t(faceCount_); ++f) {
-    vcg::Box3f& box = level.groups[size_t(faceGroup[f])].box;
-    for (uint32_t v : mesh_.faces[f]) box.Add(mesh_.positions[v]);
+  if (firstLevel) {
+    for (size_t f = 0; f < size_t(faceCount_); ++f) {
+      vcg::Box3f& box = level.groups[size_t(faceGroup[f])].box;
+      for (uint32_t v : mesh_.faces[f]) box.Add(mesh_.positions[v]);
+    }
+  } else {
+    const auto& prev = out.levels.back().groups;
+    for (size_t c = 0; c < childTotal; ++c) level.groups[size_t(childGroup[c])].box.Add(prev[c].box);
   }
   // A second sphere around the box centre; keep the smaller of it and the merged bound.
   std::vector<vcg::Point3d> boxCenter(groupCount);
