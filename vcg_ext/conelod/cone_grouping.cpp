@@ -163,7 +163,8 @@ constexpr float kNoPair = -std::numeric_limits<float>::infinity();
 // unit's best pair; kNoPair: none). A unit's leaf sits at its own index, so the neighbours of a
 // merged unit, close in index, share the lower nodes of their paths, and an update that does
 // not change a node's winner stops there: cheaper on memory than a heap, where positions are
-// scattered. Ties go to the lower unit id (deterministic output).
+// scattered. Ties go to the lower unit id (deterministic output). A node holds its winner as
+// one integer, key then unit, ordered like (higher key, lower unit): one comparison per child.
 class BestTree {
  public:
   // n units, none with a pair yet; setKey then build, or set.
@@ -180,7 +181,7 @@ class BestTree {
       below = RoundUp(count);
       total += below;
     }
-    nodes_.assign(total, Node{kNoPair, std::numeric_limits<int>::max()});  // padding never wins
+    nodes_.assign(total, 0);  // padding: below every real entry, kNoPair included
   }
   float key(int u) const { return key_[size_t(u)]; }
   void prefetch(int u) const {  // the leaf and its parent (level 1 starts nodes_)
@@ -194,27 +195,27 @@ class BestTree {
   }
   void release() {
     BigVector<float>().swap(key_);
-    BigVector<Node>().swap(nodes_);
+    BigVector<uint64_t>().swap(nodes_);
   }
-  bool empty() const { return nodes_.back().key == kNoPair; }
-  int top() const { return nodes_.back().unit; }
+  bool empty() const { return (nodes_.back() >> 32) == OrderedKey(kNoPair); }
+  int top() const { return UnitOf(nodes_.back()); }
   void set(int u, float k) {
     const float old = key_[size_t(u)];
     key_[size_t(u)] = k;
     size_t i = size_t(u);
     if (k > old) {  // u can only win more nodes
-      const Node e{k, u};
+      const uint64_t e = Entry(k, u);
       for (size_t level = 1; level <= levelBegin_.size(); ++level) {
         i /= kArity;
-        Node& n = node(level, i);
-        if (n.unit != u && !Better(e, n)) return;
+        uint64_t& n = node(level, i);
+        if (UnitOf(n) != u && e < n) return;
         n = e;
       }
     } else if (k < old) {  // only the nodes u was winning change
       for (size_t level = 1; level <= levelBegin_.size(); ++level) {
         i /= kArity;
-        Node& n = node(level, i);
-        if (n.unit != u) return;
+        uint64_t& n = node(level, i);
+        if (UnitOf(n) != u) return;
         n = winner(level, i);
       }
     }
@@ -222,33 +223,36 @@ class BestTree {
 
  private:
   static constexpr size_t kArity = 8;  // 8 nodes = one cache line
-  struct Node {
-    float key;
-    int unit;
-  };
   static size_t RoundUp(size_t n) { return (n + kArity - 1) / kArity * kArity; }
-  static bool Better(const Node& a, const Node& b) {
-    return a.key > b.key || (a.key == b.key && a.unit < b.unit);
+  // Keys as unsigned integers in the same order (no NaN here; -0 counts as +0, as in floats).
+  static uint32_t OrderedKey(float k) {
+    k += 0.0f;
+    uint32_t bits;
+    std::memcpy(&bits, &k, sizeof bits);
+    return (bits & 0x80000000u) ? ~bits : (bits | 0x80000000u);
   }
-  Node& node(size_t level, size_t i) { return nodes_[levelBegin_[level - 1] + i]; }
-  // The best of the children of node i at `level` (children in index order: ties to the first).
-  Node winner(size_t level, size_t i) {
-    if (level == 1) {
+  static uint64_t Entry(float k, int u) {
+    return (uint64_t(OrderedKey(k)) << 32) | (0xFFFFFFFFu - uint32_t(u));
+  }
+  static int UnitOf(uint64_t e) { return int(0xFFFFFFFFu - uint32_t(e)); }
+  uint64_t& node(size_t level, size_t i) { return nodes_[levelBegin_[level - 1] + i]; }
+  // The best of the children of node i at `level`.
+  uint64_t winner(size_t level, size_t i) {
+    if (level == 1) {  // leaves in index order: ties to the first
       const float* k = &key_[i * kArity];
       size_t best = 0;
       for (size_t j = 1; j < kArity; ++j)
         if (k[j] > k[best]) best = j;
-      return Node{k[best], int(i * kArity + best)};
+      return Entry(k[best], int(i * kArity + best));
     }
-    const Node* c = &node(level - 1, i * kArity);
-    Node best = c[0];
-    for (size_t j = 1; j < kArity; ++j)
-      if (Better(c[j], best)) best = c[j];
+    const uint64_t* c = &node(level - 1, i * kArity);
+    uint64_t best = c[0];
+    for (size_t j = 1; j < kArity; ++j) best = std::max(best, c[j]);
     return best;
   }
 
   BigVector<float> key_;            // leaves, padded to a multiple of kArity
-  BigVector<Node> nodes_;           // levels 1.. (each padded to a multiple of kArity), root last
+  BigVector<uint64_t> nodes_;       // levels 1.. (each padded to a multiple of kArity), root last
   std::vector<size_t> levelBegin_;  // first node of level 1, 2, ... in nodes_
   std::vector<size_t> levelCount_;  // live nodes per level
 };
