@@ -14,8 +14,9 @@
 // slot when it fits, else to the end; the arena is compacted in place when full. Level 1
 // recomputes face normals from the mesh when an exact cone needs them and areas come from the
 // faces at the end, rather than from arrays: the build's peak memory stays under twice the
-// loaded mesh's. The output is the same, bit for bit, as that of the straightforward version
-// this replaced (std::vector everywhere, binary heap, normals array).
+// loaded mesh's. None of this changes a bit of the output: the same pairs are scored with the
+// same arithmetic and MinimalCone sees the same normals in the same order (bench/
+// check_grouping prints digests to compare two builds of the code).
 #include "conelod/cone_grouping.h"
 
 #include <algorithm>
