@@ -616,8 +616,8 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   }
 
   // Exact cones; boxes from the vertices at level 1, from the children's boxes above (min and
-  // max do not depend on the order: the same boxes); tight spheres from the vertices, in face
-  // order (which reads the mesh sequentially).
+  // max do not depend on the order, but for the sign of a zero); tight spheres from the
+  // vertices, in face order (which reads the mesh sequentially).
   for (size_t g = 0; g < groupCount; ++g) {
     if (chains_[g].exactSize != units_[g].faceCount) makeConeExact(int(g));
     Group& grp = level.groups[g];
@@ -633,6 +633,21 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   } else {
     const auto& prev = out.levels.back().groups;
     for (size_t c = 0; c < childTotal; ++c) level.groups[size_t(childGroup[c])].box.Add(prev[c].box);
+  }
+  // Where a bound is zero, +0 or -0 is whichever came first: take the vertices in the order of the
+  // group's face list then, the order that defines the result.
+  for (size_t g = 0; g < groupCount; ++g) {
+    vcg::Box3f& box = level.groups[g].box;
+    bool zero = false;
+    for (int k = 0; k < 3; ++k) zero = zero || box.min[k] == 0 || box.max[k] == 0;
+    if (!zero) continue;
+    box.SetNull();
+    const int tail = chains_[g].tail;
+    int f = tail;
+    do {
+      f = faceNext_[size_t(f)];
+      for (uint32_t v : mesh_.faces[size_t(f)]) box.Add(mesh_.positions[v]);
+    } while (f != tail);
   }
   // A second sphere around the box centre; keep the smaller of it and the merged bound.
   std::vector<vcg::Point3d> boxCenter(groupCount);
