@@ -10,13 +10,16 @@
 // equal to the vertices' box, spheres enclosing the vertices (to the rounding of the float
 // centre), deterministic output (two builds, same digests).
 //
-// Usage: check_grouping MESH.ply...   exit status 0 when every check passed.
+// Usage: check_grouping [--synthetic] [MESH.ply...]   exit status 0 when every check passed.
+//   --synthetic adds generated meshes with the awkward cases: exact ties, +0/-0 coordinates,
+//   non-manifold edges, duplicated and degenerate faces.
 #include <algorithm>
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "conelod/cone_grouping.h"
@@ -135,11 +138,72 @@ std::vector<std::string> CheckHierarchy(const IndexedMesh& m, const FaceAdjacenc
   return lines;
 }
 
+// Synthetic meshes for the cases real scans rarely hit. Deterministic (xorshift).
+struct Rng {
+  uint64_t s = 0x2545F4914F6CDD1Dull;
+  double next() {  // [0, 1)
+    s ^= s >> 12; s ^= s << 25; s ^= s >> 27;
+    return double((s * 0x2545F4914F6CDD1Dull) >> 11) / 9007199254740992.0;
+  }
+};
+
+// A height field with quantized heights (exactly coplanar faces: score ties everywhere), zero and
+// negative-zero coordinates (boxes whose bounds are +0 or -0) and random diagonals.
+IndexedMesh Terrain(Rng& rng) {
+  const int k = 60;
+  const float heights[] = {0.0f, -0.0f, 0.5f, 1.0f, -0.5f};
+  IndexedMesh m;
+  for (int i = 0; i <= k; ++i)
+    for (int j = 0; j <= k; ++j) {
+      const float z = rng.next() < 0.3 ? heights[int(rng.next() * 5)] : 0.0f;
+      m.positions.emplace_back(i == k / 2 ? -0.0f : float(i - k / 2), float(j - k / 2), z);
+    }
+  for (uint32_t i = 0; i < uint32_t(k); ++i)
+    for (uint32_t j = 0; j < uint32_t(k); ++j) {
+      const uint32_t a = i * (k + 1) + j, b = a + 1, c = a + k + 1, d = c + 1;
+      if (rng.next() < 0.5) { m.faces.push_back({a, c, b}); m.faces.push_back({b, c, d}); }
+      else { m.faces.push_back({a, c, d}); m.faces.push_back({a, d, b}); }
+    }
+  return m;
+}
+
+// A bumpy sphere whose pole vertices lie on the z axis (x = y = 0) at slightly different heights.
+IndexedMesh Sphere(Rng& rng) {
+  const int rings = 40, segments = 80;
+  const double pi = NormalCone::kPi;
+  IndexedMesh m;
+  for (int i = 0; i <= rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      const double th = pi * i / rings, ph = 2 * pi * j / segments, r = 1 + 0.02 * rng.next();
+      const double sx = i == 0 || i == rings ? 0.0 : std::sin(th);
+      m.positions.emplace_back(float(r * sx * std::cos(ph)), float(r * sx * std::sin(ph)), float(r * std::cos(th)));
+    }
+  for (uint32_t i = 0; i < uint32_t(rings); ++i)
+    for (uint32_t j = 0; j < uint32_t(segments); ++j) {
+      const uint32_t a = i * segments + j, b = i * segments + (j + 1) % segments;
+      const uint32_t c = a + segments, d = b + segments;
+      m.faces.push_back({a, c, b});
+      m.faces.push_back({b, c, d});
+    }
+  return m;
+}
+
+// Non-manifold fans, a duplicated face, degenerate faces (repeated and collinear corners), an
+// isolated triangle.
+IndexedMesh Oddities() {
+  IndexedMesh m;
+  const float p[][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, -1, 0.3f},
+                        {1, 1, 1}, {5, 5, 5}, {6, 5, 5}, {5, 6, 5}, {0.5f, 0.5f, 0}};
+  for (const auto& v : p) m.positions.emplace_back(v[0], v[1], v[2]);
+  m.faces = {{0, 1, 2}, {0, 1, 3}, {0, 1, 4}, {0, 1, 2}, {0, 0, 1}, {1, 2, 9}, {6, 7, 8}, {2, 3, 5}, {3, 5, 5}};
+  return m;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: check_grouping MESH.ply...\n");
+    std::fprintf(stderr, "usage: check_grouping [--synthetic] [MESH.ply...]\n");
     return 1;
   }
   struct Named { const char* name; ConeGroupingParams p; };
@@ -151,17 +215,28 @@ int main(int argc, char** argv) {
   sets[2].name = "no-threshold";
   sets[2].p.coneThresholdDeg = 180;
 
+  std::vector<std::pair<std::string, IndexedMesh>> meshes;
   for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]) == "--synthetic") {
+      Rng rng;
+      meshes.emplace_back("synthetic terrain", Terrain(rng));
+      meshes.emplace_back("synthetic sphere", Sphere(rng));
+      meshes.emplace_back("synthetic oddities", Oddities());
+      continue;
+    }
     CMesh cm;
     const std::string err = LoadPly(cm, argv[i]);
     if (!err.empty()) { std::fprintf(stderr, "%s\n", err.c_str()); return 1; }
-    const IndexedMesh m = ToIndexedMesh(cm);
+    meshes.emplace_back(argv[i], ToIndexedMesh(cm));
+  }
+  for (const auto& named : meshes) {
+    const IndexedMesh& m = named.second;
     const FaceAdjacency adj = BuildFaceAdjacency(m);
     std::vector<vcg::Point3d> normals;
     std::vector<double> areas;
     ComputeFaceNormalsAndAreas(m, normals, areas);
     for (const Named& s : sets) {
-      std::printf("%s [%s]\n", argv[i], s.name);
+      std::printf("%s [%s]\n", named.first.c_str(), s.name);
       GroupHierarchy first, second;
       if (!BuildConeHierarchy(m, s.p, first).ok() || !BuildConeHierarchy(m, s.p, second).ok()) {
         Fail("build failed");

@@ -4,7 +4,8 @@
 #   scripts/bench.sh [MESH.ply...] [--benchmark_* flags]
 #   default meshes: ../shared/test_meshes/{stanford_bunny_bun_zipper,stanford_dragon_vrip_binary}.ply
 #   MESHLAB_SRC=/path/to/meshlab-src   where vcglib is (default: deps/meshlab-src)
-#   CHECK=1                            also run check_grouping (guarantees + result digests)
+#   CHECK=1                            also run check_grouping on the meshes and on synthetic ones
+#                                      (guarantees + result digests, to compare two versions)
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -23,5 +24,5 @@ if [ "${CHECK:-0}" = 1 ]; then
     meshes=("$ROOT/../shared/test_meshes/stanford_bunny_bun_zipper.ply"
             "$ROOT/../shared/test_meshes/stanford_dragon_vrip_binary.ply")
   fi
-  "$BUILD/bench/check_grouping" "${meshes[@]}"
+  "$BUILD/bench/check_grouping" --synthetic "${meshes[@]}"
 fi

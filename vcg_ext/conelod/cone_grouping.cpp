@@ -14,8 +14,9 @@
 // slot when it fits, else to the end; the arena is compacted in place when full. Level 1
 // recomputes face normals from the mesh when an exact cone needs them and areas come from the
 // faces at the end, rather than from arrays: the build's peak memory stays under twice the
-// loaded mesh's. The output is the same, bit for bit, as that of the straightforward version
-// this replaced (std::vector everywhere, binary heap, normals array).
+// loaded mesh's. None of this changes a bit of the output: the same pairs are scored with the
+// same arithmetic and MinimalCone sees the same normals in the same order (bench/
+// check_grouping prints digests to compare two builds of the code).
 #include "conelod/cone_grouping.h"
 
 #include <algorithm>
@@ -169,7 +170,8 @@ constexpr float kNoPair = -std::numeric_limits<float>::infinity();
 // unit's best pair; kNoPair: none). A unit's leaf sits at its own index, so the neighbours of a
 // merged unit, close in index, share the lower nodes of their paths, and an update that does
 // not change a node's winner stops there: cheaper on memory than a heap, where positions are
-// scattered. Ties go to the lower unit id (deterministic output).
+// scattered. Ties go to the lower unit id (deterministic output). A node holds its winner as
+// one integer, key then unit, ordered like (higher key, lower unit): one comparison per child.
 class BestTree {
  public:
   // n units, none with a pair yet; setKey then build, or set.
@@ -186,7 +188,7 @@ class BestTree {
       below = RoundUp(count);
       total += below;
     }
-    nodes_.assign(total, Node{kNoPair, std::numeric_limits<int>::max()});  // padding never wins
+    nodes_.assign(total, 0);  // padding: below every real entry, kNoPair included
   }
   float key(int u) const { return key_[size_t(u)]; }
   void prefetch(int u) const {  // the leaf and its parent (level 1 starts nodes_)
@@ -200,27 +202,27 @@ class BestTree {
   }
   void release() {
     BigVector<float>().swap(key_);
-    BigVector<Node>().swap(nodes_);
+    BigVector<uint64_t>().swap(nodes_);
   }
-  bool empty() const { return nodes_.back().key == kNoPair; }
-  int top() const { return nodes_.back().unit; }
+  bool empty() const { return (nodes_.back() >> 32) == OrderedKey(kNoPair); }
+  int top() const { return UnitOf(nodes_.back()); }
   void set(int u, float k) {
     const float old = key_[size_t(u)];
     key_[size_t(u)] = k;
     size_t i = size_t(u);
     if (k > old) {  // u can only win more nodes
-      const Node e{k, u};
+      const uint64_t e = Entry(k, u);
       for (size_t level = 1; level <= levelBegin_.size(); ++level) {
         i /= kArity;
-        Node& n = node(level, i);
-        if (n.unit != u && !Better(e, n)) return;
+        uint64_t& n = node(level, i);
+        if (UnitOf(n) != u && e < n) return;
         n = e;
       }
     } else if (k < old) {  // only the nodes u was winning change
       for (size_t level = 1; level <= levelBegin_.size(); ++level) {
         i /= kArity;
-        Node& n = node(level, i);
-        if (n.unit != u) return;
+        uint64_t& n = node(level, i);
+        if (UnitOf(n) != u) return;
         n = winner(level, i);
       }
     }
@@ -228,33 +230,36 @@ class BestTree {
 
  private:
   static constexpr size_t kArity = 8;  // 8 nodes = one cache line
-  struct Node {
-    float key;
-    int unit;
-  };
   static size_t RoundUp(size_t n) { return (n + kArity - 1) / kArity * kArity; }
-  static bool Better(const Node& a, const Node& b) {
-    return a.key > b.key || (a.key == b.key && a.unit < b.unit);
+  // Keys as unsigned integers in the same order (no NaN here; -0 counts as +0, as in floats).
+  static uint32_t OrderedKey(float k) {
+    k += 0.0f;
+    uint32_t bits;
+    std::memcpy(&bits, &k, sizeof bits);
+    return (bits & 0x80000000u) ? ~bits : (bits | 0x80000000u);
   }
-  Node& node(size_t level, size_t i) { return nodes_[levelBegin_[level - 1] + i]; }
-  // The best of the children of node i at `level` (children in index order: ties to the first).
-  Node winner(size_t level, size_t i) {
-    if (level == 1) {
+  static uint64_t Entry(float k, int u) {
+    return (uint64_t(OrderedKey(k)) << 32) | (0xFFFFFFFFu - uint32_t(u));
+  }
+  static int UnitOf(uint64_t e) { return int(0xFFFFFFFFu - uint32_t(e)); }
+  uint64_t& node(size_t level, size_t i) { return nodes_[levelBegin_[level - 1] + i]; }
+  // The best of the children of node i at `level`.
+  uint64_t winner(size_t level, size_t i) {
+    if (level == 1) {  // leaves in index order: ties to the first
       const float* k = &key_[i * kArity];
       size_t best = 0;
       for (size_t j = 1; j < kArity; ++j)
         if (k[j] > k[best]) best = j;
-      return Node{k[best], int(i * kArity + best)};
+      return Entry(k[best], int(i * kArity + best));
     }
-    const Node* c = &node(level - 1, i * kArity);
-    Node best = c[0];
-    for (size_t j = 1; j < kArity; ++j)
-      if (Better(c[j], best)) best = c[j];
+    const uint64_t* c = &node(level - 1, i * kArity);
+    uint64_t best = c[0];
+    for (size_t j = 1; j < kArity; ++j) best = std::max(best, c[j]);
     return best;
   }
 
   BigVector<float> key_;            // leaves, padded to a multiple of kArity
-  BigVector<Node> nodes_;           // levels 1.. (each padded to a multiple of kArity), root last
+  BigVector<uint64_t> nodes_;       // levels 1.. (each padded to a multiple of kArity), root last
   std::vector<size_t> levelBegin_;  // first node of level 1, 2, ... in nodes_
   std::vector<size_t> levelCount_;  // live nodes per level
 };
@@ -616,8 +621,9 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     for (size_t c = 0; c < childTotal; ++c) prev[c].parent = childGroup[c];
   }
 
-  // Exact cones; boxes and tight spheres from the vertices, in face order (min and max do not
-  // depend on the order, and face order reads the mesh sequentially).
+  // Exact cones; boxes from the vertices at level 1, from the children's boxes above (min and
+  // max do not depend on the order, but for the sign of a zero); tight spheres from the
+  // vertices, in face order (which reads the mesh sequentially).
   for (size_t g = 0; g < groupCount; ++g) {
     if (chains_[g].exactSize != units_[g].faceCount) makeConeExact(int(g));
     Group& grp = level.groups[g];
@@ -625,9 +631,29 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     grp.faceCount = units_[g].faceCount;
     grp.box.SetNull();
   }
-  for (size_t f = 0; f < size_t(faceCount_); ++f) {
-    vcg::Box3f& box = level.groups[size_t(faceGroup[f])].box;
-    for (uint32_t v : mesh_.faces[f]) box.Add(mesh_.positions[v]);
+  if (firstLevel) {
+    for (size_t f = 0; f < size_t(faceCount_); ++f) {
+      vcg::Box3f& box = level.groups[size_t(faceGroup[f])].box;
+      for (uint32_t v : mesh_.faces[f]) box.Add(mesh_.positions[v]);
+    }
+  } else {
+    const auto& prev = out.levels.back().groups;
+    for (size_t c = 0; c < childTotal; ++c) level.groups[size_t(childGroup[c])].box.Add(prev[c].box);
+  }
+  // Where a bound is zero, +0 or -0 is whichever came first: take the vertices in the order of the
+  // group's face list then, the order that defines the result.
+  for (size_t g = 0; g < groupCount; ++g) {
+    vcg::Box3f& box = level.groups[g].box;
+    bool zero = false;
+    for (int k = 0; k < 3; ++k) zero = zero || box.min[k] == 0 || box.max[k] == 0;
+    if (!zero) continue;
+    box.SetNull();
+    const int tail = chains_[g].tail;
+    int f = tail;
+    do {
+      f = faceNext_[size_t(f)];
+      for (uint32_t v : mesh_.faces[size_t(f)]) box.Add(mesh_.positions[v]);
+    } while (f != tail);
   }
   // A second sphere around the box centre; keep the smaller of it and the merged bound.
   std::vector<vcg::Point3d> boxCenter(groupCount);

@@ -4,6 +4,10 @@
 #include <algorithm>
 #include <cmath>
 
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
 namespace conelod {
 namespace {
 
@@ -26,6 +30,47 @@ struct Cap {
 };
 
 Cap Cap1(const vcg::Point3d& a) { return Cap{a, 1.0, false}; }
+
+// The normals as three columns, for Welzl's scans: two normals per SSE2 operation, with the
+// same products and sums as Cap::contains (so the same answers, bit for bit), and most of
+// MinimalCone's time is spent in these scans.
+class Columns {
+ public:
+  void assign(const std::vector<vcg::Point3d>& pts) {
+    const size_t n = pts.size();
+    x_.resize(n);
+    y_.resize(n);
+    z_.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      x_[i] = pts[i][0];
+      y_[i] = pts[i][1];
+      z_[i] = pts[i][2];
+    }
+  }
+  // The first index in [begin, end) whose normal the (cullable) cap does not contain, or end.
+  size_t firstOutside(const Cap& cap, size_t begin, size_t end) const {
+    const double ax = cap.axis[0], ay = cap.axis[1], az = cap.axis[2];
+    const double minCos = cap.cosHalf - kCosEps;
+    size_t i = begin;
+#ifdef __SSE2__
+    const __m128d vax = _mm_set1_pd(ax), vay = _mm_set1_pd(ay), vaz = _mm_set1_pd(az);
+    const __m128d vmin = _mm_set1_pd(minCos);
+    for (; i + 2 <= end; i += 2) {
+      __m128d d = _mm_mul_pd(_mm_loadu_pd(&x_[i]), vax);
+      d = _mm_add_pd(d, _mm_mul_pd(_mm_loadu_pd(&y_[i]), vay));
+      d = _mm_add_pd(d, _mm_mul_pd(_mm_loadu_pd(&z_[i]), vaz));
+      const int outside = _mm_movemask_pd(_mm_cmpnge_pd(d, vmin));  // not >=: NaN is outside too
+      if (outside) return i + ((outside & 1) ? 0 : 1);
+    }
+#endif
+    for (; i < end; ++i)
+      if (!(x_[i] * ax + y_[i] * ay + z_[i] * az >= minCos)) return i;
+    return end;
+  }
+
+ private:
+  std::vector<double> x_, y_, z_;
+};
 
 Cap Cap2(const vcg::Point3d& a, const vcg::Point3d& b) {
   vcg::Point3d m = a + b;
@@ -96,20 +141,25 @@ NormalCone MinimalCone(std::vector<vcg::Point3d>& pts, uint64_t seed) {
   uint64_t s = seed ? seed : 1;
   for (size_t i = n - 1; i > 0; --i) std::swap(pts[i], pts[NextRandom(s) % (i + 1)]);
 
+  // Welzl's loops below: each scans a range for the first normal outside the current cap.
+  thread_local Columns cols;
+  cols.assign(pts);
   Cap cap = Cap1(pts[0]);
   for (size_t i = 1; i < n && !cap.uncullable; ++i) {
-    if (cap.contains(pts[i])) continue;
+    i = cols.firstOutside(cap, i, n);
+    if (i == n) break;
     cap = Cap1(pts[i]);  // pts[i] is on the boundary of the minimal cap of pts[0..i]
     for (size_t j = 0; j < i && !cap.uncullable; ++j) {
-      if (cap.contains(pts[j])) continue;
+      j = cols.firstOutside(cap, j, i);
+      if (j == i) break;
       cap = Cap2(pts[i], pts[j]);
       for (size_t k = 0; k < j && !cap.uncullable; ++k) {
-        if (cap.contains(pts[k])) continue;
+        k = cols.firstOutside(cap, k, j);
+        if (k == j) break;
         cap = Cap3(pts[i], pts[j], pts[k]);
         // With three boundary points the cap is fixed: a point of pts[0..k) outside it means a
         // four-point support, i.e. the enclosing ball is centred at the origin (no hemisphere).
-        for (size_t l = 0; l < k && !cap.uncullable; ++l)
-          if (!cap.contains(pts[l])) cap.uncullable = true;
+        if (!cap.uncullable && cols.firstOutside(cap, 0, k) < k) cap.uncullable = true;
       }
     }
   }
