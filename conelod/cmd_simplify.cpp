@@ -11,6 +11,7 @@
 #include "conelod/group_qem.h"
 #include "conelod/hierarchical_simplification.h"
 #include "conelod/mesh_check.h"
+#include "conelod/pca_partition.h"
 
 namespace conelod {
 namespace cli {
@@ -55,7 +56,7 @@ const char* kSimplifyUsage =
     "  level of the normal-cone hierarchy, each level from the one below (PREFIX_L<k>.ply).\n"
     "  --groups quality    per-face quality of IN.ply (default; equal values = one group)\n"
     "  --groups cone:L     level L of the normal-cone hierarchy, default grouping parameters\n"
-    "  --groups pca:K      PCA clusters (not in this build yet)\n"
+    "  --groups pca:K      the K clusters of the recursive PCA face partition\n"
     "  --target-ratio F    target = F x faces (0 < F <= 1)     --max-error E  fraction of bbox diag\n"
     "options (defaults in brackets): --no-condition1 --no-condition2 --lock-boundaries\n"
     "  --quality-thr Q [0.3]  --no-optimal-placement  --preserve-boundary  --boundary-weight W [1]\n"
@@ -89,13 +90,16 @@ int CmdSimplify(int argc, char** argv) {
   if (!hierarchy && !targetFaces && !a.has("--target-ratio") && !a.has("--max-error"))
     return Fail(kUsage, std::string("give --target-faces, --target-ratio or --max-error\n") + kSimplifyUsage);
   std::string source = a.str("--groups", hierarchy ? "cone:1" : "quality");
-  int coneLevel = 0;
+  int coneLevel = 0, pcaClusters = 0;
   if (source.compare(0, 5, "cone:") == 0) {
     char* end = nullptr;
     coneLevel = int(std::strtol(source.c_str() + 5, &end, 10));
     if (*end || coneLevel < 1) return Fail(kUsage, "--groups cone:L needs a level L >= 1");
   } else if (source.compare(0, 4, "pca:") == 0) {
-    return Fail(kUsage, "--groups pca:K: the PCA partition is not in this build yet; use quality or cone:L");
+    char* end = nullptr;
+    pcaClusters = int(std::strtol(source.c_str() + 4, &end, 10));
+    if (*end || pcaClusters < 1) return Fail(kUsage, "--groups pca:K needs a cluster count K >= 1");
+    if (hierarchy) return Fail(kUsage, "--hierarchy simplifies the levels of the normal-cone hierarchy: use cone:L");
   } else if (source != "quality") {
     return Fail(kUsage, "--groups must be quality, cone:L or pca:K\n" + std::string(kSimplifyUsage));
   }
@@ -121,6 +125,14 @@ int CmdSimplify(int argc, char** argv) {
       return Fail(kUsage, "--groups " + source + ": the normal-cone hierarchy of this mesh has " +
                               std::to_string(h.levelCount()) + " levels");
     if (!hierarchy) groups = h.level(coneLevel).faceGroup;
+  } else if (pcaClusters > 0) {
+    // The cut of the recursive PCA partition at K clusters (built best-first, down to K only).
+    PcaPartitionParams pp;
+    pp.targetClusters = pcaClusters;
+    PcaTree tree;
+    s = BuildPcaTree(im, pp, tree);
+    if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
+    FaceClustersOfCut(tree, CutByCount(tree, pcaClusters), groups);
   } else {
     if (!(loadMask & vcg::tri::io::Mask::IOM_FACEQUALITY))
       return Fail(kBadInput, input + " has no per-face quality to use as group ids: group it first (conelod group " +
@@ -189,7 +201,7 @@ int CmdSimplify(int argc, char** argv) {
 
   if (a.has("-o")) {
     ApplySimplifiedMesh(mesh, faceOf, r.mesh, r.sourceFace, r.sourceVertex);
-    WriteGroupsToFaces(mesh, groupsAfter, coneLevel > 0);  // quality source: faces keep their quality
+    WriteGroupsToFaces(mesh, groupsAfter, coneLevel > 0 || pcaClusters > 0);  // quality source: faces keep theirs
     err = SavePly(mesh, a.str("-o"));
     if (!err.empty()) return Fail(kIoError, err);
   }

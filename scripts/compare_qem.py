@@ -142,17 +142,26 @@ def compare(mesh, a, tools, out_dir):
     os.makedirs(work, exist_ok=True)
     print("== %s" % mesh, flush=True)
 
-    # Grouped input: per-face quality = normal-cone group of level L (clamped to the levels built).
-    info = subprocess.run([tools["conelod"], "group", mesh, "--json"], stdout=subprocess.PIPE, check=True)
     import json
-    levels = json.loads(info.stdout)["levels"]
-    level = min(a.level, len(levels))
-    groups = levels[level - 1]["groups"]
-    grouped = os.path.join(work, name + "_cone%d.ply" % level)
-    subprocess.run([tools["conelod"], "group", mesh, "--level", str(level), "-o", grouped], check=True,
-                   stdout=subprocess.DEVNULL)
+    if a.pca:
+        # Grouped input: per-face quality = cluster of the recursive PCA partition cut at K.
+        grouped = os.path.join(work, name + "_pca%d.ply" % a.pca)
+        info = subprocess.run([tools["conelod"], "partition", mesh, "--clusters", str(a.pca), "-o", grouped, "--json"],
+                              stdout=subprocess.PIPE, check=True)
+        groups = json.loads(info.stdout)["clusters"]
+        source = "%d PCA clusters" % groups
+    else:
+        # Grouped input: per-face quality = normal-cone group of level L (clamped to the levels built).
+        info = subprocess.run([tools["conelod"], "group", mesh, "--json"], stdout=subprocess.PIPE, check=True)
+        levels = json.loads(info.stdout)["levels"]
+        level = min(a.level, len(levels))
+        groups = levels[level - 1]["groups"]
+        grouped = os.path.join(work, name + "_cone%d.ply" % level)
+        subprocess.run([tools["conelod"], "group", mesh, "--level", str(level), "-o", grouped], check=True,
+                       stdout=subprocess.DEVNULL)
+        source = "%d normal-cone groups, level %d" % (groups, level)
     faces_in = ply_face_count(grouped)
-    print("  %d faces, normal-cone level %d: %d groups" % (faces_in, level, groups), flush=True)
+    print("  %d faces, %s" % (faces_in, source), flush=True)
 
     noop = os.path.join(work, "noop.mlx")
     script(noop, [])
@@ -199,13 +208,13 @@ def compare(mesh, a, tools, out_dir):
                 todo.insert(0, ("builtin_same", ""))
             print("  %-24s target %7d: %7d faces, %6.2f s CPU, RMS %.4f%% / %.4f%%, %3.0f%% groups intact"
                   % (label, target, row["faces"], row["cpu"], h[0][2], h[1][2], row["intact"]), flush=True)
-    write_outputs(name, mesh, level, groups, faces_in, rows, out_dir, a)
+    write_outputs(name, mesh, source, faces_in, rows, out_dir, a)
     return rows
 
 
-def write_outputs(name, mesh, level, groups, faces_in, rows, out_dir, a):
+def write_outputs(name, mesh, source, faces_in, rows, out_dir, a):
     md = []
-    md.append("### %s (%d faces; normal-cone groups of level %d: %d)\n" % (name, faces_in, level, groups))
+    md.append("### %s (%d faces; %s)\n" % (name, faces_in, source))
     md.append("| method | target | faces | CPU s | H max → | H mean → | H RMS → | H max ← | H mean ← | H RMS ← "
               "| groups after | split | vanished | intact |")
     md.append("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
@@ -250,7 +259,7 @@ def write_outputs(name, mesh, level, groups, faces_in, rows, out_dir, a):
     gp = """set terminal pngcairo size 720,450 font "DejaVu Sans,10"
 set output '{png}'
 set termoption noenhanced
-set title "{name}: RMS Hausdorff distance vs faces ({groups} normal-cone groups, level {level})"
+set title "{name}: RMS Hausdorff distance vs faces ({source})"
 set xlabel "faces after simplification"
 set ylabel "RMS distance, % of bbox diagonal (larger of both ways)"
 set logscale xy
@@ -259,7 +268,7 @@ set key top right
 plot '{tsv}' index 0 using 3:4 with linespoints lw 2 pt 7 title "MeshLab QEM (built-in)", \\
      '{tsv}' index 1 using 3:4 with linespoints lw 2 pt 5 title "ours, conditions 1+2", \\
      '{tsv}' index 2 using 3:4 with linespoints lw 2 pt 9 title "ours, locked group boundaries"
-""".format(png=png, tsv=tsv, name=name, level=level, groups=groups)
+""".format(png=png, tsv=tsv, name=name, source=source)
     p = subprocess.run(["gnuplot"], input=gp.encode(), stderr=subprocess.PIPE)
     if p.returncode != 0:
         print("gnuplot failed: %s" % p.stderr.decode(), file=sys.stderr)
@@ -273,6 +282,7 @@ def main():
     ap.add_argument("--source", required=True)
     ap.add_argument("--out", default="qem_compare")
     ap.add_argument("--level", type=int, default=4, help="normal-cone hierarchy level of the groups [4]")
+    ap.add_argument("--pca", type=int, default=0, help="use the K clusters of the PCA partition instead")
     ap.add_argument("--targets", default="0.5,0.1,0.01", help="target fractions of the input faces [0.5,0.1,0.01]")
     ap.add_argument("--samples", type=int, default=500000, help="Hausdorff samples [500000]")
     a = ap.parse_args()

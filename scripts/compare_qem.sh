@@ -4,7 +4,7 @@
 # 50%, 10% and 1% of the faces; time, faces reached, Hausdorff distance both ways, group integrity.
 # Writes a Markdown table and a PNG plot per mesh into --out (default: qem_compare/).
 #
-#   scripts/compare_qem.sh [--level L] [--targets 0.5,0.1,0.01] [--samples N] [--out DIR] MESH...
+#   scripts/compare_qem.sh [--level L | --pca K] [--targets 0.5,0.1,0.01] [--samples N] [--out DIR] MESH...
 #
 # Needs a build (CONELOD_BUILD_DIR, default build/) with the plugin and its private meshlabserver,
 # xvfb-run, python3 and gnuplot. Details: scripts/compare_qem.py and docs/group_qem.md.

@@ -542,8 +542,6 @@ def cli_simplify_bad_inputs(c):
     bunny = c.mesh("stanford_bunny_bun_zipper.ply")
     p = c.conelod("simplify", bunny, "--target-faces", "100", expect=2)  # no quality in the file
     assert "no per-face quality" in p.stderr.decode(), p.stderr.decode()
-    p = c.conelod("simplify", bunny, "--target-faces", "100", "--groups", "pca:8", expect=1)
-    assert "PCA" in p.stderr.decode()
     p = c.conelod("simplify", bunny, "--target-faces", "100", "--groups", "cone:99", expect=1)
     assert "levels" in p.stderr.decode()
     c.conelod("simplify", bunny, "--groups", "cone:1", expect=1)  # no target
@@ -579,6 +577,21 @@ def cli_simplify_hierarchy(c):
         ply = read_ply("%s_L%d.ply" % (prefix, lv["level"]))
         assert len(ply["faces"]) == lv["faces_out"] and len(set(ply["quality"])) == lv["groups_after"], lv
     assert levels[-1]["faces_out"] < levels[0]["faces_out"] / 4, levels
+
+
+@case
+def cli_simplify_pca_groups(c):
+    """Group-preserving QEM on the clusters of the PCA partition: every cluster survives whole."""
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    out = c.out("pca_simplified.ply")
+    r = json.loads(c.conelod("simplify", bunny, "--groups", "pca:75", "--target-ratio", "0.1", "-o", out,
+                             "--json").stdout)
+    assert r["group_source"] == "pca:75" and r["groups_before"] == 75, r
+    assert r["groups_after"] == 75 and r["groups_split"] == 0 and r["groups_vanished"] == 0, r
+    assert r["faces_out"] <= 6945 + 1, r
+    ply = read_ply(out)
+    assert len(ply["faces"]) == r["faces_out"] and len(set(ply["quality"])) == 75
+    c.conelod("simplify", bunny, "--groups", "pca:0", "--target-ratio", "0.1", expect=1)
 
 
 @case
