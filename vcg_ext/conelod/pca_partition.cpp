@@ -19,22 +19,12 @@ using Vec3 = Eigen::Vector3d;
 Vec3 ToVec(const vcg::Point3f& p) { return Vec3(p[0], p[1], p[2]); }
 vcg::Point3f ToPoint(const Vec3& v) { return vcg::Point3f(float(v[0]), float(v[1]), float(v[2])); }
 
-// Unit normal and area of face f, with the degenerate-face rule of ComputeFaceNormalsAndAreas
-// (computed one face at a time here, so that the tree needs no per-face normal array).
+// Unit normal and area of face f (indexed_mesh.h's shared rule), one face at a time, so that the
+// tree needs no per-face normal array.
 double FaceNormalOf(const IndexedMesh& m, uint32_t f, vcg::Point3d& normal) {
-  const auto& t = m.faces[f];
-  const vcg::Point3d a = vcg::Point3d::Construct(m.positions[t[0]]);
-  const vcg::Point3d b = vcg::Point3d::Construct(m.positions[t[1]]);
-  const vcg::Point3d c = vcg::Point3d::Construct(m.positions[t[2]]);
-  const vcg::Point3d n = (b - a) ^ (c - a);
-  const double len = n.Norm();
-  const double scale = std::max({(b - a).SquaredNorm(), (c - a).SquaredNorm(), (c - b).SquaredNorm()});
-  if (!(len > 1e-12 * scale) || !(len > 0)) {
-    normal = vcg::Point3d(0, 0, 0);
-    return 0;
-  }
-  normal = n / len;
-  return 0.5 * len;
+  double area;
+  FaceNormalAndArea(m, f, normal, area);
+  return area;
 }
 
 // Additive sums of a set of triangles about a reference point p: area, Σ A_i (r_i − p) and
