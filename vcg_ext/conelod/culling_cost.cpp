@@ -89,9 +89,7 @@ Status EvaluateCullingCost(const IndexedMesh& mesh, const GroupHierarchy& h, con
   std::vector<double> areas;
   ComputeFaceNormalsAndAreas(mesh, normals, areas);
   std::vector<vcg::Point3d> anchor(mesh.faces.size());  // a point of each face, for perspective
-  vcg::Box3d box;
-  for (const auto& q : mesh.faces)
-    for (uint32_t v : q) box.Add(vcg::Point3d::Construct(mesh.positions[v]));
+  const vcg::Box3d box = UsedVertexBox(mesh);
   for (size_t f = 0; f < mesh.faces.size(); ++f) anchor[f] = vcg::Point3d::Construct(mesh.positions[mesh.faces[f][0]]);
   const vcg::Point3d centre = box.Center();
   const double radius = 0.5 * box.Diag();

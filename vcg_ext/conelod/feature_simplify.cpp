@@ -973,13 +973,7 @@ double DihedralAngleDeg(const vcg::Point3d& n0, const vcg::Point3d& n1) {
 }
 
 double BoundingBoxDiagonal(const IndexedMesh& mesh) {
-  vcg::Box3d box;
-  std::vector<char> used(mesh.positions.size(), 0);
-  for (const auto& t : mesh.faces)
-    for (uint32_t v : t)
-      if (v < used.size()) used[v] = 1;
-  for (size_t v = 0; v < mesh.positions.size(); ++v)
-    if (used[v]) box.Add(P3::Construct(mesh.positions[v]));
+  const vcg::Box3d box = UsedVertexBox(mesh);
   return box.IsNull() ? 0.0 : box.Diag();
 }
 

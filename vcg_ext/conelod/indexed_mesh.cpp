@@ -16,6 +16,17 @@ void ComputeFaceNormalsAndAreas(const IndexedMesh& m, std::vector<vcg::Point3d>&
   for (size_t f = 0; f < nf; ++f) FaceNormalAndArea(m, f, normals[f], areas[f]);
 }
 
+vcg::Box3d UsedVertexBox(const IndexedMesh& m) {
+  vcg::Box3d box;
+  std::vector<char> used(m.positions.size(), 0);
+  for (const auto& t : m.faces)
+    for (uint32_t v : t)
+      if (v < used.size()) used[v] = 1;
+  for (size_t v = 0; v < m.positions.size(); ++v)
+    if (used[v]) box.Add(vcg::Point3d::Construct(m.positions[v]));
+  return box;
+}
+
 FaceAdjacency BuildFaceAdjacency(const IndexedMesh& m) {
   FaceAdjacency adj;
   BuildFaceAdjacencyInto(m, adj.offsets, adj.neighbours, adj.borderEdges, adj.nonManifoldEdges);

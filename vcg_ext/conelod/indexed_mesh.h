@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <vector>
 
+#include <vcg/space/box3.h>
 #include <vcg/space/point3.h>
 
 namespace conelod {
@@ -47,6 +48,10 @@ inline void FaceNormalAndArea(const IndexedMesh& m, size_t f, vcg::Point3d& norm
 // Per-face unit normal and area (FaceNormalAndArea) of every face.
 void ComputeFaceNormalsAndAreas(const IndexedMesh& m, std::vector<vcg::Point3d>& normals,
                                 std::vector<double>& areas);
+
+// Bounding box of the vertices that faces use (unreferenced vertices and out-of-range indices
+// ignored); null when there are none.
+vcg::Box3d UsedVertexBox(const IndexedMesh& m);
 
 // Edge adjacency of faces, CSR: the faces sharing an edge with face f are
 // neighbours[offsets[f] .. offsets[f+1]). Faces sharing a non-manifold edge are all neighbours of

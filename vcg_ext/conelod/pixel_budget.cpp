@@ -39,13 +39,7 @@ Status ValidateParams(const PixelBudgetParams& p) {
 }
 
 OrthoView FramedView(const IndexedMesh& mesh, const P3& direction, int width, int height, double fill) {
-  vcg::Box3d box;
-  std::vector<char> used(mesh.positions.size(), 0);
-  for (const auto& t : mesh.faces)
-    for (uint32_t v : t)
-      if (v < used.size()) used[v] = 1;
-  for (size_t v = 0; v < mesh.positions.size(); ++v)
-    if (used[v]) box.Add(P3::Construct(mesh.positions[v]));
+  const vcg::Box3d box = UsedVertexBox(mesh);
   OrthoView view;
   view.width = width;
   view.height = height;
