@@ -27,6 +27,7 @@
 #include <vcg/complex/complex.h>
 #include <wrap/io_trimesh/import_ply.h>
 
+#include "conelod/builtin_qem_params.h"
 #include "conelod/cone_grouping.h"
 #include "conelod/group_qem.h"
 #include "conelod/vcg_bridge.h"
@@ -65,15 +66,7 @@ std::map<std::string, double> g_cpu;  // benchmark name -> CPU seconds per itera
 size_t RunVcg(QMesh& m, int targetFaces) {
   vcg::tri::UpdateTopology<QMesh>::VertexFace(m);
   vcg::tri::UpdateFlags<QMesh>::FaceBorderFromVF(m);
-  vcg::tri::TriEdgeCollapseQuadricParameter pp;
-  pp.QualityThr = 0.3;
-  pp.PreserveBoundary = false;
-  pp.BoundaryQuadricWeight = pp.BoundaryQuadricWeight * 1.0;
-  pp.PreserveTopology = false;
-  pp.QualityWeight = false;
-  pp.NormalCheck = false;
-  pp.OptimalPlacement = true;
-  pp.QualityQuadric = false;
+  vcg::tri::TriEdgeCollapseQuadricParameter pp = conelod::BuiltinQemParameters();
   vcg::LocalOptimization<QMesh> session(m, &pp);
   session.Init<QCollapse>();
   session.SetTargetSimplices(targetFaces);

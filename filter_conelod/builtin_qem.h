@@ -13,6 +13,8 @@
 #include <vcg/complex/algorithms/local_optimization.h>
 #include <vcg/complex/algorithms/local_optimization/tri_edge_collapse_quadric.h>
 
+#include "conelod/builtin_qem_params.h"
+
 namespace conelod_plugin {
 
 using QuadricTemp = vcg::SimpleTempData<CMeshO::VertContainer, vcg::math::Quadric<double>>;
@@ -47,16 +49,7 @@ inline int RunBuiltinQuadric(MeshModel& mm, int targetFaces, vcg::CallBackPos* c
   mm.updateDataMask(MeshModel::MM_VERTFACETOPO | MeshModel::MM_VERTMARK);
   vcg::tri::UpdateFlags<CMeshO>::FaceBorderFromVF(m);
 
-  vcg::tri::TriEdgeCollapseQuadricParameter pp;  // the built-in filter's defaults
-  pp.QualityThr = 0.3;
-  pp.PreserveBoundary = false;
-  pp.BoundaryQuadricWeight = pp.BoundaryQuadricWeight * 1.0;
-  pp.PreserveTopology = false;
-  pp.QualityWeight = false;
-  pp.NormalCheck = false;
-  pp.OptimalPlacement = true;
-  pp.QualityQuadric = false;
-  pp.QualityQuadricWeight = 0.001;
+  vcg::tri::TriEdgeCollapseQuadricParameter pp = conelod::BuiltinQemParameters();
 
   vcg::math::Quadric<double> zero;
   zero.SetZero();
