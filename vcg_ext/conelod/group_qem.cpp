@@ -202,6 +202,11 @@ class Simplifier {
   Candidate judge(uint32_t a, uint32_t b);
   bool condition1(const std::vector<int>& g, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a,
                   uint32_t n0b, uint32_t n1a, uint32_t n1b, bool primary) const;
+  // Condition 1 for a coarser grouping whose groups are unions of the primary ones, once the
+  // primary grouping passed it (see coarserNested_).
+  bool condition1Nested(const std::vector<int>& g, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1) const {
+    return e1 == kNone || g[e0] != g[e1] || group_[e0] == group_[e1] || interiorIn(a, g) || interiorIn(b, g);
+  }
   // Where the merged vertex goes (c.keep, c.position); false: both endpoints must stay.
   bool place(uint32_t a, uint32_t b, bool contourEdge, Candidate& c) const;
   double priorityOf(double error, double quality, uint32_t a, uint32_t b) const;
@@ -213,6 +218,13 @@ class Simplifier {
   const IndexedMesh& mesh_;
   const std::vector<int>& group_;
   const std::vector<const std::vector<int>*>& coarser_;
+  // Every coarser grouping is a union of the primary groups (as the levels of a GroupHierarchy):
+  // faces in one primary group are in one coarser group. Then a collapse that passes condition 1
+  // for the primary groups passes its first two clauses for the coarser ones (a neighbour in f1's
+  // primary group is in its coarser group), and the third wherever f1 and f2 share a primary group
+  // (a fan inside one primary group is inside one coarser group): only f1 and f2 in different
+  // primary groups but one coarser group remain to check.
+  bool coarserNested_ = false;
   GroupQemParams p_;
   const bool groupConstraints_;
 
@@ -368,6 +380,19 @@ void Simplifier::init() {
   liveFaces_ = nf;
   buildFaceLists();
   for (uint32_t v = 0; v < nv; ++v) analyzeVertex(v);
+  coarserNested_ = !coarser_.empty();
+  if (coarserNested_) {
+    const int maxGroup = nf > 0 ? *std::max_element(group_.begin(), group_.end()) : 0;
+    std::vector<int> coarserOf(size_t(maxGroup) + 1);
+    for (const auto* layer : coarser_) {
+      std::fill(coarserOf.begin(), coarserOf.end(), -1);
+      for (size_t f = 0; f < nf && coarserNested_; ++f) {
+        int& c = coarserOf[size_t(group_[f])];
+        if (c < 0) c = (*layer)[f];
+        else if (c != (*layer)[f]) coarserNested_ = false;
+      }
+    }
+  }
 
   // Quadrics: area-weighted face planes; border (and group-contour) edges add the plane through
   // the edge orthogonal to the face, weighted by boundaryWeight * length^2.
@@ -529,7 +554,9 @@ Candidate Simplifier::judge(uint32_t a, uint32_t b) {
     c.verdict = CollapseVerdict::Condition1;
     if (!condition1(group_, a, b, e[0], e[1], n0a, n0b, n1a, n1b, true)) return c;
     for (const auto* layer : coarser_)
-      if (!condition1(*layer, a, b, e[0], e[1], n0a, n0b, n1a, n1b, false)) return c;
+      if (coarserNested_ ? !condition1Nested(*layer, a, b, e[0], e[1])
+                         : !condition1(*layer, a, b, e[0], e[1], n0a, n0b, n1a, n1b, false))
+        return c;
   }
   if (p_.condition2 && ia.groups + ib.groups >= 3) {
     c.verdict = CollapseVerdict::Condition2;
