@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include <vcg/space/box3.h>
@@ -96,37 +97,52 @@ struct HeapEntry {
   uint32_t tag;
 };
 
-// 4-ary min-heap on priority: half the depth of a binary heap, and a node's children share one
-// or two cache lines (the heap is the largest and most randomly accessed array of a run).
+// 4-ary min-heap on priority: half the depth of a binary heap. The heap is the largest and most
+// randomly accessed array of a run, so the four children of a node (64 bytes) are placed in one
+// cache line: the array starts 16 bytes before a line boundary, so that children 4i+1..4i+4 begin
+// on one.
 class EntryHeap {
  public:
-  void reserve(size_t n) { h_.reserve(n); }
-  bool empty() const { return h_.empty(); }
-  size_t size() const { return h_.size(); }
+  void reserve(size_t n) {
+    if (n > cap_) grow(n);
+  }
+  bool empty() const { return n_ == 0; }
+  size_t size() const { return n_; }
   const HeapEntry& top() const { return h_[0]; }
-  void append(const HeapEntry& e) { h_.push_back(e); }  // unordered; heapify() before popping
+  void append(const HeapEntry& e) {  // unordered; heapify() before popping
+    if (n_ == cap_) grow(2 * cap_ + 64);
+    h_[n_++] = e;
+  }
   void push(const HeapEntry& e) {
-    h_.push_back(e);
-    siftUp(h_.size() - 1);
+    append(e);
+    siftUp(n_ - 1);
   }
   HeapEntry pop() {
     const HeapEntry top = h_[0];
-    h_[0] = h_.back();
-    h_.pop_back();
-    if (!h_.empty()) siftDown(0);
+    h_[0] = h_[--n_];
+    if (n_ > 0) siftDown(0);
     return top;
   }
   void heapify() {
-    for (size_t i = h_.size() / 4 + 1; i-- > 0;)
-      if (i < h_.size()) siftDown(i);
+    for (size_t i = n_ / 4 + 1; i-- > 0;)
+      if (i < n_) siftDown(i);
   }
   template <class Pred>
   void removeIf(Pred pred) {
-    h_.erase(std::remove_if(h_.begin(), h_.end(), pred), h_.end());
+    n_ = size_t(std::remove_if(h_, h_ + n_, pred) - h_);
     heapify();
   }
 
  private:
+  void grow(size_t cap) {
+    std::vector<HeapEntry> storage(cap + 4);  // + room to align
+    const uintptr_t addr = reinterpret_cast<uintptr_t>(storage.data());
+    HeapEntry* h = storage.data() + ((48 - addr % 64 + 64) % 64) / sizeof(HeapEntry);
+    std::copy(h_, h_ + n_, h);
+    storage_.swap(storage);
+    h_ = h;
+    cap_ = cap;
+  }
   void siftUp(size_t i) {
     const HeapEntry x = h_[i];
     while (i > 0) {
@@ -139,7 +155,7 @@ class EntryHeap {
   }
   void siftDown(size_t i) {
     const HeapEntry x = h_[i];
-    const size_t n = h_.size();
+    const size_t n = n_;
     for (;;) {
       const size_t first = 4 * i + 1;
       if (first >= n) break;
@@ -153,8 +169,11 @@ class EntryHeap {
     }
     h_[i] = x;
   }
-  std::vector<HeapEntry> h_;
+  std::vector<HeapEntry> storage_;
+  HeapEntry* h_ = nullptr;  // storage_.data() + 0..3, at 48 modulo 64 bytes
+  size_t n_ = 0, cap_ = 0;
 };
+static_assert(sizeof(HeapEntry) == 16, "four heap entries per cache line");
 constexpr uint32_t kLazy = 0, kJudged = 1u << 31, kKindMask = kJudged, kEpochMask = ~kKindMask;
 
 struct Candidate {
