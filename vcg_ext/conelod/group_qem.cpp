@@ -219,12 +219,15 @@ class Simplifier {
     return groupConstraints_ && !p_.lockGroupBoundaries && vi.groups == 2 && (vi.flags & kSimpleContour);
   }
   Candidate judge(uint32_t a, uint32_t b);
-  bool condition1(const std::vector<int>& g, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a,
-                  uint32_t n0b, uint32_t n1a, uint32_t n1b, bool primary) const;
+  // g(f): the group of face f; layer: the coarser grouping it reads, null for the primary one.
+  template <class GroupOf>
+  bool condition1(const GroupOf& g, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a, uint32_t n0b,
+                  uint32_t n1a, uint32_t n1b, const std::vector<int>* layer) const;
   // Condition 1 for a coarser grouping whose groups are unions of the primary ones, once the
   // primary grouping passed it (see coarserNested_).
   bool condition1Nested(const std::vector<int>& g, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1) const {
-    return e1 == kNone || g[e0] != g[e1] || group_[e0] == group_[e1] || interiorIn(a, g) || interiorIn(b, g);
+    return e1 == kNone || g[e0] != g[e1] || faces_[e0].group == faces_[e1].group || interiorIn(a, g) ||
+           interiorIn(b, g);
   }
   // Where the merged vertex goes (c.keep, c.position); false: both endpoints must stay.
   bool place(uint32_t a, uint32_t b, bool contourEdge, Candidate& c) const;
@@ -252,7 +255,11 @@ class Simplifier {
   double floorError_ = 0;
   std::vector<Point3d> pos_;
   std::vector<Quadric> quadric_;
-  std::vector<std::array<uint32_t, 3>> faces_;
+  // A face with its (primary) group: the judging reads both, in one 16-byte record.
+  struct FaceRec : std::array<uint32_t, 3> {
+    int group;
+  };
+  std::vector<FaceRec> faces_;
   std::vector<char> faceDead_;
   std::vector<uint32_t> start_, count_, refs_;
   // What the loop reads of a vertex, in one 16-byte record (one cache miss, not six).
@@ -309,7 +316,7 @@ void Simplifier::analyzeVertex(uint32_t v) {
   // Distinct groups.
   groupScratch_.clear();
   for (uint32_t i = 0; i < k; ++i) {
-    const int g = group_[fl[i]];
+    const int g = faces_[fl[i]].group;
     if (std::find(groupScratch_.begin(), groupScratch_.end(), g) == groupScratch_.end()) groupScratch_.push_back(g);
   }
   vi.groups = uint8_t(std::min<size_t>(groupScratch_.size(), 255));
@@ -348,10 +355,10 @@ void Simplifier::analyzeVertex(uint32_t v) {
       for (uint32_t i = 0; i < k; ++i)
         if (i != cur && (fanOther_[2 * i] == out || fanOther_[2 * i + 1] == out)) { next = i; break; }
       if (next == kNone || next == startFace || visited > k) {
-        if (next == startFace && group_[fl[cur]] != group_[fl[next]]) ++changes;
+        if (next == startFace && faces_[fl[cur]].group != faces_[fl[next]].group) ++changes;
         break;
       }
-      if (group_[fl[cur]] != group_[fl[next]]) ++changes;
+      if (faces_[fl[cur]].group != faces_[fl[next]].group) ++changes;
       cur = next;
       in = out;
     }
@@ -393,7 +400,11 @@ void Simplifier::init() {
   floorError_ = 1e-12 * diag_ * diag_;
   pos_.resize(nv);
   for (size_t v = 0; v < nv; ++v) pos_[v] = Point3d::Construct(mesh_.positions[v]) - center_;
-  faces_ = mesh_.faces;
+  faces_.resize(nf);
+  for (size_t f = 0; f < nf; ++f) {
+    static_cast<std::array<uint32_t, 3>&>(faces_[f]) = mesh_.faces[f];
+    faces_[f].group = group_[f];
+  }
   faceDead_.assign(nf, 0);
   vs_.assign(nv, VertexState());
   liveFaces_ = nf;
@@ -432,7 +443,7 @@ void Simplifier::init() {
       for (const uint32_t* g = facesBegin(u); g != facesEnd(u); ++g)
         if (*g != f && Contains(faces_[*g], w)) { ++others; other = *g; }
       const bool border = others == 0;
-      const bool contour = groupConstraints_ && others == 1 && group_[other] != group_[f];
+      const bool contour = groupConstraints_ && others == 1 && faces_[other].group != faces_[f].group;
       if (!border && !contour) continue;
       const Point3d edge = pos_[w] - pos_[u];
       Point3d dir = un ^ edge;
@@ -446,17 +457,18 @@ void Simplifier::init() {
   }
 }
 
-bool Simplifier::condition1(const std::vector<int>& g, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1,
-                            uint32_t n0a, uint32_t n0b, uint32_t n1a, uint32_t n1b, bool primary) const {
+template <class GroupOf>
+bool Simplifier::condition1(const GroupOf& g, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a,
+                            uint32_t n0b, uint32_t n1a, uint32_t n1b, const std::vector<int>* layer) const {
   // f1 (and f2) keep a face of their own group among their other neighbours...
-  const int g0 = g[e0];
-  if (!((n0a != kNone && g[n0a] == g0) || (n0b != kNone && g[n0b] == g0))) return false;
+  const int g0 = g(e0);
+  if (!((n0a != kNone && g(n0a) == g0) || (n0b != kNone && g(n0b) == g0))) return false;
   if (e1 == kNone) return true;
-  const int g1 = g[e1];
-  if (!((n1a != kNone && g[n1a] == g1) || (n1b != kNone && g[n1b] == g1))) return false;
+  const int g1 = g(e1);
+  if (!((n1a != kNone && g(n1a) == g1) || (n1b != kNone && g(n1b) == g1))) return false;
   // ...and, when both are in one group, one endpoint's whole closed fan is in it.
   if (g0 != g1) return true;
-  return primary ? (interior(a) || interior(b)) : (interiorIn(a, g) || interiorIn(b, g));
+  return layer ? (interiorIn(a, *layer) || interiorIn(b, *layer)) : (interior(a) || interior(b));
 }
 
 bool Simplifier::place(uint32_t a, uint32_t b, bool contourEdge, Candidate& c) const {
@@ -571,10 +583,12 @@ Candidate Simplifier::judge(uint32_t a, uint32_t b) {
   }
   if (p_.condition1) {
     c.verdict = CollapseVerdict::Condition1;
-    if (!condition1(group_, a, b, e[0], e[1], n0a, n0b, n1a, n1b, true)) return c;
+    const auto primaryGroup = [this](uint32_t f) { return faces_[f].group; };
+    if (!condition1(primaryGroup, a, b, e[0], e[1], n0a, n0b, n1a, n1b, nullptr)) return c;
     for (const auto* layer : coarser_)
       if (coarserNested_ ? !condition1Nested(*layer, a, b, e[0], e[1])
-                         : !condition1(*layer, a, b, e[0], e[1], n0a, n0b, n1a, n1b, false))
+                         : !condition1([layer](uint32_t f) { return (*layer)[f]; }, a, b, e[0], e[1], n0a, n0b,
+                                       n1a, n1b, layer))
         return c;
   }
   if (p_.condition2 && ia.groups + ib.groups >= 3) {
@@ -586,7 +600,7 @@ Candidate Simplifier::judge(uint32_t a, uint32_t b) {
     for (uint32_t v : {a, b})
       for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f) {
         if (*f == e[0] || *f == e[1]) continue;
-        const int g = group_[*f];
+        const int g = faces_[*f].group;
         if (std::find(groupScratch_.begin(), groupScratch_.end(), g) == groupScratch_.end()) {
           groupScratch_.push_back(g);
           if (groupScratch_.size() > limit) return c;
@@ -595,7 +609,7 @@ Candidate Simplifier::judge(uint32_t a, uint32_t b) {
   }
 
   c.verdict = CollapseVerdict::FixedEndpoints;
-  if (!place(a, b, ne == 2 && group_[e[0]] != group_[e[1]], c)) return c;
+  if (!place(a, b, ne == 2 && faces_[e[0]].group != faces_[e[1]].group, c)) return c;
 
   // Geometry of the faces that survive: no flip, no zero-area face; their worst quality
   // (2 area / longest edge^2, compared squared: no square root per face).
