@@ -176,6 +176,7 @@ class BestTree {
  public:
   // n units, none with a pair yet; setKey then build, or set.
   void reset(size_t n) {
+    deferred_ = false;
     key_.assign(RoundUp(std::max<size_t>(n, 1)), kNoPair);
     levelBegin_.clear();
     levelCount_.clear();
@@ -206,9 +207,12 @@ class BestTree {
   }
   bool empty() const { return (nodes_.back() >> 32) == OrderedKey(kNoPair); }
   int top() const { return UnitOf(nodes_.back()); }
+  // While deferred, set() only records the key: build() makes the tree whole again.
+  void setDeferred(bool d) { deferred_ = d; }
   void set(int u, float k) {
     const float old = key_[size_t(u)];
     key_[size_t(u)] = k;
+    if (deferred_) return;
     size_t i = size_t(u);
     if (k > old) {  // u can only win more nodes
       const uint64_t e = Entry(k, u);
@@ -262,6 +266,7 @@ class BestTree {
   BigVector<uint64_t> nodes_;       // levels 1.. (each padded to a multiple of kArity), root last
   std::vector<size_t> levelBegin_;  // first node of level 1, 2, ... in nodes_
   std::vector<size_t> levelCount_;  // live nodes per level
+  bool deferred_ = false;
 };
 
 class HierarchyBuilder {
@@ -275,7 +280,8 @@ class HierarchyBuilder {
   float evaluate(const Unit& a, const Unit& b) const;
   void setBest(int u);  // from the cached scores of u's list
   void mergeUnits(int u, int p);
-  bool runLevel(double thresholdDeg, long& mergesSoFar);
+  bool runLevel(double thresholdDeg, bool localMaximaFirst, long& mergesSoFar);
+  bool reportProgress(long mergesSoFar);
   void emitLevel(double thresholdDeg, GroupHierarchy& out, bool firstLevel);
   void nextLevelUnits();
   void makeConeExact(int u);
@@ -311,6 +317,9 @@ class HierarchyBuilder {
   // Found by emitLevel: the level's group of each unit, the unit of each group.
   std::vector<int> idOfUnit_, rootOfGroup_;
   double thresholdRad_ = kPi;
+  // A unit's cone is recomputed exactly once its face count reaches this many times the count at
+  // its last exact computation (see ConeGroupingParams::strictGreedy).
+  int exactGrowth_ = 2;
   bool thresholdOn_ = false;
   int aliveCount_ = 0;
   bool cancelled_ = false;
@@ -425,7 +434,7 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
   ac.tail = bc.tail;
   bc.tail = -1;
   if (stillExact) ac.exactSize = a.faceCount;
-  else if (a.faceCount >= 2 * ac.exactSize) makeConeExact(u);  // amortized: each face O(log N) times
+  else if (a.faceCount >= exactGrowth_ * ac.exactSize) makeConeExact(u);  // amortized: each face O(log N) times
 
   // The merged unit's list: both lists without u and p, deduplicated, each pair re-scored. It
   // goes back into u's slot when it fits (a unit absorbing a small neighbour rarely gains
@@ -523,7 +532,15 @@ void HierarchyBuilder::compactArena(size_t room) {
   if (write + room > arena_.capacity()) arena_.reserve(write + room + write / 2);
 }
 
-bool HierarchyBuilder::runLevel(double thresholdDeg, long& mergesSoFar) {
+bool HierarchyBuilder::reportProgress(long mergesSoFar) {
+  if ((mergesSoFar & 0x3FFF) != 0 || !progress_) return true;
+  const int pct = int(95.0 * double(mergesSoFar) / std::max(1, faceCount_ - 1));
+  if (progress_(std::min(95, pct), "grouping faces by normal cones")) return true;
+  cancelled_ = true;
+  return false;
+}
+
+bool HierarchyBuilder::runLevel(double thresholdDeg, bool localMaximaFirst, long& mergesSoFar) {
   thresholdOn_ = thresholdDeg < 180.0;
   thresholdRad_ = thresholdDeg * kDeg;
   const size_t n = units_.size();
@@ -545,18 +562,36 @@ bool HierarchyBuilder::runLevel(double thresholdDeg, long& mergesSoFar) {
     l.bestPartner = partner;
     tree_.setKey(int(u), best);
   }
-  tree_.build();
-
   const int minGroups = std::max(1, params_.minTopGroups);
   long merges = 0;
+  if (localMaximaFirst) {
+    // Sweeps in unit order merge every pair that is the best pair of both its units (a local
+    // maximum of v: the global order would merge it too, unless a better pair next to it changed
+    // first), the merged unit going on while its best pair stays mutual; until a sweep merges
+    // nothing. Neighbouring units have neighbouring indices, so a sweep walks the mesh's memory
+    // in order where the global order jumps all over it. The tree is not kept meanwhile.
+    tree_.setDeferred(true);
+    for (long before = -1; before != merges && aliveCount_ > minGroups;) {
+      before = merges;
+      for (int u = 0; u < int(n) && aliveCount_ > minGroups; ++u) {
+        while (alive(u) && aliveCount_ > minGroups) {
+          const int b = links_[size_t(u)].bestPartner;
+          if (b < 0 || links_[size_t(b)].bestPartner != u) break;
+          mergeUnits(u, b);
+          ++merges;
+          if (!reportProgress(mergesSoFar + merges)) return false;
+        }
+      }
+    }
+    tree_.setDeferred(false);
+  }
+  // Best pair first over the whole level (what the sweeps leave: pairs whose ties form cycles).
+  tree_.build();
   while (!tree_.empty() && aliveCount_ > minGroups) {
     const int u = tree_.top();
     mergeUnits(u, links_[size_t(u)].bestPartner);
     ++merges;
-    if ((merges & 0x3FFF) == 0 && progress_) {
-      const int pct = int(95.0 * double(mergesSoFar + merges) / std::max(1, faceCount_ - 1));
-      if (!progress_(std::min(95, pct), "grouping faces by normal cones")) { cancelled_ = true; return false; }
-    }
+    if (!reportProgress(mergesSoFar + merges)) return false;
   }
   mergesSoFar += merges;
   return merges > 0;
@@ -746,9 +781,10 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
   if (progress_ && !progress_(0, "grouping faces by normal cones")) return Status::Cancelled();
 
   long merges = 0;
+  exactGrowth_ = params_.strictGreedy ? 2 : 4;
   double threshold = params_.coneThresholdDeg;
   for (int level = 1; level <= params_.maxLevels; ++level) {
-    const bool merged = runLevel(std::min(threshold, 180.0), merges);
+    const bool merged = runLevel(std::min(threshold, 180.0), level == 1 && !params_.strictGreedy, merges);
     if (cancelled_) { out = GroupHierarchy(); return Status::Cancelled(); }
     if (!merged && level > 1) break;  // nothing changed: the previous level is the top
     emitLevel(std::min(threshold, 180.0), out, level == 1);
