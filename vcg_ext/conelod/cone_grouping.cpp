@@ -20,6 +20,7 @@
 #include "conelod/cone_grouping.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -295,10 +296,17 @@ class HierarchyBuilder {
   const Progress& progress_;
   const int faceCount_;
 
-  BigVector<int> faceNext_;  // circular face lists, one per unit (Chain::tail)
-  // Face normals, from level 2 on. Level 1 recomputes them from the mesh: its arrays leave no
-  // room for these under the memory target; above it, with far fewer units, there is.
+  // Circular face lists, one per unit (Chain::tail). From level 2 on the faces are renumbered
+  // (meshFace_), each level-1 group's faces contiguous in the order of its list: the lists above
+  // are runs of consecutive faces, walked in memory order.
+  BigVector<int> faceNext_;
+  BigVector<int> meshFace_;  // from level 2 on: the mesh face of each renumbered face
+  // Face normals of the renumbered faces, from level 2 on. Level 1 recomputes them from the mesh:
+  // its arrays leave no room for these under the memory target; above it, with far fewer units,
+  // there is.
   BigVector<vcg::Point3d> faceNormal_;
+  int meshFace(int f) const { return meshFace_.empty() ? f : meshFace_[size_t(f)]; }
+  void renumberFaces();
 
   BigVector<Unit> units_;
   BigVector<Link> links_;
@@ -610,7 +618,7 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     int f = tail;
     do {
       f = faceNext_[size_t(f)];
-      faceGroup[size_t(f)] = u;
+      faceGroup[size_t(meshFace(f))] = u;
     } while (f != tail);
   }
   // Ids in order of first appearance over faces: deterministic and cache-friendly.
@@ -687,7 +695,7 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     int f = tail;
     do {
       f = faceNext_[size_t(f)];
-      for (uint32_t v : mesh_.faces[size_t(f)]) box.Add(mesh_.positions[v]);
+      for (uint32_t v : mesh_.faces[size_t(meshFace(f))]) box.Add(mesh_.positions[v]);
     } while (f != tail);
   }
   // A second sphere around the box centre; keep the smaller of it and the merged bound.
@@ -706,6 +714,33 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     level.groups[g].radius = unit.radius;
   }
   out.levels.push_back(std::move(level));
+}
+
+// After level 1: faces renumbered group by group, each group's in the order of its list (so the
+// normals' order, which MinimalCone's last bits depend on, is unchanged), with their normals.
+void HierarchyBuilder::renumberFaces() {
+  const size_t nf = size_t(faceCount_);
+  meshFace_.resize(nf);
+  size_t next = 0;
+  for (size_t g = 0; g < units_.size(); ++g) {  // the units are the level's groups, all alive
+    const int tail = chains_[g].tail;
+    int f = tail;
+    do {
+      f = faceNext_[size_t(f)];
+      meshFace_[next++] = f;
+    } while (f != tail);
+  }
+  assert(next == nf);
+  next = 0;
+  for (size_t g = 0; g < units_.size(); ++g) {
+    const size_t first = next, end = next + size_t(units_[g].faceCount);
+    for (; next + 1 < end; ++next) faceNext_[next] = int(next + 1);
+    faceNext_[next] = int(first);
+    chains_[g].tail = int(next++);
+  }
+  faceNormal_.resize(nf);
+  double area;
+  for (size_t f = 0; f < nf; ++f) FaceNormalAndArea(mesh_, size_t(meshFace_[f]), faceNormal_[f], area);
 }
 
 // The groups found by emitLevel (rootOfGroup_, idOfUnit_) become the units of the next level
@@ -790,11 +825,7 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     emitLevel(std::min(threshold, 180.0), out, level == 1);
     if (int(out.levels.back().groups.size()) <= std::max(1, params_.minTopGroups)) break;
     if (level == params_.maxLevels) break;
-    if (faceNormal_.empty()) {
-      faceNormal_.resize(size_t(nf));
-      double area;
-      for (int f = 0; f < nf; ++f) FaceNormalAndArea(mesh_, size_t(f), faceNormal_[size_t(f)], area);
-    }
+    if (faceNormal_.empty()) renumberFaces();
     threshold *= params_.thresholdGrowth;
   }
 
