@@ -550,7 +550,10 @@ bool HierarchyBuilder::reportProgress(long mergesSoFar) {
 
 bool HierarchyBuilder::runLevel(double thresholdDeg, bool localMaximaFirst, long& mergesSoFar) {
   thresholdOn_ = thresholdDeg < 180.0;
-  thresholdRad_ = thresholdDeg * kDeg;
+  // A cone of pi/2 or more cannot be culled and is stored as pi, above any threshold under 180
+  // degrees: below 180 the limit is never above pi/2. (Without this, a pair whose bound came out
+  // just under pi/2 could merge into a group whose exact cone is uncullable.)
+  thresholdRad_ = std::min(thresholdDeg * kDeg, kPi / 2);
   const size_t n = units_.size();
   aliveCount_ = int(n);
   stampCounter_ = 0;
