@@ -307,6 +307,14 @@ class HierarchyBuilder {
   BigVector<vcg::Point3d> faceNormal_;
   int meshFace(int f) const { return meshFace_.empty() ? f : meshFace_[size_t(f)]; }
   void renumberFaces();
+  // From level 2 on, unless strictGreedy: per unit, up to three normals of its faces whose
+  // minimal cone is the unit's exact cone, or (after a merge) a guess of it: the support of the
+  // minimal cone of both units' supports. An exact recomputation first tries that guess: when
+  // every normal of the unit lies in it, it is the minimal cone (the minimal cone of a subset
+  // that holds them all), found with one scan instead of Welzl's algorithm.
+  BigVector<ConeSupport> support_;
+  bool trySupportCone(int u);
+  std::vector<vcg::Point3d> scratchSupport_;
 
   BigVector<Unit> units_;
   BigVector<Link> links_;
@@ -377,6 +385,7 @@ void HierarchyBuilder::makeConeExact(int u) {
       f = faceNext_[size_t(f)];
       scratchNormals_.push_back(faceNormal_[size_t(f)]);
     } while (f != tail);
+    if (!support_.empty() && trySupportCone(u)) return;
   } else {
     // Walk the list first, then compute the normals: the walk is a chain of dependent loads, the
     // normals are independent of each other and their misses overlap (prefetched ahead).
@@ -395,8 +404,44 @@ void HierarchyBuilder::makeConeExact(int u) {
       FaceNormalAndArea(mesh_, size_t(scratchFaces_[i]), scratchNormals_[i], area);
     }
   }
-  units_[size_t(u)].setCone(MinimalCone(scratchNormals_));
+  ConeSupport support;
+  units_[size_t(u)].setCone(MinimalCone(scratchNormals_, support));
+  if (!support_.empty()) support_[size_t(u)] = support;
   chains_[size_t(u)].exactSize = units_[size_t(u)].faceCount;
+}
+
+// makeConeExact's shortcut (see support_), on the normals in scratchNormals_: true when the
+// unit's cone was set. The guess is the minimal cone of a few normals; the normals outside it
+// join them and the guess is made again (the cone only grows towards the true one), a few times
+// at most before leaving the work to Welzl's algorithm on all the normals.
+bool HierarchyBuilder::trySupportCone(int u) {
+  ConeSupport& support = support_[size_t(u)];
+  if (support.count == 0) return false;
+  std::vector<vcg::Point3d>& chosen = scratchSupport_;
+  chosen.assign(support.normal, support.normal + support.count);
+  ConeSupport found;
+  for (int round = 0; round < 4; ++round) {
+    std::vector<vcg::Point3d> trial(chosen);  // MinimalCone shuffles its input
+    const NormalCone guess = MinimalCone(trial, found);
+    if (guess.empty()) return false;
+    size_t outside = 0;
+    if (guess.cullable()) {
+      // The inside test of MinimalCone (normal_cone.cpp): a cosine slack of 1e-10.
+      const double minCos = std::cos(guess.halfAngle) - 1e-10;
+      for (const vcg::Point3d& n : scratchNormals_)
+        if (n.SquaredNorm() >= 0.5 && !(n * guess.axis >= minCos)) {
+          if (++outside > 256) return false;
+          chosen.push_back(n);
+        }
+    }  // else some of the normals fit in no hemisphere: neither do all of them
+    if (outside == 0) {
+      units_[size_t(u)].setCone(guess);
+      support = found;
+      chains_[size_t(u)].exactSize = units_[size_t(u)].faceCount;
+      return true;
+    }
+  }
+  return false;
 }
 
 void HierarchyBuilder::mergeUnits(int u, int p) {
@@ -441,6 +486,13 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
   faceNext_[size_t(bc.tail)] = headA;
   ac.tail = bc.tail;
   bc.tail = -1;
+  if (!support_.empty()) {  // the support of both supports: the guess at u's next exact cone
+    ConeSupport& sa = support_[size_t(u)];
+    const ConeSupport& sb = support_[size_t(p)];
+    scratchSupport_.assign(sa.normal, sa.normal + sa.count);
+    scratchSupport_.insert(scratchSupport_.end(), sb.normal, sb.normal + sb.count);
+    MinimalCone(scratchSupport_, sa);
+  }
   if (stillExact) ac.exactSize = a.faceCount;
   else if (a.faceCount >= exactGrowth_ * ac.exactSize) makeConeExact(u);  // amortized: each face O(log N) times
 
@@ -636,6 +688,7 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   // The groups become the units of the next level now, indexed by group: the arrays of this
   // level go before the level's output grows.
   nextLevelUnits();
+  if (firstLevel && !params_.strictGreedy) support_.assign(groupCount, ConeSupport());
   level.groups.resize(groupCount);
 
   // Children: faces (level 1) or previous groups, bucketed by new group. A previous group's new
@@ -671,7 +724,7 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   // max do not depend on the order, but for the sign of a zero); tight spheres from the
   // vertices, in face order (which reads the mesh sequentially).
   for (size_t g = 0; g < groupCount; ++g) {
-    if (chains_[g].exactSize != units_[g].faceCount) makeConeExact(int(g));
+    if (chains_[g].exactSize != units_[g].faceCount || (firstLevel && !support_.empty())) makeConeExact(int(g));
     Group& grp = level.groups[g];
     grp.cone = units_[g].cone();
     grp.faceCount = units_[g].faceCount;
@@ -766,6 +819,11 @@ void HierarchyBuilder::nextLevelUnits() {
     chains[id].capacity = count;
     Neighbour* list = arena.data() + links[id].nbOffset;
     for (const Neighbour* w = nbBegin(u); w != nbEnd(u); ++w) *list++ = {idOfUnit_[size_t(w->id)], kNoPair};
+  }
+  if (!support_.empty()) {
+    BigVector<ConeSupport> support(g);
+    for (size_t id = 0; id < g; ++id) support[id] = support_[size_t(rootOfGroup_[id])];
+    support_.swap(support);
   }
   units_.swap(units);
   links_.swap(links);
