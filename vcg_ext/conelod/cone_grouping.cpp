@@ -4,7 +4,8 @@
 // pair's score; a tournament tree over units (not over pairs) gives the global best pair. A
 // merge only changes pairs that involve the merged unit, so only its neighbours are revisited:
 // a neighbour whose best partner was one of the merged units rescans its own neighbours, the
-// others compare their pair with the new unit against their best.
+// others compare their pair with the new unit against their best. At level 1, sweeps in unit
+// order first merge the mutual best pairs (runLevel; the tree is built after them).
 //
 // The loop is bound by memory latency (each merge touches ~20 units scattered over the mesh), so
 // the per-unit state is split by access pattern and packed: the geometry every evaluation reads
@@ -14,9 +15,11 @@
 // slot when it fits, else to the end; the arena is compacted in place when full. Level 1
 // recomputes face normals from the mesh when an exact cone needs them and areas come from the
 // faces at the end, rather than from arrays: the build's peak memory stays under twice the
-// loaded mesh's. None of this changes a bit of the output: the same pairs are scored with the
-// same arithmetic and MinimalCone sees the same normals in the same order (bench/
-// check_grouping prints digests to compare two builds of the code).
+// loaded mesh's. After level 1 the faces are renumbered group by group (renumberFaces), so the
+// upper levels read normals in order. With strictGreedy none of this changes a bit of the
+// output of the paper's best-first order: the same pairs are scored with the same arithmetic and
+// MinimalCone sees the same normals in the same order (bench/check_grouping prints digests to
+// compare two builds of the code; its "strict-greedy" set is the former default).
 #include "conelod/cone_grouping.h"
 
 #include <algorithm>
