@@ -317,7 +317,7 @@ class HierarchyBuilder {
   // that holds them all), found with one scan instead of Welzl's algorithm.
   BigVector<ConeSupport> support_;
   bool trySupportCone(int u);
-  std::vector<vcg::Point3d> scratchSupport_;
+  std::vector<vcg::Point3d> scratchSupport_, scratchTrial_;
 
   BigVector<Unit> units_;
   BigVector<Link> links_;
@@ -424,8 +424,8 @@ bool HierarchyBuilder::trySupportCone(int u) {
   chosen.assign(support.normal, support.normal + support.count);
   ConeSupport found;
   for (int round = 0; round < 4; ++round) {
-    std::vector<vcg::Point3d> trial(chosen);  // MinimalCone shuffles its input
-    const NormalCone guess = MinimalCone(trial, found);
+    scratchTrial_.assign(chosen.begin(), chosen.end());  // MinimalCone shuffles its input
+    const NormalCone guess = MinimalCone(scratchTrial_, found);
     if (guess.empty()) return false;
     size_t outside = 0;
     if (guess.cullable()) {
@@ -651,7 +651,8 @@ bool HierarchyBuilder::runLevel(double thresholdDeg, bool localMaximaFirst, long
     }
     tree_.setDeferred(false);
   }
-  // Best pair first over the whole level (what the sweeps leave: pairs whose ties form cycles).
+  // Best pair first over the whole level: all of it in strict mode, else what the sweeps leave
+  // (pairs whose exact ties form cycles, so that none is mutual).
   tree_.build();
   while (!tree_.empty() && aliveCount_ > minGroups) {
     const int u = tree_.top();
