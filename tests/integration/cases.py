@@ -191,7 +191,8 @@ def meshlab_lists_filters(c):
     for name in names:
         assert "\\section f" in text and (" " + name + " ") in text, name + " not listed by meshlabserver -d"
     for name in ["Cone LOD: Normal Cone Face Grouping", "Cone LOD: Cluster Culling Cost",
-                 "Cone LOD: Feature-Preserving Edge Simplification", "Cone LOD: Face Budget from Screen Pixels"]:
+                 "Cone LOD: Feature-Preserving Edge Simplification", "Cone LOD: Face Budget from Screen Pixels",
+                 "Cone LOD: Export LOD File", "Cone LOD: Extract View-Dependent LOD"]:
         assert name in text, name + " not listed by meshlabserver -d"
 
 
@@ -797,6 +798,169 @@ def meshlab_pca_bad_inputs(c):
         _, log = c.meshlab([c.mesh(mesh)], c.mlx("progressive_cluster_mesh.mlx"), c.out("ok2.ply"))
         assert last_float(log, "progressive_faces") > 0, log[-1500:]
 
+
+# --- LOD file: viewer and filters (issue 5) --------------------------------------------------
+
+def read_png(path):
+    """(width, height, rows of (r, g, b) tuples) of an 8-bit RGB/RGBA, non-interlaced PNG (what Qt writes)."""
+    import zlib
+    data = open(path, "rb").read()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n", path + " is not a PNG"
+    pos, idat, width = 8, b"", None
+    while pos < len(data):
+        n, kind = struct.unpack(">I4s", data[pos:pos + 8])
+        body = data[pos + 8:pos + 8 + n]
+        pos += 12 + n
+        if kind == b"IHDR":
+            width, height, depth, ctype, _, _, interlace = struct.unpack(">IIBBBBB", body)
+            assert depth == 8 and ctype in (2, 6) and interlace == 0, (depth, ctype, interlace)
+            bpp = 3 if ctype == 2 else 4
+        elif kind == b"IDAT":
+            idat += body
+    raw, stride, rows, prev = zlib.decompress(idat), width * bpp, [], bytearray(width * bpp)
+    for y in range(height):
+        f, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+        for i in range(stride):
+            a = line[i - bpp] if i >= bpp else 0
+            b, cc = prev[i], (prev[i - bpp] if i >= bpp else 0)
+            if f == 1: line[i] = (line[i] + a) & 255
+            elif f == 2: line[i] = (line[i] + b) & 255
+            elif f == 3: line[i] = (line[i] + (a + b) // 2) & 255
+            elif f == 4:
+                p = a + b - cc
+                pa, pb, pc = abs(p - a), abs(p - b), abs(p - cc)
+                line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else cc)) & 255
+        rows.append([tuple(line[x * bpp:x * bpp + 3]) for x in range(width)])
+        prev = line
+    return width, height, rows
+
+
+def build_clod(c, mesh, name):
+    out = c.out(name)
+    c.conelod("lod", "build", c.mesh(mesh), "-o", out)
+    assert os.path.getsize(out) > 0, out
+    return out
+
+
+def run_viewer(c, clod, *args):
+    """conelod-viewer under xvfb-run; returns (exit code, stdout, stderr)."""
+    viewer = os.path.join(c.build, "viewer", "conelod-viewer")
+    p = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 1280x1024x24", viewer, clod] + list(args),
+                       stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=600, cwd=c.tmp)
+    return p.returncode, p.stdout.decode(errors="replace"), p.stderr.decode(errors="replace")
+
+
+@case
+def viewer_headless_bunny(c):
+    """The viewer opens the bunny's .clod under Xvfb: a picture of the requested size showing the
+    model, the coarsest level drawn at once, more faces once refined, the budget respected."""
+    clod = build_clod(c, "stanford_bunny_bun_zipper.ply", "bunny.clod")
+    png = c.out("coarse.png")
+    rc, out, err = run_viewer(c, clod, "--screenshot", png, "--size", "320x240", "--frames", "5", "--json")
+    assert rc == 0, (rc, out, err)
+    coarse = json.loads(out.strip().splitlines()[-1])
+    w, h, rows = read_png(png)
+    assert (w, h) == (320, 240) and (coarse["width"], coarse["height"]) == (320, 240), (w, h, coarse)
+    background = rows[h - 1][w - 1]  # the HUD sits top left, the model in the middle
+    model = sum(1 for row in rows for px in row if max(abs(a - b) for a, b in zip(px, background)) > 24)
+    assert model > 0.08 * w * h, "only %d of %d pixels differ from the background" % (model, w * h)
+    s = coarse["coarse"]
+    assert s["faces_drawn"] > 0 and s["groups_drawn"] > 0 and s["faces_drawn"] <= s["cut_faces"], coarse
+    assert s["cut_faces"] < 69451 and s["max_level"] == coarse["levels"] - 1, coarse  # the roots only
+    assert coarse["first_frame_ms"] > 0 and coarse["fps"] > 0 and coarse["resident_bytes"] > 0, coarse
+
+    png = c.out("refined.png")
+    rc, out, err = run_viewer(c, clod, "--screenshot", png, "--size", "320x240", "--refine", "--frames", "5", "--json")
+    assert rc == 0, (rc, out, err)
+    refined = json.loads(out.strip().splitlines()[-1])
+    r = refined["refined"]
+    assert r["faces_drawn"] > s["faces_drawn"] and r["cut_faces"] > s["cut_faces"], (s, r)
+    assert r["min_level"] == 0 and r["cut_faces"] == 69451, r  # the default budget holds the whole bunny
+    assert r["groups_culled"] > 0 and r["faces_drawn"] < r["cut_faces"], r  # the back of the bunny is culled
+    assert read_png(png)[:2] == (320, 240)
+
+    rc, out, err = run_viewer(c, clod, "--screenshot", c.out("budget.png"), "--size", "320x240", "--refine",
+                              "--budget", "20000", "--eye", "0,0.3,0", "--frames", "0", "--json")
+    assert rc == 0, (rc, out, err)
+    small = json.loads(out.strip().splitlines()[-1])["refined"]
+    assert s["cut_faces"] < small["cut_faces"] <= 20000, small
+
+
+@case
+def viewer_bad_files(c):
+    """Missing, truncated and garbage files: a message naming the file, exit code 2, no crash."""
+    clod = build_clod(c, "stanford_bunny_bun_zipper_res4.ply", "small.clod")
+    data = open(clod, "rb").read()
+    truncated, garbage = c.out("truncated.clod"), c.out("garbage.clod")
+    open(truncated, "wb").write(data[:len(data) // 2])
+    open(garbage, "wb").write(bytes((i * 37 + 11) & 255 for i in range(4096)))
+    for path in [c.out("missing.clod"), truncated, garbage]:
+        rc, out, err = run_viewer(c, path, "--screenshot", c.out("bad.png"), "--size", "200x150", "--refine")
+        assert rc == 2, (path, rc, out, err)
+        assert "conelod-viewer: " + path in err, (path, err)
+        assert not os.path.exists(c.out("bad.png")), path
+    rc, _, err = run_viewer(c, clod, "--size", "huge")
+    assert rc == 1 and "--size" in err, (rc, err)
+
+
+def export_lod(c, mesh, clod, expect_ok=True):
+    return c.meshlab([c.mesh(mesh)], mlx_with(c, "export_lod_file.mlx", FileName=clod), expect_ok=expect_ok)
+
+
+@case
+def meshlab_lod_export_extract_bunny(c):
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    clod = c.out("bunny.clod")
+    _, log = export_lod(c, "stanford_bunny_bun_zipper.ply", clod)
+    assert os.path.getsize(clod) == last_int(log, "lod_file_bytes"), log[-1500:]
+    levels = last_int(log, "lod_levels")
+    assert levels >= 4, log[-1500:]
+    # Full budget: the input's own faces (level 0) come back.
+    full = c.out("full.ply")
+    _, log = c.meshlab([bunny], mlx_with(c, "extract_view_dependent_lod.mlx", FileName=clod, FaceBudget=69451), full)
+    ply = read_ply(full)  # meshlabserver saves the new (current) layer
+    assert len(ply["faces"]) == 69451 and set(ply["quality"]) == {0}, (len(ply["faces"]), set(ply["quality"]))
+    assert last_int(log, "lod_faces") == 69451, log[-1500:]
+    # A small budget: fewer faces, from several levels; quality = level.
+    small = c.out("small.ply")
+    _, log = c.meshlab([bunny], mlx_with(c, "extract_view_dependent_lod.mlx", FileName=clod, FaceBudget=8000), small)
+    ply = read_ply(small)
+    levels_used = set(int(q) for q in ply["quality"])
+    assert 0 < len(ply["faces"]) <= 8000 and len(ply["faces"]) == last_int(log, "lod_faces"), len(ply["faces"])
+    assert len(levels_used) >= 2 and levels_used <= set(range(levels)), levels_used
+    assert last_int(log, "lod_max_level_difference") <= 1, log[-1500:]
+    # Back-facing groups left out: fewer faces for the same budget and view.
+    _, log = c.meshlab([bunny], mlx_with(c, "extract_view_dependent_lod.mlx", FileName=clod, FaceBudget=8000,
+                                         CullBackFacing=True), c.out("culled.ply"))
+    assert 0 < last_int(log, "lod_faces") < len(ply["faces"]) and last_int(log, "lod_groups_culled") > 0, log[-1500:]
+    # The eye and orthographic views work too.
+    for mode in (1, 2):
+        _, log = c.meshlab([bunny], mlx_with(c, "extract_view_dependent_lod.mlx", FileName=clod, FaceBudget=8000,
+                                             ViewMode=mode, Eye="0 0.3 0" if mode == 1 else "0 0 0"), c.out("m.ply"))
+        assert 0 < last_int(log, "lod_faces") <= 8000, log[-1500:]
+
+
+@case
+def meshlab_lod_bad_inputs(c):
+    """Missing or corrupt .clod, empty or NaN mesh: a clear message, a failed filter, no file left,
+    never a crash (the harness checks that the mesh is unchanged and no layer is added)."""
+    clod = c.out("small.clod")
+    export_lod(c, "stanford_bunny_bun_zipper_res4.ply", clod)
+    data = open(clod, "rb").read()
+    truncated, flipped = c.out("truncated.clod"), c.out("flipped.clod")
+    open(truncated, "wb").write(data[:len(data) // 2])
+    open(flipped, "wb").write(data[:len(data) // 2] + bytes([data[len(data) // 2] ^ 0xFF]) + data[len(data) // 2 + 1:])
+    bunny = c.mesh("stanford_bunny_bun_zipper_res4.ply")
+    for path in [c.out("missing.clod"), truncated, flipped]:
+        script = mlx_with(c, "extract_view_dependent_lod.mlx", FileName=path, FaceBudget=0)
+        rc, log = c.meshlab([bunny], script, c.out("bad.ply"), expect_ok=False)
+        assert rc == 255, "%s: expected a failed filter (255), got %d\n%s" % (path, rc, log[-1500:])
+        assert "ConeLOD error" in log and path in log, "%s: no clear message:\n%s" % (path, log[-1500:])
+    for mesh, message in [("no_faces.ply", "has no faces"), ("nan_vertex.ply", "NaN or infinite")]:
+        out = c.out(mesh + ".clod")
+        rc, log = export_lod(c, mesh, out, expect_ok=False)
+        assert rc == 255 and "ConeLOD error" in log and message in log, "%s: %d\n%s" % (mesh, rc, log[-1500:])
+        assert not os.path.exists(out), out + " was left behind"
 
 def main():
     ap = argparse.ArgumentParser()
