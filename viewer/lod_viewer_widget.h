@@ -42,7 +42,7 @@ struct FrameStats {
   size_t cutNodes = 0, cutFaces = 0;
   size_t facesDrawn = 0, groupsDrawn = 0, groupsCulled = 0;
   int minLevel = 0, maxLevel = 0;  // over the drawn nodes
-  double renderMs = 0;             // CPU time to issue the frame (without glFinish)
+  double renderMs = 0;             // drawing time of the frame, glFinish included (HUD excluded)
 };
 
 class LodViewerWidget : public QOpenGLWidget, protected QOpenGLFunctions {
@@ -61,8 +61,8 @@ class LodViewerWidget : public QOpenGLWidget, protected QOpenGLFunctions {
   // Headless use (screenshots, tests): refine synchronously until Done(); false on a read error.
   bool refineToDone(double* seconds = nullptr);
   // Renders `frames` frames into the widget's framebuffer, waiting for each (glFinish), turning
-  // the model a little between frames; returns the mean milliseconds per frame and shows the
-  // resulting frames per second in the HUD.
+  // the model a little between frames (the per-node cone tests included); returns the mean
+  // milliseconds per frame and shows the resulting frames per second in the HUD from then on.
   double benchmarkFrames(int frames);
   const FrameStats& lastFrame() const { return stats_; }
   double firstFrameMsecs() const { return firstFrameMsecs_; }  // since the clock given below
@@ -121,9 +121,8 @@ class LodViewerWidget : public QOpenGLWidget, protected QOpenGLFunctions {
   bool refining_ = false;
 
   FrameStats stats_;
-  QElapsedTimer startClock_, fpsClock_;
+  QElapsedTimer startClock_;
   double firstFrameMsecs_ = -1;
-  int framesSinceFps_ = 0;
-  double fps_ = 0;
-  bool fpsMeasured_ = false;  // fps_ comes from benchmarkFrames, not from the repaint rate
+  double fps_ = 0;         // 1000 / the last frame's drawing time, or the benchmark's mean
+  int benchmarked_ = 0;    // frames of benchmarkFrames behind fps_ (0: fps_ is the last frame's)
 };

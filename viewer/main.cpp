@@ -14,6 +14,7 @@
 #include <QJsonObject>
 #include <QSurfaceFormat>
 #include <cstdio>
+#include <cstdlib>
 
 #include "lod_viewer_widget.h"
 #include "process_memory.h"
@@ -42,6 +43,9 @@ QJsonObject ToJson(const FrameStats& s) {
 int main(int argc, char** argv) {
   QElapsedTimer clock;  // time to first frame counts from here
   clock.start();
+  // Qt aborts without a display: say what to do instead.
+  if (!std::getenv("DISPLAY") && !std::getenv("WAYLAND_DISPLAY") && !std::getenv("QT_QPA_PLATFORM"))
+    return Fail(4, "no display: run it under an X server (headless: xvfb-run -a conelod-viewer ...)");
   QSurfaceFormat format;
   format.setDepthBufferSize(24);
   QSurfaceFormat::setDefaultFormat(format);
