@@ -76,7 +76,7 @@ LodViewerWidget::LodViewerWidget(LodReader& reader, const std::string& title, co
     radius_ = 0.5f * box.Diag();
   }
   frameModel();
-  const Status s = refiner_->Start(currentView());  // the cut = the roots, read at Open
+  const Status s = refiner_->Start(currentView());  // the cut = the roots
   if (!s.ok()) error_ = s.message;
   stillTimer_.setSingleShot(true);
   connect(&stillTimer_, &QTimer::timeout, this, &LodViewerWidget::viewStill);
@@ -147,12 +147,14 @@ void LodViewerWidget::interactionStarted() {
   idleTimer_.stop();
   refining_ = false;
   const Status s = refiner_->Start(currentView());
+  cutChanged_ = true;
   if (!s.ok()) error_ = s.message;
 }
 
 void LodViewerWidget::viewStill() {
   if (dragging_) return;  // still pressed: wait for the release
   const Status s = refiner_->Start(currentView());
+  cutChanged_ = true;
   if (!s.ok()) {
     error_ = s.message;
     return;
@@ -166,6 +168,7 @@ void LodViewerWidget::refineSlice() {
   t.start();
   while (!refiner_->Done() && t.nsecsElapsed() < qint64(options_.sliceMs * 1e6)) {
     const Status s = refiner_->Step(16);
+    cutChanged_ = true;
     if (!s.ok()) {
       error_ = s.message;
       break;
@@ -183,6 +186,7 @@ bool LodViewerWidget::refineToDone(double* seconds) {
   t.start();
   Status s = refiner_->Start(currentView());
   while (s.ok() && !refiner_->Done()) s = refiner_->Step(64);
+  cutChanged_ = true;
   if (!s.ok()) error_ = s.message;
   if (seconds) *seconds = t.nsecsElapsed() * 1e-9;
   return s.ok();
@@ -246,6 +250,8 @@ bool LodViewerWidget::upload(uint32_t id, NodeBuffers& b) {
 }
 
 void LodViewerWidget::syncBuffers() {
+  if (!cutChanged_) return;
+  cutChanged_ = false;
   const LodCut& cut = refiner_->cut();
   const std::unordered_set<uint32_t> inCut(cut.nodes.begin(), cut.nodes.end());
   for (auto it = buffers_.begin(); it != buffers_.end();) {

@@ -109,6 +109,7 @@ class LodViewerWidget : public QOpenGLWidget, protected QOpenGLFunctions {
   QOpenGLShaderProgram program_;
   std::unordered_map<uint32_t, NodeBuffers> buffers_;
   size_t gpuBytes_ = 0;
+  bool cutChanged_ = true;  // the refiner's cut changed since the last syncBuffers()
 
   QVector3D centre_;
   float radius_ = 1;

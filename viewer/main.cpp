@@ -118,7 +118,6 @@ int main(int argc, char** argv) {
   if (!widget.isValid() || widget.firstFrameMsecs() < 0)
     return Fail(4, "no OpenGL context: run with an X server that has GLX (e.g. xvfb-run -a conelod-viewer ...)");
   if (!widget.error().empty()) return Fail(2, QString("%1: %2").arg(path, QString::fromStdString(widget.error())));
-  widget.grabFramebuffer();
   const FrameStats coarse = widget.lastFrame();
   double refineSeconds = 0;
   if (parser.isSet(refine) && !widget.refineToDone(&refineSeconds))
