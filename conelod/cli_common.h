@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "conelod/cone_grouping.h"
 #include "conelod/indexed_mesh.h"
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"
@@ -79,7 +80,12 @@ class Timer {
 // Loads `path` into `mesh` and its indexed form. Returns "" or an error message.
 std::string LoadInput(const std::string& path, CMesh& mesh, IndexedMesh& indexed, std::vector<size_t>& faceOfIndex);
 
-int Fail(int code, const std::string& message);  // prints "conelod: message" to stderr
+int Fail(int code, const std::string& message);
+
+// The grouping options shared by `group`, `cull-cost` and `lod build`.
+extern const std::vector<std::string> kGroupingOptions;
+ConeGroupingParams ReadGroupingParams(Args& a);
+std::vector<std::string> With(std::vector<std::string> v, const std::vector<std::string>& more);  // prints "conelod: message" to stderr
 
 }  // namespace cli
 }  // namespace conelod

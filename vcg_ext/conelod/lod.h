@@ -114,6 +114,8 @@ class LodReader {
  public:
   // Reads the header, the offset index, the node records of the roots and the roots' geometry.
   static Status Open(const std::string& path, std::unique_ptr<LodReader>& out);
+  // The same from a file image in memory (tests, the fuzz target); the reader keeps `bytes`.
+  static Status OpenMemory(std::vector<uint8_t> bytes, std::unique_ptr<LodReader>& out);
   ~LodReader();
 
   const LodFileInfo& info() const;
@@ -124,6 +126,8 @@ class LodReader {
   bool hasNode(uint32_t id) const;
   const LodNode& node(uint32_t id) const;  // requires hasNode(id)
   Status LoadChildren(uint32_t id);        // makes the records of id's children available
+  Status LoadNode(uint32_t id);            // makes one record available (and its ancestors')
+  uint32_t levelOfNode(uint32_t id) const;  // from the id alone (ids are dense per level); id < nodeCount
 
   Status LoadGeometry(uint32_t id);               // reads and keeps the node's geometry
   const LodGeometry* geometry(uint32_t id) const;  // null when not loaded
