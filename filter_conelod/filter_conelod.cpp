@@ -917,8 +917,12 @@ bool FilterConeLodPlugin::applyLodExport(MeshModel& mm, const RichParameterList&
     return fail("LevelRatio must be in (0, 1]");
 
   const IndexedMesh im = ToIndexedMesh(mm.cm);
+  Status s = ValidateParams(params.grouping);
+  if (!s.ok()) return fail(QString::fromStdString(s.message));
+  s = RequireValidForFaces(CheckMesh(im, false));
+  if (!s.ok()) return fail(QString::fromStdString(s.message) + " (no file was written)");
   LodBuildStats stats;
-  const Status s = BuildLodFile(im, params, path.toStdString(), &stats, FromCallback(cb));
+  s = BuildLodFile(im, params, path.toStdString(), &stats, FromCallback(cb));
   if (!s.ok()) return fail(QString("%1: %2 (no file was written)").arg(path, QString::fromStdString(s.message)));
 
   Log("LOD file %s: %d faces, %d levels, %d nodes, %.1f KiB in %.3f s (grouping %.3f s, simplification %.3f s, "

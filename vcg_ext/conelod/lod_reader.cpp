@@ -381,7 +381,10 @@ struct LodReader::Impl {
         for (size_t k = 0; k < ids.size(); ++k) {
           if (ids[k] / vertexBlock != blocks[b]) continue;
           Decoder d(p + (ids[k] - v0) * 12, 12);
-          out[k] = vcg::Point3f(d.f32(), d.f32(), d.f32());
+          // One read per statement: the order in which function arguments are evaluated is
+          // unspecified (GCC reads right to left, which swapped x and z, mirroring every mesh).
+          const float x = d.f32(), y = d.f32(), z = d.f32();
+          out[k] = vcg::Point3f(x, y, z);
           if (!std::isfinite(out[k][0] + out[k][1] + out[k][2])) return Status::Invalid("non-finite vertex position");
         }
         at += bytes;
