@@ -164,9 +164,12 @@ void LodViewerWidget::viewStill() {
 }
 
 void LodViewerWidget::refineSlice() {
+  // At least as long as the last frame took: when frames are slow, refinement still gets half of
+  // the time instead of crawling between repaints.
+  const double sliceMs = std::max(options_.sliceMs, stats_.renderMs);
   QElapsedTimer t;
   t.start();
-  while (!refiner_->Done() && t.nsecsElapsed() < qint64(options_.sliceMs * 1e6)) {
+  while (!refiner_->Done() && t.nsecsElapsed() < qint64(sliceMs * 1e6)) {
     const Status s = refiner_->Step(16);
     cutChanged_ = true;
     if (!s.ok()) {
@@ -399,7 +402,10 @@ void LodViewerWidget::drawHud() {
 void LodViewerWidget::paintGL() {
   syncBuffers();
   renderScene();
-  if (firstFrameMsecs_ < 0) firstFrameMsecs_ = startClock_.nsecsElapsed() * 1e-6;
+  if (firstFrameMsecs_ < 0) {
+    firstFrameMsecs_ = startClock_.nsecsElapsed() * 1e-6;
+    if (options_.refineWhenIdle) stillTimer_.start(options_.stillMs);  // the coarsest level is on screen: refine
+  }
   if (!benchmarked_) fps_ = 1000.0 / std::max(stats_.renderMs, 1e-3);
   drawHud();
 }

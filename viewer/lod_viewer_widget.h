@@ -34,7 +34,8 @@ struct ViewerOptions {
   bool flatShading = false;    // flat face normals (unshared vertices) instead of per-vertex normals
   bool colourLevels = false;   // one colour per node level (red = finest ... blue = coarsest)
   int stillMs = 150;           // the view counts as still after this long without input
-  double sliceMs = 8;          // refinement work per idle-time tick
+  bool refineWhenIdle = true;  // false: only refineToDone() refines (headless measurements)
+  double sliceMs = 8;          // refinement work per idle-time tick (at least the last frame's time)
 };
 
 // What the last frame drew.

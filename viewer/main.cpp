@@ -84,6 +84,7 @@ int main(int argc, char** argv) {
   options.flatShading = parser.isSet(flat);
   options.colourLevels = parser.isSet(colours);
   options.cullBackFacing = !parser.isSet(noCull);
+  options.refineWhenIdle = !parser.isSet(screenshot);  // headless: the coarse frame, then --refine at once
   const QStringList wh = parser.value(size).split('x');
   const int width = wh.size() == 2 ? wh[0].toInt() : 0, height = wh.size() == 2 ? wh[1].toInt() : 0;
   if (width < 16 || height < 16 || width > 8192 || height > 8192) return Fail(1, "--size needs WxH, e.g. 800x600");
