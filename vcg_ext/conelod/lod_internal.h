@@ -47,7 +47,8 @@ constexpr size_t kIndexDataBytes = 8 + 4 + 4;                                // 
 constexpr size_t kNodeFixedBytes = 4 * 6 + 8 * 4 + 4 * 4 + 4 * 4;             // NODE data = 88 + 4/neighbour
 constexpr size_t kIndexEntryBytes = 8 + 8 + 4 + 4;                           // = 24
 constexpr size_t kGeomFixedBytes = 4 * 4;                                    // GEOM data = 16 + arrays
-constexpr uint32_t kGeomHasSourceIds = 1;  // GEOM flag: input vertex ids follow the level ids
+constexpr uint32_t kGeomHasSourceIds = 1;     // GEOM flag: input vertex ids follow the level ids
+constexpr uint32_t kGeomShortIndices = 2;     // GEOM flag: triangle corners are u16 (vertexCount <= 65536)
 constexpr uint32_t kVertexBlock = 256;     // vertices per VBLK (3 KiB)
 constexpr uint32_t kIndexBlock = 512;      // index entries per IBLK (12 KiB)
 
@@ -61,6 +62,7 @@ class Encoder {
   void u64(uint64_t v) { for (int i = 0; i < 8; ++i) bytes.push_back(uint8_t(v >> (8 * i))); }
   void f32(float v) { uint32_t u; std::memcpy(&u, &v, 4); u32(u); }
   void f64(double v) { uint64_t u; std::memcpy(&u, &v, 8); u64(u); }
+  void u16(uint32_t v) { bytes.push_back(uint8_t(v)); bytes.push_back(uint8_t(v >> 8)); }
   void clear() { bytes.clear(); }
 };
 
@@ -83,6 +85,12 @@ class Decoder {
     uint64_t v = 0;
     for (int i = 0; i < 8; ++i) v |= uint64_t(p_[at_ + size_t(i)]) << (8 * i);
     at_ += 8;
+    return v;
+  }
+  uint32_t u16() {
+    if (!need(2)) return 0;
+    const uint32_t v = uint32_t(p_[at_]) | uint32_t(p_[at_ + 1]) << 8;
+    at_ += 2;
     return v;
   }
   float f32() { const uint32_t u = u32(); float v; std::memcpy(&v, &u, 4); return v; }

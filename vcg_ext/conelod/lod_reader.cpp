@@ -291,7 +291,7 @@ struct LodReader::Impl {
       }
       e.geometryOffset = entries[i].geometry;
       e.geometryBytes = entries[i].geometryBytes;
-      if (uint64_t(e.geometryBytes) < kChunkHeaderBytes + kGeomFixedBytes + uint64_t(n.faceCount) * 12)
+      if (uint64_t(e.geometryBytes) < kChunkHeaderBytes + kGeomFixedBytes + uint64_t(n.faceCount) * 6)
         return Status::Invalid(bad + "its geometry chunk is too small for its face count");
       auto it = nodes.find(id);
       if (it == nodes.end()) nodes.emplace(id, std::move(e));
@@ -312,11 +312,13 @@ struct LodReader::Impl {
     if (!s.ok()) return Status::Invalid(s.message + " " + Num(id));
     Decoder d(buffer.data() + kChunkHeaderBytes, size_t(h.dataBytes));
     const uint32_t fileId = d.u32(), vc = d.u32(), fc = d.u32(), flags = d.u32();
-    if (fileId != id || vc != n.vertexCount || fc != n.faceCount || (flags & ~kGeomHasSourceIds) ||
-        (n.level == 0) != bool(flags & kGeomHasSourceIds))
+    if (fileId != id || vc != n.vertexCount || fc != n.faceCount ||
+        (flags & ~(kGeomHasSourceIds | kGeomShortIndices)) || (n.level == 0) != bool(flags & kGeomHasSourceIds) ||
+        ((flags & kGeomShortIndices) && vc > 65536))
       return Status::Invalid(bad + "does not match its record");
     const uint64_t idArrays = n.level == 0 ? 2 : 1;
-    if (h.dataBytes != kGeomFixedBytes + idArrays * 4 * uint64_t(vc) + 12 * uint64_t(fc))
+    const bool shortIndices = flags & kGeomShortIndices;
+    if (h.dataBytes != kGeomFixedBytes + idArrays * 4 * uint64_t(vc) + (shortIndices ? 6 : 12) * uint64_t(fc))
       return Status::Invalid(bad + "its size does not match its counts");
     std::unique_ptr<LodGeometry> g(new LodGeometry);
     std::vector<uint32_t> levelIds(vc);
@@ -335,7 +337,7 @@ struct LodReader::Impl {
     g->faces.resize(fc);
     for (auto& t : g->faces)
       for (auto& v : t) {
-        v = d.u32();
+        v = shortIndices ? d.u16() : d.u32();
         if (v >= vc) return Status::Invalid(bad + "face index out of range");
       }
     s = readPositions(uint32_t(n.level), levelIds, g->positions);
@@ -381,10 +383,7 @@ struct LodReader::Impl {
         for (size_t k = 0; k < ids.size(); ++k) {
           if (ids[k] / vertexBlock != blocks[b]) continue;
           Decoder d(p + (ids[k] - v0) * 12, 12);
-          // One read per statement: the order in which function arguments are evaluated is
-          // unspecified (GCC reads right to left, which swapped x and z, mirroring every mesh).
-          const float x = d.f32(), y = d.f32(), z = d.f32();
-          out[k] = vcg::Point3f(x, y, z);
+          for (int i = 0; i < 3; ++i) out[k][i] = d.f32();  // (not one expression: argument order is unspecified)
           if (!std::isfinite(out[k][0] + out[k][1] + out[k][2])) return Status::Invalid("non-finite vertex position");
         }
         at += bytes;
@@ -456,8 +455,8 @@ struct LodReader::Impl {
       if (L.firstId != id || L.nodes == 0 || L.nodes > src->size / kChunkHeaderBytes)
         return Status::Invalid(bad + "bad node count of level " + Num(uint64_t(k)));
       id += L.nodes;
-      // Each face and vertex takes at least 12 bytes in the file.
-      if (L.faces > src->size / 12 || L.vertices > src->size / 12)
+      // Each face takes at least 6 bytes in the file, each vertex 12.
+      if (L.faces > src->size / 6 || L.vertices > src->size / 12)
         return Status::Invalid(bad + "counts of level " + Num(uint64_t(k)) + " larger than the file");
       if (L.levelOffset >= src->size || L.vertOffset >= src->size)
         return Status::Invalid(bad + "an offset points past the end of the file");

@@ -37,13 +37,15 @@ enum : uint8_t { kBelow = 0, kInCut = 1, kRefined = 2 };
 struct QueueItem {
   uint8_t culled;
   int level;
+  uint8_t facesAway;  // visible, but the cone axis points away from the eye
   double priority;
   uint32_t id;
-  // std::priority_queue pops the largest: visible before culled, coarser first, larger f first,
-  // lower id first (deterministic ties).
+  // std::priority_queue pops the largest: visible before culled, coarser first, facing the eye
+  // before facing away, larger f first, lower id first (deterministic ties).
   bool operator<(const QueueItem& o) const {
     if (culled != o.culled) return culled > o.culled;
     if (level != o.level) return level < o.level;
+    if (facesAway != o.facesAway) return facesAway > o.facesAway;
     if (priority != o.priority) return priority < o.priority;
     return id > o.id;
   }
@@ -70,6 +72,13 @@ struct LodRefiner::Impl {
     return f == Facing::Back;
   }
 
+  // The cone axis points away from the eye (more than 90 degrees from the direction to it).
+  bool facesAway(const LodNode& n) const {
+    if (!view.cullBackFacing || n.cone.empty() || !n.cone.cullable()) return false;
+    const vcg::Point3d toEye = view.orthographic ? -view.viewDir : view.eye - vcg::Point3d::Construct(n.center);
+    return toEye * n.cone.axis < 0;
+  }
+
   Status addToCut(uint32_t id) {
     Status s = reader.LoadGeometry(id);
     if (!s.ok()) return s;
@@ -86,7 +95,7 @@ struct LodRefiner::Impl {
       ++cut.groupsDrawn;
       cut.drawnFaces += n.faceCount;
     }
-    if (n.childCount) queue.push({uint8_t(culled), n.level, RefinementPriority(n, view), id});
+    if (n.childCount) queue.push({uint8_t(culled), n.level, uint8_t(facesAway(n)), RefinementPriority(n, view), id});
     statsDirty = true;
     return Status::Ok();
   }

@@ -458,12 +458,13 @@ Status WriteLodFile(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
         e.u32(id);
         e.u32(uint32_t(verts.size()));
         e.u32(start[i + 1] - start[i]);
-        e.u32(k == 0 ? kGeomHasSourceIds : 0);
+        const bool shortIndices = verts.size() <= 65536;
+        e.u32((k == 0 ? kGeomHasSourceIds : 0) | (shortIndices ? kGeomShortIndices : 0));
         for (uint32_t v : verts) e.u32(levelId[v]);
         if (k == 0)
           for (uint32_t v : verts) e.u32(v);
         for (uint32_t j = start[i]; j < start[i + 1]; ++j)
-          for (uint32_t v : L.mesh->faces[faces[j]]) e.u32(local[v]);
+          for (uint32_t v : L.mesh->faces[faces[j]]) shortIndices ? e.u16(local[v]) : e.u32(local[v]);
         for (uint32_t v : verts) local[v] = kNoParent;
         index[id].geometry = out.offset();
         index[id].geometryBytes = uint32_t(kChunkHeaderBytes + e.bytes.size());
