@@ -321,10 +321,13 @@ void LodViewerWidget::renderScene() {
   for (uint32_t id : cut.nodes) {
     const LodNode& node = reader_.node(id);
     s.cutFaces += node.faceCount;
-    if (options_.cullBackFacing &&
-        ClassifyPerspective(node.cone, vcg::Point3d::Construct(node.center), node.radius, eye) == Facing::Back) {
-      ++s.groupsCulled;  // one cone test rejects the whole group
-      continue;
+    if (options_.cullBackFacing) {
+      const Facing facing = ClassifyPerspective(node.cone, vcg::Point3d::Construct(node.center), node.radius, eye);
+      if (facing == Facing::Back) {
+        ++s.groupsCulled;  // one cone test rejects the whole group
+        continue;
+      }
+      if (facing == Facing::Front) ++s.groupsFront;
     }
     const auto it = buffers_.find(id);
     if (it == buffers_.end()) continue;
@@ -375,7 +378,8 @@ void LodViewerWidget::drawHud() {
                .arg(benchmarked_ ? QString(", mean of %1").arg(benchmarked_) : QString());
   lines << QString("faces drawn %1  (cut %2, input %3)")
                .arg(Thousands(stats_.facesDrawn), Thousands(stats_.cutFaces), Thousands(info.inputFaces));
-  lines << QString("groups drawn %1  culled %2").arg(Thousands(stats_.groupsDrawn), Thousands(stats_.groupsCulled));
+  lines << QString("groups drawn %1 (all front-facing %2)  culled %3")
+               .arg(Thousands(stats_.groupsDrawn), Thousands(stats_.groupsFront), Thousands(stats_.groupsCulled));
   lines << QString("levels %1-%2 of 0-%3  %4")
                .arg(stats_.minLevel)
                .arg(stats_.maxLevel)

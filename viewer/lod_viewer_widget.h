@@ -42,6 +42,7 @@ struct ViewerOptions {
 struct FrameStats {
   size_t cutNodes = 0, cutFaces = 0;
   size_t facesDrawn = 0, groupsDrawn = 0, groupsCulled = 0;
+  size_t groupsFront = 0;          // drawn groups whose every face faces the eye (three-state test)
   int minLevel = 0, maxLevel = 0;  // over the drawn nodes
   double renderMs = 0;             // drawing time of the frame, glFinish included (HUD excluded)
 };

@@ -31,6 +31,7 @@ QJsonObject ToJson(const FrameStats& s) {
   o["faces_drawn"] = double(s.facesDrawn);
   o["groups_drawn"] = double(s.groupsDrawn);
   o["groups_culled"] = double(s.groupsCulled);
+  o["groups_front"] = double(s.groupsFront);
   o["cut_faces"] = double(s.cutFaces);
   o["cut_nodes"] = double(s.cutNodes);
   o["min_level"] = s.minLevel;
