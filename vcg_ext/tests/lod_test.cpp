@@ -312,15 +312,20 @@ TEST_F(TinyLod, EveryFlippedByteIsReadOrRefused) {
   // (the CRCs); a flip in a padding field may pass.
   const std::vector<uint8_t>& good = tiny_->bytes;
   ASSERT_EQ(FullReadError(good), "");
-  size_t refused = 0;
-  for (size_t at = 0; at < good.size(); ++at) {
+  // Every byte of the header, then a sample of the rest (the fuzz target, scripts/fuzz.sh, goes
+  // further), so that the test stays quick under the sanitizers.
+  size_t refused = 0, tried = 0;
+  const size_t header = kChunkHeaderBytes + size_t(DecodeChunkHeader(good.data()).dataBytes);
+  const size_t stride = std::max<size_t>(1, good.size() / 600);
+  for (size_t at = 0; at < good.size(); at += at < header ? 1 : stride) {
     std::vector<uint8_t> bad = good;
     bad[at] ^= 0x5A;
     if (!FullReadError(bad).empty()) ++refused;
+    ++tried;
   }
-  EXPECT_GE(refused, good.size() * 99 / 100) << "of " << good.size() << " flipped bytes";
+  EXPECT_GE(refused, tried * 99 / 100) << "of " << tried << " flipped bytes";
   // And every truncation.
-  for (size_t n = 0; n < good.size(); n += 7) {
+  for (size_t n = 0; n < good.size(); n += stride) {
     std::vector<uint8_t> cut(good.begin(), good.begin() + long(n));
     EXPECT_NE(FullReadError(cut), "") << n << " bytes";
   }
