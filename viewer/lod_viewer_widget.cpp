@@ -317,6 +317,9 @@ void LodViewerWidget::renderScene() {
   const vcg::Point3d eye(e.x(), e.y(), e.z());
   const QVector3D plain(0.82f, 0.80f, 0.74f);
   const int levels = reader_.info().levels;
+  const int colourUniform = program_.uniformLocation("uColour");  // looked up once, not per draw
+  int colourLevel = -1;                                            // the level uColour holds now
+  if (!options_.colourLevels) program_.setUniformValue(colourUniform, plain);
 
   for (uint32_t id : cut.nodes) {
     const LodNode& node = reader_.node(id);
@@ -332,11 +335,10 @@ void LodViewerWidget::renderScene() {
     const auto it = buffers_.find(id);
     if (it == buffers_.end()) continue;
     NodeBuffers& b = it->second;
-    if (options_.colourLevels) {
+    if (options_.colourLevels && node.level != colourLevel) {
       const vcg::Color4b c = LevelColor(node.level, levels);
-      program_.setUniformValue("uColour", QVector3D(c[0], c[1], c[2]) / 255.0f);
-    } else {
-      program_.setUniformValue("uColour", plain);
+      program_.setUniformValue(colourUniform, QVector3D(c[0], c[1], c[2]) / 255.0f);
+      colourLevel = node.level;
     }
     b.vertices.bind();
     glVertexAttribPointer(GLuint(position), 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
