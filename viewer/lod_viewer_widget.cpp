@@ -413,7 +413,7 @@ void LodViewerWidget::paintGL() {
     if (options_.refineWhenIdle) stillTimer_.start(options_.stillMs);  // the coarsest level is on screen: refine
   }
   if (!benchmarked_) fps_ = 1000.0 / std::max(stats_.renderMs, 1e-3);
-  drawHud();
+  if (options_.hud) drawHud();
 }
 
 double LodViewerWidget::benchmarkFrames(int frames) {
@@ -478,6 +478,7 @@ void LodViewerWidget::wheelEvent(QWheelEvent* e) {
 void LodViewerWidget::keyPressEvent(QKeyEvent* e) {
   switch (e->key()) {
     case Qt::Key_C: options_.colourLevels = !options_.colourLevels; break;
+    case Qt::Key_H: options_.hud = !options_.hud; break;
     case Qt::Key_B: options_.cullBackFacing = !options_.cullBackFacing; viewStill(); break;
     case Qt::Key_R: frameModel(); interactionStarted(); break;
     case Qt::Key_Space: viewStill(); break;

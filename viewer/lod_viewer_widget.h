@@ -35,6 +35,7 @@ struct ViewerOptions {
   bool colourLevels = false;   // one colour per node level (red = finest ... blue = coarsest)
   int stillMs = 150;           // the view counts as still after this long without input
   bool refineWhenIdle = true;  // false: only refineToDone() refines (headless measurements)
+  bool hud = true;             // the text overlay
   double sliceMs = 8;          // refinement work per idle-time tick (at least the last frame's time)
 };
 

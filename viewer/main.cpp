@@ -2,7 +2,7 @@
 // the user is idle (lod_viewer_widget.h). With --screenshot it renders in a real window (run it
 // under xvfb-run without a display), writes the picture, prints the figures and exits.
 //
-//   conelod-viewer FILE.clod [--budget F] [--flat] [--color-levels] [--no-cull]
+//   conelod-viewer FILE.clod [--budget F] [--flat] [--color-levels] [--no-cull] [--no-hud]
 //   conelod-viewer FILE.clod --screenshot OUT.png [--size WxH] [--eye X,Y,Z] [--budget F]
 //                  [--refine] [--frames N] [--json]
 // Exit codes: 0 ok, 1 usage, 2 bad file, 3 cannot write the picture, 4 no OpenGL.
@@ -57,13 +57,14 @@ int main(int argc, char** argv) {
   parser.setApplicationDescription(
       "Shows a ConeLOD .clod file: the coarsest level at once, refined while the view is still.\n"
       "Mouse: left drag rotates, right drag or wheel zooms. Keys: C colour per level, B back-face "
-      "culling, R reset view, Space refine again, Q quit.");
+      "culling, H text overlay, R reset view, Space refine again, Q quit.");
   parser.addHelpOption();
   parser.addPositionalArgument("file", "the .clod file (conelod lod build)");
   const QCommandLineOption budget("budget", "face budget of the refined cut (default 500000)", "F", "500000");
   const QCommandLineOption flat("flat", "flat shading (face normals)");
   const QCommandLineOption colours("color-levels", "one colour per level (red = finest, blue = coarsest)");
   const QCommandLineOption noCull("no-cull", "no back-face culling (neither per group nor on the GPU)");
+  const QCommandLineOption noHud("no-hud", "no text overlay");
   const QCommandLineOption screenshot("screenshot", "render, save the picture to OUT.png and exit", "OUT.png");
   const QCommandLineOption size("size", "window size (default 800x600)", "WxH", "800x600");
   const QCommandLineOption eye("eye", "eye position in model coordinates (default: framed from +Z)", "X,Y,Z");
@@ -71,7 +72,7 @@ int main(int argc, char** argv) {
   const QCommandLineOption frames("frames", "with --screenshot: frames timed for the fps figure (default 30)", "N",
                                   "30");
   const QCommandLineOption json("json", "with --screenshot: print the figures as one JSON line");
-  parser.addOptions({budget, flat, colours, noCull, screenshot, size, eye, refine, frames, json});
+  parser.addOptions({budget, flat, colours, noCull, noHud, screenshot, size, eye, refine, frames, json});
   if (!parser.parse(QApplication::arguments())) return Fail(1, parser.errorText());
   if (parser.isSet("help")) parser.showHelp(0);
   if (parser.positionalArguments().size() != 1) return Fail(1, "give one .clod file (--help for usage)");
@@ -85,6 +86,7 @@ int main(int argc, char** argv) {
   options.flatShading = parser.isSet(flat);
   options.colourLevels = parser.isSet(colours);
   options.cullBackFacing = !parser.isSet(noCull);
+  options.hud = !parser.isSet(noHud);
   options.refineWhenIdle = !parser.isSet(screenshot);  // headless: the coarse frame, then --refine at once
   const QStringList wh = parser.value(size).split('x');
   const int width = wh.size() == 2 ? wh[0].toInt() : 0, height = wh.size() == 2 ? wh[1].toInt() : 0;

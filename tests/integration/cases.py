@@ -879,6 +879,19 @@ def viewer_headless_bunny(c):
     assert r["groups_culled"] > 0 and r["faces_drawn"] < r["cut_faces"], r  # the back of the bunny is culled
     assert read_png(png)[:2] == (320, 240)
 
+    # Group culling is conservative: the picture is the one drawn without any culling (hidden
+    # surfaces aside: only pixels seen through the bunny's holes may differ).
+    pictures = []
+    for extra in ([], ["--no-cull"]):
+        png = c.out("cmp%d.png" % len(pictures))
+        rc, out, err = run_viewer(c, clod, "--screenshot", png, "--size", "320x240", "--refine", "--frames", "0",
+                                  "--no-hud", "--eye", "0.15,0.2,0.25", *extra)
+        assert rc == 0, (rc, out, err)
+        pictures.append(read_png(png)[2])
+    differ = sum(1 for a, b in zip(pictures[0], pictures[1]) for p, q in zip(a, b)
+                 if max(abs(x - y) for x, y in zip(p, q)) > 8)
+    assert differ < 0.005 * 320 * 240, "culling changed %d pixels" % differ
+
     rc, out, err = run_viewer(c, clod, "--screenshot", c.out("budget.png"), "--size", "320x240", "--refine",
                               "--budget", "20000", "--eye", "0,0.3,0", "--frames", "0", "--json")
     assert rc == 0, (rc, out, err)
