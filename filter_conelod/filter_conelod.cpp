@@ -127,9 +127,12 @@ void AddLodExtractParameters(RichParameterList& par) {
   par.addParam(RichInt("FaceBudget", 100000, "Face budget",
                        "Refine until the layer would exceed this many faces (the coarsest level is always "
                        "complete). 0: no limit, down to the input's own faces."));
-  par.addParam(RichBool("CullBackFacing", false, "Cull back-facing groups",
-                        "Groups that face away from the eye entirely (one normal-cone test each) are refined last "
-                        "and left out of the layer."));
+  const LodView d;
+  par.addParam(RichBool("CullBackFacing", d.cullBackFacing, "Refine back-facing groups last",
+                        "Groups that face away from the eye entirely (one normal-cone test each) are refined only "
+                        "after every other group (as conelod lod extract does unless --no-cull)."));
+  par.addParam(RichBool("DropBackFacing", false, "Leave back-facing groups out",
+                        "The back-facing groups are not written to the layer (conelod lod extract --drop-culled)."));
 }
 
 Progress FromCallback(vcg::CallBackPos* cb) {
@@ -299,7 +302,7 @@ QString FilterConeLodPlugin::filterInfo(FilterIDType filter) const {
                  "<i>ViewDirection</i> at <i>CameraDistance</i> bounding-sphere radii, the eye position "
                  "<i>Eye</i> (the dialog's Get / View Pos. fills in the current camera position), or "
                  "orthographic along <i>ViewDirection</i>. With <i>CullBackFacing</i>, back-facing groups are "
-                 "refined last and left out of the layer. Per-face quality = LOD level of the face (0 = the "
+                 "refined last; with <i>DropBackFacing</i> they are left out of the layer. Per-face quality = LOD level of the face (0 = the "
                  "input's own faces), colour per level (red = finest, blue = coarsest). The current mesh is not "
                  "changed.<br>") +
              kPaperKamiya;
@@ -951,7 +954,7 @@ bool FilterConeLodPlugin::applyLodExtract(MeshDocument& md, const RichParameterL
   if (mode == 0 && !(distance > 1)) return fail("CameraDistance must be > 1 (bounding-sphere radii)");
   const vcg::Point3d eyeParam = vcg::Point3d::Construct(par.getPoint3f("Eye"));
   if (mode == 1 && !(std::isfinite(eyeParam.Norm()))) return fail("Eye must be finite");
-  const bool cull = par.getBool("CullBackFacing");
+  const bool cull = par.getBool("CullBackFacing"), drop = par.getBool("DropBackFacing");
 
   QElapsedTimer timer;
   timer.start();
@@ -977,7 +980,7 @@ bool FilterConeLodPlugin::applyLodExtract(MeshDocument& md, const RichParameterL
   if (cb) cb(80, "extracting the cut");
   IndexedMesh mesh;
   std::vector<int> faceLevel;
-  s = ExtractCutMesh(*reader, cut, !cull, mesh, &faceLevel);
+  s = ExtractCutMesh(*reader, cut, !drop, mesh, &faceLevel);
   if (!s.ok()) return fail(QString("%1: %2 (no layer was added)").arg(path, QString::fromStdString(s.message)));
   const double seconds = timer.elapsed() / 1000.0;
 
@@ -997,9 +1000,10 @@ bool FilterConeLodPlugin::applyLodExtract(MeshDocument& md, const RichParameterL
   if (cb) cb(100, "view-dependent LOD: done");
 
   const vcg::Point3d& e = view.eye;
-  Log("View-dependent LOD of %s (%s, budget %s%s): %d faces, %d vertices from %d nodes in %.3f s (new layer)",
+  Log("View-dependent LOD of %s (%s, budget %s%s%s): %d faces, %d vertices from %d nodes in %.3f s (new layer)",
       qUtf8Printable(path), kLodViewModes[mode], budget == 0 ? "none" : qUtf8Printable(QString::number(budget)),
-      cull ? ", back-facing groups culled" : "", int(mesh.faceCount()), int(mesh.vertexCount()),
+      cull ? ", back-facing groups refined last" : "", drop ? ", back-facing groups left out" : "",
+      int(mesh.faceCount()), int(mesh.vertexCount()),
       int(cut.nodes.size()), seconds);
   if (mode == 2)
     Log("orthographic view direction (%g, %g, %g)", dir[0], dir[1], dir[2]);

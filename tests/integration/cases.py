@@ -944,13 +944,21 @@ def meshlab_lod_export_extract_bunny(c):
     assert last_int(log, "lod_max_level_difference") <= 1, log[-1500:]
     # Back-facing groups left out: fewer faces for the same budget and view.
     _, log = c.meshlab([bunny], mlx_with(c, "extract_view_dependent_lod.mlx", FileName=clod, FaceBudget=8000,
-                                         CullBackFacing=True), c.out("culled.ply"))
+                                         DropBackFacing=True), c.out("culled.ply"))
     assert 0 < last_int(log, "lod_faces") < len(ply["faces"]) and last_int(log, "lod_groups_culled") > 0, log[-1500:]
-    # The eye and orthographic views work too.
-    for mode in (1, 2):
-        _, log = c.meshlab([bunny], mlx_with(c, "extract_view_dependent_lod.mlx", FileName=clod, FaceBudget=8000,
-                                             ViewMode=mode, Eye="0 0.3 0" if mode == 1 else "0 0 0"), c.out("m.ply"))
-        assert 0 < last_int(log, "lod_faces") <= 8000, log[-1500:]
+    # An eye position: the same cut as the CLI's, face by face.
+    eye = c.out("eye.ply")
+    _, log = c.meshlab([bunny], mlx_with(c, "extract_view_dependent_lod.mlx", FileName=clod, FaceBudget=8000,
+                                         ViewMode=1), eye)  # Eye = (0, 0, 0): inside the bunny
+    ply, cli_out = read_ply(eye), c.out("cli_eye.ply")
+    cli = json.loads(c.conelod("lod", "extract", clod, "--eye", "0,0,0", "--budget", "8000", "-o", cli_out,
+                               "--json").stdout)
+    assert cli["faces"] == len(ply["faces"]) == last_int(log, "lod_faces"), (cli["faces"], len(ply["faces"]))
+    assert read_ply(cli_out)["quality"] == ply["quality"], "MeshLab and the CLI disagree on the cut"
+    # Orthographic.
+    _, log = c.meshlab([bunny], mlx_with(c, "extract_view_dependent_lod.mlx", FileName=clod, FaceBudget=8000,
+                                         ViewMode=2), c.out("ortho.ply"))
+    assert 0 < last_int(log, "lod_faces") <= 8000, log[-1500:]
 
 
 @case
