@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -101,6 +102,24 @@ size_t Rasterise(const IndexedMesh& m, const vcg::Point3d& eye, const vcg::Point
       }
   }
   return covered;
+}
+
+// Per face: its corner positions rotated to start at the smallest (orientation kept); sorted.
+std::vector<std::array<float, 9>> SortedFaces(const IndexedMesh& m) {
+  std::vector<std::array<float, 9>> out;
+  out.reserve(m.faces.size());
+  for (const auto& t : m.faces) {
+    std::array<float, 9> best{};
+    for (int r = 0; r < 3; ++r) {
+      std::array<float, 9> a;
+      for (int c = 0; c < 3; ++c)
+        for (int i = 0; i < 3; ++i) a[size_t(c * 3 + i)] = m.positions[t[size_t((r + c) % 3)]][i];
+      if (r == 0 || a < best) best = a;
+    }
+    out.push_back(best);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 vcg::Point3d EyeFor(const vcg::Box3f& box) {
@@ -237,6 +256,22 @@ int main(int argc, char** argv) {
     h = GroupHierarchy();
     levels.clear();
 
+    // Round trip: the full budget gives back the input's faces (positions compared exactly).
+    bool exact = false;
+    size_t roundTripVertices = 0;
+    {
+      std::unique_ptr<LodReader> r;
+      LodCut cut;
+      IndexedMesh back;
+      LodView all;
+      all.eye = EyeFor(vcg::Box3f(vcg::Point3f(0, 0, 0), vcg::Point3f(1, 1, 1)));
+      all.faceBudget = mesh.faces.size();
+      if (LodReader::Open(file, r).ok() && RefineLod(*r, all, cut).ok() && ExtractCutMesh(*r, cut, true, back).ok()) {
+        exact = SortedFaces(back) == SortedFaces(mesh);
+        roundTripVertices = back.positions.size();
+      }
+    }
+
     auto vcg = RunChild("--child-vcg " + Shell(path));
     auto rd = RunChild("--child-reader " + Shell(file) + " " + std::to_string(fraction));
     if (vcg.empty() || rd.empty()) {
@@ -253,6 +288,7 @@ int main(int argc, char** argv) {
     std::printf("file: %llu bytes (%.2f bytes/input face), %d node levels, %zu nodes; faces per level (0 = input):",
                 (unsigned long long)st.fileBytes, double(st.fileBytes) / double(mesh.faces.size()), st.levels, st.nodes);
     for (size_t f : st.levelFaces) std::printf(" %zu", f);
+    std::printf("\nround trip at full budget: %s (%zu vertices welded)", exact ? "EXACT" : "DIFFERS", roundTripVertices);
     std::printf("\nfirst image (open + coarsest cut + extract + rasterise 1024x768): %.4f s CPU [%.4f s wall], "
                 "%.0f faces, %.0f pixels; open alone %.4f s CPU\n",
                 rd["first_image_cpu"], rd["first_image_wall"], rd["first_faces"], rd["first_pixels"], rd["open_cpu"]);
