@@ -13,6 +13,7 @@ import subprocess
 import sys
 import tempfile
 import xml.etree.ElementTree as ET
+import zlib
 
 CASES = {}
 
@@ -86,7 +87,7 @@ def read_ply(path):
             current["props"].append(w[1:])
     sizes = {"char": "b", "uchar": "B", "int8": "b", "uint8": "B", "short": "h", "ushort": "H", "int": "i",
              "int32": "i", "uint": "I", "uint32": "I", "float": "f", "float32": "f", "double": "d", "float64": "d"}
-    result = {"vertices": 0, "faces": [], "quality": []}
+    result = {"vertices": 0, "faces": [], "quality": [], "positions": []}
     if fmt == "ascii":
         tokens = body.decode().split()
         pos = 0
@@ -103,6 +104,8 @@ def read_ply(path):
                     result["faces"].append(rec["vertex_indices"])
                     if "quality" in rec:
                         result["quality"].append(rec["quality"])
+                elif el["name"] == "vertex" and "x" in rec:
+                    result["positions"].append((rec["x"], rec["y"], rec["z"]))
             if el["name"] == "vertex":
                 result["vertices"] = el["count"]
         return result
@@ -118,6 +121,8 @@ def read_ply(path):
             for _ in range(el["count"]):
                 rec = dict(zip(names, st.unpack_from(body, pos)))
                 pos += st.size
+                if el["name"] == "vertex" and "x" in rec:
+                    result["positions"].append((rec["x"], rec["y"], rec["z"]))
             continue
         for _ in range(el["count"]):
             rec = {}
@@ -982,6 +987,123 @@ def meshlab_lod_bad_inputs(c):
         rc, log = export_lod(c, mesh, out, expect_ok=False)
         assert rc == 255 and "ConeLOD error" in log and message in log, "%s: %d\n%s" % (mesh, rc, log[-1500:])
         assert not os.path.exists(out), out + " was left behind"
+
+
+def canonical_faces(ply):
+    """Each face as its corner positions (float32), rotated to start at the smallest corner (the
+    orientation is kept); the faces sorted: equal for equal triangle sets whatever the vertex order."""
+    f32 = [tuple(struct.unpack("<3f", struct.pack("<3f", *p))) for p in ply["positions"]]
+    out = []
+    for t in ply["faces"]:
+        corners = [f32[i] for i in t]
+        out.append(min(tuple(corners[(r + k) % 3] for k in range(3)) for r in range(3)))
+    return sorted(out)
+
+
+@case
+def cli_lod_round_trip(c):
+    """conelod lod build / info / extract on the bunny: the full budget gives the input's faces back;
+    10% gives about 10%, finer where the eye is, adjacent groups at most one level apart."""
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    clod = c.out("bunny.clod")
+    b = json.loads(c.conelod("lod", "build", bunny, "-o", clod, "--json").stdout)
+    assert b["faces"] == 69451 and b["levels"] >= 4 and b["level_faces"][0] == 69451, b
+    assert b["file_bytes"] == os.path.getsize(clod), b
+    assert all(b["level_faces"][k] <= b["level_faces"][k - 1] for k in range(1, b["levels"])), b
+    info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
+    assert info["faces"] == 69451 and info["nodes"] == b["nodes"] and info["version"] == 1, info
+    human = c.conelod("lod", "info", clod).stdout.decode()
+    assert "node levels" in human, human
+
+    full = c.out("full.ply")
+    r = json.loads(c.conelod("lod", "extract", clod, "--eye", "0,0.1,0.6", "--budget", "100%", "-o", full,
+                             "--json").stdout)
+    for key in ("faces", "groups_drawn", "max_level_difference", "resident_bytes", "seconds", "groups_culled",
+                "levels"):
+        assert key in r, (key, r)
+    assert r["faces"] == 69451 and r["max_level_difference"] == 0, r
+    out, src = read_ply(full), read_ply(bunny)
+    assert len(out["faces"]) == 69451 and set(out["quality"]) == {0.0}, len(out["faces"])
+    a, e = canonical_faces(out), canonical_faces(src)
+    assert len(a) == len(e)
+    worst = max(abs(x - y) for fa, fe in zip(a, e) for pa, pe in zip(fa, fe) for x, y in zip(pa, pe))
+    assert worst <= 1e-6, "the round trip moved a vertex by %g" % worst
+
+    ten = c.out("ten.ply")
+    r = json.loads(c.conelod("lod", "extract", clod, "--eye", "0,0.1,0.6", "--budget", "6945", "-o", ten,
+                             "--json").stdout)
+    assert 5000 < r["faces"] <= 6945 and r["max_level_difference"] <= 1, r
+    assert r["groups_culled"] > 0 and r["groups_drawn"] > 0, r
+    ply = read_ply(ten)
+    assert len(ply["faces"]) == r["faces"], (len(ply["faces"]), r)
+    levels = {int(q) for q in ply["quality"]}
+    assert len(levels) >= 2 and min(levels) >= 1, levels  # per-face quality = node level
+    faces_per_level = {lv["level"]: lv["faces"] for lv in r["levels"]}
+    assert sum(faces_per_level.values()) == r["faces"], r
+    dropped = json.loads(c.conelod("lod", "extract", clod, "--eye", "0,0.1,0.6", "--budget", "10%", "-o",
+                                   c.out("dropped.ply"), "--drop-culled", "--json").stdout)
+    assert len(read_ply(c.out("dropped.ply"))["faces"]) < r["faces"], dropped
+    nocull = json.loads(c.conelod("lod", "extract", clod, "--eye", "0,0.1,0.6", "--budget", "10%", "-o",
+                                  c.out("nocull.ply"), "--no-cull", "--json").stdout)
+    assert nocull["groups_culled"] == 0, nocull
+    human = c.conelod("lod", "extract", clod, "--eye", "0,0.1,0.6", "--budget", "10%", "-o", c.out("h.ply"))
+    assert "max level difference" in human.stdout.decode(), human.stdout.decode()
+
+
+@case
+def cli_lod_bad_files(c):
+    """Bad .clod files and bad arguments: a clear message and a non-zero exit, never a crash."""
+    sphere = c.out("sphere.ply")
+    with open(sphere, "w") as f:  # an octahedron: enough for a small file
+        f.write("ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\nproperty float z\n"
+                "element face 8\nproperty list uchar int vertex_indices\nend_header\n"
+                "1 0 0\n-1 0 0\n0 1 0\n0 -1 0\n0 0 1\n0 0 -1\n"
+                "3 0 2 4\n3 2 1 4\n3 1 3 4\n3 3 0 4\n3 2 0 5\n3 1 2 5\n3 3 1 5\n3 0 3 5\n")
+    good = c.out("good.clod")
+    c.conelod("lod", "build", sphere, "-o", good)
+    data = open(good, "rb").read()
+    c.conelod("lod", "extract", good, "--eye", "0,0,5", "--budget", "100%", "-o", c.out("ok.ply"))
+
+    def bad(name, content, message):
+        path = c.out(name)
+        with open(path, "wb") as f:
+            f.write(content)
+        for args in (["info", path], ["extract", path, "--eye", "0,0,5", "--budget", "10", "-o", c.out("x.ply")]):
+            p = c.conelod("lod", *args, expect=2)
+            err = p.stderr.decode()
+            assert message in err and path in err, (name, err)
+
+    bad("truncated.clod", data[:-50], "truncated")
+    bad("empty.clod", b"", "truncated")
+    bad("magic.clod", b"XLOD" + data[4:], "wrong magic")
+    bad("ply.clod", open(sphere, "rb").read(), "not a .clod file")
+    version = bytearray(data)
+    version[24] = 9  # the version field (the header's checksum is checked after it)
+    bad("version.clod", bytes(version), "unsupported .clod version 9")
+    size = bytearray(data)
+    struct.pack_into("<Q", size, 16, struct.unpack_from("<Q", data, 16)[0] - 8)  # the root chunk's child size
+    bad("size.clod", bytes(size), "corrupt chunk size in the file header")
+    crc = bytearray(data)
+    crc[24 + 12] ^= 1  # a byte of the header's data: its CRC no longer matches
+    bad("crc.clod", bytes(crc), "checksum mismatch")
+    offset = bytearray(data)
+    struct.pack_into("<Q", offset, 24 + 64, len(data) + 1000)  # the index offset, past the end
+    header_bytes = struct.unpack_from("<Q", data, 8)[0]
+    struct.pack_into("<I", offset, 4, zlib.crc32(bytes(offset[24:24 + header_bytes])))  # a valid CRC-32 (zlib's)
+    bad("offset.clod", bytes(offset), "past the end of the file")
+    p = c.conelod("lod", "info", c.out("missing.clod"), expect=2)
+    assert "cannot open" in p.stderr.decode(), p.stderr.decode()
+    # Bad arguments: usage errors.
+    for args in (["extract", good, "--eye", "1,2", "--budget", "10", "-o", c.out("x.ply")],
+                 ["extract", good, "--eye", "0,0,5", "--budget", "-3", "-o", c.out("x.ply")],
+                 ["extract", good, "--eye", "0,0,5", "--budget", "120%", "-o", c.out("x.ply")],
+                 ["extract", good, "--budget", "10"], ["build", sphere], ["frobnicate"], []):
+        c.conelod("lod", *args, expect=1)
+    # Bad meshes are refused by `lod build`.
+    for mesh, message in [("no_faces.ply", "has no faces"), ("nan_vertex.ply", "NaN or infinite")]:
+        p = c.conelod("lod", "build", c.mesh(mesh), "-o", c.out("bad.clod"), expect=2)
+        assert message in p.stderr.decode(), p.stderr.decode()
+        assert not os.path.exists(c.out("bad.clod"))
 
 def main():
     ap = argparse.ArgumentParser()

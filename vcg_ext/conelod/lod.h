@@ -151,6 +151,9 @@ struct LodView {
   vcg::Point3d viewDir{0, 0, -1};  // unit; orthographic only
   size_t faceBudget = 0;           // at most this many faces in the cut (the roots may exceed it)
   bool cullBackFacing = true;      // back-facing nodes are refined only after every other node
+                                   // (and, at each level, nodes whose cone axis faces away after
+                                   // those facing the eye; lod_refine.cpp says why); false:
+                                   // no node is culled or deferred
 };
 
 // The paper's refinement priority f(g) in [0,1] (larger = refine first): with a = angle(e, n),

@@ -361,16 +361,21 @@ struct LodReader::Impl {
   Status readPositions(uint32_t level, const std::vector<uint32_t>& ids, std::vector<vcg::Point3f>& out) {
     out.resize(ids.size());
     if (ids.empty()) return Status::Ok();
+    // Local vertices sorted by level id (id << 32 | local index), swept block by block.
+    std::vector<uint64_t> byId(ids.size());
+    for (size_t k = 0; k < ids.size(); ++k) byId[k] = uint64_t(ids[k]) << 32 | k;
+    std::sort(byId.begin(), byId.end());
     std::vector<uint32_t> blocks;
-    blocks.reserve(ids.size());
-    for (uint32_t v : ids) blocks.push_back(v / vertexBlock);
-    std::sort(blocks.begin(), blocks.end());
-    blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
+    for (uint64_t e : byId) {
+      const uint32_t b = uint32_t(e >> 32) / vertexBlock;
+      if (blocks.empty() || blocks.back() != b) blocks.push_back(b);
+    }
     const LevelEntry& L = levels[level];
     const uint64_t fullBlockBytes = kChunkHeaderBytes + uint64_t(vertexBlock) * 12;
     const uint64_t base = L.vertOffset + kChunkHeaderBytes + kVertDataBytes;
-    std::vector<std::pair<uint32_t, size_t>> where;  // block -> offset in `buffer`, for the run read
+    size_t next = 0;  // into byId
     for (size_t i = 0; i < blocks.size();) {
+      // A run of consecutive blocks (at most 64: 192 KiB) in one read.
       size_t j = i + 1;
       while (j < blocks.size() && blocks[j] == blocks[j - 1] + 1 && j - i < 64) ++j;
       const uint64_t firstVertex = uint64_t(blocks[i]) * vertexBlock;
@@ -386,12 +391,11 @@ struct LodReader::Impl {
         ChunkHeader h;
         s = checkChunk(buffer.data() + at, bytes, kVBlock, bytes, "a vertex block", h);
         if (!s.ok()) return s;
-        // Copy out the positions this block holds.
         const uint8_t* p = buffer.data() + at + kChunkHeaderBytes;
-        for (size_t k = 0; k < ids.size(); ++k) {
-          if (ids[k] / vertexBlock != blocks[b]) continue;
-          Decoder d(p + (ids[k] - v0) * 12, 12);
-          for (int i = 0; i < 3; ++i) out[k][i] = d.f32();  // (not one expression: argument order is unspecified)
+        for (; next < byId.size() && (byId[next] >> 32) < v1; ++next) {
+          const size_t k = size_t(byId[next] & 0xFFFFFFFFu);
+          Decoder d(p + ((byId[next] >> 32) - v0) * 12, 12);
+          for (int c = 0; c < 3; ++c) out[k][c] = d.f32();  // (not one expression: argument order is unspecified)
           if (!std::isfinite(out[k][0] + out[k][1] + out[k][2])) return Status::Invalid("non-finite vertex position");
         }
         at += bytes;

@@ -9,6 +9,14 @@
 // single refinement adjacent cut nodes differ by at most one level. Back-facing nodes (three-state
 // cone test, normal_cone.h) wait until no visible node is left to refine, so a full budget still
 // ends with every node at level 0.
+//
+// Two choices of ours. (1) Within a level, visible nodes whose cone axis points towards the eye
+// come before those whose axis points away, then f decides. f grows with the angle between the
+// axis and the eye, so on its own it refines the far side first wherever the coarse cones are too
+// wide to be culled (most of a small budget on the bunny went to the half facing away); the paper
+// wants the silhouette and rough groups first, which f still orders within each half. (2) The
+// refinement stops at the first node (with the neighbours it forces) that does not fit the budget,
+// rather than skipping it for smaller ones, so the cut stays breadth-first.
 #include "conelod/lod.h"
 
 #include <algorithm>

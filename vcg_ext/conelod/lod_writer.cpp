@@ -400,13 +400,12 @@ Status WriteLodFile(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
 
   // Geometry, coarsest level first.
   {
-    std::vector<uint32_t> start, faces, levelId, local, order;
+    std::vector<uint32_t> start, faces, levelId, local, order, verts;
     std::vector<vcg::Point3f> block;
     Encoder e;
     for (int k = int(nodeLevels) - 1; k >= 0; --k) {
-      if (progress && !progress(40 + int(55 * (int(nodeLevels) - 1 - k) / int(nodeLevels)), "LOD file: geometry"))
-      {
-        fail("cancelled");
+      if (progress && !progress(40 + int(55 * (int(nodeLevels) - 1 - k) / int(nodeLevels)), "LOD file: geometry")) {
+        fail("cancelled");  // removes the partial file
         return Status::Cancelled();
       }
       const LevelView L = view(uint32_t(k));
@@ -447,7 +446,7 @@ Status WriteLodFile(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
       for (uint32_t i = 0; i < nodes; ++i) {
         const uint32_t id = nodeId(uint32_t(k), i);
         // Local vertices by first use within the node.
-        std::vector<uint32_t> verts;
+        verts.clear();
         for (uint32_t j = start[i]; j < start[i + 1]; ++j)
           for (uint32_t v : L.mesh->faces[faces[j]])
             if (local[v] == kNoParent) {

@@ -644,6 +644,25 @@ TEST(Lod, WriterRefusesMismatchedInput) {
   EXPECT_FALSE(WriteLodFile(m, h, levels, "/nonexistent-dir/x.clod").ok());
 }
 
+TEST(Lod, CancellingLeavesNoFile) {
+  IndexedMesh m = test::Sphere(3);
+  const std::string path = TempPath("cancelled.clod");
+  std::remove(path.c_str());
+  // Stop at each stage in turn: grouping, simplification, records, geometry.
+  for (int stopAt : {1, 30, 91, 97}) {
+    int last = -1;
+    const Progress stop = [&](int percent, const char*) {
+      EXPECT_GE(percent, last) << "progress must rise";
+      last = percent;
+      return percent < stopAt;
+    };
+    const Status s = BuildLodFile(m, LodBuildParams(), path, nullptr, stop);
+    EXPECT_EQ(s.code, Status::Code::Cancelled) << stopAt;
+    std::ifstream in(path);
+    EXPECT_FALSE(in.good()) << "a cancelled build leaves no file (" << stopAt << ")";
+  }
+}
+
 TEST(Lod, BuildLodFileReportsItsFigures) {
   IndexedMesh m = test::Sphere(3);  // 512 faces
   LodBuildParams p;
