@@ -303,7 +303,7 @@ QString FilterConeLodPlugin::filterInfo(FilterIDType filter) const {
                  "<i>Eye</i> (the dialog's Get / View Pos. fills in the current camera position), or "
                  "orthographic along <i>ViewDirection</i>. With <i>CullBackFacing</i>, back-facing groups are "
                  "refined last; with <i>DropBackFacing</i> they are left out of the layer. Per-face quality = LOD level of the face (0 = the "
-                 "input's own faces), colour per level (red = finest, blue = coarsest). The current mesh is not "
+                 "input's own faces), a distinct colour per level (those of conelod lod extract). The current mesh is not "
                  "changed.<br>") +
              kPaperKamiya;
   }
@@ -992,7 +992,7 @@ bool FilterConeLodPlugin::applyLodExtract(MeshDocument& md, const RichParameterL
   for (size_t f = 0; f < out->cm.face.size(); ++f) {
     const int level = faceLevel[f];
     out->cm.face[f].Q() = CMeshO::FaceType::QualityType(level);
-    out->cm.face[f].C() = LevelColor(level, info.levels);
+    out->cm.face[f].C() = GroupColor(level);  // as conelod lod extract colours its output
     if (level >= 0 && size_t(level) < facesPerLevel.size()) ++facesPerLevel[size_t(level)];
   }
   vcg::tri::UpdateBounding<CMeshO>::Box(out->cm);

@@ -316,7 +316,6 @@ void LodViewerWidget::renderScene() {
   const QVector3D e = eyeInModel();
   const vcg::Point3d eye(e.x(), e.y(), e.z());
   const QVector3D plain(0.82f, 0.80f, 0.74f);
-  const int levels = reader_.info().levels;
   const int colourUniform = program_.uniformLocation("uColour");  // looked up once, not per draw
   int colourLevel = -1;                                            // the level uColour holds now
   if (!options_.colourLevels) program_.setUniformValue(colourUniform, plain);
@@ -336,7 +335,7 @@ void LodViewerWidget::renderScene() {
     if (it == buffers_.end()) continue;
     NodeBuffers& b = it->second;
     if (options_.colourLevels && node.level != colourLevel) {
-      const vcg::Color4b c = LevelColor(node.level, levels);
+      const vcg::Color4b c = GroupColor(node.level);  // the colours of conelod lod extract's output
       program_.setUniformValue(colourUniform, QVector3D(c[0], c[1], c[2]) / 255.0f);
       colourLevel = node.level;
     }

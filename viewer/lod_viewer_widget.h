@@ -32,7 +32,7 @@ struct ViewerOptions {
   size_t faceBudget = 500000;  // faces of the refined cut (the roots may exceed it)
   bool cullBackFacing = true;  // per-frame cone test; the refiner also refines back-facing nodes last
   bool flatShading = false;    // flat face normals (unshared vertices) instead of per-vertex normals
-  bool colourLevels = false;   // one colour per node level (red = finest ... blue = coarsest)
+  bool colourLevels = false;   // one colour per node level (GroupColor(level), as conelod lod extract)
   int stillMs = 150;           // the view counts as still after this long without input
   bool refineWhenIdle = true;  // false: only refineToDone() refines (headless measurements)
   bool hud = true;             // the text overlay

@@ -62,7 +62,7 @@ int main(int argc, char** argv) {
   parser.addPositionalArgument("file", "the .clod file (conelod lod build)");
   const QCommandLineOption budget("budget", "face budget of the refined cut (default 500000)", "F", "500000");
   const QCommandLineOption flat("flat", "flat shading (face normals)");
-  const QCommandLineOption colours("color-levels", "one colour per level (red = finest, blue = coarsest)");
+  const QCommandLineOption colours("color-levels", "one colour per level (as conelod lod extract's output)");
   const QCommandLineOption noCull("no-cull", "no back-face culling (neither per group nor on the GPU)");
   const QCommandLineOption noHud("no-hud", "no text overlay");
   const QCommandLineOption screenshot("screenshot", "render, save the picture to OUT.png and exit", "OUT.png");

@@ -29,12 +29,4 @@ inline vcg::Color4b GroupColor(int id) {
                       (unsigned char)(b * 255 + 0.5), 255);
 }
 
-// The colour of LOD level `level` of `levels` (0 = the input's own faces): a ramp from red (finest)
-// through green to blue (coarsest), so that a view-dependent cut reads as a heat map of detail.
-inline vcg::Color4b LevelColor(int level, int levels) {
-  vcg::Color4b c;
-  c.SetColorRamp(0.0f, float(levels > 1 ? levels - 1 : 1), float(level));
-  return c;
-}
-
 }  // namespace conelod
