@@ -80,12 +80,12 @@ class Timer {
 // Loads `path` into `mesh` and its indexed form. Returns "" or an error message.
 std::string LoadInput(const std::string& path, CMesh& mesh, IndexedMesh& indexed, std::vector<size_t>& faceOfIndex);
 
-int Fail(int code, const std::string& message);
+int Fail(int code, const std::string& message);  // prints "conelod: message" to stderr
 
 // The grouping options shared by `group`, `cull-cost` and `lod build`.
 extern const std::vector<std::string> kGroupingOptions;
 ConeGroupingParams ReadGroupingParams(Args& a);
-std::vector<std::string> With(std::vector<std::string> v, const std::vector<std::string>& more);  // prints "conelod: message" to stderr
+std::vector<std::string> With(std::vector<std::string> v, const std::vector<std::string>& more);  // v + more
 
 }  // namespace cli
 }  // namespace conelod

@@ -41,6 +41,8 @@ int LodBuild(int argc, char** argv) {
   if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kLodUsage);
   if (a.positional().size() != 1 || !a.has("-o"))
     return Fail(kUsage, std::string("expected IN.ply and -o OUT.clod\n") + kLodUsage);
+  const double ratio = params.simplification.levelRatio;
+  if (!(ratio > 0 && ratio <= 1)) return Fail(kUsage, "--level-ratio must be in (0, 1]");
   const std::string input = a.positional()[0], output = a.str("-o");
   CMesh mesh;
   IndexedMesh im;

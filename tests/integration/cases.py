@@ -1097,7 +1097,9 @@ def cli_lod_bad_files(c):
     for args in (["extract", good, "--eye", "1,2", "--budget", "10", "-o", c.out("x.ply")],
                  ["extract", good, "--eye", "0,0,5", "--budget", "-3", "-o", c.out("x.ply")],
                  ["extract", good, "--eye", "0,0,5", "--budget", "120%", "-o", c.out("x.ply")],
-                 ["extract", good, "--budget", "10"], ["build", sphere], ["frobnicate"], []):
+                 ["extract", good, "--budget", "10"], ["build", sphere], ["frobnicate"], [],
+                 ["build", sphere, "-o", c.out("r.clod"), "--level-ratio", "0"],
+                 ["build", sphere, "-o", c.out("r.clod"), "--threshold", "-1"]):
         c.conelod("lod", *args, expect=1)
     # Bad meshes are refused by `lod build`.
     for mesh, message in [("no_faces.ply", "has no faces"), ("nan_vertex.ply", "NaN or infinite")]:

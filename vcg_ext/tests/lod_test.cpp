@@ -15,6 +15,8 @@
 #include <iterator>
 #include <map>
 
+#include <unistd.h>
+
 #include "conelod/lod_internal.h"
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"
@@ -25,7 +27,10 @@ namespace {
 
 using namespace lodfile;
 
-std::string TempPath(const std::string& name) { return ::testing::TempDir() + "conelod_lod_test_" + name; }
+// Per process: ctest runs the tests of this file in parallel processes, each building its files.
+std::string TempPath(const std::string& name) {
+  return ::testing::TempDir() + "conelod_lod_test_" + std::to_string(getpid()) + "_" + name;
+}
 
 std::vector<uint8_t> ReadBytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
