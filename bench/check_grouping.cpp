@@ -207,13 +207,16 @@ int main(int argc, char** argv) {
     return 1;
   }
   struct Named { const char* name; ConeGroupingParams p; };
-  std::vector<Named> sets(3);
+  std::vector<Named> sets(4);
   sets[0].name = "default";
   sets[1].name = "cone-only";
   sets[1].p.shapeWeight = 0;
   sets[1].p.sizeWeight = 0;
   sets[2].name = "no-threshold";
   sets[2].p.coneThresholdDeg = 180;
+  // The paper's best-first order: its digests are those of "default" before local maxima came in.
+  sets[3].name = "strict-greedy";
+  sets[3].p.strictGreedy = true;
 
   std::vector<std::pair<std::string, IndexedMesh>> meshes;
   for (int i = 1; i < argc; ++i) {

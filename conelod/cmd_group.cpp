@@ -17,6 +17,7 @@ void WriteParams(Json& j, const ConeGroupingParams& p) {
       .field("cone_weight", p.coneWeight).field("shape_weight", p.shapeWeight).field("size_weight", p.sizeWeight)
       .field("threshold_deg", p.coneThresholdDeg).field("growth", p.thresholdGrowth)
       .field("max_levels", p.maxLevels).field("min_top_groups", p.minTopGroups)
+      .field("strict_greedy", p.strictGreedy)
       .endObject();
 }
 
@@ -30,7 +31,9 @@ const char* kGroupUsage =
     "  --cone-weight K    k_c [1]     --shape-weight K  k_s [0.5]    --size-weight K  k_n [0.5]\n"
     "  --threshold DEG    level-1 limit on the cone half-angle [15]; >= 180: no limit\n"
     "  --growth F         the limit grows by this factor per level [1.6]\n"
-    "  --max-levels N     [8]         --min-top-groups N  stop at this many groups [8]\n";
+    "  --max-levels N     [8]         --min-top-groups N  stop at this many groups [8]\n"
+    "  --strict-greedy    merge the best pair of the whole level first at every step (the paper's\n"
+    "                     order, about 2x slower); default: level 1 merges local maxima first\n";
 
 const char* kCullCostUsage =
     "conelod cull-cost IN.ply [--views N] [--camera-distance R] [grouping options | --pca K [--pca-levels L]]\n"
@@ -43,7 +46,7 @@ const char* kCullCostUsage =
     "  --pca-levels L  L nested levels: K clusters, then K/4, K/16, ... [1]\n";
 
 int CmdGroup(int argc, char** argv) {
-  Args a(argc, argv, With(kGroupingOptions, {"-o", "--level"}), {"--json"});
+  Args a(argc, argv, With(kGroupingOptions, {"-o", "--level"}), {"--json", "--strict-greedy"});
   ConeGroupingParams params = ReadGroupingParams(a);
   const int displayLevel = a.integer("--level", 1);
   if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kGroupUsage);
@@ -105,7 +108,8 @@ int CmdGroup(int argc, char** argv) {
 }
 
 int CmdCullCost(int argc, char** argv) {
-  Args a(argc, argv, With(kGroupingOptions, {"--views", "--camera-distance", "--pca", "--pca-levels"}), {"--json"});
+  Args a(argc, argv, With(kGroupingOptions, {"--views", "--camera-distance", "--pca", "--pca-levels"}),
+         {"--json", "--strict-greedy"});
   ConeGroupingParams params = ReadGroupingParams(a);
   CullingCostParams cp;
   cp.views = a.integer("--views", cp.views);
@@ -117,6 +121,7 @@ int CmdCullCost(int argc, char** argv) {
   if (pca) {
     for (const auto& o : kGroupingOptions)
       if (a.has(o)) return Fail(kUsage, o + " is a normal-cone grouping option: it does not go with --pca");
+    if (a.has("--strict-greedy")) return Fail(kUsage, "--strict-greedy is a normal-cone grouping option: it does not go with --pca");
     if (pcaClusters < 1) return Fail(kUsage, "--pca needs a cluster count >= 1");
     if (pcaLevels < 1 || pcaLevels > 16) return Fail(kUsage, "--pca-levels must be between 1 and 16");
   } else if (a.has("--pca-levels")) {

@@ -4,7 +4,8 @@
 // pair's score; a tournament tree over units (not over pairs) gives the global best pair. A
 // merge only changes pairs that involve the merged unit, so only its neighbours are revisited:
 // a neighbour whose best partner was one of the merged units rescans its own neighbours, the
-// others compare their pair with the new unit against their best.
+// others compare their pair with the new unit against their best. At level 1, sweeps in unit
+// order first merge the mutual best pairs (runLevel; the tree is built after them).
 //
 // The loop is bound by memory latency (each merge touches ~20 units scattered over the mesh), so
 // the per-unit state is split by access pattern and packed: the geometry every evaluation reads
@@ -14,12 +15,15 @@
 // slot when it fits, else to the end; the arena is compacted in place when full. Level 1
 // recomputes face normals from the mesh when an exact cone needs them and areas come from the
 // faces at the end, rather than from arrays: the build's peak memory stays under twice the
-// loaded mesh's. None of this changes a bit of the output: the same pairs are scored with the
-// same arithmetic and MinimalCone sees the same normals in the same order (bench/
-// check_grouping prints digests to compare two builds of the code).
+// loaded mesh's. After level 1 the faces are renumbered group by group (renumberFaces), so the
+// upper levels read normals in order. With strictGreedy none of this changes a bit of the
+// output of the paper's best-first order: the same pairs are scored with the same arithmetic and
+// MinimalCone sees the same normals in the same order (bench/check_grouping prints digests to
+// compare two builds of the code; its "strict-greedy" set is the former default).
 #include "conelod/cone_grouping.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -176,6 +180,7 @@ class BestTree {
  public:
   // n units, none with a pair yet; setKey then build, or set.
   void reset(size_t n) {
+    deferred_ = false;
     key_.assign(RoundUp(std::max<size_t>(n, 1)), kNoPair);
     levelBegin_.clear();
     levelCount_.clear();
@@ -206,9 +211,12 @@ class BestTree {
   }
   bool empty() const { return (nodes_.back() >> 32) == OrderedKey(kNoPair); }
   int top() const { return UnitOf(nodes_.back()); }
+  // While deferred, set() only records the key: build() makes the tree whole again.
+  void setDeferred(bool d) { deferred_ = d; }
   void set(int u, float k) {
     const float old = key_[size_t(u)];
     key_[size_t(u)] = k;
+    if (deferred_) return;
     size_t i = size_t(u);
     if (k > old) {  // u can only win more nodes
       const uint64_t e = Entry(k, u);
@@ -262,6 +270,7 @@ class BestTree {
   BigVector<uint64_t> nodes_;       // levels 1.. (each padded to a multiple of kArity), root last
   std::vector<size_t> levelBegin_;  // first node of level 1, 2, ... in nodes_
   std::vector<size_t> levelCount_;  // live nodes per level
+  bool deferred_ = false;
 };
 
 class HierarchyBuilder {
@@ -275,7 +284,8 @@ class HierarchyBuilder {
   float evaluate(const Unit& a, const Unit& b) const;
   void setBest(int u);  // from the cached scores of u's list
   void mergeUnits(int u, int p);
-  bool runLevel(double thresholdDeg, long& mergesSoFar);
+  bool runLevel(double thresholdDeg, bool localMaximaFirst, long& mergesSoFar);
+  bool reportProgress(long mergesSoFar);
   void emitLevel(double thresholdDeg, GroupHierarchy& out, bool firstLevel);
   void nextLevelUnits();
   void makeConeExact(int u);
@@ -289,10 +299,25 @@ class HierarchyBuilder {
   const Progress& progress_;
   const int faceCount_;
 
-  BigVector<int> faceNext_;  // circular face lists, one per unit (Chain::tail)
-  // Face normals, from level 2 on. Level 1 recomputes them from the mesh: its arrays leave no
-  // room for these under the memory target; above it, with far fewer units, there is.
+  // Circular face lists, one per unit (Chain::tail). From level 2 on the faces are renumbered
+  // (meshFace_), each level-1 group's faces contiguous in the order of its list: the lists above
+  // are runs of consecutive faces, walked in memory order.
+  BigVector<int> faceNext_;
+  BigVector<int> meshFace_;  // from level 2 on: the mesh face of each renumbered face
+  // Face normals of the renumbered faces, from level 2 on. Level 1 recomputes them from the mesh:
+  // its arrays leave no room for these under the memory target; above it, with far fewer units,
+  // there is.
   BigVector<vcg::Point3d> faceNormal_;
+  int meshFace(int f) const { return meshFace_.empty() ? f : meshFace_[size_t(f)]; }
+  void renumberFaces();
+  // From level 2 on, unless strictGreedy: per unit, up to three normals of its faces whose
+  // minimal cone is the unit's exact cone, or (after a merge) a guess of it: the support of the
+  // minimal cone of both units' supports. An exact recomputation first tries that guess: when
+  // every normal of the unit lies in it, it is the minimal cone (the minimal cone of a subset
+  // that holds them all), found with one scan instead of Welzl's algorithm.
+  BigVector<ConeSupport> support_;
+  bool trySupportCone(int u);
+  std::vector<vcg::Point3d> scratchSupport_, scratchTrial_;
 
   BigVector<Unit> units_;
   BigVector<Link> links_;
@@ -311,6 +336,9 @@ class HierarchyBuilder {
   // Found by emitLevel: the level's group of each unit, the unit of each group.
   std::vector<int> idOfUnit_, rootOfGroup_;
   double thresholdRad_ = kPi;
+  // A unit's cone is recomputed exactly once its face count reaches this many times the count at
+  // its last exact computation (see ConeGroupingParams::strictGreedy).
+  int exactGrowth_ = 2;
   bool thresholdOn_ = false;
   int aliveCount_ = 0;
   bool cancelled_ = false;
@@ -360,6 +388,7 @@ void HierarchyBuilder::makeConeExact(int u) {
       f = faceNext_[size_t(f)];
       scratchNormals_.push_back(faceNormal_[size_t(f)]);
     } while (f != tail);
+    if (!support_.empty() && trySupportCone(u)) return;
   } else {
     // Walk the list first, then compute the normals: the walk is a chain of dependent loads, the
     // normals are independent of each other and their misses overlap (prefetched ahead).
@@ -378,8 +407,44 @@ void HierarchyBuilder::makeConeExact(int u) {
       FaceNormalAndArea(mesh_, size_t(scratchFaces_[i]), scratchNormals_[i], area);
     }
   }
-  units_[size_t(u)].setCone(MinimalCone(scratchNormals_));
+  ConeSupport support;
+  units_[size_t(u)].setCone(MinimalCone(scratchNormals_, support));
+  if (!support_.empty()) support_[size_t(u)] = support;
   chains_[size_t(u)].exactSize = units_[size_t(u)].faceCount;
+}
+
+// makeConeExact's shortcut (see support_), on the normals in scratchNormals_: true when the
+// unit's cone was set. The guess is the minimal cone of a few normals; the normals outside it
+// join them and the guess is made again (the cone only grows towards the true one), a few times
+// at most before leaving the work to Welzl's algorithm on all the normals.
+bool HierarchyBuilder::trySupportCone(int u) {
+  ConeSupport& support = support_[size_t(u)];
+  if (support.count == 0) return false;
+  std::vector<vcg::Point3d>& chosen = scratchSupport_;
+  chosen.assign(support.normal, support.normal + support.count);
+  ConeSupport found;
+  for (int round = 0; round < 4; ++round) {
+    scratchTrial_.assign(chosen.begin(), chosen.end());  // MinimalCone shuffles its input
+    const NormalCone guess = MinimalCone(scratchTrial_, found);
+    if (guess.empty()) return false;
+    size_t outside = 0;
+    if (guess.cullable()) {
+      // The inside test of MinimalCone (normal_cone.cpp): a cosine slack of 1e-10.
+      const double minCos = std::cos(guess.halfAngle) - 1e-10;
+      for (const vcg::Point3d& n : scratchNormals_)
+        if (n.SquaredNorm() >= 0.5 && !(n * guess.axis >= minCos)) {
+          if (++outside > 256) return false;
+          chosen.push_back(n);
+        }
+    }  // else some of the normals fit in no hemisphere: neither do all of them
+    if (outside == 0) {
+      units_[size_t(u)].setCone(guess);
+      support = found;
+      chains_[size_t(u)].exactSize = units_[size_t(u)].faceCount;
+      return true;
+    }
+  }
+  return false;
 }
 
 void HierarchyBuilder::mergeUnits(int u, int p) {
@@ -424,8 +489,15 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
   faceNext_[size_t(bc.tail)] = headA;
   ac.tail = bc.tail;
   bc.tail = -1;
+  if (!support_.empty()) {  // the support of both supports: the guess at u's next exact cone
+    ConeSupport& sa = support_[size_t(u)];
+    const ConeSupport& sb = support_[size_t(p)];
+    scratchSupport_.assign(sa.normal, sa.normal + sa.count);
+    scratchSupport_.insert(scratchSupport_.end(), sb.normal, sb.normal + sb.count);
+    MinimalCone(scratchSupport_, sa);
+  }
   if (stillExact) ac.exactSize = a.faceCount;
-  else if (a.faceCount >= 2 * ac.exactSize) makeConeExact(u);  // amortized: each face O(log N) times
+  else if (a.faceCount >= exactGrowth_ * ac.exactSize) makeConeExact(u);  // amortized: each face O(log N) times
 
   // The merged unit's list: both lists without u and p, deduplicated, each pair re-scored. It
   // goes back into u's slot when it fits (a unit absorbing a small neighbour rarely gains
@@ -523,9 +595,20 @@ void HierarchyBuilder::compactArena(size_t room) {
   if (write + room > arena_.capacity()) arena_.reserve(write + room + write / 2);
 }
 
-bool HierarchyBuilder::runLevel(double thresholdDeg, long& mergesSoFar) {
+bool HierarchyBuilder::reportProgress(long mergesSoFar) {
+  if ((mergesSoFar & 0x3FFF) != 0 || !progress_) return true;
+  const int pct = int(95.0 * double(mergesSoFar) / std::max(1, faceCount_ - 1));
+  if (progress_(std::min(95, pct), "grouping faces by normal cones")) return true;
+  cancelled_ = true;
+  return false;
+}
+
+bool HierarchyBuilder::runLevel(double thresholdDeg, bool localMaximaFirst, long& mergesSoFar) {
   thresholdOn_ = thresholdDeg < 180.0;
-  thresholdRad_ = thresholdDeg * kDeg;
+  // A cone of pi/2 or more cannot be culled and is stored as pi, above any threshold under 180
+  // degrees: below 180 the limit is never above pi/2. (Without this, a pair whose bound came out
+  // just under pi/2 could merge into a group whose exact cone is uncullable.)
+  thresholdRad_ = std::min(thresholdDeg * kDeg, kPi / 2);
   const size_t n = units_.size();
   aliveCount_ = int(n);
   stampCounter_ = 0;
@@ -545,18 +628,37 @@ bool HierarchyBuilder::runLevel(double thresholdDeg, long& mergesSoFar) {
     l.bestPartner = partner;
     tree_.setKey(int(u), best);
   }
-  tree_.build();
-
   const int minGroups = std::max(1, params_.minTopGroups);
   long merges = 0;
+  if (localMaximaFirst) {
+    // Sweeps in unit order merge every pair that is the best pair of both its units (a local
+    // maximum of v: the global order would merge it too, unless a better pair next to it changed
+    // first), the merged unit going on while its best pair stays mutual; until a sweep merges
+    // nothing. Neighbouring units have neighbouring indices, so a sweep walks the mesh's memory
+    // in order where the global order jumps all over it. The tree is not kept meanwhile.
+    tree_.setDeferred(true);
+    for (long before = -1; before != merges && aliveCount_ > minGroups;) {
+      before = merges;
+      for (int u = 0; u < int(n) && aliveCount_ > minGroups; ++u) {
+        while (alive(u) && aliveCount_ > minGroups) {
+          const int b = links_[size_t(u)].bestPartner;
+          if (b < 0 || links_[size_t(b)].bestPartner != u) break;
+          mergeUnits(u, b);
+          ++merges;
+          if (!reportProgress(mergesSoFar + merges)) return false;
+        }
+      }
+    }
+    tree_.setDeferred(false);
+  }
+  // Best pair first over the whole level: all of it in strict mode, else what the sweeps leave
+  // (pairs whose exact ties form cycles, so that none is mutual).
+  tree_.build();
   while (!tree_.empty() && aliveCount_ > minGroups) {
     const int u = tree_.top();
     mergeUnits(u, links_[size_t(u)].bestPartner);
     ++merges;
-    if ((merges & 0x3FFF) == 0 && progress_) {
-      const int pct = int(95.0 * double(mergesSoFar + merges) / std::max(1, faceCount_ - 1));
-      if (!progress_(std::min(95, pct), "grouping faces by normal cones")) { cancelled_ = true; return false; }
-    }
+    if (!reportProgress(mergesSoFar + merges)) return false;
   }
   mergesSoFar += merges;
   return merges > 0;
@@ -575,7 +677,7 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     int f = tail;
     do {
       f = faceNext_[size_t(f)];
-      faceGroup[size_t(f)] = u;
+      faceGroup[size_t(meshFace(f))] = u;
     } while (f != tail);
   }
   // Ids in order of first appearance over faces: deterministic and cache-friendly.
@@ -590,6 +692,7 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   // The groups become the units of the next level now, indexed by group: the arrays of this
   // level go before the level's output grows.
   nextLevelUnits();
+  if (firstLevel && !params_.strictGreedy) support_.assign(groupCount, ConeSupport());
   level.groups.resize(groupCount);
 
   // Children: faces (level 1) or previous groups, bucketed by new group. A previous group's new
@@ -625,7 +728,7 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   // max do not depend on the order, but for the sign of a zero); tight spheres from the
   // vertices, in face order (which reads the mesh sequentially).
   for (size_t g = 0; g < groupCount; ++g) {
-    if (chains_[g].exactSize != units_[g].faceCount) makeConeExact(int(g));
+    if (chains_[g].exactSize != units_[g].faceCount || (firstLevel && !support_.empty())) makeConeExact(int(g));
     Group& grp = level.groups[g];
     grp.cone = units_[g].cone();
     grp.faceCount = units_[g].faceCount;
@@ -652,7 +755,7 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     int f = tail;
     do {
       f = faceNext_[size_t(f)];
-      for (uint32_t v : mesh_.faces[size_t(f)]) box.Add(mesh_.positions[v]);
+      for (uint32_t v : mesh_.faces[size_t(meshFace(f))]) box.Add(mesh_.positions[v]);
     } while (f != tail);
   }
   // A second sphere around the box centre; keep the smaller of it and the merged bound.
@@ -671,6 +774,33 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     level.groups[g].radius = unit.radius;
   }
   out.levels.push_back(std::move(level));
+}
+
+// After level 1: faces renumbered group by group, each group's in the order of its list (so the
+// normals' order, which MinimalCone's last bits depend on, is unchanged), with their normals.
+void HierarchyBuilder::renumberFaces() {
+  const size_t nf = size_t(faceCount_);
+  meshFace_.resize(nf);
+  size_t next = 0;
+  for (size_t g = 0; g < units_.size(); ++g) {  // the units are the level's groups, all alive
+    const int tail = chains_[g].tail;
+    int f = tail;
+    do {
+      f = faceNext_[size_t(f)];
+      meshFace_[next++] = f;
+    } while (f != tail);
+  }
+  assert(next == nf);
+  next = 0;
+  for (size_t g = 0; g < units_.size(); ++g) {
+    const size_t first = next, end = next + size_t(units_[g].faceCount);
+    for (; next + 1 < end; ++next) faceNext_[next] = int(next + 1);
+    faceNext_[next] = int(first);
+    chains_[g].tail = int(next++);
+  }
+  faceNormal_.resize(nf);
+  double area;
+  for (size_t f = 0; f < nf; ++f) FaceNormalAndArea(mesh_, size_t(meshFace_[f]), faceNormal_[f], area);
 }
 
 // The groups found by emitLevel (rootOfGroup_, idOfUnit_) become the units of the next level
@@ -693,6 +823,11 @@ void HierarchyBuilder::nextLevelUnits() {
     chains[id].capacity = count;
     Neighbour* list = arena.data() + links[id].nbOffset;
     for (const Neighbour* w = nbBegin(u); w != nbEnd(u); ++w) *list++ = {idOfUnit_[size_t(w->id)], kNoPair};
+  }
+  if (!support_.empty()) {
+    BigVector<ConeSupport> support(g);
+    for (size_t id = 0; id < g; ++id) support[id] = support_[size_t(rootOfGroup_[id])];
+    support_.swap(support);
   }
   units_.swap(units);
   links_.swap(links);
@@ -746,19 +881,16 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
   if (progress_ && !progress_(0, "grouping faces by normal cones")) return Status::Cancelled();
 
   long merges = 0;
+  exactGrowth_ = params_.strictGreedy ? 2 : 4;
   double threshold = params_.coneThresholdDeg;
   for (int level = 1; level <= params_.maxLevels; ++level) {
-    const bool merged = runLevel(std::min(threshold, 180.0), merges);
+    const bool merged = runLevel(std::min(threshold, 180.0), level == 1 && !params_.strictGreedy, merges);
     if (cancelled_) { out = GroupHierarchy(); return Status::Cancelled(); }
     if (!merged && level > 1) break;  // nothing changed: the previous level is the top
     emitLevel(std::min(threshold, 180.0), out, level == 1);
     if (int(out.levels.back().groups.size()) <= std::max(1, params_.minTopGroups)) break;
     if (level == params_.maxLevels) break;
-    if (faceNormal_.empty()) {
-      faceNormal_.resize(size_t(nf));
-      double area;
-      for (int f = 0; f < nf; ++f) FaceNormalAndArea(mesh_, size_t(f), faceNormal_[size_t(f)], area);
-    }
+    if (faceNormal_.empty()) renumberFaces();
     threshold *= params_.thresholdGrowth;
   }
 

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 
 #ifdef __SSE2__
 #include <emmintrin.h>
@@ -132,6 +133,12 @@ NormalCone UnionCone(const NormalCone& a, const NormalCone& b) {
 }
 
 NormalCone MinimalCone(std::vector<vcg::Point3d>& pts, uint64_t seed) {
+  ConeSupport unused;
+  return MinimalCone(pts, unused, seed);
+}
+
+NormalCone MinimalCone(std::vector<vcg::Point3d>& pts, ConeSupport& support, uint64_t seed) {
+  support.count = 0;
   // Drop zero vectors (normals of zero-area faces) in place.
   pts.erase(std::remove_if(pts.begin(), pts.end(), [](const vcg::Point3d& p) { return p.SquaredNorm() < 0.5; }),
             pts.end());
@@ -145,25 +152,36 @@ NormalCone MinimalCone(std::vector<vcg::Point3d>& pts, uint64_t seed) {
   thread_local Columns cols;
   cols.assign(pts);
   Cap cap = Cap1(pts[0]);
+  auto supportedBy = [&](std::initializer_list<size_t> at) {
+    support.count = 0;
+    for (size_t a : at) support.normal[support.count++] = pts[a];
+  };
+  supportedBy({0});
   for (size_t i = 1; i < n && !cap.uncullable; ++i) {
     i = cols.firstOutside(cap, i, n);
     if (i == n) break;
     cap = Cap1(pts[i]);  // pts[i] is on the boundary of the minimal cap of pts[0..i]
+    supportedBy({i});
     for (size_t j = 0; j < i && !cap.uncullable; ++j) {
       j = cols.firstOutside(cap, j, i);
       if (j == i) break;
       cap = Cap2(pts[i], pts[j]);
+      supportedBy({i, j});
       for (size_t k = 0; k < j && !cap.uncullable; ++k) {
         k = cols.firstOutside(cap, k, j);
         if (k == j) break;
         cap = Cap3(pts[i], pts[j], pts[k]);
+        supportedBy({i, j, k});
         // With three boundary points the cap is fixed: a point of pts[0..k) outside it means a
         // four-point support, i.e. the enclosing ball is centred at the origin (no hemisphere).
         if (!cap.uncullable && cols.firstOutside(cap, 0, k) < k) cap.uncullable = true;
       }
     }
   }
-  if (cap.uncullable || cap.cosHalf <= 1e-9) return NormalCone::Uncullable();
+  if (cap.uncullable || cap.cosHalf <= 1e-9) {
+    support.count = 0;
+    return NormalCone::Uncullable();
+  }
   NormalCone out;
   out.axis = cap.axis;
   out.halfAngle = std::acos(std::min(1.0, cap.cosHalf));

@@ -70,6 +70,17 @@ NormalCone UnionCone(const NormalCone& a, const NormalCone& b);
 // `normals` is shuffled in place (deterministically, from `seed`).
 NormalCone MinimalCone(std::vector<vcg::Point3d>& normals, uint64_t seed = 0x9E3779B97F4A7C15ull);
 
+// At most three of the normals on whose boundary circle a minimal cone lies: the minimal cone
+// of these alone is the cone (empty: count 0; an uncullable cone has no support).
+struct ConeSupport {
+  vcg::Point3d normal[3];
+  int count = 0;
+};
+
+// MinimalCone, also giving the support of the cone it returns.
+NormalCone MinimalCone(std::vector<vcg::Point3d>& normals, ConeSupport& support,
+                       uint64_t seed = 0x9E3779B97F4A7C15ull);
+
 // Reference implementation for tests: tries every cap defined by 1, 2 or 3 of the normals.
 // O(n^4): only for small sets.
 NormalCone MinimalConeBruteForce(const std::vector<vcg::Point3d>& normals);

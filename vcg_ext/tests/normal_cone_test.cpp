@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -98,6 +99,43 @@ TEST(MinimalCone, MatchesBruteForceOnRandomSets) {
     EXPECT_NEAR(fast.halfAngle, brute.halfAngle, 1e-7) << "trial " << trial;
     ExpectContainsAll(fast, ns);
   }
+}
+
+// The support MinimalCone reports: one to three of the input normals whose own minimal cone is
+// the cone (cone_grouping.cpp starts exact recomputations from it); none for an uncullable set.
+TEST(MinimalCone, SupportDefinesTheCone) {
+  std::mt19937 rng(777);
+  std::uniform_real_distribution<double> uni(0, 1);
+  for (int trial = 0; trial < 200; ++trial) {
+    const double capDeg = 2 + (trial % 8) * 12;  // 2 .. 86 degrees
+    const vcg::Point3d axis = Dir(uni(rng) * 180, uni(rng) * 360);
+    std::vector<vcg::Point3d> ns;
+    for (int i = 0; i < 1 + trial % 40; ++i) {
+      vcg::Point3d n = axis + Dir(uni(rng) * 180, uni(rng) * 360) * std::sin(capDeg * kDeg);
+      ns.push_back(n.Normalize());
+    }
+    std::vector<vcg::Point3d> copy = ns;
+    ConeSupport support;
+    const NormalCone cone = MinimalCone(copy, support, 1 + trial);
+    if (!cone.cullable()) {
+      EXPECT_EQ(support.count, 0);
+      continue;
+    }
+    ASSERT_GE(support.count, 1);
+    ASSERT_LE(support.count, 3);
+    std::vector<vcg::Point3d> onlySupport(support.normal, support.normal + support.count);
+    for (const auto& s : onlySupport) {  // each is one of the input normals, on the boundary
+      EXPECT_TRUE(std::find(ns.begin(), ns.end(), s) != ns.end());
+      EXPECT_NEAR(Angle(cone.axis, s), cone.halfAngle, 1e-7);
+    }
+    const NormalCone again = MinimalConeBruteForce(onlySupport);
+    EXPECT_NEAR(again.halfAngle, cone.halfAngle, 1e-7) << "trial " << trial;
+    EXPECT_LT(Angle(again.axis, cone.axis), 1e-6) << "trial " << trial;
+  }
+  std::vector<vcg::Point3d> antipodal = {vcg::Point3d(0, 0, 1), vcg::Point3d(0, 0, -1)};
+  ConeSupport support;
+  EXPECT_FALSE(MinimalCone(antipodal, support).cullable());
+  EXPECT_EQ(support.count, 0);
 }
 
 TEST(MinimalCone, IsNeverLargerThanTheMeanNormalCone) {
