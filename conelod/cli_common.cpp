@@ -130,7 +130,7 @@ const std::vector<std::string> kGroupingOptions = {"--cone-weight", "--shape-wei
 
 ConeGroupingParams ReadGroupingParams(Args& a) {
   ConeGroupingParams p;
-  p.strictGreedy = a.has("--strict-greedy");  // a flag: only commands that declare it accept it
+  p.strictGreedy = a.has("--strict-greedy");  // a flag: callers list it among their flag options
   p.coneWeight = a.num("--cone-weight", p.coneWeight);
   p.shapeWeight = a.num("--shape-weight", p.shapeWeight);
   p.sizeWeight = a.num("--size-weight", p.sizeWeight);

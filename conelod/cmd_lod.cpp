@@ -34,7 +34,7 @@ bool ParsePoint(const std::string& text, vcg::Point3d& p) {
 }
 
 int LodBuild(int argc, char** argv) {
-  Args a(argc, argv, With(kGroupingOptions, {"-o", "--level-ratio"}), {"--json"});
+  Args a(argc, argv, With(kGroupingOptions, {"-o", "--level-ratio"}), {"--json", "--strict-greedy"});
   LodBuildParams params;
   params.grouping = ReadGroupingParams(a);
   params.simplification.levelRatio = a.num("--level-ratio", params.simplification.levelRatio);
@@ -205,9 +205,9 @@ const char* kLodUsage =
     "conelod lod build IN.ply -o OUT.clod [grouping options] [--level-ratio R] [--json]\n"
     "conelod lod extract IN.clod --eye X,Y,Z --budget N|P% -o OUT.ply [--no-cull] [--drop-culled] [--json]\n"
     "conelod lod info IN.clod [--json]\n"
-    "  build: groups by normal cones (options as for `group`), simplifies once per level keeping\n"
-    "  the groups (each level R x the faces of the one below [0.5]) and writes the streamable\n"
-    "  .clod file (format: vcg_ext/conelod/lod_format.md).\n"
+    "  build: groups by normal cones (options as for `group`, --strict-greedy included), simplifies\n"
+    "  once per level keeping the groups (each level R x the faces of the one below [0.5]) and\n"
+    "  writes the streamable .clod file (format: vcg_ext/conelod/lod_format.md).\n"
     "  extract: opens the file, refines for a perspective eye at X,Y,Z under a budget of N faces\n"
     "  (or P% of the input's), coarser levels first, adjacent groups at most one level apart,\n"
     "  back-facing groups last (--no-cull: no back-face test), and writes the cut as OUT.ply with\n"
