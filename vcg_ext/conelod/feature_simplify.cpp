@@ -920,7 +920,7 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
         }
       }
       // Edges that cannot come within the tie of the best d so far skip the exact distances
-      // (d = infinity); they are measured below only if the topology refuses every other edge.
+      // (d = infinity); they are measured below only if the topology refuses the best edge.
       double best = std::numeric_limits<double>::infinity();
       for (uint32_t u : nbrs) {
         double d = 0;
@@ -945,9 +945,11 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
     uint32_t triedTo = kNone;
     bool done = false;
     for (size_t i = 0; i < cands.size(); ++i) {
-      if (!std::isfinite(cands[i].d)) {  // the topology refused every edge measured exactly
-        for (size_t j = i; j < cands.size(); ++j) Check(v, cands[j].to, &cands[j].d, nullptr, false);
-        std::sort(cands.begin() + long(i), cands.end(), byDistance);
+      if (i == 1 && !std::isfinite(cands.back().d)) {
+        // The topology refused the best edge: measure the edges the cutoff skipped, rank again.
+        for (size_t j = 1; j < cands.size(); ++j)
+          if (!std::isfinite(cands[j].d)) Check(v, cands[j].to, &cands[j].d, nullptr, false);
+        std::sort(cands.begin() + 1, cands.end(), byDistance);
       }
       const Candidate& cd = cands[i];
       // The paper's rule: the edge with the smallest d (among those the topology allows) is the
