@@ -169,6 +169,7 @@ class Arena {
 };
 
 constexpr float kNoPair = -std::numeric_limits<float>::infinity();
+constexpr float kUnscored = std::numeric_limits<float>::quiet_NaN();  // a list entry not scored yet
 
 // The unit with the best pair: an 8-ary tournament tree over the units' keys (the score of each
 // unit's best pair; kNoPair: none). A unit's leaf sits at its own index, so the neighbours of a
@@ -613,13 +614,24 @@ bool HierarchyBuilder::runLevel(double thresholdDeg, bool localMaximaFirst, long
   aliveCount_ = int(n);
   stampCounter_ = 0;
   tree_.reset(n);
+  // Every pair is scored from both of its units in strict mode (the former arithmetic, bit for
+  // bit); else once, from its lower unit, which writes the score into the higher unit's entry
+  // too (kUnscored marks the entries still to score).
+  const bool scoreOnce = !params_.strictGreedy;
   for (size_t u = 0; u < n; ++u) {
     Link& l = links_[u];
     l.stamp = 0;
     float best = kNoPair;
     int partner = -1;
     for (Neighbour* nb = nbBegin(int(u)); nb != nbEnd(int(u)); ++nb) {
-      nb->score = evaluate(units_[u], units_[size_t(nb->id)]);
+      if (!scoreOnce) {
+        nb->score = evaluate(units_[u], units_[size_t(nb->id)]);
+      } else if (std::isnan(nb->score)) {
+        nb->score = evaluate(units_[u], units_[size_t(nb->id)]);
+        if (size_t(nb->id) > u)  // the higher unit has not chosen its best yet
+          for (Neighbour* back = nbBegin(nb->id); back != nbEnd(nb->id); ++back)
+            if (back->id == int(u)) { back->score = nb->score; break; }
+      }
       if (nb->score > best || (nb->score == best && nb->score != kNoPair && nb->id < partner)) {
         best = nb->score;
         partner = nb->id;
@@ -692,6 +704,9 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   // The groups become the units of the next level now, indexed by group: the arrays of this
   // level go before the level's output grows.
   nextLevelUnits();
+  // Renumbered now, the exact cones below read the normals in memory order, computed once for
+  // this level and the next ones (where the level-1 merges recomputed them from the mesh).
+  if (firstLevel) renumberFaces();
   if (firstLevel && !params_.strictGreedy) support_.assign(groupCount, ConeSupport());
   level.groups.resize(groupCount);
 
@@ -822,7 +837,7 @@ void HierarchyBuilder::nextLevelUnits() {
     links[id] = Link{-1, uint32_t(arena.grow(size_t(count))), count, 0};
     chains[id].capacity = count;
     Neighbour* list = arena.data() + links[id].nbOffset;
-    for (const Neighbour* w = nbBegin(u); w != nbEnd(u); ++w) *list++ = {idOfUnit_[size_t(w->id)], kNoPair};
+    for (const Neighbour* w = nbBegin(u); w != nbEnd(u); ++w) *list++ = {idOfUnit_[size_t(w->id)], kUnscored};
   }
   if (!support_.empty()) {
     BigVector<ConeSupport> support(g);
@@ -852,7 +867,7 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     // The arena's high-water mark is what it costs in memory: a quarter of slack, no more.
     arena_.reserve(neighbours.size() + neighbours.size() / 4 + 16);
     Neighbour* list = arena_.data() + arena_.grow(neighbours.size());
-    for (const uint32_t w : neighbours) *list++ = {int(w), kNoPair};
+    for (const uint32_t w : neighbours) *list++ = {int(w), kUnscored};
     links_.resize(size_t(nf));
     for (int f = 0; f < nf; ++f)
       links_[size_t(f)] = Link{-1, offsets[size_t(f)], int(offsets[size_t(f) + 1] - offsets[size_t(f)]), 0};
@@ -890,7 +905,6 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     emitLevel(std::min(threshold, 180.0), out, level == 1);
     if (int(out.levels.back().groups.size()) <= std::max(1, params_.minTopGroups)) break;
     if (level == params_.maxLevels) break;
-    if (faceNormal_.empty()) renumberFaces();
     threshold *= params_.thresholdGrowth;
   }
 
