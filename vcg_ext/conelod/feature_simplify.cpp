@@ -172,6 +172,16 @@ class Work {
   }
 
   double CurvatureK(uint32_t v) const;
+  // Corner angles (radians) and area of a face, computed once per version of the face: the
+  // curvature K of a vertex is recomputed whenever its fan changes, but a collapse changes only a
+  // few of the faces around it.
+  struct FaceAngles {
+    double corner[3];
+    double area;
+  };
+  mutable std::vector<FaceAngles> faceAngles;
+  mutable std::vector<char> faceAnglesValid;  // 0: the face changed since (or never computed)
+  const FaceAngles& Angles(uint32_t f) const;
   double CurvatureM(uint32_t v) const;
   bool IsManifoldVertex(uint32_t v, std::vector<uint32_t>& verts, std::vector<uint32_t>& parent,
                         std::vector<int>& degree) const;
@@ -180,14 +190,28 @@ class Work {
   void FillInfo();
 };
 
+const Work::FaceAngles& Work::Angles(uint32_t f) const {
+  FaceAngles& a = faceAngles[f];
+  if (!faceAnglesValid[f]) {
+    faceAnglesValid[f] = 1;
+    const auto& t = F[f];
+    for (int i = 0; i < 3; ++i) {
+      const P3& p = P[t[i]];
+      a.corner[i] = AngleBetween(P[t[(i + 1) % 3]] - p, P[t[(i + 2) % 3]] - p);
+    }
+    a.area = 0.5 * Cross(f).Norm();
+  }
+  return a;
+}
+
 double Work::CurvatureK(uint32_t v) const {
   double angles = 0, area = 0;
   for (uint32_t f : VF[v]) {
     const auto& t = F[f];
     const int i = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
-    const P3& p = P[v];
-    angles += AngleBetween(P[t[(i + 1) % 3]] - p, P[t[(i + 2) % 3]] - p);
-    area += 0.5 * Cross(f).Norm();
+    const FaceAngles& a = Angles(f);
+    angles += a.corner[i];
+    area += a.area;
   }
   const double S = area / 3.0;
   return S > 0 ? (2 * kPi - angles) / S : 0.0;
@@ -314,6 +338,8 @@ Status Work::Build(const IndexedMesh& in, const FeatureSimplifyParams& p) {
   }
 
   if (p.extendFeatureLines) ExtendFeatureLines(p.featureAngleDeg);
+  faceAngles.resize(F.size());
+  faceAnglesValid.assign(F.size(), 0);
   Classify(p);
   return Status::Ok();
 }
@@ -724,6 +750,7 @@ void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
     } else {
       for (auto& x : t)
         if (x == from) x = to;
+      w.faceAnglesValid[f] = 0;
       w.VF[to].push_back(f);
       if (track) outError_[f] = outErr;
     }

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include <vcg/space/box3.h>
@@ -96,37 +97,52 @@ struct HeapEntry {
   uint32_t tag;
 };
 
-// 4-ary min-heap on priority: half the depth of a binary heap, and a node's children share one
-// or two cache lines (the heap is the largest and most randomly accessed array of a run).
+// 4-ary min-heap on priority: half the depth of a binary heap. The heap is the largest and most
+// randomly accessed array of a run, so the four children of a node (64 bytes) are placed in one
+// cache line: the array starts 16 bytes before a line boundary, so that children 4i+1..4i+4 begin
+// on one.
 class EntryHeap {
  public:
-  void reserve(size_t n) { h_.reserve(n); }
-  bool empty() const { return h_.empty(); }
-  size_t size() const { return h_.size(); }
+  void reserve(size_t n) {
+    if (n > cap_) grow(n);
+  }
+  bool empty() const { return n_ == 0; }
+  size_t size() const { return n_; }
   const HeapEntry& top() const { return h_[0]; }
-  void append(const HeapEntry& e) { h_.push_back(e); }  // unordered; heapify() before popping
+  void append(const HeapEntry& e) {  // unordered; heapify() before popping
+    if (n_ == cap_) grow(2 * cap_ + 64);
+    h_[n_++] = e;
+  }
   void push(const HeapEntry& e) {
-    h_.push_back(e);
-    siftUp(h_.size() - 1);
+    append(e);
+    siftUp(n_ - 1);
   }
   HeapEntry pop() {
     const HeapEntry top = h_[0];
-    h_[0] = h_.back();
-    h_.pop_back();
-    if (!h_.empty()) siftDown(0);
+    h_[0] = h_[--n_];
+    if (n_ > 0) siftDown(0);
     return top;
   }
   void heapify() {
-    for (size_t i = h_.size() / 4 + 1; i-- > 0;)
-      if (i < h_.size()) siftDown(i);
+    for (size_t i = n_ / 4 + 1; i-- > 0;)
+      if (i < n_) siftDown(i);
   }
   template <class Pred>
   void removeIf(Pred pred) {
-    h_.erase(std::remove_if(h_.begin(), h_.end(), pred), h_.end());
+    n_ = size_t(std::remove_if(h_, h_ + n_, pred) - h_);
     heapify();
   }
 
  private:
+  void grow(size_t cap) {
+    std::vector<HeapEntry> storage(cap + 4);  // + room to align
+    const uintptr_t addr = reinterpret_cast<uintptr_t>(storage.data());
+    HeapEntry* h = storage.data() + ((48 - addr % 64 + 64) % 64) / sizeof(HeapEntry);
+    std::copy(h_, h_ + n_, h);
+    storage_.swap(storage);
+    h_ = h;
+    cap_ = cap;
+  }
   void siftUp(size_t i) {
     const HeapEntry x = h_[i];
     while (i > 0) {
@@ -139,7 +155,7 @@ class EntryHeap {
   }
   void siftDown(size_t i) {
     const HeapEntry x = h_[i];
-    const size_t n = h_.size();
+    const size_t n = n_;
     for (;;) {
       const size_t first = 4 * i + 1;
       if (first >= n) break;
@@ -153,8 +169,11 @@ class EntryHeap {
     }
     h_[i] = x;
   }
-  std::vector<HeapEntry> h_;
+  std::vector<HeapEntry> storage_;
+  HeapEntry* h_ = nullptr;  // storage_.data() + 0..3, at 48 modulo 64 bytes
+  size_t n_ = 0, cap_ = 0;
 };
+static_assert(sizeof(HeapEntry) == 16, "four heap entries per cache line");
 constexpr uint32_t kLazy = 0, kJudged = 1u << 31, kKindMask = kJudged, kEpochMask = ~kKindMask;
 
 struct Candidate {
@@ -200,8 +219,16 @@ class Simplifier {
     return groupConstraints_ && !p_.lockGroupBoundaries && vi.groups == 2 && (vi.flags & kSimpleContour);
   }
   Candidate judge(uint32_t a, uint32_t b);
-  bool condition1(const std::vector<int>& g, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a,
-                  uint32_t n0b, uint32_t n1a, uint32_t n1b, bool primary) const;
+  // g(f): the group of face f; layer: the coarser grouping it reads, null for the primary one.
+  template <class GroupOf>
+  bool condition1(const GroupOf& g, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a, uint32_t n0b,
+                  uint32_t n1a, uint32_t n1b, const std::vector<int>* layer) const;
+  // Condition 1 for a coarser grouping whose groups are unions of the primary ones, once the
+  // primary grouping passed it (see coarserNested_).
+  bool condition1Nested(const std::vector<int>& g, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1) const {
+    return e1 == kNone || g[e0] != g[e1] || faces_[e0].group == faces_[e1].group || interiorIn(a, g) ||
+           interiorIn(b, g);
+  }
   // Where the merged vertex goes (c.keep, c.position); false: both endpoints must stay.
   bool place(uint32_t a, uint32_t b, bool contourEdge, Candidate& c) const;
   double priorityOf(double error, double quality, uint32_t a, uint32_t b) const;
@@ -213,6 +240,13 @@ class Simplifier {
   const IndexedMesh& mesh_;
   const std::vector<int>& group_;
   const std::vector<const std::vector<int>*>& coarser_;
+  // Every coarser grouping is a union of the primary groups (as the levels of a GroupHierarchy):
+  // faces in one primary group are in one coarser group. Then a collapse that passes condition 1
+  // for the primary groups passes its first two clauses for the coarser ones (a neighbour in f1's
+  // primary group is in its coarser group), and the third wherever f1 and f2 share a primary group
+  // (a fan inside one primary group is inside one coarser group): only f1 and f2 in different
+  // primary groups but one coarser group remain to check.
+  bool coarserNested_ = false;
   GroupQemParams p_;
   const bool groupConstraints_;
 
@@ -221,7 +255,11 @@ class Simplifier {
   double floorError_ = 0;
   std::vector<Point3d> pos_;
   std::vector<Quadric> quadric_;
-  std::vector<std::array<uint32_t, 3>> faces_;
+  // A face with its (primary) group: the judging reads both, in one 16-byte record.
+  struct FaceRec : std::array<uint32_t, 3> {
+    int group;
+  };
+  std::vector<FaceRec> faces_;
   std::vector<char> faceDead_;
   std::vector<uint32_t> start_, count_, refs_;
   // What the loop reads of a vertex, in one 16-byte record (one cache miss, not six).
@@ -278,7 +316,7 @@ void Simplifier::analyzeVertex(uint32_t v) {
   // Distinct groups.
   groupScratch_.clear();
   for (uint32_t i = 0; i < k; ++i) {
-    const int g = group_[fl[i]];
+    const int g = faces_[fl[i]].group;
     if (std::find(groupScratch_.begin(), groupScratch_.end(), g) == groupScratch_.end()) groupScratch_.push_back(g);
   }
   vi.groups = uint8_t(std::min<size_t>(groupScratch_.size(), 255));
@@ -317,10 +355,10 @@ void Simplifier::analyzeVertex(uint32_t v) {
       for (uint32_t i = 0; i < k; ++i)
         if (i != cur && (fanOther_[2 * i] == out || fanOther_[2 * i + 1] == out)) { next = i; break; }
       if (next == kNone || next == startFace || visited > k) {
-        if (next == startFace && group_[fl[cur]] != group_[fl[next]]) ++changes;
+        if (next == startFace && faces_[fl[cur]].group != faces_[fl[next]].group) ++changes;
         break;
       }
-      if (group_[fl[cur]] != group_[fl[next]]) ++changes;
+      if (faces_[fl[cur]].group != faces_[fl[next]].group) ++changes;
       cur = next;
       in = out;
     }
@@ -362,12 +400,29 @@ void Simplifier::init() {
   floorError_ = 1e-12 * diag_ * diag_;
   pos_.resize(nv);
   for (size_t v = 0; v < nv; ++v) pos_[v] = Point3d::Construct(mesh_.positions[v]) - center_;
-  faces_ = mesh_.faces;
+  faces_.resize(nf);
+  for (size_t f = 0; f < nf; ++f) {
+    static_cast<std::array<uint32_t, 3>&>(faces_[f]) = mesh_.faces[f];
+    faces_[f].group = group_[f];
+  }
   faceDead_.assign(nf, 0);
   vs_.assign(nv, VertexState());
   liveFaces_ = nf;
   buildFaceLists();
   for (uint32_t v = 0; v < nv; ++v) analyzeVertex(v);
+  coarserNested_ = !coarser_.empty();
+  if (coarserNested_) {
+    const int maxGroup = nf > 0 ? *std::max_element(group_.begin(), group_.end()) : 0;
+    std::vector<int> coarserOf(size_t(maxGroup) + 1);
+    for (const auto* layer : coarser_) {
+      std::fill(coarserOf.begin(), coarserOf.end(), -1);
+      for (size_t f = 0; f < nf && coarserNested_; ++f) {
+        int& c = coarserOf[size_t(group_[f])];
+        if (c < 0) c = (*layer)[f];
+        else if (c != (*layer)[f]) coarserNested_ = false;
+      }
+    }
+  }
 
   // Quadrics: area-weighted face planes; border (and group-contour) edges add the plane through
   // the edge orthogonal to the face, weighted by boundaryWeight * length^2.
@@ -388,7 +443,7 @@ void Simplifier::init() {
       for (const uint32_t* g = facesBegin(u); g != facesEnd(u); ++g)
         if (*g != f && Contains(faces_[*g], w)) { ++others; other = *g; }
       const bool border = others == 0;
-      const bool contour = groupConstraints_ && others == 1 && group_[other] != group_[f];
+      const bool contour = groupConstraints_ && others == 1 && faces_[other].group != faces_[f].group;
       if (!border && !contour) continue;
       const Point3d edge = pos_[w] - pos_[u];
       Point3d dir = un ^ edge;
@@ -402,17 +457,18 @@ void Simplifier::init() {
   }
 }
 
-bool Simplifier::condition1(const std::vector<int>& g, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1,
-                            uint32_t n0a, uint32_t n0b, uint32_t n1a, uint32_t n1b, bool primary) const {
+template <class GroupOf>
+bool Simplifier::condition1(const GroupOf& g, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a,
+                            uint32_t n0b, uint32_t n1a, uint32_t n1b, const std::vector<int>* layer) const {
   // f1 (and f2) keep a face of their own group among their other neighbours...
-  const int g0 = g[e0];
-  if (!((n0a != kNone && g[n0a] == g0) || (n0b != kNone && g[n0b] == g0))) return false;
+  const int g0 = g(e0);
+  if (!((n0a != kNone && g(n0a) == g0) || (n0b != kNone && g(n0b) == g0))) return false;
   if (e1 == kNone) return true;
-  const int g1 = g[e1];
-  if (!((n1a != kNone && g[n1a] == g1) || (n1b != kNone && g[n1b] == g1))) return false;
+  const int g1 = g(e1);
+  if (!((n1a != kNone && g(n1a) == g1) || (n1b != kNone && g(n1b) == g1))) return false;
   // ...and, when both are in one group, one endpoint's whole closed fan is in it.
   if (g0 != g1) return true;
-  return primary ? (interior(a) || interior(b)) : (interiorIn(a, g) || interiorIn(b, g));
+  return layer ? (interiorIn(a, *layer) || interiorIn(b, *layer)) : (interior(a) || interior(b));
 }
 
 bool Simplifier::place(uint32_t a, uint32_t b, bool contourEdge, Candidate& c) const {
@@ -527,9 +583,13 @@ Candidate Simplifier::judge(uint32_t a, uint32_t b) {
   }
   if (p_.condition1) {
     c.verdict = CollapseVerdict::Condition1;
-    if (!condition1(group_, a, b, e[0], e[1], n0a, n0b, n1a, n1b, true)) return c;
+    const auto primaryGroup = [this](uint32_t f) { return faces_[f].group; };
+    if (!condition1(primaryGroup, a, b, e[0], e[1], n0a, n0b, n1a, n1b, nullptr)) return c;
     for (const auto* layer : coarser_)
-      if (!condition1(*layer, a, b, e[0], e[1], n0a, n0b, n1a, n1b, false)) return c;
+      if (coarserNested_ ? !condition1Nested(*layer, a, b, e[0], e[1])
+                         : !condition1([layer](uint32_t f) { return (*layer)[f]; }, a, b, e[0], e[1], n0a, n0b,
+                                       n1a, n1b, layer))
+        return c;
   }
   if (p_.condition2 && ia.groups + ib.groups >= 3) {
     c.verdict = CollapseVerdict::Condition2;
@@ -540,7 +600,7 @@ Candidate Simplifier::judge(uint32_t a, uint32_t b) {
     for (uint32_t v : {a, b})
       for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f) {
         if (*f == e[0] || *f == e[1]) continue;
-        const int g = group_[*f];
+        const int g = faces_[*f].group;
         if (std::find(groupScratch_.begin(), groupScratch_.end(), g) == groupScratch_.end()) {
           groupScratch_.push_back(g);
           if (groupScratch_.size() > limit) return c;
@@ -549,7 +609,7 @@ Candidate Simplifier::judge(uint32_t a, uint32_t b) {
   }
 
   c.verdict = CollapseVerdict::FixedEndpoints;
-  if (!place(a, b, ne == 2 && group_[e[0]] != group_[e[1]], c)) return c;
+  if (!place(a, b, ne == 2 && faces_[e[0]].group != faces_[e[1]].group, c)) return c;
 
   // Geometry of the faces that survive: no flip, no zero-area face; their worst quality
   // (2 area / longest edge^2, compared squared: no square root per face).
