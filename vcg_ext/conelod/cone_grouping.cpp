@@ -899,9 +899,9 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
   double threshold = params_.coneThresholdDeg;
   for (int level = 1; level <= params_.maxLevels; ++level) {
     // Level 1 (default mode) refreshes its cones at every 8-fold growth: each refresh recomputes
-    // the unit's normals from the mesh (10% of the build at every 4-fold growth); the looser
-    // bounds leave 1-3% more level-1 groups, culling as well (docs/cone_grouping.md). Above it
-    // a refresh costs about one scan (support_).
+    // the unit's normals from the mesh (a tenth of the build at every 4-fold growth; 8-fold
+    // recomputes a quarter fewer normals); the looser bounds leave 1-3% more level-1 groups,
+    // culling as well (docs/cone_grouping.md). Above it a refresh costs about one scan (support_).
     exactGrowth_ = params_.strictGreedy ? 2 : (level == 1 ? 8 : 4);
     const bool merged = runLevel(std::min(threshold, 180.0), level == 1 && !params_.strictGreedy, merges);
     if (cancelled_) { out = GroupHierarchy(); return Status::Cancelled(); }
