@@ -13,10 +13,11 @@
 // touched only by the merging units; and a merge prefetches all its neighbours' data before it
 // uses any of it. Neighbour lists live in one arena: a merged list goes back into its unit's
 // slot when it fits, else to the end; the arena is compacted in place when full. Level 1
-// recomputes face normals from the mesh when an exact cone needs them and areas come from the
-// faces at the end, rather than from arrays: the build's peak memory stays under twice the
-// loaded mesh's. After level 1 the faces are renumbered group by group (renumberFaces), so the
-// upper levels read normals in order. With strictGreedy none of this changes a bit of the
+// recomputes face normals from the mesh when an exact cone needs them during its merges, and
+// areas come from the faces at the end, rather than from arrays: the build's peak memory stays
+// under twice the loaded mesh's. Once level 1's merges are done and its arrays freed, the faces
+// are renumbered group by group (renumberFaces), so level 1's final exact cones and the upper
+// levels read normals in order. With strictGreedy none of this changes a bit of the
 // output of the paper's best-first order: the same pairs are scored with the same arithmetic and
 // MinimalCone sees the same normals in the same order (bench/check_grouping prints digests to
 // compare two builds of the code; its "strict-greedy" set is the former default).
