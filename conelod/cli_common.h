@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "conelod/cone_grouping.h"
 #include "conelod/indexed_mesh.h"
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"
@@ -80,6 +81,11 @@ class Timer {
 std::string LoadInput(const std::string& path, CMesh& mesh, IndexedMesh& indexed, std::vector<size_t>& faceOfIndex);
 
 int Fail(int code, const std::string& message);  // prints "conelod: message" to stderr
+
+// The grouping options shared by `group`, `cull-cost` and `lod build`.
+extern const std::vector<std::string> kGroupingOptions;
+ConeGroupingParams ReadGroupingParams(Args& a);
+std::vector<std::string> With(std::vector<std::string> v, const std::vector<std::string>& more);  // v + more
 
 }  // namespace cli
 }  // namespace conelod

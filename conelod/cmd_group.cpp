@@ -12,28 +12,6 @@ namespace conelod {
 namespace cli {
 namespace {
 
-const std::vector<std::string> kGroupingOptions = {"--cone-weight", "--shape-weight", "--size-weight",
-                                                    "--threshold",   "--growth",       "--max-levels",
-                                                    "--min-top-groups"};
-
-ConeGroupingParams ReadGroupingParams(Args& a) {
-  ConeGroupingParams p;
-  p.strictGreedy = a.has("--strict-greedy");
-  p.coneWeight = a.num("--cone-weight", p.coneWeight);
-  p.shapeWeight = a.num("--shape-weight", p.shapeWeight);
-  p.sizeWeight = a.num("--size-weight", p.sizeWeight);
-  p.coneThresholdDeg = a.num("--threshold", p.coneThresholdDeg);
-  p.thresholdGrowth = a.num("--growth", p.thresholdGrowth);
-  p.maxLevels = a.integer("--max-levels", p.maxLevels);
-  p.minTopGroups = a.integer("--min-top-groups", p.minTopGroups);
-  return p;
-}
-
-std::vector<std::string> With(std::vector<std::string> v, const std::vector<std::string>& more) {
-  v.insert(v.end(), more.begin(), more.end());
-  return v;
-}
-
 void WriteParams(Json& j, const ConeGroupingParams& p) {
   j.key("params").beginObject()
       .field("cone_weight", p.coneWeight).field("shape_weight", p.shapeWeight).field("size_weight", p.sizeWeight)

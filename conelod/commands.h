@@ -26,6 +26,8 @@ int CmdProgressive(int argc, char** argv);
 extern const char* kPartitionUsage;
 extern const char* kProgressiveUsage;
 extern const char* kClusterShapeUsage;
+int CmdLod(int argc, char** argv);
+extern const char* kLodUsage;
 
 }  // namespace cli
 }  // namespace conelod

@@ -24,6 +24,7 @@ const Command kCommands[] = {
     {"partition", conelod::cli::CmdPartition, &conelod::cli::kPartitionUsage},
     {"progressive", conelod::cli::CmdProgressive, &conelod::cli::kProgressiveUsage},
     {"cluster-shape", conelod::cli::CmdClusterShape, &conelod::cli::kClusterShapeUsage},
+    {"lod", conelod::cli::CmdLod, &conelod::cli::kLodUsage},
 };
 
 void PrintUsage(FILE* out) {

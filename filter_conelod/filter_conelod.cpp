@@ -2,14 +2,19 @@
 #include "filter_conelod.h"
 
 #include <QElapsedTimer>
+#include <QFileInfo>
+#include <cmath>
+#include <memory>
 #include <exception>
 #include <new>
 
 #include "builtin_qem.h"
 #include "conelod/cone_grouping.h"
 #include "conelod/culling_cost.h"
+#include "conelod/group_colors.h"
 #include "conelod/group_integrity.h"
 #include "conelod/group_qem.h"
+#include "conelod/lod.h"
 #include "conelod/feature_simplify.h"
 #include "conelod/mesh_check.h"
 #include "conelod/pixel_budget.h"
@@ -77,6 +82,59 @@ ConeGroupingParams ReadGroupingParameters(const RichParameterList& par) {
   return p;
 }
 
+// The LOD file's simplification options (the grouping ones come from AddGroupingParameters).
+// Names are those of the group-preserving QEM filter, which does each level's simplification.
+void AddLodSimplificationParameters(RichParameterList& par) {
+  const HierarchicalSimplificationParams d;
+  par.addParam(RichFloat("LevelRatio", float(d.levelRatio), "Faces kept per level (0..1]",
+                         "Each LOD level targets this fraction of the faces of the level below (level 1: of the "
+                         "mesh); a level stops earlier when its groups allow no further collapse."));
+  par.addParam(RichBool("LockGroupBoundaries", d.qem.lockGroupBoundaries, "Lock group boundaries",
+                        "No vertex on a group boundary moves: neighbouring groups drawn at different levels "
+                        "then meet without cracks, at the price of less reduction."));
+  par.addParam(RichFloat("QualityThr", float(d.qem.qualityThr), "Quality threshold",
+                         "Collapses creating faces of quality (2 area / longest edge^2) below this are penalised, "
+                         "as in the built-in filter. 0: no penalty."));
+  par.addParam(RichBool("OptimalPlacement", d.qem.optimalPlacement, "Optimal position of simplified vertices",
+                        "The merged vertex goes where the quadric error is least; otherwise to the better endpoint."));
+  par.addParam(RichBool("PreserveBoundary", d.qem.preserveBoundary, "Preserve Boundary of the mesh",
+                        "Vertices on the mesh border never move."));
+  par.addParam(RichFloat("BoundaryWeight", float(d.qem.boundaryWeight), "Boundary Preserving Weight",
+                         "Weight of the quadrics that keep mesh borders (and group contours) in place."));
+  par.addParam(RichBool("PreserveNormal", d.qem.preserveNormal, "Preserve Normal",
+                        "Refuse collapses that turn a face's normal by more than about 78 degrees (fold-overs)."));
+}
+
+const char* const kLodViewModes[] = {"Perspective, framed from ViewDirection", "Perspective from Eye",
+                                     "Orthographic along ViewDirection"};
+
+// Independent of the current mesh: the extract reads everything from the file.
+void AddLodExtractParameters(RichParameterList& par) {
+  par.addParam(RichOpenFile("FileName", "out.clod", QStringList() << "ConeLOD file (*.clod)", "LOD file",
+                            "The .clod file to read (Cone LOD: Export LOD File or conelod lod build); a relative "
+                            "path is relative to the current directory."));
+  par.addParam(RichEnum("ViewMode", 0, QStringList() << kLodViewModes[0] << kLodViewModes[1] << kLodViewModes[2],
+                        "View", "Framed: a perspective eye on the line through the model's centre along "
+                        "ViewDirection, CameraDistance bounding-sphere radii away. Eye: a perspective eye at Eye. "
+                        "Orthographic: parallel projection along ViewDirection."));
+  par.addParam(RichPoint3f("Eye", vcg::Point3f(0, 0, 0), "Eye position",
+                           "Used when View is 'Perspective from Eye': the eye in model coordinates (Get / View "
+                           "Pos. takes the current camera)."));
+  par.addParam(RichPoint3f("ViewDirection", vcg::Point3f(0, 0, -1), "View direction",
+                           "Direction from the eye into the scene (the default looks down -Z, from the +Z side)."));
+  par.addParam(RichFloat("CameraDistance", 3.0f, "Camera distance",
+                         "Framed view: the eye's distance from the model's centre, in bounding-sphere radii (> 1)."));
+  par.addParam(RichInt("FaceBudget", 100000, "Face budget",
+                       "Refine until the layer would exceed this many faces (the coarsest level is always "
+                       "complete). 0: no limit, down to the input's own faces."));
+  const LodView d;
+  par.addParam(RichBool("CullBackFacing", d.cullBackFacing, "Refine back-facing groups last",
+                        "Groups that face away from the eye entirely (one normal-cone test each) are refined only "
+                        "after every other group (as conelod lod extract does unless --no-cull)."));
+  par.addParam(RichBool("DropBackFacing", false, "Leave back-facing groups out",
+                        "The back-facing groups are not written to the layer (conelod lod extract --drop-culled)."));
+}
+
 Progress FromCallback(vcg::CallBackPos* cb) {
   if (!cb) return Progress();
   return [cb](int percent, const char* stage) { return cb(percent, stage); };
@@ -103,7 +161,8 @@ const char* StopName(GroupQemStats::Stop s) {
 }  // namespace
 
 FilterConeLodPlugin::FilterConeLodPlugin() {
-  typeList << FP_CONE_GROUPING << FP_CULLING_COST << FP_GROUP_QEM << FP_GROUP_INTEGRITY << FP_FEATURE_SIMPLIFY << FP_PIXEL_BUDGET << FP_PCA_PARTITION << FP_PROGRESSIVE_MESH;
+  typeList << FP_CONE_GROUPING << FP_CULLING_COST << FP_GROUP_QEM << FP_GROUP_INTEGRITY << FP_FEATURE_SIMPLIFY << FP_PIXEL_BUDGET << FP_PCA_PARTITION << FP_PROGRESSIVE_MESH
+           << FP_LOD_EXPORT << FP_LOD_EXTRACT;
   for (FilterIDType tt : types()) actionList << new QAction(filterName(tt), this);
 }
 
@@ -119,6 +178,8 @@ QString FilterConeLodPlugin::filterName(FilterIDType filter) const {
     case FP_PIXEL_BUDGET: return "Cone LOD: Face Budget from Screen Pixels";
     case FP_PCA_PARTITION: return "Cone LOD: PCA Recursive Face Partition";
     case FP_PROGRESSIVE_MESH: return "Cone LOD: Progressive Cluster Mesh";
+    case FP_LOD_EXPORT: return "Cone LOD: Export LOD File";
+    case FP_LOD_EXTRACT: return "Cone LOD: Extract View-Dependent LOD";
   }
   return "";
 }
@@ -219,6 +280,32 @@ QString FilterConeLodPlugin::filterInfo(FilterIDType filter) const {
                  "face by more than <i>MaxNormalTurnDeg</i>, or remove a cluster; non-manifold parts of the "
                  "input are left as they are. The current mesh is not changed.<br>") +
              kPaperTsuji;
+    case FP_LOD_EXPORT:
+      return QString(
+                 "Writes the current mesh as a streamable level-of-detail file (<tt>.clod</tt>, the paper's "
+                 "sections 7-8): the faces are grouped by normal cones (the grouping parameters are those of "
+                 "<i>Cone LOD: Normal Cone Face Grouping</i>), the mesh is simplified once per hierarchy level "
+                 "while keeping that level's groups intact (each level keeps <i>LevelRatio</i> of the faces of "
+                 "the level below, with the options of <i>Cone LOD: Group-Preserving Quadric Edge Collapse</i>), "
+                 "and every group of every level is written as a node of a chunk file with its normal cone, "
+                 "bounding sphere and geometry. A viewer (<tt>conelod-viewer</tt>) or <i>Cone LOD: Extract "
+                 "View-Dependent LOD</i> reads only the nodes it needs. A relative <i>FileName</i> is relative "
+                 "to the current directory. The mesh is not changed; on failure no file is left.<br>") +
+             kPaperKamiya;
+    case FP_LOD_EXTRACT:
+      return QString(
+                 "Reads a <tt>.clod</tt> file (<i>Cone LOD: Export LOD File</i>, <tt>conelod lod build</tt>) and "
+                 "adds a new layer with the view-dependent mesh for one view: starting from the coarsest level, "
+                 "groups are refined breadth-first in the order of the paper's priority f(g) = (1 - cos(angle(e, "
+                 "n) + c)) / 2 (e: towards the eye, n: cone axis, c: cone half-angle), adjacent groups never more "
+                 "than one level apart, until <i>FaceBudget</i> faces. The view: framed from "
+                 "<i>ViewDirection</i> at <i>CameraDistance</i> bounding-sphere radii, the eye position "
+                 "<i>Eye</i> (the dialog's Get / View Pos. fills in the current camera position), or "
+                 "orthographic along <i>ViewDirection</i>. With <i>CullBackFacing</i>, back-facing groups are "
+                 "refined last; with <i>DropBackFacing</i> they are left out of the layer. Per-face quality = LOD level of the face (0 = the "
+                 "input's own faces), a distinct colour per level (those of conelod lod extract). The current mesh is not "
+                 "changed.<br>") +
+             kPaperKamiya;
   }
   return "";
 }
@@ -233,8 +320,14 @@ MeshFilterInterface::FilterClass FilterConeLodPlugin::getClass(QAction* a) {
     case FP_PIXEL_BUDGET: return MeshFilterInterface::Remeshing;
     case FP_PCA_PARTITION: return MeshFilterInterface::FaceColoring;
     case FP_PROGRESSIVE_MESH: return MeshFilterInterface::Remeshing;
+    case FP_LOD_EXPORT: return MeshFilterInterface::Remeshing;
+    case FP_LOD_EXTRACT: return MeshFilterInterface::MeshCreation;
   }
   return MeshFilterInterface::Measure;
+}
+
+MeshFilterInterface::FILTER_ARITY FilterConeLodPlugin::filterArity(QAction* a) const {
+  return ID(a) == FP_LOD_EXTRACT ? NONE : SINGLE_MESH;  // the extract reads a file, not a layer
 }
 
 int FilterConeLodPlugin::getRequirements(QAction* a) {
@@ -381,6 +474,16 @@ void FilterConeLodPlugin::initParameterSet(QAction* a, MeshModel& m, RichParamet
                            "0). 0: no limit."));
       break;
     }
+    case FP_LOD_EXPORT:
+      par.addParam(RichSaveFile("FileName", "out.clod", "ConeLOD file (*.clod)", "LOD file",
+                                "Where to write the .clod file; a relative path is relative to the current "
+                                "directory (meshlabserver: where it was started)."));
+      AddGroupingParameters(par);
+      AddLodSimplificationParameters(par);
+      break;
+    case FP_LOD_EXTRACT:
+      AddLodExtractParameters(par);
+      break;
     case FP_PROGRESSIVE_MESH: {
       const ProgressiveMeshParams d;
       par.addParam(RichInt("TargetClusters", d.targetClusters, "Target clusters",
@@ -395,6 +498,7 @@ void FilterConeLodPlugin::initParameterSet(QAction* a, MeshModel& m, RichParamet
 }
 
 void FilterConeLodPlugin::initParameterSet(QAction* a, MeshDocument& md, RichParameterList& par) {
+  if (ID(a) == FP_LOD_EXTRACT) return AddLodExtractParameters(par);
   if (ID(a) == FP_GROUP_INTEGRITY) {
     par.addParam(RichMesh("ReferenceMesh", md.mm(), &md, "Reference mesh",
                           "The mesh whose groups (per-face quality) are the reference, e.g. the mesh before "
@@ -415,6 +519,7 @@ bool FilterConeLodPlugin::applyFilter(QAction* a, MeshDocument& md, const RichPa
   errorMessage.clear();
   // Never let an exception reach MeshLab: it would lose the user's unsaved work.
   try {
+    if (ID(a) == FP_LOD_EXTRACT) return applyLodExtract(md, par, cb);  // needs no current mesh
     MeshModel* mm = md.mm();
     if (!mm) return fail("no current mesh");
     switch (ID(a)) {
@@ -426,6 +531,7 @@ bool FilterConeLodPlugin::applyFilter(QAction* a, MeshDocument& md, const RichPa
       case FP_PIXEL_BUDGET: return applyPixelBudget(*mm, par, cb);
       case FP_PCA_PARTITION: return applyPcaPartition(*mm, par, cb);
       case FP_PROGRESSIVE_MESH: return applyProgressiveMesh(md, *mm, par, cb);
+      case FP_LOD_EXPORT: return applyLodExport(*mm, par, cb);
     }
     return fail("unknown filter");
   } catch (const std::bad_alloc&) {
@@ -794,6 +900,123 @@ bool FilterConeLodPlugin::applyProgressiveMesh(MeshDocument& md, MeshModel& mm, 
   if (s.ok())
     Log("hausdorff %.6g  hausdorff_percent %.4f  (sampled, %% of the bounding-box diagonal)", h.hausdorff,
         h.diagonal > 0 ? 100 * h.hausdorff / h.diagonal : 0.0);
+  return true;
+}
+
+bool FilterConeLodPlugin::applyLodExport(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb) {
+  const QString path = par.getSaveFileName("FileName");
+  if (path.trimmed().isEmpty()) return fail("FileName is empty: give the .clod file to write");
+  LodBuildParams params;
+  params.grouping = ReadGroupingParameters(par);
+  params.simplification.levelRatio = par.getFloat("LevelRatio");
+  GroupQemParams& q = params.simplification.qem;
+  q.lockGroupBoundaries = par.getBool("LockGroupBoundaries");
+  q.qualityThr = par.getFloat("QualityThr");
+  q.optimalPlacement = par.getBool("OptimalPlacement");
+  q.preserveBoundary = par.getBool("PreserveBoundary");
+  q.boundaryWeight = par.getFloat("BoundaryWeight");
+  q.preserveNormal = par.getBool("PreserveNormal");
+  if (!(params.simplification.levelRatio > 0 && params.simplification.levelRatio <= 1))
+    return fail("LevelRatio must be in (0, 1]");
+
+  const IndexedMesh im = ToIndexedMesh(mm.cm);
+  Status s = ValidateParams(params.grouping);
+  if (!s.ok()) return fail(QString::fromStdString(s.message));
+  s = RequireValidForFaces(CheckMesh(im, false));
+  if (!s.ok()) return fail(QString::fromStdString(s.message) + " (no file was written)");
+  LodBuildStats stats;
+  s = BuildLodFile(im, params, path.toStdString(), &stats, FromCallback(cb));
+  if (!s.ok()) return fail(QString("%1: %2 (no file was written)").arg(path, QString::fromStdString(s.message)));
+
+  Log("LOD file %s: %d faces, %d levels, %d nodes, %.1f KiB in %.3f s (grouping %.3f s, simplification %.3f s, "
+      "writing %.3f s)",
+      qUtf8Printable(path), int(stats.inputFaces), stats.levels, int(stats.nodes), stats.fileBytes / 1024.0,
+      stats.seconds, stats.groupingSeconds, stats.simplifySeconds, stats.writeSeconds);
+  for (size_t l = 0; l < stats.levelFaces.size(); ++l)
+    Log("lod level %d: faces %d nodes %d", int(l), int(stats.levelFaces[l]),
+        l < stats.levelNodes.size() ? int(stats.levelNodes[l]) : 0);
+  Log("lod_levels %d", stats.levels);
+  Log("lod_nodes %d", int(stats.nodes));
+  Log("lod_file_bytes %lld", (long long)stats.fileBytes);
+  return true;
+}
+
+bool FilterConeLodPlugin::applyLodExtract(MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb) {
+  const QString path = par.getOpenFileName("FileName");
+  const int mode = par.getEnum("ViewMode");
+  if (mode < 0 || mode > 2) return fail("ViewMode must be 0, 1 or 2");
+  const int budget = par.getInt("FaceBudget");
+  if (budget < 0) return fail("FaceBudget must be >= 0 (0: no limit)");
+  const float distance = par.getFloat("CameraDistance");
+  vcg::Point3d dir = vcg::Point3d::Construct(par.getPoint3f("ViewDirection"));
+  if (mode != 1 && !(dir.Norm() > 0 && std::isfinite(dir.Norm())))
+    return fail("ViewDirection must be a non-zero vector");
+  if (mode == 0 && !(distance > 1)) return fail("CameraDistance must be > 1 (bounding-sphere radii)");
+  const vcg::Point3d eyeParam = vcg::Point3d::Construct(par.getPoint3f("Eye"));
+  if (mode == 1 && !(std::isfinite(eyeParam.Norm()))) return fail("Eye must be finite");
+  const bool cull = par.getBool("CullBackFacing"), drop = par.getBool("DropBackFacing");
+
+  QElapsedTimer timer;
+  timer.start();
+  if (cb) cb(0, "reading the LOD file");
+  std::unique_ptr<LodReader> reader;
+  Status s = LodReader::Open(path.toStdString(), reader);
+  if (!s.ok()) return fail(QString("%1: %2 (no layer was added)").arg(path, QString::fromStdString(s.message)));
+  const LodFileInfo& info = reader->info();
+
+  LodView view;
+  dir.Normalize();
+  const vcg::Point3d centre = vcg::Point3d::Construct(info.box.Center());
+  const double radius = 0.5 * double(info.box.Diag());
+  view.orthographic = mode == 2;
+  view.viewDir = dir;
+  view.eye = mode == 1 ? eyeParam : centre - dir * (double(distance) * radius);
+  view.faceBudget = budget == 0 ? size_t(-1) : size_t(budget);
+  view.cullBackFacing = cull;
+  LodCut cut;
+  if (cb) cb(10, "refining");
+  s = RefineLod(*reader, view, cut);
+  if (!s.ok()) return fail(QString("%1: %2 (no layer was added)").arg(path, QString::fromStdString(s.message)));
+  if (cb) cb(80, "extracting the cut");
+  IndexedMesh mesh;
+  std::vector<int> faceLevel;
+  s = ExtractCutMesh(*reader, cut, !drop, mesh, &faceLevel);
+  if (!s.ok()) return fail(QString("%1: %2 (no layer was added)").arg(path, QString::fromStdString(s.message)));
+  const double seconds = timer.elapsed() / 1000.0;
+
+  MeshModel* out = md.addNewMesh("", QString("%1 (LOD, %2 faces)").arg(QFileInfo(path).completeBaseName()).arg(mesh.faceCount()), true);
+  if (!out) return fail("could not add a layer");
+  out->updateDataMask(MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR);
+  AppendIndexedMesh(out->cm, mesh);
+  std::vector<size_t> facesPerLevel(size_t(std::max(info.levels, 1)), 0);
+  for (size_t f = 0; f < out->cm.face.size(); ++f) {
+    const int level = faceLevel[f];
+    out->cm.face[f].Q() = CMeshO::FaceType::QualityType(level);
+    out->cm.face[f].C() = GroupColor(level);  // as conelod lod extract colours its output
+    if (level >= 0 && size_t(level) < facesPerLevel.size()) ++facesPerLevel[size_t(level)];
+  }
+  vcg::tri::UpdateBounding<CMeshO>::Box(out->cm);
+  vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFaceNormalized(out->cm);
+  if (cb) cb(100, "view-dependent LOD: done");
+
+  const vcg::Point3d& e = view.eye;
+  Log("View-dependent LOD of %s (%s, budget %s%s%s): %d faces, %d vertices from %d nodes in %.3f s (new layer)",
+      qUtf8Printable(path), kLodViewModes[mode], budget == 0 ? "none" : qUtf8Printable(QString::number(budget)),
+      cull ? ", back-facing groups refined last" : "", drop ? ", back-facing groups left out" : "",
+      int(mesh.faceCount()), int(mesh.vertexCount()),
+      int(cut.nodes.size()), seconds);
+  if (mode == 2)
+    Log("orthographic view direction (%g, %g, %g)", dir[0], dir[1], dir[2]);
+  else
+    Log("eye (%g, %g, %g)", e[0], e[1], e[2]);
+  for (size_t l = 0; l < facesPerLevel.size(); ++l)
+    if (facesPerLevel[l]) Log("faces at level %d: %d", int(l), int(facesPerLevel[l]));
+  Log("lod_faces %d", int(mesh.faceCount()));
+  Log("lod_cut_faces %d", int(cut.faces));
+  Log("lod_groups_culled %d", int(cut.groupsCulled));
+  Log("lod_refinements %d", int(cut.refinements));
+  Log("lod_max_level_difference %d", cut.maxLevelDifference);
+  Log("lod_resident_bytes %lld (the file: %lld)", (long long)reader->residentBytes(), (long long)info.fileBytes);
   return true;
 }
 

@@ -23,6 +23,8 @@ class FilterConeLodPlugin : public QObject, public MeshFilterInterface {
     FP_PIXEL_BUDGET,
     FP_PCA_PARTITION,
     FP_PROGRESSIVE_MESH,
+    FP_LOD_EXPORT,
+    FP_LOD_EXTRACT,
   };
 
   FilterConeLodPlugin();
@@ -30,7 +32,7 @@ class FilterConeLodPlugin : public QObject, public MeshFilterInterface {
   QString filterName(FilterIDType filter) const override;
   QString filterInfo(FilterIDType filter) const override;
   FilterClass getClass(QAction* a) override;
-  FILTER_ARITY filterArity(QAction*) const override { return SINGLE_MESH; }
+  FILTER_ARITY filterArity(QAction* a) const override;
   int getRequirements(QAction* a) override;
   int postCondition(QAction* a) const override;
   void initParameterSet(QAction* a, MeshModel& m, RichParameterList& par) override;
@@ -46,5 +48,7 @@ class FilterConeLodPlugin : public QObject, public MeshFilterInterface {
   bool applyPixelBudget(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb);
   bool applyPcaPartition(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb);
   bool applyProgressiveMesh(MeshDocument& md, MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb);
+  bool applyLodExport(MeshModel& mm, const RichParameterList& par, vcg::CallBackPos* cb);
+  bool applyLodExtract(MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb);
   bool fail(const QString& message);  // logs and sets errorMessage; returns false
 };

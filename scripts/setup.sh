@@ -4,7 +4,7 @@
 #  2. fetches MeshLab 2020.09's plugin headers and vcglib from Debian's own `meshlab`
 #     source package (the ABI of the installed /usr/bin/meshlab) into deps/meshlab-src;
 #  3. builds ConeLOD in Release (build/), installs the plugin into MeshLab's plugin folder
-#     and `conelod` into /usr/local/bin.
+#     and `conelod` and `conelod-viewer` into /usr/local/bin.
 # Every step fails loudly: the script stops at the first error and says which step failed.
 set -euo pipefail
 
@@ -25,7 +25,7 @@ grep -q bookworm /etc/os-release || echo "setup.sh: warning: written for Debian 
 
 PKGS=(meshlab qtbase5-dev libqt5opengl5-dev libeigen3-dev libglew-dev xvfb xauth dpkg-dev
       xz-utils cmake g++ make libgtest-dev libgmock-dev libbenchmark-dev imagemagick xdotool
-      python3 gnuplot-nox)
+      python3 gnuplot-nox clang libclang-rt-14-dev fonts-dejavu-core)
 
 step "Debian packages"
 apt_install_missing "${PKGS[@]}" || fail "Debian packages"
@@ -48,11 +48,13 @@ cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DMESHLAB_SRC="$SRC" >/d
   || fail "cmake configure"
 cmake --build "$BUILD" -j "$JOBS" || fail "build"
 
-step "Install the plugin and the conelod CLI"
+step "Install the plugin, the conelod CLI and conelod-viewer"
 cmake --install "$BUILD" >/dev/null || fail "install"
 PLUGDIR=/usr/lib/x86_64-linux-gnu/meshlab/plugins
 [ -f "$PLUGDIR/libfilter_conelod.so" ] || fail "plugin not installed in $PLUGDIR"
 command -v conelod >/dev/null || fail "conelod not on PATH"
+command -v conelod-viewer >/dev/null || fail "conelod-viewer not on PATH (Qt5 Widgets missing at configure time?)"
 echo "plugin: $PLUGDIR/libfilter_conelod.so"
 echo "cli:    $(command -v conelod)"
+echo "viewer: $(command -v conelod-viewer)"
 echo "setup.sh: done"

@@ -13,6 +13,7 @@ import subprocess
 import sys
 import tempfile
 import xml.etree.ElementTree as ET
+import zlib
 
 CASES = {}
 
@@ -86,7 +87,7 @@ def read_ply(path):
             current["props"].append(w[1:])
     sizes = {"char": "b", "uchar": "B", "int8": "b", "uint8": "B", "short": "h", "ushort": "H", "int": "i",
              "int32": "i", "uint": "I", "uint32": "I", "float": "f", "float32": "f", "double": "d", "float64": "d"}
-    result = {"vertices": 0, "faces": [], "quality": []}
+    result = {"vertices": 0, "faces": [], "quality": [], "positions": []}
     if fmt == "ascii":
         tokens = body.decode().split()
         pos = 0
@@ -103,6 +104,8 @@ def read_ply(path):
                     result["faces"].append(rec["vertex_indices"])
                     if "quality" in rec:
                         result["quality"].append(rec["quality"])
+                elif el["name"] == "vertex" and "x" in rec:
+                    result["positions"].append((rec["x"], rec["y"], rec["z"]))
             if el["name"] == "vertex":
                 result["vertices"] = el["count"]
         return result
@@ -118,6 +121,8 @@ def read_ply(path):
             for _ in range(el["count"]):
                 rec = dict(zip(names, st.unpack_from(body, pos)))
                 pos += st.size
+                if el["name"] == "vertex" and "x" in rec:
+                    result["positions"].append((rec["x"], rec["y"], rec["z"]))
             continue
         for _ in range(el["count"]):
             rec = {}
@@ -191,7 +196,8 @@ def meshlab_lists_filters(c):
     for name in names:
         assert "\\section f" in text and (" " + name + " ") in text, name + " not listed by meshlabserver -d"
     for name in ["Cone LOD: Normal Cone Face Grouping", "Cone LOD: Cluster Culling Cost",
-                 "Cone LOD: Feature-Preserving Edge Simplification", "Cone LOD: Face Budget from Screen Pixels"]:
+                 "Cone LOD: Feature-Preserving Edge Simplification", "Cone LOD: Face Budget from Screen Pixels",
+                 "Cone LOD: Export LOD File", "Cone LOD: Extract View-Dependent LOD"]:
         assert name in text, name + " not listed by meshlabserver -d"
 
 
@@ -797,6 +803,309 @@ def meshlab_pca_bad_inputs(c):
         _, log = c.meshlab([c.mesh(mesh)], c.mlx("progressive_cluster_mesh.mlx"), c.out("ok2.ply"))
         assert last_float(log, "progressive_faces") > 0, log[-1500:]
 
+
+# --- LOD file: viewer and filters (issue 5) --------------------------------------------------
+
+def read_png(path):
+    """(width, height, rows of (r, g, b) tuples) of an 8-bit RGB/RGBA, non-interlaced PNG (what Qt writes)."""
+    import zlib
+    data = open(path, "rb").read()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n", path + " is not a PNG"
+    pos, idat, width = 8, b"", None
+    while pos < len(data):
+        n, kind = struct.unpack(">I4s", data[pos:pos + 8])
+        body = data[pos + 8:pos + 8 + n]
+        pos += 12 + n
+        if kind == b"IHDR":
+            width, height, depth, ctype, _, _, interlace = struct.unpack(">IIBBBBB", body)
+            assert depth == 8 and ctype in (2, 6) and interlace == 0, (depth, ctype, interlace)
+            bpp = 3 if ctype == 2 else 4
+        elif kind == b"IDAT":
+            idat += body
+    raw, stride, rows, prev = zlib.decompress(idat), width * bpp, [], bytearray(width * bpp)
+    for y in range(height):
+        f, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+        for i in range(stride):
+            a = line[i - bpp] if i >= bpp else 0
+            b, cc = prev[i], (prev[i - bpp] if i >= bpp else 0)
+            if f == 1: line[i] = (line[i] + a) & 255
+            elif f == 2: line[i] = (line[i] + b) & 255
+            elif f == 3: line[i] = (line[i] + (a + b) // 2) & 255
+            elif f == 4:
+                p = a + b - cc
+                pa, pb, pc = abs(p - a), abs(p - b), abs(p - cc)
+                line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else cc)) & 255
+        rows.append([tuple(line[x * bpp:x * bpp + 3]) for x in range(width)])
+        prev = line
+    return width, height, rows
+
+
+def build_clod(c, mesh, name):
+    out = c.out(name)
+    c.conelod("lod", "build", c.mesh(mesh), "-o", out)
+    assert os.path.getsize(out) > 0, out
+    return out
+
+
+def run_viewer(c, clod, *args):
+    """conelod-viewer under xvfb-run; returns (exit code, stdout, stderr)."""
+    viewer = os.path.join(c.build, "viewer", "conelod-viewer")
+    p = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 1280x1024x24", viewer, clod] + list(args),
+                       stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=600, cwd=c.tmp)
+    return p.returncode, p.stdout.decode(errors="replace"), p.stderr.decode(errors="replace")
+
+
+@case
+def viewer_headless_bunny(c):
+    """The viewer opens the bunny's .clod under Xvfb: a picture of the requested size showing the
+    model, the coarsest level drawn at once, more faces once refined, the budget respected."""
+    clod = build_clod(c, "stanford_bunny_bun_zipper.ply", "bunny.clod")
+    png = c.out("coarse.png")
+    rc, out, err = run_viewer(c, clod, "--screenshot", png, "--size", "320x240", "--frames", "5", "--json")
+    assert rc == 0, (rc, out, err)
+    coarse = json.loads(out.strip().splitlines()[-1])
+    w, h, rows = read_png(png)
+    assert (w, h) == (320, 240) and (coarse["width"], coarse["height"]) == (320, 240), (w, h, coarse)
+    background = rows[h - 1][w - 1]  # the HUD sits top left, the model in the middle
+    model = sum(1 for row in rows for px in row if max(abs(a - b) for a, b in zip(px, background)) > 24)
+    assert model > 0.08 * w * h, "only %d of %d pixels differ from the background" % (model, w * h)
+    s = coarse["coarse"]
+    assert s["faces_drawn"] > 0 and s["groups_drawn"] > 0 and s["faces_drawn"] <= s["cut_faces"], coarse
+    assert s["cut_faces"] < 69451 and s["max_level"] == coarse["levels"] - 1, coarse  # the roots only
+    assert coarse["first_frame_ms"] > 0 and coarse["fps"] > 0 and coarse["resident_bytes"] > 0, coarse
+
+    png = c.out("refined.png")
+    rc, out, err = run_viewer(c, clod, "--screenshot", png, "--size", "320x240", "--refine", "--frames", "5", "--json")
+    assert rc == 0, (rc, out, err)
+    refined = json.loads(out.strip().splitlines()[-1])
+    r = refined["refined"]
+    assert r["faces_drawn"] > s["faces_drawn"] and r["cut_faces"] > s["cut_faces"], (s, r)
+    assert r["min_level"] == 0 and r["cut_faces"] == 69451, r  # the default budget holds the whole bunny
+    assert r["groups_culled"] > 0 and r["faces_drawn"] < r["cut_faces"], r  # the back of the bunny is culled
+    assert read_png(png)[:2] == (320, 240)
+
+    # Group culling is conservative: the picture is the one drawn without any culling (hidden
+    # surfaces aside: only pixels seen through the bunny's holes may differ).
+    pictures = []
+    for extra in ([], ["--no-cull"]):
+        png = c.out("cmp%d.png" % len(pictures))
+        rc, out, err = run_viewer(c, clod, "--screenshot", png, "--size", "320x240", "--refine", "--frames", "0",
+                                  "--no-hud", "--eye", "0.15,0.2,0.25", *extra)
+        assert rc == 0, (rc, out, err)
+        pictures.append(read_png(png)[2])
+    differ = sum(1 for a, b in zip(pictures[0], pictures[1]) for p, q in zip(a, b)
+                 if max(abs(x - y) for x, y in zip(p, q)) > 8)
+    assert differ < 0.005 * 320 * 240, "culling changed %d pixels" % differ
+
+    rc, out, err = run_viewer(c, clod, "--screenshot", c.out("budget.png"), "--size", "320x240", "--refine",
+                              "--budget", "20000", "--eye", "0,0.3,0", "--frames", "0", "--json")
+    assert rc == 0, (rc, out, err)
+    small = json.loads(out.strip().splitlines()[-1])["refined"]
+    assert s["cut_faces"] < small["cut_faces"] <= 20000, small
+
+
+@case
+def viewer_bad_files(c):
+    """Missing, truncated and garbage files: a message naming the file, exit code 2, no crash."""
+    clod = build_clod(c, "stanford_bunny_bun_zipper_res4.ply", "small.clod")
+    data = open(clod, "rb").read()
+    truncated, garbage = c.out("truncated.clod"), c.out("garbage.clod")
+    open(truncated, "wb").write(data[:len(data) // 2])
+    open(garbage, "wb").write(bytes((i * 37 + 11) & 255 for i in range(4096)))
+    for path in [c.out("missing.clod"), truncated, garbage]:
+        rc, out, err = run_viewer(c, path, "--screenshot", c.out("bad.png"), "--size", "200x150", "--refine")
+        assert rc == 2, (path, rc, out, err)
+        assert "conelod-viewer: " + path in err, (path, err)
+        assert not os.path.exists(c.out("bad.png")), path
+    rc, _, err = run_viewer(c, clod, "--size", "huge")
+    assert rc == 1 and "--size" in err, (rc, err)
+
+
+def export_lod(c, mesh, clod, expect_ok=True):
+    return c.meshlab([c.mesh(mesh)], mlx_with(c, "export_lod_file.mlx", FileName=clod), expect_ok=expect_ok)
+
+
+@case
+def meshlab_lod_export_extract_bunny(c):
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    clod = c.out("bunny.clod")
+    _, log = export_lod(c, "stanford_bunny_bun_zipper.ply", clod)
+    assert os.path.getsize(clod) == last_int(log, "lod_file_bytes"), log[-1500:]
+    levels = last_int(log, "lod_levels")
+    assert levels >= 4, log[-1500:]
+    # Full budget: the input's own faces (level 0) come back.
+    full = c.out("full.ply")
+    _, log = c.meshlab([bunny], mlx_with(c, "extract_view_dependent_lod.mlx", FileName=clod, FaceBudget=69451), full)
+    ply = read_ply(full)  # meshlabserver saves the new (current) layer
+    assert len(ply["faces"]) == 69451 and set(ply["quality"]) == {0}, (len(ply["faces"]), set(ply["quality"]))
+    assert last_int(log, "lod_faces") == 69451, log[-1500:]
+    # A small budget: fewer faces, from several levels; quality = level.
+    small = c.out("small.ply")
+    _, log = c.meshlab([bunny], mlx_with(c, "extract_view_dependent_lod.mlx", FileName=clod, FaceBudget=8000), small)
+    ply = read_ply(small)
+    levels_used = set(int(q) for q in ply["quality"])
+    assert 0 < len(ply["faces"]) <= 8000 and len(ply["faces"]) == last_int(log, "lod_faces"), len(ply["faces"])
+    assert len(levels_used) >= 2 and levels_used <= set(range(levels)), levels_used
+    assert last_int(log, "lod_max_level_difference") <= 1, log[-1500:]
+    # Back-facing groups left out: fewer faces for the same budget and view.
+    _, log = c.meshlab([bunny], mlx_with(c, "extract_view_dependent_lod.mlx", FileName=clod, FaceBudget=8000,
+                                         DropBackFacing=True), c.out("culled.ply"))
+    assert 0 < last_int(log, "lod_faces") < len(ply["faces"]) and last_int(log, "lod_groups_culled") > 0, log[-1500:]
+    # An eye position: the same cut as the CLI's, face by face.
+    eye = c.out("eye.ply")
+    _, log = c.meshlab([bunny], mlx_with(c, "extract_view_dependent_lod.mlx", FileName=clod, FaceBudget=8000,
+                                         ViewMode=1), eye)  # Eye = (0, 0, 0): inside the bunny
+    ply, cli_out = read_ply(eye), c.out("cli_eye.ply")
+    cli = json.loads(c.conelod("lod", "extract", clod, "--eye", "0,0,0", "--budget", "8000", "-o", cli_out,
+                               "--json").stdout)
+    assert cli["faces"] == len(ply["faces"]) == last_int(log, "lod_faces"), (cli["faces"], len(ply["faces"]))
+    assert read_ply(cli_out)["quality"] == ply["quality"], "MeshLab and the CLI disagree on the cut"
+    # Orthographic.
+    _, log = c.meshlab([bunny], mlx_with(c, "extract_view_dependent_lod.mlx", FileName=clod, FaceBudget=8000,
+                                         ViewMode=2), c.out("ortho.ply"))
+    assert 0 < last_int(log, "lod_faces") <= 8000, log[-1500:]
+
+
+@case
+def meshlab_lod_bad_inputs(c):
+    """Missing or corrupt .clod, empty or NaN mesh: a clear message, a failed filter, no file left,
+    never a crash (the harness checks that the mesh is unchanged and no layer is added)."""
+    clod = c.out("small.clod")
+    export_lod(c, "stanford_bunny_bun_zipper_res4.ply", clod)
+    data = open(clod, "rb").read()
+    truncated, flipped = c.out("truncated.clod"), c.out("flipped.clod")
+    open(truncated, "wb").write(data[:len(data) // 2])
+    open(flipped, "wb").write(data[:len(data) // 2] + bytes([data[len(data) // 2] ^ 0xFF]) + data[len(data) // 2 + 1:])
+    bunny = c.mesh("stanford_bunny_bun_zipper_res4.ply")
+    for path in [c.out("missing.clod"), truncated, flipped]:
+        script = mlx_with(c, "extract_view_dependent_lod.mlx", FileName=path, FaceBudget=0)
+        rc, log = c.meshlab([bunny], script, c.out("bad.ply"), expect_ok=False)
+        assert rc == 255, "%s: expected a failed filter (255), got %d\n%s" % (path, rc, log[-1500:])
+        assert "ConeLOD error" in log and path in log, "%s: no clear message:\n%s" % (path, log[-1500:])
+    for mesh, message in [("no_faces.ply", "has no faces"), ("nan_vertex.ply", "NaN or infinite")]:
+        out = c.out(mesh + ".clod")
+        rc, log = export_lod(c, mesh, out, expect_ok=False)
+        assert rc == 255 and "ConeLOD error" in log and message in log, "%s: %d\n%s" % (mesh, rc, log[-1500:])
+        assert not os.path.exists(out), out + " was left behind"
+
+
+def canonical_faces(ply):
+    """Each face as its corner positions (float32), rotated to start at the smallest corner (the
+    orientation is kept); the faces sorted: equal for equal triangle sets whatever the vertex order."""
+    f32 = [tuple(struct.unpack("<3f", struct.pack("<3f", *p))) for p in ply["positions"]]
+    out = []
+    for t in ply["faces"]:
+        corners = [f32[i] for i in t]
+        out.append(min(tuple(corners[(r + k) % 3] for k in range(3)) for r in range(3)))
+    return sorted(out)
+
+
+@case
+def cli_lod_round_trip(c):
+    """conelod lod build / info / extract on the bunny: the full budget gives the input's faces back;
+    10% gives about 10%, finer where the eye is, adjacent groups at most one level apart."""
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    clod = c.out("bunny.clod")
+    b = json.loads(c.conelod("lod", "build", bunny, "-o", clod, "--json").stdout)
+    assert b["faces"] == 69451 and b["levels"] >= 4 and b["level_faces"][0] == 69451, b
+    assert b["file_bytes"] == os.path.getsize(clod), b
+    assert all(b["level_faces"][k] <= b["level_faces"][k - 1] for k in range(1, b["levels"])), b
+    info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
+    assert info["faces"] == 69451 and info["nodes"] == b["nodes"] and info["version"] == 1, info
+    human = c.conelod("lod", "info", clod).stdout.decode()
+    assert "node levels" in human, human
+
+    full = c.out("full.ply")
+    r = json.loads(c.conelod("lod", "extract", clod, "--eye", "0,0.1,0.6", "--budget", "100%", "-o", full,
+                             "--json").stdout)
+    for key in ("faces", "groups_drawn", "max_level_difference", "resident_bytes", "seconds", "groups_culled",
+                "levels"):
+        assert key in r, (key, r)
+    assert r["faces"] == 69451 and r["max_level_difference"] == 0, r
+    out, src = read_ply(full), read_ply(bunny)
+    assert len(out["faces"]) == 69451 and set(out["quality"]) == {0.0}, len(out["faces"])
+    a, e = canonical_faces(out), canonical_faces(src)
+    assert len(a) == len(e)
+    worst = max(abs(x - y) for fa, fe in zip(a, e) for pa, pe in zip(fa, fe) for x, y in zip(pa, pe))
+    assert worst <= 1e-6, "the round trip moved a vertex by %g" % worst
+
+    ten = c.out("ten.ply")
+    r = json.loads(c.conelod("lod", "extract", clod, "--eye", "0,0.1,0.6", "--budget", "6945", "-o", ten,
+                             "--json").stdout)
+    assert 5000 < r["faces"] <= 6945 and r["max_level_difference"] <= 1, r
+    assert r["groups_culled"] > 0 and r["groups_drawn"] > 0, r
+    ply = read_ply(ten)
+    assert len(ply["faces"]) == r["faces"], (len(ply["faces"]), r)
+    levels = {int(q) for q in ply["quality"]}
+    assert len(levels) >= 2 and min(levels) >= 1, levels  # per-face quality = node level
+    faces_per_level = {lv["level"]: lv["faces"] for lv in r["levels"]}
+    assert sum(faces_per_level.values()) == r["faces"], r
+    dropped = json.loads(c.conelod("lod", "extract", clod, "--eye", "0,0.1,0.6", "--budget", "10%", "-o",
+                                   c.out("dropped.ply"), "--drop-culled", "--json").stdout)
+    assert len(read_ply(c.out("dropped.ply"))["faces"]) < r["faces"], dropped
+    nocull = json.loads(c.conelod("lod", "extract", clod, "--eye", "0,0.1,0.6", "--budget", "10%", "-o",
+                                  c.out("nocull.ply"), "--no-cull", "--json").stdout)
+    assert nocull["groups_culled"] == 0, nocull
+    human = c.conelod("lod", "extract", clod, "--eye", "0,0.1,0.6", "--budget", "10%", "-o", c.out("h.ply"))
+    assert "max level difference" in human.stdout.decode(), human.stdout.decode()
+
+
+@case
+def cli_lod_bad_files(c):
+    """Bad .clod files and bad arguments: a clear message and a non-zero exit, never a crash."""
+    sphere = c.out("sphere.ply")
+    with open(sphere, "w") as f:  # an octahedron: enough for a small file
+        f.write("ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\nproperty float z\n"
+                "element face 8\nproperty list uchar int vertex_indices\nend_header\n"
+                "1 0 0\n-1 0 0\n0 1 0\n0 -1 0\n0 0 1\n0 0 -1\n"
+                "3 0 2 4\n3 2 1 4\n3 1 3 4\n3 3 0 4\n3 2 0 5\n3 1 2 5\n3 3 1 5\n3 0 3 5\n")
+    good = c.out("good.clod")
+    c.conelod("lod", "build", sphere, "-o", good)
+    data = open(good, "rb").read()
+    c.conelod("lod", "extract", good, "--eye", "0,0,5", "--budget", "100%", "-o", c.out("ok.ply"))
+
+    def bad(name, content, message):
+        path = c.out(name)
+        with open(path, "wb") as f:
+            f.write(content)
+        for args in (["info", path], ["extract", path, "--eye", "0,0,5", "--budget", "10", "-o", c.out("x.ply")]):
+            p = c.conelod("lod", *args, expect=2)
+            err = p.stderr.decode()
+            assert message in err and path in err, (name, err)
+
+    bad("truncated.clod", data[:-50], "truncated")
+    bad("empty.clod", b"", "truncated")
+    bad("magic.clod", b"XLOD" + data[4:], "wrong magic")
+    bad("ply.clod", open(sphere, "rb").read(), "not a .clod file")
+    version = bytearray(data)
+    version[24] = 9  # the version field (the header's checksum is checked after it)
+    bad("version.clod", bytes(version), "unsupported .clod version 9")
+    size = bytearray(data)
+    struct.pack_into("<Q", size, 16, struct.unpack_from("<Q", data, 16)[0] - 8)  # the root chunk's child size
+    bad("size.clod", bytes(size), "corrupt chunk size in the file header")
+    crc = bytearray(data)
+    crc[24 + 12] ^= 1  # a byte of the header's data: its CRC no longer matches
+    bad("crc.clod", bytes(crc), "checksum mismatch")
+    offset = bytearray(data)
+    struct.pack_into("<Q", offset, 24 + 64, len(data) + 1000)  # the index offset, past the end
+    header_bytes = struct.unpack_from("<Q", data, 8)[0]
+    struct.pack_into("<I", offset, 4, zlib.crc32(bytes(offset[24:24 + header_bytes])))  # a valid CRC-32 (zlib's)
+    bad("offset.clod", bytes(offset), "past the end of the file")
+    p = c.conelod("lod", "info", c.out("missing.clod"), expect=2)
+    assert "cannot open" in p.stderr.decode(), p.stderr.decode()
+    # Bad arguments: usage errors.
+    for args in (["extract", good, "--eye", "1,2", "--budget", "10", "-o", c.out("x.ply")],
+                 ["extract", good, "--eye", "0,0,5", "--budget", "-3", "-o", c.out("x.ply")],
+                 ["extract", good, "--eye", "0,0,5", "--budget", "120%", "-o", c.out("x.ply")],
+                 ["extract", good, "--budget", "10"], ["build", sphere], ["frobnicate"], [],
+                 ["build", sphere, "-o", c.out("r.clod"), "--level-ratio", "0"],
+                 ["build", sphere, "-o", c.out("r.clod"), "--threshold", "-1"]):
+        c.conelod("lod", *args, expect=1)
+    # Bad meshes are refused by `lod build`.
+    for mesh, message in [("no_faces.ply", "has no faces"), ("nan_vertex.ply", "NaN or infinite")]:
+        p = c.conelod("lod", "build", c.mesh(mesh), "-o", c.out("bad.clod"), expect=2)
+        assert message in p.stderr.decode(), p.stderr.decode()
+        assert not os.path.exists(c.out("bad.clod"))
 
 def main():
     ap = argparse.ArgumentParser()

@@ -3,7 +3,10 @@
 // (bad parameters, bad input, cancellation) leaves the mesh exactly as it was.
 //   plugin_harness PLUGIN.so GOOD.ply NAN.ply       exit 0 when every check passes
 #include <QApplication>
+#include <QFile>
+#include <QFileInfo>
 #include <QPluginLoader>
+#include <QTemporaryDir>
 #include <cmath>
 #include <cstring>
 #include <cstdio>
@@ -132,6 +135,64 @@ int main(int argc, char** argv) {
     CHECK(Take(*mm) == after, "a failed culling run leaves the grouped mesh as it was");
     CHECK(plugin->applyFilter(culling, md, params(culling, *mm), nullptr), "culling cost succeeds");
     CHECK(Take(*mm) == after, "culling cost does not change the mesh");
+  }
+  {  // The LOD filters: export writes a file and changes nothing; extract adds one layer; failures
+     // (cancelled, missing or corrupt file, empty mesh) leave the mesh as it was, add no layer and
+     // leave no file.
+    QAction* exportLod = plugin->AC("Cone LOD: Export LOD File");
+    QAction* extractLod = plugin->AC("Cone LOD: Extract View-Dependent LOD");
+    CHECK(exportLod && extractLod, "both LOD filters found by name");
+    QTemporaryDir dir;
+    if (exportLod && extractLod && dir.isValid()) {
+      MeshDocument md;
+      MeshModel* mm = Load(md, argv[2]);
+      const Snapshot before = Take(*mm);
+      auto exportParams = [&](MeshModel& m, const QString& path) {
+        RichParameterList p = params(exportLod, m);
+        p.setValue("FileName", FileValue(path));
+        return p;
+      };
+      auto extractParams = [&](const QString& path) {
+        RichParameterList p;
+        plugin->initParameterSet(extractLod, md, p);
+        p.setValue("FileName", FileValue(path));
+        p.setValue("FaceBudget", IntValue(0));
+        return p;
+      };
+      const QString clod = dir.filePath("m.clod"), cancelled = dir.filePath("cancelled.clod");
+      CHECK(!plugin->applyFilter(exportLod, md, exportParams(*mm, cancelled), cancelAtOnce), "a cancelled export fails");
+      CHECK(!QFileInfo::exists(cancelled), "a cancelled export leaves no file");
+      CHECK(plugin->applyFilter(exportLod, md, exportParams(*mm, clod), nullptr), "export succeeds");
+      CHECK(QFileInfo(clod).size() > 0, "export writes the file");
+      CHECK(Take(*mm) == before, "export leaves the mesh unchanged");
+
+      QFile whole(clod);
+      whole.open(QIODevice::ReadOnly);
+      const QByteArray bytes = whole.readAll();
+      const QString truncated = dir.filePath("truncated.clod");
+      QFile cut(truncated);
+      cut.open(QIODevice::WriteOnly);
+      cut.write(bytes.left(bytes.size() / 2));
+      cut.close();
+      for (const QString& bad : {dir.filePath("missing.clod"), truncated}) {
+        const int layers = md.meshList.size();
+        CHECK(!plugin->applyFilter(extractLod, md, extractParams(bad), nullptr), "extract refuses a missing or truncated file");
+        CHECK(plugin->errorMsg().contains(bad), "the message names the file");
+        CHECK(md.meshList.size() == layers && md.mm() == mm, "no layer is added after a failed extract");
+        CHECK(Take(*mm) == before, "the mesh is unchanged after a failed extract");
+      }
+      const int layers = md.meshList.size();
+      CHECK(plugin->applyFilter(extractLod, md, extractParams(clod), nullptr), "extract succeeds");
+      CHECK(md.meshList.size() == layers + 1 && md.mm() != mm, "extract adds a layer and makes it current");
+      CHECK(md.mm()->cm.fn == mm->cm.fn, "without a budget the extract gives back every face of the input");
+      CHECK(Take(*mm) == before, "extract leaves the mesh unchanged");
+
+      MeshDocument emptyDoc;
+      MeshModel* empty = emptyDoc.addNewMesh("", "empty");
+      const QString emptyClod = dir.filePath("empty.clod");
+      CHECK(!plugin->applyFilter(exportLod, emptyDoc, exportParams(*empty, emptyClod), nullptr), "export refuses an empty mesh");
+      CHECK(!QFileInfo::exists(emptyClod), "a failed export leaves no file");
+    }
   }
   std::printf("%d failure(s)\n", failures);
   return failures == 0 ? 0 : 1;

@@ -114,6 +114,8 @@ class LodReader {
  public:
   // Reads the header, the offset index, the node records of the roots and the roots' geometry.
   static Status Open(const std::string& path, std::unique_ptr<LodReader>& out);
+  // The same from a file image in memory (tests, the fuzz target); the reader keeps `bytes`.
+  static Status OpenMemory(std::vector<uint8_t> bytes, std::unique_ptr<LodReader>& out);
   ~LodReader();
 
   const LodFileInfo& info() const;
@@ -124,6 +126,8 @@ class LodReader {
   bool hasNode(uint32_t id) const;
   const LodNode& node(uint32_t id) const;  // requires hasNode(id)
   Status LoadChildren(uint32_t id);        // makes the records of id's children available
+  Status LoadNode(uint32_t id);            // makes one record available (and its ancestors')
+  uint32_t levelOfNode(uint32_t id) const;  // from the id alone (ids are dense per level); id < nodeCount
 
   Status LoadGeometry(uint32_t id);               // reads and keeps the node's geometry
   const LodGeometry* geometry(uint32_t id) const;  // null when not loaded
@@ -147,6 +151,9 @@ struct LodView {
   vcg::Point3d viewDir{0, 0, -1};  // unit; orthographic only
   size_t faceBudget = 0;           // at most this many faces in the cut (the roots may exceed it)
   bool cullBackFacing = true;      // back-facing nodes are refined only after every other node
+                                   // (and, at each level, nodes whose cone axis faces away after
+                                   // those facing the eye; lod_refine.cpp says why); false:
+                                   // no node is culled or deferred
 };
 
 // The paper's refinement priority f(g) in [0,1] (larger = refine first): with a = angle(e, n),

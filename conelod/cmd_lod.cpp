@@ -1,0 +1,227 @@
+// ConeLOD CLI — `conelod lod`: build the streamable .clod LOD file, extract a view-dependent cut of
+// it, describe it (Kamiya-Suzuki-Kawachi §7-9, SPEC §4; vcg_ext/conelod/lod.h).
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+#include "cli_common.h"
+#include "commands.h"
+#include "conelod/group_colors.h"
+#include "conelod/lod.h"
+#include "conelod/mesh_check.h"
+
+namespace conelod {
+namespace cli {
+namespace {
+
+bool ParsePoint(const std::string& text, vcg::Point3d& p) {
+  double v[3];
+  const char* s = text.c_str();
+  for (int i = 0; i < 3; ++i) {
+    char* end = nullptr;
+    v[i] = std::strtod(s, &end);
+    if (end == s || !std::isfinite(v[i])) return false;
+    s = end;
+    if (i < 2) {
+      if (*s != ',') return false;
+      ++s;
+    }
+  }
+  if (*s) return false;
+  p = vcg::Point3d(v[0], v[1], v[2]);
+  return true;
+}
+
+int LodBuild(int argc, char** argv) {
+  Args a(argc, argv, With(kGroupingOptions, {"-o", "--level-ratio"}), {"--json", "--strict-greedy"});
+  LodBuildParams params;
+  params.grouping = ReadGroupingParams(a);
+  params.simplification.levelRatio = a.num("--level-ratio", params.simplification.levelRatio);
+  if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kLodUsage);
+  if (a.positional().size() != 1 || !a.has("-o"))
+    return Fail(kUsage, std::string("expected IN.ply and -o OUT.clod\n") + kLodUsage);
+  const double ratio = params.simplification.levelRatio;
+  if (!(ratio > 0 && ratio <= 1)) return Fail(kUsage, "--level-ratio must be in (0, 1]");
+  const std::string input = a.positional()[0], output = a.str("-o");
+  CMesh mesh;
+  IndexedMesh im;
+  std::vector<size_t> faceOf;
+  Timer timer;
+  std::string err = LoadInput(input, mesh, im, faceOf);
+  if (!err.empty()) return Fail(kIoError, err);
+  mesh.Clear();
+  const double loadSeconds = timer.seconds();
+  Status s = ValidateParams(params.grouping);
+  if (!s.ok()) return Fail(kUsage, s.message);
+  s = RequireValidForFaces(CheckMesh(im, false));
+  if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
+  LodBuildStats st;
+  s = BuildLodFile(im, params, output, &st);
+  if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
+  if (a.has("--json")) {
+    Json j;
+    j.beginObject().field("input", input).field("output", output).field("vertices", st.inputVertices)
+        .field("faces", st.inputFaces).field("levels", st.levels).field("nodes", st.nodes)
+        .field("file_bytes", size_t(st.fileBytes)).field("load_seconds", loadSeconds)
+        .field("grouping_seconds", st.groupingSeconds).field("simplify_seconds", st.simplifySeconds)
+        .field("write_seconds", st.writeSeconds).field("seconds", st.seconds);
+    j.key("level_faces").beginArray();
+    for (size_t f : st.levelFaces) j.value(f);
+    j.endArray().key("level_nodes").beginArray();
+    for (size_t n : st.levelNodes) j.value(n);
+    j.endArray().endObject();
+    std::printf("%s\n", j.str().c_str());
+  } else {
+    std::printf("%s: %zu faces -> %s: %d node levels, %zu nodes, %llu bytes in %.3f s "
+                "(grouping %.3f s, simplification %.3f s, writing %.3f s)\n",
+                input.c_str(), st.inputFaces, output.c_str(), st.levels, st.nodes, (unsigned long long)st.fileBytes,
+                st.seconds, st.groupingSeconds, st.simplifySeconds, st.writeSeconds);
+    std::printf("%5s %8s %10s\n", "level", "nodes", "faces");
+    for (int k = st.levels - 1; k >= 0; --k)
+      std::printf("%5d %8zu %10zu\n", k, st.levelNodes[size_t(k)], st.levelFaces[size_t(k)]);
+  }
+  return kOk;
+}
+
+int LodExtract(int argc, char** argv) {
+  Args a(argc, argv, {"-o", "--eye", "--budget"}, {"--json", "--no-cull", "--drop-culled"});
+  if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kLodUsage);
+  if (a.positional().size() != 1) return Fail(kUsage, std::string("expected one .clod file\n") + kLodUsage);
+  if (!a.has("--eye") || !a.has("--budget")) return Fail(kUsage, std::string("give --eye and --budget\n") + kLodUsage);
+  LodView view;
+  if (!ParsePoint(a.str("--eye"), view.eye)) return Fail(kUsage, "--eye must be X,Y,Z (three numbers)");
+  const std::string budget = a.str("--budget");
+  bool percent = !budget.empty() && budget.back() == '%';
+  char* end = nullptr;
+  const double b = std::strtod(budget.c_str(), &end);
+  if (end == budget.c_str() || *end != (percent ? '%' : '\0') || !(b >= 0) || !std::isfinite(b) ||
+      (percent && b > 100))
+    return Fail(kUsage, "--budget must be a face count N >= 0 or a percentage P% (0-100)");
+  view.cullBackFacing = !a.has("--no-cull");
+  const bool drop = a.has("--drop-culled");
+  const std::string input = a.positional()[0];
+
+  Timer timer;
+  std::unique_ptr<LodReader> reader;
+  Status s = LodReader::Open(input, reader);
+  if (!s.ok()) return Fail(kBadInput, s.message);
+  const double openSeconds = timer.seconds();
+  view.faceBudget = percent ? size_t(std::floor(double(reader->info().inputFaces) * b / 100.0)) : size_t(b);
+  LodCut cut;
+  s = RefineLod(*reader, view, cut);
+  if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
+  const size_t resident = reader->residentBytes();
+  IndexedMesh out;
+  std::vector<int> faceLevel;
+  s = ExtractCutMesh(*reader, cut, !drop, out, &faceLevel);
+  if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
+  const double seconds = timer.seconds();
+
+  if (a.has("-o")) {
+    CMesh m;
+    AppendIndexedMesh(m, out);
+    for (size_t f = 0; f < m.face.size(); ++f) {
+      m.face[f].Q() = float(faceLevel[f]);
+      m.face[f].C() = GroupColor(faceLevel[f]);
+    }
+    const std::string err = SavePly(m, a.str("-o"));
+    if (!err.empty()) return Fail(kIoError, err);
+  }
+  const int levels = reader->info().levels;
+  std::vector<size_t> levelFaces(size_t(levels), 0), levelNodes(size_t(levels), 0);
+  for (size_t i = 0; i < cut.nodes.size(); ++i) {
+    const LodNode& n = reader->node(cut.nodes[i]);
+    levelFaces[size_t(n.level)] += n.faceCount;
+    ++levelNodes[size_t(n.level)];
+  }
+  if (a.has("--json")) {
+    Json j;
+    j.beginObject().field("input", input).field("faces", out.faces.size()).field("cut_faces", cut.faces)
+        .field("budget", view.faceBudget).field("groups_drawn", cut.groupsDrawn)
+        .field("groups_culled", cut.groupsCulled).field("culled_faces", cut.faces - cut.drawnFaces)
+        .field("max_level_difference", cut.maxLevelDifference).field("refinements", cut.refinements)
+        .field("resident_bytes", resident).field("open_seconds", openSeconds).field("seconds", seconds);
+    j.key("levels").beginArray();
+    for (int k = 0; k < levels; ++k)
+      j.beginObject().field("level", k).field("nodes", levelNodes[size_t(k)]).field("faces", levelFaces[size_t(k)]).endObject();
+    j.endArray();
+    if (a.has("-o")) j.field("output", a.str("-o"));
+    j.endObject();
+    std::printf("%s\n", j.str().c_str());
+  } else {
+    std::printf("%s: cut of %zu faces (budget %zu), %zu groups drawn, %zu culled, max level difference %d, "
+                "%zu bytes resident, %.3f s\n",
+                input.c_str(), cut.faces, view.faceBudget, cut.groupsDrawn, cut.groupsCulled, cut.maxLevelDifference,
+                resident, seconds);
+    std::printf("%5s %8s %10s\n", "level", "nodes", "faces");
+    for (int k = levels - 1; k >= 0; --k) std::printf("%5d %8zu %10zu\n", k, levelNodes[size_t(k)], levelFaces[size_t(k)]);
+    if (a.has("-o"))
+      std::printf("wrote %s: %zu faces (quality and colour = node level)\n", a.str("-o").c_str(), out.faces.size());
+  }
+  return kOk;
+}
+
+int LodInfo(int argc, char** argv) {
+  Args a(argc, argv, {}, {"--json"});
+  if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kLodUsage);
+  if (a.positional().size() != 1) return Fail(kUsage, std::string("expected one .clod file\n") + kLodUsage);
+  Timer timer;
+  std::unique_ptr<LodReader> reader;
+  Status s = LodReader::Open(a.positional()[0], reader);
+  if (!s.ok()) return Fail(kBadInput, s.message);
+  const double seconds = timer.seconds();
+  const LodFileInfo& i = reader->info();
+  if (a.has("--json")) {
+    Json j;
+    j.beginObject().field("input", a.positional()[0]).field("version", int(i.version))
+        .field("vertices", size_t(i.inputVertices)).field("faces", size_t(i.inputFaces)).field("levels", i.levels)
+        .field("nodes", size_t(i.nodeCount)).field("file_bytes", size_t(i.fileBytes))
+        .field("roots", reader->roots().size()).field("resident_bytes", reader->residentBytes())
+        .field("open_seconds", seconds);
+    j.key("level_faces").beginArray();
+    for (auto f : i.levelFaces) j.value(size_t(f));
+    j.endArray().key("level_nodes").beginArray();
+    for (auto n : i.levelNodes) j.value(size_t(n));
+    j.endArray().endObject();
+    std::printf("%s\n", j.str().c_str());
+  } else {
+    std::printf("%s: .clod version %u, %llu vertices, %llu faces, %d node levels, %llu nodes, %llu bytes\n",
+                a.positional()[0].c_str(), i.version, (unsigned long long)i.inputVertices,
+                (unsigned long long)i.inputFaces, i.levels, (unsigned long long)i.nodeCount,
+                (unsigned long long)i.fileBytes);
+    std::printf("opened in %.4f s, %zu bytes resident (roots and their geometry)\n", seconds, reader->residentBytes());
+    std::printf("%5s %8s %10s\n", "level", "nodes", "faces");
+    for (int k = i.levels - 1; k >= 0; --k)
+      std::printf("%5d %8llu %10llu\n", k, (unsigned long long)i.levelNodes[size_t(k)],
+                  (unsigned long long)i.levelFaces[size_t(k)]);
+  }
+  return kOk;
+}
+
+}  // namespace
+
+const char* kLodUsage =
+    "conelod lod build IN.ply -o OUT.clod [grouping options] [--level-ratio R] [--json]\n"
+    "conelod lod extract IN.clod --eye X,Y,Z --budget N|P% -o OUT.ply [--no-cull] [--drop-culled] [--json]\n"
+    "conelod lod info IN.clod [--json]\n"
+    "  build: groups by normal cones (options as for `group`, --strict-greedy included), simplifies\n"
+    "  once per level keeping the groups (each level R x the faces of the one below [0.5]) and\n"
+    "  writes the streamable .clod file (format: vcg_ext/conelod/lod_format.md).\n"
+    "  extract: opens the file, refines for a perspective eye at X,Y,Z under a budget of N faces\n"
+    "  (or P% of the input's), coarser levels first, adjacent groups at most one level apart,\n"
+    "  back-facing groups last (--no-cull: no back-face test), and writes the cut as OUT.ply with\n"
+    "  per-face quality = node level (0 = the input's faces) and a colour per level.\n"
+    "  --drop-culled leaves the back-facing groups out of OUT.ply.\n";
+
+int CmdLod(int argc, char** argv) {
+  if (argc < 1) return Fail(kUsage, std::string("expected build, extract or info\n") + kLodUsage);
+  const std::string sub = argv[0];
+  if (sub == "build") return LodBuild(argc - 1, argv + 1);
+  if (sub == "extract") return LodExtract(argc - 1, argv + 1);
+  if (sub == "info") return LodInfo(argc - 1, argv + 1);
+  return Fail(kUsage, "unknown lod command '" + sub + "'\n" + kLodUsage);
+}
+
+}  // namespace cli
+}  // namespace conelod

@@ -1,0 +1,77 @@
+#!/usr/bin/env bash
+# Fuzzes the .clod reader (vcg_ext/fuzz/lod_reader_fuzz.cpp) with libFuzzer under ASan + UBSan for
+# a bounded time. Builds into build-fuzz/ (ignored by git) with clang++; the seed corpus is written
+# at run time by `conelod lod build` from small generated meshes (nothing binary is committed). The
+# fuzz build ignores CRC mismatches (FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION) so that mutations
+# reach the structural checks behind them.
+#   scripts/fuzz.sh [SECONDS]          default 60 (FUZZ_SECONDS also works)
+#   CONELOD=/path/to/conelod           the CLI that writes the seeds (default: build/conelod/conelod,
+#                                      built by scripts/setup.sh)
+#   MESHLAB_SRC=/path/to/meshlab-src   where vcglib is (default: deps/meshlab-src)
+# Crashes are written to build-fuzz/crashes/ and make the script fail.
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+OUT="$ROOT/build-fuzz"
+SECONDS_TO_RUN="${1:-${FUZZ_SECONDS:-60}}"
+MESHLAB_SRC="${MESHLAB_SRC:-$ROOT/deps/meshlab-src}"
+CONELOD="${CONELOD:-$ROOT/build/conelod/conelod}"
+CXX_FUZZ="${CXX_FUZZ:-clang++}"
+
+[ -f "$MESHLAB_SRC/vcglib/vcg/complex/complex.h" ] || { echo "fuzz.sh: vcglib not found under $MESHLAB_SRC (run scripts/setup.sh)" >&2; exit 1; }
+[ -x "$CONELOD" ] || { echo "fuzz.sh: $CONELOD not built (run scripts/setup.sh or set CONELOD)" >&2; exit 1; }
+command -v "$CXX_FUZZ" >/dev/null || { echo "fuzz.sh: $CXX_FUZZ not found (Debian: clang, libclang-rt-14-dev)" >&2; exit 1; }
+mkdir -p "$OUT/corpus" "$OUT/seeds" "$OUT/crashes"
+
+# The reader, the refiner and the cone tests they use: nothing else of the core is needed.
+"$CXX_FUZZ" -std=c++14 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
+  -DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION \
+  -I"$ROOT/vcg_ext" -isystem "$MESHLAB_SRC/vcglib" -isystem /usr/include/eigen3 \
+  "$ROOT/vcg_ext/fuzz/lod_reader_fuzz.cpp" "$ROOT/vcg_ext/conelod/lod_reader.cpp" \
+  "$ROOT/vcg_ext/conelod/lod_refine.cpp" "$ROOT/vcg_ext/conelod/normal_cone.cpp" \
+  -o "$OUT/lod_reader_fuzz"
+
+# Seeds: an octahedron subdivided once and twice (32 and 128 faces, a sphere) and a bumpy variant,
+# with default and two-level hierarchies.
+python3 - "$OUT/seeds" <<'PY'
+import math, sys
+def sphere(levels, bump):
+    p = [(1,0,0),(-1,0,0),(0,1,0),(0,-1,0),(0,0,1),(0,0,-1)]
+    f = [(0,2,4),(2,1,4),(1,3,4),(3,0,4),(2,0,5),(1,2,5),(3,1,5),(0,3,5)]
+    for _ in range(levels):
+        mid, nf = {}, []
+        def m(a, b):
+            k = (min(a,b), max(a,b))
+            if k not in mid:
+                x = [(p[a][i]+p[b][i])/2 for i in range(3)]
+                n = math.sqrt(sum(v*v for v in x)); p.append(tuple(v/n for v in x)); mid[k] = len(p)-1
+            return mid[k]
+        for a,b,c in f:
+            ab, bc, ca = m(a,b), m(b,c), m(c,a)
+            nf += [(a,ab,ca),(ab,b,bc),(ca,bc,c),(ab,bc,ca)]
+        f = nf
+    p = [tuple(v*(1+bump*math.sin(5*q[0])*math.cos(3*q[1])) for v in q) for q in p]
+    return p, f
+for name, lv, bump in (("oct1", 1, 0), ("sphere2", 2, 0), ("bumpy2", 2, 0.2)):
+    p, f = sphere(lv, bump)
+    with open(f"{sys.argv[1]}/{name}.ply", "w") as o:
+        o.write(f"ply\nformat ascii 1.0\nelement vertex {len(p)}\nproperty float x\nproperty float y\nproperty float z\n"
+                f"element face {len(f)}\nproperty list uchar int vertex_indices\nend_header\n")
+        o.writelines(f"{x:.6f} {y:.6f} {z:.6f}\n" for x,y,z in p)
+        o.writelines(f"3 {a} {b} {c}\n" for a,b,c in f)
+PY
+for m in "$OUT"/seeds/*.ply; do
+  b="$(basename "$m" .ply)"
+  "$CONELOD" lod build "$m" -o "$OUT/corpus/$b.clod" >/dev/null
+  "$CONELOD" lod build "$m" -o "$OUT/corpus/${b}_2levels.clod" --max-levels 2 >/dev/null
+done
+echo "fuzz.sh: $(ls "$OUT/corpus" | wc -l) inputs in the corpus; fuzzing for ${SECONDS_TO_RUN} s"
+cd "$OUT"
+ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+  ./lod_reader_fuzz -max_total_time="$SECONDS_TO_RUN" -rss_limit_mb=1024 -malloc_limit_mb=256 -timeout=10 \
+  -artifact_prefix="$OUT/crashes/" -print_final_stats=1 "$OUT/corpus" 2>&1 | tail -n 25
+status=${PIPESTATUS[0]}
+if [ "$status" -ne 0 ] || [ -n "$(ls -A "$OUT/crashes")" ]; then
+  echo "fuzz.sh: FAILED: the reader crashed or leaked; inputs in $OUT/crashes" >&2
+  exit 1
+fi
+echo "fuzz.sh: no crash in ${SECONDS_TO_RUN} s"
