@@ -13,10 +13,11 @@
 // touched only by the merging units; and a merge prefetches all its neighbours' data before it
 // uses any of it. Neighbour lists live in one arena: a merged list goes back into its unit's
 // slot when it fits, else to the end; the arena is compacted in place when full. Level 1
-// recomputes face normals from the mesh when an exact cone needs them and areas come from the
-// faces at the end, rather than from arrays: the build's peak memory stays under twice the
-// loaded mesh's. After level 1 the faces are renumbered group by group (renumberFaces), so the
-// upper levels read normals in order. With strictGreedy none of this changes a bit of the
+// recomputes face normals from the mesh when an exact cone needs them during its merges, and
+// areas come from the faces at the end, rather than from arrays: the build's peak memory stays
+// under twice the loaded mesh's. Once level 1's merges are done and its arrays freed, the faces
+// are renumbered group by group (renumberFaces), so level 1's final exact cones and the upper
+// levels read normals in order. With strictGreedy none of this changes a bit of the
 // output of the paper's best-first order: the same pairs are scored with the same arithmetic and
 // MinimalCone sees the same normals in the same order (bench/check_grouping prints digests to
 // compare two builds of the code; its "strict-greedy" set is the former default).
@@ -169,6 +170,7 @@ class Arena {
 };
 
 constexpr float kNoPair = -std::numeric_limits<float>::infinity();
+constexpr float kUnscored = std::numeric_limits<float>::quiet_NaN();  // a list entry not scored yet
 
 // The unit with the best pair: an 8-ary tournament tree over the units' keys (the score of each
 // unit's best pair; kNoPair: none). A unit's leaf sits at its own index, so the neighbours of a
@@ -497,7 +499,7 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
     MinimalCone(scratchSupport_, sa);
   }
   if (stillExact) ac.exactSize = a.faceCount;
-  else if (a.faceCount >= exactGrowth_ * ac.exactSize) makeConeExact(u);  // amortized: each face O(log N) times
+  else if (a.faceCount >= int64_t(exactGrowth_) * ac.exactSize) makeConeExact(u);  // amortized: each face O(log N) times
 
   // The merged unit's list: both lists without u and p, deduplicated, each pair re-scored. It
   // goes back into u's slot when it fits (a unit absorbing a small neighbour rarely gains
@@ -613,13 +615,24 @@ bool HierarchyBuilder::runLevel(double thresholdDeg, bool localMaximaFirst, long
   aliveCount_ = int(n);
   stampCounter_ = 0;
   tree_.reset(n);
+  // Every pair is scored from both of its units in strict mode (the former arithmetic, bit for
+  // bit); else once, from its lower unit, which writes the score into the higher unit's entry
+  // too (kUnscored marks the entries still to score).
+  const bool scoreOnce = !params_.strictGreedy;
   for (size_t u = 0; u < n; ++u) {
     Link& l = links_[u];
     l.stamp = 0;
     float best = kNoPair;
     int partner = -1;
     for (Neighbour* nb = nbBegin(int(u)); nb != nbEnd(int(u)); ++nb) {
-      nb->score = evaluate(units_[u], units_[size_t(nb->id)]);
+      if (!scoreOnce) {
+        nb->score = evaluate(units_[u], units_[size_t(nb->id)]);
+      } else if (std::isnan(nb->score)) {
+        nb->score = evaluate(units_[u], units_[size_t(nb->id)]);
+        if (size_t(nb->id) > u)  // the higher unit has not chosen its best yet
+          for (Neighbour* back = nbBegin(nb->id); back != nbEnd(nb->id); ++back)
+            if (back->id == int(u)) { back->score = nb->score; break; }
+      }
       if (nb->score > best || (nb->score == best && nb->score != kNoPair && nb->id < partner)) {
         best = nb->score;
         partner = nb->id;
@@ -692,6 +705,9 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   // The groups become the units of the next level now, indexed by group: the arrays of this
   // level go before the level's output grows.
   nextLevelUnits();
+  // Renumbered now, the exact cones below read the normals in memory order, computed once for
+  // this level and the next ones (where the level-1 merges recomputed them from the mesh).
+  if (firstLevel) renumberFaces();
   if (firstLevel && !params_.strictGreedy) support_.assign(groupCount, ConeSupport());
   level.groups.resize(groupCount);
 
@@ -822,7 +838,7 @@ void HierarchyBuilder::nextLevelUnits() {
     links[id] = Link{-1, uint32_t(arena.grow(size_t(count))), count, 0};
     chains[id].capacity = count;
     Neighbour* list = arena.data() + links[id].nbOffset;
-    for (const Neighbour* w = nbBegin(u); w != nbEnd(u); ++w) *list++ = {idOfUnit_[size_t(w->id)], kNoPair};
+    for (const Neighbour* w = nbBegin(u); w != nbEnd(u); ++w) *list++ = {idOfUnit_[size_t(w->id)], kUnscored};
   }
   if (!support_.empty()) {
     BigVector<ConeSupport> support(g);
@@ -852,7 +868,7 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     // The arena's high-water mark is what it costs in memory: a quarter of slack, no more.
     arena_.reserve(neighbours.size() + neighbours.size() / 4 + 16);
     Neighbour* list = arena_.data() + arena_.grow(neighbours.size());
-    for (const uint32_t w : neighbours) *list++ = {int(w), kNoPair};
+    for (const uint32_t w : neighbours) *list++ = {int(w), kUnscored};
     links_.resize(size_t(nf));
     for (int f = 0; f < nf; ++f)
       links_[size_t(f)] = Link{-1, offsets[size_t(f)], int(offsets[size_t(f) + 1] - offsets[size_t(f)]), 0};
@@ -881,16 +897,19 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
   if (progress_ && !progress_(0, "grouping faces by normal cones")) return Status::Cancelled();
 
   long merges = 0;
-  exactGrowth_ = params_.strictGreedy ? 2 : 4;
   double threshold = params_.coneThresholdDeg;
   for (int level = 1; level <= params_.maxLevels; ++level) {
+    // Level 1 (default mode) refreshes its cones at every 8-fold growth: each refresh recomputes
+    // the unit's normals from the mesh (a tenth of the build at every 4-fold growth; 8-fold
+    // recomputes a quarter fewer normals); the looser bounds leave 1-3% more level-1 groups,
+    // culling as well (docs/cone_grouping.md). Above it a refresh costs about one scan (support_).
+    exactGrowth_ = params_.strictGreedy ? 2 : (level == 1 ? 8 : 4);
     const bool merged = runLevel(std::min(threshold, 180.0), level == 1 && !params_.strictGreedy, merges);
     if (cancelled_) { out = GroupHierarchy(); return Status::Cancelled(); }
     if (!merged && level > 1) break;  // nothing changed: the previous level is the top
     emitLevel(std::min(threshold, 180.0), out, level == 1);
     if (int(out.levels.back().groups.size()) <= std::max(1, params_.minTopGroups)) break;
     if (level == params_.maxLevels) break;
-    if (faceNormal_.empty()) renumberFaces();
     threshold *= params_.thresholdGrowth;
   }
 

@@ -28,9 +28,9 @@
 //
 // Candidate cones are the exact union of the two units' cones (an upper bound of the merged
 // normals' minimal cone, so the threshold is never exceeded); a group's cone is recomputed
-// exactly (MinimalCone, Welzl) whenever its face count has grown 4-fold (2-fold with
-// strictGreedy) since the last exact computation — amortized O(N log N) — and every group of the
-// output has its exact cone.
+// exactly (MinimalCone, Welzl) whenever its face count has grown 8-fold at level 1 and 4-fold
+// above (2-fold everywhere with strictGreedy) since the last exact computation — amortized
+// O(N log N) — and every group of the output has its exact cone.
 #pragma once
 
 #include "conelod/group_hierarchy.h"
