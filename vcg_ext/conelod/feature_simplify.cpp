@@ -460,8 +460,11 @@ class Simplifier {
   // Checks the half-edge collapse from -> to; on success fills d (the paper's error distance:
   // from `from` to the nearest new face) and q (worst shape among the new faces). With
   // `topology` false the link condition is left to CheckTopology (the engine runs it only on the
-  // candidate it is about to apply).
-  CollapseRefusal Check(uint32_t from, uint32_t to, double* d, double* q, bool topology = true);
+  // candidate it is about to apply). With a finite `cutoff` (model units) d is exact only below
+  // it, +infinity otherwise: ranking a vertex's edges needs the exact distance only for the edges
+  // that can still beat the best one found so far.
+  CollapseRefusal Check(uint32_t from, uint32_t to, double* d, double* q, bool topology = true,
+                        double cutoff = std::numeric_limits<double>::infinity());
   CollapseRefusal CheckTopology(uint32_t from, uint32_t to);
   double NewFanQuality(uint32_t from, uint32_t to);
   void Collapse(uint32_t from, uint32_t to, double outErr);
@@ -542,7 +545,8 @@ void Simplifier::BuildFan(uint32_t from) {
   }
 }
 
-CollapseRefusal Simplifier::Check(uint32_t from, uint32_t to, double* dOut, double* qOut, bool topology) {
+CollapseRefusal Simplifier::Check(uint32_t from, uint32_t to, double* dOut, double* qOut, bool topology,
+                                  double cutoff) {
   Work& w = w_;
   if (from == to) return CollapseRefusal::NotAnEdge;
   BuildFan(from);
@@ -564,7 +568,8 @@ CollapseRefusal Simplifier::Check(uint32_t from, uint32_t to, double* dOut, doub
   // duplicate face.
   const P3& pf = w.P[from];
   const P3& pt = w.P[to];
-  double d2 = std::numeric_limits<double>::infinity();
+  const double cutoff2 = cutoff * cutoff;
+  double d2 = cutoff2;  // faces whose plane is beyond the cutoff are not measured
   int modified = 0;
   for (const FanFace& ff : fan_) {
     if (ff.x == to || ff.y == to) continue;
@@ -585,6 +590,7 @@ CollapseRefusal Simplifier::Check(uint32_t from, uint32_t to, double* dOut, doub
   }
   if (modified == 0) {
     // An ear (a border vertex with one face): measure against the faces left around `to`.
+    d2 = std::numeric_limits<double>::infinity();
     for (uint32_t f : w.VF[to]) {
       if (w.Contains(f, from)) continue;
       const auto& t = w.F[f];
@@ -592,7 +598,7 @@ CollapseRefusal Simplifier::Check(uint32_t from, uint32_t to, double* dOut, doub
     }
     if (!std::isfinite(d2)) return CollapseRefusal::Topology;  // would delete a whole piece
   }
-  if (dOut) *dOut = std::sqrt(d2);
+  if (dOut) *dOut = d2 < cutoff2 ? std::sqrt(d2) : std::numeric_limits<double>::infinity();
   if (qOut) *qOut = NewFanQuality(from, to);
   return topology ? CheckTopology(from, to) : CollapseRefusal::None;
 }
@@ -892,6 +898,7 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
       const double curv = c == VertexClass::Smooth ? std::abs(w.K[v]) * d2 : std::abs(w.M[v]) * d1;
       if (curv >= p_.curvatureThreshold) continue;
     }
+    const double tie = 1e-9 * w.diag;
     // Candidate edges: all of them for V_K, the two line edges for V_M (or the one edge known).
     cands.clear();
     if (retry_[v] != kNone) {
@@ -912,26 +919,39 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
           if (std::find(nbrs.begin(), nbrs.end(), ff.y) == nbrs.end()) nbrs.push_back(ff.y);
         }
       }
+      // Edges that cannot come within the tie of the best d so far skip the exact distances
+      // (d = infinity); they are measured below only if the topology refuses the best edge.
+      double best = std::numeric_limits<double>::infinity();
       for (uint32_t u : nbrs) {
         double d = 0;
-        if (Check(v, u, &d, nullptr, false) == CollapseRefusal::None) cands.push_back({d, -1.0, u});
+        if (Check(v, u, &d, nullptr, false, best + tie) == CollapseRefusal::None) {
+          cands.push_back({d, -1.0, u});
+          best = std::min(best, d);
+        }
       }
     }
     if (cands.empty()) continue;
     // Smallest error distance d (Fig. 8); near-ties (flat regions) go to the better triangle shape.
-    const double tie = 1e-9 * w.diag;
     double dMin = std::numeric_limits<double>::infinity();
     for (const Candidate& cd : cands) dMin = std::min(dMin, cd.d);
     for (Candidate& cd : cands)
       if (cd.d <= dMin + tie) cd.q = NewFanQuality(v, cd.to);
-    std::sort(cands.begin(), cands.end(), [tie](const Candidate& a, const Candidate& b) {
+    auto byDistance = [tie](const Candidate& a, const Candidate& b) {
       if (std::abs(a.d - b.d) > tie) return a.d < b.d;
       return a.q > b.q;
-    });
+    };
+    std::sort(cands.begin(), cands.end(), byDistance);
     double smallestError = std::numeric_limits<double>::infinity();
     uint32_t triedTo = kNone;
     bool done = false;
-    for (const Candidate& cd : cands) {
+    for (size_t i = 0; i < cands.size(); ++i) {
+      if (i == 1 && !std::isfinite(cands.back().d)) {
+        // The topology refused the best edge: measure the edges the cutoff skipped, rank again.
+        for (size_t j = 1; j < cands.size(); ++j)
+          if (!std::isfinite(cands[j].d)) Check(v, cands[j].to, &cands[j].d, nullptr, false);
+        std::sort(cands.begin() + 1, cands.end(), byDistance);
+      }
+      const Candidate& cd = cands[i];
       // The paper's rule: the edge with the smallest d (among those the topology allows) is the
       // one; under an error bound it is applied or the vertex waits for a larger bound.
       if (CheckTopology(v, cd.to) != CollapseRefusal::None) continue;
