@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The core's unit tests and the CLI integration tests built with AddressSanitizer and UBSan
-# (no plugin: MeshLab itself is not built with sanitizers). Run by CI after scripts/test.sh.
+# (no plugin: MeshLab itself is not built with sanitizers; no viewer: Qt, D-Bus and Mesa leak at
+# exit in ways LeakSanitizer reports and we cannot fix). Run by CI after scripts/test.sh.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BUILD="${CONELOD_ASAN_BUILD_DIR:-$ROOT/build-asan}"
@@ -9,7 +10,7 @@ if [ -z "$MESHES" ]; then
   if [ -d "$ROOT/../shared/test_meshes" ]; then MESHES="$(cd "$ROOT/../shared/test_meshes" && pwd)"
   else bash "$ROOT/scripts/get_test_meshes.sh"; MESHES="$ROOT/deps/test_meshes"; fi
 fi
-cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCONELOD_SANITIZE=ON -DCONELOD_BUILD_PLUGIN=OFF \
+cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCONELOD_SANITIZE=ON -DCONELOD_BUILD_PLUGIN=OFF -DCONELOD_BUILD_VIEWER=OFF \
   -DCONELOD_TEST_MESHES="$MESHES" >/dev/null
 cmake --build "$BUILD" -j "$(nproc)"
 cd "$BUILD"
