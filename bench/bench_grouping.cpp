@@ -25,6 +25,7 @@
 #include <benchmark/benchmark.h>
 
 #include "conelod/cone_grouping.h"
+#include "conelod/process_memory.h"
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"
 
@@ -32,19 +33,9 @@ namespace {
 
 using namespace conelod;
 
-// A "VmXXX:  1234 kB" line of /proc/self/status, in bytes (0 if missing).
-double ProcStatusBytes(const char* field) {
-  std::ifstream in("/proc/self/status");
-  std::string line;
-  const size_t n = std::strlen(field);
-  while (std::getline(in, line))
-    if (line.compare(0, n, field) == 0 && line.size() > n && line[n] == ':') return 1024.0 * std::atof(line.c_str() + n + 1);
-  return 0;
-}
-
 double SettledRss() {
   malloc_trim(0);
-  return ProcStatusBytes("VmRSS");
+  return double(ProcessStatusBytes("VmRSS"));
 }
 
 bool ResetPeakRss() {
@@ -82,7 +73,7 @@ void BM_BuildConeHierarchy(benchmark::State& state, Loaded* m) {
     const Status s = BuildConeHierarchy(m->mesh, params, h);
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     state.PauseTiming();
-    peak = std::max(peak, ProcStatusBytes("VmHWM") - rssBefore);
+    peak = std::max(peak, double(ProcessStatusBytes("VmHWM")) - rssBefore);
     state.ResumeTiming();
     if (!s.ok()) {
       m->error = s.message;

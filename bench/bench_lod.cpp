@@ -28,6 +28,8 @@
 #include <vector>
 
 #include "conelod/lod.h"
+#include "conelod/process_memory.h"
+#include "conelod/sorted_faces.h"
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"
 
@@ -42,16 +44,6 @@ double CpuSeconds() {
 }
 double WallSeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
-// VmRSS / VmHWM of this process, bytes.
-size_t ProcStatus(const char* key) {
-  std::ifstream in("/proc/self/status");
-  std::string line;
-  const size_t n = std::strlen(key);
-  while (std::getline(in, line))
-    if (line.compare(0, n, key) == 0 && line.size() > n && line[n] == ':') return size_t(std::atoll(line.c_str() + n + 1)) * 1024;
-  return 0;
 }
 
 // A tiny perspective rasteriser: flat-shaded triangles into a z-buffer. Returns covered pixels.
@@ -104,24 +96,6 @@ size_t Rasterise(const IndexedMesh& m, const vcg::Point3d& eye, const vcg::Point
   return covered;
 }
 
-// Per face: its corner positions rotated to start at the smallest (orientation kept); sorted.
-std::vector<std::array<float, 9>> SortedFaces(const IndexedMesh& m) {
-  std::vector<std::array<float, 9>> out;
-  out.reserve(m.faces.size());
-  for (const auto& t : m.faces) {
-    std::array<float, 9> best{};
-    for (int r = 0; r < 3; ++r) {
-      std::array<float, 9> a;
-      for (int c = 0; c < 3; ++c)
-        for (int i = 0; i < 3; ++i) a[size_t(c * 3 + i)] = m.positions[t[size_t((r + c) % 3)]][i];
-      if (r == 0 || a < best) best = a;
-    }
-    out.push_back(best);
-  }
-  std::sort(out.begin(), out.end());
-  return out;
-}
-
 vcg::Point3d EyeFor(const vcg::Box3f& box) {
   const vcg::Point3f c = box.Center();
   return vcg::Point3d(c[0], c[1], c[2]) + vcg::Point3d(0.3, 0.25, 1).Normalize() * (1.6 * box.Diag());
@@ -130,16 +104,16 @@ vcg::Point3d EyeFor(const vcg::Box3f& box) {
 // --- The measurements made in fresh processes (this program re-executed) ---------------------
 
 int ChildVcg(const std::string& mesh) {
-  const size_t before = ProcStatus("VmRSS");
+  const size_t before = ProcessStatusBytes("VmRSS");
   CMesh m;
   if (!LoadPly(m, mesh).empty()) return 1;
-  const size_t after = ProcStatus("VmRSS");
-  std::printf("vcg_rss_growth=%zu vcg_hwm=%zu faces=%zu\n", after - before, ProcStatus("VmHWM"), m.face.size());
+  const size_t after = ProcessStatusBytes("VmRSS");
+  std::printf("vcg_rss_growth=%zu vcg_hwm=%zu faces=%zu\n", after - before, ProcessStatusBytes("VmHWM"), m.face.size());
   return 0;
 }
 
 int ChildReader(const std::string& file, double fraction) {
-  const size_t before = ProcStatus("VmRSS");
+  const size_t before = ProcessStatusBytes("VmRSS");
   const double c0 = CpuSeconds(), w0 = WallSeconds();
   std::unique_ptr<LodReader> r;
   Status s = LodReader::Open(file, r);
@@ -148,7 +122,7 @@ int ChildReader(const std::string& file, double fraction) {
     return 1;
   }
   const double openCpu = CpuSeconds() - c0;
-  const size_t rssOpen = ProcStatus("VmRSS") - before;
+  const size_t rssOpen = ProcessStatusBytes("VmRSS") - before;
   const size_t residentOpen = r->residentBytes();
   // First image: the coarsest cut (budget 0: the roots), extracted and rasterised.
   LodView view;
@@ -172,12 +146,12 @@ int ChildReader(const std::string& file, double fraction) {
   s = RefineLod(*r, view, cut);
   if (!s.ok()) return 1;
   const double refineCpu = CpuSeconds() - c1;
-  const size_t rssBudget = ProcStatus("VmRSS") - before;
+  const size_t rssBudget = ProcessStatusBytes("VmRSS") - before;
   std::printf("open_cpu=%.6f first_image_cpu=%.6f first_image_wall=%.6f first_faces=%zu first_pixels=%zu "
               "resident_open=%zu rss_open=%zu resident_budget=%zu rss_budget=%zu budget_faces=%zu cut_faces=%zu "
               "refine_cpu=%.6f max_level_difference=%d hwm=%zu\n",
               openCpu, firstCpu, firstWall, first.faces.size(), pixels, residentOpen, rssOpen, r->residentBytes(),
-              rssBudget, view.faceBudget, cut.faces, refineCpu, cut.maxLevelDifference, ProcStatus("VmHWM"));
+              rssBudget, view.faceBudget, cut.faces, refineCpu, cut.maxLevelDifference, ProcessStatusBytes("VmHWM"));
   return 0;
 }
 
@@ -252,7 +226,7 @@ int main(int argc, char** argv) {
       return 1;
     }
     const double writeCpu = CpuSeconds() - c, writeWall = WallSeconds() - w;
-    const size_t writeHwm = ProcStatus("VmHWM");
+    const size_t writeHwm = ProcessStatusBytes("VmHWM");
     h = GroupHierarchy();
     levels.clear();
 
@@ -267,7 +241,7 @@ int main(int argc, char** argv) {
       all.eye = EyeFor(vcg::Box3f(vcg::Point3f(0, 0, 0), vcg::Point3f(1, 1, 1)));
       all.faceBudget = mesh.faces.size();
       if (LodReader::Open(file, r).ok() && RefineLod(*r, all, cut).ok() && ExtractCutMesh(*r, cut, true, back).ok()) {
-        exact = SortedFaces(back) == SortedFaces(mesh);
+        exact = SortedFacePositions(back) == SortedFacePositions(mesh);
         roundTripVertices = back.positions.size();
       }
     }

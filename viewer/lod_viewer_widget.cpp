@@ -12,7 +12,7 @@
 
 #include "conelod/group_colors.h"
 #include "conelod/normal_cone.h"
-#include "process_memory.h"
+#include "conelod/process_memory.h"
 
 using namespace conelod;
 
@@ -369,7 +369,7 @@ void LodViewerWidget::renderScene() {
 
 void LodViewerWidget::drawHud() {
   const double readerBytes = double(reader_.residentBytes());
-  const double rss = double(ProcessResidentBytes());
+  const double rss = double(conelod::ProcessStatusBytes("VmRSS"));
   const LodFileInfo& info = reader_.info();
   QStringList lines;
   lines << QString("ConeLOD viewer  %1").arg(QString::fromStdString(title_));

@@ -17,7 +17,7 @@
 #include <cstdlib>
 
 #include "lod_viewer_widget.h"
-#include "process_memory.h"
+#include "conelod/process_memory.h"
 
 namespace {
 
@@ -156,7 +156,7 @@ int main(int argc, char** argv) {
   o["fps"] = frameMs > 0 ? 1000.0 / frameMs : 0.0;
   o["resident_bytes"] = double(reader->residentBytes());
   o["gpu_bytes"] = double(widget.gpuBytes());
-  o["process_rss_bytes"] = double(ProcessResidentBytes());
+  o["process_rss_bytes"] = double(conelod::ProcessStatusBytes("VmRSS"));
   if (parser.isSet(json)) {
     std::printf("%s\n", QJsonDocument(o).toJson(QJsonDocument::Compact).constData());
   } else {

@@ -18,6 +18,7 @@
 #include <unistd.h>
 
 #include "conelod/lod_internal.h"
+#include "conelod/sorted_faces.h"
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"
 #include "test_util.h"
@@ -55,21 +56,6 @@ void Build(Built& b, const std::string& name, const ConeGroupingParams& gp = Con
   ASSERT_TRUE(s.ok()) << s.message;
   b.bytes = ReadBytes(b.path);
   ASSERT_EQ(b.bytes.size(), b.stats.fileBytes);
-}
-
-// Per face: its position triples, sorted within the face by rotation (orientation kept), the
-// faces sorted: equal for two meshes with the same triangles whatever the vertex order.
-std::vector<std::array<float, 9>> SortedFaces(const IndexedMesh& m) {
-  std::vector<std::array<float, 9>> out;
-  for (const auto& t : m.faces) {
-    std::array<std::array<float, 9>, 3> rot;
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c)
-        for (int i = 0; i < 3; ++i) rot[size_t(r)][size_t(c * 3 + i)] = m.positions[t[size_t((r + c) % 3)]][i];
-    out.push_back(*std::min_element(rot.begin(), rot.end()));
-  }
-  std::sort(out.begin(), out.end());
-  return out;
 }
 
 // Input faces covered by a node: those of its group at its level (level 0: the level-1 group).
@@ -279,7 +265,7 @@ TEST_F(TinyLod, FullBudgetGivesTheInputBack) {
   ASSERT_TRUE(ExtractCutMesh(*r, cut, true, out, &level).ok());
   EXPECT_EQ(out.faces.size(), 128u);
   EXPECT_EQ(out.positions.size(), 66u);  // welded: the input's shared vertices
-  EXPECT_EQ(SortedFaces(out), SortedFaces(b.mesh));
+  EXPECT_EQ(SortedFacePositions(out), SortedFacePositions(b.mesh));
   EXPECT_TRUE(std::all_of(level.begin(), level.end(), [](int l) { return l == 0; }));
   // The level-0 vertex ids are the input's vertex indices.
   for (uint32_t id : cut.nodes) {
@@ -475,7 +461,7 @@ TEST_F(BunnyLod, FullBudgetRoundTripIsExact) {
   IndexedMesh out;
   ASSERT_TRUE(ExtractCutMesh(*r, cut, true, out).ok());
   EXPECT_EQ(out.faces.size(), 69451u);
-  EXPECT_EQ(SortedFaces(out), SortedFaces(bunny_->mesh));
+  EXPECT_EQ(SortedFacePositions(out), SortedFacePositions(bunny_->mesh));
   // Welded: the input's used vertices (the bunny has unreferenced ones).
   std::vector<uint8_t> used(bunny_->mesh.positions.size(), 0);
   for (const auto& t : bunny_->mesh.faces)
