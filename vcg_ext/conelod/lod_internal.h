@@ -58,12 +58,16 @@ uint32_t Crc32(const void* data, size_t bytes, uint32_t crc = 0);
 class Encoder {
  public:
   std::vector<uint8_t> bytes;
-  void u32(uint32_t v) { for (int i = 0; i < 4; ++i) bytes.push_back(uint8_t(v >> (8 * i))); }
-  void u64(uint64_t v) { for (int i = 0; i < 8; ++i) bytes.push_back(uint8_t(v >> (8 * i))); }
+  void u16(uint32_t v) { little(uint16_t(v)); }
+  void u32(uint32_t v) { little(v); }
+  void u64(uint64_t v) { little(v); }
   void f32(float v) { uint32_t u; std::memcpy(&u, &v, 4); u32(u); }
   void f64(double v) { uint64_t u; std::memcpy(&u, &v, 8); u64(u); }
-  void u16(uint32_t v) { bytes.push_back(uint8_t(v)); bytes.push_back(uint8_t(v >> 8)); }
   void clear() { bytes.clear(); }
+
+ private:
+  template <typename T>
+  void little(T v) { for (size_t i = 0; i < sizeof(T); ++i) bytes.push_back(uint8_t(v >> (8 * i))); }
 };
 
 // Reads little-endian fields from a byte range; reading past the end sets `overrun` and yields 0.
@@ -73,30 +77,21 @@ class Decoder {
   bool overrun = false;
   size_t left() const { return n_ - at_; }
   size_t at() const { return at_; }
-  uint32_t u32() {
-    if (!need(4)) return 0;
-    uint32_t v = 0;
-    for (int i = 0; i < 4; ++i) v |= uint32_t(p_[at_ + size_t(i)]) << (8 * i);
-    at_ += 4;
-    return v;
-  }
-  uint64_t u64() {
-    if (!need(8)) return 0;
-    uint64_t v = 0;
-    for (int i = 0; i < 8; ++i) v |= uint64_t(p_[at_ + size_t(i)]) << (8 * i);
-    at_ += 8;
-    return v;
-  }
-  uint32_t u16() {
-    if (!need(2)) return 0;
-    const uint32_t v = uint32_t(p_[at_]) | uint32_t(p_[at_ + 1]) << 8;
-    at_ += 2;
-    return v;
-  }
+  uint32_t u16() { return uint32_t(little<uint16_t>()); }
+  uint32_t u32() { return little<uint32_t>(); }
+  uint64_t u64() { return little<uint64_t>(); }
   float f32() { const uint32_t u = u32(); float v; std::memcpy(&v, &u, 4); return v; }
   double f64() { const uint64_t u = u64(); double v; std::memcpy(&v, &u, 8); return v; }
 
  private:
+  template <typename T>
+  T little() {
+    if (!need(sizeof(T))) return 0;
+    T v = 0;
+    for (size_t i = 0; i < sizeof(T); ++i) v = T(v | T(p_[at_ + i]) << (8 * i));
+    at_ += sizeof(T);
+    return v;
+  }
   bool need(size_t k) {
     if (n_ - at_ < k) { overrun = true; at_ = n_; return false; }
     return true;
