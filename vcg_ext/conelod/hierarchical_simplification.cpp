@@ -16,7 +16,7 @@ namespace {
 
 constexpr uint32_t kNone = UINT32_MAX;
 constexpr int kMaxParts = 8;
-constexpr int kGroupsPerPart = 16;  // fewer coarse groups per part: cut along a finer level
+constexpr int kGroupsPerPart = 16;  // no group may hold more than 1/16 of a part's faces
 
 // The part (0..parts-1) of every face of `mesh`: recursive median cuts of the groups' centroids
 // (weighted by their face counts), so that every group lies in one part and the parts have about
@@ -133,16 +133,19 @@ void SimplifyPart(const IndexedMesh& below, const std::vector<std::vector<int>>&
 Status SimplifyInParts(const IndexedMesh& below, const std::vector<std::vector<int>>& groups, int parts, int parity,
                        const HierarchicalSimplificationParams& params, GroupQemResult& out, const Progress& progress) {
   out = GroupQemResult();
-  // Cut along the coarsest level that still has enough groups for balanced parts.
+  // Cut along the contours of the coarsest level whose groups are small enough for balanced parts
+  // (coarse levels can hold a whole connected component in one group).
   size_t cutLayer = 0;
   for (size_t j = groups.size(); j-- > 0;) {
-    std::vector<char> seen;
-    int distinct = 0;
+    std::vector<size_t> faces;
     for (int g : groups[j]) {
-      if (size_t(g) >= seen.size()) seen.resize(size_t(g) + 1, 0);
-      if (!seen[size_t(g)]) { seen[size_t(g)] = 1; ++distinct; }
+      if (size_t(g) >= faces.size()) faces.resize(size_t(g) + 1, 0);
+      ++faces[size_t(g)];
     }
-    if (distinct >= kGroupsPerPart * parts) { cutLayer = j; break; }
+    if (*std::max_element(faces.begin(), faces.end()) * kGroupsPerPart * size_t(parts) <= below.faces.size()) {
+      cutLayer = j;
+      break;
+    }
   }
   const std::vector<uint8_t> partOfFace = CutIntoParts(below, groups[cutLayer], parts, parity);
   // A vertex used by faces of two parts is shared: it stays where it is at this level.

@@ -8,6 +8,7 @@
 
 #include "conelod/cone_grouping.h"
 #include "conelod/group_integrity.h"
+#include "conelod/sampled_distance.h"
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"
 #include "test_util.h"
@@ -98,7 +99,13 @@ TEST(BuildSimplifiedLevels, PartsSideBySide) {
   for (size_t i = 0; i < one.size(); ++i) {
     SCOPED_TRACE("level " + std::to_string(i + 1));
     EXPECT_LE(one[i].mesh.faces.size(), one[i].targetFaces + one[i].targetFaces / 50 + 8);
-    EXPECT_LT(one[i].stats.maxCollapseError, 2 * whole[i].stats.maxCollapseError + 1e-9);
+    // Mean distance from the input: each part must reach half of its own faces, so where a part
+    // is mostly detail its collapses cost more than in one piece; measured +7% at levels 1-2 with
+    // these small parts, the same from level 3 on.
+    SurfaceDistance dOne, dWhole;
+    ASSERT_TRUE(SampledDistance(m, one[i].mesh, 20000, dOne).ok());
+    ASSERT_TRUE(SampledDistance(m, whole[i].mesh, 20000, dWhole).ok());
+    EXPECT_LT(dOne.mean, 1.15 * dWhole.mean);
   }
 
   // Cancelled from the progress callback, which is only ever called on this thread.
