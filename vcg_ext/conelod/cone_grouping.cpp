@@ -319,6 +319,8 @@ class HierarchyBuilder {
   // that holds them all), found with one scan instead of Welzl's algorithm.
   BigVector<ConeSupport> support_;
   bool trySupportCone(int u);
+  bool seededCone(int u);
+  bool refineCone(int u);  // on scratchSupport_ and scratchNormals_
   std::vector<vcg::Point3d> scratchSupport_, scratchTrial_;
 
   BigVector<Unit> units_;
@@ -409,6 +411,7 @@ void HierarchyBuilder::makeConeExact(int u) {
       FaceNormalAndArea(mesh_, size_t(scratchFaces_[i]), scratchNormals_[i], area);
     }
   }
+  if (!params_.strictGreedy && seededCone(u)) return;
   ConeSupport support;
   units_[size_t(u)].setCone(MinimalCone(scratchNormals_, support));
   if (!support_.empty()) support_[size_t(u)] = support;
@@ -422,8 +425,37 @@ void HierarchyBuilder::makeConeExact(int u) {
 bool HierarchyBuilder::trySupportCone(int u) {
   ConeSupport& support = support_[size_t(u)];
   if (support.count == 0) return false;
+  scratchSupport_.assign(support.normal, support.normal + support.count);
+  return refineCone(u);
+}
+
+// Level 1, default mode (no support known): the first guess comes from the normals themselves,
+// the one farthest from the unit's current axis (the union bound's, or the exact cone's) and the
+// one farthest from that; then refineCone. Empty or uncullable units are left to Welzl.
+bool HierarchyBuilder::seededCone(int u) {
+  const Unit& unit = units_[size_t(u)];
+  if (!(unit.half >= 0 && unit.half < kPi / 2)) return false;
+  const vcg::Point3d axis = unit.axis;
+  const vcg::Point3d* first = nullptr;
+  double lowest = 2;
+  for (const vcg::Point3d& n : scratchNormals_)
+    if (n.SquaredNorm() >= 0.5 && n * axis < lowest) { lowest = n * axis; first = &n; }
+  if (!first) return false;
+  const vcg::Point3d far1 = *first;
+  const vcg::Point3d* second = first;
+  lowest = 2;
+  for (const vcg::Point3d& n : scratchNormals_)
+    if (n.SquaredNorm() >= 0.5 && n * far1 < lowest) { lowest = n * far1; second = &n; }
+  scratchSupport_.assign({far1, *second});
+  return refineCone(u);
+}
+
+// The guess is the minimal cone of the normals in scratchSupport_; the normals of
+// scratchNormals_ outside it join them and the guess is made again (the cone only grows towards
+// the true one), a few times at most before leaving the work to Welzl's algorithm on all the
+// normals (false). True: the unit's cone (and support, where kept) was set.
+bool HierarchyBuilder::refineCone(int u) {
   std::vector<vcg::Point3d>& chosen = scratchSupport_;
-  chosen.assign(support.normal, support.normal + support.count);
   ConeSupport found;
   for (int round = 0; round < 4; ++round) {
     scratchTrial_.assign(chosen.begin(), chosen.end());  // MinimalCone shuffles its input
@@ -441,7 +473,7 @@ bool HierarchyBuilder::trySupportCone(int u) {
     }  // else some of the normals fit in no hemisphere: neither do all of them
     if (outside == 0) {
       units_[size_t(u)].setCone(guess);
-      support = found;
+      if (!support_.empty()) support_[size_t(u)] = found;
       chains_[size_t(u)].exactSize = units_[size_t(u)].faceCount;
       return true;
     }
