@@ -446,8 +446,41 @@ bool HierarchyBuilder::seededCone(int u) {
   lowest = 2;
   for (const vcg::Point3d& n : scratchNormals_)
     if (n.SquaredNorm() >= 0.5 && n * far1 < lowest) { lowest = n * far1; second = &n; }
-  scratchSupport_.assign({far1, *second});
-  return refineCone(u);
+  const vcg::Point3d far2 = *second;
+  // The minimal cone of the two as MinimalCone makes it (one normal's cap when the other lies in
+  // it to the slack of 1e-10 on cosines, else the two-point cap), checked against every normal
+  // here: most groups need no more.
+  vcg::Point3d axis2 = far1;
+  double cosHalf = 1;
+  if (!(far2 * far1 >= 1 - 1e-10)) {
+    axis2 = far1 + far2;
+    const double len = axis2.Norm();
+    if (len < 1e-12) return false;
+    axis2 /= len;
+    cosHalf = std::min(axis2 * far1, axis2 * far2);
+    if (!(cosHalf > 1e-9)) return false;
+  }
+  scratchSupport_.assign({far1, far2});
+  const double minCos = cosHalf - 1e-10;
+  size_t outside = 0;
+  for (const vcg::Point3d& n : scratchNormals_)
+    if (n.SquaredNorm() >= 0.5 && !(n * axis2 >= minCos)) {
+      if (++outside > 256) return false;
+      scratchSupport_.push_back(n);
+    }
+  if (outside > 0) return refineCone(u);
+  NormalCone cone;
+  cone.axis = axis2;
+  cone.halfAngle = std::acos(std::min(1.0, cosHalf));
+  units_[size_t(u)].setCone(cone);
+  if (!support_.empty()) {
+    ConeSupport& support = support_[size_t(u)];
+    support.normal[0] = far1;
+    support.normal[1] = far2;
+    support.count = cosHalf == 1 ? 1 : 2;
+  }
+  chains_[size_t(u)].exactSize = units_[size_t(u)].faceCount;
+  return true;
 }
 
 // The guess is the minimal cone of the normals in scratchSupport_; the normals of
