@@ -684,7 +684,16 @@ bool HierarchyBuilder::runLevel(double thresholdDeg, bool localMaximaFirst, long
   // bit); else once, from its lower unit, which writes the score into the higher unit's entry
   // too (kUnscored marks the entries still to score).
   const bool scoreOnce = !params_.strictGreedy;
+  constexpr size_t kAhead = 16;  // units ahead whose neighbours' data is asked for (then lists at half)
   for (size_t u = 0; u < n; ++u) {
+    if (u + kAhead < n)
+      for (const Neighbour* nb = nbBegin(int(u + kAhead)); nb != nbEnd(int(u + kAhead)); ++nb) {
+        Prefetch(&units_[size_t(nb->id)]);
+        Prefetch(&links_[size_t(nb->id)]);
+      }
+    if (scoreOnce && u + kAhead / 2 < n)
+      for (const Neighbour* nb = nbBegin(int(u + kAhead / 2)); nb != nbEnd(int(u + kAhead / 2)); ++nb)
+        if (size_t(nb->id) > u) Prefetch(nbBegin(nb->id));
     Link& l = links_[u];
     l.stamp = 0;
     float best = kNoPair;
