@@ -727,6 +727,15 @@ bool HierarchyBuilder::runLevel(double thresholdDeg, bool localMaximaFirst, long
     for (long before = -1; before != merges && aliveCount_ > minGroups;) {
       before = merges;
       for (int u = 0; u < int(n) && aliveCount_ > minGroups; ++u) {
+        // Whether u's best pair is mutual reads its partner's link, scattered: asked for 8 units
+        // ahead (with the partner's unit, which the merge reads first).
+        if (u + 8 < int(n)) {
+          const int ahead = links_[size_t(u) + 8].bestPartner;
+          if (ahead >= 0) {
+            Prefetch(&links_[size_t(ahead)]);
+            Prefetch(&units_[size_t(ahead)]);
+          }
+        }
         while (alive(u) && aliveCount_ > minGroups) {
           const int b = links_[size_t(u)].bestPartner;
           if (b < 0 || links_[size_t(b)].bestPartner != u) break;
