@@ -17,7 +17,10 @@
 // areas come from the faces at the end, rather than from arrays: the build's peak memory stays
 // under twice the loaded mesh's. Once level 1's merges are done and its arrays freed, the faces
 // are renumbered group by group (renumberFaces), so level 1's final exact cones and the upper
-// levels read normals in order. With strictGreedy none of this changes a bit of the
+// levels read normals in order. Exact cones rarely run Welzl's algorithm in the default mode:
+// above level 1 they start from the support of the merged units' cones (trySupportCone), at
+// level 1 (no supports kept) from the cap of two far normals (seededCone); either guess is
+// checked against every normal. With strictGreedy none of this changes a bit of the
 // output of the paper's best-first order: the same pairs are scored with the same arithmetic and
 // MinimalCone sees the same normals in the same order (bench/check_grouping prints digests to
 // compare two builds of the code; its "strict-greedy" set is the former default).
@@ -431,7 +434,11 @@ bool HierarchyBuilder::trySupportCone(int u) {
 
 // Level 1, default mode (no support known): the first guess comes from the normals themselves,
 // the one farthest from the unit's current axis (the union bound's, or the exact cone's) and the
-// one farthest from that; then refineCone. Empty or uncullable units are left to Welzl.
+// one farthest from that. Their cap, checked here against every normal, holds them all for most
+// groups: that is the minimal cone; else the normals outside join the two in refineCone. Empty
+// or uncullable units are left to Welzl. (Before, Welzl ran on all the normals of every level-1
+// exact cone: the bunny's build took 516 M instructions, 485 M since; MinimalCone's share of
+// the dragon's profile went from 6.8% to 1.6%.)
 bool HierarchyBuilder::seededCone(int u) {
   const Unit& unit = units_[size_t(u)];
   if (!(unit.half >= 0 && unit.half < kPi / 2)) return false;
