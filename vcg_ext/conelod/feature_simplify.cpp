@@ -777,8 +777,12 @@ void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
   // The fans of `to` and of from's old ring changed: their curvatures are recomputed. The rest of
   // to's ring kept its fan, but its collapses into `to` may have become possible: vertices found
   // stuck before go back into their queue.
+  // A `to` that waits for a larger bound keeps waiting with the error it was deferred with, like
+  // the deferred vertices of from's ring: absorbing `from` gives its fan from's removed vertices to
+  // cover as well, and on the bunny 96 % of such `to`s evaluated at once were deferred again.
   ++mark_;
-  Push(to, true);
+  if (deferredMark_[to]) fanChanged_[to] = 1;
+  else Push(to, true);
   visit_[to] = mark_;
   for (uint32_t x : scratchRing_) {
     visit_[x] = mark_;
