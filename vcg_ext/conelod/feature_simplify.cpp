@@ -287,21 +287,37 @@ Status Work::Build(const IndexedMesh& in, const FeatureSimplifyParams& p) {
     if (t[2] != t[0] && t[2] != t[1]) VF[t[2]].push_back(f);
   }
 
-  // Undirected edges with their faces: sort (key, face, directed-forward) records.
+  // Undirected edges with their faces: (key, face, directed-forward) records sorted by key, then
+  // face. Bucketed by the smaller vertex first (in face order), then each small bucket is sorted:
+  // the same order as one global sort, at a fraction of its cost (it was 7 % of a bunny run).
   struct HalfEdge { uint64_t key; uint32_t face; uint32_t forward; };
-  std::vector<HalfEdge> he;
-  he.reserve(nf * 3);
-  for (uint32_t f = 0; f < nf; ++f) {
-    const auto& t = F[f];
+  std::vector<uint32_t> start(nv + 1, 0);
+  for (const auto& t : F)
     for (int k = 0; k < 3; ++k) {
       const uint32_t a = t[k], b = t[(k + 1) % 3];
-      if (a == b) continue;
-      he.push_back({EdgeKey(a, b), f, a < b ? 1u : 0u});
+      if (a != b) ++start[std::min(a, b) + 1];
+    }
+  for (size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
+  std::vector<HalfEdge> he(start[nv]);
+  {
+    std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+    for (uint32_t f = 0; f < nf; ++f) {
+      const auto& t = F[f];
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t a = t[k], b = t[(k + 1) % 3];
+        if (a == b) continue;
+        he[fill[std::min(a, b)]++] = {EdgeKey(a, b), f, a < b ? 1u : 0u};
+      }
     }
   }
-  std::sort(he.begin(), he.end(), [](const HalfEdge& x, const HalfEdge& y) {
-    return x.key != y.key ? x.key < y.key : x.face < y.face;
-  });
+  for (size_t v = 0; v < nv; ++v)  // insertion sort of each bucket (valence-sized)
+    for (uint32_t i = start[v] + 1; i < start[v + 1]; ++i) {
+      const HalfEdge x = he[i];
+      uint32_t j = i;
+      for (; j > start[v] && (he[j - 1].key > x.key || (he[j - 1].key == x.key && he[j - 1].face > x.face)); --j)
+        he[j] = he[j - 1];
+      he[j] = x;
+    }
   const double cosLimit = std::cos((180.0 - p.featureAngleDeg) * kPi / 180.0);  // A <= A_t <=> cos(normals) <= this
   for (size_t i = 0; i < he.size();) {
     size_t j = i;
