@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <queue>
 #include <unordered_map>
 #include <unordered_set>
@@ -107,6 +108,51 @@ double DistanceToTris2(const P3& p, const std::vector<Tri>& tris, double enough2
   return best;
 }
 
+// The faces around a vertex: up to kInline ids stored in place (no pointer to follow for the
+// usual valences), more on the heap. The order is that of push_back / swap-removal, as with a
+// std::vector.
+class FaceList {
+ public:
+  static constexpr uint32_t kInline = 13;
+  FaceList() = default;
+  FaceList(const FaceList& o) { *this = o; }
+  FaceList& operator=(const FaceList& o) {
+    if (this == &o) return *this;
+    n_ = 0;
+    reserve(o.n_);
+    std::copy(o.begin(), o.end(), data());
+    n_ = o.n_;
+    return *this;
+  }
+  uint32_t* begin() { return data(); }
+  uint32_t* end() { return data() + n_; }
+  const uint32_t* begin() const { return data(); }
+  const uint32_t* end() const { return data() + n_; }
+  size_t size() const { return n_; }
+  bool empty() const { return n_ == 0; }
+  void clear() { n_ = 0; }
+  uint32_t& back() { return data()[n_ - 1]; }
+  void pop_back() { --n_; }
+  void push_back(uint32_t f) {
+    if (n_ == cap_) reserve(2 * cap_);
+    data()[n_++] = f;
+  }
+  void reserve(size_t want) {
+    if (want <= cap_) return;
+    std::unique_ptr<uint32_t[]> h(new uint32_t[want]);
+    std::copy(begin(), end(), h.get());
+    heap_ = std::move(h);
+    cap_ = uint32_t(want);
+  }
+
+ private:
+  uint32_t* data() { return heap_ ? heap_.get() : inline_; }
+  const uint32_t* data() const { return heap_ ? heap_.get() : inline_; }
+  uint32_t n_ = 0, cap_ = kInline;
+  uint32_t inline_[kInline];
+  std::unique_ptr<uint32_t[]> heap_;
+};
+
 // The working mesh shared by the detection and the simplification: positions, faces with their
 // alive flags, per-vertex incident faces and per-vertex feature neighbours.
 class Work {
@@ -114,7 +160,7 @@ class Work {
   std::vector<P3> P;
   std::vector<std::array<uint32_t, 3>> F;
   std::vector<char> alive;
-  std::vector<std::vector<uint32_t>> VF;
+  std::vector<FaceList> VF;
   std::vector<std::vector<uint32_t>> feat;
   std::vector<char> locked;
   std::unordered_set<uint64_t> swapMade;  // feature edges created by extension swaps
