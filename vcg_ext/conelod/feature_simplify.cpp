@@ -335,7 +335,7 @@ Status Work::Build(const IndexedMesh& in, const FeatureSimplifyParams& p) {
 
   // Undirected edges with their faces: (key, face, directed-forward) records sorted by key, then
   // face. Bucketed by the smaller vertex first (in face order), then each small bucket is sorted:
-  // the same order as one global sort, at a fraction of its cost (it was 7 % of a bunny run).
+  // the same order as one global sort, at a fraction of its cost (setup 163 -> 133 M instructions on the bunny).
   struct HalfEdge { uint64_t key; uint32_t face; uint32_t forward; };
   std::vector<uint32_t> start(nv + 1, 0);
   for (const auto& t : F)
