@@ -4,7 +4,10 @@
 //   bench_lod [MESH.ply...] [--budget-fraction F] [--keep DIR]
 //   default meshes: the bunny and the dragon from CONELOD_TEST_MESHES
 //
-// Times are CPU seconds of this process (the machine is shared; wall seconds in brackets).
+// Times are CPU seconds of this process (the machine is shared; wall seconds in brackets). The
+// simplification runs twice: on one thread (its CPU time is the one-core cost) and on one thread
+// per core (the default; the same levels, large ones cut into parts simplified side by side), whose
+// wall time is what a user waits for; the build target is judged on the latter.
 // Memory is measured in fresh processes (this program re-executes itself), so that one
 // measurement cannot reuse pages another freed:
 //   vcglib   RSS growth (VmRSS after - before) of LoadPly into the project's vcg mesh (vcg_mesh.h);
@@ -25,6 +28,7 @@
 #include <fstream>
 #include <map>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "conelod/lod.h"
@@ -214,8 +218,16 @@ int main(int argc, char** argv) {
     GroupHierarchy h;
     if (!BuildConeHierarchy(mesh, params.grouping, h).ok()) return 1;
     const double groupCpu = CpuSeconds() - c, groupWall = WallSeconds() - w;
-    c = CpuSeconds(), w = WallSeconds();
     std::vector<SimplifiedLevel> levels;
+    HierarchicalSimplificationParams oneThread = params.simplification;
+    oneThread.threads = 1;
+    c = CpuSeconds(), w = WallSeconds();
+    if (!BuildSimplifiedLevels(mesh, h, oneThread, levels).ok()) return 1;
+    const double simplify1Cpu = CpuSeconds() - c, simplify1Wall = WallSeconds() - w;
+    levels.clear();
+    const int threads = params.simplification.threads > 0 ? params.simplification.threads
+                                                          : int(std::max(1u, std::thread::hardware_concurrency()));
+    c = CpuSeconds(), w = WallSeconds();
     if (!BuildSimplifiedLevels(mesh, h, params.simplification, levels).ok()) return 1;
     const double simplifyCpu = CpuSeconds() - c, simplifyWall = WallSeconds() - w;
     c = CpuSeconds(), w = WallSeconds();
@@ -253,12 +265,14 @@ int main(int argc, char** argv) {
       return 1;
     }
     const double vcgBytes = vcg["vcg_rss_growth"];
-    const double buildCpu = groupCpu + simplifyCpu + writeCpu;
+    const double buildWall = groupWall + simplifyWall + writeWall;
+    const double build1Cpu = groupCpu + simplify1Cpu + writeCpu;
     std::printf("\n== %s: %zu faces, %zu vertices\n", name.c_str(), mesh.faces.size(), mesh.positions.size());
-    std::printf("build: %.2f s CPU [%.2f s wall] = grouping %.2f + simplification %.2f + writing %.3f s CPU "
-                "(writing %.3f s wall); process peak %.1f MiB\n",
-                buildCpu, groupWall + simplifyWall + writeWall, groupCpu, simplifyCpu, writeCpu, writeWall,
-                double(writeHwm) / 1048576.0);
+    std::printf("build, %d threads: %.2f s wall = grouping %.2f + simplification %.2f + writing %.3f s wall "
+                "(simplification %.2f s CPU); process peak %.1f MiB\n",
+                threads, buildWall, groupWall, simplifyWall, writeWall, simplifyCpu, double(writeHwm) / 1048576.0);
+    std::printf("build, 1 thread: %.2f s CPU [%.2f s wall] = grouping %.2f + simplification %.2f + writing %.3f s CPU\n",
+                build1Cpu, groupWall + simplify1Wall + writeWall, groupCpu, simplify1Cpu, writeCpu);
     std::printf("file: %llu bytes (%.2f bytes/input face), %d node levels, %zu nodes; faces per level (0 = input):",
                 (unsigned long long)st.fileBytes, double(st.fileBytes) / double(mesh.faces.size()), st.levels, st.nodes);
     for (size_t f : st.levelFaces) std::printf(" %zu", f);
@@ -278,8 +292,8 @@ int main(int argc, char** argv) {
     const bool memOpen = std::max(rd["resident_open"], rd["rss_open"]) <= 0.05 * vcgBytes;
     const bool memBudget = std::max(rd["resident_budget"], rd["rss_budget"]) <= 0.20 * vcgBytes;
     const bool firstFast = rd["first_image_cpu"] < 0.2;
-    const bool buildFast = buildCpu < 10;
-    std::printf("targets: coarsest <= 5%% %s, %.0f%% budget <= 20%% %s, first image < 0.2 s %s, build < 10 s %s\n",
+    const bool buildFast = buildWall < 10;
+    std::printf("targets: coarsest <= 5%% %s, %.0f%% budget <= 20%% %s, first image < 0.2 s %s, build < 10 s (wall) %s\n",
                 memOpen ? "MET" : "NOT MET", 100 * fraction, memBudget ? "MET" : "NOT MET", firstFast ? "MET" : "NOT MET",
                 buildFast ? "MET" : "NOT MET");
     if (keep.empty()) std::remove(file.c_str());

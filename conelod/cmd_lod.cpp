@@ -34,11 +34,19 @@ bool ParsePoint(const std::string& text, vcg::Point3d& p) {
 }
 
 int LodBuild(int argc, char** argv) {
-  Args a(argc, argv, With(kGroupingOptions, {"-o", "--level-ratio"}), {"--json", "--strict-greedy"});
+  Args a(argc, argv, With(kGroupingOptions, {"-o", "--level-ratio", "--threads", "--faces-per-part"}), {"--json", "--strict-greedy"});
   LodBuildParams params;
   params.grouping = ReadGroupingParams(a);
   params.simplification.levelRatio = a.num("--level-ratio", params.simplification.levelRatio);
+  const double threads = a.num("--threads", 0);
+  const double facesPerPart = a.num("--faces-per-part", double(params.simplification.facesPerPart));
   if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kLodUsage);
+  if (!(threads >= 0 && threads <= 1024 && threads == std::floor(threads)))
+    return Fail(kUsage, "--threads must be a whole number from 0 (one per core) to 1024");
+  if (!(facesPerPart >= 0 && facesPerPart <= 1e12 && facesPerPart == std::floor(facesPerPart)))
+    return Fail(kUsage, "--faces-per-part must be a whole number >= 0 (0: never cut a level into parts)");
+  params.simplification.threads = int(threads);
+  params.simplification.facesPerPart = size_t(facesPerPart);
   if (a.positional().size() != 1 || !a.has("-o"))
     return Fail(kUsage, std::string("expected IN.ply and -o OUT.clod\n") + kLodUsage);
   const double ratio = params.simplification.levelRatio;
@@ -202,12 +210,16 @@ int LodInfo(int argc, char** argv) {
 }  // namespace
 
 const char* kLodUsage =
-    "conelod lod build IN.ply -o OUT.clod [grouping options] [--level-ratio R] [--json]\n"
+    "conelod lod build IN.ply -o OUT.clod [grouping options] [--level-ratio R] [--threads N]\n"
+    "                  [--faces-per-part N] [--json]\n"
     "conelod lod extract IN.clod --eye X,Y,Z --budget N|P% -o OUT.ply [--no-cull] [--drop-culled] [--json]\n"
     "conelod lod info IN.clod [--json]\n"
     "  build: groups by normal cones (options as for `group`, --strict-greedy included), simplifies\n"
     "  once per level keeping the groups (each level R x the faces of the one below [0.5]) and\n"
-    "  writes the streamable .clod file (format: vcg_ext/conelod/lod_format.md).\n"
+    "  writes the streamable .clod file (format: vcg_ext/conelod/lod_format.md). A level with at\n"
+    "  least 2N faces is cut into parts of about N faces [100000; 0: never] along group contours,\n"
+    "  simplified side by side on --threads threads [0: one per core]; the cut vertices stay put at\n"
+    "  that level. The file does not depend on --threads.\n"
     "  extract: opens the file, refines for a perspective eye at X,Y,Z under a budget of N faces\n"
     "  (or P% of the input's), coarser levels first, adjacent groups at most one level apart,\n"
     "  back-facing groups last (--no-cull: no back-face test), and writes the cut as OUT.ply with\n"

@@ -12,6 +12,7 @@
 #include "conelod/hierarchical_simplification.h"
 #include "conelod/mesh_check.h"
 #include "conelod/pca_partition.h"
+#include "conelod/sampled_distance.h"
 
 namespace conelod {
 namespace cli {
@@ -60,12 +61,16 @@ const char* kSimplifyUsage =
     "  --target-ratio F    target = F x faces (0 < F <= 1)     --max-error E  fraction of bbox diag\n"
     "options (defaults in brackets): --no-condition1 --no-condition2 --lock-boundaries\n"
     "  --quality-thr Q [0.3]  --no-optimal-placement  --preserve-boundary  --boundary-weight W [1]\n"
-    "  --no-preserve-normal (allow face flips)  --level-ratio R [0.5] (--hierarchy)\n";
+    "  --no-preserve-normal (allow face flips)\n"
+    "with --hierarchy: --level-ratio R [0.5]; --faces-per-part N [100000]: a level with at least 2N\n"
+    "  faces is cut into parts along group contours, simplified side by side (0: never);\n"
+    "  --threads N [0: one per core; the result does not depend on it]; --samples N: also the\n"
+    "  sampled Hausdorff distance of each level to the input, N face samples [0: off]\n";
 
 int CmdSimplify(int argc, char** argv) {
   Args a(argc, argv,
          {"-o", "--target-faces", "--target-ratio", "--max-error", "--groups", "--quality-thr", "--boundary-weight",
-          "--level-ratio"},
+          "--level-ratio", "--threads", "--faces-per-part", "--samples"},
          {"--json", "--no-condition1", "--no-condition2", "--lock-boundaries", "--no-optimal-placement",
           "--preserve-boundary", "--no-preserve-normal", "--hierarchy"});
   GroupQemParams p;
@@ -75,6 +80,9 @@ int CmdSimplify(int argc, char** argv) {
   p.qualityThr = a.num("--quality-thr", p.qualityThr);
   p.boundaryWeight = a.num("--boundary-weight", p.boundaryWeight);
   const double levelRatio = a.num("--level-ratio", 0.5);
+  const int threads = a.integer("--threads", 0);
+  const int facesPerPart = a.integer("--faces-per-part", int(HierarchicalSimplificationParams().facesPerPart));
+  const int samples = a.integer("--samples", 0);
   p.condition1 = !a.has("--no-condition1");
   p.condition2 = !a.has("--no-condition2");
   p.lockGroupBoundaries = a.has("--lock-boundaries");
@@ -86,6 +94,10 @@ int CmdSimplify(int argc, char** argv) {
   if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kSimplifyUsage);
   if (a.positional().size() != 1) return Fail(kUsage, std::string("expected one input mesh\n") + kSimplifyUsage);
   if (targetFaces < 0) return Fail(kUsage, "--target-faces must be >= 0");
+  if (threads < 0 || facesPerPart < 0 || samples < 0)
+    return Fail(kUsage, "--threads, --faces-per-part and --samples must be >= 0");
+  if (!hierarchy && (a.has("--threads") || a.has("--faces-per-part") || a.has("--samples")))
+    return Fail(kUsage, "--threads, --faces-per-part and --samples go with --hierarchy");
   if (a.has("--target-ratio") && !(targetRatio > 0 && targetRatio <= 1)) return Fail(kUsage, "--target-ratio must be in (0, 1]");
   if (!hierarchy && !targetFaces && !a.has("--target-ratio") && !a.has("--max-error"))
     return Fail(kUsage, std::string("give --target-faces, --target-ratio or --max-error\n") + kSimplifyUsage);
@@ -149,6 +161,8 @@ int CmdSimplify(int argc, char** argv) {
     HierarchicalSimplificationParams hp;
     hp.qem = p;
     hp.levelRatio = levelRatio;
+    hp.threads = threads;
+    hp.facesPerPart = size_t(facesPerPart);
     std::vector<SimplifiedLevel> levels;
     Timer timer;
     s = BuildSimplifiedLevels(im, h, hp, levels);
@@ -158,19 +172,30 @@ int CmdSimplify(int argc, char** argv) {
     j.beginObject().field("input", input).field("faces_in", im.faceCount()).field("seconds", seconds);
     j.key("levels").beginArray();
     if (!json)
-      std::printf("%s: %zu faces, %d levels in %.3f s\n%5s %8s %8s %8s %8s %8s %9s\n", input.c_str(), im.faceCount(),
-                  int(levels.size()), seconds, "level", "groups", "target", "faces", "split", "vanished", "intact%");
+      std::printf("%s: %zu faces, %d levels in %.3f s\n%5s %8s %8s %8s %8s %8s %9s%s\n", input.c_str(), im.faceCount(),
+                  int(levels.size()), seconds, "level", "groups", "target", "faces", "split", "vanished", "intact%",
+                  samples > 0 ? "  hausdorff%  mean%" : "");
     for (const SimplifiedLevel& L : levels) {
       GroupIntegrity gi;
       MeasureGroupIntegrity(im, h.level(L.level).faceGroup, L.mesh, L.faceGroup, gi);
       j.beginObject().field("level", L.level).field("groups_before", gi.groupsBefore).field("groups_after", gi.groupsAfter)
           .field("target_faces", L.targetFaces).field("faces_out", L.mesh.faceCount())
           .field("groups_split", gi.groupsSplit).field("groups_vanished", gi.groupsVanished);
+      HausdorffResult hd;
+      if (samples > 0) {
+        s = SampledHausdorff(im, L.mesh, samples, hd);
+        if (!s.ok()) return Fail(kBadInput, "distance: " + s.message);
+        j.field("hausdorff", hd.hausdorff).field("mean_distance_from_input", hd.ab.mean)
+            .field("mean_distance_to_input", hd.ba.mean).field("diagonal", hd.diagonal);
+      }
       WriteStats(j, L.stats);
       j.endObject();
       if (!json)
-        std::printf("%5d %8d %8zu %8zu %8d %8d %9.2f\n", L.level, gi.groupsBefore, L.targetFaces, L.mesh.faceCount(),
+        std::printf("%5d %8d %8zu %8zu %8d %8d %9.2f", L.level, gi.groupsBefore, L.targetFaces, L.mesh.faceCount(),
                     gi.groupsSplit, gi.groupsVanished, 100 * gi.intact());
+      if (!json && samples > 0)
+        std::printf("  %10.4f %6.4f", 100 * hd.hausdorff / hd.diagonal, 100 * hd.ab.mean / hd.diagonal);
+      if (!json) std::printf("\n");
       if (a.has("-o")) {
         CMesh copy;
         vcg::tri::Append<CMesh, CMesh>::MeshCopy(copy, mesh);

@@ -583,6 +583,18 @@ def cli_simplify_hierarchy(c):
         ply = read_ply("%s_L%d.ply" % (prefix, lv["level"]))
         assert len(ply["faces"]) == lv["faces_out"] and len(set(ply["quality"])) == lv["groups_after"], lv
     assert levels[-1]["faces_out"] < levels[0]["faces_out"] / 4, levels
+    # Cut into parts (levels of 20,000 faces or more) and measured against the input: every group
+    # intact, the distance grows with the level, and parts on 2 threads give what 1 thread gives.
+    runs = [json.loads(c.conelod("simplify", c.mesh("stanford_bunny_bun_zipper.ply"), "--hierarchy", "--faces-per-part",
+                                 "10000", "--threads", t, "--samples", "20000", "--json").stdout) for t in ("1", "2")]
+    for a, b in zip(runs[0]["levels"], runs[1]["levels"]):
+        assert a["faces_out"] == b["faces_out"] and a["hausdorff"] == b["hausdorff"], (a, b)
+        assert a["groups_split"] == 0 and a["groups_vanished"] == 0, a
+        assert 0 < a["hausdorff"] < 0.05 * a["diagonal"], a
+    mean = [lv["mean_distance_from_input"] for lv in runs[0]["levels"]]
+    assert mean[-1] > 4 * mean[0], mean
+    c.conelod("simplify", c.mesh("stanford_bunny_bun_zipper.ply"), "--target-ratio", "0.5", "--threads", "2",
+              expect=1)  # --threads goes with --hierarchy
 
 
 @case
@@ -1049,6 +1061,21 @@ def cli_lod_round_trip(c):
     human = c.conelod("lod", "extract", clod, "--eye", "0,0.1,0.6", "--budget", "10%", "-o", c.out("h.ply"))
     assert "max level difference" in human.stdout.decode(), human.stdout.decode()
 
+    # Levels cut into parts (here every level of 20,000 faces or more) simplified side by side: the
+    # file does not depend on the number of threads, differs from the uncut one, and still gives the
+    # input back at full budget.
+    files = []
+    for threads in ("1", "3"):
+        files.append(c.out("parts%s.clod" % threads))
+        c.conelod("lod", "build", bunny, "-o", files[-1], "--faces-per-part", "10000", "--threads", threads)
+    parts = open(files[0], "rb").read()
+    assert parts == open(files[1], "rb").read(), "the .clod file depends on --threads"
+    assert parts != open(clod, "rb").read(), "--faces-per-part 10000 should have cut level 1 into parts"
+    r = json.loads(c.conelod("lod", "extract", files[0], "--eye", "0,0.1,0.6", "--budget", "100%", "-o",
+                             c.out("parts_full.ply"), "--json").stdout)
+    assert r["faces"] == 69451 and r["max_level_difference"] == 0, r
+    assert canonical_faces(read_ply(c.out("parts_full.ply"))) == canonical_faces(read_ply(full))
+
 
 @case
 def cli_lod_bad_files(c):
@@ -1099,7 +1126,10 @@ def cli_lod_bad_files(c):
                  ["extract", good, "--eye", "0,0,5", "--budget", "120%", "-o", c.out("x.ply")],
                  ["extract", good, "--budget", "10"], ["build", sphere], ["frobnicate"], [],
                  ["build", sphere, "-o", c.out("r.clod"), "--level-ratio", "0"],
-                 ["build", sphere, "-o", c.out("r.clod"), "--threshold", "-1"]):
+                 ["build", sphere, "-o", c.out("r.clod"), "--threshold", "-1"],
+                 ["build", sphere, "-o", c.out("r.clod"), "--threads", "-2"],
+                 ["build", sphere, "-o", c.out("r.clod"), "--threads", "1.5"],
+                 ["build", sphere, "-o", c.out("r.clod"), "--faces-per-part", "-1"]):
         c.conelod("lod", *args, expect=1)
     # Bad meshes are refused by `lod build`.
     for mesh, message in [("no_faces.ply", "has no faces"), ("nan_vertex.ply", "NaN or infinite")]:

@@ -195,9 +195,12 @@ inline float ToFloat(double x) { return float(std::min(x, double(std::numeric_li
 class Simplifier {
  public:
   Simplifier(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
-             const std::vector<const std::vector<int>*>& coarser, const GroupQemParams& p)
+             const std::vector<const std::vector<int>*>& coarser, const GroupQemParams& p,
+             const GroupQemRegion* region = nullptr)
       : mesh_(mesh), group_(faceGroup), coarser_(coarser), p_(p),
-        groupConstraints_(p.condition1 || p.lockGroupBoundaries) {}
+        groupConstraints_(p.condition1 || p.lockGroupBoundaries),
+        frozen_(region && !region->frozenVertex.empty() ? region->frozenVertex.data() : nullptr),
+        regionDiagonal_(region ? region->diagonal : 0) {}
 
   void init();
   Candidate evaluate(uint32_t a, uint32_t b);  // judge() + counts
@@ -234,7 +237,10 @@ class Simplifier {
   double priorityOf(double error, double quality, uint32_t a, uint32_t b) const;
   float lowerBound(uint32_t a, uint32_t b) const;
   void collapse(const Candidate& c);
-  void pushLazy(uint32_t a, uint32_t b) { heap_.push({lowerBound(a, b), a, b, epoch_ | kLazy}); }
+  bool frozen(uint32_t v) const { return frozen_ && frozen_[v]; }
+  void pushLazy(uint32_t a, uint32_t b) {
+    if (!frozen(a) && !frozen(b)) heap_.push({lowerBound(a, b), a, b, epoch_ | kLazy});
+  }
   void pushEdgesOf(uint32_t v);  // lazy entries for every edge of v, heap order restored
 
   const IndexedMesh& mesh_;
@@ -249,6 +255,8 @@ class Simplifier {
   bool coarserNested_ = false;
   GroupQemParams p_;
   const bool groupConstraints_;
+  const uint8_t* frozen_;         // per vertex, or null: see GroupQemRegion
+  const double regionDiagonal_;   // > 0: the whole mesh's diagonal
 
   Point3d center_;
   double diag_ = 1;
@@ -395,7 +403,7 @@ void Simplifier::init() {
   for (const auto& t : mesh_.faces)
     for (uint32_t v : t) box.Add(Point3d::Construct(mesh_.positions[v]));
   center_ = box.Center();
-  diag_ = box.Diag() > 0 ? box.Diag() : 1.0;
+  diag_ = regionDiagonal_ > 0 ? regionDiagonal_ : (box.Diag() > 0 ? box.Diag() : 1.0);
   // As vcglib: errors below a floor (~1e-6 of the diagonal) are equal, and shorter edges go first.
   floorError_ = 1e-12 * diag_ * diag_;
   pos_.resize(nv);
@@ -544,6 +552,10 @@ Candidate Simplifier::judge(uint32_t a, uint32_t b) {
   for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f)
     if (Contains(faces_[*f], b)) { if (ne < 2) e[ne] = *f; ++ne; }
   if (ne == 0) return c;
+  if (frozen(a) || frozen(b)) {  // shared with another part of the mesh
+    c.verdict = CollapseVerdict::FixedEndpoints;
+    return c;
+  }
   c.verdict = CollapseVerdict::Topology;
   const VertexInfo ia = vs_[a].info, ib = vs_[b].info;
   if (ne > 2 || ((ia.flags | ib.flags) & kNonManifold)) return c;
@@ -739,6 +751,7 @@ Status Simplifier::run(const Progress& progress, GroupQemStats& stats) {
       for (uint32_t u : faces_[*f])
         if (u > v && vs_[u].mark != stamp_) {
           vs_[u].mark = stamp_;
+          if (frozen(v) || frozen(u)) continue;
           heap_.append({lowerBound(v, u), v, u, epoch_ | kLazy});
         }
     if (progress && (v & 0xffff) == 0 && !progress(int(5.0 * v / nv), "Group-preserving QEM: queueing edges")) {
@@ -881,13 +894,19 @@ const char* ToString(CollapseVerdict v) {
 
 Status SimplifyPreservingGroups(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
                                 const GroupQemParams& params, GroupQemResult& out, const Progress& progress,
-                                const std::vector<const std::vector<int>*>& coarserGroups) {
+                                const std::vector<const std::vector<int>*>& coarserGroups,
+                                const GroupQemRegion* region) {
   out = GroupQemResult();
   Status s = ValidateParams(params);
   if (!s.ok()) return s;
   s = CheckInput(mesh, faceGroup, coarserGroups);
   if (!s.ok()) return s;
-  Simplifier simplifier(mesh, faceGroup, coarserGroups, params);
+  if (region && !region->frozenVertex.empty() && region->frozenVertex.size() != mesh.positions.size())
+    return Status::Invalid("the frozen-vertex flags are " + std::to_string(region->frozenVertex.size()) + " for " +
+                           std::to_string(mesh.positions.size()) + " vertices");
+  if (region && !(region->diagonal >= 0 && std::isfinite(region->diagonal)))
+    return Status::Invalid("the region's diagonal must be finite and >= 0");
+  Simplifier simplifier(mesh, faceGroup, coarserGroups, params, region);
   simplifier.init();
   s = simplifier.run(progress, out.stats);
   if (s.ok() || s.code == Status::Code::Cancelled) simplifier.output(out);

@@ -91,16 +91,29 @@ struct GroupQemResult {
   GroupQemStats stats;
 };
 
+// A part of a larger mesh, simplified on its own (hierarchical_simplification.cpp simplifies the
+// parts of a large level side by side). Every face around a vertex that is not frozen is in the
+// part, so its quadric, fan, groups and conditions are the same as in the whole mesh; a frozen
+// vertex (one shared with another part) never moves and no edge at it collapses, so the parts
+// never touch each other's faces.
+struct GroupQemRegion {
+  std::vector<uint8_t> frozenVertex;  // per vertex of the part: 1 = shared with another part
+  double diagonal = 0;                // the whole mesh's bounding-box diagonal (errors and ties are
+                                      // relative to it); 0: the part's own
+};
+
 // Simplifies `mesh` until targetFaces (and/or maxError) is reached or no allowed collapse is left.
 // faceGroup: one group id (>= 0) per face. `coarserGroups` (optional): further groupings whose
 // groups condition 1 must also keep intact (hierarchical simplification: a finer level's groups
 // being intact does not keep their unions connected). On bad input `out` is left empty; on
 // cancellation by `progress` the run stops at once and `out` holds the valid mesh reached so far
 // (Status::Cancelled): callers that promise to leave the user's data untouched just drop it.
+// `region` (optional): `mesh` is a part of a larger mesh (see GroupQemRegion).
 Status SimplifyPreservingGroups(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
                                 const GroupQemParams& params, GroupQemResult& out,
                                 const Progress& progress = Progress(),
-                                const std::vector<const std::vector<int>*>& coarserGroups = {});
+                                const std::vector<const std::vector<int>*>& coarserGroups = {},
+                                const GroupQemRegion* region = nullptr);
 
 // The verdict on one collapse, as the simplifier would judge it on the unmodified mesh (tests,
 // diagnostics). Checks run in this order: topology, lock, condition 1, condition 2, placement

@@ -7,6 +7,13 @@
 // group-preserving collapse of group_qem.h. The groups of level k are preserved by condition 1 for
 // level k AND for every coarser level above it: intact fine groups do not keep their unions (the
 // coarser groups) connected, so without that a later level would start from broken groups.
+//
+// Speed (BEYOND the paper): a large level is cut into parts along the contours of coarse groups
+// (a median cut of the groups' centroids, along the longest or the second-longest axis by level,
+// so that consecutive levels cut in different places) and the parts are simplified on several
+// threads. Only the vertices on the cuts are held in place for that level; every other vertex
+// sees its whole neighbourhood, so its collapses are judged exactly as in one piece. The cut into
+// parts depends on the mesh only, never on the number of threads: the output is deterministic.
 #pragma once
 
 #include <vector>
@@ -22,6 +29,13 @@ struct HierarchicalSimplificationParams {
   GroupQemParams qem;       // conditions and quality options of every level (its targetFaces is ignored)
   double levelRatio = 0.5;  // each level targets this fraction of the faces of the level below
                             // (level 1: of the input), in (0, 1]
+  // A level whose input has at least 2 x facesPerPart faces is cut into parts (2, 4 or 8, about
+  // facesPerPart faces each) along the contours of coarse groups, and the parts are simplified
+  // side by side, each to levelRatio of its faces; the vertices the parts share stay where they
+  // are at that level (the next level cuts elsewhere). 0: never cut.
+  size_t facesPerPart = 100000;
+  int threads = 0;          // threads that simplify the parts; 0: one per core. The result is the
+                            // same whatever the number.
 };
 
 struct SimplifiedLevel {
@@ -34,7 +48,7 @@ struct SimplifiedLevel {
   GroupQemStats stats;
 };
 
-// One SimplifiedLevel per hierarchy level, finest first. A level's face count is at most the one
+// One SimplifiedLevel per hierarchy level, finest first. Progress is reported on the calling thread. A level's face count is at most the one
 // below it (equal when its groups allow no further collapse). On failure or cancellation `out`
 // is left empty.
 Status BuildSimplifiedLevels(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,

@@ -67,7 +67,11 @@ class Encoder {
 
  private:
   template <typename T>
-  void little(T v) { for (size_t i = 0; i < sizeof(T); ++i) bytes.push_back(uint8_t(v >> (8 * i))); }
+  void little(T v) {
+    uint8_t b[sizeof(T)];
+    for (size_t i = 0; i < sizeof(T); ++i) b[i] = uint8_t(v >> (8 * i));
+    bytes.insert(bytes.end(), b, b + sizeof(T));  // one capacity check per field, not per byte
+  }
 };
 
 // Reads little-endian fields from a byte range; reading past the end sets `overrun` and yields 0.

@@ -237,6 +237,48 @@ TEST(Simplify, KeepsEveryGroupWhereThePlainCollapseBreaksSome) {
   EXPECT_GT(gi.groupsSplit + gi.groupsVanished, 0) << "the plain collapse should break groups at this size";
 }
 
+// A part of a larger mesh: the frozen vertices (shared with other parts) neither move nor go, and
+// the rest simplifies as usual.
+TEST(Simplify, FrozenVerticesOfARegionStayWhereTheyAre) {
+  const IndexedMesh m = test::Sphere(4);  // 2048 faces
+  std::vector<int> g(m.faces.size(), 0);
+  GroupQemRegion region;
+  region.frozenVertex.resize(m.positions.size());
+  size_t frozen = 0;
+  for (size_t v = 0; v < m.positions.size(); ++v) {
+    region.frozenVertex[v] = std::fabs(m.positions[v][2]) < 0.15f;  // a band around the equator
+    frozen += region.frozenVertex[v];
+  }
+  ASSERT_GT(frozen, 20u);
+  region.diagonal = 10;  // a larger whole mesh
+  GroupQemParams p;
+  p.targetFaces = 400;
+  GroupQemResult r;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r, Progress(), {}, &region).ok());
+  ExpectValidOutput(m, r);
+  EXPECT_LE(r.mesh.faces.size(), 400u) << "the caps have room to simplify";
+  std::vector<int> kept(m.positions.size(), -1);
+  for (size_t i = 0; i < r.sourceVertex.size(); ++i) kept[r.sourceVertex[i]] = int(i);
+  for (size_t v = 0; v < m.positions.size(); ++v) {
+    if (!region.frozenVertex[v]) continue;
+    ASSERT_GE(kept[v], 0) << "frozen vertex " << v << " was removed";
+    EXPECT_EQ(r.mesh.positions[size_t(kept[v])], m.positions[v]) << "frozen vertex " << v << " moved";
+  }
+  // Errors are fractions of the region's diagonal (10), not of the sphere's own (2 sqrt 3).
+  GroupQemRegion ownDiagonal = region;
+  ownDiagonal.diagonal = 0;
+  GroupQemResult own;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, own, Progress(), {}, &ownDiagonal).ok());
+  EXPECT_NEAR(r.stats.maxCollapseError / own.stats.maxCollapseError, 2 * std::sqrt(3.0) / 10, 0.05);
+
+  GroupQemRegion bad;
+  bad.frozenVertex.resize(3);
+  EXPECT_EQ(SimplifyPreservingGroups(m, g, p, r, Progress(), {}, &bad).code, Status::Code::InvalidInput);
+  bad.frozenVertex.clear();
+  bad.diagonal = std::nan("");
+  EXPECT_EQ(SimplifyPreservingGroups(m, g, p, r, Progress(), {}, &bad).code, Status::Code::InvalidInput);
+}
+
 TEST(Simplify, LockedContoursDoNotChange) {
   const IndexedMesh m = test::Sphere(3);
   std::vector<int> g;
