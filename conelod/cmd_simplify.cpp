@@ -62,8 +62,8 @@ const char* kSimplifyUsage =
     "options (defaults in brackets): --no-condition1 --no-condition2 --lock-boundaries\n"
     "  --quality-thr Q [0.3]  --no-optimal-placement  --preserve-boundary  --boundary-weight W [1]\n"
     "  --no-preserve-normal (allow face flips)\n"
-    "with --hierarchy: --level-ratio R [0.5]; --faces-per-part N [100000]: a level with at least 2N\n"
-    "  faces is cut into parts along group contours, simplified side by side (0: never);\n"
+    "with --hierarchy: --level-ratio R [0.5]; --faces-per-part P [100000]: a level of at least 2P\n"
+    "  faces is cut into 2-8 parts along group contours, simplified side by side (0: never);\n"
     "  --threads N [0: one per core; the result does not depend on it]; --samples N: also the\n"
     "  sampled Hausdorff distance of each level to the input, N face samples [0: off]\n";
 
