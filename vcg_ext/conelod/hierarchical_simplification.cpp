@@ -90,6 +90,11 @@ void SimplifyPart(const IndexedMesh& below, const std::vector<std::vector<int>>&
   try {
     for (uint32_t f = 0; f < partOfFace.size(); ++f)
       if (partOfFace[f] == index) part.faces.push_back(f);
+    if (part.faces.empty()) {  // fewer groups than parts: nothing to do here
+      part.result.stats.stop = GroupQemStats::Stop::TargetReached;
+      part.percent.store(100, std::memory_order_relaxed);
+      return;
+    }
     std::vector<uint32_t> local(below.positions.size(), kNone);
     for (uint32_t f : part.faces)
       for (uint32_t v : below.faces[f]) local[v] = 0;

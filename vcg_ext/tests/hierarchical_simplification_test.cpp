@@ -123,6 +123,24 @@ TEST(BuildSimplifiedLevels, PartsSideBySide) {
   EXPECT_FALSE(otherThread) << "progress was called from a worker thread";
 }
 
+// A flat grid: few, large groups (possibly one), so a cut may leave parts without faces.
+TEST(BuildSimplifiedLevels, PartsOfAMeshWithFewGroups) {
+  const IndexedMesh m = test::Grid(40);  // 3200 faces
+  GroupHierarchy h;
+  ASSERT_TRUE(BuildConeHierarchy(m, ConeGroupingParams(), h).ok());
+  HierarchicalSimplificationParams p;
+  p.facesPerPart = 200;  // 8 parts wanted at level 1
+  std::vector<SimplifiedLevel> levels;
+  ASSERT_TRUE(BuildSimplifiedLevels(m, h, p, levels).ok());
+  ExpectLevelsValid(m, h, levels);
+  EXPECT_LE(levels.front().mesh.faces.size(), m.faces.size() / 2 + 8);
+  // And every face in one group.
+  GroupHierarchy one = h;
+  for (int k = 1; k <= one.levelCount(); ++k) std::fill(one.levels[size_t(k - 1)].faceGroup.begin(), one.levels[size_t(k - 1)].faceGroup.end(), 0);
+  ASSERT_TRUE(BuildSimplifiedLevels(m, one, p, levels).ok());
+  EXPECT_LE(levels.front().mesh.faces.size(), m.faces.size() / 2);
+}
+
 TEST(BuildSimplifiedLevels, BadInputAndCancellation) {
   const IndexedMesh m = test::Sphere(3);
   GroupHierarchy h;
