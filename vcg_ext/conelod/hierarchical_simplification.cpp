@@ -2,10 +2,11 @@
 #include "conelod/hierarchical_simplification.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <numeric>
+#include <system_error>
 #include <thread>
 
 #include <vcg/space/box3.h>
@@ -176,7 +177,14 @@ Status SimplifyInParts(const IndexedMesh& below, const std::vector<std::vector<i
   int threads = params.threads > 0 ? params.threads : int(std::thread::hardware_concurrency());
   threads = std::max(1, std::min(threads, parts));
   std::vector<std::thread> pool;
-  for (int t = 0; t < threads; ++t) pool.emplace_back(work);
+  for (int t = 0; t < threads; ++t) {
+    try {
+      pool.emplace_back(work);
+    } catch (const std::system_error&) {  // no more threads to be had: the started ones do the rest
+      break;
+    }
+  }
+  if (pool.empty()) work();  // not even one: this thread does it all
   // Progress and cancellation from this thread only (MeshLab's callbacks are not thread-safe).
   if (progress) {
     for (;;) {
