@@ -141,6 +141,17 @@ ConeGroupingParams ReadGroupingParams(Args& a) {
   return p;
 }
 
+std::string ReadPartsOptions(Args& a, HierarchicalSimplificationParams& p) {
+  const int threads = a.integer("--threads", p.threads);
+  const int facesPerPart = a.integer("--faces-per-part", int(p.facesPerPart));
+  if (!a.ok()) return a.error();
+  if (threads < 0 || threads > 1024) return "--threads must be a whole number from 0 (one per core) to 1024";
+  if (facesPerPart < 0) return "--faces-per-part must be a whole number >= 0 (0: never cut a level into parts)";
+  p.threads = threads;
+  p.facesPerPart = size_t(facesPerPart);
+  return "";
+}
+
 std::vector<std::string> With(std::vector<std::string> v, const std::vector<std::string>& more) {
   v.insert(v.end(), more.begin(), more.end());
   return v;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "conelod/cone_grouping.h"
+#include "conelod/hierarchical_simplification.h"
 #include "conelod/indexed_mesh.h"
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"
@@ -85,6 +86,10 @@ int Fail(int code, const std::string& message);  // prints "conelod: message" to
 // The grouping options shared by `group`, `cull-cost` and `lod build`.
 extern const std::vector<std::string> kGroupingOptions;
 ConeGroupingParams ReadGroupingParams(Args& a);
+// --threads N (0..1024, 0: one per core) and --faces-per-part P (>= 0, 0: never cut) of the
+// hierarchical simplification, shared by `lod build` and `simplify --hierarchy`, into `p`.
+// Returns "" or a usage message.
+std::string ReadPartsOptions(Args& a, HierarchicalSimplificationParams& p);
 std::vector<std::string> With(std::vector<std::string> v, const std::vector<std::string>& more);  // v + more
 
 }  // namespace cli

@@ -38,15 +38,9 @@ int LodBuild(int argc, char** argv) {
   LodBuildParams params;
   params.grouping = ReadGroupingParams(a);
   params.simplification.levelRatio = a.num("--level-ratio", params.simplification.levelRatio);
-  const double threads = a.num("--threads", 0);
-  const double facesPerPart = a.num("--faces-per-part", double(params.simplification.facesPerPart));
+  const std::string partsError = ReadPartsOptions(a, params.simplification);
   if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kLodUsage);
-  if (!(threads >= 0 && threads <= 1024 && threads == std::floor(threads)))
-    return Fail(kUsage, "--threads must be a whole number from 0 (one per core) to 1024");
-  if (!(facesPerPart >= 0 && facesPerPart <= 1e12 && facesPerPart == std::floor(facesPerPart)))
-    return Fail(kUsage, "--faces-per-part must be a whole number >= 0 (0: never cut a level into parts)");
-  params.simplification.threads = int(threads);
-  params.simplification.facesPerPart = size_t(facesPerPart);
+  if (!partsError.empty()) return Fail(kUsage, partsError);
   if (a.positional().size() != 1 || !a.has("-o"))
     return Fail(kUsage, std::string("expected IN.ply and -o OUT.clod\n") + kLodUsage);
   const double ratio = params.simplification.levelRatio;

@@ -80,8 +80,8 @@ int CmdSimplify(int argc, char** argv) {
   p.qualityThr = a.num("--quality-thr", p.qualityThr);
   p.boundaryWeight = a.num("--boundary-weight", p.boundaryWeight);
   const double levelRatio = a.num("--level-ratio", 0.5);
-  const int threads = a.integer("--threads", 0);
-  const int facesPerPart = a.integer("--faces-per-part", int(HierarchicalSimplificationParams().facesPerPart));
+  HierarchicalSimplificationParams hp;
+  const std::string partsError = ReadPartsOptions(a, hp);
   const int samples = a.integer("--samples", 0);
   p.condition1 = !a.has("--no-condition1");
   p.condition2 = !a.has("--no-condition2");
@@ -94,8 +94,8 @@ int CmdSimplify(int argc, char** argv) {
   if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kSimplifyUsage);
   if (a.positional().size() != 1) return Fail(kUsage, std::string("expected one input mesh\n") + kSimplifyUsage);
   if (targetFaces < 0) return Fail(kUsage, "--target-faces must be >= 0");
-  if (threads < 0 || facesPerPart < 0 || samples < 0)
-    return Fail(kUsage, "--threads, --faces-per-part and --samples must be >= 0");
+  if (!partsError.empty()) return Fail(kUsage, partsError);
+  if (samples < 0) return Fail(kUsage, "--samples must be >= 0");
   if (!hierarchy && (a.has("--threads") || a.has("--faces-per-part") || a.has("--samples")))
     return Fail(kUsage, "--threads, --faces-per-part and --samples go with --hierarchy");
   if (a.has("--target-ratio") && !(targetRatio > 0 && targetRatio <= 1)) return Fail(kUsage, "--target-ratio must be in (0, 1]");
@@ -158,11 +158,8 @@ int CmdSimplify(int argc, char** argv) {
   }
 
   if (hierarchy) {
-    HierarchicalSimplificationParams hp;
     hp.qem = p;
     hp.levelRatio = levelRatio;
-    hp.threads = threads;
-    hp.facesPerPart = size_t(facesPerPart);
     std::vector<SimplifiedLevel> levels;
     Timer timer;
     s = BuildSimplifiedLevels(im, h, hp, levels);
