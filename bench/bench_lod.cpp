@@ -28,7 +28,6 @@
 #include <fstream>
 #include <map>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "conelod/lod.h"
@@ -225,8 +224,7 @@ int main(int argc, char** argv) {
     if (!BuildSimplifiedLevels(mesh, h, oneThread, levels).ok()) return 1;
     const double simplify1Cpu = CpuSeconds() - c, simplify1Wall = WallSeconds() - w;
     levels.clear();
-    const int threads = params.simplification.threads > 0 ? params.simplification.threads
-                                                          : int(std::max(1u, std::thread::hardware_concurrency()));
+    const int threads = SimplificationThreads(params.simplification);
     c = CpuSeconds(), w = WallSeconds();
     if (!BuildSimplifiedLevels(mesh, h, params.simplification, levels).ok()) return 1;
     const double simplifyCpu = CpuSeconds() - c, simplifyWall = WallSeconds() - w;

@@ -161,10 +161,7 @@ Status SimplifyInParts(const IndexedMesh& below, const std::vector<std::vector<i
       if (firstPart[v] == 0xff) firstPart[v] = partOfFace[f];
       else if (firstPart[v] != partOfFace[f]) shared[v] = 1;
     }
-  vcg::Box3d box;
-  for (const auto& t : below.faces)
-    for (uint32_t v : t) box.Add(vcg::Point3d::Construct(below.positions[v]));
-  const double diagonal = box.Diag();
+  const double diagonal = UsedVertexBox(below).Diag();
 
   std::vector<Part> part(static_cast<size_t>(parts));
   for (Part& p : part) p.params = params.qem;
@@ -174,8 +171,7 @@ Status SimplifyInParts(const IndexedMesh& below, const std::vector<std::vector<i
     for (int i; (i = next.fetch_add(1)) < parts;)
       SimplifyPart(below, groups, partOfFace, shared, i, params.levelRatio, diagonal, cancel, part[size_t(i)]);
   };
-  int threads = params.threads > 0 ? params.threads : int(std::thread::hardware_concurrency());
-  threads = std::max(1, std::min(threads, parts));
+  const int threads = std::min(SimplificationThreads(params), parts);
   std::vector<std::thread> pool;
   for (int t = 0; t < threads; ++t) {
     try {
@@ -252,6 +248,10 @@ Status SimplifyInParts(const IndexedMesh& below, const std::vector<std::vector<i
 }
 
 }  // namespace
+
+int SimplificationThreads(const HierarchicalSimplificationParams& params) {
+  return params.threads > 0 ? params.threads : std::max(1, int(std::thread::hardware_concurrency()));
+}
 
 Status BuildSimplifiedLevels(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
                              const HierarchicalSimplificationParams& params, std::vector<SimplifiedLevel>& out,

@@ -48,6 +48,9 @@ struct SimplifiedLevel {
   GroupQemStats stats;
 };
 
+// The threads the parts of a level run on: params.threads, or one per core when it is 0.
+int SimplificationThreads(const HierarchicalSimplificationParams& params);
+
 // One SimplifiedLevel per hierarchy level, finest first. Progress is reported on the calling thread. A level's face count is at most the one
 // below it (equal when its groups allow no further collapse). On failure or cancellation `out`
 // is left empty.
