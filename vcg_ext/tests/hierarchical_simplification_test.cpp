@@ -54,12 +54,18 @@ TEST(BuildSimplifiedLevels, SphereLevelsAreCoarserAndIntact) {
   EXPECT_LE(levels.front().mesh.faces.size(), m.faces.size() / 2);
 }
 
-TEST(BuildSimplifiedLevels, Bunny) {
+// The bunny and its normal-cone hierarchy (default parameters).
+void LoadBunnyWithHierarchy(IndexedMesh& m, GroupHierarchy& h) {
   CMesh cm;
   ASSERT_EQ(LoadPly(cm, test::MeshPath("stanford_bunny_bun_zipper.ply")), "");
-  const IndexedMesh m = ToIndexedMesh(cm);
-  GroupHierarchy h;
+  m = ToIndexedMesh(cm);
   ASSERT_TRUE(BuildConeHierarchy(m, ConeGroupingParams(), h).ok());
+}
+
+TEST(BuildSimplifiedLevels, Bunny) {
+  IndexedMesh m;
+  GroupHierarchy h;
+  ASSERT_NO_FATAL_FAILURE(LoadBunnyWithHierarchy(m, h));
   std::vector<SimplifiedLevel> levels;
   ASSERT_TRUE(BuildSimplifiedLevels(m, h, HierarchicalSimplificationParams(), levels).ok());
   ExpectLevelsValid(m, h, levels);
@@ -78,11 +84,9 @@ bool SameLevels(const std::vector<SimplifiedLevel>& a, const std::vector<Simplif
 // Large levels are cut into parts simplified side by side: the groups stay intact, the face
 // counts come close to those of one piece, and the result is the same on 1 or 3 threads.
 TEST(BuildSimplifiedLevels, PartsSideBySide) {
-  CMesh cm;
-  ASSERT_EQ(LoadPly(cm, test::MeshPath("stanford_bunny_bun_zipper.ply")), "");
-  const IndexedMesh m = ToIndexedMesh(cm);
+  IndexedMesh m;
   GroupHierarchy h;
-  ASSERT_TRUE(BuildConeHierarchy(m, ConeGroupingParams(), h).ok());
+  ASSERT_NO_FATAL_FAILURE(LoadBunnyWithHierarchy(m, h));
   HierarchicalSimplificationParams p;
   p.facesPerPart = 5000;  // 8 parts at levels 1-2, 4 at level 3, 2 at level 4
   p.threads = 1;
