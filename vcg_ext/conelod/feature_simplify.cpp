@@ -19,6 +19,7 @@ namespace {
 using P3 = vcg::Point3d;
 constexpr double kPi = 3.14159265358979323846;
 constexpr uint32_t kNone = UINT32_MAX;
+constexpr size_t kNoTri = SIZE_MAX;  // no triangle to try first
 
 inline uint64_t EdgeKey(uint32_t a, uint32_t b) {
   return a < b ? (uint64_t(a) << 32) | b : (uint64_t(b) << 32) | a;
@@ -91,15 +92,29 @@ Tri MakeTri(const P3& a, const P3& b, const P3& c, uint32_t face) {
   return {a, b, c, len > 0 ? n / len : P3(0, 0, 0), face};
 }
 
-// Squared distance from p to the nearest of `tris` (index in *nearest); stops once within `enough2`.
-double DistanceToTris2(const P3& p, const std::vector<Tri>& tris, double enough2, size_t* nearest = nullptr) {
+// Squared distance from p to the nearest of `tris`, trying tris[first] before the others (which
+// follow in order; kNoTri: none first): a good first guess lets the plane test skip more of the
+// others. With `enough2` > 0 the search stops once within it (the value is then some distance
+// <= enough2). With `nearest`, the index of the nearest triangle, ties to the lowest index (as a
+// plain scan in order finds it).
+double DistanceToTris2(const P3& p, const std::vector<Tri>& tris, size_t first, double enough2,
+                       size_t* nearest = nullptr) {
   double best = std::numeric_limits<double>::infinity();
+  if (first < tris.size()) {
+    const Tri& t = tris[first];
+    best = PointTriangleDistance2(p, t.a, t.b, t.c);
+    if (nearest) *nearest = first;
+    if (best <= enough2) return best;
+  }
   for (size_t i = 0; i < tris.size(); ++i) {
+    if (i == first) continue;
     const Tri& t = tris[i];
     const double h = (p - t.a) * t.n;
-    if (h * h >= best) continue;
+    // Below `first` an equal distance wins (the lower index), above it only a smaller one.
+    const bool below = i < first && first < tris.size();
+    if (below ? h * h > best : h * h >= best) continue;
     const double d2 = PointTriangleDistance2(p, t.a, t.b, t.c);
-    if (d2 < best) {
+    if (below ? d2 <= best : d2 < best) {
       best = d2;
       if (nearest) *nearest = i;
       if (best <= enough2) break;
@@ -577,6 +592,7 @@ class Simplifier {
   std::vector<uint32_t> newFanIds_;   // faces around `to` after a collapse (GatherNewFan)
   std::vector<Tri> newFan_, oldFan_;  // the same as triangles / the faces around `from` before it
   std::vector<uint32_t> scratchPts_;  // original vertices to re-assign after a collapse
+  std::vector<size_t> scratchFirst_;  // for each, the triangle of newFan_ to try first
   std::vector<uint32_t> scratchRing_;
   std::vector<uint32_t> link_;   // link_[x] == linkStamp_: x is a neighbour of linkFrom_
   uint32_t linkStamp_ = 0, linkFrom_ = kNone;
@@ -766,14 +782,16 @@ double Simplifier::OutwardError(uint32_t from, uint32_t to, double limit) {
     oldFan_.clear();
     for (const FanFace& ff : fan_) oldFan_.push_back(MakeTri(w_.P[from], w_.P[ff.x], w_.P[ff.y], ff.face));
   }
-  auto distToOldFan2 = [&](const P3& p) { return DistanceToTris2(p, oldFan_, room2); };
+  // Each sample is tried first against the old face its new face replaces (oldFan_ is in fan_'s
+  // order): mostly the nearest, so the search stops there.
   const P3& u = w_.P[to];
-  for (const FanFace& ff : fan_) {
+  for (size_t i = 0; i < fan_.size(); ++i) {
+    const FanFace& ff = fan_[i];
     if (ff.x == to || ff.y == to) continue;
     const P3 &px = w_.P[ff.x], &py = w_.P[ff.y];
-    worst2 = std::max(worst2, distToOldFan2((u + px + py) / 3.0));
+    worst2 = std::max(worst2, DistanceToTris2((u + px + py) / 3.0, oldFan_, i, room2));
     // New edges (to, x): each is the x edge of one new face (the y edge of its neighbour).
-    worst2 = std::max(worst2, distToOldFan2((u + px) * 0.5));
+    worst2 = std::max(worst2, DistanceToTris2((u + px) * 0.5, oldFan_, i, room2));
   }
   return std::max(old, std::sqrt(worst2));
 }
@@ -788,10 +806,19 @@ void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
     newFan_.clear();
     for (uint32_t f : newFanIds_)
       newFan_.push_back(MakeTri(Corner(f, 0, from, to), Corner(f, 1, from, to), Corner(f, 2, from, to), f));
+    // The points to re-assign, each with the index in newFan_ of the new version of the face it
+    // answered for (where to look first; none for `from` and for the faces that die).
     scratchPts_.clear();
+    scratchFirst_.clear();
     scratchPts_.push_back(from);
+    scratchFirst_.push_back(kNoTri);
+    size_t next = newFanIds_.size() - (w.VF[from].size() - size_t(w.EdgeFaces(from, to, nullptr, 0)));
     for (uint32_t f : w.VF[from]) {
-      scratchPts_.insert(scratchPts_.end(), owned_[f].begin(), owned_[f].end());
+      const size_t first = w.Contains(f, to) ? kNoTri : next++;
+      for (uint32_t x : owned_[f]) {
+        scratchPts_.push_back(x);
+        scratchFirst_.push_back(first);
+      }
       owned_[f].clear();
     }
   }
@@ -828,9 +855,10 @@ void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
   if (track) {
     // Each removed original vertex answers to its nearest face of the new fan.
     double worst = 0;
-    for (uint32_t x : scratchPts_) {
+    for (size_t i = 0; i < scratchPts_.size(); ++i) {
+      const uint32_t x = scratchPts_[i];
       size_t nearest = 0;
-      const double d2 = DistanceToTris2(w.P[x], newFan_, 0.0, &nearest);
+      const double d2 = DistanceToTris2(w.P[x], newFan_, scratchFirst_[i], 0.0, &nearest);
       if (!newFan_.empty()) owned_[newFan_[nearest].face].push_back(x);
       worst = std::max(worst, std::sqrt(d2));
     }
