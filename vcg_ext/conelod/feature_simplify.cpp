@@ -979,6 +979,15 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
     heap.pop();
     const uint32_t v = e.v;
     if (e.stamp != stamp_[v]) continue;  // stale
+    // The vertex most likely next (the new top of this queue): its record now, its faces at the
+    // end of this iteration, so that its misses overlap this evaluation.
+    uint32_t ahead = kNone;
+    if (!heap.empty()) {
+      ahead = heap.top().v;
+      const char* rec = reinterpret_cast<const char*>(&w.VF[ahead]);
+      __builtin_prefetch(rec);
+      __builtin_prefetch(rec + 64);
+    }
     const VertexClass c = w.cls[v];
     if (c != (takeK ? VertexClass::Smooth : VertexClass::FeatureLine)) continue;
     queued_[v] = 0;
@@ -1067,6 +1076,14 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
       deferredMark_[v] = 1;
     }
     reached = target > 0 && faces_ <= target;
+    if (ahead != kNone && w.cls[ahead] != VertexClass::Unused)
+      for (uint32_t f : w.VF[ahead]) {
+        __builtin_prefetch(&w.F[f]);
+        if (track_) {
+          __builtin_prefetch(&owned_[f]);
+          __builtin_prefetch(&outError_[f]);
+        }
+      }
   }
   out.finalErrorBound = track_ ? bound_ : 0.0;
 
