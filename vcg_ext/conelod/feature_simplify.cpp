@@ -569,6 +569,11 @@ class Simplifier {
     bool operator<(const Deferred& o) const { return error > o.error; }  // min-heap
   };
   void Push(uint32_t v, bool recompute);
+  void PrefetchRecord(uint32_t v) const {  // the vertex's faces (FaceList: two cache lines)
+    const char* rec = reinterpret_cast<const char*>(&w_.VF[v]);
+    __builtin_prefetch(rec);
+    __builtin_prefetch(rec + 64);
+  }
   P3 Corner(uint32_t f, int k, uint32_t from, uint32_t to) const {
     const uint32_t x = w_.F[f][size_t(k)];
     return w_.P[x == from ? to : x];
@@ -587,11 +592,13 @@ class Simplifier {
   bool track_ = false;           // original vertices are tracked (an error bound is in force)
   bool grow_ = false;            // the bound grows until the target face count is reached
   double bound_ = std::numeric_limits<double>::infinity();
-  std::vector<std::vector<uint32_t>> owned_;  // face -> removed original vertices it answers for
+  // face -> the removed original vertices it answers for, as positions (vertices never move, and
+  // the error checks then read them in a row instead of looking each up in P)
+  std::vector<std::vector<P3>> owned_;
   std::vector<double> outError_;  // face -> bound on the distance from its points to the input
   std::vector<uint32_t> newFanIds_;   // faces around `to` after a collapse (GatherNewFan)
   std::vector<Tri> newFan_, oldFan_;  // the same as triangles / the faces around `from` before it
-  std::vector<uint32_t> scratchPts_;  // original vertices to re-assign after a collapse
+  std::vector<P3> scratchPts_;        // original vertices to re-assign after a collapse
   std::vector<size_t> scratchFirst_;  // for each, the triangle of newFan_ to try first
   std::vector<uint32_t> scratchRing_;
   std::vector<uint32_t> link_;   // link_[x] == linkStamp_: x is a neighbour of linkFrom_
@@ -755,11 +762,11 @@ double Simplifier::CollapseError(uint32_t from, uint32_t to, double d, double li
   if (worst > limit) return worst;
   for (uint32_t f : w_.VF[from]) {
     const bool survives = !w_.Contains(f, to);
-    for (uint32_t x : owned_[f]) {
-      if (survives && PointTriangleDistance2(w_.P[x], Corner(f, 0, from, to), Corner(f, 1, from, to),
+    for (const P3& x : owned_[f]) {
+      if (survives && PointTriangleDistance2(x, Corner(f, 0, from, to), Corner(f, 1, from, to),
                                              Corner(f, 2, from, to)) <= limit2)
         continue;
-      worst = std::max(worst, std::sqrt(DistanceToNewFan2(w_.P[x], from, to, limit2)));
+      worst = std::max(worst, std::sqrt(DistanceToNewFan2(x, from, to, limit2)));
     }
   }
   return worst;
@@ -810,12 +817,12 @@ void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
     // answered for (where to look first; none for `from` and for the faces that die).
     scratchPts_.clear();
     scratchFirst_.clear();
-    scratchPts_.push_back(from);
+    scratchPts_.push_back(w.P[from]);
     scratchFirst_.push_back(kNoTri);
     size_t next = newFanIds_.size() - (w.VF[from].size() - size_t(w.EdgeFaces(from, to, nullptr, 0)));
     for (uint32_t f : w.VF[from]) {
       const size_t first = w.Contains(f, to) ? kNoTri : next++;
-      for (uint32_t x : owned_[f]) {
+      for (const P3& x : owned_[f]) {
         scratchPts_.push_back(x);
         scratchFirst_.push_back(first);
       }
@@ -827,6 +834,8 @@ void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
     for (uint32_t x : w.F[f])
       if (x != from && x != to && std::find(scratchRing_.begin(), scratchRing_.end(), x) == scratchRing_.end())
         scratchRing_.push_back(x);
+  // The curvatures of the ring are recomputed below (Push): ask for the records now.
+  for (uint32_t x : scratchRing_) PrefetchRecord(x);
   // Feature edges: from's line edges (from, other) become (to, other).
   if (w.cls[from] == VertexClass::FeatureLine) {
     const uint32_t other = w.feat[from][0] == to ? w.feat[from][1] : w.feat[from][0];
@@ -852,13 +861,19 @@ void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
   }
   w.VF[from].clear();
   w.cls[from] = VertexClass::Unused;
+  // ... and for their faces' corners and angles, read by Push after the re-assignment below.
+  for (uint32_t x : scratchRing_)
+    for (uint32_t f : w.VF[x]) {
+      __builtin_prefetch(&w.F[f]);
+      __builtin_prefetch(&w.faceAngles[f]);
+    }
   if (track) {
     // Each removed original vertex answers to its nearest face of the new fan.
     double worst = 0;
     for (size_t i = 0; i < scratchPts_.size(); ++i) {
-      const uint32_t x = scratchPts_[i];
+      const P3& x = scratchPts_[i];
       size_t nearest = 0;
-      const double d2 = DistanceToTris2(w.P[x], newFan_, scratchFirst_[i], 0.0, &nearest);
+      const double d2 = DistanceToTris2(x, newFan_, scratchFirst_[i], 0.0, &nearest);
       if (!newFan_.empty()) owned_[newFan_[nearest].face].push_back(x);
       worst = std::max(worst, std::sqrt(d2));
     }
@@ -984,9 +999,7 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
     uint32_t ahead = kNone;
     if (!heap.empty()) {
       ahead = heap.top().v;
-      const char* rec = reinterpret_cast<const char*>(&w.VF[ahead]);
-      __builtin_prefetch(rec);
-      __builtin_prefetch(rec + 64);
+      PrefetchRecord(ahead);
     }
     const VertexClass c = w.cls[v];
     if (c != (takeK ? VertexClass::Smooth : VertexClass::FeatureLine)) continue;
@@ -1022,6 +1035,8 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
           if (std::find(nbrs.begin(), nbrs.end(), ff.y) == nbrs.end()) nbrs.push_back(ff.y);
         }
       }
+      // The topology check and the error checks of the chosen edge read its end's record.
+      for (uint32_t u : nbrs) PrefetchRecord(u);
       // Edges that cannot come within the tie of the best d so far skip the exact distances
       // (d = infinity); they are measured below only if the topology refuses the best edge.
       double best = std::numeric_limits<double>::infinity();
