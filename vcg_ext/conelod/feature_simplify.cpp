@@ -588,6 +588,7 @@ class Simplifier {
   const FeatureSimplifyParams& p_;
   std::priority_queue<Entry> heapK_, heapM_;
   std::priority_queue<Deferred> deferred_;
+  std::vector<Deferred> admitted_;  // RaiseBound's vertices to put back in their queues
   std::vector<uint32_t> stamp_;
   bool track_ = false;           // original vertices are tracked (an error bound is in force)
   bool grow_ = false;            // the bound grows until the target face count is reached
@@ -932,14 +933,26 @@ bool Simplifier::RaiseBound() {
     next = std::min(next, p_.maxErrorDistance);
   }
   bound_ = next;
+  admitted_.clear();
   while (!deferred_.empty() && deferred_.top().error <= bound_) {
     const Deferred d = deferred_.top();
     deferred_.pop();
-    if (d.stamp == stamp_[d.v] && !queued_[d.v]) {
-      const bool same = !fanChanged_[d.v];
-      Push(d.v, false);
-      if (same) retry_[d.v] = d.to;
-    }
+    if (d.stamp == stamp_[d.v] && !queued_[d.v]) admitted_.push_back(d);
+  }
+  // Pushed in the same order; a vertex whose fan changed has its curvature recomputed, which
+  // reads its faces and their angles, scattered: asked for a few vertices ahead.
+  constexpr size_t kRecordAhead = 8, kFacesAhead = 4;
+  for (size_t i = 0; i < admitted_.size(); ++i) {
+    if (i + kRecordAhead < admitted_.size()) PrefetchRecord(admitted_[i + kRecordAhead].v);
+    if (i + kFacesAhead < admitted_.size() && fanChanged_[admitted_[i + kFacesAhead].v])
+      for (uint32_t f : w_.VF[admitted_[i + kFacesAhead].v]) {
+        __builtin_prefetch(&w_.F[f]);
+        __builtin_prefetch(&w_.faceAngles[f]);
+      }
+    const Deferred& d = admitted_[i];
+    const bool same = !fanChanged_[d.v];
+    Push(d.v, false);
+    if (same) retry_[d.v] = d.to;
   }
   return true;
 }
