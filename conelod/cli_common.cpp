@@ -141,11 +141,19 @@ ConeGroupingParams ReadGroupingParams(Args& a) {
   return p;
 }
 
-std::string ReadPartsOptions(Args& a, HierarchicalSimplificationParams& p) {
-  const int threads = a.integer("--threads", p.threads);
-  const int facesPerPart = a.integer("--faces-per-part", int(p.facesPerPart));
+std::string ReadThreadsOption(Args& a, int fallback, int& threads) {
+  threads = a.integer("--threads", fallback);
   if (!a.ok()) return a.error();
   if (threads < 0 || threads > 1024) return "--threads must be a whole number from 0 (one per core) to 1024";
+  return "";
+}
+
+std::string ReadPartsOptions(Args& a, HierarchicalSimplificationParams& p) {
+  int threads = 0;
+  std::string err = ReadThreadsOption(a, p.threads, threads);
+  if (!err.empty()) return err;
+  const int facesPerPart = a.integer("--faces-per-part", int(p.facesPerPart));
+  if (!a.ok()) return a.error();
   if (facesPerPart < 0) return "--faces-per-part must be a whole number >= 0 (0: never cut a level into parts)";
   p.threads = threads;
   p.facesPerPart = size_t(facesPerPart);

@@ -86,8 +86,10 @@ int Fail(int code, const std::string& message);  // prints "conelod: message" to
 // The grouping options shared by `group`, `cull-cost` and `lod build`.
 extern const std::vector<std::string> kGroupingOptions;
 ConeGroupingParams ReadGroupingParams(Args& a);
-// --threads N (0..1024, 0: one per core) and --faces-per-part P (>= 0, 0: never cut) of the
-// hierarchical simplification, shared by `lod build` and `simplify --hierarchy`, into `p`.
+// --threads N (0 = one per core, at most 1024; `fallback` when absent): "" or the error to print.
+std::string ReadThreadsOption(Args& a, int fallback, int& threads);
+// --threads N (as above) and --faces-per-part P (>= 0, 0: never cut) of the hierarchical
+// simplification, shared by `lod build` and `simplify --hierarchy`, into `p`.
 // Returns "" or a usage message.
 std::string ReadPartsOptions(Args& a, HierarchicalSimplificationParams& p);
 std::vector<std::string> With(std::vector<std::string> v, const std::vector<std::string>& more);  // v + more

@@ -40,7 +40,7 @@ FeatureSimplifyParams ReadFeatureParams(Args& a) {
 const char* kFeatureSimplifyUsage =
     "conelod feature-simplify IN.ply (--target-faces N | --target-percent P | --max-error E[%]) [-o OUT.ply]\n"
     "                         [--angle DEG] [--no-extend] [--feature-curvature K] [--curvature-threshold T]\n"
-    "                         [--mark] [--line-tolerance PCT] [--json]\n"
+    "                         [--mark] [--line-tolerance PCT] [--threads N] [--json]\n"
     "  Feature-preserving simplification by edge operations (Hayano-Matsuoka-Ueda): feature edges\n"
     "  (dihedral angle <= DEG [135]; 180 = flat, 90 = cube edge) and feature vertices are kept,\n"
     "  feature lines are simplified only along themselves. Stops at N faces (or P % of the input),\n"
@@ -49,7 +49,9 @@ const char* kFeatureSimplifyUsage =
     "  vertices; --curvature-threshold T: vertices with |K| D^2 or |M| D >= T are not removed\n"
     "  (D = diagonal; 0 = off). --mark writes vertex colours (red = feature line, blue = feature\n"
     "  vertex) and vertex quality = class (0 smooth, 1 line, 2 feature). The report counts the\n"
-    "  output's feature edges lying on the input's feature lines (within PCT % of D [0.5]).\n";
+    "  output's feature edges lying on the input's feature lines (within PCT % of D [0.5]).\n"
+    "  --threads N: threads for the first pass of the growing bound (0 = one per core [0]); the\n"
+    "  output is the same for any N.\n";
 
 const char* kFeatureEdgesUsage =
     "conelod feature-edges IN.ply [--reference REF.ply] [--angle DEG] [--no-extend] [--line-tolerance PCT] [--json]\n"
@@ -61,12 +63,16 @@ const char* kFeatureEdgesUsage =
 int CmdFeatureSimplify(int argc, char** argv) {
   std::vector<std::string> valueOptions = kFeatureOptions;
   valueOptions.insert(valueOptions.end(),
-                      {"-o", "--target-faces", "--target-percent", "--max-error", "--line-tolerance"});
+                      {"-o", "--target-faces", "--target-percent", "--max-error", "--line-tolerance", "--threads"});
   Args a(argc, argv, valueOptions, {"--json", "--no-extend", "--mark", "--no-grow"});
   FeatureSimplifyParams p = ReadFeatureParams(a);
   const double targetPercent = a.num("--target-percent", 0);
   const int targetFaces = a.integer("--target-faces", 0);
   const double lineTolPct = a.num("--line-tolerance", 0.5);
+  int threads = 0;
+  const std::string threadsError = ReadThreadsOption(a, 0, threads);
+  if (!threadsError.empty()) return Fail(kUsage, threadsError + "\n" + kFeatureSimplifyUsage);
+  p.threads = unsigned(threads);
   if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kFeatureSimplifyUsage);
   if (a.positional().size() != 1) return Fail(kUsage, std::string("expected one input mesh\n") + kFeatureSimplifyUsage);
   if (!a.has("--target-faces") && !a.has("--target-percent") && !a.has("--max-error"))

@@ -2,10 +2,12 @@
 #include "conelod/feature_simplify.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <memory>
 #include <queue>
+#include <thread>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -529,10 +531,32 @@ void Work::FillInfo() {
   std::sort(info.featureEdges.begin(), info.featureEdges.end());
 }
 
-// §3.3-3.4: the collapse engine on a Work.
-class Simplifier {
+// Per-face tracking of the error bound, shared by the engine and its evaluators.
+struct TrackingStore {
+  // face -> the removed original vertices it answers for, as positions (vertices never move, and
+  // the error checks then read them in a row instead of looking each up in P)
+  std::vector<std::vector<P3>> ownedStore;
+  std::vector<double> outErrorStore;  // face -> bound on the distance from its points to the input
+};
+
+// What evaluating a vertex decided: nothing to do (no allowed edge), collapse it along `to`, or
+// let it wait until the bound reaches `error`.
+struct Evaluation {
+  enum Kind : uint8_t { None, Collapse, Defer };
+  Kind kind = None;
+  uint32_t to = kNone;
+  double d = 0;       // Collapse: the error distance d of the edge
+  double outErr = 0;  // Collapse: the outward error estimate of the new faces
+  double error = 0;   // Defer: the smallest bound under which the edge `to` may fit
+};
+
+// §3.3-3.4, the half of the engine that reads: ranks a vertex's edges and measures the error of
+// the best one. It writes only its own scratch, so several evaluators may run at once while
+// nothing is collapsed.
+class Evaluator {
  public:
-  Simplifier(Work& w, const FeatureSimplifyParams& p) : w_(w), p_(p), link_(w.P.size(), 0) {}
+  Evaluator(Work& w, const FeatureSimplifyParams& p, TrackingStore& t)
+      : w_(w), p_(p), owned_(t.ownedStore), outError_(t.outErrorStore), link_(w.P.size(), 0) {}
 
   // Checks the half-edge collapse from -> to; on success fills d (the paper's error distance:
   // from `from` to the nearest new face) and q (worst shape among the new faces). With
@@ -544,31 +568,20 @@ class Simplifier {
                         double cutoff = std::numeric_limits<double>::infinity());
   CollapseRefusal CheckTopology(uint32_t from, uint32_t to);
   double NewFanQuality(uint32_t from, uint32_t to);
-  void Collapse(uint32_t from, uint32_t to, double outErr);
-  Status Run(FeatureSimplifyResult& out, const Progress& progress);
+  // The paper's rule under the error bound `bound` (tracked when `track`): the allowed edge of v
+  // with the smallest d, applied if its error fits, else v waits. `retryTo`: the edge known from
+  // an earlier evaluation with the same fan (kNone: rank all edges). A function of the mesh
+  // around v and of the tracking there.
+  Evaluation Evaluate(uint32_t v, uint32_t retryTo, double bound, bool track);
+  // Forgets the cached fan and link (the mesh changed since they were built).
+  void ResetCaches() { fanOf_ = oldFanOf_ = linkFrom_ = kNone; }
 
- private:
-  struct Entry {
-    float key;
-    uint32_t v;
-    uint32_t stamp;
-    bool operator<(const Entry& o) const { return key > o.key; }  // min-heap
-  };
+ protected:
   struct FanFace {
     uint32_t face, x, y;  // the face is (from, x, y) in its own order
     P3 normal;            // its (unnormalised) normal before the collapse
   };
   void BuildFan(uint32_t from);
-  std::vector<FanFace> fan_;
-  uint32_t fanOf_ = kNone, oldFanOf_ = kNone;
-  struct Deferred {
-    double error;  // the smallest error bound under which one of v's collapses fits
-    uint32_t v;
-    uint32_t stamp;
-    uint32_t to;   // the edge v -> to that was tried (the smallest d the topology allowed)
-    bool operator<(const Deferred& o) const { return error > o.error; }  // min-heap
-  };
-  void Push(uint32_t v, bool recompute);
   void PrefetchRecord(uint32_t v) const {  // the vertex's faces (FaceList: two cache lines)
     const char* rec = reinterpret_cast<const char*>(&w_.VF[v]);
     __builtin_prefetch(rec);
@@ -582,10 +595,50 @@ class Simplifier {
   double DistanceToNewFan2(const P3& p, uint32_t from, uint32_t to, double enough2) const;
   double CollapseError(uint32_t from, uint32_t to, double d, double limit);
   double OutwardError(uint32_t from, uint32_t to, double limit);
-  bool RaiseBound();
 
   Work& w_;
   const FeatureSimplifyParams& p_;
+  std::vector<std::vector<P3>>& owned_;  // the TrackingStore's
+  std::vector<double>& outError_;
+  std::vector<FanFace> fan_;
+  uint32_t fanOf_ = kNone, oldFanOf_ = kNone;
+  std::vector<uint32_t> newFanIds_;  // faces around `to` after a collapse (GatherNewFan)
+  std::vector<Tri> oldFan_;          // the faces around `from` before it, as triangles
+  std::vector<uint32_t> link_;       // link_[x] == linkStamp_: x is a neighbour of linkFrom_
+  uint32_t linkStamp_ = 0, linkFrom_ = kNone;
+  struct Candidate { double d, q; uint32_t to; };
+  std::vector<Candidate> cands_;
+  std::vector<uint32_t> nbrs_;
+};
+
+// §3.3-3.4: the collapse engine on a Work.
+class Simplifier : private TrackingStore, public Evaluator {
+ public:
+  Simplifier(Work& w, const FeatureSimplifyParams& p) : TrackingStore(), Evaluator(w, p, *this) {}
+
+  void Collapse(uint32_t from, uint32_t to, double outErr);
+  Status Run(FeatureSimplifyResult& out, const Progress& progress);
+
+ private:
+  struct Entry {
+    float key;
+    uint32_t v;
+    uint32_t stamp;
+    bool operator<(const Entry& o) const { return key > o.key; }  // min-heap
+  };
+  struct Deferred {
+    double error;  // the smallest error bound under which one of v's collapses fits
+    uint32_t v;
+    uint32_t stamp;
+    uint32_t to;   // the edge v -> to that was tried (the smallest d the topology allowed)
+    bool operator<(const Deferred& o) const { return error > o.error; }  // min-heap
+  };
+  void Push(uint32_t v, bool recompute);
+  bool RaiseBound();
+  template <class Admit>
+  void FirstPassAhead(unsigned threads, const Admit& admit);
+  void InvalidateAhead(uint32_t from, uint32_t to);
+
   std::priority_queue<Entry> heapK_, heapM_;
   std::priority_queue<Deferred> deferred_;
   std::vector<Deferred> admitted_;  // RaiseBound's vertices to put back in their queues
@@ -593,17 +646,10 @@ class Simplifier {
   bool track_ = false;           // original vertices are tracked (an error bound is in force)
   bool grow_ = false;            // the bound grows until the target face count is reached
   double bound_ = std::numeric_limits<double>::infinity();
-  // face -> the removed original vertices it answers for, as positions (vertices never move, and
-  // the error checks then read them in a row instead of looking each up in P)
-  std::vector<std::vector<P3>> owned_;
-  std::vector<double> outError_;  // face -> bound on the distance from its points to the input
-  std::vector<uint32_t> newFanIds_;   // faces around `to` after a collapse (GatherNewFan)
-  std::vector<Tri> newFan_, oldFan_;  // the same as triangles / the faces around `from` before it
+  std::vector<Tri> newFan_;           // the faces around `to` after a collapse, as triangles
   std::vector<P3> scratchPts_;        // original vertices to re-assign after a collapse
   std::vector<size_t> scratchFirst_;  // for each, the triangle of newFan_ to try first
   std::vector<uint32_t> scratchRing_;
-  std::vector<uint32_t> link_;   // link_[x] == linkStamp_: x is a neighbour of linkFrom_
-  uint32_t linkStamp_ = 0, linkFrom_ = kNone;
   std::vector<uint32_t> visit_;  // visit_[v] == mark_: seen in the current collapse
   uint32_t mark_ = 0;
   std::vector<char> queued_;     // v has a valid entry in its queue
@@ -613,13 +659,19 @@ class Simplifier {
   std::vector<char> deferredMark_;  // v waits in deferred_ for a larger bound (its stored error may
                                     // be stale once its neighbourhood changes: it is re-evaluated
                                     // when the bound reaches it)
+  // The first pass evaluated ahead (FirstPassAhead): every vertex's first evaluation, under the
+  // first bound, depends on the input around it only. aheadStamp_[v]: the queue entry it is for
+  // (kNone: none, or no longer valid); a collapse invalidates those within two rings of it.
+  std::vector<Evaluation> ahead_;
+  std::vector<uint32_t> aheadStamp_;
+  size_t aheadLeft_ = 0;
   size_t faces_ = 0;
   double maxD_ = 0, maxTracked_ = 0;
 };
 
 // The faces around `from` as (face, x, y, old normal) with (from, x, y) in the face's order:
 // built once for all candidate edges of `from`.
-void Simplifier::BuildFan(uint32_t from) {
+void Evaluator::BuildFan(uint32_t from) {
   if (fanOf_ == from) return;
   fanOf_ = from;
   fan_.clear();
@@ -631,8 +683,8 @@ void Simplifier::BuildFan(uint32_t from) {
   }
 }
 
-CollapseRefusal Simplifier::Check(uint32_t from, uint32_t to, double* dOut, double* qOut, bool topology,
-                                  double cutoff) {
+CollapseRefusal Evaluator::Check(uint32_t from, uint32_t to, double* dOut, double* qOut, bool topology,
+                                 double cutoff) {
   Work& w = w_;
   if (from == to) return CollapseRefusal::NotAnEdge;
   BuildFan(from);
@@ -690,7 +742,7 @@ CollapseRefusal Simplifier::Check(uint32_t from, uint32_t to, double* dOut, doub
 }
 
 // The worst shape among the faces (to, x, y) that replace (from, x, y).
-double Simplifier::NewFanQuality(uint32_t from, uint32_t to) {
+double Evaluator::NewFanQuality(uint32_t from, uint32_t to) {
   BuildFan(from);
   double q = 1;
   for (const FanFace& ff : fan_)
@@ -700,7 +752,7 @@ double Simplifier::NewFanQuality(uint32_t from, uint32_t to) {
 
 // The link condition (the common neighbours of `from` and `to` are the vertices opposite their
 // edge) and no pinch of the border.
-CollapseRefusal Simplifier::CheckTopology(uint32_t from, uint32_t to) {
+CollapseRefusal Evaluator::CheckTopology(uint32_t from, uint32_t to) {
   Work& w = w_;
   uint32_t ef[3];
   const int ne = w.EdgeFaces(from, to, ef, 3);
@@ -733,7 +785,7 @@ CollapseRefusal Simplifier::CheckTopology(uint32_t from, uint32_t to) {
 
 // The faces around `to` after the collapse: to's own faces that stay, then the modified faces
 // of `from` (from -> to). As face ids for the one-off checks, as triangles for the re-assignment.
-void Simplifier::GatherNewFan(uint32_t from, uint32_t to) {
+void Evaluator::GatherNewFan(uint32_t from, uint32_t to) {
   newFanIds_.clear();
   for (uint32_t f : w_.VF[to])
     if (!w_.Contains(f, from)) newFanIds_.push_back(f);
@@ -741,7 +793,7 @@ void Simplifier::GatherNewFan(uint32_t from, uint32_t to) {
     if (!w_.Contains(f, to)) newFanIds_.push_back(f);
 }
 
-double Simplifier::DistanceToNewFan2(const P3& p, uint32_t from, uint32_t to, double enough2) const {
+double Evaluator::DistanceToNewFan2(const P3& p, uint32_t from, uint32_t to, double enough2) const {
   double best = std::numeric_limits<double>::infinity();
   for (uint32_t f : newFanIds_) {
     best = std::min(best, PointTriangleDistance2(p, Corner(f, 0, from, to), Corner(f, 1, from, to),
@@ -755,7 +807,7 @@ double Simplifier::DistanceToNewFan2(const P3& p, uint32_t from, uint32_t to, do
 // fan: exact when above `limit`, some value <= limit otherwise (points within the limit stop
 // their search early). `from` itself comes first (its distance to the nearest new face, d, is
 // known), then each point is tried first against the new version of the face it answered for.
-double Simplifier::CollapseError(uint32_t from, uint32_t to, double d, double limit) {
+double Evaluator::CollapseError(uint32_t from, uint32_t to, double d, double limit) {
   GatherNewFan(from, to);
   if (newFanIds_.empty()) return std::numeric_limits<double>::infinity();
   const double limit2 = limit * limit;
@@ -778,7 +830,7 @@ double Simplifier::CollapseError(uint32_t from, uint32_t to, double d, double li
 // (centroid and the midpoints of the new edges) against the old faces around `from`, plus the
 // bound those old faces already carried. Sampled, so an estimate; accumulated, so conservative
 // along a chain of collapses. Returns early (some value > limit) once over `limit`.
-double Simplifier::OutwardError(uint32_t from, uint32_t to, double limit) {
+double Evaluator::OutwardError(uint32_t from, uint32_t to, double limit) {
   BuildFan(from);
   double old = 0;
   for (uint32_t f : w_.VF[from]) old = std::max(old, outError_[f]);
@@ -802,6 +854,85 @@ double Simplifier::OutwardError(uint32_t from, uint32_t to, double limit) {
     worst2 = std::max(worst2, DistanceToTris2((u + px) * 0.5, oldFan_, i, room2));
   }
   return std::max(old, std::sqrt(worst2));
+}
+
+Evaluation Evaluator::Evaluate(uint32_t v, uint32_t retryTo, double bound, bool track) {
+  Work& w = w_;
+  const VertexClass c = w.cls[v];
+  const double tie = 1e-9 * w.diag;
+  // Candidate edges: all of them for V_K, the two line edges for V_M (or the one edge known).
+  std::vector<Candidate>& cands = cands_;
+  cands.clear();
+  if (retryTo != kNone) {
+    double d = 0;
+    const uint32_t u = retryTo;
+    if (Check(v, u, &d, nullptr, false) == CollapseRefusal::None && CheckTopology(v, u) == CollapseRefusal::None)
+      cands.push_back({d, 1.0, u});
+  }
+  if (cands.empty()) {
+    std::vector<uint32_t>& nbrs = nbrs_;
+    nbrs.clear();
+    if (c == VertexClass::FeatureLine) {
+      nbrs = w.feat[v];
+    } else {
+      BuildFan(v);
+      for (const FanFace& ff : fan_) {
+        if (std::find(nbrs.begin(), nbrs.end(), ff.x) == nbrs.end()) nbrs.push_back(ff.x);
+        if (std::find(nbrs.begin(), nbrs.end(), ff.y) == nbrs.end()) nbrs.push_back(ff.y);
+      }
+    }
+    // The topology check and the error checks of the chosen edge read its end's record.
+    for (uint32_t u : nbrs) PrefetchRecord(u);
+    // Edges that cannot come within the tie of the best d so far skip the exact distances
+    // (d = infinity); they are measured below only if the topology refuses the best edge.
+    double best = std::numeric_limits<double>::infinity();
+    for (uint32_t u : nbrs) {
+      double d = 0;
+      if (Check(v, u, &d, nullptr, false, best + tie) == CollapseRefusal::None) {
+        cands.push_back({d, -1.0, u});
+        best = std::min(best, d);
+      }
+    }
+  }
+  Evaluation ev;
+  if (cands.empty()) return ev;
+  // Smallest error distance d (Fig. 8); near-ties (flat regions) go to the better triangle shape.
+  double dMin = std::numeric_limits<double>::infinity();
+  for (const Candidate& cd : cands) dMin = std::min(dMin, cd.d);
+  for (Candidate& cd : cands)
+    if (cd.d <= dMin + tie) cd.q = NewFanQuality(v, cd.to);
+  auto byDistance = [tie](const Candidate& a, const Candidate& b) {
+    if (std::abs(a.d - b.d) > tie) return a.d < b.d;
+    return a.q > b.q;
+  };
+  std::sort(cands.begin(), cands.end(), byDistance);
+  for (size_t i = 0; i < cands.size(); ++i) {
+    if (i == 1 && !std::isfinite(cands.back().d)) {
+      // The topology refused the best edge: measure the edges the cutoff skipped, rank again.
+      for (size_t j = 1; j < cands.size(); ++j)
+        if (!std::isfinite(cands[j].d)) Check(v, cands[j].to, &cands[j].d, nullptr, false);
+      std::sort(cands.begin() + 1, cands.end(), byDistance);
+    }
+    const Candidate& cd = cands[i];
+    // The paper's rule: the edge with the smallest d (among those the topology allows) is the
+    // one; under an error bound it is applied or the vertex waits for a larger bound.
+    if (CheckTopology(v, cd.to) != CollapseRefusal::None) continue;
+    double outErr = 0;
+    if (track) {
+      const double err = CollapseError(v, cd.to, cd.d, bound);
+      if (err > bound) { ev.kind = Evaluation::Defer; ev.to = cd.to; ev.error = err; return ev; }
+      outErr = OutwardError(v, cd.to, bound);
+      if (outErr > bound) { ev.kind = Evaluation::Defer; ev.to = cd.to; ev.error = outErr; return ev; }
+    }
+    ev.kind = Evaluation::Collapse;
+    ev.to = cd.to;
+    ev.d = cd.d;
+    ev.outErr = outErr;
+    return ev;
+  }
+  ev.kind = Evaluation::Defer;  // every edge refused by the topology: nothing to wait for
+  ev.error = std::numeric_limits<double>::infinity();
+  return ev;
 }
 
 void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
@@ -862,6 +993,7 @@ void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
   }
   w.VF[from].clear();
   w.cls[from] = VertexClass::Unused;
+  if (aheadLeft_ > 0) InvalidateAhead(from, to);
   // ... and for their faces' corners and angles, read by Push after the re-assignment below.
   for (uint32_t x : scratchRing_)
     for (uint32_t f : w.VF[x]) {
@@ -957,6 +1089,75 @@ bool Simplifier::RaiseBound() {
   return true;
 }
 
+// Evaluates every queued vertex that `admit`s (the curvature threshold) under the first bound,
+// in index order, split over `threads` threads (this one included). Each writes only ahead_ and
+// aheadStamp_ of its own vertices and its evaluator's scratch; nothing is collapsed meanwhile.
+// If a thread fails, nothing made ahead is used.
+template <class Admit>
+void Simplifier::FirstPassAhead(unsigned threads, const Admit& admit) {
+  const uint32_t nv = uint32_t(w_.P.size());
+  ahead_.assign(nv, Evaluation());
+  aheadStamp_.assign(nv, kNone);
+  std::vector<uint32_t> batch;
+  for (uint32_t v = 0; v < nv; ++v)
+    if (queued_[v] && (w_.cls[v] == VertexClass::Smooth || w_.cls[v] == VertexClass::FeatureLine) && admit(v))
+      batch.push_back(v);
+  const size_t n = batch.size();
+  constexpr size_t kChunk = 512;
+  threads = unsigned(std::min<size_t>(threads, (n + kChunk - 1) / kChunk));
+  std::atomic<size_t> next(0);
+  std::atomic<bool> failed(false);
+  auto work = [&](Evaluator& ev) {
+    try {
+      for (size_t begin; (begin = next.fetch_add(kChunk)) < n;)
+        for (size_t i = begin; i < std::min(n, begin + kChunk); ++i) {
+          const uint32_t v = batch[i];
+          ahead_[v] = ev.Evaluate(v, kNone, bound_, track_);
+          aheadStamp_[v] = stamp_[v];
+        }
+    } catch (...) {
+      failed = true;
+    }
+  };
+  std::vector<Evaluator> helpers;
+  std::vector<std::thread> pool;
+  try {
+    helpers.reserve(threads > 1 ? threads - 1 : 0);
+    for (unsigned t = 1; t < threads; ++t) {
+      helpers.emplace_back(w_, p_, static_cast<TrackingStore&>(*this));
+      pool.emplace_back(work, std::ref(helpers.back()));
+    }
+  } catch (...) {
+    // no (more) threads: the ones started and this one share the batch
+  }
+  work(*this);
+  for (std::thread& t : pool) t.join();
+  ResetCaches();
+  if (failed) {
+    aheadStamp_.assign(nv, kNone);
+    aheadLeft_ = 0;
+    return;
+  }
+  aheadLeft_ = n;
+}
+
+// After a collapse: the evaluations made ahead that it may have changed — every vertex within two
+// rings of `to` (from's old ring is in to's new one), since an evaluation reads its vertex's fan
+// and its neighbours' fans, feature edges and tracking — are no longer used.
+void Simplifier::InvalidateAhead(uint32_t from, uint32_t to) {
+  auto drop = [&](uint32_t x) {
+    if (aheadStamp_[x] == kNone) return;
+    aheadStamp_[x] = kNone;
+    --aheadLeft_;
+  };
+  drop(from);
+  drop(to);
+  for (uint32_t f : w_.VF[to])
+    for (uint32_t y : w_.F[f])
+      for (uint32_t g : w_.VF[y])
+        for (uint32_t z : w_.F[g]) drop(z);
+}
+
 Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
   Work& w = w_;
   const size_t nv = w.P.size();
@@ -989,10 +1190,20 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
     Push(v, true);
   }
   const double d2 = w.diag * w.diag, d1 = w.diag;
+  if (grow_ && p_.firstPassAhead) {
+    // Every vertex's first evaluation (a sixth of the time) depends on the input only: made
+    // here, in memory order and on every core, and used in the queue's order unless a collapse
+    // has come within two rings of the vertex by then (the output is the same either way).
+    unsigned threads = p_.threads;
+    if (threads == 0) threads = std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
+    FirstPassAhead(threads, [&](uint32_t v) {
+      const VertexClass c = w.cls[v];
+      if (p_.curvatureThreshold <= 0) return true;
+      const double curv = c == VertexClass::Smooth ? std::abs(w.K[v]) * d2 : std::abs(w.M[v]) * d1;
+      return curv < p_.curvatureThreshold;
+    });
+  }
   size_t popsK = 0, popsM = 0, iter = 0;
-  struct Candidate { double d, q; uint32_t to; };
-  std::vector<Candidate> cands;
-  std::vector<uint32_t> nbrs;
   bool reached = target > 0 && faces_ <= target;
   while (!reached) {
     const bool haveK = !heapK_.empty(), haveM = !heapM_.empty();
@@ -1009,10 +1220,13 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
     if (e.stamp != stamp_[v]) continue;  // stale
     // The vertex most likely next (the new top of this queue): its record now, its faces at the
     // end of this iteration, so that its misses overlap this evaluation.
-    uint32_t ahead = kNone;
+    // A vertex readmitted with its fan unchanged retries one known edge: its end's record too.
+    uint32_t ahead = kNone, aheadTo = kNone;
     if (!heap.empty()) {
       ahead = heap.top().v;
       PrefetchRecord(ahead);
+      aheadTo = retry_[ahead];
+      if (aheadTo != kNone) PrefetchRecord(aheadTo);
     }
     const VertexClass c = w.cls[v];
     if (c != (takeK ? VertexClass::Smooth : VertexClass::FeatureLine)) continue;
@@ -1027,81 +1241,26 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
       const double curv = c == VertexClass::Smooth ? std::abs(w.K[v]) * d2 : std::abs(w.M[v]) * d1;
       if (curv >= p_.curvatureThreshold) continue;
     }
-    const double tie = 1e-9 * w.diag;
-    // Candidate edges: all of them for V_K, the two line edges for V_M (or the one edge known).
-    cands.clear();
-    if (retry_[v] != kNone) {
-      double d = 0;
-      const uint32_t u = retry_[v];
-      retry_[v] = kNone;
-      if (Check(v, u, &d, nullptr, false) == CollapseRefusal::None && CheckTopology(v, u) == CollapseRefusal::None)
-        cands.push_back({d, 1.0, u});
+    // The evaluation made ahead in the first pass, if nothing it read has changed since.
+    Evaluation ev;
+    if (aheadLeft_ > 0 && aheadStamp_[v] != kNone) {
+      --aheadLeft_;
+      const bool same = aheadStamp_[v] == e.stamp && retry_[v] == kNone;
+      aheadStamp_[v] = kNone;
+      ev = same ? ahead_[v] : Evaluate(v, retry_[v], bound_, track_);
+    } else {
+      ev = Evaluate(v, retry_[v], bound_, track_);
     }
-    if (cands.empty()) {
-      nbrs.clear();
-      if (c == VertexClass::FeatureLine) {
-        nbrs = w.feat[v];
-      } else {
-        BuildFan(v);
-        for (const FanFace& ff : fan_) {
-          if (std::find(nbrs.begin(), nbrs.end(), ff.x) == nbrs.end()) nbrs.push_back(ff.x);
-          if (std::find(nbrs.begin(), nbrs.end(), ff.y) == nbrs.end()) nbrs.push_back(ff.y);
-        }
-      }
-      // The topology check and the error checks of the chosen edge read its end's record.
-      for (uint32_t u : nbrs) PrefetchRecord(u);
-      // Edges that cannot come within the tie of the best d so far skip the exact distances
-      // (d = infinity); they are measured below only if the topology refuses the best edge.
-      double best = std::numeric_limits<double>::infinity();
-      for (uint32_t u : nbrs) {
-        double d = 0;
-        if (Check(v, u, &d, nullptr, false, best + tie) == CollapseRefusal::None) {
-          cands.push_back({d, -1.0, u});
-          best = std::min(best, d);
-        }
-      }
-    }
-    if (cands.empty()) continue;
-    // Smallest error distance d (Fig. 8); near-ties (flat regions) go to the better triangle shape.
-    double dMin = std::numeric_limits<double>::infinity();
-    for (const Candidate& cd : cands) dMin = std::min(dMin, cd.d);
-    for (Candidate& cd : cands)
-      if (cd.d <= dMin + tie) cd.q = NewFanQuality(v, cd.to);
-    auto byDistance = [tie](const Candidate& a, const Candidate& b) {
-      if (std::abs(a.d - b.d) > tie) return a.d < b.d;
-      return a.q > b.q;
-    };
-    std::sort(cands.begin(), cands.end(), byDistance);
-    double smallestError = std::numeric_limits<double>::infinity();
-    uint32_t triedTo = kNone;
-    bool done = false;
-    for (size_t i = 0; i < cands.size(); ++i) {
-      if (i == 1 && !std::isfinite(cands.back().d)) {
-        // The topology refused the best edge: measure the edges the cutoff skipped, rank again.
-        for (size_t j = 1; j < cands.size(); ++j)
-          if (!std::isfinite(cands[j].d)) Check(v, cands[j].to, &cands[j].d, nullptr, false);
-        std::sort(cands.begin() + 1, cands.end(), byDistance);
-      }
-      const Candidate& cd = cands[i];
-      // The paper's rule: the edge with the smallest d (among those the topology allows) is the
-      // one; under an error bound it is applied or the vertex waits for a larger bound.
-      if (CheckTopology(v, cd.to) != CollapseRefusal::None) continue;
-      double outErr = 0;
-      if (track_) {
-        const double err = CollapseError(v, cd.to, cd.d, bound_);
-        if (err > bound_) { smallestError = err; triedTo = cd.to; break; }
-        outErr = OutwardError(v, cd.to, bound_);
-        if (outErr > bound_) { smallestError = outErr; triedTo = cd.to; break; }
-      }
-      maxD_ = std::max(maxD_, cd.d);
-      Collapse(v, cd.to, outErr);
+    retry_[v] = kNone;
+    if (ev.kind == Evaluation::Collapse) {
+      maxD_ = std::max(maxD_, ev.d);
+      Collapse(v, ev.to, ev.outErr);
       ++out.collapses;
-      done = true;
-      break;
-    }
-    if (!done && grow_ && std::isfinite(smallestError)) {
-      deferred_.push({smallestError, v, stamp_[v], triedTo});
+    } else if (ev.kind == Evaluation::Defer && grow_ && std::isfinite(ev.error)) {
+      deferred_.push({ev.error, v, stamp_[v], ev.to});
       deferredMark_[v] = 1;
+    } else if (ev.kind == Evaluation::None) {
+      continue;
     }
     reached = target > 0 && faces_ <= target;
     if (ahead != kNone && w.cls[ahead] != VertexClass::Unused)
@@ -1112,6 +1271,8 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
           __builtin_prefetch(&outError_[f]);
         }
       }
+    if (aheadTo != kNone && w.cls[aheadTo] != VertexClass::Unused)
+      for (uint32_t f : w.VF[aheadTo]) __builtin_prefetch(&w.F[f]);
   }
   out.finalErrorBound = track_ ? bound_ : 0.0;
 
