@@ -1187,7 +1187,7 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
   for (uint32_t v = 0; v < nv; ++v) {
     if (w.cls[v] == VertexClass::Smooth) ++nK;
     if (w.cls[v] == VertexClass::FeatureLine) ++nM;
-    Push(v, true);
+    Push(v, false);  // Classify has just computed K and M
   }
   const double d2 = w.diag * w.diag, d1 = w.diag;
   if (grow_ && p_.firstPassAhead) {
