@@ -636,7 +636,7 @@ class Simplifier : private TrackingStore, public Evaluator {
   void Push(uint32_t v, bool recompute);
   bool RaiseBound();
   template <class Admit>
-  void FirstPassAhead(unsigned threads, const Admit& admit);
+  bool FirstPassAhead(unsigned threads, const Admit& admit, const Progress& progress);
   void InvalidateAhead(uint32_t from, uint32_t to);
 
   std::priority_queue<Entry> heapK_, heapM_;
@@ -1092,9 +1092,10 @@ bool Simplifier::RaiseBound() {
 // Evaluates every queued vertex that `admit`s (the curvature threshold) under the first bound,
 // in index order, split over `threads` threads (this one included). Each writes only ahead_ and
 // aheadStamp_ of its own vertices and its evaluator's scratch; nothing is collapsed meanwhile.
-// If a thread fails, nothing made ahead is used.
+// If a thread fails, nothing made ahead is used. Progress is reported (and cancellation seen)
+// on this thread only, between chunks; false: cancelled.
 template <class Admit>
-void Simplifier::FirstPassAhead(unsigned threads, const Admit& admit) {
+bool Simplifier::FirstPassAhead(unsigned threads, const Admit& admit, const Progress& progress) {
   const uint32_t nv = uint32_t(w_.P.size());
   ahead_.assign(nv, Evaluation());
   aheadStamp_.assign(nv, kNone);
@@ -1106,15 +1107,17 @@ void Simplifier::FirstPassAhead(unsigned threads, const Admit& admit) {
   constexpr size_t kChunk = 512;
   threads = unsigned(std::min<size_t>(threads, (n + kChunk - 1) / kChunk));
   std::atomic<size_t> next(0);
-  std::atomic<bool> failed(false);
-  auto work = [&](Evaluator& ev) {
+  std::atomic<bool> failed(false), cancelled(false);
+  auto work = [&](Evaluator& ev, bool reports) {
     try {
-      for (size_t begin; (begin = next.fetch_add(kChunk)) < n;)
+      for (size_t begin; !cancelled && (begin = next.fetch_add(kChunk)) < n;) {
         for (size_t i = begin; i < std::min(n, begin + kChunk); ++i) {
           const uint32_t v = batch[i];
           ahead_[v] = ev.Evaluate(v, kNone, bound_, track_);
           aheadStamp_[v] = stamp_[v];
         }
+        if (reports && progress && !progress(0, "feature-preserving simplification")) cancelled = true;
+      }
     } catch (...) {
       failed = true;
     }
@@ -1125,20 +1128,21 @@ void Simplifier::FirstPassAhead(unsigned threads, const Admit& admit) {
     helpers.reserve(threads > 1 ? threads - 1 : 0);
     for (unsigned t = 1; t < threads; ++t) {
       helpers.emplace_back(w_, p_, static_cast<TrackingStore&>(*this));
-      pool.emplace_back(work, std::ref(helpers.back()));
+      pool.emplace_back(work, std::ref(helpers.back()), false);
     }
   } catch (...) {
     // no (more) threads: the ones started and this one share the batch
   }
-  work(*this);
+  work(*this, true);
   for (std::thread& t : pool) t.join();
   ResetCaches();
-  if (failed) {
+  if (failed || cancelled) {
     aheadStamp_.assign(nv, kNone);
     aheadLeft_ = 0;
-    return;
+    return !cancelled;
   }
   aheadLeft_ = n;
+  return true;
 }
 
 // After a collapse: the evaluations made ahead that it may have changed — every vertex within two
@@ -1196,12 +1200,13 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
     // has come within two rings of the vertex by then (the output is the same either way).
     unsigned threads = p_.threads;
     if (threads == 0) threads = std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
-    FirstPassAhead(threads, [&](uint32_t v) {
+    const auto admit = [&](uint32_t v) {
       const VertexClass c = w.cls[v];
       if (p_.curvatureThreshold <= 0) return true;
       const double curv = c == VertexClass::Smooth ? std::abs(w.K[v]) * d2 : std::abs(w.M[v]) * d1;
       return curv < p_.curvatureThreshold;
-    });
+    };
+    if (!FirstPassAhead(threads, admit, progress)) return Status::Cancelled();
   }
   size_t popsK = 0, popsM = 0, iter = 0;
   bool reached = target > 0 && faces_ <= target;

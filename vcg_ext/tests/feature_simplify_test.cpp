@@ -8,6 +8,7 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <thread>
 
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"
@@ -486,6 +487,29 @@ TEST(FeatureSimplify, CancelLeavesNoResult) {
   EXPECT_EQ(s.code, Status::Code::Cancelled);
   EXPECT_TRUE(r.mesh.faces.empty());
   EXPECT_EQ(r.facesOut, 0u);
+}
+
+// The first pass runs on several threads: progress is reported from the calling thread only, and
+// cancelling there (at its first report) stops it with no result.
+TEST(FeatureSimplify, FirstPassAheadReportsOnTheCallingThread) {
+  const IndexedMesh sphere = test::Sphere(5);  // 4098 vertices: several chunks per thread
+  FeatureSimplifyParams p;
+  p.targetFaceCount = 100;
+  p.threads = 3;
+  const std::thread::id caller = std::this_thread::get_id();
+  int calls = 0, elsewhere = 0;
+  FeatureSimplifyResult r;
+  ASSERT_TRUE(FeatureSimplify(sphere, p, r, [&](int, const char*) {
+                ++calls;
+                if (std::this_thread::get_id() != caller) ++elsewhere;
+                return true;
+              }).ok());
+  EXPECT_GT(calls, 0);
+  EXPECT_EQ(elsewhere, 0);
+  FeatureSimplifyResult cancelled;
+  const Status s = FeatureSimplify(sphere, p, cancelled, [&](int, const char*) { return false; });
+  EXPECT_EQ(s.code, Status::Code::Cancelled);
+  EXPECT_TRUE(cancelled.mesh.faces.empty());
 }
 
 }  // namespace
