@@ -315,6 +315,15 @@ class HierarchyBuilder {
   BigVector<vcg::Point3d> faceNormal_;
   int meshFace(int f) const { return meshFace_.empty() ? f : meshFace_[size_t(f)]; }
   void renumberFaces();
+  // From level 1's emission on: the distinct vertices of every level-1 group, group by group
+  // (group g's are l1Verts_[l1VertBegin_[g], l1VertBegin_[g + 1])), and each level-1 group's group
+  // at the level last emitted. A group's tight sphere (and level 1's box) is a maximum (minimum)
+  // over its vertices, which neither their order nor repeats change: read from these lists, each
+  // level reads about a third of the vertices that its faces name, in order.
+  BigVector<vcg::Point3f> l1Verts_;
+  BigVector<uint32_t> l1VertBegin_;
+  BigVector<int> l1Group_;
+  void collectGroupVertices();
   // From level 2 on, unless strictGreedy: per unit, up to three normals of its faces whose
   // minimal cone is the unit's exact cone, or (after a merge) a guess of it: the support of the
   // minimal cone of both units' supports. An exact recomputation first tries that guess: when
@@ -797,7 +806,10 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   nextLevelUnits();
   // Renumbered now, the exact cones below read the normals in memory order, computed once for
   // this level and the next ones (where the level-1 merges recomputed them from the mesh).
-  if (firstLevel) renumberFaces();
+  if (firstLevel) {
+    renumberFaces();
+    collectGroupVertices();
+  }
   if (firstLevel && !params_.strictGreedy) support_.assign(groupCount, ConeSupport());
   level.groups.resize(groupCount);
 
@@ -841,9 +853,9 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     grp.box.SetNull();
   }
   if (firstLevel) {
-    for (size_t f = 0; f < size_t(faceCount_); ++f) {
-      vcg::Box3f& box = level.groups[size_t(faceGroup[f])].box;
-      for (uint32_t v : mesh_.faces[f]) box.Add(mesh_.positions[v]);
+    for (size_t g = 0; g < groupCount; ++g) {
+      vcg::Box3f& box = level.groups[g].box;
+      for (uint32_t i = l1VertBegin_[g]; i < l1VertBegin_[g + 1]; ++i) box.Add(l1Verts_[i]);
     }
   } else {
     const auto& prev = out.levels.back().groups;
@@ -867,11 +879,18 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   // A second sphere around the box centre; keep the smaller of it and the merged bound.
   std::vector<vcg::Point3d> boxCenter(groupCount);
   for (size_t g = 0; g < groupCount; ++g) boxCenter[g] = vcg::Point3d::Construct(level.groups[g].box.Center());
+  // The largest squared distance from the centre to a vertex: over each level-1 group's distinct
+  // vertices (a maximum of non-negative numbers: the same whatever the order).
   std::vector<double> r2(groupCount, 0.0);
-  for (size_t f = 0; f < size_t(faceCount_); ++f) {
-    const size_t g = size_t(faceGroup[f]);
-    for (uint32_t v : mesh_.faces[f])
-      r2[g] = std::max(r2[g], (vcg::Point3d::Construct(mesh_.positions[v]) - boxCenter[g]).SquaredNorm());
+  if (!firstLevel)
+    for (int& g : l1Group_) g = childGroup[size_t(g)];
+  for (size_t g1 = 0; g1 < l1Group_.size(); ++g1) {
+    const size_t g = size_t(l1Group_[g1]);
+    const vcg::Point3d c = boxCenter[g];
+    double m = r2[g];
+    for (uint32_t i = l1VertBegin_[g1]; i < l1VertBegin_[g1 + 1]; ++i)
+      m = std::max(m, (vcg::Point3d::Construct(l1Verts_[i]) - c).SquaredNorm());
+    r2[g] = m;
   }
   for (size_t g = 0; g < groupCount; ++g) {
     Unit& unit = units_[g];
@@ -907,6 +926,30 @@ void HierarchyBuilder::renumberFaces() {
   faceNormal_.resize(nf);
   double area;
   for (size_t f = 0; f < nf; ++f) FaceNormalAndArea(mesh_, size_t(meshFace_[f]), faceNormal_[f], area);
+}
+
+// Level 1's groups' distinct vertices (l1Verts_), from the renumbered faces: the units are the
+// level-1 groups, group g's faces the run of faceCount faces after group g-1's.
+void HierarchyBuilder::collectGroupVertices() {
+  const size_t groups = units_.size();
+  BigVector<int> seen(mesh_.positions.size(), -1);  // the last group that took the vertex
+  l1VertBegin_.resize(groups + 1);
+  l1Group_.resize(groups);
+  l1Verts_.clear();
+  l1Verts_.reserve(mesh_.positions.size() + mesh_.positions.size() / 2);
+  size_t face = 0;
+  for (size_t g = 0; g < groups; ++g) {
+    l1VertBegin_[g] = uint32_t(l1Verts_.size());
+    l1Group_[g] = int(g);
+    const size_t end = face + size_t(units_[g].faceCount);
+    for (; face < end; ++face)
+      for (const uint32_t v : mesh_.faces[size_t(meshFace_[face])])
+        if (seen[v] != int(g)) {
+          seen[v] = int(g);
+          l1Verts_.push_back(mesh_.positions[v]);
+        }
+  }
+  l1VertBegin_[groups] = uint32_t(l1Verts_.size());
 }
 
 // The groups found by emitLevel (rootOfGroup_, idOfUnit_) become the units of the next level
