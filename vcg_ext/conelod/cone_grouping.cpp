@@ -313,6 +313,7 @@ class HierarchyBuilder {
   // its arrays leave no room for these under the memory target; above it, with far fewer units,
   // there is.
   BigVector<vcg::Point3d> faceNormal_;
+  BigVector<double> faceArea_;  // from level 2 on: every mesh face's area (FaceNormalAndArea), by mesh face
   int meshFace(int f) const { return meshFace_.empty() ? f : meshFace_[size_t(f)]; }
   void renumberFaces();
   // From level 1's emission on: the distinct vertices of every level-1 group, group by group
@@ -924,8 +925,12 @@ void HierarchyBuilder::renumberFaces() {
     chains_[g].tail = int(next++);
   }
   faceNormal_.resize(nf);
+  faceArea_.resize(nf);
   double area;
-  for (size_t f = 0; f < nf; ++f) FaceNormalAndArea(mesh_, size_t(meshFace_[f]), faceNormal_[f], area);
+  for (size_t f = 0; f < nf; ++f) {
+    FaceNormalAndArea(mesh_, size_t(meshFace_[f]), faceNormal_[f], area);
+    faceArea_[size_t(meshFace_[f])] = area;
+  }
 }
 
 // Level 1's groups' distinct vertices (l1Verts_), from the renumbered faces: the units are the
@@ -1046,11 +1051,10 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     threshold *= params_.thresholdGrowth;
   }
 
-  // Areas per group, from the faces (in face order: the same sums on every run).
+  // Areas per group, from the faces' areas (renumberFaces) in face order: the same sums on every
+  // run.
   for (int f = 0; f < nf; ++f) {
-    vcg::Point3d n;
-    double area;
-    FaceNormalAndArea(mesh_, size_t(f), n, area);
+    const double area = faceArea_[size_t(f)];
     for (auto& lv : out.levels) lv.groups[size_t(lv.faceGroup[size_t(f)])].area += area;
   }
   out.faceCount = nf;
