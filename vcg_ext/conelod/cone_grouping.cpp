@@ -588,7 +588,10 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
   // neighbours), else to the end of the arena with room to grow.
   tree_.set(p, kNoPair);
   --aliveCount_;
-  const uint32_t st = ++stampCounter_;
+  // Stamps of this merge: st, or st + 1 for a neighbour of both u and p (whose list then names
+  // both: the lists are symmetric).
+  stampCounter_ += 2;
+  const uint32_t st = stampCounter_, both = st + 1;
   lu.stamp = st;
   lp.stamp = st;
   scratchList_.clear();
@@ -597,7 +600,10 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
     for (int i = 0; i < src->nbCount; ++i) {
       const int w = list[i].id;
       Link& lw = links_[size_t(w)];
-      if (lw.stamp == st) continue;
+      if (lw.stamp >= st) {
+        if (src == &lp) lw.stamp = both;
+        continue;
+      }
       lw.stamp = st;
       Prefetch(arena_.data() + lw.nbOffset);  // for the update below, now that its offset is here
       tree_.prefetch(w);
@@ -623,9 +629,12 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
     Link& lw = links_[size_t(w)];
     Neighbour* nb = arena_.data() + lw.nbOffset;
     int n = lw.nbCount;
+    // The list names u, p or both, once each: the scan stops at the last of them.
+    int left = lw.stamp == both ? 2 : 1;
     bool seen = false;
-    for (int k = 0; k < n;) {
+    for (int k = 0; left > 0 && k < n;) {
       if (nb[k].id == u || nb[k].id == p) {
+        --left;
         if (!seen) { nb[k] = {u, s}; seen = true; ++k; }
         else nb[k] = nb[--n];
       } else {
