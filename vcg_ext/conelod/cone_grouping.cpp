@@ -324,6 +324,8 @@ class HierarchyBuilder {
   BigVector<vcg::Point3f> l1Verts_;
   BigVector<uint32_t> l1VertBegin_;
   BigVector<int> l1Group_;
+  // Above level 1: the unit that absorbed each dead unit of the level (mergeUnits).
+  BigVector<int> absorbedBy_;
   void collectGroupVertices();
   // From level 2 on, unless strictGreedy: per unit, up to three normals of its faces whose
   // minimal cone is the unit's exact cone, or (after a merge) a guess of it: the support of the
@@ -573,6 +575,7 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
   faceNext_[size_t(bc.tail)] = headA;
   ac.tail = bc.tail;
   bc.tail = -1;
+  if (!absorbedBy_.empty()) absorbedBy_[size_t(p)] = u;
   if (!support_.empty()) {  // the support of both supports: the guess at u's next exact cone
     ConeSupport& sa = support_[size_t(u)];
     const ConeSupport& sb = support_[size_t(p)];
@@ -790,25 +793,49 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   const size_t n = units_.size();
   GroupLevel level;
   level.thresholdDeg = thresholdDeg;
-  // The unit of every face, from the live units' face lists.
   level.faceGroup.resize(size_t(faceCount_));
   std::vector<int>& faceGroup = level.faceGroup;
-  for (int u = 0; u < int(n); ++u) {
-    if (!alive(u)) continue;
-    const int tail = chains_[size_t(u)].tail;
-    int f = tail;
-    do {
-      f = faceNext_[size_t(f)];
-      faceGroup[size_t(meshFace(f))] = u;
-    } while (f != tail);
-  }
   // Ids in order of first appearance over faces: deterministic and cache-friendly.
   idOfUnit_.assign(n, -1);
   rootOfGroup_.clear();
-  for (int& g : faceGroup) {
-    int& id = idOfUnit_[size_t(g)];
-    if (id < 0) { id = int(rootOfGroup_.size()); rootOfGroup_.push_back(g); }
-    g = id;
+  // Above level 1: the group of every previous group (the units this level started with).
+  std::vector<int> childGroupAbove;
+  if (firstLevel) {
+    // The unit of every face, from the live units' face lists.
+    for (int u = 0; u < int(n); ++u) {
+      if (!alive(u)) continue;
+      const int tail = chains_[size_t(u)].tail;
+      int f = tail;
+      do {
+        f = faceNext_[size_t(f)];
+        faceGroup[size_t(meshFace(f))] = u;
+      } while (f != tail);
+    }
+    for (int& g : faceGroup) {
+      int& id = idOfUnit_[size_t(g)];
+      if (id < 0) { id = int(rootOfGroup_.size()); rootOfGroup_.push_back(g); }
+      g = id;
+    }
+  } else {
+    // Every face lies in one level-1 group, and level 1's ids follow the faces' order: a unit's
+    // first face is the first face of its lowest level-1 group, so taking the level-1 groups in
+    // order gives the same ids as the faces would, with one lookup per level-1 group. A unit
+    // (a previous group) is found through the units that absorbed it (absorbedBy_).
+    for (int u = 0; u < int(n); ++u) {
+      int r = u;
+      while (!alive(r)) r = absorbedBy_[size_t(r)];
+      absorbedBy_[size_t(u)] = r;  // from now on: u's live unit (followed by the units after u)
+    }
+    childGroupAbove.resize(n);
+    for (int& g : l1Group_) {  // the previous level's group -> this level's
+      const int u = absorbedBy_[size_t(g)];
+      int& id = idOfUnit_[size_t(u)];
+      if (id < 0) { id = int(rootOfGroup_.size()); rootOfGroup_.push_back(u); }
+      childGroupAbove[size_t(g)] = id;
+      g = id;
+    }
+    const std::vector<int>& level1Group = out.levels.front().faceGroup;
+    for (size_t f = 0; f < size_t(faceCount_); ++f) faceGroup[f] = l1Group_[size_t(level1Group[f])];
   }
   const size_t groupCount = rootOfGroup_.size();
   // The groups become the units of the next level now, indexed by group: the arrays of this
@@ -826,12 +853,6 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   // Children: faces (level 1) or previous groups, bucketed by new group. A previous group's new
   // group is that of any of its faces.
   const size_t childTotal = firstLevel ? size_t(faceCount_) : n;
-  std::vector<int> childGroupAbove;
-  if (!firstLevel) {
-    childGroupAbove.assign(childTotal, -1);
-    const std::vector<int>& prevFaceGroup = out.levels.back().faceGroup;
-    for (size_t f = 0; f < size_t(faceCount_); ++f) childGroupAbove[size_t(prevFaceGroup[f])] = faceGroup[f];
-  }
   const std::vector<int>& childGroup = firstLevel ? faceGroup : childGroupAbove;
   std::vector<int> childCount(groupCount, 0);
   for (size_t c = 0; c < childTotal; ++c) ++childCount[size_t(childGroup[c])];
@@ -892,8 +913,6 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   // The largest squared distance from the centre to a vertex: over each level-1 group's distinct
   // vertices (a maximum of non-negative numbers: the same whatever the order).
   std::vector<double> r2(groupCount, 0.0);
-  if (!firstLevel)
-    for (int& g : l1Group_) g = childGroup[size_t(g)];
   for (size_t g1 = 0; g1 < l1Group_.size(); ++g1) {
     const size_t g = size_t(l1Group_[g1]);
     const vcg::Point3d c = boxCenter[g];
@@ -995,6 +1014,7 @@ void HierarchyBuilder::nextLevelUnits() {
   units_.swap(units);
   links_.swap(links);
   chains_.swap(chains);
+  absorbedBy_.resize(g);
   arena_.swap(arena);
   prefixEnd_ = arena_.size();
   std::vector<int>().swap(arenaOrder_);
