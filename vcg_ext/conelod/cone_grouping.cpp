@@ -458,13 +458,14 @@ bool HierarchyBuilder::seededCone(int u) {
   const vcg::Point3d* first = nullptr;
   double lowest = 2;
   for (const vcg::Point3d& n : scratchNormals_)
-    if (n.SquaredNorm() >= 0.5 && n * axis < lowest) { lowest = n * axis; first = &n; }
+    // The cheap test first: the zero normals of degenerate faces (dot 0) are rarely the lowest.
+    if (n * axis < lowest && n.SquaredNorm() >= 0.5) { lowest = n * axis; first = &n; }
   if (!first) return false;
   const vcg::Point3d far1 = *first;
   const vcg::Point3d* second = first;
   lowest = 2;
   for (const vcg::Point3d& n : scratchNormals_)
-    if (n.SquaredNorm() >= 0.5 && n * far1 < lowest) { lowest = n * far1; second = &n; }
+    if (n * far1 < lowest && n.SquaredNorm() >= 0.5) { lowest = n * far1; second = &n; }
   const vcg::Point3d far2 = *second;
   // The minimal cone of the two as MinimalCone makes it (one normal's cap when the other lies in
   // it to the slack of 1e-10 on cosines, else the two-point cap), checked against every normal
@@ -483,7 +484,7 @@ bool HierarchyBuilder::seededCone(int u) {
   const double minCos = cosHalf - 1e-10;
   size_t outside = 0;
   for (const vcg::Point3d& n : scratchNormals_)
-    if (n.SquaredNorm() >= 0.5 && !(n * axis2 >= minCos)) {
+    if (!(n * axis2 >= minCos) && n.SquaredNorm() >= 0.5) {
       if (++outside > 256) return false;
       scratchSupport_.push_back(n);
     }
@@ -518,7 +519,7 @@ bool HierarchyBuilder::refineCone(int u) {
       // The inside test of MinimalCone (normal_cone.cpp): a cosine slack of 1e-10.
       const double minCos = std::cos(guess.halfAngle) - 1e-10;
       for (const vcg::Point3d& n : scratchNormals_)
-        if (n.SquaredNorm() >= 0.5 && !(n * guess.axis >= minCos)) {
+        if (!(n * guess.axis >= minCos) && n.SquaredNorm() >= 0.5) {
           if (++outside > 256) return false;
           chosen.push_back(n);
         }
