@@ -80,7 +80,8 @@ Sphere TriangleSphere(const vcg::Point3d& a, const vcg::Point3d& b, const vcg::P
   if (n2 <= 0) { edgeSphere(b, c, lbc); return s; }
   const vcg::Point3d off = ((n ^ ab) * lac + (ac ^ n) * lab) / (2 * n2);
   s.c = a + off;
-  s.r = std::max({Distance(s.c, a), Distance(s.c, b), Distance(s.c, c)});
+  // max(sqrt x, sqrt y) == sqrt(max(x, y)) (a correctly rounded sqrt is monotone): one root.
+  s.r = std::sqrt(std::max({(s.c - a).SquaredNorm(), (s.c - b).SquaredNorm(), (s.c - c).SquaredNorm()}));
   return s;
 }
 
