@@ -1134,7 +1134,7 @@ Status BuildConeHierarchy(const IndexedMesh& mesh, const ConeGroupingParams& par
   out = GroupHierarchy();
   Status s = ValidateParams(params);
   if (!s.ok()) return s;
-  s = RequireValidForFaces(CheckMesh(mesh, /*withTopology=*/false));
+  s = RequireValidForFaces(mesh);
   if (!s.ok()) return s;
   if (mesh.faces.size() >= size_t(std::numeric_limits<int>::max()) / 4)
     return Status::Invalid("the mesh has too many faces for 32-bit group ids");
