@@ -1083,10 +1083,11 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
   }
 
   // Areas per group, from the faces' areas (renumberFaces) in face order: the same sums on every
-  // run.
-  for (int f = 0; f < nf; ++f) {
-    const double area = faceArea_[size_t(f)];
-    for (auto& lv : out.levels) lv.groups[size_t(lv.faceGroup[size_t(f)])].area += area;
+  // run. Level by level: each group's sum still takes its faces in face order.
+  for (auto& lv : out.levels) {
+    Group* groups = lv.groups.data();
+    const int* faceGroup = lv.faceGroup.data();
+    for (size_t f = 0; f < size_t(nf); ++f) groups[faceGroup[f]].area += faceArea_[f];
   }
   out.faceCount = nf;
   if (progress_ && !progress_(100, "grouping done")) { out = GroupHierarchy(); return Status::Cancelled(); }
