@@ -361,6 +361,8 @@ class HierarchyBuilder {
   int exactGrowth_ = 2;
   bool thresholdOn_ = false;
   int aliveCount_ = 0;
+  // During level 1's sweeps: per unit, whether it was marked since its last visit (runLevel).
+  uint8_t* dirty_ = nullptr;
   bool cancelled_ = false;
 };
 
@@ -397,6 +399,10 @@ void HierarchyBuilder::setBest(int u) {
     }
   links_[size_t(u)].bestPartner = partner;
   tree_.set(u, best);
+  if (dirty_) {
+    dirty_[size_t(u)] = 1;
+    if (partner >= 0) dirty_[size_t(partner)] = 1;
+  }
 }
 
 void HierarchyBuilder::makeConeExact(int u) {
@@ -652,6 +658,7 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
       setBest(w);
     } else if (s != kNoPair && (s > tree_.key(w) || (s == tree_.key(w) && u < bp))) {
       lw.bestPartner = u;
+      if (dirty_) dirty_[size_t(w)] = 1;  // (u is marked by its setBest)
       tree_.set(w, s);
     }
   }
@@ -754,28 +761,58 @@ bool HierarchyBuilder::runLevel(double thresholdDeg, bool localMaximaFirst, long
     // first), the merged unit going on while its best pair stays mutual; until a sweep merges
     // nothing. Neighbouring units have neighbouring indices, so a sweep walks the mesh's memory
     // in order where the global order jumps all over it. The tree is not kept meanwhile.
+    //
+    // After the first sweep, a sweep visits only the units marked since their last visit (dirty_):
+    // a unit whose best partner was set, and that partner. A unit left without a mutual pair by
+    // its visit only gets one when its best partner or its partner's becomes the other, which
+    // marks both; so every unit that a full sweep would find mutual is marked when the sweep
+    // reaches it (a mark ahead of the sweep is seen in the same sweep, one behind in the next),
+    // and the merges, in the same order, are the same as a full sweep's.
     tree_.setDeferred(true);
-    for (long before = -1; before != merges && aliveCount_ > minGroups;) {
+    const size_t padded = (n + 7) / 8 * 8;
+    BigVector<uint8_t> dirty(padded, 0);
+    dirty_ = dirty.data();
+    // Merges u while its best pair is mutual; false: cancelled.
+    auto visit = [&](int u) {
+      dirty_[size_t(u)] = 0;
+      while (alive(u) && aliveCount_ > minGroups) {
+        const int b = links_[size_t(u)].bestPartner;
+        if (b < 0 || links_[size_t(b)].bestPartner != u) break;
+        mergeUnits(u, b);
+        ++merges;
+        if (!reportProgress(mergesSoFar + merges)) return false;
+      }
+      return true;
+    };
+    bool ok = true;
+    for (long before = -1; ok && before != merges && aliveCount_ > minGroups;) {
+      const bool first = before < 0;
       before = merges;
-      for (int u = 0; u < int(n) && aliveCount_ > minGroups; ++u) {
-        // Whether u's best pair is mutual reads its partner's link, scattered: asked for 8 units
-        // ahead (with the partner's unit, which the merge reads first).
-        if (u + 8 < int(n)) {
-          const int ahead = links_[size_t(u) + 8].bestPartner;
-          if (ahead >= 0) {
-            Prefetch(&links_[size_t(ahead)]);
-            Prefetch(&units_[size_t(ahead)]);
+      if (first) {
+        for (int u = 0; ok && u < int(n) && aliveCount_ > minGroups; ++u) {
+          // Whether u's best pair is mutual reads its partner's link, scattered: asked for 8 units
+          // ahead (with the partner's unit, which the merge reads first).
+          if (u + 8 < int(n)) {
+            const int ahead = links_[size_t(u) + 8].bestPartner;
+            if (ahead >= 0) {
+              Prefetch(&links_[size_t(ahead)]);
+              Prefetch(&units_[size_t(ahead)]);
+            }
           }
+          ok = visit(u);
         }
-        while (alive(u) && aliveCount_ > minGroups) {
-          const int b = links_[size_t(u)].bestPartner;
-          if (b < 0 || links_[size_t(b)].bestPartner != u) break;
-          mergeUnits(u, b);
-          ++merges;
-          if (!reportProgress(mergesSoFar + merges)) return false;
+      } else {
+        for (size_t w = 0; ok && w < padded && aliveCount_ > minGroups; w += 8) {
+          uint64_t word;
+          std::memcpy(&word, dirty_ + w, sizeof word);
+          if (word == 0) continue;
+          for (size_t u = w; ok && u < w + 8 && aliveCount_ > minGroups; ++u)
+            if (dirty_[u]) ok = visit(int(u));
         }
       }
     }
+    dirty_ = nullptr;
+    if (!ok) return false;
     tree_.setDeferred(false);
   }
   // Best pair first over the whole level: all of it in strict mode, else what the sweeps leave
