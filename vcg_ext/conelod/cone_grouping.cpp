@@ -409,11 +409,17 @@ void HierarchyBuilder::makeConeExact(int u) {
   const int tail = chains_[size_t(u)].tail;
   int f = tail;
   if (!faceNormal_.empty()) {
+    // The list is made of runs of consecutive faces (renumberFaces): copied run by run, in the
+    // list's order.
     scratchNormals_.clear();
-    do {
-      f = faceNext_[size_t(f)];
-      scratchNormals_.push_back(faceNormal_[size_t(f)]);
-    } while (f != tail);
+    int head = faceNext_[size_t(tail)];
+    for (;;) {
+      int last = head;
+      while (last != tail && faceNext_[size_t(last)] == last + 1) ++last;
+      scratchNormals_.insert(scratchNormals_.end(), faceNormal_.begin() + head, faceNormal_.begin() + last + 1);
+      if (last == tail) break;
+      head = faceNext_[size_t(last)];
+    }
     if (!support_.empty() && trySupportCone(u)) return;
   } else {
     // Walk the list first, then compute the normals: the walk is a chain of dependent loads, the
