@@ -13,11 +13,12 @@
 // touched only by the merging units; and a merge prefetches all its neighbours' data before it
 // uses any of it. Neighbour lists live in one arena: a merged list goes back into its unit's
 // slot when it fits, else to the end; the arena is compacted in place when full. Level 1
-// recomputes face normals from the mesh when an exact cone needs them during its merges, and
-// areas come from the faces at the end, rather than from arrays: the build's peak memory stays
-// under twice the loaded mesh's. Once level 1's merges are done and its arrays freed, the faces
-// are renumbered group by group (renumberFaces), so level 1's final exact cones and the upper
-// levels read normals in order. Exact cones rarely run Welzl's algorithm in the default mode:
+// recomputes face normals from the mesh when an exact cone needs them during its merges, rather
+// than keeping an array of them: the build's peak memory stays under twice the loaded mesh's.
+// Once level 1's merges are done and its arrays freed, the faces are renumbered group by group
+// (renumberFaces, which keeps their normals and areas), so level 1's final exact cones and the
+// upper levels read normals in order; each level-1 group's distinct vertices are collected then
+// too (collectGroupVertices), and every level's spheres read those rather than the faces. Exact cones rarely run Welzl's algorithm in the default mode:
 // above level 1 they start from the support of the merged units' cones (trySupportCone), at
 // level 1 (no supports kept) from the cap of two far normals (seededCone); either guess is
 // checked against every normal. With strictGreedy none of this changes a bit of the
