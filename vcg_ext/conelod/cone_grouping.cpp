@@ -288,7 +288,8 @@ class HierarchyBuilder {
   Status run(GroupHierarchy& out);
 
  private:
-  float evaluate(const Unit& a, const Unit& b) const;
+  // Inlined into the first scores and the merges (no call per evaluation).
+  __attribute__((always_inline)) inline float evaluate(const Unit& a, const Unit& b) const;
   // From the cached scores of u's list. Inlined: it is the core of a merge's neighbour updates.
   __attribute__((always_inline)) inline void setBest(int u);
   void mergeUnits(int u, int p);
