@@ -649,16 +649,16 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
     Link& lw = links_[size_t(w)];
     Neighbour* nb = arena_.data() + lw.nbOffset;
     int n = lw.nbCount;
-    // The list names u, p or both, once each: the scan stops at the last of them.
-    int left = lw.stamp == both ? 2 : 1;
-    bool seen = false;
-    for (int k = 0; left > 0 && k < n;) {
-      if (nb[k].id == u || nb[k].id == p) {
-        --left;
-        if (!seen) { nb[k] = {u, s}; seen = true; ++k; }
-        else nb[k] = nb[--n];
-      } else {
+    // The list names u, p or both, once each: the first becomes u's entry, the second (if any)
+    // gives its place to the last entry; the scan stops there.
+    int k = 0;
+    while (k < n && nb[k].id != u && nb[k].id != p) ++k;
+    if (k < n) {
+      nb[k] = {u, s};
+      if (lw.stamp == both) {
         ++k;
+        while (k < n && nb[k].id != u && nb[k].id != p) ++k;
+        if (k < n) nb[k] = nb[--n];
       }
     }
     lw.nbCount = n;
