@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <new>
+#include <utility>
 #include <vector>
 
 #ifdef __linux__
@@ -59,6 +60,13 @@ struct BigAlloc {
     if (posix_memalign(&p, 64, std::max<size_t>(bytes, 1)) != 0) throw std::bad_alloc();
     return static_cast<T*>(p);
   }
+  // resize() and sized construction default-initialise (trivial types are left unwritten) where
+  // std::allocator value-initialises: every user of a BigVector writes what it sizes, and zeroing it
+  // first cost a pass over fresh memory. Values given are copied as usual (assign(n, x)).
+  template <class U>
+  void construct(U* p) { ::new (static_cast<void*>(p)) U; }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) { ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...); }
   void deallocate(T* p, size_t n) {
 #ifdef __linux__
     if (n * sizeof(T) >= kMapped) { munmap(p, MappedSize(n * sizeof(T))); return; }

@@ -13,11 +13,12 @@
 // touched only by the merging units; and a merge prefetches all its neighbours' data before it
 // uses any of it. Neighbour lists live in one arena: a merged list goes back into its unit's
 // slot when it fits, else to the end; the arena is compacted in place when full. Level 1
-// recomputes face normals from the mesh when an exact cone needs them during its merges, and
-// areas come from the faces at the end, rather than from arrays: the build's peak memory stays
-// under twice the loaded mesh's. Once level 1's merges are done and its arrays freed, the faces
-// are renumbered group by group (renumberFaces), so level 1's final exact cones and the upper
-// levels read normals in order. Exact cones rarely run Welzl's algorithm in the default mode:
+// recomputes face normals from the mesh when an exact cone needs them during its merges, rather
+// than keeping an array of them: the build's peak memory stays under twice the loaded mesh's.
+// Once level 1's merges are done and its arrays freed, the faces are renumbered group by group
+// (renumberFaces, which keeps their normals and areas), so level 1's final exact cones and the
+// upper levels read normals in order; each level-1 group's distinct vertices are collected then
+// too (collectGroupVertices), and every level's spheres read those rather than the faces. Exact cones rarely run Welzl's algorithm in the default mode:
 // above level 1 they start from the support of the merged units' cones (trySupportCone), at
 // level 1 (no supports kept) from the cap of two far normals (seededCone); either guess is
 // checked against every normal. With strictGreedy none of this changes a bit of the
@@ -80,7 +81,8 @@ Sphere TriangleSphere(const vcg::Point3d& a, const vcg::Point3d& b, const vcg::P
   if (n2 <= 0) { edgeSphere(b, c, lbc); return s; }
   const vcg::Point3d off = ((n ^ ab) * lac + (ac ^ n) * lab) / (2 * n2);
   s.c = a + off;
-  s.r = std::max({Distance(s.c, a), Distance(s.c, b), Distance(s.c, c)});
+  // max(sqrt x, sqrt y) == sqrt(max(x, y)) (a correctly rounded sqrt is monotone): one root.
+  s.r = std::sqrt(std::max({(s.c - a).SquaredNorm(), (s.c - b).SquaredNorm(), (s.c - c).SquaredNorm()}));
   return s;
 }
 
@@ -286,8 +288,10 @@ class HierarchyBuilder {
   Status run(GroupHierarchy& out);
 
  private:
-  float evaluate(const Unit& a, const Unit& b) const;
-  void setBest(int u);  // from the cached scores of u's list
+  // Inlined into the first scores and the merges (no call per evaluation).
+  __attribute__((always_inline)) inline float evaluate(const Unit& a, const Unit& b) const;
+  // From the cached scores of u's list. Inlined: it is the core of a merge's neighbour updates.
+  __attribute__((always_inline)) inline void setBest(int u);
   void mergeUnits(int u, int p);
   bool runLevel(double thresholdDeg, bool localMaximaFirst, long& mergesSoFar);
   bool reportProgress(long mergesSoFar);
@@ -313,8 +317,20 @@ class HierarchyBuilder {
   // its arrays leave no room for these under the memory target; above it, with far fewer units,
   // there is.
   BigVector<vcg::Point3d> faceNormal_;
+  BigVector<double> faceArea_;  // from level 2 on: every mesh face's area (FaceNormalAndArea), by mesh face
   int meshFace(int f) const { return meshFace_.empty() ? f : meshFace_[size_t(f)]; }
   void renumberFaces();
+  // From level 1's emission on: the distinct vertices of every level-1 group, group by group
+  // (group g's are l1Verts_[l1VertBegin_[g], l1VertBegin_[g + 1])), and each level-1 group's group
+  // at the level last emitted. A group's tight sphere (and level 1's box) is a maximum (minimum)
+  // over its vertices, which neither their order nor repeats change: read from these lists, each
+  // level reads about a third of the vertices that its faces name, in order.
+  BigVector<vcg::Point3f> l1Verts_;
+  BigVector<uint32_t> l1VertBegin_;
+  BigVector<int> l1Group_;
+  // Above level 1: the unit that absorbed each dead unit of the level (mergeUnits).
+  BigVector<int> absorbedBy_;
+  void collectGroupVertices();
   // From level 2 on, unless strictGreedy: per unit, up to three normals of its faces whose
   // minimal cone is the unit's exact cone, or (after a merge) a guess of it: the support of the
   // minimal cone of both units' supports. An exact recomputation first tries that guess: when
@@ -348,6 +364,8 @@ class HierarchyBuilder {
   int exactGrowth_ = 2;
   bool thresholdOn_ = false;
   int aliveCount_ = 0;
+  // During level 1's sweeps: per unit, whether it was marked since its last visit (runLevel).
+  uint8_t* dirty_ = nullptr;
   bool cancelled_ = false;
 };
 
@@ -384,17 +402,27 @@ void HierarchyBuilder::setBest(int u) {
     }
   links_[size_t(u)].bestPartner = partner;
   tree_.set(u, best);
+  if (dirty_) {
+    dirty_[size_t(u)] = 1;
+    if (partner >= 0) dirty_[size_t(partner)] = 1;
+  }
 }
 
 void HierarchyBuilder::makeConeExact(int u) {
   const int tail = chains_[size_t(u)].tail;
   int f = tail;
   if (!faceNormal_.empty()) {
+    // The list is made of runs of consecutive faces (renumberFaces): copied run by run, in the
+    // list's order.
     scratchNormals_.clear();
-    do {
-      f = faceNext_[size_t(f)];
-      scratchNormals_.push_back(faceNormal_[size_t(f)]);
-    } while (f != tail);
+    int head = faceNext_[size_t(tail)];
+    for (;;) {
+      int last = head;
+      while (last != tail && faceNext_[size_t(last)] == last + 1) ++last;
+      scratchNormals_.insert(scratchNormals_.end(), faceNormal_.begin() + head, faceNormal_.begin() + last + 1);
+      if (last == tail) break;
+      head = faceNext_[size_t(last)];
+    }
     if (!support_.empty() && trySupportCone(u)) return;
   } else {
     // Walk the list first, then compute the normals: the walk is a chain of dependent loads, the
@@ -446,13 +474,14 @@ bool HierarchyBuilder::seededCone(int u) {
   const vcg::Point3d* first = nullptr;
   double lowest = 2;
   for (const vcg::Point3d& n : scratchNormals_)
-    if (n.SquaredNorm() >= 0.5 && n * axis < lowest) { lowest = n * axis; first = &n; }
+    // The cheap test first: the zero normals of degenerate faces (dot 0) are rarely the lowest.
+    if (n * axis < lowest && n.SquaredNorm() >= 0.5) { lowest = n * axis; first = &n; }
   if (!first) return false;
   const vcg::Point3d far1 = *first;
   const vcg::Point3d* second = first;
   lowest = 2;
   for (const vcg::Point3d& n : scratchNormals_)
-    if (n.SquaredNorm() >= 0.5 && n * far1 < lowest) { lowest = n * far1; second = &n; }
+    if (n * far1 < lowest && n.SquaredNorm() >= 0.5) { lowest = n * far1; second = &n; }
   const vcg::Point3d far2 = *second;
   // The minimal cone of the two as MinimalCone makes it (one normal's cap when the other lies in
   // it to the slack of 1e-10 on cosines, else the two-point cap), checked against every normal
@@ -471,7 +500,7 @@ bool HierarchyBuilder::seededCone(int u) {
   const double minCos = cosHalf - 1e-10;
   size_t outside = 0;
   for (const vcg::Point3d& n : scratchNormals_)
-    if (n.SquaredNorm() >= 0.5 && !(n * axis2 >= minCos)) {
+    if (!(n * axis2 >= minCos) && n.SquaredNorm() >= 0.5) {
       if (++outside > 256) return false;
       scratchSupport_.push_back(n);
     }
@@ -506,7 +535,7 @@ bool HierarchyBuilder::refineCone(int u) {
       // The inside test of MinimalCone (normal_cone.cpp): a cosine slack of 1e-10.
       const double minCos = std::cos(guess.halfAngle) - 1e-10;
       for (const vcg::Point3d& n : scratchNormals_)
-        if (n.SquaredNorm() >= 0.5 && !(n * guess.axis >= minCos)) {
+        if (!(n * guess.axis >= minCos) && n.SquaredNorm() >= 0.5) {
           if (++outside > 256) return false;
           chosen.push_back(n);
         }
@@ -563,6 +592,7 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
   faceNext_[size_t(bc.tail)] = headA;
   ac.tail = bc.tail;
   bc.tail = -1;
+  if (!absorbedBy_.empty()) absorbedBy_[size_t(p)] = u;
   if (!support_.empty()) {  // the support of both supports: the guess at u's next exact cone
     ConeSupport& sa = support_[size_t(u)];
     const ConeSupport& sb = support_[size_t(p)];
@@ -578,7 +608,10 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
   // neighbours), else to the end of the arena with room to grow.
   tree_.set(p, kNoPair);
   --aliveCount_;
-  const uint32_t st = ++stampCounter_;
+  // Stamps of this merge: st, or st + 1 for a neighbour of both u and p (whose list then names
+  // both: the lists are symmetric).
+  stampCounter_ += 2;
+  const uint32_t st = stampCounter_, both = st + 1;
   lu.stamp = st;
   lp.stamp = st;
   scratchList_.clear();
@@ -587,7 +620,10 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
     for (int i = 0; i < src->nbCount; ++i) {
       const int w = list[i].id;
       Link& lw = links_[size_t(w)];
-      if (lw.stamp == st) continue;
+      if (lw.stamp >= st) {
+        if (src == &lp) lw.stamp = both;
+        continue;
+      }
       lw.stamp = st;
       Prefetch(arena_.data() + lw.nbOffset);  // for the update below, now that its offset is here
       tree_.prefetch(w);
@@ -613,13 +649,16 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
     Link& lw = links_[size_t(w)];
     Neighbour* nb = arena_.data() + lw.nbOffset;
     int n = lw.nbCount;
-    bool seen = false;
-    for (int k = 0; k < n;) {
-      if (nb[k].id == u || nb[k].id == p) {
-        if (!seen) { nb[k] = {u, s}; seen = true; ++k; }
-        else nb[k] = nb[--n];
-      } else {
+    // The list names u, p or both, once each: the first becomes u's entry, the second (if any)
+    // gives its place to the last entry; the scan stops there.
+    int k = 0;
+    while (k < n && nb[k].id != u && nb[k].id != p) ++k;
+    if (k < n) {
+      nb[k] = {u, s};
+      if (lw.stamp == both) {
         ++k;
+        while (k < n && nb[k].id != u && nb[k].id != p) ++k;
+        if (k < n) nb[k] = nb[--n];
       }
     }
     lw.nbCount = n;
@@ -628,6 +667,7 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
       setBest(w);
     } else if (s != kNoPair && (s > tree_.key(w) || (s == tree_.key(w) && u < bp))) {
       lw.bestPartner = u;
+      if (dirty_) dirty_[size_t(w)] = 1;  // (u is marked by its setBest)
       tree_.set(w, s);
     }
   }
@@ -730,28 +770,58 @@ bool HierarchyBuilder::runLevel(double thresholdDeg, bool localMaximaFirst, long
     // first), the merged unit going on while its best pair stays mutual; until a sweep merges
     // nothing. Neighbouring units have neighbouring indices, so a sweep walks the mesh's memory
     // in order where the global order jumps all over it. The tree is not kept meanwhile.
+    //
+    // After the first sweep, a sweep visits only the units marked since their last visit (dirty_):
+    // a unit whose best partner was set, and that partner. A unit left without a mutual pair by
+    // its visit only gets one when its best partner or its partner's becomes the other, which
+    // marks both; so every unit that a full sweep would find mutual is marked when the sweep
+    // reaches it (a mark ahead of the sweep is seen in the same sweep, one behind in the next),
+    // and the merges, in the same order, are the same as a full sweep's.
     tree_.setDeferred(true);
-    for (long before = -1; before != merges && aliveCount_ > minGroups;) {
+    const size_t padded = (n + 7) / 8 * 8;
+    BigVector<uint8_t> dirty(padded, 0);
+    dirty_ = dirty.data();
+    // Merges u while its best pair is mutual; false: cancelled.
+    auto visit = [&](int u) {
+      dirty_[size_t(u)] = 0;
+      while (alive(u) && aliveCount_ > minGroups) {
+        const int b = links_[size_t(u)].bestPartner;
+        if (b < 0 || links_[size_t(b)].bestPartner != u) break;
+        mergeUnits(u, b);
+        ++merges;
+        if (!reportProgress(mergesSoFar + merges)) return false;
+      }
+      return true;
+    };
+    bool ok = true;
+    for (long before = -1; ok && before != merges && aliveCount_ > minGroups;) {
+      const bool first = before < 0;
       before = merges;
-      for (int u = 0; u < int(n) && aliveCount_ > minGroups; ++u) {
-        // Whether u's best pair is mutual reads its partner's link, scattered: asked for 8 units
-        // ahead (with the partner's unit, which the merge reads first).
-        if (u + 8 < int(n)) {
-          const int ahead = links_[size_t(u) + 8].bestPartner;
-          if (ahead >= 0) {
-            Prefetch(&links_[size_t(ahead)]);
-            Prefetch(&units_[size_t(ahead)]);
+      if (first) {
+        for (int u = 0; ok && u < int(n) && aliveCount_ > minGroups; ++u) {
+          // Whether u's best pair is mutual reads its partner's link, scattered: asked for 8 units
+          // ahead (with the partner's unit, which the merge reads first).
+          if (u + 8 < int(n)) {
+            const int ahead = links_[size_t(u) + 8].bestPartner;
+            if (ahead >= 0) {
+              Prefetch(&links_[size_t(ahead)]);
+              Prefetch(&units_[size_t(ahead)]);
+            }
           }
+          ok = visit(u);
         }
-        while (alive(u) && aliveCount_ > minGroups) {
-          const int b = links_[size_t(u)].bestPartner;
-          if (b < 0 || links_[size_t(b)].bestPartner != u) break;
-          mergeUnits(u, b);
-          ++merges;
-          if (!reportProgress(mergesSoFar + merges)) return false;
+      } else {
+        for (size_t w = 0; ok && w < padded && aliveCount_ > minGroups; w += 8) {
+          uint64_t word;
+          std::memcpy(&word, dirty_ + w, sizeof word);
+          if (word == 0) continue;
+          for (size_t u = w; ok && u < w + 8 && aliveCount_ > minGroups; ++u)
+            if (dirty_[u]) ok = visit(int(u));
         }
       }
     }
+    dirty_ = nullptr;
+    if (!ok) return false;
     tree_.setDeferred(false);
   }
   // Best pair first over the whole level: all of it in strict mode, else what the sweeps leave
@@ -771,25 +841,49 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   const size_t n = units_.size();
   GroupLevel level;
   level.thresholdDeg = thresholdDeg;
-  // The unit of every face, from the live units' face lists.
   level.faceGroup.resize(size_t(faceCount_));
   std::vector<int>& faceGroup = level.faceGroup;
-  for (int u = 0; u < int(n); ++u) {
-    if (!alive(u)) continue;
-    const int tail = chains_[size_t(u)].tail;
-    int f = tail;
-    do {
-      f = faceNext_[size_t(f)];
-      faceGroup[size_t(meshFace(f))] = u;
-    } while (f != tail);
-  }
   // Ids in order of first appearance over faces: deterministic and cache-friendly.
   idOfUnit_.assign(n, -1);
   rootOfGroup_.clear();
-  for (int& g : faceGroup) {
-    int& id = idOfUnit_[size_t(g)];
-    if (id < 0) { id = int(rootOfGroup_.size()); rootOfGroup_.push_back(g); }
-    g = id;
+  // Above level 1: the group of every previous group (the units this level started with).
+  std::vector<int> childGroupAbove;
+  if (firstLevel) {
+    // The unit of every face, from the live units' face lists.
+    for (int u = 0; u < int(n); ++u) {
+      if (!alive(u)) continue;
+      const int tail = chains_[size_t(u)].tail;
+      int f = tail;
+      do {
+        f = faceNext_[size_t(f)];
+        faceGroup[size_t(meshFace(f))] = u;
+      } while (f != tail);
+    }
+    for (int& g : faceGroup) {
+      int& id = idOfUnit_[size_t(g)];
+      if (id < 0) { id = int(rootOfGroup_.size()); rootOfGroup_.push_back(g); }
+      g = id;
+    }
+  } else {
+    // Every face lies in one level-1 group, and level 1's ids follow the faces' order: a unit's
+    // first face is the first face of its lowest level-1 group, so taking the level-1 groups in
+    // order gives the same ids as the faces would, with one lookup per level-1 group. A unit
+    // (a previous group) is found through the units that absorbed it (absorbedBy_).
+    for (int u = 0; u < int(n); ++u) {
+      int r = u;
+      while (!alive(r)) r = absorbedBy_[size_t(r)];
+      absorbedBy_[size_t(u)] = r;  // from now on: u's live unit (followed by the units after u)
+    }
+    childGroupAbove.resize(n);
+    for (int& g : l1Group_) {  // the previous level's group -> this level's
+      const int u = absorbedBy_[size_t(g)];
+      int& id = idOfUnit_[size_t(u)];
+      if (id < 0) { id = int(rootOfGroup_.size()); rootOfGroup_.push_back(u); }
+      childGroupAbove[size_t(g)] = id;
+      g = id;
+    }
+    const std::vector<int>& level1Group = out.levels.front().faceGroup;
+    for (size_t f = 0; f < size_t(faceCount_); ++f) faceGroup[f] = l1Group_[size_t(level1Group[f])];
   }
   const size_t groupCount = rootOfGroup_.size();
   // The groups become the units of the next level now, indexed by group: the arrays of this
@@ -797,19 +891,16 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   nextLevelUnits();
   // Renumbered now, the exact cones below read the normals in memory order, computed once for
   // this level and the next ones (where the level-1 merges recomputed them from the mesh).
-  if (firstLevel) renumberFaces();
+  if (firstLevel) {
+    renumberFaces();
+    collectGroupVertices();
+  }
   if (firstLevel && !params_.strictGreedy) support_.assign(groupCount, ConeSupport());
   level.groups.resize(groupCount);
 
   // Children: faces (level 1) or previous groups, bucketed by new group. A previous group's new
   // group is that of any of its faces.
   const size_t childTotal = firstLevel ? size_t(faceCount_) : n;
-  std::vector<int> childGroupAbove;
-  if (!firstLevel) {
-    childGroupAbove.assign(childTotal, -1);
-    const std::vector<int>& prevFaceGroup = out.levels.back().faceGroup;
-    for (size_t f = 0; f < size_t(faceCount_); ++f) childGroupAbove[size_t(prevFaceGroup[f])] = faceGroup[f];
-  }
   const std::vector<int>& childGroup = firstLevel ? faceGroup : childGroupAbove;
   std::vector<int> childCount(groupCount, 0);
   for (size_t c = 0; c < childTotal; ++c) ++childCount[size_t(childGroup[c])];
@@ -841,9 +932,9 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     grp.box.SetNull();
   }
   if (firstLevel) {
-    for (size_t f = 0; f < size_t(faceCount_); ++f) {
-      vcg::Box3f& box = level.groups[size_t(faceGroup[f])].box;
-      for (uint32_t v : mesh_.faces[f]) box.Add(mesh_.positions[v]);
+    for (size_t g = 0; g < groupCount; ++g) {
+      vcg::Box3f& box = level.groups[g].box;
+      for (uint32_t i = l1VertBegin_[g]; i < l1VertBegin_[g + 1]; ++i) box.Add(l1Verts_[i]);
     }
   } else {
     const auto& prev = out.levels.back().groups;
@@ -867,11 +958,16 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   // A second sphere around the box centre; keep the smaller of it and the merged bound.
   std::vector<vcg::Point3d> boxCenter(groupCount);
   for (size_t g = 0; g < groupCount; ++g) boxCenter[g] = vcg::Point3d::Construct(level.groups[g].box.Center());
+  // The largest squared distance from the centre to a vertex: over each level-1 group's distinct
+  // vertices (a maximum of non-negative numbers: the same whatever the order).
   std::vector<double> r2(groupCount, 0.0);
-  for (size_t f = 0; f < size_t(faceCount_); ++f) {
-    const size_t g = size_t(faceGroup[f]);
-    for (uint32_t v : mesh_.faces[f])
-      r2[g] = std::max(r2[g], (vcg::Point3d::Construct(mesh_.positions[v]) - boxCenter[g]).SquaredNorm());
+  for (size_t g1 = 0; g1 < l1Group_.size(); ++g1) {
+    const size_t g = size_t(l1Group_[g1]);
+    const vcg::Point3d c = boxCenter[g];
+    double m = r2[g];
+    for (uint32_t i = l1VertBegin_[g1]; i < l1VertBegin_[g1 + 1]; ++i)
+      m = std::max(m, (vcg::Point3d::Construct(l1Verts_[i]) - c).SquaredNorm());
+    r2[g] = m;
   }
   for (size_t g = 0; g < groupCount; ++g) {
     Unit& unit = units_[g];
@@ -905,8 +1001,36 @@ void HierarchyBuilder::renumberFaces() {
     chains_[g].tail = int(next++);
   }
   faceNormal_.resize(nf);
+  faceArea_.resize(nf);
   double area;
-  for (size_t f = 0; f < nf; ++f) FaceNormalAndArea(mesh_, size_t(meshFace_[f]), faceNormal_[f], area);
+  for (size_t f = 0; f < nf; ++f) {
+    FaceNormalAndArea(mesh_, size_t(meshFace_[f]), faceNormal_[f], area);
+    faceArea_[size_t(meshFace_[f])] = area;
+  }
+}
+
+// Level 1's groups' distinct vertices (l1Verts_), from the renumbered faces: the units are the
+// level-1 groups, group g's faces the run of faceCount faces after group g-1's.
+void HierarchyBuilder::collectGroupVertices() {
+  const size_t groups = units_.size();
+  BigVector<int> seen(mesh_.positions.size(), -1);  // the last group that took the vertex
+  l1VertBegin_.resize(groups + 1);
+  l1Group_.resize(groups);
+  l1Verts_.clear();
+  l1Verts_.reserve(mesh_.positions.size() + mesh_.positions.size() / 2);
+  size_t face = 0;
+  for (size_t g = 0; g < groups; ++g) {
+    l1VertBegin_[g] = uint32_t(l1Verts_.size());
+    l1Group_[g] = int(g);
+    const size_t end = face + size_t(units_[g].faceCount);
+    for (; face < end; ++face)
+      for (const uint32_t v : mesh_.faces[size_t(meshFace_[face])])
+        if (seen[v] != int(g)) {
+          seen[v] = int(g);
+          l1Verts_.push_back(mesh_.positions[v]);
+        }
+  }
+  l1VertBegin_[groups] = uint32_t(l1Verts_.size());
 }
 
 // The groups found by emitLevel (rootOfGroup_, idOfUnit_) become the units of the next level
@@ -938,6 +1062,7 @@ void HierarchyBuilder::nextLevelUnits() {
   units_.swap(units);
   links_.swap(links);
   chains_.swap(chains);
+  absorbedBy_.resize(g);
   arena_.swap(arena);
   prefixEnd_ = arena_.size();
   std::vector<int>().swap(arenaOrder_);
@@ -1003,12 +1128,12 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     threshold *= params_.thresholdGrowth;
   }
 
-  // Areas per group, from the faces (in face order: the same sums on every run).
-  for (int f = 0; f < nf; ++f) {
-    vcg::Point3d n;
-    double area;
-    FaceNormalAndArea(mesh_, size_t(f), n, area);
-    for (auto& lv : out.levels) lv.groups[size_t(lv.faceGroup[size_t(f)])].area += area;
+  // Areas per group, from the faces' areas (renumberFaces) in face order: the same sums on every
+  // run. Level by level: each group's sum still takes its faces in face order.
+  for (auto& lv : out.levels) {
+    Group* groups = lv.groups.data();
+    const int* faceGroup = lv.faceGroup.data();
+    for (size_t f = 0; f < size_t(nf); ++f) groups[faceGroup[f]].area += faceArea_[f];
   }
   out.faceCount = nf;
   if (progress_ && !progress_(100, "grouping done")) { out = GroupHierarchy(); return Status::Cancelled(); }
@@ -1056,7 +1181,7 @@ Status BuildConeHierarchy(const IndexedMesh& mesh, const ConeGroupingParams& par
   out = GroupHierarchy();
   Status s = ValidateParams(params);
   if (!s.ok()) return s;
-  s = RequireValidForFaces(CheckMesh(mesh, /*withTopology=*/false));
+  s = RequireValidForFaces(mesh);
   if (!s.ok()) return s;
   if (mesh.faces.size() >= size_t(std::numeric_limits<int>::max()) / 4)
     return Status::Invalid("the mesh has too many faces for 32-bit group ids");

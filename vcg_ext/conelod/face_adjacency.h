@@ -52,10 +52,16 @@ void BuildFaceAdjacencyInto(const IndexedMesh& m, std::vector<uint32_t, Alloc>& 
       if (a == b) continue;  // a degenerate face's collapsed edge is no edge
       // The faces on edge (a,b) are those around a that also use b (b != a: among the others).
       uint32_t sharers = 1, lowest = f;
-      for (uint32_t i = vfStart[a]; i < vfStart[a + 1]; ++i) {
+      // The ring's bounds in locals: the pushes below store uint32_t too, and would otherwise make
+      // the compiler reload them at every corner.
+      const uint32_t ringBegin = vfStart[a], ringEnd = vfStart[a + 1];
+      uint32_t previous = f;  // the face of the corner before (f before the first: skipped anyway)
+      for (uint32_t i = ringBegin; i < ringEnd; ++i) {
         const detail::Corner& c = vf[i];
         const uint32_t g = c.face;
-        if (g == f || (i > vfStart[a] && vf[i - 1].face == g)) continue;  // a face listed twice at a
+        const uint32_t before = previous;
+        previous = g;
+        if (g == f || g == before) continue;  // f itself, or a face listed twice at a
         if (c.other1 != b && c.other2 != b) continue;
         ++sharers;
         lowest = std::min(lowest, g);

@@ -5,7 +5,10 @@
 
 namespace conelod {
 
-MeshReport CheckMesh(const IndexedMesh& m, bool withTopology) {
+namespace {
+// CheckMesh's counts without the topology; with `anyArea`, the degenerate faces are counted only
+// up to the first face with an area (enough for RequireValidForFaces: not all are degenerate).
+MeshReport CheckFaces(const IndexedMesh& m, bool anyArea) {
   MeshReport r;
   r.vertices = m.positions.size();
   r.faces = m.faces.size();
@@ -28,8 +31,15 @@ MeshReport CheckMesh(const IndexedMesh& m, bool withTopology) {
     double a;
     FaceNormalAndArea(m, f, n, a);
     if (a == 0) ++r.degenerateFaces;
+    else if (anyArea) break;
   }
-  if (!withTopology) return r;
+  return r;
+}
+}  // namespace
+
+MeshReport CheckMesh(const IndexedMesh& m, bool withTopology) {
+  MeshReport r = CheckFaces(m, false);
+  if (!withTopology || r.badIndexFaces || r.nonFiniteVertices) return r;
   const FaceAdjacency adj = BuildFaceAdjacency(m);
   r.borderEdges = adj.borderEdges;
   r.nonManifoldEdges = adj.nonManifoldEdges;
@@ -37,6 +47,8 @@ MeshReport CheckMesh(const IndexedMesh& m, bool withTopology) {
   r.components = m.faces.empty() ? 0 : ConnectedComponents(adj, comp);
   return r;
 }
+
+Status RequireValidForFaces(const IndexedMesh& m) { return RequireValidForFaces(CheckFaces(m, true)); }
 
 Status RequireValidForFaces(const MeshReport& r) {
   if (r.faces == 0)

@@ -33,4 +33,8 @@ MeshReport CheckMesh(const IndexedMesh& m, bool withTopology = true);
 // edges, unreferenced vertices and several components are accepted (documented behaviour).
 Status RequireValidForFaces(const MeshReport& r);
 
+// RequireValidForFaces(CheckMesh(m, false)), the same status, without counting every zero-area
+// face (it stops at the first face with an area).
+Status RequireValidForFaces(const IndexedMesh& m);
+
 }  // namespace conelod
