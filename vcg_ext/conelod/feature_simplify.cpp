@@ -603,6 +603,7 @@ class Evaluator {
   std::vector<FanFace> fan_;
   uint32_t fanOf_ = kNone, oldFanOf_ = kNone;
   std::vector<uint32_t> newFanIds_;  // faces around `to` after a collapse (GatherNewFan)
+  size_t newFanFromBegin_ = 0;       // where from's faces (from -> to) start in newFanIds_
   std::vector<Tri> oldFan_;          // the faces around `from` before it, as triangles
   std::vector<uint32_t> link_;       // link_[x] == linkStamp_: x is a neighbour of linkFrom_
   uint32_t linkStamp_ = 0, linkFrom_ = kNone;
@@ -789,6 +790,7 @@ void Evaluator::GatherNewFan(uint32_t from, uint32_t to) {
   newFanIds_.clear();
   for (uint32_t f : w_.VF[to])
     if (!w_.Contains(f, from)) newFanIds_.push_back(f);
+  newFanFromBegin_ = newFanIds_.size();
   for (uint32_t f : w_.VF[from])
     if (!w_.Contains(f, to)) newFanIds_.push_back(f);
 }
@@ -937,8 +939,7 @@ Evaluation Evaluator::Evaluate(uint32_t v, uint32_t retryTo, double bound, bool 
 
 void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
   Work& w = w_;
-  linkFrom_ = kNone;
-  fanOf_ = kNone;
+  ResetCaches();
   const bool track = track_;
   if (track) {
     GatherNewFan(from, to);
@@ -951,7 +952,7 @@ void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
     scratchFirst_.clear();
     scratchPts_.push_back(w.P[from]);
     scratchFirst_.push_back(kNoTri);
-    size_t next = newFanIds_.size() - (w.VF[from].size() - size_t(w.EdgeFaces(from, to, nullptr, 0)));
+    size_t next = newFanFromBegin_;
     for (uint32_t f : w.VF[from]) {
       const size_t first = w.Contains(f, to) ? kNoTri : next++;
       for (const P3& x : owned_[f]) {
