@@ -636,8 +636,11 @@ class Simplifier : private TrackingStore, public Evaluator {
   };
   void Push(uint32_t v, bool recompute);
   bool RaiseBound();
-  template <class Admit>
-  bool FirstPassAhead(unsigned threads, const Admit& admit, const Progress& progress);
+  // CurvatureThreshold (§3.3): v (V_K or V_M) may be removed, |K| D^2 or |M| D under the threshold.
+  bool Admitted(uint32_t v) const;
+  // The inputs of CurvatureK(v), asked for ahead of a Push that recomputes it.
+  void PrefetchCurvatureInputs(uint32_t v) const;
+  bool FirstPassAhead(unsigned threads, const Progress& progress);
   void InvalidateAhead(uint32_t from, uint32_t to);
 
   std::priority_queue<Entry> heapK_, heapM_;
@@ -996,11 +999,7 @@ void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
   w.cls[from] = VertexClass::Unused;
   if (aheadLeft_ > 0) InvalidateAhead(from, to);
   // ... and for their faces' corners and angles, read by Push after the re-assignment below.
-  for (uint32_t x : scratchRing_)
-    for (uint32_t f : w.VF[x]) {
-      __builtin_prefetch(&w.F[f]);
-      __builtin_prefetch(&w.faceAngles[f]);
-    }
+  for (uint32_t x : scratchRing_) PrefetchCurvatureInputs(x);
   if (track) {
     // Each removed original vertex answers to its nearest face of the new fan.
     double worst = 0;
@@ -1034,6 +1033,20 @@ void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
         visit_[x] = mark_;
         if (!queued_[x] && !deferredMark_[x]) Push(x, false);
       }
+}
+
+bool Simplifier::Admitted(uint32_t v) const {
+  if (p_.curvatureThreshold <= 0) return true;
+  const Work& w = w_;
+  const double curv = w.cls[v] == VertexClass::Smooth ? std::abs(w.K[v]) * (w.diag * w.diag) : std::abs(w.M[v]) * w.diag;
+  return curv < p_.curvatureThreshold;
+}
+
+void Simplifier::PrefetchCurvatureInputs(uint32_t v) const {
+  for (uint32_t f : w_.VF[v]) {
+    __builtin_prefetch(&w_.F[f]);
+    __builtin_prefetch(&w_.faceAngles[f]);
+  }
 }
 
 void Simplifier::Push(uint32_t v, bool recompute) {
@@ -1078,10 +1091,7 @@ bool Simplifier::RaiseBound() {
   for (size_t i = 0; i < admitted_.size(); ++i) {
     if (i + kRecordAhead < admitted_.size()) PrefetchRecord(admitted_[i + kRecordAhead].v);
     if (i + kFacesAhead < admitted_.size() && fanChanged_[admitted_[i + kFacesAhead].v])
-      for (uint32_t f : w_.VF[admitted_[i + kFacesAhead].v]) {
-        __builtin_prefetch(&w_.F[f]);
-        __builtin_prefetch(&w_.faceAngles[f]);
-      }
+      PrefetchCurvatureInputs(admitted_[i + kFacesAhead].v);
     const Deferred& d = admitted_[i];
     const bool same = !fanChanged_[d.v];
     Push(d.v, false);
@@ -1090,19 +1100,18 @@ bool Simplifier::RaiseBound() {
   return true;
 }
 
-// Evaluates every queued vertex that `admit`s (the curvature threshold) under the first bound,
+// Evaluates every queued vertex the curvature threshold admits under the first bound,
 // in index order, split over `threads` threads (this one included). Each writes only ahead_ and
 // aheadStamp_ of its own vertices and its evaluator's scratch; nothing is collapsed meanwhile.
 // If a thread fails, nothing made ahead is used. Progress is reported (and cancellation seen)
 // on this thread only, between chunks; false: cancelled.
-template <class Admit>
-bool Simplifier::FirstPassAhead(unsigned threads, const Admit& admit, const Progress& progress) {
+bool Simplifier::FirstPassAhead(unsigned threads, const Progress& progress) {
   const uint32_t nv = uint32_t(w_.P.size());
   ahead_.assign(nv, Evaluation());
   aheadStamp_.assign(nv, kNone);
   std::vector<uint32_t> batch;
   for (uint32_t v = 0; v < nv; ++v)
-    if (queued_[v] && (w_.cls[v] == VertexClass::Smooth || w_.cls[v] == VertexClass::FeatureLine) && admit(v))
+    if (queued_[v] && (w_.cls[v] == VertexClass::Smooth || w_.cls[v] == VertexClass::FeatureLine) && Admitted(v))
       batch.push_back(v);
   const size_t n = batch.size();
   constexpr size_t kChunk = 512;
@@ -1194,20 +1203,13 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
     if (w.cls[v] == VertexClass::FeatureLine) ++nM;
     Push(v, false);  // Classify has just computed K and M
   }
-  const double d2 = w.diag * w.diag, d1 = w.diag;
   if (grow_ && p_.firstPassAhead) {
     // Every vertex's first evaluation (a sixth of the time) depends on the input only: made
     // here, in memory order and on every core, and used in the queue's order unless a collapse
     // has come within two rings of the vertex by then (the output is the same either way).
     unsigned threads = p_.threads;
     if (threads == 0) threads = std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
-    const auto admit = [&](uint32_t v) {
-      const VertexClass c = w.cls[v];
-      if (p_.curvatureThreshold <= 0) return true;
-      const double curv = c == VertexClass::Smooth ? std::abs(w.K[v]) * d2 : std::abs(w.M[v]) * d1;
-      return curv < p_.curvatureThreshold;
-    };
-    if (!FirstPassAhead(threads, admit, progress)) return Status::Cancelled();
+    if (!FirstPassAhead(threads, progress)) return Status::Cancelled();
   }
   size_t popsK = 0, popsM = 0, iter = 0;
   bool reached = target > 0 && faces_ <= target;
@@ -1243,10 +1245,7 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
                                  : int(100.0 * double(popsK + popsM) / double(nK + nM + 1));
       if (!progress(std::min(99, std::max(0, pct)), "feature-preserving simplification")) return Status::Cancelled();
     }
-    if (p_.curvatureThreshold > 0) {
-      const double curv = c == VertexClass::Smooth ? std::abs(w.K[v]) * d2 : std::abs(w.M[v]) * d1;
-      if (curv >= p_.curvatureThreshold) continue;
-    }
+    if (!Admitted(v)) continue;
     // The evaluation made ahead in the first pass, if nothing it read has changed since.
     Evaluation ev;
     if (aheadLeft_ > 0 && aheadStamp_[v] != kNone) {
