@@ -13,6 +13,7 @@
 
 #include <vcg/space/box3.h>
 
+#include "conelod/cores.h"
 #include "conelod/mesh_check.h"
 
 namespace conelod {
@@ -1208,7 +1209,7 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
     // here, in memory order and on every core, and used in the queue's order unless a collapse
     // has come within two rings of the vertex by then (the output is the same either way).
     unsigned threads = p_.threads;
-    if (threads == 0) threads = std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
+    if (threads == 0) threads = std::min(8u, CoreCount());
     if (!FirstPassAhead(threads, progress)) return Status::Cancelled();
   }
   size_t popsK = 0, popsM = 0, iter = 0;

@@ -74,8 +74,8 @@ struct FeatureSimplifyParams {
                                    // curvature order up to the target
   unsigned threads = 0;            // threads for the first pass of the growing bound (every vertex's
                                    // first evaluation, which depends on the input only, made ahead in
-                                   // memory order); 0 = one per core. The output is the same for any
-                                   // count.
+                                   // memory order); 0 = one per core, at most 8. The output is the
+                                   // same for any count.
   bool firstPassAhead = true;      // false: the first pass too is evaluated in the queue's order (the
                                    // same output, slower; for checking)
 };

@@ -11,6 +11,8 @@
 
 #include <vcg/space/box3.h>
 
+#include "conelod/cores.h"
+
 namespace conelod {
 
 namespace {
@@ -250,7 +252,7 @@ Status SimplifyInParts(const IndexedMesh& below, const std::vector<std::vector<i
 }  // namespace
 
 int SimplificationThreads(const HierarchicalSimplificationParams& params) {
-  return params.threads > 0 ? params.threads : std::max(1, int(std::thread::hardware_concurrency()));
+  return params.threads > 0 ? params.threads : int(CoreCount());
 }
 
 Status BuildSimplifiedLevels(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
