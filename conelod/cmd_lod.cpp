@@ -56,7 +56,7 @@ int LodBuild(int argc, char** argv) {
   const double loadSeconds = timer.seconds();
   Status s = ValidateParams(params.grouping);
   if (!s.ok()) return Fail(kUsage, s.message);
-  s = RequireValidForFaces(CheckMesh(im, false));
+  s = RequireValidForFaces(im);
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
   LodBuildStats st;
   s = BuildLodFile(im, params, output, &st);

@@ -124,7 +124,7 @@ int CmdSimplify(int argc, char** argv) {
   if (!err.empty()) return Fail(kIoError, err);
   std::vector<size_t> faceOf;
   const IndexedMesh im = ToIndexedMesh(mesh, &faceOf);
-  Status s = RequireValidForFaces(CheckMesh(im, false));
+  Status s = RequireValidForFaces(im);
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
 
   // Group ids per face of `im`.

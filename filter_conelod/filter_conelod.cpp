@@ -619,7 +619,7 @@ bool FilterConeLodPlugin::applyGroupQem(MeshModel& mm, const RichParameterList& 
 
   std::vector<size_t> faceOf;
   const IndexedMesh im = ToIndexedMesh(mm.cm, &faceOf);
-  s = RequireValidForFaces(CheckMesh(im, false));
+  s = RequireValidForFaces(im);
   if (!s.ok()) return fail(QString::fromStdString(s.message) + " (the mesh was not changed)");
   QElapsedTimer timer;
   timer.start();
@@ -922,7 +922,7 @@ bool FilterConeLodPlugin::applyLodExport(MeshModel& mm, const RichParameterList&
   const IndexedMesh im = ToIndexedMesh(mm.cm);
   Status s = ValidateParams(params.grouping);
   if (!s.ok()) return fail(QString::fromStdString(s.message));
-  s = RequireValidForFaces(CheckMesh(im, false));
+  s = RequireValidForFaces(im);
   if (!s.ok()) return fail(QString::fromStdString(s.message) + " (no file was written)");
   LodBuildStats stats;
   s = BuildLodFile(im, params, path.toStdString(), &stats, FromCallback(cb));

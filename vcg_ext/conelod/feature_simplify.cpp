@@ -1316,7 +1316,7 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
 Status ValidateAndCheckInput(const IndexedMesh& mesh, const FeatureSimplifyParams& p) {
   Status s = ValidateParams(p);
   if (!s.ok()) return s;
-  return RequireValidForFaces(CheckMesh(mesh, false));
+  return RequireValidForFaces(mesh);
 }
 
 }  // namespace

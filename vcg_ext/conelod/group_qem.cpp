@@ -852,7 +852,7 @@ void Simplifier::output(GroupQemResult& out) const {
 
 Status CheckInput(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
                   const std::vector<const std::vector<int>*>& coarser) {
-  Status s = RequireValidForFaces(CheckMesh(mesh, false));
+  Status s = RequireValidForFaces(mesh);
   if (!s.ok()) return s;
   if (faceGroup.size() != mesh.faces.size())
     return Status::Invalid("the group ids are " + std::to_string(faceGroup.size()) + " for " +

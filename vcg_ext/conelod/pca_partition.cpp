@@ -840,8 +840,9 @@ Status BuildPcaTree(const IndexedMesh& mesh, const PcaPartitionParams& params, P
   out = PcaTree();
   Status s = ValidateParams(params);
   if (!s.ok()) return s;
-  // CheckMesh() computes every normal; the build computes the areas anyway, so only the checks
-  // that must come first run here, and CheckMesh() words the message when one fails.
+  // Only the checks that must come before the build run here (the build computes the areas and
+  // reports a mesh of zero-area faces itself); RequireValidForFaces() words the message when one
+  // fails.
   bool valid = !mesh.faces.empty();
   for (const auto& t : mesh.faces) {
     for (uint32_t v : t) {
@@ -852,7 +853,7 @@ Status BuildPcaTree(const IndexedMesh& mesh, const PcaPartitionParams& params, P
     if (!valid) break;
   }
   if (!valid) {
-    s = RequireValidForFaces(CheckMesh(mesh, false));
+    s = RequireValidForFaces(mesh);
     if (!s.ok()) return s;
   }
   if (mesh.faces.size() >= (size_t(1) << (32 - kStateBits)))

@@ -109,7 +109,7 @@ Status ComputePixelBudget(const IndexedMesh& mesh, const PixelBudgetParams& p, P
   out = PixelBudgetResult();
   Status s = ValidateParams(p);
   if (!s.ok()) return s;
-  s = RequireValidForFaces(CheckMesh(mesh, false));
+  s = RequireValidForFaces(mesh);
   if (!s.ok()) return s;
   PixelBudgetResult r;
   r.currentFaces = mesh.faceCount();

@@ -331,7 +331,7 @@ Status BuildProgressiveClusterMesh(const IndexedMesh& mesh, const PcaTree& tree,
   out = ProgressiveMeshResult();
   Status s = ValidateParams(params);
   if (!s.ok()) return s;
-  s = RequireValidForFaces(CheckMesh(mesh, false));
+  s = RequireValidForFaces(mesh);
   if (!s.ok()) return s;
   if (tree.empty() || size_t(tree.faceCount) != mesh.faces.size())
     return Status::Invalid("the PCA tree does not belong to this mesh");

@@ -51,8 +51,8 @@ struct Accumulator {
 
 Status SampledDistance(const IndexedMesh& from, const IndexedMesh& to, int faceSamples, SurfaceDistance& out) {
   out = SurfaceDistance();
-  Status s = RequireValidForFaces(CheckMesh(from, false));
-  if (s.ok()) s = RequireValidForFaces(CheckMesh(to, false));
+  Status s = RequireValidForFaces(from);
+  if (s.ok()) s = RequireValidForFaces(to);
   if (!s.ok()) return s;
   if (faceSamples < 0) return Status::Invalid("the number of samples must be >= 0");
   DMesh target;
