@@ -1248,15 +1248,13 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
     }
     if (!Admitted(v)) continue;
     // The evaluation made ahead in the first pass, if nothing it read has changed since.
-    Evaluation ev;
-    if (aheadLeft_ > 0 && aheadStamp_[v] != kNone) {
+    bool useAhead = false;
+    if (aheadLeft_ > 0 && aheadStamp_[v] != kNone) {  // made ahead: used, or dropped as outdated
       --aheadLeft_;
-      const bool same = aheadStamp_[v] == e.stamp && retry_[v] == kNone;
+      useAhead = aheadStamp_[v] == e.stamp && retry_[v] == kNone;
       aheadStamp_[v] = kNone;
-      ev = same ? ahead_[v] : Evaluate(v, retry_[v], bound_, track_);
-    } else {
-      ev = Evaluate(v, retry_[v], bound_, track_);
     }
+    const Evaluation ev = useAhead ? ahead_[v] : Evaluate(v, retry_[v], bound_, track_);
     retry_[v] = kNone;
     if (ev.kind == Evaluation::Collapse) {
       maxD_ = std::max(maxD_, ev.d);
