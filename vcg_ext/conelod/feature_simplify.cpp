@@ -593,7 +593,9 @@ class Evaluator {
     return w_.P[x == from ? to : x];
   }
   void GatherNewFan(uint32_t from, uint32_t to);
-  double DistanceToNewFan2(const P3& p, uint32_t from, uint32_t to, double enough2) const;
+  // Squared distance from p to the new fan, trying newFanIds_[first] first (kNoTri: none); the
+  // search stops once within `enough2` (the value is then some distance <= enough2).
+  double DistanceToNewFan2(const P3& p, uint32_t from, uint32_t to, double enough2, size_t first) const;
   double CollapseError(uint32_t from, uint32_t to, double d, double limit);
   double OutwardError(uint32_t from, uint32_t to, double limit);
 
@@ -799,36 +801,53 @@ void Evaluator::GatherNewFan(uint32_t from, uint32_t to) {
     if (!w_.Contains(f, to)) newFanIds_.push_back(f);
 }
 
-double Evaluator::DistanceToNewFan2(const P3& p, uint32_t from, uint32_t to, double enough2) const {
+double Evaluator::DistanceToNewFan2(const P3& p, uint32_t from, uint32_t to, double enough2, size_t first) const {
+  auto dist2 = [&](uint32_t f) {
+    return PointTriangleDistance2(p, Corner(f, 0, from, to), Corner(f, 1, from, to), Corner(f, 2, from, to));
+  };
   double best = std::numeric_limits<double>::infinity();
-  for (uint32_t f : newFanIds_) {
-    best = std::min(best, PointTriangleDistance2(p, Corner(f, 0, from, to), Corner(f, 1, from, to),
-                                                 Corner(f, 2, from, to)));
+  if (first < newFanIds_.size()) {
+    best = dist2(newFanIds_[first]);
+    if (best <= enough2) return best;
+  }
+  for (size_t i = 0; i < newFanIds_.size(); ++i) {
+    if (i == first) continue;
+    best = std::min(best, dist2(newFanIds_[i]));
     if (best <= enough2) break;
   }
   return best;
 }
 
 // The largest distance from `from` and the original vertices its faces answer for to the new
-// fan: exact when above `limit`, some value <= limit otherwise (points within the limit stop
-// their search early). `from` itself comes first (its distance to the nearest new face, d, is
-// known), then each point is tried first against the new version of the face it answered for.
+// fan: exact when above `limit`, some value <= limit otherwise. A point's search stops at the
+// first face within the limit, or within the largest distance found so far (it cannot raise the
+// maximum then: the maximum stays exact). `from` itself comes first (its distance to the nearest
+// new face, d, is known), then each point is tried first against the new version of the face it
+// answered for.
 double Evaluator::CollapseError(uint32_t from, uint32_t to, double d, double limit) {
   GatherNewFan(from, to);
   if (newFanIds_.empty()) return std::numeric_limits<double>::infinity();
   const double limit2 = limit * limit;
-  double worst = d <= limit ? d : std::sqrt(DistanceToNewFan2(w_.P[from], from, to, limit2));
-  if (worst > limit) return worst;
-  for (uint32_t f : w_.VF[from]) {
-    const bool survives = !w_.Contains(f, to);
-    for (const P3& x : owned_[f]) {
-      if (survives && PointTriangleDistance2(x, Corner(f, 0, from, to), Corner(f, 1, from, to),
-                                             Corner(f, 2, from, to)) <= limit2)
-        continue;
-      worst = std::max(worst, std::sqrt(DistanceToNewFan2(x, from, to, limit2)));
-    }
+  if (d > limit) {
+    const double worst = std::sqrt(DistanceToNewFan2(w_.P[from], from, to, limit2, kNoTri));
+    if (worst > limit) return worst;
   }
-  return worst;
+  double worst2 = 0;  // squared: the root of the largest square is the largest root
+  size_t next = newFanFromBegin_;
+  for (uint32_t f : w_.VF[from]) {
+    // Where to look first: a face that stays, at its new version; one that dies (from, to, o),
+    // at the new face beyond its edge (from, o), which takes o's side of it.
+    size_t first = kNoTri;
+    if (!w_.Contains(f, to)) {
+      first = next++;
+    } else if (!owned_[f].empty()) {
+      const uint32_t o = w_.Third(f, from, to);
+      for (size_t i = newFanFromBegin_; i < newFanIds_.size() && first == kNoTri; ++i)
+        if (w_.Contains(newFanIds_[i], o)) first = i;
+    }
+    for (const P3& x : owned_[f]) worst2 = std::max(worst2, DistanceToNewFan2(x, from, to, std::max(limit2, worst2), first));
+  }
+  return std::sqrt(worst2);
 }
 
 // The other direction (output -> input), which the original vertices cannot see (a new face may
@@ -855,9 +874,11 @@ double Evaluator::OutwardError(uint32_t from, uint32_t to, double limit) {
     const FanFace& ff = fan_[i];
     if (ff.x == to || ff.y == to) continue;
     const P3 &px = w_.P[ff.x], &py = w_.P[ff.y];
-    worst2 = std::max(worst2, DistanceToTris2((u + px + py) / 3.0, oldFan_, i, room2));
+    // A sample's search stops within the room or within the largest distance found so far (the
+    // maximum stays exact).
+    worst2 = std::max(worst2, DistanceToTris2((u + px + py) / 3.0, oldFan_, i, std::max(room2, worst2)));
     // New edges (to, x): each is the x edge of one new face (the y edge of its neighbour).
-    worst2 = std::max(worst2, DistanceToTris2((u + px) * 0.5, oldFan_, i, room2));
+    worst2 = std::max(worst2, DistanceToTris2((u + px) * 0.5, oldFan_, i, std::max(room2, worst2)));
   }
   return std::max(old, std::sqrt(worst2));
 }
