@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <exception>
+#include <mutex>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -126,6 +128,35 @@ double DistanceToTris2(const P3& p, const std::vector<Tri>& tris, size_t first, 
   return best;
 }
 
+// Runs body(begin, end) over [0, n) in chunks of `chunk`, on `threads` threads (this one
+// included; if no thread can be started, this one does it all). The bodies must touch disjoint
+// data. An exception from a body is rethrown here, after every thread has stopped.
+template <class Body>
+void ParallelChunks(size_t n, unsigned threads, size_t chunk, const Body& body) {
+  threads = unsigned(std::max<size_t>(1, std::min<size_t>(threads, (n + chunk - 1) / chunk)));
+  std::atomic<size_t> next(0);
+  std::exception_ptr error;
+  std::mutex errorMutex;
+  auto work = [&] {
+    try {
+      for (size_t begin; (begin = next.fetch_add(chunk)) < n;) body(begin, std::min(n, begin + chunk));
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(errorMutex);
+      if (!error) error = std::current_exception();
+      next = n;
+    }
+  };
+  std::vector<std::thread> pool;
+  try {
+    for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work);
+  } catch (...) {
+    // no (more) threads: the ones started and this one share the work
+  }
+  work();
+  for (std::thread& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+}
+
 // The faces around a vertex: up to kInline ids stored in place (no pointer to follow for the
 // usual valences), more on the heap. The order is that of push_back / swap-removal, as with a
 // std::vector.
@@ -211,7 +242,9 @@ class Work {
     const auto& t = F[f];
     return (P[t[1]] - P[t[0]]) ^ (P[t[2]] - P[t[0]]);
   }
-  bool Contains(uint32_t f, uint32_t v) const { return F[f][0] == v || F[f][1] == v || F[f][2] == v; }
+  // (Here and in the fan loops below, `|` instead of `||`: which corner matches is data, not a
+  // pattern a branch predictor can learn.)
+  bool Contains(uint32_t f, uint32_t v) const { return (F[f][0] == v) | (F[f][1] == v) | (F[f][2] == v); }
   // Faces containing both a and b, written to out (at most `cap`); returns the count.
   int EdgeFaces(uint32_t a, uint32_t b, uint32_t* out, int cap) const {
     int n = 0;
@@ -250,7 +283,8 @@ class Work {
   bool IsManifoldVertex(uint32_t v, std::vector<uint32_t>& verts, std::vector<uint32_t>& parent,
                         std::vector<int>& degree) const;
   void ExtendFeatureLines(double featureAngleDeg);
-  void Classify(const FeatureSimplifyParams& p);
+  // On `threads` threads; every face's angles must be valid (it only reads them).
+  void Classify(const FeatureSimplifyParams& p, unsigned threads);
   void FillInfo();
 };
 
@@ -410,17 +444,26 @@ Status Work::Build(const IndexedMesh& in, const FeatureSimplifyParams& p) {
     }
     i = j;
   }
-  {
-    std::vector<uint32_t> verts, parent;  // scratch for the fan test, allocated once
+  // The per-vertex and per-face passes below run on the first pass's threads (each writes its
+  // own vertices' or faces' entries only).
+  const unsigned threads = p.threads == 0 ? std::min(8u, CoreCount()) : p.threads;
+  constexpr size_t kChunk = 4096;
+  ParallelChunks(nv, threads, kChunk, [&](size_t begin, size_t end) {
+    std::vector<uint32_t> verts, parent;  // scratch for the fan test
     std::vector<int> degree;
-    for (uint32_t v = 0; v < nv; ++v)
-      if (!locked[v] && !IsManifoldVertex(v, verts, parent, degree)) locked[v] = 1;
-  }
+    for (size_t v = begin; v < end; ++v)
+      if (!locked[v] && !IsManifoldVertex(uint32_t(v), verts, parent, degree)) locked[v] = 1;
+  });
 
   if (p.extendFeatureLines) ExtendFeatureLines(p.featureAngleDeg);
+  // Every face's corner angles and area now (the curvatures read nearly all of them), so that
+  // Classify only reads them.
   faceAngles.resize(F.size());
   faceAnglesValid.assign(F.size(), 0);
-  Classify(p);
+  ParallelChunks(F.size(), threads, kChunk, [&](size_t begin, size_t end) {
+    for (size_t f = begin; f < end; ++f) Angles(uint32_t(f));
+  });
+  Classify(p, threads);
   return Status::Ok();
 }
 
@@ -494,26 +537,28 @@ void Work::ExtendFeatureLines(double featureAngleDeg) {
   }
 }
 
-void Work::Classify(const FeatureSimplifyParams& p) {
+void Work::Classify(const FeatureSimplifyParams& p, unsigned threads) {
   const size_t nv = P.size();
   cls.assign(nv, VertexClass::Unused);
   K.assign(nv, 0.0);
   M.assign(nv, 0.0);
   const double d2 = diag * diag;
-  for (uint32_t v = 0; v < nv; ++v) {
-    if (VF[v].empty()) continue;
-    const size_t fc = feat[v].size();
-    if (locked[v] || fc == 1 || fc >= 3) {
-      cls[v] = VertexClass::Feature;
-    } else if (fc == 2) {
-      cls[v] = VertexClass::FeatureLine;
-      M[v] = CurvatureM(v);
-    } else {
-      K[v] = CurvatureK(v);
-      cls[v] = (p.featureCurvature > 0 && std::abs(K[v]) * d2 >= p.featureCurvature) ? VertexClass::Feature
-                                                                                        : VertexClass::Smooth;
+  ParallelChunks(nv, threads, 4096, [&](size_t begin, size_t end) {
+    for (uint32_t v = uint32_t(begin); v < end; ++v) {
+      if (VF[v].empty()) continue;
+      const size_t fc = feat[v].size();
+      if (locked[v] || fc == 1 || fc >= 3) {
+        cls[v] = VertexClass::Feature;
+      } else if (fc == 2) {
+        cls[v] = VertexClass::FeatureLine;
+        M[v] = CurvatureM(v);
+      } else {
+        K[v] = CurvatureK(v);
+        cls[v] = (p.featureCurvature > 0 && std::abs(K[v]) * d2 >= p.featureCurvature) ? VertexClass::Feature
+                                                                                          : VertexClass::Smooth;
+      }
     }
-  }
+  });
 }
 
 void Work::FillInfo() {
@@ -696,7 +741,7 @@ CollapseRefusal Evaluator::Check(uint32_t from, uint32_t to, double* dOut, doubl
   if (from == to) return CollapseRefusal::NotAnEdge;
   BuildFan(from);
   int ne = 0;
-  for (const FanFace& ff : fan_) ne += (ff.x == to || ff.y == to) ? 1 : 0;
+  for (const FanFace& ff : fan_) ne += int((ff.x == to) | (ff.y == to));
   if (ne == 0) return CollapseRefusal::NotAnEdge;
   if (w.locked[from] || w.cls[from] == VertexClass::Feature || w.cls[from] == VertexClass::Unused)
     return CollapseRefusal::LockedVertex;
@@ -717,7 +762,7 @@ CollapseRefusal Evaluator::Check(uint32_t from, uint32_t to, double* dOut, doubl
   double d2 = cutoff2;  // faces whose plane is beyond the cutoff are not measured
   int modified = 0;
   for (const FanFace& ff : fan_) {
-    if (ff.x == to || ff.y == to) continue;
+    if ((ff.x == to) | (ff.y == to)) continue;
     ++modified;
     const P3& px = w.P[ff.x];
     const P3& py = w.P[ff.y];
@@ -772,10 +817,9 @@ CollapseRefusal Evaluator::CheckTopology(uint32_t from, uint32_t to) {
       for (uint32_t x : w.F[f]) link_[x] = linkStamp_;
   }
   for (uint32_t f : w.VF[to])
-    for (uint32_t x : w.F[f]) {
-      if (x == to || x == from || x == opp[0] || x == opp[1]) continue;
-      if (link_[x] == linkStamp_) return CollapseRefusal::Topology;
-    }
+    for (uint32_t x : w.F[f])  // a common neighbour other than the opposite vertices
+      if ((link_[x] == linkStamp_) & (x != to) & (x != from) & (x != opp[0]) & (x != opp[1]))
+        return CollapseRefusal::Topology;
   // An interior edge between two border vertices would pinch the surface.
   if (ne == 2) {
     auto onBorder = [&](uint32_t v) {
