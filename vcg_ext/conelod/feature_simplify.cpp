@@ -128,18 +128,18 @@ double DistanceToTris2(const P3& p, const std::vector<Tri>& tris, size_t first, 
   return best;
 }
 
-// Runs body(begin, end) over [0, n) in chunks of `chunk`, on `threads` threads (this one
-// included; if no thread can be started, this one does it all). The bodies must touch disjoint
-// data. An exception from a body is rethrown here, after every thread has stopped.
+// Runs body(begin, end, thread) over [0, n) in chunks of `chunk`, on `threads` threads (thread
+// 0 is this one; if no other can be started, this one does it all). The bodies must touch
+// disjoint data. An exception from a body is rethrown here, after every thread has stopped.
 template <class Body>
 void ParallelChunks(size_t n, unsigned threads, size_t chunk, const Body& body) {
   threads = unsigned(std::max<size_t>(1, std::min<size_t>(threads, (n + chunk - 1) / chunk)));
   std::atomic<size_t> next(0);
   std::exception_ptr error;
   std::mutex errorMutex;
-  auto work = [&] {
+  auto work = [&](unsigned thread) {
     try {
-      for (size_t begin; (begin = next.fetch_add(chunk)) < n;) body(begin, std::min(n, begin + chunk));
+      for (size_t begin; (begin = next.fetch_add(chunk)) < n;) body(begin, std::min(n, begin + chunk), thread);
     } catch (...) {
       std::lock_guard<std::mutex> lock(errorMutex);
       if (!error) error = std::current_exception();
@@ -148,14 +148,18 @@ void ParallelChunks(size_t n, unsigned threads, size_t chunk, const Body& body) 
   };
   std::vector<std::thread> pool;
   try {
-    for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work);
+    for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work, t);
   } catch (...) {
     // no (more) threads: the ones started and this one share the work
   }
-  work();
+  work(0);
   for (std::thread& t : pool) t.join();
   if (error) std::rethrow_exception(error);
 }
+
+// The threads of the first pass and of the set-up's passes: FeatureSimplifyParams::threads, 0 =
+// one per core, at most 8.
+unsigned FeatureThreads(const FeatureSimplifyParams& p) { return p.threads == 0 ? std::min(8u, CoreCount()) : p.threads; }
 
 // The faces around a vertex: up to kInline ids stored in place (no pointer to follow for the
 // usual valences), more on the heap. The order is that of push_back / swap-removal, as with a
@@ -446,9 +450,9 @@ Status Work::Build(const IndexedMesh& in, const FeatureSimplifyParams& p) {
   }
   // The per-vertex and per-face passes below run on the first pass's threads (each writes its
   // own vertices' or faces' entries only).
-  const unsigned threads = p.threads == 0 ? std::min(8u, CoreCount()) : p.threads;
+  const unsigned threads = FeatureThreads(p);
   constexpr size_t kChunk = 4096;
-  ParallelChunks(nv, threads, kChunk, [&](size_t begin, size_t end) {
+  ParallelChunks(nv, threads, kChunk, [&](size_t begin, size_t end, unsigned) {
     std::vector<uint32_t> verts, parent;  // scratch for the fan test
     std::vector<int> degree;
     for (size_t v = begin; v < end; ++v)
@@ -460,7 +464,7 @@ Status Work::Build(const IndexedMesh& in, const FeatureSimplifyParams& p) {
   // Classify only reads them.
   faceAngles.resize(F.size());
   faceAnglesValid.assign(F.size(), 0);
-  ParallelChunks(F.size(), threads, kChunk, [&](size_t begin, size_t end) {
+  ParallelChunks(F.size(), threads, kChunk, [&](size_t begin, size_t end, unsigned) {
     for (size_t f = begin; f < end; ++f) Angles(uint32_t(f));
   });
   Classify(p, threads);
@@ -543,7 +547,7 @@ void Work::Classify(const FeatureSimplifyParams& p, unsigned threads) {
   K.assign(nv, 0.0);
   M.assign(nv, 0.0);
   const double d2 = diag * diag;
-  ParallelChunks(nv, threads, 4096, [&](size_t begin, size_t end) {
+  ParallelChunks(nv, threads, 4096, [&](size_t begin, size_t end, unsigned) {
     for (uint32_t v = uint32_t(begin); v < end; ++v) {
       if (VF[v].empty()) continue;
       const size_t fc = feat[v].size();
@@ -1182,35 +1186,29 @@ bool Simplifier::FirstPassAhead(unsigned threads, const Progress& progress) {
   const size_t n = batch.size();
   constexpr size_t kChunk = 512;
   threads = unsigned(std::min<size_t>(threads, (n + kChunk - 1) / kChunk));
-  std::atomic<size_t> next(0);
-  std::atomic<bool> failed(false), cancelled(false);
-  auto work = [&](Evaluator& ev, bool reports) {
-    try {
-      for (size_t begin; !cancelled && (begin = next.fetch_add(kChunk)) < n;) {
-        for (size_t i = begin; i < std::min(n, begin + kChunk); ++i) {
-          const uint32_t v = batch[i];
-          ahead_[v] = ev.Evaluate(v, kNone, bound_, track_);
-          aheadStamp_[v] = stamp_[v];
-        }
-        if (reports && progress && !progress(0, "feature-preserving simplification")) cancelled = true;
-      }
-    } catch (...) {
-      failed = true;
-    }
-  };
-  std::vector<Evaluator> helpers;
-  std::vector<std::thread> pool;
+  std::vector<Evaluator> helpers;  // one per thread beside this one (whose evaluator is *this)
   try {
     helpers.reserve(threads > 1 ? threads - 1 : 0);
-    for (unsigned t = 1; t < threads; ++t) {
-      helpers.emplace_back(w_, p_, static_cast<TrackingStore&>(*this));
-      pool.emplace_back(work, std::ref(helpers.back()), false);
-    }
+    for (unsigned t = 1; t < threads; ++t) helpers.emplace_back(w_, p_, static_cast<TrackingStore&>(*this));
   } catch (...) {
-    // no (more) threads: the ones started and this one share the batch
+    // no room for more: fewer threads
   }
-  work(*this, true);
-  for (std::thread& t : pool) t.join();
+  std::atomic<bool> cancelled(false);
+  bool failed = false;
+  try {
+    ParallelChunks(n, unsigned(helpers.size() + 1), kChunk, [&](size_t begin, size_t end, unsigned thread) {
+      if (cancelled) return;
+      Evaluator& ev = thread == 0 ? *this : helpers[thread - 1];
+      for (size_t i = begin; i < end; ++i) {
+        const uint32_t v = batch[i];
+        ahead_[v] = ev.Evaluate(v, kNone, bound_, track_);
+        aheadStamp_[v] = stamp_[v];
+      }
+      if (thread == 0 && progress && !progress(0, "feature-preserving simplification")) cancelled = true;
+    });
+  } catch (...) {
+    failed = true;
+  }
   ResetCaches();
   if (failed || cancelled) {
     aheadStamp_.assign(nv, kNone);
@@ -1273,9 +1271,7 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
     // Every vertex's first evaluation (a sixth of the time) depends on the input only: made
     // here, in memory order and on every core, and used in the queue's order unless a collapse
     // has come within two rings of the vertex by then (the output is the same either way).
-    unsigned threads = p_.threads;
-    if (threads == 0) threads = std::min(8u, CoreCount());
-    if (!FirstPassAhead(threads, progress)) return Status::Cancelled();
+    if (!FirstPassAhead(FeatureThreads(p_), progress)) return Status::Cancelled();
   }
   size_t popsK = 0, popsM = 0, iter = 0;
   bool reached = target > 0 && faces_ <= target;
