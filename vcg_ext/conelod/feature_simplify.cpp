@@ -159,7 +159,9 @@ void ParallelChunks(size_t n, unsigned threads, size_t chunk, const Body& body) 
 
 // The threads of the first pass and of the set-up's passes: FeatureSimplifyParams::threads, 0 =
 // one per core, at most 8.
-unsigned FeatureThreads(const FeatureSimplifyParams& p) { return p.threads == 0 ? std::min(8u, CoreCount()) : p.threads; }
+unsigned FeatureThreads(const FeatureSimplifyParams& p) {
+  return p.threads == 0 ? std::min(8u, CoreCount()) : p.threads;
+}
 
 // The faces around a vertex: up to kInline ids stored in place (no pointer to follow for the
 // usual valences), more on the heap. The order is that of push_back / swap-removal, as with a
@@ -978,7 +980,8 @@ double Evaluator::CollapseError(uint32_t from, uint32_t to, double d, double lim
       for (size_t i = newFanFromBegin_; i < newFanIds_.size() && first == kNoTri; ++i)
         if (w_.Contains(newFanIds_[i], o)) first = i;
     }
-    for (const P3& x : owned_[f]) worst2 = std::max(worst2, DistanceToNewFan2(x, from, to, std::max(limit2, worst2), first));
+    for (const P3& x : owned_[f])
+      worst2 = std::max(worst2, DistanceToNewFan2(x, from, to, std::max(limit2, worst2), first));
   }
   return std::sqrt(worst2);
 }
