@@ -666,80 +666,6 @@ class Evaluator {
   std::vector<uint32_t> nbrs_;
 };
 
-// A helper thread that evaluates one vertex while the calling thread evaluates another (both
-// only read the mesh then; the caller waits for it before changing anything). Start hands it a
-// vertex; Finish takes the vertex back if the helper has not begun it (no free core: the caller
-// does not wait for one), else waits for the evaluation. Waiting spins briefly (an evaluation
-// takes a few microseconds), then yields the core.
-class Speculator {
- public:
-  Speculator(Work& w, const FeatureSimplifyParams& p, TrackingStore& t) : ev_(w, p, t) {
-    thread_ = std::thread([this] { Loop(); });
-  }
-  ~Speculator() {
-    // (after an exception between Start and Finish a vertex may still be posted or in work)
-    int posted = kWork;
-    state_.compare_exchange_strong(posted, kIdle);
-    Wait([this] { return state_.load(std::memory_order_acquire) != kBusy; });
-    state_.store(kQuit, std::memory_order_release);
-    thread_.join();
-  }
-  void Start(uint32_t v, uint32_t retryTo, double bound, bool track) {
-    v_ = v;
-    retryTo_ = retryTo;
-    bound_ = bound;
-    track_ = track;
-    state_.store(kWork, std::memory_order_release);
-  }
-  // The evaluation of the vertex given to Start; false if it failed (nothing to use).
-  bool Finish(Evaluation& out) {
-    int posted = kWork;
-    if (state_.compare_exchange_strong(posted, kIdle)) return false;  // not begun: taken back
-    Wait([this] { return state_.load(std::memory_order_acquire) == kDone; });
-    state_.store(kIdle, std::memory_order_relaxed);
-    out = result_;
-    return ok_;
-  }
-
- private:
-  enum : int { kIdle, kWork, kBusy, kDone, kQuit };
-  template <class Pred>
-  static void Wait(const Pred& ready) {
-    for (int i = 0; i < 2000; ++i) {
-      if (ready()) return;
-#if defined(__x86_64__) || defined(__i386__)
-      __builtin_ia32_pause();
-#endif
-    }
-    while (!ready()) std::this_thread::yield();
-  }
-  void Loop() {
-    for (;;) {
-      int s = kIdle;
-      Wait([&] { s = state_.load(std::memory_order_acquire); return s == kWork || s == kQuit; });
-      if (s == kQuit) return;
-      if (!state_.compare_exchange_strong(s, kBusy)) continue;  // taken back meanwhile
-      try {
-        ev_.ResetCaches();  // the mesh may have changed since its last evaluation
-        result_ = ev_.Evaluate(v_, retryTo_, bound_, track_);
-        ok_ = true;
-      } catch (...) {
-        ok_ = false;
-      }
-      state_.store(kDone, std::memory_order_release);
-    }
-  }
-
-  Evaluator ev_;
-  std::thread thread_;
-  std::atomic<int> state_{kIdle};
-  uint32_t v_ = kNone, retryTo_ = kNone;
-  double bound_ = 0;
-  bool track_ = false;
-  Evaluation result_;
-  bool ok_ = false;
-};
-
 // §3.3-3.4: the collapse engine on a Work.
 class Simplifier : private TrackingStore, public Evaluator {
  public:
@@ -796,18 +722,7 @@ class Simplifier : private TrackingStore, public Evaluator {
   // (kNone: none, or no longer valid); a collapse invalidates those within two rings of it.
   std::vector<Evaluation> ahead_;
   std::vector<uint32_t> aheadStamp_;
-  std::vector<uint32_t> aheadRetry_;  // the known edge the evaluation made ahead was made with
   size_t aheadLeft_ = 0;
-  // While the queue evaluates a vertex, a Speculator evaluates the vertex most likely popped
-  // next (the top of the queue the next pop takes from), kept as an evaluation made ahead.
-  std::unique_ptr<Speculator> spec_;
-  uint32_t Predict(size_t popsK, size_t popsM, size_t nK, size_t nM) const;
-  void KeepAhead(uint32_t v, const Evaluation& ev) {
-    if (aheadStamp_[v] == kNone) ++aheadLeft_;
-    ahead_[v] = ev;
-    aheadStamp_[v] = stamp_[v];
-    aheadRetry_[v] = retry_[v];
-  }
   size_t faces_ = 0;
   double maxD_ = 0, maxTracked_ = 0;
 };
@@ -1267,7 +1182,6 @@ bool Simplifier::FirstPassAhead(unsigned threads, const Progress& progress) {
   const uint32_t nv = uint32_t(w_.P.size());
   ahead_.assign(nv, Evaluation());
   aheadStamp_.assign(nv, kNone);
-  aheadRetry_.assign(nv, kNone);
   std::vector<uint32_t> batch;
   for (uint32_t v = 0; v < nv; ++v)
     if (queued_[v] && (w_.cls[v] == VertexClass::Smooth || w_.cls[v] == VertexClass::FeatureLine) && Admitted(v))
@@ -1325,20 +1239,6 @@ void Simplifier::InvalidateAhead(uint32_t from, uint32_t to) {
         for (uint32_t z : w_.F[g]) drop(z);
 }
 
-// The vertex the queue will most likely evaluate next, if it has no evaluation made ahead yet:
-// the top of the queue the next pop takes from (a collapse may push a vertex before it; its
-// evaluation made ahead then waits for it, or is dropped if a collapse comes near it).
-uint32_t Simplifier::Predict(size_t popsK, size_t popsM, size_t nK, size_t nM) const {
-  const bool haveK = !heapK_.empty(), haveM = !heapM_.empty();
-  if (!haveK && !haveM) return kNone;
-  const bool takeK = haveK && (!haveM || double(popsK + 1) * double(nM) <= double(popsM + 1) * double(nK));
-  const Entry& e = (takeK ? heapK_ : heapM_).top();
-  const uint32_t u = e.v;
-  if (e.stamp != stamp_[u] || w_.cls[u] != (takeK ? VertexClass::Smooth : VertexClass::FeatureLine)) return kNone;
-  if (aheadStamp_[u] == e.stamp && aheadRetry_[u] == retry_[u]) return kNone;  // made already
-  return Admitted(u) ? u : kNone;
-}
-
 Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
   Work& w = w_;
   const size_t nv = w.P.size();
@@ -1370,20 +1270,11 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
     if (w.cls[v] == VertexClass::FeatureLine) ++nM;
     Push(v, false);  // Classify has just computed K and M
   }
-  if (grow_ && p_.evaluateAhead) {
+  if (grow_ && p_.firstPassAhead) {
     // Every vertex's first evaluation (a sixth of the time) depends on the input only: made
     // here, in memory order and on every core, and used in the queue's order unless a collapse
-    // has come within two rings of the vertex by then (the output is the same either way). Then,
-    // with a second core, the queue's vertex likely next is evaluated beside each evaluation.
-    const unsigned threads = FeatureThreads(p_);
-    if (!FirstPassAhead(threads, progress)) return Status::Cancelled();
-    if (threads > 1) {
-      try {
-        spec_.reset(new Speculator(w, p_, *this));
-      } catch (...) {
-        // no thread: the queue evaluates alone
-      }
-    }
+    // has come within two rings of the vertex by then (the output is the same either way).
+    if (!FirstPassAhead(FeatureThreads(p_), progress)) return Status::Cancelled();
   }
   size_t popsK = 0, popsM = 0, iter = 0;
   bool reached = target > 0 && faces_ <= target;
@@ -1424,20 +1315,10 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
     bool useAhead = false;
     if (aheadLeft_ > 0 && aheadStamp_[v] != kNone) {  // made ahead: used, or dropped as outdated
       --aheadLeft_;
-      useAhead = aheadStamp_[v] == e.stamp && aheadRetry_[v] == retry_[v];
+      useAhead = aheadStamp_[v] == e.stamp && retry_[v] == kNone;
       aheadStamp_[v] = kNone;
     }
-    Evaluation ev;
-    if (useAhead) {
-      ev = ahead_[v];
-    } else {
-      // The vertex likely next is evaluated beside this one, while neither changes the mesh.
-      const uint32_t next = spec_ ? Predict(popsK, popsM, nK, nM) : kNone;
-      if (next != kNone) spec_->Start(next, retry_[next], bound_, track_);
-      ev = Evaluate(v, retry_[v], bound_, track_);
-      Evaluation evNext;
-      if (next != kNone && spec_->Finish(evNext)) KeepAhead(next, evNext);
-    }
+    const Evaluation ev = useAhead ? ahead_[v] : Evaluate(v, retry_[v], bound_, track_);
     retry_[v] = kNone;
     if (ev.kind == Evaluation::Collapse) {
       maxD_ = std::max(maxD_, ev.d);
@@ -1461,7 +1342,6 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
     if (aheadTo != kNone && w.cls[aheadTo] != VertexClass::Unused)
       for (uint32_t f : w.VF[aheadTo]) __builtin_prefetch(&w.F[f]);
   }
-  spec_.reset();
   out.finalErrorBound = track_ ? bound_ : 0.0;
 
   // Output: live faces and the vertices they use, in input order.

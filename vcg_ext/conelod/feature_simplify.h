@@ -72,13 +72,12 @@ struct FeatureSimplifyParams {
                                    // original vertices that starts tiny and grows x1.25 only when no
                                    // collapse fits (BEYOND the paper); false = the paper's pure
                                    // curvature order up to the target
-  unsigned threads = 0;            // threads for the set-up, for the first pass of the growing bound
-                                   // (every vertex's first evaluation, which depends on the input
-                                   // only, made ahead in memory order) and, with 2 or more, for
-                                   // evaluating the vertex likely next beside the one being evaluated;
-                                   // 0 = one per core, at most 8. The output is the same for any count.
-  bool evaluateAhead = true;       // false: every evaluation is made in the queue's order when its
-                                   // vertex comes (the same output, slower; for checking)
+  unsigned threads = 0;            // threads for the first pass of the growing bound (every vertex's
+                                   // first evaluation, which depends on the input only, made ahead in
+                                   // memory order); 0 = one per core, at most 8. The output is the
+                                   // same for any count.
+  bool firstPassAhead = true;      // false: the first pass too is evaluated in the queue's order (the
+                                   // same output, slower; for checking)
 };
 
 // Checks the parameters (at least one stop criterion); Ok or a message naming the bad one.

@@ -362,12 +362,11 @@ TEST(FeatureSimplify, GrowingBoundHoldsForEveryInputVertex) {
   }
 }
 
-// Evaluating ahead (the first pass in memory order on any number of threads; with two or more,
-// the vertex likely next beside the one being evaluated) gives the output of evaluating every
-// vertex in the queue's order: an evaluation made ahead is used only while no collapse has come
-// near its vertex. Fandisk's flat parts and the whole grid collapse during the
+// The first pass evaluated ahead (in memory order, on any number of threads) gives the output of
+// evaluating every vertex in the queue's order: an evaluation made ahead is used only while no
+// collapse has come near its vertex. Fandisk's flat parts and the whole grid collapse during the
 // first pass (d = 0), so the invalidation is exercised; the sphere has no feature lines at all.
-TEST(FeatureSimplify, EvaluatingAheadChangesNothing) {
+TEST(FeatureSimplify, FirstPassAheadChangesNothing) {
   std::vector<std::pair<std::string, IndexedMesh>> meshes = {{"fandisk.ply", Load("fandisk.ply")},
                                                              {"mech_holes_shark.ply", Load("mech_holes_shark.ply")},
                                                              {"sphere", test::Sphere(4)},
@@ -375,11 +374,11 @@ TEST(FeatureSimplify, EvaluatingAheadChangesNothing) {
   for (const auto& [name, in] : meshes) {
     FeatureSimplifyParams p;
     p.targetFaceCount = in.faceCount() / 8;
-    p.evaluateAhead = false;
+    p.firstPassAhead = false;
     FeatureSimplifyResult ref;
     ASSERT_TRUE(FeatureSimplify(in, p, ref).ok()) << name;
     ASSERT_GT(ref.collapses, 0u) << name;
-    p.evaluateAhead = true;
+    p.firstPassAhead = true;
     for (unsigned threads : {1u, 2u, 3u}) {
       p.threads = threads;
       FeatureSimplifyResult r;
