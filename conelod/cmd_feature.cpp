@@ -50,8 +50,8 @@ const char* kFeatureSimplifyUsage =
     "  (D = diagonal; 0 = off). --mark writes vertex colours (red = feature line, blue = feature\n"
     "  vertex) and vertex quality = class (0 smooth, 1 line, 2 feature). The report counts the\n"
     "  output's feature edges lying on the input's feature lines (within PCT % of D [0.5]).\n"
-    "  --threads N: threads for the first pass of the growing bound (0 = one per core, at most\n"
-    "  8 [0]); the output is the same for any N.\n";
+    "  --threads N: threads for the set-up and the first pass of the growing bound (0 = one per\n"
+    "  core, at most 8 [0]); the output is the same for any N.\n";
 
 const char* kFeatureEdgesUsage =
     "conelod feature-edges IN.ply [--reference REF.ply] [--angle DEG] [--no-extend] [--line-tolerance PCT] [--json]\n"

@@ -72,8 +72,9 @@ struct FeatureSimplifyParams {
                                    // original vertices that starts tiny and grows x1.25 only when no
                                    // collapse fits (BEYOND the paper); false = the paper's pure
                                    // curvature order up to the target
-  unsigned threads = 0;            // threads for the first pass of the growing bound (every vertex's
-                                   // first evaluation, which depends on the input only, made ahead in
+  unsigned threads = 0;            // threads for the set-up (feature detection, classification) and
+                                   // the first pass of the growing bound (every vertex's first
+                                   // evaluation, which depends on the input only, made ahead in
                                    // memory order); 0 = one per core, at most 8. The output is the
                                    // same for any count.
   bool firstPassAhead = true;      // false: the first pass too is evaluated in the queue's order (the
