@@ -307,6 +307,10 @@ class HierarchyBuilder {
   const ConeGroupingParams& params_;
   const Progress& progress_;
   const int faceCount_;
+  // First of the arrays, so that it outlives them all: the arrays freed by one phase (the face
+  // adjacency's, level 1's) are reused by the next instead of fresh memory (BigRecycler). Level
+  // 1's arrays leave more than level 2 on needs: the rest is released after the renumbering.
+  BigRecycler recycler_;
 
   // Circular face lists, one per unit (Chain::tail). From level 2 on the faces are renumbered
   // (meshFace_), each level-1 group's faces contiguous in the order of its list: the lists above
@@ -894,6 +898,7 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   if (firstLevel) {
     renumberFaces();
     collectGroupVertices();
+    recycler_.release();
   }
   if (firstLevel && !params_.strictGreedy) support_.assign(groupCount, ConeSupport());
   level.groups.resize(groupCount);
