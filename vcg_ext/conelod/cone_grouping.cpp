@@ -343,8 +343,20 @@ class HierarchyBuilder {
   BigVector<ConeSupport> support_;
   bool trySupportCone(int u);
   bool seededCone(int u);
-  bool refineCone(int u);  // on scratchSupport_ and scratchNormals_
+  bool refineCone(int u);  // on scratchSupport_ and normalRuns_
   std::vector<vcg::Point3d> scratchSupport_, scratchTrial_;
+  // The normals of the unit whose exact cone is being made, in the order of its face list, as
+  // runs: of faceNormal_ from level 2 on (read in place: the scans above need no copy), of
+  // scratchNormals_ at level 1 (computed from the mesh). Copied only for Welzl's algorithm.
+  std::vector<std::pair<const vcg::Point3d*, const vcg::Point3d*>> normalRuns_;
+  // Calls f on each of those normals in order while it returns true; false: f stopped it.
+  template <class F>
+  bool eachNormal(F f) const {
+    for (const auto& run : normalRuns_)
+      for (const vcg::Point3d* n = run.first; n != run.second; ++n)
+        if (!f(*n)) return false;
+    return true;
+  }
 
   BigVector<Unit> units_;
   BigVector<Link> links_;
@@ -416,14 +428,14 @@ void HierarchyBuilder::makeConeExact(int u) {
   const int tail = chains_[size_t(u)].tail;
   int f = tail;
   if (!faceNormal_.empty()) {
-    // The list is made of runs of consecutive faces (renumberFaces): copied run by run, in the
-    // list's order.
-    scratchNormals_.clear();
+    // The list is made of runs of consecutive faces (renumberFaces): their normals are runs of
+    // faceNormal_, in the list's order.
+    normalRuns_.clear();
     int head = faceNext_[size_t(tail)];
     for (;;) {
       int last = head;
       while (last != tail && faceNext_[size_t(last)] == last + 1) ++last;
-      scratchNormals_.insert(scratchNormals_.end(), faceNormal_.begin() + head, faceNormal_.begin() + last + 1);
+      normalRuns_.emplace_back(faceNormal_.data() + head, faceNormal_.data() + last + 1);
       if (last == tail) break;
       head = faceNext_[size_t(last)];
     }
@@ -445,15 +457,20 @@ void HierarchyBuilder::makeConeExact(int u) {
         for (const uint32_t v : mesh_.faces[size_t(scratchFaces_[i + 4])]) Prefetch(&mesh_.positions[v]);
       FaceNormalAndArea(mesh_, size_t(scratchFaces_[i]), scratchNormals_[i], area);
     }
+    normalRuns_.assign(1, {scratchNormals_.data(), scratchNormals_.data() + n});
   }
   if (!params_.strictGreedy && seededCone(u)) return;
+  if (!faceNormal_.empty()) {  // Welzl's algorithm shuffles its input: a copy
+    scratchNormals_.clear();
+    for (const auto& run : normalRuns_) scratchNormals_.insert(scratchNormals_.end(), run.first, run.second);
+  }
   ConeSupport support;
   units_[size_t(u)].setCone(MinimalCone(scratchNormals_, support));
   if (!support_.empty()) support_[size_t(u)] = support;
   chains_[size_t(u)].exactSize = units_[size_t(u)].faceCount;
 }
 
-// makeConeExact's shortcut (see support_), on the normals in scratchNormals_: true when the
+// makeConeExact's shortcut (see support_), on the normals in normalRuns_: true when the
 // unit's cone was set. The guess is the minimal cone of a few normals; the normals outside it
 // join them and the guess is made again (the cone only grows towards the true one), a few times
 // at most before leaving the work to Welzl's algorithm on all the normals.
@@ -477,15 +494,19 @@ bool HierarchyBuilder::seededCone(int u) {
   const vcg::Point3d axis = unit.axis;
   const vcg::Point3d* first = nullptr;
   double lowest = 2;
-  for (const vcg::Point3d& n : scratchNormals_)
+  eachNormal([&](const vcg::Point3d& n) {
     // The cheap test first: the zero normals of degenerate faces (dot 0) are rarely the lowest.
     if (n * axis < lowest && n.SquaredNorm() >= 0.5) { lowest = n * axis; first = &n; }
+    return true;
+  });
   if (!first) return false;
   const vcg::Point3d far1 = *first;
   const vcg::Point3d* second = first;
   lowest = 2;
-  for (const vcg::Point3d& n : scratchNormals_)
+  eachNormal([&](const vcg::Point3d& n) {
     if (n * far1 < lowest && n.SquaredNorm() >= 0.5) { lowest = n * far1; second = &n; }
+    return true;
+  });
   const vcg::Point3d far2 = *second;
   // The minimal cone of the two as MinimalCone makes it (one normal's cap when the other lies in
   // it to the slack of 1e-10 on cosines, else the two-point cap), checked against every normal
@@ -503,11 +524,14 @@ bool HierarchyBuilder::seededCone(int u) {
   scratchSupport_.assign({far1, far2});
   const double minCos = cosHalf - 1e-10;
   size_t outside = 0;
-  for (const vcg::Point3d& n : scratchNormals_)
+  const bool few = eachNormal([&](const vcg::Point3d& n) {
     if (!(n * axis2 >= minCos) && n.SquaredNorm() >= 0.5) {
       if (++outside > 256) return false;
       scratchSupport_.push_back(n);
     }
+    return true;
+  });
+  if (!few) return false;
   if (outside > 0) return refineCone(u);
   NormalCone cone;
   cone.axis = axis2;
@@ -524,7 +548,7 @@ bool HierarchyBuilder::seededCone(int u) {
 }
 
 // The guess is the minimal cone of the normals in scratchSupport_; the normals of
-// scratchNormals_ outside it join them and the guess is made again (the cone only grows towards
+// normalRuns_ outside it join them and the guess is made again (the cone only grows towards
 // the true one), a few times at most before leaving the work to Welzl's algorithm on all the
 // normals (false). True: the unit's cone (and support, where kept) was set.
 bool HierarchyBuilder::refineCone(int u) {
@@ -538,11 +562,14 @@ bool HierarchyBuilder::refineCone(int u) {
     if (guess.cullable()) {
       // The inside test of MinimalCone (normal_cone.cpp): a cosine slack of 1e-10.
       const double minCos = std::cos(guess.halfAngle) - 1e-10;
-      for (const vcg::Point3d& n : scratchNormals_)
+      const bool few = eachNormal([&](const vcg::Point3d& n) {
         if (!(n * guess.axis >= minCos) && n.SquaredNorm() >= 0.5) {
           if (++outside > 256) return false;
           chosen.push_back(n);
         }
+        return true;
+      });
+      if (!few) return false;
     }  // else some of the normals fit in no hemisphere: neither do all of them
     if (outside == 0) {
       units_[size_t(u)].setCone(guess);
