@@ -177,6 +177,26 @@ class Arena {
 constexpr float kNoPair = -std::numeric_limits<float>::infinity();
 constexpr float kUnscored = std::numeric_limits<float>::quiet_NaN();  // a list entry not scored yet
 
+// A scored list entry as one integer ordered like (higher score, lower id), so that a unit's best
+// pair is the largest entry of its list: one integer maximum per entry and no branch, where the
+// comparisons of scores branched unpredictably. Scores are kNoPair or >= +0 (sums of
+// non-negative terms): their bits as signed integers are in the same order, kNoPair below 0.
+inline int64_t PairEntry(const Neighbour& n) {
+  uint32_t bits;
+  std::memcpy(&bits, &n.score, sizeof bits);
+  return int64_t((uint64_t(bits) << 32) | (0xFFFFFFFFu - uint32_t(n.id)));
+}
+constexpr int64_t kNoEntry = std::numeric_limits<int64_t>::min();  // the maximum of an empty list
+// The pair of the largest entry: its score and id, or kNoPair and -1 when no entry is a pair.
+inline void BestPair(int64_t top, float& best, int& partner) {
+  best = kNoPair;
+  partner = -1;
+  if (top < 0) return;
+  const uint32_t bits = uint32_t(uint64_t(top) >> 32);
+  std::memcpy(&best, &bits, sizeof best);
+  partner = int(0xFFFFFFFFu - uint32_t(top));
+}
+
 // The unit with the best pair: an 8-ary tournament tree over the units' keys (the score of each
 // unit's best pair; kNoPair: none). A unit's leaf sits at its own index, so the neighbours of a
 // merged unit, close in index, share the lower nodes of their paths, and an update that does
@@ -409,13 +429,11 @@ float HierarchyBuilder::evaluate(const Unit& a, const Unit& b) const {
 }
 
 void HierarchyBuilder::setBest(int u) {
-  float best = kNoPair;
-  int partner = -1;
-  for (const Neighbour* n = nbBegin(u); n != nbEnd(u); ++n)
-    if (n->score > best || (n->score == best && n->score != kNoPair && n->id < partner)) {
-      best = n->score;
-      partner = n->id;
-    }
+  int64_t top = kNoEntry;
+  for (const Neighbour* n = nbBegin(u); n != nbEnd(u); ++n) top = std::max(top, PairEntry(*n));
+  float best;
+  int partner;
+  BestPair(top, best, partner);
   links_[size_t(u)].bestPartner = partner;
   tree_.set(u, best);
   if (dirty_) {
