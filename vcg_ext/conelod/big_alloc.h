@@ -22,22 +22,18 @@ namespace conelod {
 // build's time on the dragon). The grouping's phases free large arrays just before the next phase
 // allocates its own (the face adjacency's, level 1's), which then reuse those pages. Blocks are
 // handed out as they are: users of BigAlloc write what they size. Kept blocks count in the
-// process's memory until taken or released: the owner releases them where nothing will take them.
+// process's memory until taken: a recycler spans only the phases whose frees the next
+// allocations take, and unmaps what is left when it ends.
 class BigRecycler {
  public:
   BigRecycler() : outer_(Current()) { Current() = this; }
   BigRecycler(const BigRecycler&) = delete;
   BigRecycler& operator=(const BigRecycler&) = delete;
   ~BigRecycler() {
-    release();
-    Current() = outer_;
-  }
-  // Unmaps every kept block.
-  void release() {
 #ifdef __linux__
     for (const Block& b : kept_) munmap(b.p, b.size);
 #endif
-    kept_.clear();
+    Current() = outer_;
   }
   static BigRecycler*& Current() {
     static thread_local BigRecycler* current = nullptr;

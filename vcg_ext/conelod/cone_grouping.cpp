@@ -32,6 +32,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <new>
 #include <utility>
 
@@ -327,10 +328,6 @@ class HierarchyBuilder {
   const ConeGroupingParams& params_;
   const Progress& progress_;
   const int faceCount_;
-  // First of the arrays, so that it outlives them all: the arrays freed by one phase (the face
-  // adjacency's, level 1's) are reused by the next instead of fresh memory (BigRecycler). Level
-  // 1's arrays leave more than level 2 on needs: the rest is released after the renumbering.
-  BigRecycler recycler_;
 
   // Circular face lists, one per unit (Chain::tail). From level 2 on the faces are renumbered
   // (meshFace_), each level-1 group's faces contiguous in the order of its list: the lists above
@@ -935,15 +932,19 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     for (size_t f = 0; f < size_t(faceCount_); ++f) faceGroup[f] = l1Group_[size_t(level1Group[f])];
   }
   const size_t groupCount = rootOfGroup_.size();
-  // The groups become the units of the next level now, indexed by group: the arrays of this
-  // level go before the level's output grows.
-  nextLevelUnits();
-  // Renumbered now, the exact cones below read the normals in memory order, computed once for
-  // this level and the next ones (where the level-1 merges recomputed them from the mesh).
-  if (firstLevel) {
-    renumberFaces();
-    collectGroupVertices();
-    recycler_.release();
+  {
+    // Level 1's arrays, freed by nextLevelUnits, become the renumbered faces' arrays below instead
+    // of fresh memory (BigRecycler); the rest is unmapped at the end of this scope.
+    std::unique_ptr<BigRecycler> recycler(firstLevel ? new BigRecycler : nullptr);
+    // The groups become the units of the next level now, indexed by group: the arrays of this
+    // level go before the level's output grows.
+    nextLevelUnits();
+    // Renumbered now, the exact cones below read the normals in memory order, computed once for
+    // this level and the next ones (where the level-1 merges recomputed them from the mesh).
+    if (firstLevel) {
+      renumberFaces();
+      collectGroupVertices();
+    }
   }
   if (firstLevel && !params_.strictGreedy) support_.assign(groupCount, ConeSupport());
   level.groups.resize(groupCount);
@@ -1133,27 +1134,32 @@ void HierarchyBuilder::nextLevelUnits() {
 
 Status HierarchyBuilder::run(GroupHierarchy& out) {
   const int nf = faceCount_;
-  // Adjacency first, while nothing else is allocated: it is the largest temporary.
+  // Adjacency first, while nothing else is allocated: it is the largest temporary. Its arrays,
+  // freed once level 1's lists are made, become level 1's arena, face lists and chains instead of
+  // fresh memory (BigRecycler); what is left is unmapped before the merges.
   {
-    BigVector<uint32_t> offsets, neighbours;
-    size_t borderEdges, nonManifoldEdges;
-    BuildFaceAdjacencyInto(mesh_, offsets, neighbours, borderEdges, nonManifoldEdges);
-    if (neighbours.size() > size_t(std::numeric_limits<uint32_t>::max() / 2))
-      throw std::bad_alloc();  // list offsets are 32-bit
-    // The arena's high-water mark is what it costs in memory: a quarter of slack, no more.
-    arena_.reserve(neighbours.size() + neighbours.size() / 4 + 16);
-    Neighbour* list = arena_.data() + arena_.grow(neighbours.size());
-    for (const uint32_t w : neighbours) *list++ = {int(w), kUnscored};
-    links_.resize(size_t(nf));
-    for (int f = 0; f < nf; ++f)
-      links_[size_t(f)] = Link{-1, offsets[size_t(f)], int(offsets[size_t(f) + 1] - offsets[size_t(f)]), 0};
-    prefixEnd_ = arena_.size();
+    BigRecycler recycler;
+    {
+      BigVector<uint32_t> offsets, neighbours;
+      size_t borderEdges, nonManifoldEdges;
+      BuildFaceAdjacencyInto(mesh_, offsets, neighbours, borderEdges, nonManifoldEdges);
+      if (neighbours.size() > size_t(std::numeric_limits<uint32_t>::max() / 2))
+        throw std::bad_alloc();  // list offsets are 32-bit
+      // The arena's high-water mark is what it costs in memory: a quarter of slack, no more.
+      arena_.reserve(neighbours.size() + neighbours.size() / 4 + 16);
+      Neighbour* list = arena_.data() + arena_.grow(neighbours.size());
+      for (const uint32_t w : neighbours) *list++ = {int(w), kUnscored};
+      links_.resize(size_t(nf));
+      for (int f = 0; f < nf; ++f)
+        links_[size_t(f)] = Link{-1, offsets[size_t(f)], int(offsets[size_t(f) + 1] - offsets[size_t(f)]), 0};
+      prefixEnd_ = arena_.size();
+    }
+    faceNext_.resize(size_t(nf));
+    units_.resize(size_t(nf));
+    chains_.resize(size_t(nf));
   }
 
   // Level-1 units: one per face.
-  faceNext_.resize(size_t(nf));
-  units_.resize(size_t(nf));
-  chains_.resize(size_t(nf));
   for (int f = 0; f < nf; ++f) {
     Unit& u = units_[size_t(f)];
     const auto& t = mesh_.faces[size_t(f)];
