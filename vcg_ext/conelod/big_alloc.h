@@ -2,6 +2,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <cstdlib>
 #include <new>
@@ -13,6 +14,57 @@
 #endif
 
 namespace conelod {
+
+// While a BigRecycler is alive on a thread, the mapped blocks that BigAlloc frees on that thread are
+// kept rather than unmapped, and BigAlloc takes its next blocks from them (trimmed to the size asked
+// for) before mapping fresh ones. Fresh memory is not free: the kernel zeroes every page on its
+// first touch and, on a busy machine, compacts memory to find huge pages (a fifth of a first
+// build's time on the dragon). The grouping's phases free large arrays just before the next phase
+// allocates its own (the face adjacency's, level 1's), which then reuse those pages. Blocks are
+// handed out as they are: users of BigAlloc write what they size. Kept blocks count in the
+// process's memory until taken: a recycler spans only the phases whose frees the next
+// allocations take, and unmaps what is left when it ends.
+class BigRecycler {
+ public:
+  BigRecycler() : outer_(Current()) { Current() = this; }
+  BigRecycler(const BigRecycler&) = delete;
+  BigRecycler& operator=(const BigRecycler&) = delete;
+  ~BigRecycler() {
+#ifdef __linux__
+    for (const Block& b : kept_) munmap(b.p, b.size);
+#endif
+    Current() = outer_;
+  }
+  static BigRecycler*& Current() {
+    static thread_local BigRecycler* current = nullptr;
+    return current;
+  }
+  // The smallest kept block of at least `size` bytes (a multiple of the page size), trimmed to it;
+  // for a huge-page block (`huge`), only one that was mapped as such (aligned, advised). Null: none.
+  void* take(size_t size, bool huge) {
+    size_t best = kept_.size();
+    for (size_t i = 0; i < kept_.size(); ++i)
+      if (kept_[i].size >= size && (kept_[i].huge || !huge) && (best == kept_.size() || kept_[i].size < kept_[best].size))
+        best = i;
+    if (best == kept_.size()) return nullptr;
+    const Block b = kept_[best];
+    kept_.erase(kept_.begin() + std::ptrdiff_t(best));
+#ifdef __linux__
+    if (b.size > size) munmap(b.p + size, b.size - size);
+#endif
+    return b.p;
+  }
+  void keep(void* p, size_t size, bool huge) { kept_.push_back(Block{static_cast<char*>(p), size, huge}); }
+
+ private:
+  struct Block {
+    char* p;
+    size_t size;
+    bool huge;  // mapped huge-page aligned and advised
+  };
+  std::vector<Block> kept_;
+  BigRecycler* outer_;
+};
 
 // Large arrays of the grouping are read at random, all over: backed by 2 MiB pages where the
 // kernel offers transparent huge pages on request, they cost far fewer TLB misses (and page
@@ -40,6 +92,8 @@ struct BigAlloc {
 #ifdef __linux__
     if (bytes >= kMapped) {
       const size_t size = MappedSize(bytes);
+      if (BigRecycler* r = BigRecycler::Current())
+        if (void* kept = r->take(size, bytes >= kHuge)) return static_cast<T*>(kept);
       if (bytes < kHuge) {
         void* p = mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
         if (p == MAP_FAILED) throw std::bad_alloc();
@@ -69,7 +123,12 @@ struct BigAlloc {
   void construct(U* p, Args&&... args) { ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...); }
   void deallocate(T* p, size_t n) {
 #ifdef __linux__
-    if (n * sizeof(T) >= kMapped) { munmap(p, MappedSize(n * sizeof(T))); return; }
+    if (n * sizeof(T) >= kMapped) {
+      const size_t size = MappedSize(n * sizeof(T));
+      if (BigRecycler* r = BigRecycler::Current()) r->keep(p, size, n * sizeof(T) >= kHuge);
+      else munmap(p, size);
+      return;
+    }
 #endif
     free(p);
   }

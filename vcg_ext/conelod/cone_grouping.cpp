@@ -32,6 +32,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <new>
 #include <utility>
 
@@ -176,6 +177,26 @@ class Arena {
 
 constexpr float kNoPair = -std::numeric_limits<float>::infinity();
 constexpr float kUnscored = std::numeric_limits<float>::quiet_NaN();  // a list entry not scored yet
+
+// A scored list entry as one integer ordered like (higher score, lower id), so that a unit's best
+// pair is the largest entry of its list: one integer maximum per entry and no branch, where the
+// comparisons of scores branched unpredictably. Scores are kNoPair or >= +0 (sums of
+// non-negative terms): their bits as signed integers are in the same order, kNoPair below 0.
+inline int64_t PairEntry(const Neighbour& n) {
+  uint32_t bits;
+  std::memcpy(&bits, &n.score, sizeof bits);
+  return int64_t((uint64_t(bits) << 32) | (0xFFFFFFFFu - uint32_t(n.id)));
+}
+constexpr int64_t kNoEntry = std::numeric_limits<int64_t>::min();  // the maximum of an empty list
+// The pair of the largest entry: its score and id, or kNoPair and -1 when no entry is a pair.
+inline void BestPair(int64_t top, float& best, int& partner) {
+  best = kNoPair;
+  partner = -1;
+  if (top < 0) return;
+  const uint32_t bits = uint32_t(uint64_t(top) >> 32);
+  std::memcpy(&best, &bits, sizeof best);
+  partner = int(0xFFFFFFFFu - uint32_t(top));
+}
 
 // The unit with the best pair: an 8-ary tournament tree over the units' keys (the score of each
 // unit's best pair; kNoPair: none). A unit's leaf sits at its own index, so the neighbours of a
@@ -339,8 +360,20 @@ class HierarchyBuilder {
   BigVector<ConeSupport> support_;
   bool trySupportCone(int u);
   bool seededCone(int u);
-  bool refineCone(int u);  // on scratchSupport_ and scratchNormals_
+  bool refineCone(int u);  // on scratchSupport_ and normalRuns_
   std::vector<vcg::Point3d> scratchSupport_, scratchTrial_;
+  // The normals of the unit whose exact cone is being made, in the order of its face list, as
+  // runs: of faceNormal_ from level 2 on (read in place: the scans above need no copy), of
+  // scratchNormals_ at level 1 (computed from the mesh). Copied only for Welzl's algorithm.
+  std::vector<std::pair<const vcg::Point3d*, const vcg::Point3d*>> normalRuns_;
+  // Calls f on each of those normals in order while it returns true; false: f stopped it.
+  template <class F>
+  bool eachNormal(F f) const {
+    for (const auto& run : normalRuns_)
+      for (const vcg::Point3d* n = run.first; n != run.second; ++n)
+        if (!f(*n)) return false;
+    return true;
+  }
 
   BigVector<Unit> units_;
   BigVector<Link> links_;
@@ -393,13 +426,11 @@ float HierarchyBuilder::evaluate(const Unit& a, const Unit& b) const {
 }
 
 void HierarchyBuilder::setBest(int u) {
-  float best = kNoPair;
-  int partner = -1;
-  for (const Neighbour* n = nbBegin(u); n != nbEnd(u); ++n)
-    if (n->score > best || (n->score == best && n->score != kNoPair && n->id < partner)) {
-      best = n->score;
-      partner = n->id;
-    }
+  int64_t top = kNoEntry;
+  for (const Neighbour* n = nbBegin(u); n != nbEnd(u); ++n) top = std::max(top, PairEntry(*n));
+  float best;
+  int partner;
+  BestPair(top, best, partner);
   links_[size_t(u)].bestPartner = partner;
   tree_.set(u, best);
   if (dirty_) {
@@ -412,14 +443,14 @@ void HierarchyBuilder::makeConeExact(int u) {
   const int tail = chains_[size_t(u)].tail;
   int f = tail;
   if (!faceNormal_.empty()) {
-    // The list is made of runs of consecutive faces (renumberFaces): copied run by run, in the
-    // list's order.
-    scratchNormals_.clear();
+    // The list is made of runs of consecutive faces (renumberFaces): their normals are runs of
+    // faceNormal_, in the list's order.
+    normalRuns_.clear();
     int head = faceNext_[size_t(tail)];
     for (;;) {
       int last = head;
       while (last != tail && faceNext_[size_t(last)] == last + 1) ++last;
-      scratchNormals_.insert(scratchNormals_.end(), faceNormal_.begin() + head, faceNormal_.begin() + last + 1);
+      normalRuns_.emplace_back(faceNormal_.data() + head, faceNormal_.data() + last + 1);
       if (last == tail) break;
       head = faceNext_[size_t(last)];
     }
@@ -441,15 +472,20 @@ void HierarchyBuilder::makeConeExact(int u) {
         for (const uint32_t v : mesh_.faces[size_t(scratchFaces_[i + 4])]) Prefetch(&mesh_.positions[v]);
       FaceNormalAndArea(mesh_, size_t(scratchFaces_[i]), scratchNormals_[i], area);
     }
+    normalRuns_.assign(1, {scratchNormals_.data(), scratchNormals_.data() + n});
   }
   if (!params_.strictGreedy && seededCone(u)) return;
+  if (!faceNormal_.empty()) {  // Welzl's algorithm shuffles its input: a copy
+    scratchNormals_.clear();
+    for (const auto& run : normalRuns_) scratchNormals_.insert(scratchNormals_.end(), run.first, run.second);
+  }
   ConeSupport support;
   units_[size_t(u)].setCone(MinimalCone(scratchNormals_, support));
   if (!support_.empty()) support_[size_t(u)] = support;
   chains_[size_t(u)].exactSize = units_[size_t(u)].faceCount;
 }
 
-// makeConeExact's shortcut (see support_), on the normals in scratchNormals_: true when the
+// makeConeExact's shortcut (see support_), on the normals in normalRuns_: true when the
 // unit's cone was set. The guess is the minimal cone of a few normals; the normals outside it
 // join them and the guess is made again (the cone only grows towards the true one), a few times
 // at most before leaving the work to Welzl's algorithm on all the normals.
@@ -473,15 +509,19 @@ bool HierarchyBuilder::seededCone(int u) {
   const vcg::Point3d axis = unit.axis;
   const vcg::Point3d* first = nullptr;
   double lowest = 2;
-  for (const vcg::Point3d& n : scratchNormals_)
+  eachNormal([&](const vcg::Point3d& n) {
     // The cheap test first: the zero normals of degenerate faces (dot 0) are rarely the lowest.
     if (n * axis < lowest && n.SquaredNorm() >= 0.5) { lowest = n * axis; first = &n; }
+    return true;
+  });
   if (!first) return false;
   const vcg::Point3d far1 = *first;
   const vcg::Point3d* second = first;
   lowest = 2;
-  for (const vcg::Point3d& n : scratchNormals_)
+  eachNormal([&](const vcg::Point3d& n) {
     if (n * far1 < lowest && n.SquaredNorm() >= 0.5) { lowest = n * far1; second = &n; }
+    return true;
+  });
   const vcg::Point3d far2 = *second;
   // The minimal cone of the two as MinimalCone makes it (one normal's cap when the other lies in
   // it to the slack of 1e-10 on cosines, else the two-point cap), checked against every normal
@@ -499,11 +539,14 @@ bool HierarchyBuilder::seededCone(int u) {
   scratchSupport_.assign({far1, far2});
   const double minCos = cosHalf - 1e-10;
   size_t outside = 0;
-  for (const vcg::Point3d& n : scratchNormals_)
+  const bool few = eachNormal([&](const vcg::Point3d& n) {
     if (!(n * axis2 >= minCos) && n.SquaredNorm() >= 0.5) {
       if (++outside > 256) return false;
       scratchSupport_.push_back(n);
     }
+    return true;
+  });
+  if (!few) return false;
   if (outside > 0) return refineCone(u);
   NormalCone cone;
   cone.axis = axis2;
@@ -520,7 +563,7 @@ bool HierarchyBuilder::seededCone(int u) {
 }
 
 // The guess is the minimal cone of the normals in scratchSupport_; the normals of
-// scratchNormals_ outside it join them and the guess is made again (the cone only grows towards
+// normalRuns_ outside it join them and the guess is made again (the cone only grows towards
 // the true one), a few times at most before leaving the work to Welzl's algorithm on all the
 // normals (false). True: the unit's cone (and support, where kept) was set.
 bool HierarchyBuilder::refineCone(int u) {
@@ -534,11 +577,14 @@ bool HierarchyBuilder::refineCone(int u) {
     if (guess.cullable()) {
       // The inside test of MinimalCone (normal_cone.cpp): a cosine slack of 1e-10.
       const double minCos = std::cos(guess.halfAngle) - 1e-10;
-      for (const vcg::Point3d& n : scratchNormals_)
+      const bool few = eachNormal([&](const vcg::Point3d& n) {
         if (!(n * guess.axis >= minCos) && n.SquaredNorm() >= 0.5) {
           if (++outside > 256) return false;
           chosen.push_back(n);
         }
+        return true;
+      });
+      if (!few) return false;
     }  // else some of the normals fit in no hemisphere: neither do all of them
     if (outside == 0) {
       units_[size_t(u)].setCone(guess);
@@ -886,14 +932,19 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     for (size_t f = 0; f < size_t(faceCount_); ++f) faceGroup[f] = l1Group_[size_t(level1Group[f])];
   }
   const size_t groupCount = rootOfGroup_.size();
-  // The groups become the units of the next level now, indexed by group: the arrays of this
-  // level go before the level's output grows.
-  nextLevelUnits();
-  // Renumbered now, the exact cones below read the normals in memory order, computed once for
-  // this level and the next ones (where the level-1 merges recomputed them from the mesh).
-  if (firstLevel) {
-    renumberFaces();
-    collectGroupVertices();
+  {
+    // Level 1's arrays, freed by nextLevelUnits, become the renumbered faces' arrays below instead
+    // of fresh memory (BigRecycler); the rest is unmapped at the end of this scope.
+    std::unique_ptr<BigRecycler> recycler(firstLevel ? new BigRecycler : nullptr);
+    // The groups become the units of the next level now, indexed by group: the arrays of this
+    // level go before the level's output grows.
+    nextLevelUnits();
+    // Renumbered now, the exact cones below read the normals in memory order, computed once for
+    // this level and the next ones (where the level-1 merges recomputed them from the mesh).
+    if (firstLevel) {
+      renumberFaces();
+      collectGroupVertices();
+    }
   }
   if (firstLevel && !params_.strictGreedy) support_.assign(groupCount, ConeSupport());
   level.groups.resize(groupCount);
@@ -1004,6 +1055,10 @@ void HierarchyBuilder::renumberFaces() {
   faceArea_.resize(nf);
   double area;
   for (size_t f = 0; f < nf; ++f) {
+    // The mesh is read in group order, scattered: its faces and vertices asked for ahead.
+    if (f + 8 < nf) Prefetch(&mesh_.faces[size_t(meshFace_[f + 8])]);
+    if (f + 4 < nf)
+      for (const uint32_t v : mesh_.faces[size_t(meshFace_[f + 4])]) Prefetch(&mesh_.positions[v]);
     FaceNormalAndArea(mesh_, size_t(meshFace_[f]), faceNormal_[f], area);
     faceArea_[size_t(meshFace_[f])] = area;
   }
@@ -1018,17 +1073,23 @@ void HierarchyBuilder::collectGroupVertices() {
   l1Group_.resize(groups);
   l1Verts_.clear();
   l1Verts_.reserve(mesh_.positions.size() + mesh_.positions.size() / 2);
+  const size_t nf = size_t(faceCount_);
   size_t face = 0;
   for (size_t g = 0; g < groups; ++g) {
     l1VertBegin_[g] = uint32_t(l1Verts_.size());
     l1Group_[g] = int(g);
     const size_t end = face + size_t(units_[g].faceCount);
-    for (; face < end; ++face)
+    for (; face < end; ++face) {
+      // Faces in group order, scattered over the mesh (as in renumberFaces): asked for ahead.
+      if (face + 8 < nf) Prefetch(&mesh_.faces[size_t(meshFace_[face + 8])]);
+      if (face + 4 < nf)
+        for (const uint32_t v : mesh_.faces[size_t(meshFace_[face + 4])]) Prefetch(&seen[v]);
       for (const uint32_t v : mesh_.faces[size_t(meshFace_[face])])
         if (seen[v] != int(g)) {
           seen[v] = int(g);
           l1Verts_.push_back(mesh_.positions[v]);
         }
+    }
   }
   l1VertBegin_[groups] = uint32_t(l1Verts_.size());
 }
@@ -1073,27 +1134,32 @@ void HierarchyBuilder::nextLevelUnits() {
 
 Status HierarchyBuilder::run(GroupHierarchy& out) {
   const int nf = faceCount_;
-  // Adjacency first, while nothing else is allocated: it is the largest temporary.
+  // Adjacency first, while nothing else is allocated: it is the largest temporary. Its arrays,
+  // freed once level 1's lists are made, become level 1's arena, face lists and chains instead of
+  // fresh memory (BigRecycler); what is left is unmapped before the merges.
   {
-    BigVector<uint32_t> offsets, neighbours;
-    size_t borderEdges, nonManifoldEdges;
-    BuildFaceAdjacencyInto(mesh_, offsets, neighbours, borderEdges, nonManifoldEdges);
-    if (neighbours.size() > size_t(std::numeric_limits<uint32_t>::max() / 2))
-      throw std::bad_alloc();  // list offsets are 32-bit
-    // The arena's high-water mark is what it costs in memory: a quarter of slack, no more.
-    arena_.reserve(neighbours.size() + neighbours.size() / 4 + 16);
-    Neighbour* list = arena_.data() + arena_.grow(neighbours.size());
-    for (const uint32_t w : neighbours) *list++ = {int(w), kUnscored};
-    links_.resize(size_t(nf));
-    for (int f = 0; f < nf; ++f)
-      links_[size_t(f)] = Link{-1, offsets[size_t(f)], int(offsets[size_t(f) + 1] - offsets[size_t(f)]), 0};
-    prefixEnd_ = arena_.size();
+    BigRecycler recycler;
+    {
+      BigVector<uint32_t> offsets, neighbours;
+      size_t borderEdges, nonManifoldEdges;
+      BuildFaceAdjacencyInto(mesh_, offsets, neighbours, borderEdges, nonManifoldEdges);
+      if (neighbours.size() > size_t(std::numeric_limits<uint32_t>::max() / 2))
+        throw std::bad_alloc();  // list offsets are 32-bit
+      // The arena's high-water mark is what it costs in memory: a quarter of slack, no more.
+      arena_.reserve(neighbours.size() + neighbours.size() / 4 + 16);
+      Neighbour* list = arena_.data() + arena_.grow(neighbours.size());
+      for (const uint32_t w : neighbours) *list++ = {int(w), kUnscored};
+      links_.resize(size_t(nf));
+      for (int f = 0; f < nf; ++f)
+        links_[size_t(f)] = Link{-1, offsets[size_t(f)], int(offsets[size_t(f) + 1] - offsets[size_t(f)]), 0};
+      prefixEnd_ = arena_.size();
+    }
+    faceNext_.resize(size_t(nf));
+    units_.resize(size_t(nf));
+    chains_.resize(size_t(nf));
   }
 
   // Level-1 units: one per face.
-  faceNext_.resize(size_t(nf));
-  units_.resize(size_t(nf));
-  chains_.resize(size_t(nf));
   for (int f = 0; f < nf; ++f) {
     Unit& u = units_[size_t(f)];
     const auto& t = mesh_.faces[size_t(f)];
