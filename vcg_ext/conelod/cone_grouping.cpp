@@ -17,8 +17,9 @@
 // than keeping an array of them: the build's peak memory stays under twice the loaded mesh's.
 // Once level 1's merges are done and its arrays freed, the faces are renumbered group by group
 // (renumberFaces, which keeps their normals and areas), so level 1's final exact cones and the
-// upper levels read normals in order; each level-1 group's distinct vertices are collected then
-// too (collectGroupVertices), and every level's spheres read those rather than the faces. Exact cones rarely run Welzl's algorithm in the default mode:
+// upper levels read normals in order; each level-1 group's distinct vertices are collected in the
+// same pass, and every level's spheres read those rather than the faces. Exact cones rarely run
+// Welzl's algorithm in the default mode:
 // above level 1 they start from the support of the merged units' cones (trySupportCone), at
 // level 1 (no supports kept) from the cap of two far normals (seededCone); either guess is
 // checked against every normal. With strictGreedy none of this changes a bit of the
@@ -351,7 +352,6 @@ class HierarchyBuilder {
   BigVector<int> l1Group_;
   // Above level 1: the unit that absorbed each dead unit of the level (mergeUnits).
   BigVector<int> absorbedBy_;
-  void collectGroupVertices();
   // From level 2 on, unless strictGreedy: per unit, up to three normals of its faces whose
   // minimal cone is the unit's exact cone, or (after a merge) a guess of it: the support of the
   // minimal cone of both units' supports. An exact recomputation first tries that guess: when
@@ -941,10 +941,7 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     nextLevelUnits();
     // Renumbered now, the exact cones below read the normals in memory order, computed once for
     // this level and the next ones (where the level-1 merges recomputed them from the mesh).
-    if (firstLevel) {
-      renumberFaces();
-      collectGroupVertices();
-    }
+    if (firstLevel) renumberFaces();
   }
   if (firstLevel && !params_.strictGreedy) support_.assign(groupCount, ConeSupport());
   level.groups.resize(groupCount);
@@ -1030,12 +1027,14 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
 }
 
 // After level 1: faces renumbered group by group, each group's in the order of its list (so the
-// normals' order, which MinimalCone's last bits depend on, is unchanged), with their normals.
+// normals' order, which MinimalCone's last bits depend on, is unchanged), with their normals and
+// areas; and, in the same pass over the faces, each level-1 group's distinct vertices (l1Verts_).
 void HierarchyBuilder::renumberFaces() {
   const size_t nf = size_t(faceCount_);
+  const size_t groups = units_.size();  // the units are the level's groups, all alive
   meshFace_.resize(nf);
   size_t next = 0;
-  for (size_t g = 0; g < units_.size(); ++g) {  // the units are the level's groups, all alive
+  for (size_t g = 0; g < groups; ++g) {
     const int tail = chains_[g].tail;
     int f = tail;
     do {
@@ -1045,7 +1044,7 @@ void HierarchyBuilder::renumberFaces() {
   }
   assert(next == nf);
   next = 0;
-  for (size_t g = 0; g < units_.size(); ++g) {
+  for (size_t g = 0; g < groups; ++g) {
     const size_t first = next, end = next + size_t(units_[g].faceCount);
     for (; next + 1 < end; ++next) faceNext_[next] = int(next + 1);
     faceNext_[next] = int(first);
@@ -1053,38 +1052,28 @@ void HierarchyBuilder::renumberFaces() {
   }
   faceNormal_.resize(nf);
   faceArea_.resize(nf);
-  double area;
-  for (size_t f = 0; f < nf; ++f) {
-    // The mesh is read in group order, scattered: its faces and vertices asked for ahead.
-    if (f + 8 < nf) Prefetch(&mesh_.faces[size_t(meshFace_[f + 8])]);
-    if (f + 4 < nf)
-      for (const uint32_t v : mesh_.faces[size_t(meshFace_[f + 4])]) Prefetch(&mesh_.positions[v]);
-    FaceNormalAndArea(mesh_, size_t(meshFace_[f]), faceNormal_[f], area);
-    faceArea_[size_t(meshFace_[f])] = area;
-  }
-}
-
-// Level 1's groups' distinct vertices (l1Verts_), from the renumbered faces: the units are the
-// level-1 groups, group g's faces the run of faceCount faces after group g-1's.
-void HierarchyBuilder::collectGroupVertices() {
-  const size_t groups = units_.size();
   BigVector<int> seen(mesh_.positions.size(), -1);  // the last group that took the vertex
   l1VertBegin_.resize(groups + 1);
   l1Group_.resize(groups);
   l1Verts_.clear();
   l1Verts_.reserve(mesh_.positions.size() + mesh_.positions.size() / 2);
-  const size_t nf = size_t(faceCount_);
-  size_t face = 0;
+  double area;
+  size_t f = 0;  // group g's faces are the run of its faceCount faces after group g-1's
   for (size_t g = 0; g < groups; ++g) {
     l1VertBegin_[g] = uint32_t(l1Verts_.size());
     l1Group_[g] = int(g);
-    const size_t end = face + size_t(units_[g].faceCount);
-    for (; face < end; ++face) {
-      // Faces in group order, scattered over the mesh (as in renumberFaces): asked for ahead.
-      if (face + 8 < nf) Prefetch(&mesh_.faces[size_t(meshFace_[face + 8])]);
-      if (face + 4 < nf)
-        for (const uint32_t v : mesh_.faces[size_t(meshFace_[face + 4])]) Prefetch(&seen[v]);
-      for (const uint32_t v : mesh_.faces[size_t(meshFace_[face])])
+    for (const size_t end = f + size_t(units_[g].faceCount); f < end; ++f) {
+      // The mesh is read in group order, scattered: its faces and vertices asked for ahead.
+      if (f + 8 < nf) Prefetch(&mesh_.faces[size_t(meshFace_[f + 8])]);
+      if (f + 4 < nf)
+        for (const uint32_t v : mesh_.faces[size_t(meshFace_[f + 4])]) {
+          Prefetch(&mesh_.positions[v]);
+          Prefetch(&seen[v]);
+        }
+      const size_t mf = size_t(meshFace_[f]);
+      FaceNormalAndArea(mesh_, mf, faceNormal_[f], area);
+      faceArea_[mf] = area;
+      for (const uint32_t v : mesh_.faces[mf])
         if (seen[v] != int(g)) {
           seen[v] = int(g);
           l1Verts_.push_back(mesh_.positions[v]);
