@@ -627,7 +627,7 @@ def cli_feature_simplify(c):
     assert abs(e["max_error_distance"] - 0.005 * e["diagonal"]) < 1e-5 * e["diagonal"] and e["faces_out"] < 12946 // 4, e
     text = c.conelod("feature-simplify", fandisk, "--target-faces", "5000").stdout.decode()
     assert "12946 -> 5000 faces" in text and "target reached" in text, text
-    # The first pass runs on --threads N threads: the same file for any N.
+    # The set-up and the first pass run on --threads N threads: the same file for any N.
     files = []
     for n in ["1", "3"]:
         files.append(c.out("fandisk_threads_%s.ply" % n))

@@ -3,11 +3,11 @@
 
 #include <algorithm>
 #include <atomic>
-#include <exception>
-#include <mutex>
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <queue>
 #include <thread>
 #include <unordered_map>
@@ -162,6 +162,7 @@ void ParallelChunks(size_t n, unsigned threads, size_t chunk, const Body& body) 
 unsigned FeatureThreads(const FeatureSimplifyParams& p) {
   return p.threads == 0 ? std::min(8u, CoreCount()) : p.threads;
 }
+constexpr size_t kSetUpChunk = 4096;  // vertices or faces per chunk of the set-up's passes
 
 // The faces around a vertex: up to kInline ids stored in place (no pointer to follow for the
 // usual valences), more on the heap. The order is that of push_back / swap-removal, as with a
@@ -453,8 +454,7 @@ Status Work::Build(const IndexedMesh& in, const FeatureSimplifyParams& p) {
   // The per-vertex and per-face passes below run on the first pass's threads (each writes its
   // own vertices' or faces' entries only).
   const unsigned threads = FeatureThreads(p);
-  constexpr size_t kChunk = 4096;
-  ParallelChunks(nv, threads, kChunk, [&](size_t begin, size_t end, unsigned) {
+  ParallelChunks(nv, threads, kSetUpChunk, [&](size_t begin, size_t end, unsigned) {
     std::vector<uint32_t> verts, parent;  // scratch for the fan test
     std::vector<int> degree;
     for (size_t v = begin; v < end; ++v)
@@ -466,7 +466,7 @@ Status Work::Build(const IndexedMesh& in, const FeatureSimplifyParams& p) {
   // Classify only reads them.
   faceAngles.resize(F.size());
   faceAnglesValid.assign(F.size(), 0);
-  ParallelChunks(F.size(), threads, kChunk, [&](size_t begin, size_t end, unsigned) {
+  ParallelChunks(F.size(), threads, kSetUpChunk, [&](size_t begin, size_t end, unsigned) {
     for (size_t f = begin; f < end; ++f) Angles(uint32_t(f));
   });
   Classify(p, threads);
@@ -549,7 +549,7 @@ void Work::Classify(const FeatureSimplifyParams& p, unsigned threads) {
   K.assign(nv, 0.0);
   M.assign(nv, 0.0);
   const double d2 = diag * diag;
-  ParallelChunks(nv, threads, 4096, [&](size_t begin, size_t end, unsigned) {
+  ParallelChunks(nv, threads, kSetUpChunk, [&](size_t begin, size_t end, unsigned) {
     for (uint32_t v = uint32_t(begin); v < end; ++v) {
       if (VF[v].empty()) continue;
       const size_t fc = feat[v].size();
@@ -1184,8 +1184,7 @@ bool Simplifier::FirstPassAhead(unsigned threads, const Progress& progress) {
   aheadStamp_.assign(nv, kNone);
   std::vector<uint32_t> batch;
   for (uint32_t v = 0; v < nv; ++v)
-    if (queued_[v] && (w_.cls[v] == VertexClass::Smooth || w_.cls[v] == VertexClass::FeatureLine) && Admitted(v))
-      batch.push_back(v);
+    if (queued_[v] && Admitted(v)) batch.push_back(v);  // queued: V_K or V_M (Push)
   const size_t n = batch.size();
   constexpr size_t kChunk = 512;
   threads = unsigned(std::min<size_t>(threads, (n + kChunk - 1) / kChunk));

@@ -371,7 +371,9 @@ TEST(FeatureSimplify, FirstPassAheadChangesNothing) {
                                                              {"mech_holes_shark.ply", Load("mech_holes_shark.ply")},
                                                              {"sphere", test::Sphere(4)},
                                                              {"grid", test::Grid(40)}};
-  for (const auto& [name, in] : meshes) {
+  for (const auto& named : meshes) {
+    const std::string& name = named.first;
+    const IndexedMesh& in = named.second;
     FeatureSimplifyParams p;
     p.targetFaceCount = in.faceCount() / 8;
     p.firstPassAhead = false;
