@@ -40,7 +40,7 @@ FeatureSimplifyParams ReadFeatureParams(Args& a) {
 const char* kFeatureSimplifyUsage =
     "conelod feature-simplify IN.ply (--target-faces N | --target-percent P | --max-error E[%]) [-o OUT.ply]\n"
     "                         [--angle DEG] [--no-extend] [--feature-curvature K] [--curvature-threshold T]\n"
-    "                         [--mark] [--line-tolerance PCT] [--threads N] [--json]\n"
+    "                         [--mark] [--line-tolerance PCT] [--threads N] [--faces-per-part P] [--json]\n"
     "  Feature-preserving simplification by edge operations (Hayano-Matsuoka-Ueda): feature edges\n"
     "  (dihedral angle <= DEG [135]; 180 = flat, 90 = cube edge) and feature vertices are kept,\n"
     "  feature lines are simplified only along themselves. Stops at N faces (or P % of the input),\n"
@@ -50,8 +50,10 @@ const char* kFeatureSimplifyUsage =
     "  (D = diagonal; 0 = off). --mark writes vertex colours (red = feature line, blue = feature\n"
     "  vertex) and vertex quality = class (0 smooth, 1 line, 2 feature). The report counts the\n"
     "  output's feature edges lying on the input's feature lines (within PCT % of D [0.5]).\n"
-    "  --threads N: threads for the set-up and the first pass of the growing bound (0 = one per\n"
-    "  core, at most 8 [0]); the output is the same for any N.\n";
+    "  --threads N: threads (0 = one per core, at most 8 [0]) for the set-up, the first pass of the\n"
+    "  growing bound and the parts; --faces-per-part P [32768; 0: never]: with the growing bound, a\n"
+    "  mesh of at least 2P faces is simplified in 2, 4 or 8 parts at the same time, the seams\n"
+    "  between them in each round of the bound. The output is the same for any N.\n";
 
 const char* kFeatureEdgesUsage =
     "conelod feature-edges IN.ply [--reference REF.ply] [--angle DEG] [--no-extend] [--line-tolerance PCT] [--json]\n"
@@ -63,7 +65,8 @@ const char* kFeatureEdgesUsage =
 int CmdFeatureSimplify(int argc, char** argv) {
   std::vector<std::string> valueOptions = kFeatureOptions;
   valueOptions.insert(valueOptions.end(),
-                      {"-o", "--target-faces", "--target-percent", "--max-error", "--line-tolerance", "--threads"});
+                      {"-o", "--target-faces", "--target-percent", "--max-error", "--line-tolerance", "--threads",
+                       "--faces-per-part"});
   Args a(argc, argv, valueOptions, {"--json", "--no-extend", "--mark", "--no-grow"});
   FeatureSimplifyParams p = ReadFeatureParams(a);
   const double targetPercent = a.num("--target-percent", 0);
@@ -73,6 +76,11 @@ int CmdFeatureSimplify(int argc, char** argv) {
   const std::string threadsError = ReadThreadsOption(a, 0, threads);
   if (!threadsError.empty()) return Fail(kUsage, threadsError + "\n" + kFeatureSimplifyUsage);
   p.threads = unsigned(threads);
+  const int facesPerPart = a.integer("--faces-per-part", int(p.facesPerPart));
+  if (facesPerPart < 0)
+    return Fail(kUsage, "--faces-per-part must be a whole number >= 0 (0: never in parts)\n" +
+                            std::string(kFeatureSimplifyUsage));
+  p.facesPerPart = size_t(facesPerPart);
   if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kFeatureSimplifyUsage);
   if (a.positional().size() != 1) return Fail(kUsage, std::string("expected one input mesh\n") + kFeatureSimplifyUsage);
   if (!a.has("--target-faces") && !a.has("--target-percent") && !a.has("--max-error"))
@@ -127,6 +135,7 @@ int CmdFeatureSimplify(int argc, char** argv) {
         .field("target_reached", r.targetReached).field("max_error_distance", p.maxErrorDistance)
         .field("max_collapse_distance", r.maxCollapseDistance).field("max_tracked_error", r.maxTrackedError)
         .field("final_error_bound", r.finalErrorBound).field("grow_error_bound", p.growErrorBound)
+        .field("parts", size_t(r.parts))
         .field("diagonal", diagonal).field("feature_angle_deg", p.featureAngleDeg);
     if (sa.ok()) {
       j.field("line_tolerance", lineTolPct / 100.0 * diagonal)

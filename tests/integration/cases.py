@@ -627,16 +627,22 @@ def cli_feature_simplify(c):
     assert abs(e["max_error_distance"] - 0.005 * e["diagonal"]) < 1e-5 * e["diagonal"] and e["faces_out"] < 12946 // 4, e
     text = c.conelod("feature-simplify", fandisk, "--target-faces", "5000").stdout.decode()
     assert "12946 -> 5000 faces" in text and "target reached" in text, text
-    # The set-up and the first pass run on --threads N threads: the same file for any N.
-    files = []
-    for n in ["1", "3"]:
-        files.append(c.out("fandisk_threads_%s.ply" % n))
-        c.conelod("feature-simplify", fandisk, "--target-percent", "10", "--threads", n, "-o", files[-1])
-    with open(files[0], "rb") as a, open(files[1], "rb") as b:
-        assert a.read() == b.read(), "--threads 1 and 3 differ"
+    # The set-up, the first pass and the parts (fandisk in one piece by default, in 4 parts with
+    # --faces-per-part 3000) run on --threads N threads: the same file for any N.
+    for per_part, parts in [([], 1), (["--faces-per-part", "3000"], 4)]:
+        files = []
+        for n in ["1", "3"]:
+            files.append(c.out("fandisk_threads_%s.ply" % n))
+            r = json.loads(c.conelod("feature-simplify", fandisk, "--target-percent", "10", "--threads", n,
+                                     *per_part, "-o", files[-1], "--json").stdout)
+            assert r["parts"] == parts and r["target_reached"] and r["faces_out"] >= 1294 - parts, r
+        with open(files[0], "rb") as a, open(files[1], "rb") as b:
+            assert a.read() == b.read(), "--threads 1 and 3 differ (%d parts)" % parts
     for bad in ["-1", "2.5", "many"]:
         p = c.conelod("feature-simplify", fandisk, "--target-percent", "10", "--threads", bad, expect=1)
         assert "--threads" in p.stderr.decode(), p.stderr.decode()
+        p = c.conelod("feature-simplify", fandisk, "--target-percent", "10", "--faces-per-part", bad, expect=1)
+        assert "--faces-per-part" in p.stderr.decode(), p.stderr.decode()
     # Bad input and usage.
     for mesh, message in [("no_faces.ply", "has no faces"), ("nan_vertex.ply", "NaN or infinite")]:
         p = c.conelod("feature-simplify", c.mesh(mesh), "--target-faces", "10", expect=2)

@@ -2,6 +2,8 @@
 #include "conelod/feature_simplify.h"
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <atomic>
 #include <cmath>
 #include <exception>
@@ -219,6 +221,9 @@ class Work {
   std::vector<FaceList> VF;
   std::vector<std::vector<uint32_t>> feat;
   std::vector<char> locked;
+  // While the parts' lanes of a mesh simplified in parts run (Simplify): the vertices of faces
+  // that span two parts, which no lane moves or collapses into; null otherwise.
+  const std::vector<char>* frozen = nullptr;
   std::unordered_set<uint64_t> swapMade;  // feature edges created by extension swaps
   double diag = 0;
   double degenerateArea2 = 0;  // squared |cross| below which a face counts as degenerate
@@ -666,13 +671,80 @@ class Evaluator {
   std::vector<uint32_t> nbrs_;
 };
 
-// §3.3-3.4: the collapse engine on a Work.
-class Simplifier : private TrackingStore, public Evaluator {
+// The per-vertex state of the queues and of the tracking, shared by the lanes below: while the
+// mesh is simplified in parts, each lane writes the entries of its own vertices only.
+struct QueueState : TrackingStore {
+  std::vector<uint32_t> stamp;       // the vertex's current queue entry
+  std::vector<uint32_t> visit;       // == a lane's mark: seen in its current collapse
+  std::vector<char> queued;          // v has a valid entry in its queue
+  std::vector<char> fanChanged;      // v's fan changed while it was deferred
+  std::vector<uint32_t> retry;       // readmitted with an unchanged fan: its ranking of edges (d, flips,
+                                     // shapes: all from its own fan) is unchanged, so its edge is known
+  std::vector<char> deferredMark;    // v waits in a deferred queue for a larger bound (its stored error
+                                     // may be stale once its neighbourhood changes: it is re-evaluated
+                                     // when the bound reaches it)
+  // The first pass evaluated ahead (FirstPassAhead): every vertex's first evaluation, under the
+  // first bound, depends on the input around it only. aheadStamp[v]: the queue entry it is for
+  // (kNone: none, or no longer valid); a collapse invalidates those within two rings of it.
+  std::vector<Evaluation> ahead;
+  std::vector<uint32_t> aheadStamp;
+  void Reset(size_t nv) {
+    stamp.assign(nv, 0);
+    visit.assign(nv, 0);
+    queued.assign(nv, 0);
+    fanChanged.assign(nv, 0);
+    retry.assign(nv, kNone);
+    deferredMark.assign(nv, 0);
+  }
+};
+
+// §3.3-3.4: the collapse engine on a Work — one lane: its queues, its deferred vertices under the
+// common error bound, its collapses. The whole mesh is one lane; a mesh simplified in parts has one
+// lane per part (SimplifyInParts), and the lanes run at the same time.
+class Simplifier : public Evaluator {
  public:
-  Simplifier(Work& w, const FeatureSimplifyParams& p) : TrackingStore(), Evaluator(w, p, *this) {}
+  Simplifier(Work& w, const FeatureSimplifyParams& p, QueueState& q)
+      : Evaluator(w, p, q), q_(q), stamp_(q.stamp), visit_(q.visit), queued_(q.queued), fanChanged_(q.fanChanged),
+        retry_(q.retry), deferredMark_(q.deferredMark), ahead_(q.ahead), aheadStamp_(q.aheadStamp) {}
 
   void Collapse(uint32_t from, uint32_t to, double outErr);
-  Status Run(FeatureSimplifyResult& out, const Progress& progress);
+  void Push(uint32_t v, bool recompute);
+  // Pops and evaluates until both queues are empty (true) or `quota` faces have been removed
+  // (false). progress (may be null) is called every 1024 pops with the percentage done, assuming
+  // every lane of the round `lanes` removes as many faces as this one; cancelled is set when it
+  // returns false, and ends the round of every lane.
+  bool RunRound(size_t quota, const Progress* progress, size_t facesIn, size_t target, size_t facesBefore,
+                size_t lanes, std::atomic<bool>& cancelled);
+  // The error of the deferred vertex with the smallest error (false: none is deferred).
+  bool SmallestDeferred(double& error);
+  // Puts the deferred vertices under bound_ back in their queues.
+  void Admit();
+  bool FirstPassAhead(unsigned threads, const Progress& progress);
+  // Lanes of a mesh simplified in parts (SimplifyInParts): the part of each vertex, the lanes by
+  // part, and whether this is the seam lane (which runs alone, with Work::frozen lifted, on the
+  // vertices of the seams and on the vertices their collapses touch).
+  void SetParts(const std::vector<uint8_t>* part, std::vector<char>* seam, const std::vector<Simplifier*>* lanes,
+                bool seamLane, uint32_t index, uint32_t count) {
+    part_ = part;
+    seam_ = seam;
+    lanes_ = lanes;
+    seamLane_ = seamLane;
+    mark_ = index;  // visit_ marks unique to the lane
+    markStep_ = count;
+  }
+  // A part's lane: queues for the seam lane the seam vertices Push was asked for.
+  void HandPendingTo(Simplifier& seamLane);
+
+  bool track_ = false;  // original vertices are tracked (an error bound is in force)
+  bool grow_ = false;   // the bound grows until the target face count is reached
+  double bound_ = std::numeric_limits<double>::infinity();
+  size_t nK_ = 0, nM_ = 0;  // V_K and V_M vertices queued at the start (the queues' interleaving)
+  size_t removed_ = 0;      // faces removed by this lane's collapses
+  size_t collapses_ = 0;
+  size_t faces_ = 0;        // faces of this lane's part at the start
+  size_t aheadLeft_ = 0;
+  uint32_t mark_ = 0;
+  double maxD_ = 0, maxTracked_ = 0;
 
  private:
   struct Entry {
@@ -688,43 +760,37 @@ class Simplifier : private TrackingStore, public Evaluator {
     uint32_t to;   // the edge v -> to that was tried (the smallest d the topology allowed)
     bool operator<(const Deferred& o) const { return error > o.error; }  // min-heap
   };
-  void Push(uint32_t v, bool recompute);
-  bool RaiseBound();
   // CurvatureThreshold (§3.3): v (V_K or V_M) may be removed, |K| D^2 or |M| D under the threshold.
   bool Admitted(uint32_t v) const;
   // The inputs of CurvatureK(v), asked for ahead of a Push that recomputes it.
   void PrefetchCurvatureInputs(uint32_t v) const;
-  bool FirstPassAhead(unsigned threads, const Progress& progress);
   void InvalidateAhead(uint32_t from, uint32_t to);
 
+  QueueState& q_;
+  std::vector<uint32_t>& stamp_;
+  std::vector<uint32_t>& visit_;
+  std::vector<char>& queued_;
+  std::vector<char>& fanChanged_;
+  std::vector<uint32_t>& retry_;
+  std::vector<char>& deferredMark_;
+  std::vector<Evaluation>& ahead_;
+  std::vector<uint32_t>& aheadStamp_;
   std::priority_queue<Entry> heapK_, heapM_;
   std::priority_queue<Deferred> deferred_;
-  std::vector<Deferred> admitted_;  // RaiseBound's vertices to put back in their queues
-  std::vector<uint32_t> stamp_;
-  bool track_ = false;           // original vertices are tracked (an error bound is in force)
-  bool grow_ = false;            // the bound grows until the target face count is reached
-  double bound_ = std::numeric_limits<double>::infinity();
+  std::vector<Deferred> admitted_;  // Admit's vertices to put back in their queues
+  size_t popsK_ = 0, popsM_ = 0, iter_ = 0;
+  // The lane whose first pass ahead covers v (its aheadLeft_), and whose deferred queue takes v.
+  Simplifier& Owner(uint32_t v) { return part_ && !(seamLane_ && (*seam_)[v]) ? *(*lanes_)[(*part_)[v]] : *this; }
+  const std::vector<uint8_t>* part_ = nullptr;
+  std::vector<char>* seam_ = nullptr;
+  uint32_t markStep_ = 1;
+  const std::vector<Simplifier*>* lanes_ = nullptr;
+  bool seamLane_ = false;
+  std::vector<std::pair<uint32_t, bool>> pending_;  // seam vertices to push (recompute K / M)
   std::vector<Tri> newFan_;           // the faces around `to` after a collapse, as triangles
   std::vector<P3> scratchPts_;        // original vertices to re-assign after a collapse
   std::vector<size_t> scratchFirst_;  // for each, the triangle of newFan_ to try first
   std::vector<uint32_t> scratchRing_;
-  std::vector<uint32_t> visit_;  // visit_[v] == mark_: seen in the current collapse
-  uint32_t mark_ = 0;
-  std::vector<char> queued_;     // v has a valid entry in its queue
-  std::vector<char> fanChanged_;    // v's fan changed while it was deferred
-  std::vector<uint32_t> retry_;     // readmitted with an unchanged fan: its ranking of edges (d, flips,
-                                    // shapes: all from its own fan) is unchanged, so its edge is known
-  std::vector<char> deferredMark_;  // v waits in deferred_ for a larger bound (its stored error may
-                                    // be stale once its neighbourhood changes: it is re-evaluated
-                                    // when the bound reaches it)
-  // The first pass evaluated ahead (FirstPassAhead): every vertex's first evaluation, under the
-  // first bound, depends on the input around it only. aheadStamp_[v]: the queue entry it is for
-  // (kNone: none, or no longer valid); a collapse invalidates those within two rings of it.
-  std::vector<Evaluation> ahead_;
-  std::vector<uint32_t> aheadStamp_;
-  size_t aheadLeft_ = 0;
-  size_t faces_ = 0;
-  double maxD_ = 0, maxTracked_ = 0;
 };
 
 // The faces around `from` as (face, x, y, old normal) with (from, x, y) in the face's order:
@@ -745,6 +811,7 @@ CollapseRefusal Evaluator::Check(uint32_t from, uint32_t to, double* dOut, doubl
                                  double cutoff) {
   Work& w = w_;
   if (from == to) return CollapseRefusal::NotAnEdge;
+  if (w.frozen && ((*w.frozen)[from] | (*w.frozen)[to])) return CollapseRefusal::LockedVertex;
   BuildFan(from);
   int ne = 0;
   for (const FanFace& ff : fan_) ne += int((ff.x == to) | (ff.y == to));
@@ -1057,7 +1124,7 @@ void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
     auto& t = w.F[f];
     if (w.Contains(f, to)) {
       w.alive[f] = 0;
-      --faces_;
+      ++removed_;
       for (uint32_t x : t)
         if (x != from) w.RemoveFaceFrom(x, f);
     } else {
@@ -1070,7 +1137,7 @@ void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
   }
   w.VF[from].clear();
   w.cls[from] = VertexClass::Unused;
-  if (aheadLeft_ > 0) InvalidateAhead(from, to);
+  if ((aheadLeft_ > 0 || seamLane_) && !aheadStamp_.empty()) InvalidateAhead(from, to);
   // ... and for their faces' corners and angles, read by Push after the re-assignment below.
   for (uint32_t x : scratchRing_) PrefetchCurvatureInputs(x);
   if (track) {
@@ -1091,7 +1158,24 @@ void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
   // A `to` that waits for a larger bound keeps waiting with the error it was deferred with, like
   // the deferred vertices of from's ring: absorbing `from` gives its fan from's removed vertices to
   // cover as well, and on the bunny 96 % of such `to`s evaluated at once were deferred again.
-  ++mark_;
+  mark_ += markStep_;
+  if (seamLane_) {
+    // A face that now spans two parts makes its vertices seam vertices (the parts' lanes leave
+    // them to this lane from now on); an evaluation made ahead for one is dropped.
+    for (uint32_t f : w.VF[to]) {
+      const auto& t = w.F[f];
+      const std::vector<uint8_t>& part = *part_;
+      if (part[t[0]] == part[t[1]] && part[t[0]] == part[t[2]]) continue;
+      for (uint32_t x : t) {
+        if ((*seam_)[x]) continue;
+        if (!aheadStamp_.empty() && aheadStamp_[x] != kNone) {
+          aheadStamp_[x] = kNone;
+          --Owner(x).aheadLeft_;
+        }
+        (*seam_)[x] = 1;
+      }
+    }
+  }
   if (deferredMark_[to]) fanChanged_[to] = 1;
   else Push(to, true);
   visit_[to] = mark_;
@@ -1124,6 +1208,10 @@ void Simplifier::PrefetchCurvatureInputs(uint32_t v) const {
 
 void Simplifier::Push(uint32_t v, bool recompute) {
   Work& w = w_;
+  if (!seamLane_ && w.frozen && (*w.frozen)[v]) {  // a seam vertex: the seam lane's
+    pending_.push_back({v, recompute});
+    return;
+  }
   ++stamp_[v];
   deferredMark_[v] = 0;
   retry_[v] = kNone;
@@ -1140,18 +1228,16 @@ void Simplifier::Push(uint32_t v, bool recompute) {
   }
 }
 
-// Raises the error bound to admit the deferred vertex with the smallest error (at least x1.25,
-// so that each round admits many vertices) and puts the deferred vertices under it back in their
-// queues. False when nothing is deferred or the next bound passes maxErrorDistance.
-bool Simplifier::RaiseBound() {
+// The smallest error among the deferred vertices (stale entries dropped): the next bound is at
+// least this (and at least x1.25 the current one, so that each round admits many vertices).
+bool Simplifier::SmallestDeferred(double& error) {
   while (!deferred_.empty() && deferred_.top().stamp != stamp_[deferred_.top().v]) deferred_.pop();
   if (deferred_.empty()) return false;
-  double next = std::max(bound_ * 1.25, deferred_.top().error);
-  if (p_.maxErrorDistance > 0) {
-    if (deferred_.top().error > p_.maxErrorDistance) return false;
-    next = std::min(next, p_.maxErrorDistance);
-  }
-  bound_ = next;
+  error = deferred_.top().error;
+  return true;
+}
+
+void Simplifier::Admit() {
   admitted_.clear();
   while (!deferred_.empty() && deferred_.top().error <= bound_) {
     const Deferred d = deferred_.top();
@@ -1170,7 +1256,6 @@ bool Simplifier::RaiseBound() {
     Push(d.v, false);
     if (same) retry_[d.v] = d.to;
   }
-  return true;
 }
 
 // Evaluates every queued vertex the curvature threshold admits under the first bound,
@@ -1191,7 +1276,7 @@ bool Simplifier::FirstPassAhead(unsigned threads, const Progress& progress) {
   std::vector<Evaluator> helpers;  // one per thread beside this one (whose evaluator is *this)
   try {
     helpers.reserve(threads > 1 ? threads - 1 : 0);
-    for (unsigned t = 1; t < threads; ++t) helpers.emplace_back(w_, p_, static_cast<TrackingStore&>(*this));
+    for (unsigned t = 1; t < threads; ++t) helpers.emplace_back(w_, p_, static_cast<TrackingStore&>(q_));
   } catch (...) {
     // no room for more: fewer threads
   }
@@ -1228,7 +1313,7 @@ void Simplifier::InvalidateAhead(uint32_t from, uint32_t to) {
   auto drop = [&](uint32_t x) {
     if (aheadStamp_[x] == kNone) return;
     aheadStamp_[x] = kNone;
-    --aheadLeft_;
+    --Owner(x).aheadLeft_;
   };
   drop(from);
   drop(to);
@@ -1238,53 +1323,15 @@ void Simplifier::InvalidateAhead(uint32_t from, uint32_t to) {
         for (uint32_t z : w_.F[g]) drop(z);
 }
 
-Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
+bool Simplifier::RunRound(size_t quota, const Progress* progress, size_t facesIn, size_t target, size_t facesBefore,
+                          size_t lanes, std::atomic<bool>& cancelled) {
   Work& w = w_;
-  const size_t nv = w.P.size();
-  stamp_.assign(nv, 0);
-  visit_.assign(nv, 0);
-  queued_.assign(nv, 0);
-  deferredMark_.assign(nv, 0);
-  fanChanged_.assign(nv, 0);
-  retry_.assign(nv, kNone);
-  faces_ = 0;
-  for (char a : w.alive) faces_ += a ? 1 : 0;
-  const size_t facesIn = faces_;
-  const size_t target = p_.targetFaceCount;
-  // Error bound: fixed at maxErrorDistance (§3.4), or, with a target face count and
-  // growErrorBound, starting tiny and raised only when no collapse fits (up to maxErrorDistance
-  // if given). Without either, the paper's pure curvature order runs untracked.
-  grow_ = target > 0 && p_.growErrorBound;
-  track_ = grow_ || p_.maxErrorDistance > 0;
-  bound_ = grow_ ? 1e-6 * w.diag : (p_.maxErrorDistance > 0 ? p_.maxErrorDistance
-                                                            : std::numeric_limits<double>::infinity());
-  if (grow_ && p_.maxErrorDistance > 0) bound_ = std::min(bound_, p_.maxErrorDistance);
-  if (track_) {
-    owned_.assign(w.F.size(), {});
-    outError_.assign(w.F.size(), 0.0);
-  }
-  size_t nK = 0, nM = 0;
-  for (uint32_t v = 0; v < nv; ++v) {
-    if (w.cls[v] == VertexClass::Smooth) ++nK;
-    if (w.cls[v] == VertexClass::FeatureLine) ++nM;
-    Push(v, false);  // Classify has just computed K and M
-  }
-  if (grow_ && p_.firstPassAhead) {
-    // Every vertex's first evaluation (a sixth of the time) depends on the input only: made
-    // here, in memory order and on every core, and used in the queue's order unless a collapse
-    // has come within two rings of the vertex by then (the output is the same either way).
-    if (!FirstPassAhead(FeatureThreads(p_), progress)) return Status::Cancelled();
-  }
-  size_t popsK = 0, popsM = 0, iter = 0;
-  bool reached = target > 0 && faces_ <= target;
-  while (!reached) {
+  const size_t start = removed_;
+  while (removed_ - start < quota) {
     const bool haveK = !heapK_.empty(), haveM = !heapM_.empty();
-    if (!haveK && !haveM) {
-      if (grow_ && RaiseBound()) continue;
-      break;
-    }
+    if (!haveK && !haveM) return true;
     // Interleave the two queues in proportion to their initial sizes.
-    const bool takeK = haveK && (!haveM || double(popsK + 1) * double(nM) <= double(popsM + 1) * double(nK));
+    const bool takeK = haveK && (!haveM || double(popsK_ + 1) * double(nM_) <= double(popsM_ + 1) * double(nK_));
     auto& heap = takeK ? heapK_ : heapM_;
     const Entry e = heap.top();
     heap.pop();
@@ -1303,18 +1350,23 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
     const VertexClass c = w.cls[v];
     if (c != (takeK ? VertexClass::Smooth : VertexClass::FeatureLine)) continue;
     queued_[v] = 0;
-    (takeK ? popsK : popsM) += 1;
-    if ((++iter & 1023) == 0 && progress) {
-      const int pct = target > 0 ? int(100.0 * double(facesIn - faces_) / double(facesIn - target))
-                                 : int(100.0 * double(popsK + popsM) / double(nK + nM + 1));
-      if (!progress(std::min(99, std::max(0, pct)), "feature-preserving simplification")) return Status::Cancelled();
+    (takeK ? popsK_ : popsM_) += 1;
+    if ((++iter_ & 1023) == 0) {
+      if (progress && *progress) {
+        const size_t done = facesIn - facesBefore + (removed_ - start) * lanes;
+        const int pct = target > 0 ? int(100.0 * double(done) / double(facesIn - target))
+                                   : int(100.0 * double(popsK_ + popsM_) / double(nK_ + nM_ + 1));
+        if (!(*progress)(std::min(99, std::max(0, pct)), "feature-preserving simplification")) cancelled = true;
+      }
+      if (cancelled) return false;
     }
     if (!Admitted(v)) continue;
     // The evaluation made ahead in the first pass, if nothing it read has changed since.
+    // (The seam lane does not use them: they were made with the seams frozen.)
     bool useAhead = false;
-    if (aheadLeft_ > 0 && aheadStamp_[v] != kNone) {  // made ahead: used, or dropped as outdated
-      --aheadLeft_;
-      useAhead = aheadStamp_[v] == e.stamp && retry_[v] == kNone;
+    if ((aheadLeft_ > 0 || (seamLane_ && !aheadStamp_.empty())) && aheadStamp_[v] != kNone) {  // made ahead: used, or dropped
+      --Owner(v).aheadLeft_;
+      useAhead = !seamLane_ && aheadStamp_[v] == e.stamp && retry_[v] == kNone;
       aheadStamp_[v] = kNone;
     }
     const Evaluation ev = useAhead ? ahead_[v] : Evaluate(v, retry_[v], bound_, track_);
@@ -1322,14 +1374,13 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
     if (ev.kind == Evaluation::Collapse) {
       maxD_ = std::max(maxD_, ev.d);
       Collapse(v, ev.to, ev.outErr);
-      ++out.collapses;
+      ++collapses_;
     } else if (ev.kind == Evaluation::Defer && grow_ && std::isfinite(ev.error)) {
-      deferred_.push({ev.error, v, stamp_[v], ev.to});
+      Owner(v).deferred_.push({ev.error, v, stamp_[v], ev.to});
       deferredMark_[v] = 1;
     } else if (ev.kind == Evaluation::None) {
       continue;
     }
-    reached = target > 0 && faces_ <= target;
     if (ahead != kNone && w.cls[ahead] != VertexClass::Unused)
       for (uint32_t f : w.VF[ahead]) {
         __builtin_prefetch(&w.F[f]);
@@ -1341,7 +1392,248 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
     if (aheadTo != kNone && w.cls[aheadTo] != VertexClass::Unused)
       for (uint32_t f : w.VF[aheadTo]) __builtin_prefetch(&w.F[f]);
   }
-  out.finalErrorBound = track_ ? bound_ : 0.0;
+  return false;
+}
+
+void Simplifier::HandPendingTo(Simplifier& seamLane) {
+  for (const auto& x : pending_)
+    if (!queued_[x.first] || x.second) seamLane.Push(x.first, x.second);
+  pending_.clear();
+}
+
+// The number of parts a mesh is simplified in: 2, 4 or 8 with at least `facesPerPart` faces each,
+// 1 (one piece) below 2 x facesPerPart or with facesPerPart 0.
+unsigned PartCount(size_t faces, size_t facesPerPart) {
+  unsigned parts = 1;
+  if (facesPerPart == 0) return parts;
+  while (parts < 8 && faces / (2 * parts) >= facesPerPart) parts *= 2;
+  return parts;
+}
+
+// Vertex -> part: the used vertices cut at the median of their positions across the longest side
+// of their box, each half again, and so on (ties by index). A function of the mesh only.
+std::vector<uint8_t> CutIntoParts(const Work& w, unsigned parts) {
+  std::vector<uint8_t> part(w.P.size(), 0);
+  std::vector<uint32_t> verts;
+  for (uint32_t v = 0; v < w.P.size(); ++v)
+    if (w.cls[v] != VertexClass::Unused) verts.push_back(v);
+  struct Range {
+    size_t begin, end;
+    unsigned first, count;  // the parts [first, first + count) share verts[begin, end)
+  };
+  std::vector<Range> todo{{0, verts.size(), 0, parts}};
+  while (!todo.empty()) {
+    const Range r = todo.back();
+    todo.pop_back();
+    if (r.count == 1) {
+      for (size_t i = r.begin; i < r.end; ++i) part[verts[i]] = uint8_t(r.first);
+      continue;
+    }
+    vcg::Box3d box;
+    for (size_t i = r.begin; i < r.end; ++i) box.Add(w.P[verts[i]]);
+    const int axis = box.MaxDim();
+    const size_t mid = r.begin + (r.end - r.begin) / 2;
+    std::nth_element(verts.begin() + long(r.begin), verts.begin() + long(mid), verts.begin() + long(r.end),
+                     [&](uint32_t a, uint32_t b) {
+                       const double pa = w.P[a][axis], pb = w.P[b][axis];
+                       return pa < pb || (pa == pb && a < b);
+                     });
+    todo.push_back({r.begin, mid, r.first, r.count / 2});
+    todo.push_back({mid, r.end, r.first + r.count / 2, r.count / 2});
+  }
+  return part;
+}
+
+// Runs the lanes' rounds under the common error bound until the face count reaches the target
+// (0: none) or no collapse fits the largest bound allowed. In each round (one bound) the parts'
+// lanes run at the same time on up to `threads` threads, with the seams frozen, until their queues
+// are empty; then the seam lane (if any) alone, with the seams free, on the seam vertices that
+// were admitted or touched meanwhile and whatever their collapses touch; then the bound is raised.
+// A round that reaches the target is shared between the parts' lanes still busy in proportion to
+// their faces, so that the result depends neither on which lane runs first nor on the number of
+// threads. Progress is reported on this thread only. False: cancelled.
+bool RunLanes(Work& w, const std::vector<Simplifier*>& lanes, Simplifier* seamLane, const std::vector<char>* seam,
+              const FeatureSimplifyParams& p, size_t facesIn, unsigned threads, const Progress& progress) {
+  const size_t target = p.targetFaceCount;
+  std::atomic<bool> cancelled(false);
+  std::vector<char> exhausted(lanes.size(), 0);
+  bool admit = false, seamAdmit = false, seamDone = seamLane == nullptr;
+  for (;;) {
+    size_t removed = seamLane ? seamLane->removed_ : 0;
+    for (const Simplifier* l : lanes) removed += l->removed_;
+    const size_t faces = facesIn - removed;
+    if (target > 0 && faces <= target) return true;
+    std::vector<size_t> active;
+    size_t activeFaces = 0;
+    for (size_t i = 0; i < lanes.size(); ++i)
+      if (!exhausted[i]) {
+        active.push_back(i);
+        activeFaces += lanes[i]->faces_ - lanes[i]->removed_;
+      }
+    if (!active.empty()) {
+      // The faces left to remove, shared in proportion to the lanes' faces (rounded down, the rest
+      // one each to the first lanes): together exactly what is left.
+      std::vector<size_t> quota(lanes.size(), std::numeric_limits<size_t>::max());
+      if (target > 0) {
+        const size_t left = faces - target;
+        size_t given = 0;
+        for (size_t i : active) {
+          const size_t own = lanes[i]->faces_ - lanes[i]->removed_;
+          quota[i] = activeFaces > 0 ? left * own / activeFaces : left / active.size();
+          given += quota[i];
+        }
+        for (size_t k = 0; given < left; k = (k + 1) % active.size(), ++given) ++quota[active[k]];
+        size_t kept = 0;
+        for (size_t i : active)
+          if (quota[i] > 0) active[kept++] = i;
+        active.resize(kept);
+      }
+      auto run = [&](size_t i, bool reporting) {
+        Simplifier& l = *lanes[i];
+        if (admit) l.Admit();
+        if (l.RunRound(quota[i], reporting ? &progress : nullptr, facesIn, target, faces, active.size(), cancelled))
+          exhausted[i] = 1;
+      };
+      if (active.size() == 1 || threads <= 1) {
+        for (size_t i : active) run(i, true);
+      } else {
+        ParallelChunks(active.size(), threads, 1,
+                       [&](size_t begin, size_t, unsigned thread) { run(active[begin], thread == 0); });
+      }
+      admit = false;
+      if (cancelled) return false;
+      continue;
+    }
+    if (!seamDone) {
+      w.frozen = nullptr;  // the seams are free while the seam lane runs alone
+      for (Simplifier* l : lanes) l->HandPendingTo(*seamLane);
+      if (seamAdmit) seamLane->Admit();
+      seamLane->RunRound(target > 0 ? faces - target : std::numeric_limits<size_t>::max(), &progress, facesIn,
+                         target, faces, 1, cancelled);
+      w.frozen = seam;
+      seamAdmit = false;
+      seamDone = true;
+      if (cancelled) return false;
+      continue;
+    }
+    // Every queue is empty: raise the bound to admit the deferred vertex with the smallest error
+    // (at least x1.25, so that each round admits many), or stop.
+    if (!lanes[0]->grow_) return true;
+    double smallest = std::numeric_limits<double>::infinity();
+    bool any = false;
+    auto consider = [&](Simplifier* l) {
+      double e = 0;
+      if (l->SmallestDeferred(e)) { any = true; smallest = std::min(smallest, e); }
+    };
+    for (Simplifier* l : lanes) consider(l);
+    if (seamLane) consider(seamLane);
+    if (!any) return true;
+    double next = std::max(lanes[0]->bound_ * 1.25, smallest);
+    if (p.maxErrorDistance > 0) {
+      if (smallest > p.maxErrorDistance) return true;
+      next = std::min(next, p.maxErrorDistance);
+    }
+    for (Simplifier* l : lanes) l->bound_ = next;
+    if (seamLane) seamLane->bound_ = next;
+    std::fill(exhausted.begin(), exhausted.end(), 0);
+    admit = seamAdmit = true;
+    seamDone = seamLane == nullptr;
+  }
+}
+
+// The simplification of §3.3-3.4 on a Work. A large mesh (growing bound, at least 2 x
+// facesPerPart faces) is simplified in parts, one lane per part, all at the same time: the
+// vertices are cut by CutIntoParts, and those of the faces that span two parts (the seams) are
+// frozen while the parts' lanes run, so that no collapse of one part reads or writes what
+// another's does. In every round of the bound the seams' vertices then get their turn in the seam
+// lane, alone, so that they too go in the order of their errors.
+Status Simplify(Work& w, const FeatureSimplifyParams& p, FeatureSimplifyResult& out, const Progress& progress) {
+  const size_t nv = w.P.size();
+  QueueState q;
+  q.Reset(nv);
+  size_t facesIn = 0;
+  for (char a : w.alive) facesIn += a ? 1 : 0;
+  const size_t target = p.targetFaceCount;
+  // Error bound: fixed at maxErrorDistance (§3.4), or, with a target face count and
+  // growErrorBound, starting tiny and raised only when no collapse fits (up to maxErrorDistance
+  // if given). Without either, the paper's pure curvature order runs untracked.
+  const bool grow = target > 0 && p.growErrorBound;
+  const bool track = grow || p.maxErrorDistance > 0;
+  double bound = grow ? 1e-6 * w.diag : (p.maxErrorDistance > 0 ? p.maxErrorDistance
+                                                               : std::numeric_limits<double>::infinity());
+  if (grow && p.maxErrorDistance > 0) bound = std::min(bound, p.maxErrorDistance);
+  if (track) {
+    q.ownedStore.assign(w.F.size(), {});
+    q.outErrorStore.assign(w.F.size(), 0.0);
+  }
+  const unsigned parts = grow && target < facesIn ? PartCount(facesIn, p.facesPerPart) : 1;
+  std::vector<uint8_t> part;
+  std::vector<char> seam;  // the vertices of faces that span two parts
+  if (parts > 1) {
+    part = CutIntoParts(w, parts);
+    seam.assign(nv, 0);
+    for (uint32_t f = 0; f < w.F.size(); ++f) {
+      const auto& t = w.F[f];
+      if (w.alive[f] && (part[t[0]] != part[t[1]] || part[t[0]] != part[t[2]]))
+        for (uint32_t v : t) seam[v] = 1;
+    }
+  }
+  std::vector<std::unique_ptr<Simplifier>> store;
+  std::vector<Simplifier*> lanes;
+  for (unsigned i = 0; i < parts + (parts > 1 ? 1 : 0); ++i) {
+    store.emplace_back(new Simplifier(w, p, q));
+    store.back()->track_ = track;
+    store.back()->grow_ = grow;
+    store.back()->bound_ = bound;
+    if (i < parts) lanes.push_back(store.back().get());
+  }
+  Simplifier* seamLane = parts > 1 ? store.back().get() : nullptr;
+  if (parts > 1) {
+    for (unsigned i = 0; i < parts; ++i) lanes[i]->SetParts(&part, &seam, &lanes, false, i, parts + 1);
+    seamLane->SetParts(&part, &seam, &lanes, true, parts, parts + 1);
+  }
+  auto laneOf = [&](uint32_t v) -> Simplifier& {
+    if (parts == 1) return *lanes[0];
+    return seam[v] ? *seamLane : *lanes[part[v]];
+  };
+  for (uint32_t f = 0; f < w.F.size(); ++f)
+    if (w.alive[f]) (parts > 1 ? *lanes[part[w.F[f][0]]] : *lanes[0]).faces_ += 1;
+  for (uint32_t v = 0; v < nv; ++v) {
+    Simplifier& l = laneOf(v);
+    if (w.cls[v] == VertexClass::Smooth) ++l.nK_;
+    if (w.cls[v] == VertexClass::FeatureLine) ++l.nM_;
+    if (&l != seamLane) l.Push(v, false);  // Classify has just computed K and M
+  }
+  const unsigned threads = FeatureThreads(p);
+  if (grow && p.firstPassAhead) {
+    // Every vertex's first evaluation (a sixth of the time) depends on the input only: made
+    // here, in memory order and on every core, and used in the queue's order unless a collapse
+    // has come within two rings of the vertex by then (the output is the same either way).
+    w.frozen = parts > 1 ? &seam : nullptr;  // the parts' lanes see the seams frozen
+    if (!lanes[0]->FirstPassAhead(threads, progress)) return Status::Cancelled();
+    for (Simplifier* l : lanes) l->aheadLeft_ = 0;
+    for (uint32_t v = 0; v < nv; ++v)
+      if (q.aheadStamp[v] != kNone) laneOf(v).aheadLeft_ += 1;
+  }
+  // The seam vertices are queued last: the first pass ahead leaves them to the seam lane.
+  if (seamLane)
+    for (uint32_t v = 0; v < nv; ++v)
+      if (seam[v]) seamLane->Push(v, false);
+  w.frozen = parts > 1 ? &seam : nullptr;
+  const bool ok = RunLanes(w, lanes, seamLane, w.frozen, p, facesIn, threads, progress);
+  w.frozen = nullptr;
+  if (!ok) return Status::Cancelled();
+  size_t removed = 0;
+  double maxD = 0, maxTracked = 0;
+  for (const auto& l : store) {
+    removed += l->removed_;
+    out.collapses += l->collapses_;
+    maxD = std::max(maxD, l->maxD_);
+    maxTracked = std::max(maxTracked, l->maxTracked_);
+  }
+  out.finalErrorBound = track ? lanes[0]->bound_ : 0.0;
+  out.parts = parts;
+  const size_t facesOut = facesIn - removed;
 
   // Output: live faces and the vertices they use, in input order.
   std::vector<uint32_t> outIndex(nv, kNone);
@@ -1368,9 +1660,9 @@ Status Simplifier::Run(FeatureSimplifyResult& out, const Progress& progress) {
   std::sort(out.featureEdges.begin(), out.featureEdges.end());
   out.facesIn = facesIn;
   out.facesOut = out.mesh.faces.size();
-  out.maxCollapseDistance = maxD_;
-  out.maxTrackedError = maxTracked_;
-  out.targetReached = target > 0 && faces_ <= target;
+  out.maxCollapseDistance = maxD;
+  out.maxTrackedError = maxTracked;
+  out.targetReached = target > 0 && facesOut <= target;
   return Status::Ok();
 }
 
@@ -1442,8 +1734,7 @@ Status FeatureSimplify(const IndexedMesh& mesh, const FeatureSimplifyParams& par
     if (c == VertexClass::FeatureLine) ++r.lineVerticesIn;
     if (c == VertexClass::Smooth) ++r.smoothVerticesIn;
   }
-  Simplifier simp(w, params);
-  s = simp.Run(r, progress);
+  s = Simplify(w, params, r, progress);
   if (!s.ok()) return s;
   if (progress && !progress(100, "feature-preserving simplification")) return Status::Cancelled();
   out = std::move(r);
@@ -1455,7 +1746,8 @@ CollapseRefusal CheckFeatureCollapse(const IndexedMesh& mesh, const FeatureSimpl
   Work w;
   if (!ValidateAndCheckInput(mesh, params).ok() || !w.Build(mesh, params).ok()) return CollapseRefusal::NotAnEdge;
   if (from >= w.P.size() || to >= w.P.size()) return CollapseRefusal::NotAnEdge;
-  Simplifier simp(w, params);
+  QueueState q;
+  Simplifier simp(w, params, q);
   return simp.Check(from, to, nullptr, nullptr, true);
 }
 

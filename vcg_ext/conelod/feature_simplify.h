@@ -77,6 +77,10 @@ struct FeatureSimplifyParams {
                                    // evaluation, which depends on the input only, made ahead in
                                    // memory order); 0 = one per core, at most 8. The output is the
                                    // same for any count.
+  size_t facesPerPart = 32768;     // with the growing bound, a mesh of at least 2 x this many faces is
+                                   // simplified in 2, 4 or 8 parts at the same time (on `threads`
+                                   // threads), then along the seams between them; 0 = in one piece.
+                                   // The parts depend on the mesh only, not on the threads.
   bool firstPassAhead = true;      // false: the first pass too is evaluated in the queue's order (the
                                    // same output, slower; for checking)
 };
@@ -127,6 +131,7 @@ struct FeatureSimplifyResult {
   double maxTrackedError = 0;          // largest distance of a removed original vertex to its output
                                        // face when last re-assigned (tracked under an error bound)
   double finalErrorBound = 0;          // the error bound in force at the end (0: none)
+  unsigned parts = 1;                  // parts simplified at the same time (FeatureSimplifyParams::facesPerPart)
   bool targetReached = false;          // false: stopped because no allowed collapse was left
 };
 

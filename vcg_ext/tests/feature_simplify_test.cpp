@@ -394,6 +394,50 @@ TEST(FeatureSimplify, FirstPassAheadChangesNothing) {
   }
 }
 
+// Simplified in parts (2 or 8 here, forced by a small facesPerPart): the parts' lanes run on any
+// number of threads and give the same output (they share nothing but what none of them changes),
+// with the first pass ahead or without; every input vertex still ends within the final bound, the
+// target is reached, and the result is about as good as in one piece.
+TEST(FeatureSimplify, InPartsTheSameForAnyThreadCount) {
+  std::vector<std::pair<std::string, IndexedMesh>> meshes = {{"fandisk.ply", Load("fandisk.ply")},
+                                                             {"mech_holes_shark.ply", Load("mech_holes_shark.ply")},
+                                                             {"sphere", test::Sphere(5)}};
+  for (const auto& named : meshes) {
+    const std::string& name = named.first;
+    const IndexedMesh& in = named.second;
+    FeatureSimplifyParams p;
+    p.targetFaceCount = in.faceCount() / 10;
+    FeatureSimplifyResult whole;
+    ASSERT_TRUE(FeatureSimplify(in, p, whole).ok()) << name;
+    ASSERT_EQ(whole.parts, 1u) << name;
+    for (size_t perPart : {in.faceCount() / 3, in.faceCount() / 16}) {
+      p.facesPerPart = perPart;
+      p.threads = 1;
+      p.firstPassAhead = false;
+      FeatureSimplifyResult ref;
+      ASSERT_TRUE(FeatureSimplify(in, p, ref).ok()) << name;
+      EXPECT_EQ(ref.parts, perPart == in.faceCount() / 3 ? 2u : 8u) << name;
+      EXPECT_TRUE(ref.targetReached) << name;
+      EXPECT_GE(ref.facesOut + ref.parts, p.targetFaceCount) << name;  // each lane stops within a collapse
+      const double worst = WorstInputToOutput(in, ref.mesh);
+      EXPECT_LE(ref.maxTrackedError, ref.finalErrorBound) << name;
+      EXPECT_LE(worst, ref.finalErrorBound * (1 + 1e-6)) << name;
+      EXPECT_LE(ref.finalErrorBound, whole.finalErrorBound * 1.25 * (1 + 1e-9)) << name;
+      p.firstPassAhead = true;
+      for (unsigned threads : {2u, 3u}) {
+        p.threads = threads;
+        FeatureSimplifyResult r;
+        ASSERT_TRUE(FeatureSimplify(in, p, r).ok()) << name;
+        EXPECT_EQ(r.collapses, ref.collapses) << name << " threads " << threads << " parts " << r.parts;
+        EXPECT_EQ(r.inputVertex, ref.inputVertex) << name << " threads " << threads << " parts " << r.parts;
+        EXPECT_EQ(r.mesh.faces, ref.mesh.faces) << name << " threads " << threads << " parts " << r.parts;
+        EXPECT_EQ(r.finalErrorBound, ref.finalErrorBound) << name << " threads " << threads;
+        EXPECT_EQ(r.maxTrackedError, ref.maxTrackedError) << name << " threads " << threads;
+      }
+    }
+  }
+}
+
 TEST(FeatureSimplify, FandiskKeepsItsFeatureLines) {
   const IndexedMesh fandisk = Load("fandisk.ply");
   FeatureSimplifyParams p;
@@ -493,25 +537,33 @@ TEST(FeatureSimplify, CancelLeavesNoResult) {
 
 // The first pass runs on several threads: progress is reported from the calling thread only, and
 // cancelling there (at its first report) stops it with no result.
+// So do the parts (here 8, on 3 threads); cancelling at a report in the middle stops them too.
 TEST(FeatureSimplify, FirstPassAheadReportsOnTheCallingThread) {
   const IndexedMesh sphere = test::Sphere(5);  // 4098 vertices: several chunks per thread
-  FeatureSimplifyParams p;
-  p.targetFaceCount = 100;
-  p.threads = 3;
-  const std::thread::id caller = std::this_thread::get_id();
-  int calls = 0, elsewhere = 0;
-  FeatureSimplifyResult r;
-  ASSERT_TRUE(FeatureSimplify(sphere, p, r, [&](int, const char*) {
-                ++calls;
-                if (std::this_thread::get_id() != caller) ++elsewhere;
-                return true;
-              }).ok());
-  EXPECT_GT(calls, 0);
-  EXPECT_EQ(elsewhere, 0);
-  FeatureSimplifyResult cancelled;
-  const Status s = FeatureSimplify(sphere, p, cancelled, [&](int, const char*) { return false; });
-  EXPECT_EQ(s.code, Status::Code::Cancelled);
-  EXPECT_TRUE(cancelled.mesh.faces.empty());
+  for (size_t perPart : {size_t(0), size_t(1000)}) {
+    FeatureSimplifyParams p;
+    p.targetFaceCount = 100;
+    p.threads = 3;
+    p.facesPerPart = perPart;
+    const std::thread::id caller = std::this_thread::get_id();
+    int calls = 0, elsewhere = 0;
+    FeatureSimplifyResult r;
+    ASSERT_TRUE(FeatureSimplify(sphere, p, r, [&](int, const char*) {
+                  ++calls;
+                  if (std::this_thread::get_id() != caller) ++elsewhere;
+                  return true;
+                }).ok());
+    EXPECT_EQ(r.parts, perPart ? 8u : 1u);
+    EXPECT_GT(calls, 1);
+    EXPECT_EQ(elsewhere, 0);
+    for (int stopAt : {1, calls / 2}) {
+      FeatureSimplifyResult cancelled;
+      int seen = 0;
+      const Status s = FeatureSimplify(sphere, p, cancelled, [&](int, const char*) { return ++seen < stopAt; });
+      EXPECT_EQ(s.code, Status::Code::Cancelled) << "parts " << r.parts << " stop at report " << stopAt;
+      EXPECT_TRUE(cancelled.mesh.faces.empty());
+    }
+  }
 }
 
 }  // namespace
