@@ -2,8 +2,6 @@
 #include "conelod/feature_simplify.h"
 
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
 #include <atomic>
 #include <cmath>
 #include <exception>
@@ -700,7 +698,7 @@ struct QueueState : TrackingStore {
 
 // §3.3-3.4: the collapse engine on a Work — one lane: its queues, its deferred vertices under the
 // common error bound, its collapses. The whole mesh is one lane; a mesh simplified in parts has one
-// lane per part (SimplifyInParts), and the lanes run at the same time.
+// lane per part and a seam lane (Simplify), and the parts' lanes run at the same time.
 class Simplifier : public Evaluator {
  public:
   Simplifier(Work& w, const FeatureSimplifyParams& p, QueueState& q)
@@ -720,7 +718,7 @@ class Simplifier : public Evaluator {
   // Puts the deferred vertices under bound_ back in their queues.
   void Admit();
   bool FirstPassAhead(unsigned threads, const Progress& progress);
-  // Lanes of a mesh simplified in parts (SimplifyInParts): the part of each vertex, the lanes by
+  // Lanes of a mesh simplified in parts (Simplify): the part of each vertex, the lanes by
   // part, and whether this is the seam lane (which runs alone, with Work::frozen lifted, on the
   // vertices of the seams and on the vertices their collapses touch).
   void SetParts(const std::vector<uint8_t>* part, std::vector<char>* seam, const std::vector<Simplifier*>* lanes,
@@ -1457,7 +1455,8 @@ bool RunLanes(Work& w, const std::vector<Simplifier*>& lanes, Simplifier* seamLa
   const size_t target = p.targetFaceCount;
   std::atomic<bool> cancelled(false);
   std::vector<char> exhausted(lanes.size(), 0);
-  bool admit = false, seamAdmit = false, seamDone = seamLane == nullptr;
+  std::vector<char> admit(lanes.size(), 0);  // the bound was raised since the lane last ran
+  bool seamAdmit = false, seamDone = seamLane == nullptr;
   for (;;) {
     size_t removed = seamLane ? seamLane->removed_ : 0;
     for (const Simplifier* l : lanes) removed += l->removed_;
@@ -1490,7 +1489,8 @@ bool RunLanes(Work& w, const std::vector<Simplifier*>& lanes, Simplifier* seamLa
       }
       auto run = [&](size_t i, bool reporting) {
         Simplifier& l = *lanes[i];
-        if (admit) l.Admit();
+        if (admit[i]) l.Admit();
+        admit[i] = 0;
         if (l.RunRound(quota[i], reporting ? &progress : nullptr, facesIn, target, faces, active.size(), cancelled))
           exhausted[i] = 1;
       };
@@ -1500,7 +1500,6 @@ bool RunLanes(Work& w, const std::vector<Simplifier*>& lanes, Simplifier* seamLa
         ParallelChunks(active.size(), threads, 1,
                        [&](size_t begin, size_t, unsigned thread) { run(active[begin], thread == 0); });
       }
-      admit = false;
       if (cancelled) return false;
       continue;
     }
@@ -1536,7 +1535,8 @@ bool RunLanes(Work& w, const std::vector<Simplifier*>& lanes, Simplifier* seamLa
     for (Simplifier* l : lanes) l->bound_ = next;
     if (seamLane) seamLane->bound_ = next;
     std::fill(exhausted.begin(), exhausted.end(), 0);
-    admit = seamAdmit = true;
+    std::fill(admit.begin(), admit.end(), 1);
+    seamAdmit = true;
     seamDone = seamLane == nullptr;
   }
 }
