@@ -148,11 +148,13 @@ int CmdFeatureSimplify(int argc, char** argv) {
     j.endObject();
     std::printf("%s\n", j.str().c_str());
   } else {
-    std::printf("%s: %zu -> %zu faces in %.3f s (%zu collapses; %s)\n", a.positional()[0].c_str(), r.facesIn,
+    const std::string parts = r.parts > 1 ? "; in " + std::to_string(r.parts) + " parts" : "";
+    std::printf("%s: %zu -> %zu faces in %.3f s (%zu collapses; %s%s)\n", a.positional()[0].c_str(), r.facesIn,
                 r.facesOut, seconds, r.collapses,
                 p.targetFaceCount == 0 ? "error-distance stop"
                 : r.targetReached      ? "target reached"
-                                       : "target NOT reached: no allowed collapse left");
+                                       : "target NOT reached: no allowed collapse left",
+                parts.c_str());
     std::printf("feature edges %zu (%zu made by extension swaps) -> %zu; feature vertices %zu (kept); "
                 "feature-line vertices %zu; smooth vertices %zu\n",
                 r.featureEdgesIn, r.swapEdges, r.featureEdges.size(), r.featureVertices, r.lineVerticesIn,

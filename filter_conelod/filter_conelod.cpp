@@ -747,8 +747,9 @@ bool FilterConeLodPlugin::applyFeatureSimplify(MeshModel& mm, const RichParamete
   WriteSimplifiedMesh(mm.cm, faceOf, r, mark);
   mm.UpdateBoxAndNormals();
 
-  Log("Feature-preserving simplification: %d -> %d faces in %.3f s (%d collapses)%s", int(r.facesIn),
+  Log("Feature-preserving simplification: %d -> %d faces in %.3f s (%d collapses%s)%s", int(r.facesIn),
       int(r.facesOut), seconds, int(r.collapses),
+      r.parts > 1 ? (", in " + std::to_string(r.parts) + " parts on every core").c_str() : "",
       params.targetFaceCount == 0 ? ""
       : r.targetReached           ? ", target reached"
                                   : ", target NOT reached: no allowed collapse left");

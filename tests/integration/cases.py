@@ -380,6 +380,21 @@ def meshlab_feature_simplify_fandisk(c):
 
 
 @case
+def meshlab_feature_simplify_bunny_in_parts(c):
+    """The bunny (69,451 faces) goes in two parts on every core in MeshLab too: the CLI's faces."""
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    out = c.out("ml_bunny_parts.ply")
+    _, log = c.meshlab([bunny], mlx_with(c, "feature_preserving_edge_simplification.mlx", TargetFaceNum=6945,
+                                         MarkFeatures=False), out)
+    assert "in 2 parts on every core), target reached" in log, log[-1500:]
+    cli_out = c.out("cli_bunny_parts.ply")
+    r = json.loads(c.conelod("feature-simplify", bunny, "--target-faces", "6945", "--threads", "1", "-o", cli_out,
+                             "--json").stdout)
+    assert r["parts"] == 2 and r["target_reached"] and 6943 <= r["faces_out"] <= 6945, r
+    assert read_ply(cli_out)["faces"] == read_ply(out)["faces"], "MeshLab (every core) and the CLI (one thread) disagree"
+
+
+@case
 def meshlab_feature_simplify_error_bound(c):
     """Stop at an error distance only (no target): fewer faces, the bound is reported."""
     fandisk = c.mesh("fandisk.ply")
