@@ -148,16 +148,20 @@ std::string ReadThreadsOption(Args& a, int fallback, int& threads) {
   return "";
 }
 
-std::string ReadPartsOptions(Args& a, HierarchicalSimplificationParams& p) {
-  int threads = 0;
-  std::string err = ReadThreadsOption(a, p.threads, threads);
+std::string ReadPartsOptions(Args& a, int& threads, size_t& facesPerPart, const char* zeroMeans) {
+  int t = 0;
+  std::string err = ReadThreadsOption(a, threads, t);
   if (!err.empty()) return err;
-  const int facesPerPart = a.integer("--faces-per-part", int(p.facesPerPart));
+  const int perPart = a.integer("--faces-per-part", int(facesPerPart));
   if (!a.ok()) return a.error();
-  if (facesPerPart < 0) return "--faces-per-part must be a whole number >= 0 (0: never cut a level into parts)";
-  p.threads = threads;
-  p.facesPerPart = size_t(facesPerPart);
+  if (perPart < 0) return std::string("--faces-per-part must be a whole number >= 0 (0: ") + zeroMeans + ")";
+  threads = t;
+  facesPerPart = size_t(perPart);
   return "";
+}
+
+std::string ReadPartsOptions(Args& a, HierarchicalSimplificationParams& p) {
+  return ReadPartsOptions(a, p.threads, p.facesPerPart, "never cut a level into parts");
 }
 
 std::vector<std::string> With(std::vector<std::string> v, const std::vector<std::string>& more) {

@@ -88,9 +88,10 @@ extern const std::vector<std::string> kGroupingOptions;
 ConeGroupingParams ReadGroupingParams(Args& a);
 // --threads N (0 = one per core, at most 1024; `fallback` when absent): "" or the error to print.
 std::string ReadThreadsOption(Args& a, int fallback, int& threads);
-// --threads N (as above) and --faces-per-part P (>= 0, 0: never cut) of the hierarchical
-// simplification, shared by `lod build` and `simplify --hierarchy`, into `p`.
-// Returns "" or a usage message.
+// --threads N (as above) and --faces-per-part P (>= 0; `zeroMeans` says what 0 does), the
+// current values as fallbacks, changed only when both are valid. Returns "" or a usage message.
+std::string ReadPartsOptions(Args& a, int& threads, size_t& facesPerPart, const char* zeroMeans);
+// The same for the hierarchical simplification, shared by `lod build` and `simplify --hierarchy`.
 std::string ReadPartsOptions(Args& a, HierarchicalSimplificationParams& p);
 std::vector<std::string> With(std::vector<std::string> v, const std::vector<std::string>& more);  // v + more
 

@@ -72,15 +72,10 @@ int CmdFeatureSimplify(int argc, char** argv) {
   const double targetPercent = a.num("--target-percent", 0);
   const int targetFaces = a.integer("--target-faces", 0);
   const double lineTolPct = a.num("--line-tolerance", 0.5);
-  int threads = 0;
-  const std::string threadsError = ReadThreadsOption(a, 0, threads);
-  if (!threadsError.empty()) return Fail(kUsage, threadsError + "\n" + kFeatureSimplifyUsage);
+  int threads = int(p.threads);
+  const std::string partsError = ReadPartsOptions(a, threads, p.facesPerPart, "never in parts");
+  if (!partsError.empty()) return Fail(kUsage, partsError + "\n" + kFeatureSimplifyUsage);
   p.threads = unsigned(threads);
-  const int facesPerPart = a.integer("--faces-per-part", int(p.facesPerPart));
-  if (facesPerPart < 0)
-    return Fail(kUsage, "--faces-per-part must be a whole number >= 0 (0: never in parts)\n" +
-                            std::string(kFeatureSimplifyUsage));
-  p.facesPerPart = size_t(facesPerPart);
   if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kFeatureSimplifyUsage);
   if (a.positional().size() != 1) return Fail(kUsage, std::string("expected one input mesh\n") + kFeatureSimplifyUsage);
   if (!a.has("--target-faces") && !a.has("--target-percent") && !a.has("--max-error"))

@@ -669,6 +669,11 @@ class Evaluator {
   std::vector<uint32_t> nbrs_;
 };
 
+// Whether the face t has vertices in two parts (its vertices are then seam vertices).
+bool SpansParts(const std::vector<uint8_t>& part, const std::array<uint32_t, 3>& t) {
+  return part[t[0]] != part[t[1]] || part[t[0]] != part[t[2]];
+}
+
 // The per-vertex state of the queues and of the tracking, shared by the lanes below: while the
 // mesh is simplified in parts, each lane writes the entries of its own vertices only.
 struct QueueState : TrackingStore {
@@ -763,6 +768,14 @@ class Simplifier : public Evaluator {
   // The inputs of CurvatureK(v), asked for ahead of a Push that recomputes it.
   void PrefetchCurvatureInputs(uint32_t v) const;
   void InvalidateAhead(uint32_t from, uint32_t to);
+  // Whether evaluations made ahead may be left to drop: this lane's, or (the seam lane) any lane's.
+  bool AheadToDrop() const { return (aheadLeft_ > 0 || seamLane_) && !aheadStamp_.empty(); }
+  // v's evaluation made ahead, if any, is no longer used (its owner's count goes down).
+  void DropAhead(uint32_t v) {
+    if (aheadStamp_[v] == kNone) return;
+    aheadStamp_[v] = kNone;
+    --Owner(v).aheadLeft_;
+  }
 
   QueueState& q_;
   std::vector<uint32_t>& stamp_;
@@ -1135,7 +1148,7 @@ void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
   }
   w.VF[from].clear();
   w.cls[from] = VertexClass::Unused;
-  if ((aheadLeft_ > 0 || seamLane_) && !aheadStamp_.empty()) InvalidateAhead(from, to);
+  if (AheadToDrop()) InvalidateAhead(from, to);
   // ... and for their faces' corners and angles, read by Push after the re-assignment below.
   for (uint32_t x : scratchRing_) PrefetchCurvatureInputs(x);
   if (track) {
@@ -1161,15 +1174,10 @@ void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
     // A face that now spans two parts makes its vertices seam vertices (the parts' lanes leave
     // them to this lane from now on); an evaluation made ahead for one is dropped.
     for (uint32_t f : w.VF[to]) {
-      const auto& t = w.F[f];
-      const std::vector<uint8_t>& part = *part_;
-      if (part[t[0]] == part[t[1]] && part[t[0]] == part[t[2]]) continue;
-      for (uint32_t x : t) {
+      if (!SpansParts(*part_, w.F[f])) continue;
+      for (uint32_t x : w.F[f]) {
         if ((*seam_)[x]) continue;
-        if (!aheadStamp_.empty() && aheadStamp_[x] != kNone) {
-          aheadStamp_[x] = kNone;
-          --Owner(x).aheadLeft_;
-        }
+        if (!aheadStamp_.empty()) DropAhead(x);
         (*seam_)[x] = 1;
       }
     }
@@ -1308,17 +1316,12 @@ bool Simplifier::FirstPassAhead(unsigned threads, const Progress& progress) {
 // rings of `to` (from's old ring is in to's new one), since an evaluation reads its vertex's fan
 // and its neighbours' fans, feature edges and tracking — are no longer used.
 void Simplifier::InvalidateAhead(uint32_t from, uint32_t to) {
-  auto drop = [&](uint32_t x) {
-    if (aheadStamp_[x] == kNone) return;
-    aheadStamp_[x] = kNone;
-    --Owner(x).aheadLeft_;
-  };
-  drop(from);
-  drop(to);
+  DropAhead(from);
+  DropAhead(to);
   for (uint32_t f : w_.VF[to])
     for (uint32_t y : w_.F[f])
       for (uint32_t g : w_.VF[y])
-        for (uint32_t z : w_.F[g]) drop(z);
+        for (uint32_t z : w_.F[g]) DropAhead(z);
 }
 
 bool Simplifier::RunRound(size_t quota, const Progress* progress, size_t facesIn, size_t target, size_t facesBefore,
@@ -1362,10 +1365,9 @@ bool Simplifier::RunRound(size_t quota, const Progress* progress, size_t facesIn
     // The evaluation made ahead in the first pass, if nothing it read has changed since.
     // (The seam lane does not use them: they were made with the seams frozen.)
     bool useAhead = false;
-    if ((aheadLeft_ > 0 || (seamLane_ && !aheadStamp_.empty())) && aheadStamp_[v] != kNone) {  // made ahead: used, or dropped
-      --Owner(v).aheadLeft_;
+    if (AheadToDrop() && aheadStamp_[v] != kNone) {  // made ahead: used, or dropped as outdated
       useAhead = !seamLane_ && aheadStamp_[v] == e.stamp && retry_[v] == kNone;
-      aheadStamp_[v] = kNone;
+      DropAhead(v);
     }
     const Evaluation ev = useAhead ? ahead_[v] : Evaluate(v, retry_[v], bound_, track_);
     retry_[v] = kNone;
@@ -1450,9 +1452,10 @@ std::vector<uint8_t> CutIntoParts(const Work& w, unsigned parts) {
 // A round that reaches the target is shared between the parts' lanes still busy in proportion to
 // their faces, so that the result depends neither on which lane runs first nor on the number of
 // threads. Progress is reported on this thread only. False: cancelled.
-bool RunLanes(Work& w, const std::vector<Simplifier*>& lanes, Simplifier* seamLane, const std::vector<char>* seam,
-              const FeatureSimplifyParams& p, size_t facesIn, unsigned threads, const Progress& progress) {
+bool RunLanes(Work& w, const std::vector<Simplifier*>& lanes, Simplifier* seamLane, const FeatureSimplifyParams& p,
+              size_t facesIn, unsigned threads, const Progress& progress) {
   const size_t target = p.targetFaceCount;
+  const std::vector<char>* seam = w.frozen;  // lifted while the seam lane runs
   std::atomic<bool> cancelled(false);
   std::vector<char> exhausted(lanes.size(), 0);
   std::vector<char> admit(lanes.size(), 0);  // the bound was raised since the lane last ran
@@ -1572,11 +1575,9 @@ Status Simplify(Work& w, const FeatureSimplifyParams& p, FeatureSimplifyResult& 
   if (parts > 1) {
     part = CutIntoParts(w, parts);
     seam.assign(nv, 0);
-    for (uint32_t f = 0; f < w.F.size(); ++f) {
-      const auto& t = w.F[f];
-      if (w.alive[f] && (part[t[0]] != part[t[1]] || part[t[0]] != part[t[2]]))
-        for (uint32_t v : t) seam[v] = 1;
-    }
+    for (uint32_t f = 0; f < w.F.size(); ++f)
+      if (w.alive[f] && SpansParts(part, w.F[f]))
+        for (uint32_t v : w.F[f]) seam[v] = 1;
   }
   std::vector<std::unique_ptr<Simplifier>> store;
   std::vector<Simplifier*> lanes;
@@ -1605,12 +1606,15 @@ Status Simplify(Work& w, const FeatureSimplifyParams& p, FeatureSimplifyResult& 
     if (&l != seamLane) l.Push(v, false);  // Classify has just computed K and M
   }
   const unsigned threads = FeatureThreads(p);
+  w.frozen = parts > 1 ? &seam : nullptr;  // the parts' lanes (and their first pass) see the seams frozen
   if (grow && p.firstPassAhead) {
     // Every vertex's first evaluation (a sixth of the time) depends on the input only: made
     // here, in memory order and on every core, and used in the queue's order unless a collapse
     // has come within two rings of the vertex by then (the output is the same either way).
-    w.frozen = parts > 1 ? &seam : nullptr;  // the parts' lanes see the seams frozen
-    if (!lanes[0]->FirstPassAhead(threads, progress)) return Status::Cancelled();
+    if (!lanes[0]->FirstPassAhead(threads, progress)) {
+      w.frozen = nullptr;
+      return Status::Cancelled();
+    }
     for (Simplifier* l : lanes) l->aheadLeft_ = 0;
     for (uint32_t v = 0; v < nv; ++v)
       if (q.aheadStamp[v] != kNone) laneOf(v).aheadLeft_ += 1;
@@ -1619,21 +1623,17 @@ Status Simplify(Work& w, const FeatureSimplifyParams& p, FeatureSimplifyResult& 
   if (seamLane)
     for (uint32_t v = 0; v < nv; ++v)
       if (seam[v]) seamLane->Push(v, false);
-  w.frozen = parts > 1 ? &seam : nullptr;
-  const bool ok = RunLanes(w, lanes, seamLane, w.frozen, p, facesIn, threads, progress);
+  const bool ok = RunLanes(w, lanes, seamLane, p, facesIn, threads, progress);
   w.frozen = nullptr;
   if (!ok) return Status::Cancelled();
-  size_t removed = 0;
   double maxD = 0, maxTracked = 0;
   for (const auto& l : store) {
-    removed += l->removed_;
     out.collapses += l->collapses_;
     maxD = std::max(maxD, l->maxD_);
     maxTracked = std::max(maxTracked, l->maxTracked_);
   }
   out.finalErrorBound = track ? lanes[0]->bound_ : 0.0;
   out.parts = parts;
-  const size_t facesOut = facesIn - removed;
 
   // Output: live faces and the vertices they use, in input order.
   std::vector<uint32_t> outIndex(nv, kNone);
@@ -1662,7 +1662,7 @@ Status Simplify(Work& w, const FeatureSimplifyParams& p, FeatureSimplifyResult& 
   out.facesOut = out.mesh.faces.size();
   out.maxCollapseDistance = maxD;
   out.maxTrackedError = maxTracked;
-  out.targetReached = target > 0 && facesOut <= target;
+  out.targetReached = target > 0 && out.facesOut <= target;
   return Status::Ok();
 }
 
