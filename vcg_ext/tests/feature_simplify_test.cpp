@@ -362,6 +362,15 @@ TEST(FeatureSimplify, GrowingBoundHoldsForEveryInputVertex) {
   }
 }
 
+// r is ref to the last bit: the same collapses, vertices, faces, final bound and tracked error.
+void ExpectSameOutput(const FeatureSimplifyResult& r, const FeatureSimplifyResult& ref, const std::string& what) {
+  EXPECT_EQ(r.collapses, ref.collapses) << what;
+  EXPECT_EQ(r.inputVertex, ref.inputVertex) << what;
+  EXPECT_EQ(r.mesh.faces, ref.mesh.faces) << what;
+  EXPECT_EQ(r.finalErrorBound, ref.finalErrorBound) << what;
+  EXPECT_EQ(r.maxTrackedError, ref.maxTrackedError) << what;
+}
+
 // The first pass evaluated ahead (in memory order, on any number of threads) gives the output of
 // evaluating every vertex in the queue's order: an evaluation made ahead is used only while no
 // collapse has come near its vertex. Fandisk's flat parts and the whole grid collapse during the
@@ -385,11 +394,7 @@ TEST(FeatureSimplify, FirstPassAheadChangesNothing) {
       p.threads = threads;
       FeatureSimplifyResult r;
       ASSERT_TRUE(FeatureSimplify(in, p, r).ok()) << name;
-      EXPECT_EQ(r.collapses, ref.collapses) << name << " threads " << threads;
-      EXPECT_EQ(r.inputVertex, ref.inputVertex) << name << " threads " << threads;
-      EXPECT_EQ(r.mesh.faces, ref.mesh.faces) << name << " threads " << threads;
-      EXPECT_EQ(r.finalErrorBound, ref.finalErrorBound) << name << " threads " << threads;
-      EXPECT_EQ(r.maxTrackedError, ref.maxTrackedError) << name << " threads " << threads;
+      ExpectSameOutput(r, ref, name + " threads " + std::to_string(threads));
     }
   }
 }
@@ -428,11 +433,7 @@ TEST(FeatureSimplify, InPartsTheSameForAnyThreadCount) {
         p.threads = threads;
         FeatureSimplifyResult r;
         ASSERT_TRUE(FeatureSimplify(in, p, r).ok()) << name;
-        EXPECT_EQ(r.collapses, ref.collapses) << name << " threads " << threads << " parts " << r.parts;
-        EXPECT_EQ(r.inputVertex, ref.inputVertex) << name << " threads " << threads << " parts " << r.parts;
-        EXPECT_EQ(r.mesh.faces, ref.mesh.faces) << name << " threads " << threads << " parts " << r.parts;
-        EXPECT_EQ(r.finalErrorBound, ref.finalErrorBound) << name << " threads " << threads;
-        EXPECT_EQ(r.maxTrackedError, ref.maxTrackedError) << name << " threads " << threads;
+        ExpectSameOutput(r, ref, name + " threads " + std::to_string(threads) + " parts " + std::to_string(r.parts));
       }
     }
   }
