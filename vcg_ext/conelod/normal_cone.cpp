@@ -132,6 +132,34 @@ NormalCone UnionCone(const NormalCone& a, const NormalCone& b) {
   return r;
 }
 
+NormalCone FastUnionCone(const NormalCone& a, const NormalCone& b) {
+  if (a.empty()) return b;
+  if (b.empty()) return a;
+  if (!a.cullable() || !b.cullable()) return NormalCone::Uncullable();
+  const double d = std::max(-1.0, std::min(1.0, a.axis * b.axis));
+  const double theta = FastAcos(d) + 1e-7;
+  if (a.halfAngle == 0 && b.halfAngle == 0 && d > -0.5) {  // two normals: the bisector
+    NormalCone r;
+    r.axis = a.axis + b.axis;
+    r.axis.Normalize();
+    r.halfAngle = 0.5 * theta + 1e-7;
+    return r;
+  }
+  if (theta + b.halfAngle <= a.halfAngle) return a;
+  if (theta + a.halfAngle <= b.halfAngle) return b;
+  const double half = 0.5 * (theta + a.halfAngle + b.halfAngle);
+  if (half >= kHalfPi) return NormalCone::Uncullable();
+  const vcg::Point3d w = b.axis - a.axis * d;  // towards b, orthogonal to a
+  const double len = w.Norm();
+  NormalCone r;
+  r.halfAngle = half;
+  if (len < 1e-12) { r.axis = a.axis; r.halfAngle = std::max(a.halfAngle, b.halfAngle) + theta; return r; }
+  const double t = half - a.halfAngle;  // rotate a's axis towards b by t
+  r.axis = a.axis * std::cos(t) + w * (std::sin(t) / len);
+  r.axis.Normalize();
+  return r;
+}
+
 NormalCone MinimalCone(std::vector<vcg::Point3d>& pts, uint64_t seed) {
   ConeSupport unused;
   return MinimalCone(pts, unused, seed);

@@ -621,35 +621,6 @@ void TreeBuilder::split(const Pending& p, Pending out[2], int& outCount) {
   }
 }
 
-// The smallest cone holding cones a and b (both non-empty), as UnionCone computes it, with one
-// sine/cosine pair instead of atan2 and three sines (the bottom-up pass calls this once per node);
-// the half-angle is padded by 1e-7 rad for FastAcos's error, so the cone stays conservative.
-NormalCone FastUnionCone(const NormalCone& a, const NormalCone& b) {
-  if (!a.cullable() || !b.cullable()) return NormalCone::Uncullable();
-  const double d = std::max(-1.0, std::min(1.0, a.axis * b.axis));
-  const double theta = FastAcos(d) + 1e-7;
-  if (a.halfAngle == 0 && b.halfAngle == 0 && d > -0.5) {  // two normals: the bisector
-    NormalCone r;
-    r.axis = a.axis + b.axis;
-    r.axis.Normalize();
-    r.halfAngle = 0.5 * theta + 1e-7;
-    return r;
-  }
-  if (theta + b.halfAngle <= a.halfAngle) return a;
-  if (theta + a.halfAngle <= b.halfAngle) return b;
-  const double half = 0.5 * (theta + a.halfAngle + b.halfAngle);
-  if (half >= NormalCone::kPi / 2) return NormalCone::Uncullable();
-  vcg::Point3d w = b.axis - a.axis * d;  // towards b, orthogonal to a
-  const double len = w.Norm();
-  NormalCone r;
-  r.halfAngle = half;
-  if (len < 1e-12) { r.axis = a.axis; r.halfAngle = std::max(a.halfAngle, b.halfAngle) + theta; return r; }
-  const double t = half - a.halfAngle;  // rotate a's axis towards b by t
-  r.axis = a.axis * std::cos(t) + w * (std::sin(t) / len);
-  r.axis.Normalize();
-  return r;
-}
-
 // Cones and boxes bottom-up: a child's index is above its parent's, so a backward sweep sees
 // every child before its parent. Single faces give their own normal and box; a leaf cluster (a
 // stop criterion held) gets the exact minimal cone of its normals.

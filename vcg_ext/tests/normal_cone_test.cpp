@@ -194,6 +194,58 @@ TEST(UnionCone, NestedConeIsReturnedUnchanged) {
   EXPECT_EQ(UnionCone(NormalCone::Empty(), small).halfAngle, small.halfAngle);
 }
 
+// The cheaper bound must hold both cones to the rounding of the boundary samples (1e-12 rad, far
+// below its padding; the threshold test relies on it), for wide and tiny angles alike, and stay
+// within a few 1e-7 rad of UnionCone.
+TEST(FastUnionCone, ContainsBothConesAndStaysCloseToUnionCone) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> uni(0, 1);
+  int tight = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    NormalCone a, b;
+    a.axis = Dir(uni(rng) * 180, uni(rng) * 360);
+    // Every third pair is close (down to 1e-9 rad apart), every fifth cone a single normal.
+    const double apart = trial % 3 == 0 ? std::pow(10.0, -9 + 8 * uni(rng)) : uni(rng) * kPi;
+    vcg::Point3d side = (std::abs(a.axis[0]) < 0.9 ? vcg::Point3d(1, 0, 0) : vcg::Point3d(0, 1, 0)) ^ a.axis;
+    side.Normalize();
+    b.axis = a.axis * std::cos(apart) + side * std::sin(apart);
+    b.axis.Normalize();
+    a.halfAngle = trial % 5 == 0 ? 0 : uni(rng) * 40 * kDeg * (trial % 3 == 0 ? 1e-6 : 1);
+    b.halfAngle = trial % 5 == 1 ? 0 : uni(rng) * 40 * kDeg;
+    if (trial % 7 == 0) a.halfAngle = b.halfAngle = 0;
+    const NormalCone fast = FastUnionCone(a, b), exact = UnionCone(a, b);
+    if (!fast.cullable()) {
+      EXPECT_GE(exact.halfAngle, kPi / 2 - 1e-6) << "trial " << trial;
+      continue;
+    }
+    ASSERT_TRUE(exact.cullable()) << "trial " << trial;
+    EXPECT_GE(fast.halfAngle, exact.halfAngle - 1e-12) << "trial " << trial;
+    EXPECT_LE(fast.halfAngle, exact.halfAngle + 3e-7) << "trial " << trial;
+    tight += fast.halfAngle <= exact.halfAngle + 3e-7;
+    for (const NormalCone* c : {&a, &b}) {
+      vcg::Point3d p = (std::abs(c->axis[0]) < 0.9 ? vcg::Point3d(1, 0, 0) : vcg::Point3d(0, 1, 0)) ^ c->axis;
+      p.Normalize();
+      const vcg::Point3d q = c->axis ^ p;
+      for (int k = 0; k < 36; ++k) {
+        const double phi = k * 10 * kDeg;
+        const vcg::Point3d n = c->axis * std::cos(c->halfAngle) +
+                               (p * std::cos(phi) + q * std::sin(phi)) * std::sin(c->halfAngle);
+        ASSERT_TRUE(fast.contains(n, 1e-12)) << "trial " << trial << " angle " << Angle(fast.axis, n) << " > "
+                                         << fast.halfAngle;
+      }
+    }
+  }
+  EXPECT_GT(tight, 2000);
+  // Nested and empty cones come back unchanged, as from UnionCone.
+  NormalCone big, small;
+  big.axis = Dir(0, 0); big.halfAngle = 30 * kDeg;
+  small.axis = Dir(10, 0); small.halfAngle = 5 * kDeg;
+  EXPECT_EQ(FastUnionCone(big, small).halfAngle, big.halfAngle);
+  EXPECT_EQ(FastUnionCone(small, big).axis, big.axis);
+  EXPECT_EQ(FastUnionCone(NormalCone::Empty(), small).halfAngle, small.halfAngle);
+  EXPECT_FALSE(FastUnionCone(NormalCone::Uncullable(), small).cullable());
+}
+
 TEST(FastAcos, AccurateOverTheWholeRange) {
   for (int i = -100000; i <= 100000; ++i) {
     const double x = i / 100000.0;
