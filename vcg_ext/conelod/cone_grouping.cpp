@@ -316,6 +316,13 @@ class HierarchyBuilder {
   __attribute__((always_inline)) inline void setBest(int u);
   void mergeUnits(int u, int p);
   bool runLevel(double thresholdDeg, bool localMaximaFirst, long& mergesSoFar);
+  void setThreshold(double thresholdDeg) {
+    thresholdOn_ = thresholdDeg < 180.0;
+    // A cone of pi/2 or more cannot be culled and is stored as pi, above any threshold under 180
+    // degrees: below 180 the limit is never above pi/2. (Without this, a pair whose bound came out
+    // just under pi/2 could merge into a group whose exact cone is uncullable.)
+    thresholdRad_ = std::min(thresholdDeg * kDeg, kPi / 2);
+  }
   bool reportProgress(long mergesSoFar);
   void emitLevel(double thresholdDeg, GroupHierarchy& out, bool firstLevel);
   void nextLevelUnits();
@@ -396,6 +403,7 @@ class HierarchyBuilder {
   // its last exact computation (see ConeGroupingParams::strictGreedy).
   int exactGrowth_ = 2;
   bool thresholdOn_ = false;
+  bool prescored_ = false;  // level 1, default mode: run() scored every pair with the units
   int aliveCount_ = 0;
   // During level 1's sweeps: per unit, whether it was marked since its last visit (runLevel).
   uint8_t* dirty_ = nullptr;
@@ -766,11 +774,7 @@ bool HierarchyBuilder::reportProgress(long mergesSoFar) {
 }
 
 bool HierarchyBuilder::runLevel(double thresholdDeg, bool localMaximaFirst, long& mergesSoFar) {
-  thresholdOn_ = thresholdDeg < 180.0;
-  // A cone of pi/2 or more cannot be culled and is stored as pi, above any threshold under 180
-  // degrees: below 180 the limit is never above pi/2. (Without this, a pair whose bound came out
-  // just under pi/2 could merge into a group whose exact cone is uncullable.)
-  thresholdRad_ = std::min(thresholdDeg * kDeg, kPi / 2);
+  setThreshold(thresholdDeg);
   const size_t n = units_.size();
   aliveCount_ = int(n);
   stampCounter_ = 0;
@@ -780,13 +784,14 @@ bool HierarchyBuilder::runLevel(double thresholdDeg, bool localMaximaFirst, long
   // too (kUnscored marks the entries still to score).
   const bool scoreOnce = !params_.strictGreedy;
   constexpr size_t kAhead = 16;  // units ahead whose neighbours' data is asked for (then lists at half)
+  const bool prefetch = !prescored_;  // nothing to evaluate when run() scored the pairs already
   for (size_t u = 0; u < n; ++u) {
-    if (u + kAhead < n)
+    if (prefetch && u + kAhead < n)
       for (const Neighbour* nb = nbBegin(int(u + kAhead)); nb != nbEnd(int(u + kAhead)); ++nb) {
         Prefetch(&units_[size_t(nb->id)]);
         Prefetch(&links_[size_t(nb->id)]);
       }
-    if (scoreOnce && u + kAhead / 2 < n)
+    if (prefetch && scoreOnce && u + kAhead / 2 < n)
       for (const Neighbour* nb = nbBegin(int(u + kAhead / 2)); nb != nbEnd(int(u + kAhead / 2)); ++nb)
         if (size_t(nb->id) > u) Prefetch(nbBegin(nb->id));
     Link& l = links_[u];
@@ -1150,7 +1155,11 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     chains_.resize(size_t(nf));
   }
 
-  // Level-1 units: one per face.
+  // Level-1 units: one per face. In the default mode each pair is scored once, from its lower
+  // unit (runLevel); here already, as soon as both units are made.
+  const bool scoreNow = !params_.strictGreedy;
+  if (scoreNow) setThreshold(std::min(params_.coneThresholdDeg, 180.0));
+  prescored_ = scoreNow;
   for (int f = 0; f < nf; ++f) {
     Unit& u = units_[size_t(f)];
     const auto& t = mesh_.faces[size_t(f)];
@@ -1165,6 +1174,18 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     u.faceCount = 1;
     faceNext_[size_t(f)] = f;
     chains_[size_t(f)] = Chain{f, 1, links_[size_t(f)].nbCount};
+    if (scoreNow) {
+      // The pairs with the faces before this one, scored as runLevel would score them (from the
+      // lower unit), while those faces' units are still in the cache: runLevel then only picks
+      // each unit's best.
+      for (Neighbour* nb = nbBegin(f); nb != nbEnd(f); ++nb) {
+        const int w = nb->id;
+        if (w >= f) continue;
+        nb->score = evaluate(units_[size_t(w)], u);
+        for (Neighbour* back = nbBegin(w); back != nbEnd(w); ++back)
+          if (back->id == f) { back->score = nb->score; break; }
+      }
+    }
   }
   if (progress_ && !progress_(0, "grouping faces by normal cones")) return Status::Cancelled();
 
@@ -1177,6 +1198,7 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     // culling as well (docs/cone_grouping.md). Above it a refresh costs about one scan (support_).
     exactGrowth_ = params_.strictGreedy ? 2 : (level == 1 ? 8 : 4);
     const bool merged = runLevel(std::min(threshold, 180.0), level == 1 && !params_.strictGreedy, merges);
+    prescored_ = false;
     if (cancelled_) { out = GroupHierarchy(); return Status::Cancelled(); }
     if (!merged && level > 1) break;  // nothing changed: the previous level is the top
     emitLevel(std::min(threshold, 180.0), out, level == 1);
