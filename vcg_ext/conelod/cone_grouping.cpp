@@ -327,6 +327,7 @@ class HierarchyBuilder {
   void emitLevel(double thresholdDeg, GroupHierarchy& out, bool firstLevel);
   void nextLevelUnits();
   void makeConeExact(int u);
+  void makeCone(int u);  // makeConeExact without the widening for l1Normal_
   bool alive(int u) const { return chains_[size_t(u)].tail >= 0; }
   Neighbour* nbBegin(int u) { return arena_.data() + links_[size_t(u)].nbOffset; }
   Neighbour* nbEnd(int u) { return nbBegin(u) + links_[size_t(u)].nbCount; }
@@ -346,6 +347,10 @@ class HierarchyBuilder {
   // its arrays leave no room for these under the memory target; above it, with far fewer units,
   // there is.
   BigVector<vcg::Point3d> faceNormal_;
+  // Level 1, default mode, during the merges only: every face's unit normal rounded to float
+  // (12 bytes a face where the mesh's would take 24), read by the cone refreshes instead of
+  // recomputing each normal from the scattered mesh (a tenth of the build before).
+  BigVector<vcg::Point3f> l1Normal_;
   BigVector<double> faceArea_;  // from level 2 on: every mesh face's area (FaceNormalAndArea), by mesh face
   int meshFace(int f) const { return meshFace_.empty() ? f : meshFace_[size_t(f)]; }
   void renumberFaces();
@@ -448,6 +453,16 @@ void HierarchyBuilder::setBest(int u) {
 }
 
 void HierarchyBuilder::makeConeExact(int u) {
+  makeCone(u);
+  if (!l1Normal_.empty()) {
+    // From normals rounded to float (each off its direction by ~1e-7 rad): widened by 1e-6 rad to
+    // stay a bound of the true normals' cone. Emission recomputes every level-1 cone exactly.
+    Unit& unit = units_[size_t(u)];
+    if (unit.half >= 0 && unit.half < kPi / 2) unit.half = unit.half + 1e-6 >= kPi / 2 ? kPi : unit.half + 1e-6;
+  }
+}
+
+void HierarchyBuilder::makeCone(int u) {
   const int tail = chains_[size_t(u)].tail;
   int f = tail;
   if (!faceNormal_.empty()) {
@@ -463,6 +478,16 @@ void HierarchyBuilder::makeConeExact(int u) {
       head = faceNext_[size_t(last)];
     }
     if (!support_.empty() && trySupportCone(u)) return;
+  } else if (!l1Normal_.empty()) {
+    scratchNormals_.clear();
+    do {
+      f = faceNext_[size_t(f)];
+      vcg::Point3d n = vcg::Point3d::Construct(l1Normal_[size_t(f)]);
+      const double len2 = n.SquaredNorm();
+      if (len2 > 0) n /= std::sqrt(len2);
+      scratchNormals_.push_back(n);
+    } while (f != tail);
+    normalRuns_.assign(1, {scratchNormals_.data(), scratchNormals_.data() + scratchNormals_.size()});
   } else {
     // Walk the list first, then compute the normals: the walk is a chain of dependent loads, the
     // normals are independent of each other and their misses overlap (prefetched ahead).
@@ -1153,6 +1178,7 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     faceNext_.resize(size_t(nf));
     units_.resize(size_t(nf));
     chains_.resize(size_t(nf));
+    if (!params_.strictGreedy) l1Normal_.resize(size_t(nf));
   }
 
   // Level-1 units: one per face. In the default mode each pair is scored once, from its lower
@@ -1167,6 +1193,7 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     double area;
     FaceNormalAndArea(mesh_, size_t(f), n, area);
     u.setCone(n.SquaredNorm() > 0.5 ? NormalCone::Of(n) : NormalCone::Empty());
+    if (!l1Normal_.empty()) l1Normal_[size_t(f)] = vcg::Point3f::Construct(n);
     for (int k = 0; k < 3; ++k) u.vecArea[k] = float(n[k] * area);
     u.setSphere(TriangleSphere(vcg::Point3d::Construct(mesh_.positions[t[0]]),
                                vcg::Point3d::Construct(mesh_.positions[t[1]]),
@@ -1199,6 +1226,7 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     exactGrowth_ = params_.strictGreedy ? 2 : (level == 1 ? 8 : 4);
     const bool merged = runLevel(std::min(threshold, 180.0), level == 1 && !params_.strictGreedy, merges);
     prescored_ = false;
+    BigVector<vcg::Point3f>().swap(l1Normal_);  // before the level's output grows
     if (cancelled_) { out = GroupHierarchy(); return Status::Cancelled(); }
     if (!merged && level > 1) break;  // nothing changed: the previous level is the top
     emitLevel(std::min(threshold, 180.0), out, level == 1);
