@@ -12,9 +12,11 @@
 // (one cache line), the greedy state read for every neighbour (a quarter line), the face chain
 // touched only by the merging units; and a merge prefetches all its neighbours' data before it
 // uses any of it. Neighbour lists live in one arena: a merged list goes back into its unit's
-// slot when it fits, else to the end; the arena is compacted in place when full. Level 1
-// recomputes face normals from the mesh when an exact cone needs them during its merges, rather
-// than keeping an array of them: the build's peak memory stays under twice the loaded mesh's.
+// slot when it fits, else to the end; the arena is compacted in place when full. When an exact
+// cone needs face normals during level 1's merges, the default mode reads them from an array of
+// float normals (widening the cone for their rounding) and the strict mode recomputes them from
+// the mesh, rather than keeping them in double: the build's peak memory stays under twice the
+// loaded mesh's.
 // Once level 1's merges are done and its arrays freed, the faces are renumbered group by group
 // (renumberFaces, which keeps their normals and areas), so level 1's final exact cones and the
 // upper levels read normals in order; each level-1 group's distinct vertices are collected in the
@@ -343,13 +345,13 @@ class HierarchyBuilder {
   // are runs of consecutive faces, walked in memory order.
   BigVector<int> faceNext_;
   BigVector<int> meshFace_;  // from level 2 on: the mesh face of each renumbered face
-  // Face normals of the renumbered faces, from level 2 on. Level 1 recomputes them from the mesh:
-  // its arrays leave no room for these under the memory target; above it, with far fewer units,
-  // there is.
+  // Face normals of the renumbered faces, from level 2 on. Level 1's arrays leave no room for
+  // these under the memory target (it reads l1Normal_, or the mesh in strict mode); above it,
+  // with far fewer units, there is.
   BigVector<vcg::Point3d> faceNormal_;
   // Level 1, default mode, during the merges only: every face's unit normal rounded to float
-  // (12 bytes a face where the mesh's would take 24), read by the cone refreshes instead of
-  // recomputing each normal from the scattered mesh (a tenth of the build before).
+  // (12 bytes a face, where doubles would not fit under the memory target), read by the cone
+  // refreshes instead of recomputing each normal from the scattered mesh.
   BigVector<vcg::Point3f> l1Normal_;
   BigVector<double> faceArea_;  // from level 2 on: every mesh face's area (FaceNormalAndArea), by mesh face
   int meshFace(int f) const { return meshFace_.empty() ? f : meshFace_[size_t(f)]; }
@@ -376,7 +378,7 @@ class HierarchyBuilder {
   std::vector<vcg::Point3d> scratchSupport_, scratchTrial_;
   // The normals of the unit whose exact cone is being made, in the order of its face list, as
   // runs: of faceNormal_ from level 2 on (read in place: the scans above need no copy), of
-  // scratchNormals_ at level 1 (computed from the mesh). Copied only for Welzl's algorithm.
+  // scratchNormals_ at level 1 (from l1Normal_ or the mesh). Copied only for Welzl's algorithm.
   std::vector<std::pair<const vcg::Point3d*, const vcg::Point3d*>> normalRuns_;
   // Calls f on each of those normals in order while it returns true; false: f stopped it.
   template <class F>
@@ -458,7 +460,10 @@ void HierarchyBuilder::makeConeExact(int u) {
     // From normals rounded to float (each off its direction by ~1e-7 rad): widened by 1e-6 rad to
     // stay a bound of the true normals' cone. Emission recomputes every level-1 cone exactly.
     Unit& unit = units_[size_t(u)];
-    if (unit.half >= 0 && unit.half < kPi / 2) unit.half = unit.half + 1e-6 >= kPi / 2 ? kPi : unit.half + 1e-6;
+    if (unit.half >= 0 && unit.half < kPi / 2) {
+      unit.half += 1e-6;
+      if (unit.half >= kPi / 2) unit.half = kPi;  // uncullable: stored as pi (setThreshold)
+    }
   }
 }
 
@@ -972,7 +977,7 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     // level go before the level's output grows.
     nextLevelUnits();
     // Renumbered now, the exact cones below read the normals in memory order, computed once for
-    // this level and the next ones (where the level-1 merges recomputed them from the mesh).
+    // this level and the next ones (the level-1 merges read them rounded, or from the mesh).
     if (firstLevel) renumberFaces();
   }
   if (firstLevel && !params_.strictGreedy) support_.assign(groupCount, ConeSupport());
@@ -1219,10 +1224,10 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
   long merges = 0;
   double threshold = params_.coneThresholdDeg;
   for (int level = 1; level <= params_.maxLevels; ++level) {
-    // Level 1 (default mode) refreshes its cones at every 8-fold growth: each refresh recomputes
-    // the unit's normals from the mesh (a tenth of the build at every 4-fold growth; 8-fold
-    // recomputes a quarter fewer normals); the looser bounds leave 1-3% more level-1 groups,
-    // culling as well (docs/cone_grouping.md). Above it a refresh costs about one scan (support_).
+    // Level 1 (default mode) refreshes its cones at every 8-fold growth: each refresh walks the
+    // unit's face list for its normals (a tenth of the build at every 4-fold growth; 8-fold reads
+    // a quarter fewer normals); the looser bounds leave 1-3% more level-1 groups, culling as well
+    // (docs/cone_grouping.md). Above it a refresh costs about one scan (support_).
     exactGrowth_ = params_.strictGreedy ? 2 : (level == 1 ? 8 : 4);
     const bool merged = runLevel(std::min(threshold, 180.0), level == 1 && !params_.strictGreedy, merges);
     prescored_ = false;
