@@ -333,6 +333,11 @@ class HierarchyBuilder {
   bool alive(int u) const { return chains_[size_t(u)].tail >= 0; }
   Neighbour* nbBegin(int u) { return arena_.data() + links_[size_t(u)].nbOffset; }
   Neighbour* nbEnd(int u) { return nbBegin(u) + links_[size_t(u)].nbCount; }
+  // u's list entry for w takes the score of the pair (w's entry for u was scored: lists are symmetric).
+  void setEntryScore(int u, int w, float score) {
+    for (Neighbour* e = nbBegin(u); e != nbEnd(u); ++e)
+      if (e->id == w) { e->score = score; return; }
+  }
   void compactArena(size_t room);
 
   const IndexedMesh& mesh_;
@@ -833,9 +838,8 @@ bool HierarchyBuilder::runLevel(double thresholdDeg, bool localMaximaFirst, long
         nb->score = evaluate(units_[u], units_[size_t(nb->id)]);
       } else if (std::isnan(nb->score)) {
         nb->score = evaluate(units_[u], units_[size_t(nb->id)]);
-        if (size_t(nb->id) > u)  // the higher unit has not chosen its best yet
-          for (Neighbour* back = nbBegin(nb->id); back != nbEnd(nb->id); ++back)
-            if (back->id == int(u)) { back->score = nb->score; break; }
+        // The higher unit has not chosen its best yet: its entry takes the score too.
+        if (size_t(nb->id) > u) setEntryScore(nb->id, int(u), nb->score);
       }
       if (nb->score > best || (nb->score == best && nb->score != kNoPair && nb->id < partner)) {
         best = nb->score;
@@ -1214,8 +1218,7 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
         const int w = nb->id;
         if (w >= f) continue;
         nb->score = evaluate(units_[size_t(w)], u);
-        for (Neighbour* back = nbBegin(w); back != nbEnd(w); ++back)
-          if (back->id == f) { back->score = nb->score; break; }
+        setEntryScore(w, f, nb->score);
       }
     }
   }
