@@ -22,39 +22,8 @@ import tempfile
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-
-QEM_MLX = """<!DOCTYPE FilterScript>
-<FilterScript>
- <filter name="Simplification: Quadric Edge Collapse Decimation">
-  <Param type="RichInt" value="{faces}" name="TargetFaceNum"/>
-  <Param type="RichFloat" value="0" name="TargetPerc"/>
-  <Param type="RichFloat" value="0.3" name="QualityThr"/>
-  <Param type="RichBool" value="false" name="PreserveBoundary"/>
-  <Param type="RichFloat" value="1" name="BoundaryWeight"/>
-  <Param type="RichBool" value="false" name="PreserveNormal"/>
-  <Param type="RichBool" value="false" name="PreserveTopology"/>
-  <Param type="RichBool" value="true" name="OptimalPlacement"/>
-  <Param type="RichBool" value="false" name="PlanarQuadric"/>
-  <Param type="RichFloat" value="0.001" name="PlanarWeight"/>
-  <Param type="RichBool" value="false" name="QualityWeight"/>
-  <Param type="RichBool" value="true" name="AutoClean"/>
-  <Param type="RichBool" value="false" name="Selected"/>
- </filter>
-</FilterScript>
-"""
-
-HAUSDORFF = """ <filter name="Hausdorff Distance">
-  <Param type="RichMesh" value="{sampled}" name="SampledMesh"/>
-  <Param type="RichMesh" value="{target}" name="TargetMesh"/>
-  <Param type="RichBool" value="false" name="SaveSample"/>
-  <Param type="RichBool" value="true" name="SampleVert"/>
-  <Param type="RichBool" value="false" name="SampleEdge"/>
-  <Param type="RichBool" value="false" name="SampleFauxEdge"/>
-  <Param type="RichBool" value="true" name="SampleFace"/>
-  <Param type="RichInt" value="{samples}" name="SampleNum"/>
-  <Param type="RichAbsPerc" value="{maxdist}" min="0" max="{maxdist}" name="MaxDist"/>
- </filter>
-"""
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+from mlx_filters import builtin_qem, hausdorff as hausdorff_filter, script  # noqa: E402
 
 
 def run(cmd, **kw):
@@ -81,10 +50,8 @@ def meshlab(server, inputs, script_text, tmp, output=None):
 
 def hausdorff(server, original, simplified, samples, tmp):
     """{'out_in': (max, mean, rms), 'in_out': (...)} in absolute units (last occurrence of each)."""
-    text = "<!DOCTYPE FilterScript>\n<FilterScript>\n"
-    text += HAUSDORFF.format(sampled=1, target=0, samples=samples, maxdist=1e9)
-    text += HAUSDORFF.format(sampled=0, target=1, samples=samples, maxdist=1e9)
-    text += "</FilterScript>\n"
+    text = script(hausdorff_filter(1, 0, samples, sample_edges=False),
+                  hausdorff_filter(0, 1, samples, sample_edges=False))
     log = meshlab(server, [original, simplified], text, tmp)
     blocks = re.findall(r"Sampled \d+ pts \(rng: \d+\) on (\S+) searched closest on (\S+)\s*\n\s*min : ([0-9.eE+-]+)\s+"
                         r"max ([0-9.eE+-]+)\s+mean : ([0-9.eE+-]+)\s+RMS : ([0-9.eE+-]+)", log)
@@ -110,6 +77,9 @@ def main():
     ap.add_argument("--keep", help="keep the simplified meshes in this folder")
     ap.add_argument("--pure", action="store_true", help="also run the paper's pure curvature order (--no-grow)")
     a = ap.parse_args()
+    # meshlabserver runs in a scratch folder: every path it is given must be absolute.
+    if os.path.sep in a.meshlabserver:
+        a.meshlabserver = os.path.abspath(a.meshlabserver)
     cli = os.path.join(a.build, "conelod", "conelod")
     tmp = tempfile.mkdtemp(prefix="conelod_cmp_")
     keep = os.path.abspath(a.keep) if a.keep else tmp
@@ -117,7 +87,7 @@ def main():
 
     rows = []
     for name in a.meshes:
-        mesh = name if os.path.exists(name) else os.path.join(a.meshes_dir, name)
+        mesh = os.path.abspath(name if os.path.exists(name) else os.path.join(a.meshes_dir, name))
         stem = os.path.splitext(os.path.basename(mesh))[0]
         info = json.loads(run([cli, "info", mesh, "--json"]))
         variants = [("ours", [])] + ([("ours, paper order", ["--no-grow"])] if a.pure else [])
@@ -130,7 +100,7 @@ def main():
             rows.append((stem, label, out, r["faces_out"], r["seconds"], r["diagonal"]))
         qem = os.path.join(keep, "%s_qem.ply" % stem)
         t0 = time.time()
-        log = meshlab(a.meshlabserver, [mesh], QEM_MLX.format(faces=target), tmp, qem)
+        log = meshlab(a.meshlabserver, [mesh], script(builtin_qem(target)), tmp, qem)
         qem_wall = time.time() - t0
         faces = int(re.findall(r"saved as .* \((\d+) vn (\d+) fn\)", log)[-1][1])
         rows.append((stem, "MeshLab QEM", qem, faces, None, rows[-1][5]))

@@ -23,35 +23,8 @@ import sys
 import time
 import xml.etree.ElementTree as ET
 
-BUILTIN = """ <filter name="Simplification: Quadric Edge Collapse Decimation">
-  <Param type="RichInt" value="{target}" name="TargetFaceNum"/>
-  <Param type="RichFloat" value="0" name="TargetPerc"/>
-  <Param type="RichFloat" value="0.3" name="QualityThr"/>
-  <Param type="RichBool" value="false" name="PreserveBoundary"/>
-  <Param type="RichFloat" value="1" name="BoundaryWeight"/>
-  <Param type="RichBool" value="false" name="PreserveNormal"/>
-  <Param type="RichBool" value="false" name="PreserveTopology"/>
-  <Param type="RichBool" value="true" name="OptimalPlacement"/>
-  <Param type="RichBool" value="false" name="PlanarQuadric"/>
-  <Param type="RichFloat" value="0.001" name="PlanarWeight"/>
-  <Param type="RichBool" value="false" name="QualityWeight"/>
-  <Param type="RichBool" value="true" name="AutoClean"/>
-  <Param type="RichBool" value="false" name="Selected"/>
- </filter>
-"""
-
-HAUSDORFF = """ <filter name="Hausdorff Distance">
-  <Param type="RichMesh" value="{sampled}" name="SampledMesh"/>
-  <Param type="RichMesh" value="{target}" name="TargetMesh"/>
-  <Param type="RichBool" value="false" name="SaveSample"/>
-  <Param type="RichBool" value="true" name="SampleVert"/>
-  <Param type="RichBool" value="true" name="SampleEdge"/>
-  <Param type="RichBool" value="false" name="SampleFauxEdge"/>
-  <Param type="RichBool" value="true" name="SampleFace"/>
-  <Param type="RichInt" value="{samples}" name="SampleNum"/>
-  <Param type="RichAbsPerc" value="1e+09" min="0" max="1e+09" name="MaxDist"/>
- </filter>
-"""
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from mlx_filters import builtin_qem, hausdorff as hausdorff_filter, script as script_text  # noqa: E402
 
 METHODS = [
     ("builtin", "MeshLab QEM (built-in)"),
@@ -62,7 +35,7 @@ METHODS = [
 
 def script(path, filters):
     with open(path, "w") as f:
-        f.write("<!DOCTYPE FilterScript>\n<FilterScript>\n%s</FilterScript>\n" % "".join(filters))
+        f.write(script_text(*filters))
 
 
 def our_filter(source_dir, target, locked):
@@ -182,14 +155,14 @@ def compare(mesh, a, tools, out_dir):
             method_target = target
             if method == "builtin_same":  # ours stopped above the target: the built-in at our face count
                 method_target = next(r["faces"] for r in rows if r["ratio"] == ratio and r["method"] == "ours")
-            script(run, [BUILTIN.format(target=method_target) if method.startswith("builtin")
+            script(run, [builtin_qem(method_target) if method.startswith("builtin")
                          else our_filter(tools["source"], target, method == "ours_locked")])
             runlog, cpu, wall = meshlab(tools["server"], [grouped], run, log, simplified, work)
             filter_seconds = last_number(runlog, "seconds") if method.startswith("ours") else float("nan")
             measure = os.path.join(work, tag + "_measure.mlx")
             script(measure, [integrity_filter(tools["source"]),
-                             HAUSDORFF.format(sampled=1, target=0, samples=a.samples),
-                             HAUSDORFF.format(sampled=0, target=1, samples=a.samples)])
+                             hausdorff_filter(1, 0, a.samples, sample_edges=True),
+                             hausdorff_filter(0, 1, a.samples, sample_edges=True)])
             mlog, _, _ = meshlab(tools["server"], [grouped, simplified], measure, log, None, work)
             h = hausdorff(mlog)
             if len(h) != 2:

@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Small mesh-file tool for scripts/get_test_meshes.sh (python3 standard library only).
+"""Small mesh-file tool for scripts/get_test_meshes.sh (python3 standard library only), and the
+one PLY reader of the project's Python scripts and integration tests (read_ply_elements).
 
   meshdata.py convert IN OUT [--comment TEXT]...
       IN: OFF (ASCII) or ASCII PLY (optionally .gz). OUT: binary little-endian PLY with
@@ -102,6 +103,68 @@ def read_ascii_ply(path):
                 for _ in range(count):
                     f.readline()
     return verts, faces
+
+
+STRUCT_CODES = {"char": "b", "uchar": "B", "int8": "b", "uint8": "B", "short": "h", "ushort": "H", "int16": "h",
+                "uint16": "H", "int": "i", "uint": "I", "int32": "i", "uint32": "I", "float": "f", "float32": "f",
+                "double": "d", "float64": "d"}
+
+
+def read_ply_elements(path):
+    """Every element of a PLY file (ASCII or binary little endian, optionally .gz), in file order, as
+    (name, records): one dict per record, property name -> value (a list of ints for a list
+    property; ints and floats as the file stores them, except that ASCII scalars are floats)."""
+    with open_maybe_gz(path) as f:
+        fmt, elements = read_ply_header(f, path)
+        body = f.read()
+    result = []
+    if fmt == "ascii":
+        tokens = body.split()
+        pos = 0
+        for name, count, props in elements:
+            records = []
+            for _ in range(count):
+                rec = {}
+                for prop in props:
+                    if prop[0] == "list":
+                        n = int(tokens[pos])
+                        rec[prop[-1]] = [int(t) for t in tokens[pos + 1:pos + 1 + n]]
+                        pos += 1 + n
+                    else:
+                        rec[prop[-1]] = float(tokens[pos])
+                        pos += 1
+                records.append(rec)
+            result.append((name, records))
+        return result
+    if fmt != "binary_little_endian":
+        raise ValueError("%s: PLY format %s is not handled" % (path, fmt))
+    pos = 0
+    for name, count, props in elements:
+        names = [p[-1] for p in props]
+        records = []
+        if all(p[0] != "list" for p in props):  # fixed-size records: one unpack each
+            st = struct.Struct("<" + "".join(STRUCT_CODES[p[0]] for p in props))
+            for _ in range(count):
+                records.append(dict(zip(names, st.unpack_from(body, pos))))
+                pos += st.size
+        else:
+            for _ in range(count):
+                rec = {}
+                for prop in props:
+                    if prop[0] == "list":
+                        cs = struct.Struct("<" + STRUCT_CODES[prop[1]])
+                        n = cs.unpack_from(body, pos)[0]
+                        pos += cs.size
+                        vs = struct.Struct("<%d%s" % (n, STRUCT_CODES[prop[2]]))
+                        rec[prop[-1]] = list(vs.unpack_from(body, pos))
+                        pos += vs.size
+                    else:
+                        s = struct.Struct("<" + STRUCT_CODES[prop[0]])
+                        rec[prop[-1]] = s.unpack_from(body, pos)[0]
+                        pos += s.size
+                records.append(rec)
+        result.append((name, records))
+    return result
 
 
 def write_binary_ply(path, verts, faces, comments):

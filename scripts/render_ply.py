@@ -11,66 +11,24 @@ degrees; the model is framed to fill the image.
 """
 import argparse
 import math
+import os
 import struct
+import sys
 import zlib
 
-TYPES = {"char": "b", "uchar": "B", "int8": "b", "uint8": "B", "short": "h", "ushort": "H", "int16": "h",
-         "uint16": "H", "int": "i", "uint": "I", "int32": "i", "uint32": "I", "float": "f", "float32": "f",
-         "double": "d", "float64": "d"}
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from meshdata import read_ply_elements  # noqa: E402
 
 
 def read_ply(path):
-    with open(path, "rb") as f:
-        header = []
-        while True:
-            line = f.readline().decode("ascii", "replace").strip()
-            header.append(line)
-            if line == "end_header":
-                break
-        body = f.read()
-    fmt = [l.split()[1] for l in header if l.startswith("format")][0]
-    elements, cur = [], None
-    for l in header:
-        w = l.split()
-        if w and w[0] == "element":
-            cur = {"name": w[1], "count": int(w[2]), "props": []}
-            elements.append(cur)
-        elif w and w[0] == "property":
-            cur["props"].append(w[1:])
+    """The mesh's vertex positions, its faces as triangles (polygons fanned) and, when every face
+    has one, each triangle's colour (else None)."""
     verts, faces, colors = [], [], []
-    if fmt == "ascii":
-        tok = body.split()
-        pos = 0
-
-        def nxt():
-            nonlocal pos
-            pos += 1
-            return tok[pos - 1]
-        read_scalar = lambda t: float(nxt())
-        read_count = lambda t: int(nxt())
-    else:
-        assert fmt == "binary_little_endian", fmt
-        pos = 0
-
-        def read_scalar(t):
-            nonlocal pos
-            s = struct.Struct("<" + TYPES[t])
-            v = s.unpack_from(body, pos)[0]
-            pos += s.size
-            return v
-        read_count = read_scalar
-    for el in elements:
-        for _ in range(el["count"]):
-            rec = {}
-            for p in el["props"]:
-                if p[0] == "list":
-                    n = int(read_count(p[1]))
-                    rec[p[-1]] = [int(read_scalar(p[2])) for _ in range(n)]
-                else:
-                    rec[p[-1]] = read_scalar(p[0])
-            if el["name"] == "vertex":
-                verts.append((rec["x"], rec["y"], rec["z"]))
-            elif el["name"] == "face":
+    for name, records in read_ply_elements(path):
+        if name == "vertex":
+            verts = [(r["x"], r["y"], r["z"]) for r in records]
+        elif name == "face":
+            for rec in records:
                 idx = rec.get("vertex_indices", rec.get("vertex_index"))
                 for k in range(1, len(idx) - 1):
                     faces.append((idx[0], idx[k], idx[k + 1]))

@@ -15,6 +15,10 @@ import tempfile
 import xml.etree.ElementTree as ET
 import zlib
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
+from meshdata import read_ply_elements  # noqa: E402
+from mlx_filters import builtin_qem, script as mlx_script  # noqa: E402
+
 CASES = {}
 
 
@@ -67,77 +71,15 @@ class Ctx:
 
 
 def read_ply(path):
-    """Minimal PLY reader (ASCII and binary little endian): vertex count, faces, per-face quality."""
-    with open(path, "rb") as f:
-        header = []
-        while True:
-            line = f.readline().decode("ascii", "replace").strip()
-            header.append(line)
-            if line == "end_header":
-                break
-        body = f.read()
-    fmt = [l.split()[1] for l in header if l.startswith("format")][0]
-    elements, current = [], None
-    for l in header:
-        w = l.split()
-        if w and w[0] == "element":
-            current = {"name": w[1], "count": int(w[2]), "props": []}
-            elements.append(current)
-        elif w and w[0] == "property":
-            current["props"].append(w[1:])
-    sizes = {"char": "b", "uchar": "B", "int8": "b", "uint8": "B", "short": "h", "ushort": "H", "int": "i",
-             "int32": "i", "uint": "I", "uint32": "I", "float": "f", "float32": "f", "double": "d", "float64": "d"}
+    """A saved mesh as the tests look at it: vertex count and positions, faces, per-face quality."""
     result = {"vertices": 0, "faces": [], "quality": [], "positions": []}
-    if fmt == "ascii":
-        tokens = body.decode().split()
-        pos = 0
-        for el in elements:
-            for _ in range(el["count"]):
-                rec = {}
-                for prop in el["props"]:
-                    if prop[0] == "list":
-                        n = int(tokens[pos]); pos += 1
-                        rec[prop[-1]] = [int(t) for t in tokens[pos:pos + n]]; pos += n
-                    else:
-                        rec[prop[-1]] = float(tokens[pos]); pos += 1
-                if el["name"] == "face":
-                    result["faces"].append(rec["vertex_indices"])
-                    if "quality" in rec:
-                        result["quality"].append(rec["quality"])
-                elif el["name"] == "vertex" and "x" in rec:
-                    result["positions"].append((rec["x"], rec["y"], rec["z"]))
-            if el["name"] == "vertex":
-                result["vertices"] = el["count"]
-        return result
-    assert fmt == "binary_little_endian", fmt
-    pos = 0
-    for el in elements:
-        if el["name"] == "vertex":
-            result["vertices"] = el["count"]
-        simple = all(p[0] != "list" for p in el["props"])
-        if simple:
-            st = struct.Struct("<" + "".join(sizes[p[0]] for p in el["props"]))
-            names = [p[-1] for p in el["props"]]
-            for _ in range(el["count"]):
-                rec = dict(zip(names, st.unpack_from(body, pos)))
-                pos += st.size
-                if el["name"] == "vertex" and "x" in rec:
-                    result["positions"].append((rec["x"], rec["y"], rec["z"]))
-            continue
-        for _ in range(el["count"]):
-            rec = {}
-            for prop in el["props"]:
-                if prop[0] == "list":
-                    cs, vs = struct.Struct("<" + sizes[prop[1]]), struct.Struct("<" + sizes[prop[2]])
-                    n = cs.unpack_from(body, pos)[0]; pos += cs.size
-                    rec[prop[-1]] = list(struct.unpack_from("<%d%s" % (n, sizes[prop[2]]), body, pos)); pos += n * vs.size
-                else:
-                    s = struct.Struct("<" + sizes[prop[0]])
-                    rec[prop[-1]] = s.unpack_from(body, pos)[0]; pos += s.size
-            if el["name"] == "face":
-                result["faces"].append(rec["vertex_indices"])
-                if "quality" in rec:
-                    result["quality"].append(rec["quality"])
+    for name, records in read_ply_elements(path):
+        if name == "vertex":
+            result["vertices"] = len(records)
+            result["positions"] = [(r["x"], r["y"], r["z"]) for r in records if "x" in r]
+        elif name == "face":
+            result["faces"] = [r["vertex_indices"] for r in records]
+            result["quality"] = [r["quality"] for r in records if "quality" in r]
     return result
 
 
@@ -321,17 +263,9 @@ def meshlab_group_qem_locked_and_builtin(c):
     assert last_float(log, "integrity_percent") == 100.0, log[-2000:]
     free = json.loads(c.conelod("simplify", grouped, "--target-ratio", "0.05", "--json").stdout)
     assert locked > free["faces_out"], (locked, free)
-    builtin = (DUPLICATE + '<filter name="Simplification: Quadric Edge Collapse Decimation">'
-               '<Param type="RichInt" value="0" name="TargetFaceNum"/><Param type="RichFloat" value="0.05" name="TargetPerc"/>'
-               '<Param type="RichFloat" value="0.3" name="QualityThr"/><Param type="RichBool" value="false" name="PreserveBoundary"/>'
-               '<Param type="RichFloat" value="1" name="BoundaryWeight"/><Param type="RichBool" value="false" name="PreserveNormal"/>'
-               '<Param type="RichBool" value="false" name="PreserveTopology"/><Param type="RichBool" value="true" name="OptimalPlacement"/>'
-               '<Param type="RichBool" value="false" name="PlanarQuadric"/><Param type="RichFloat" value="0.001" name="PlanarWeight"/>'
-               '<Param type="RichBool" value="false" name="QualityWeight"/><Param type="RichBool" value="true" name="AutoClean"/>'
-               '<Param type="RichBool" value="false" name="Selected"/></filter>\n')
     path = c.out("builtin.mlx")
     with open(path, "w") as f:
-        f.write("<!DOCTYPE FilterScript>\n<FilterScript>\n%s%s</FilterScript>\n" % (builtin, integrity_filter(c)))
+        f.write(mlx_script(DUPLICATE, builtin_qem(target_perc=0.05), integrity_filter(c)))
     _, log = c.meshlab([grouped], path)
     assert last_int(log, "groups_split") + last_int(log, "groups_vanished") > 0, log[-2000:]
     assert last_float(log, "integrity_percent") < 100.0
@@ -444,25 +378,7 @@ def meshlab_budget_builtin_qem_matches_meshlab(c):
     assert 1000 < target < 69451, target
     qem_mlx = c.out("qem.mlx")
     with open(qem_mlx, "w") as f:
-        f.write("""<!DOCTYPE FilterScript>
-<FilterScript>
- <filter name="Simplification: Quadric Edge Collapse Decimation">
-  <Param type="RichInt" value="%d" name="TargetFaceNum"/>
-  <Param type="RichFloat" value="0" name="TargetPerc"/>
-  <Param type="RichFloat" value="0.3" name="QualityThr"/>
-  <Param type="RichBool" value="false" name="PreserveBoundary"/>
-  <Param type="RichFloat" value="1" name="BoundaryWeight"/>
-  <Param type="RichBool" value="false" name="PreserveNormal"/>
-  <Param type="RichBool" value="false" name="PreserveTopology"/>
-  <Param type="RichBool" value="true" name="OptimalPlacement"/>
-  <Param type="RichBool" value="false" name="PlanarQuadric"/>
-  <Param type="RichFloat" value="0.001" name="PlanarWeight"/>
-  <Param type="RichBool" value="false" name="QualityWeight"/>
-  <Param type="RichBool" value="true" name="AutoClean"/>
-  <Param type="RichBool" value="false" name="Selected"/>
- </filter>
-</FilterScript>
-""" % target)
+        f.write(mlx_script(builtin_qem(target)))
     builtin = c.out("builtin_qem.ply")
     c.meshlab([bunny], qem_mlx, builtin)
     a, b = read_ply(ours), read_ply(builtin)
