@@ -194,13 +194,20 @@ TEST(UnionCone, ContainsBothCones) {
   }
 }
 
-TEST(UnionCone, NestedConeIsReturnedUnchanged) {
+// UnionCone and FastUnionCone alike: a nested cone gives the outer one back unchanged, an empty one
+// the other, an uncullable one an uncullable union.
+TEST(UnionCone, BothUnionsKeepNestedEmptyAndUncullableCones) {
   NormalCone big, small;
   big.axis = Dir(0, 0); big.halfAngle = 30 * kDeg;
   small.axis = Dir(10, 0); small.halfAngle = 5 * kDeg;
-  EXPECT_EQ(UnionCone(big, small).halfAngle, big.halfAngle);
-  EXPECT_EQ(UnionCone(small, big).halfAngle, big.halfAngle);
-  EXPECT_EQ(UnionCone(NormalCone::Empty(), small).halfAngle, small.halfAngle);
+  for (NormalCone (*unite)(const NormalCone&, const NormalCone&) : {&UnionCone, &FastUnionCone}) {
+    const char* name = unite == &UnionCone ? "UnionCone" : "FastUnionCone";
+    EXPECT_EQ(unite(big, small).halfAngle, big.halfAngle) << name;
+    EXPECT_EQ(unite(small, big).halfAngle, big.halfAngle) << name;
+    EXPECT_EQ(unite(small, big).axis, big.axis) << name;
+    EXPECT_EQ(unite(NormalCone::Empty(), small).halfAngle, small.halfAngle) << name;
+    EXPECT_FALSE(unite(NormalCone::Uncullable(), small).cullable()) << name;
+  }
 }
 
 // The cheaper bound must hold both cones to the rounding of the boundary samples (1e-12 rad, far
@@ -235,14 +242,6 @@ TEST(FastUnionCone, ContainsBothConesAndStaysCloseToUnionCone) {
                                              << fast.halfAngle;
   }
   EXPECT_GT(checked, 2000);
-  // Nested and empty cones come back unchanged, as from UnionCone.
-  NormalCone big, small;
-  big.axis = Dir(0, 0); big.halfAngle = 30 * kDeg;
-  small.axis = Dir(10, 0); small.halfAngle = 5 * kDeg;
-  EXPECT_EQ(FastUnionCone(big, small).halfAngle, big.halfAngle);
-  EXPECT_EQ(FastUnionCone(small, big).axis, big.axis);
-  EXPECT_EQ(FastUnionCone(NormalCone::Empty(), small).halfAngle, small.halfAngle);
-  EXPECT_FALSE(FastUnionCone(NormalCone::Uncullable(), small).cullable());
 }
 
 TEST(FastAcos, AccurateOverTheWholeRange) {
