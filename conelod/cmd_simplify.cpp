@@ -18,17 +18,8 @@ namespace conelod {
 namespace cli {
 namespace {
 
-const char* StopName(GroupQemStats::Stop s) {
-  switch (s) {
-    case GroupQemStats::Stop::TargetReached: return "target reached";
-    case GroupQemStats::Stop::NoMoreCollapses: return "no allowed collapse left";
-    case GroupQemStats::Stop::Cancelled: return "cancelled";
-  }
-  return "?";
-}
-
 void WriteStats(Json& j, const GroupQemStats& s) {
-  j.field("collapses", s.collapses).field("evaluations", s.evaluations).field("stop", StopName(s.stop))
+  j.field("collapses", s.collapses).field("evaluations", s.evaluations).field("stop", ToString(s.stop))
       .field("max_collapse_error", s.maxCollapseError);
   j.key("refused").beginObject()
       .field("topology", s.refusedTopology).field("condition1", s.refusedCondition1)
@@ -244,7 +235,7 @@ int CmdSimplify(int argc, char** argv) {
     std::printf("%s\n", j.str().c_str());
   } else {
     std::printf("%s: %zu -> %zu faces (target %zu, %s) in %.3f s, %zu collapses\n", input.c_str(), im.faceCount(),
-                r.mesh.faceCount(), p.targetFaces, StopName(r.stats.stop), seconds, r.stats.collapses);
+                r.mesh.faceCount(), p.targetFaces, ToString(r.stats.stop), seconds, r.stats.collapses);
     std::printf("groups (%s): %d before, %d after, %d split, %d vanished: %.2f%% intact\n", source.c_str(),
                 gi.groupsBefore, gi.groupsAfter, gi.groupsSplit, gi.groupsVanished, 100 * gi.intact());
     if (gi.groupsDisconnectedBefore)

@@ -878,6 +878,15 @@ Status ValidateParams(const GroupQemParams& p) {
   return Status::Ok();
 }
 
+const char* ToString(GroupQemStats::Stop s) {
+  switch (s) {
+    case GroupQemStats::Stop::TargetReached: return "target reached";
+    case GroupQemStats::Stop::NoMoreCollapses: return "no allowed collapse left";
+    case GroupQemStats::Stop::Cancelled: return "cancelled";
+  }
+  return "?";
+}
+
 const char* ToString(CollapseVerdict v) {
   switch (v) {
     case CollapseVerdict::Allowed: return "allowed";

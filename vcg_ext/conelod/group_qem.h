@@ -122,6 +122,8 @@ enum class CollapseVerdict {
   Allowed, NotAnEdge, Topology, LockedBoundary, Condition1, Condition2, FixedEndpoints, Geometry
 };
 const char* ToString(CollapseVerdict v);
+// Why the simplification stopped, as the CLI and the plugin print it: "target reached", ...
+const char* ToString(GroupQemStats::Stop s);
 CollapseVerdict EvaluateCollapse(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
                                  const GroupQemParams& params, uint32_t v1, uint32_t v2,
                                  vcg::Point3f* newPosition = nullptr);
