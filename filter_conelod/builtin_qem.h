@@ -8,7 +8,7 @@
 // the built-in filter run with TargetFaceNum = the budget.
 #pragma once
 
-#include <common/meshmodel.h>
+#include "meshlab_api.h"
 #include <vcg/complex/algorithms/clean.h>
 #include <vcg/complex/algorithms/local_optimization.h>
 #include <vcg/complex/algorithms/local_optimization/tri_edge_collapse_quadric.h>
@@ -73,7 +73,7 @@ inline int RunBuiltinQuadric(MeshModel& mm, int targetFaces, vcg::CallBackPos* c
   mm.clearDataMask(MeshModel::MM_FACEFACETOPO);
   vcg::tri::Allocator<CMeshO>::CompactVertexVector(m);
   vcg::tri::Allocator<CMeshO>::CompactFaceVector(m);
-  mm.UpdateBoxAndNormals();
+  UpdateBoxAndNormals(mm);
   return nullFaces;
 }
 

@@ -99,7 +99,8 @@ int main(int argc, char** argv) {
     RichParameterList par = params(grouping, *mm);
     par.setValue("ConeThresholdDeg", FloatValue(0.0f));
     CHECK(!plugin->applyFilter(grouping, md, par, nullptr), "ConeThresholdDeg = 0 is refused");
-    CHECK(plugin->errorMsg().contains("ConeThresholdDeg"), "the message names ConeThresholdDeg");
+    CHECK(plugin->errorMsg().contains("'Cone threshold (deg)'") && !plugin->errorMsg().contains("ConeThresholdDeg"),
+          "the message names the dialog's label, 'Cone threshold (deg)'");
     CHECK(Take(*mm) == before, "the mesh is unchanged after a refused parameter");
   }
   {  // Cancellation through MeshLab's callback: refused, mesh unchanged.

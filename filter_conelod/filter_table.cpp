@@ -1,0 +1,1311 @@
+// ConeLOD MeshLab plugin — the filter table (see filter_table.h).
+#include "filter_table.h"
+
+#include <QElapsedTimer>
+#include <QFileInfo>
+#include <QRegularExpression>
+#include <algorithm>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <exception>
+#include <limits>
+#include <memory>
+#include <new>
+#include <stdexcept>
+
+#include "builtin_qem.h"
+#include "conelod/cone_grouping.h"
+#include "conelod/culling_cost.h"
+#include "conelod/feature_simplify.h"
+#include "conelod/group_colors.h"
+#include "conelod/group_integrity.h"
+#include "conelod/group_qem.h"
+#include "conelod/lod.h"
+#include "conelod/manifold_check.h"
+#include "conelod/mesh_check.h"
+#include "conelod/pca_partition.h"
+#include "conelod/pixel_budget.h"
+#include "conelod/progressive_cluster_mesh.h"
+#include "conelod/sampled_distance.h"
+#include "conelod/simplify_bridge.h"
+#include "conelod/vcg_bridge.h"
+
+#include <vcg/complex/algorithms/update/bounding.h>
+#include <vcg/complex/algorithms/update/normal.h>
+#include <vcg/complex/algorithms/update/topology.h>
+
+namespace conelod_plugin {
+
+using conelod::Status;
+
+// ---------------------------------------------------------------------------------------------
+// Parameters, values, report
+
+Bound AtLeast(double min, const char* note) { return Bound{min, std::numeric_limits<double>::infinity(), false, false, note}; }
+Bound Above(double min, const char* note) { return Bound{min, std::numeric_limits<double>::infinity(), true, false, note}; }
+Bound Between(double min, double max, const char* note) { return Bound{min, max, false, false, note}; }
+Bound AboveUpTo(double min, double max, const char* note) { return Bound{min, max, true, false, note}; }
+static Bound Inside(double min, double max, const char* note = nullptr) { return Bound{min, max, true, true, note}; }
+
+static ParamSpec Spec(ParamKind kind, const char* name, const char* label, const char* help) {
+  ParamSpec p;
+  p.kind = kind;
+  p.name = name;
+  p.label = label;
+  p.help = help;
+  return p;
+}
+
+ParamSpec BoolParam(const char* name, bool value, const char* label, const char* help) {
+  ParamSpec p = Spec(ParamKind::Bool, name, label, help);
+  p.number = value ? 1 : 0;
+  return p;
+}
+
+ParamSpec IntParam(const char* name, int value, const char* label, const char* help, Bound bound) {
+  ParamSpec p = Spec(ParamKind::Int, name, label, help);
+  p.number = value;
+  p.bound = bound;
+  return p;
+}
+
+ParamSpec FloatParam(const char* name, double value, const char* label, const char* help, Bound bound) {
+  ParamSpec p = Spec(ParamKind::Float, name, label, help);
+  p.number = value;
+  p.bound = bound;
+  return p;
+}
+
+ParamSpec AbsPercParam(const char* name, double value, double absMax, const char* label, const char* help,
+                       Bound bound) {
+  ParamSpec p = Spec(ParamKind::AbsPerc, name, label, help);
+  p.number = value;
+  p.absMax = absMax;
+  p.bound = bound;
+  return p;
+}
+
+ParamSpec EnumParam(const char* name, int value, QStringList choices, const char* label, const char* help) {
+  ParamSpec p = Spec(ParamKind::Enum, name, label, help);
+  p.number = value;
+  p.choices = std::move(choices);
+  return p;
+}
+
+ParamSpec PositionParam(const char* name, vcg::Point3f value, const char* label, const char* help) {
+  ParamSpec p = Spec(ParamKind::Position, name, label, help);
+  p.point = value;
+  return p;
+}
+
+ParamSpec DirectionParam(const char* name, vcg::Point3f value, const char* label, const char* help) {
+  ParamSpec p = Spec(ParamKind::Direction, name, label, help);
+  p.point = value;
+  return p;
+}
+
+ParamSpec OpenFileParam(const char* name, QStringList types, const char* label, const char* help) {
+  ParamSpec p = Spec(ParamKind::OpenFile, name, label, help);
+  p.choices = std::move(types);
+  return p;
+}
+
+ParamSpec SaveFileParam(const char* name, QString type, const char* label, const char* help) {
+  ParamSpec p = Spec(ParamKind::SaveFile, name, label, help);
+  p.choices = QStringList() << type;
+  return p;
+}
+
+ParamSpec MeshParam(const char* name, const MeshModel* value, const char* label, const char* help) {
+  ParamSpec p = Spec(ParamKind::Mesh, name, label, help);
+  p.mesh = value;
+  return p;
+}
+
+template <class Map>
+static const typename Map::mapped_type& Find(const Map& map, const char* name) {
+  const auto it = map.find(QString(name));
+  if (it == map.end()) throw std::logic_error(std::string("the filter reads an undeclared parameter ") + name);
+  return it->second;
+}
+
+double Args::number(const char* name) const { return Find(numbers_, name); }
+vcg::Point3d Args::point(const char* name) const { return vcg::Point3d::Construct(Find(points_, name)); }
+QString Args::path(const char* name) const { return Find(paths_, name); }
+MeshModel* Args::mesh(const char* name) const { return Find(meshes_, name); }
+
+void Report::log(const char* format, ...) {
+  va_list args, again;
+  va_start(args, format);
+  va_copy(again, args);
+  const int n = std::vsnprintf(nullptr, 0, format, args);
+  va_end(args);
+  std::string line(size_t(std::max(n, 0)), '\0');
+  if (n > 0) std::vsnprintf(&line[0], line.size() + 1, format, again);
+  va_end(again);
+  if (sink_) sink_(line, false);
+}
+
+conelod::Progress FilterCall::progress() const {
+  vcg::CallBackPos* callback = cb;
+  if (!callback) return conelod::Progress();
+  return [callback](int percent, const char* stage) { return callback(percent, stage); };
+}
+
+namespace {
+
+const char* const kPaperKamiya =
+    "M. Kamiya, H. Suzuki, K. Kawachi, <i>LODs for efficient displaying triangle meshes</i> "
+    "(University of Tokyo).";
+const char* const kPaperHayano =
+    "M. Hayano, T. Matsuoka, K. Ueda, <i>Mesh Simplification Using Edge Operation with Feature Detection</i> "
+    "(Ricoh Software Research Center).";
+const char* const kPaperMizuno =
+    "S. Mizuno, M. Okumoto, M. Takata, K. Joe, <i>Polygon reduction for effective 3D model rendering on "
+    "different platforms</i>, IPSJ SIG Technical Report 2011-MPS-86.";
+const char* const kPaperTsuji =
+    "T. Tsuji, H. Zha, R. Kurazume, T. Hasegawa, <i>Face clusters partitioning for hierarchical data "
+    "structure and high speed rendering</i> (Kyushu University).";
+
+const char* const kUnchanged = "the mesh was not changed";
+
+Status Invalid(const QString& message) { return Status::Invalid(message.toStdString()); }
+
+// "'Target fraction (0..1)'": how messages name a parameter (by the label the dialog shows).
+QString Quoted(const ParamSpec& p) { return "'" + p.label + "'"; }
+
+std::vector<ParamSpec> ParamsOf(const FilterSpec& f, MeshDocument& doc) { return f.params(&doc, doc.mm()); }
+
+// The quoted label of `name` among the filter's parameters (the name itself if it has none).
+QString Label(const FilterCall& c, const char* name) {
+  for (const ParamSpec& p : c.params)
+    if (p.name == name) return Quoted(p);
+  return QString("'%1'").arg(name);
+}
+
+double Diagonal(const MeshModel* m) { return m && !m->cm.bbox.IsNull() ? double(m->cm.bbox.Diag()) : 0.0; }
+
+// Per-face quality of the live faces, in ToIndexedMesh order.
+std::vector<float> FaceQualities(const CMeshO& m) {
+  std::vector<float> q;
+  q.reserve(size_t(m.fn));
+  for (const auto& f : m.face)
+    if (!f.IsD()) q.push_back(float(f.cQ()));
+  return q;
+}
+
+// The path of a file parameter; refused when empty (no hidden default file is ever read or
+// written). MeshLab 2020.09 passes on only a file chosen with "...", so there the message says so.
+Status RequirePath(const FilterCall& c, const char* name, QString& path) {
+  path = c.args.path(name).trimmed();
+  if (!path.isEmpty()) return Status::Ok();
+  if (kDialogPassesTypedPaths)
+    return Invalid(Label(c, name) + " is empty: type the path of the file or choose it with the '...' button");
+  return Invalid(Label(c, name) +
+                 " is empty: choose the file with the '...' button beside the box (MeshLab 2020.09 does not pass "
+                 "on a path typed into the box)");
+}
+
+// A message about a file that names it ("PATH: why"), once.
+QString NameFile(const QString& path, const std::string& why) {
+  const QString message = QString::fromStdString(why);
+  return message.contains(path) ? message : path + ": " + message;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Parameters shared by several filters
+
+// The grouping parameters of the grouping, culling-cost and LOD-export filters.
+void AddGroupingParams(std::vector<ParamSpec>& p) {
+  const conelod::ConeGroupingParams d;
+  p.push_back(FloatParam("ConeWeight", d.coneWeight, "Cone weight k_c",
+                         "Weight of the cone term v_c = (pi - c)/pi, c = the merged group's cone half-angle. "
+                         "The paper found this term matters most for culling.",
+                         AtLeast(0)));
+  p.push_back(FloatParam("ShapeWeight", d.shapeWeight, "Shape weight k_s",
+                         "Weight of the shape term v_s = projected area / area of the enclosing circle "
+                         "(round groups score higher).",
+                         AtLeast(0)));
+  p.push_back(FloatParam("SizeWeight", d.sizeWeight, "Size weight k_n",
+                         "Weight of the size term v_n = (N - n)/N (smaller groups score higher).", AtLeast(0)));
+  p.push_back(FloatParam("ConeThresholdDeg", d.coneThresholdDeg, "Cone threshold (deg)",
+                         "Level-1 limit on a group's cone half-angle, in degrees: pairs whose merged cone "
+                         "would reach it are never merged. 180 or more: no limit.",
+                         Above(0, "180 or more: no limit")));
+  p.push_back(FloatParam("ThresholdGrowth", d.thresholdGrowth, "Threshold growth per level",
+                         "The cone threshold is multiplied by this factor at each level above the first (>= 1).",
+                         AtLeast(1)));
+  p.push_back(IntParam("MaxLevels", d.maxLevels, "Max levels", "At most this many hierarchy levels.",
+                       Between(1, 64)));
+  p.push_back(IntParam("MinTopGroups", d.minTopGroups, "Min top-level groups",
+                       "Merging stops once a level has this many groups (or fewer).", AtLeast(1)));
+}
+
+conelod::ConeGroupingParams ReadGroupingParams(const Args& a) {
+  conelod::ConeGroupingParams p;
+  p.coneWeight = a.number("ConeWeight");
+  p.shapeWeight = a.number("ShapeWeight");
+  p.sizeWeight = a.number("SizeWeight");
+  p.coneThresholdDeg = a.number("ConeThresholdDeg");
+  p.thresholdGrowth = a.number("ThresholdGrowth");
+  p.maxLevels = a.integer("MaxLevels");
+  p.minTopGroups = a.integer("MinTopGroups");
+  return p;
+}
+
+// The collapse options shared by the group-preserving QEM and the LOD export (which runs it per level).
+void AddCollapseOptionParams(std::vector<ParamSpec>& p, const conelod::GroupQemParams& d, const char* boundaryWeightHelp) {
+  p.push_back(FloatParam("QualityThr", d.qualityThr, "Quality threshold",
+                         "Collapses creating faces of quality (2 area / longest edge^2) below this are penalised, "
+                         "as in the built-in filter. 0: no penalty.",
+                         Between(0, 1)));
+  p.push_back(BoolParam("OptimalPlacement", d.optimalPlacement, "Optimal position of simplified vertices",
+                        "The merged vertex goes where the quadric error is least; otherwise to the better endpoint."));
+  p.push_back(BoolParam("PreserveBoundary", d.preserveBoundary, "Preserve Boundary of the mesh",
+                        "Vertices on the mesh border never move."));
+  p.push_back(FloatParam("BoundaryWeight", d.boundaryWeight, "Boundary Preserving Weight", boundaryWeightHelp,
+                         AtLeast(0)));
+  p.push_back(BoolParam("PreserveNormal", d.preserveNormal, "Preserve Normal",
+                        "Refuse collapses that turn a face's normal by more than about 78 degrees (fold-overs)."));
+}
+
+void ReadCollapseOptions(const Args& a, conelod::GroupQemParams& q) {
+  q.qualityThr = a.number("QualityThr");
+  q.optimalPlacement = a.flag("OptimalPlacement");
+  q.preserveBoundary = a.flag("PreserveBoundary");
+  q.boundaryWeight = a.number("BoundaryWeight");
+  q.preserveNormal = a.flag("PreserveNormal");
+}
+
+// The face-count target of both simplifications: 'Target number of faces' when it is > 0,
+// otherwise 'Target fraction' x the faces (rounded, at least 1), 0 (no target) when both are 0.
+void AddFaceTargetParams(std::vector<ParamSpec>& p) {
+  p.push_back(IntParam("TargetFaceNum", 0, "Target number of faces",
+                       "Stop at this many faces. 0: the target is the fraction below.",
+                       AtLeast(0, "0: use the target fraction")));
+  p.push_back(FloatParam("TargetPerc", 0.5, "Target fraction (0..1)",
+                         "Used when the target number of faces is 0: the target is this fraction of the current "
+                         "face count (0.1 = 10 %). 0 with a target number of 0: no face-count target.",
+                         Between(0, 1)));
+}
+
+size_t FaceTarget(const Args& a, int faces) {
+  const int count = a.integer("TargetFaceNum");
+  const double fraction = a.number("TargetPerc");
+  if (count > 0) return size_t(count);
+  if (fraction > 0) return std::max<size_t>(1, size_t(std::llround(fraction * double(faces))));
+  return 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cone LOD: Normal Cone Face Grouping
+
+std::vector<ParamSpec> ConeGroupingSpecs(const MeshDocument*, const MeshModel*) {
+  std::vector<ParamSpec> p;
+  AddGroupingParams(p);
+  p.push_back(IntParam("DisplayLevel", 1, "Display level",
+                       "Hierarchy level shown as per-face quality and colour (1 = finest). A level above "
+                       "the top is shown as the top level.",
+                       AtLeast(1)));
+  return p;
+}
+
+Status ApplyConeGrouping(FilterCall& c) {
+  MeshModel& mm = *c.mesh;
+  int displayLevel = c.args.integer("DisplayLevel");
+  std::vector<size_t> faceOf;
+  const conelod::IndexedMesh im = conelod::ToIndexedMesh(mm.cm, &faceOf);
+  conelod::GroupHierarchy h;
+  QElapsedTimer timer;
+  timer.start();
+  const Status s = conelod::BuildConeHierarchy(im, ReadGroupingParams(c.args), h, c.progress());
+  if (!s.ok()) return s;
+  const double seconds = timer.elapsed() / 1000.0;
+  if (displayLevel > h.levelCount()) {
+    c.report.log("DisplayLevel %d is above the %d levels built: showing level %d", displayLevel, h.levelCount(),
+                 h.levelCount());
+    displayLevel = h.levelCount();
+  }
+
+  mm.updateDataMask(MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR);
+  conelod::WriteGroupResults(mm.cm, faceOf, h, displayLevel);
+
+  c.report.log("Normal cone grouping: %d faces, %d levels in %.3f s; quality and colour = groups of level %d",
+               int(im.faceCount()), h.levelCount(), seconds, displayLevel);
+  for (int l = 1; l <= h.levelCount(); ++l) {
+    const conelod::GroupLevel& lv = h.level(l);
+    c.report.log("level %d: groups %d, max_cone_deg %.2f, mean_cone_deg %.2f, limit_deg %.1f, uncullable %d", l,
+                 int(lv.groups.size()), lv.maxConeDeg(), lv.meanConeDeg(), lv.thresholdDeg, lv.uncullableGroups());
+  }
+  c.report.figure("levels", h.levelCount());
+  c.report.figure("level1_groups", double(h.level(1).groups.size()));
+  return Status::Ok();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cone LOD: Cluster Culling Cost
+
+std::vector<ParamSpec> CullingCostSpecs(const MeshDocument*, const MeshModel*) {
+  std::vector<ParamSpec> p;
+  AddGroupingParams(p);
+  p.push_back(IntParam("Views", 1000, "View directions", "Number of view directions, uniform on the sphere.",
+                       Between(1, 1e7)));
+  p.push_back(FloatParam("CameraDistance", 0.0, "Camera distance",
+                         "0: orthographic views (the paper's test). Otherwise a perspective eye at this many "
+                         "bounding-sphere radii (> 1) from the model's centre."));
+  return p;
+}
+
+Status ApplyCullingCost(FilterCall& c) {
+  conelod::CullingCostParams cp;
+  cp.views = c.args.integer("Views");
+  cp.cameraDistance = c.args.number("CameraDistance");
+  if (!(cp.cameraDistance == 0 || (cp.cameraDistance > 1 && std::isfinite(cp.cameraDistance))))
+    return Invalid(Label(c, "CameraDistance") + " must be 0 (orthographic views) or > 1 (bounding-sphere radii)");
+
+  const conelod::IndexedMesh im = conelod::ToIndexedMesh(c.mesh->cm);
+  conelod::GroupHierarchy h;
+  Status s = conelod::BuildConeHierarchy(im, ReadGroupingParams(c.args), h, conelod::SubProgress(c.progress(), 0, 50));
+  if (!s.ok()) return s;
+  conelod::CullingCostResult r;
+  s = conelod::EvaluateCullingCost(im, h, cp, r, conelod::SubProgress(c.progress(), 50, 100));
+  if (!s.ok()) return s;
+
+  Report& out = c.report;
+  out.log("Cluster culling cost over %d %s views: %d faces, %d levels (%d groups at level 1, %d at the top)", r.views,
+          r.perspective ? "perspective" : "orthographic", int(im.faceCount()), h.levelCount(),
+          int(h.level(1).groups.size()), int(h.level(h.levelCount()).groups.size()));
+  out.log("two_state_cost %.4f (min %.4f, max %.4f)", r.twoState.mean, r.twoState.min, r.twoState.max);
+  out.log("three_state_cost %.4f (min %.4f, max %.4f)", r.threeState.mean, r.threeState.min, r.threeState.max);
+  out.log("rejected_fraction %.4f  ideal_fraction %.4f  (%.1f%% of the ideal culled at group level)",
+          r.rejectedFraction, r.idealFraction, r.idealFraction > 0 ? 100 * r.rejectedFraction / r.idealFraction : 0.0);
+  out.log("front_accepted_fraction %.4f  mean_group_tests %.1f", r.frontAcceptedFraction, r.meanGroupTests);
+  out.figure("two_state_cost", r.twoState.mean);
+  out.figure("three_state_cost", r.threeState.mean);
+  out.figure("rejected_fraction", r.rejectedFraction);
+  out.figure("ideal_fraction", r.idealFraction);
+  return Status::Ok();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cone LOD: Group-Preserving Quadric Edge Collapse
+
+std::vector<ParamSpec> GroupQemSpecs(const MeshDocument*, const MeshModel*) {
+  const conelod::GroupQemParams d;
+  std::vector<ParamSpec> p;
+  AddFaceTargetParams(p);
+  p.push_back(FloatParam("MaxErrorPerc", 0.0, "Max error (% of bbox diagonal)",
+                         "If non zero, no collapse whose quadric error (RMS distance) exceeds this percentage of "
+                         "the bounding-box diagonal is done. 0: no limit.",
+                         AtLeast(0, "0: no limit")));
+  p.push_back(EnumParam("GroupSource", 0, QStringList() << "Per-face quality" << "Normal cone groups", "Groups",
+                        "Per-face quality: the ids already on the mesh (e.g. from Cone LOD: Normal Cone Face "
+                        "Grouping). Normal cone groups: computed now at the normal cone level below with the "
+                        "default grouping parameters."));
+  p.push_back(IntParam("GroupLevel", 1, "Normal cone level",
+                       "Hierarchy level of the normal cone groups (1 = finest); used when Groups is Normal cone "
+                       "groups."));
+  p.push_back(BoolParam("Condition1", d.condition1, "Condition 1: keep groups whole",
+                        "Refuse collapses that split a group or remove its last faces."));
+  p.push_back(BoolParam("Condition2", d.condition2, "Condition 2: no new group corners",
+                        "Refuse collapses that create a vertex where 3 or more groups meet."));
+  p.push_back(BoolParam("LockGroupBoundaries", d.lockGroupBoundaries, "Lock group boundaries",
+                        "No vertex on a group boundary moves: group contours stay exactly as they are."));
+  AddCollapseOptionParams(p, d, "Weight of the quadrics that keep mesh borders (and group contours) in place.");
+  return p;
+}
+
+Status ApplyGroupQem(FilterCall& c) {
+  MeshModel& mm = *c.mesh;
+  conelod::GroupQemParams p;
+  p.targetFaces = FaceTarget(c.args, mm.cm.fn);
+  p.maxError = c.args.number("MaxErrorPerc") / 100.0;
+  p.condition1 = c.args.flag("Condition1");
+  p.condition2 = c.args.flag("Condition2");
+  p.lockGroupBoundaries = c.args.flag("LockGroupBoundaries");
+  ReadCollapseOptions(c.args, p);
+  if (p.targetFaces == 0 && p.maxError == 0)
+    return Invalid("give a target: " + Label(c, "TargetFaceNum") + ", " + Label(c, "TargetPerc") + " or " +
+                   Label(c, "MaxErrorPerc"));
+
+  std::vector<size_t> faceOf;
+  const conelod::IndexedMesh im = conelod::ToIndexedMesh(mm.cm, &faceOf);
+  Status s = conelod::RequireValidForFaces(im);
+  if (!s.ok()) return s;
+  QElapsedTimer timer;
+  timer.start();
+  std::vector<int> groups;
+  const bool coneSource = c.args.integer("GroupSource") == 1;
+  int level = c.args.integer("GroupLevel");
+  conelod::Progress progress = c.progress();
+  if (coneSource) {
+    conelod::GroupHierarchy h;
+    s = conelod::BuildConeHierarchy(im, conelod::ConeGroupingParams(), h, conelod::SubProgress(progress, 0, 30));
+    if (!s.ok()) return s;
+    if (level < 1 || level > h.levelCount()) {
+      c.report.log("GroupLevel %d is outside the %d levels built: using level %d", level, h.levelCount(),
+                   std::min(std::max(level, 1), h.levelCount()));
+      level = std::min(std::max(level, 1), h.levelCount());
+    }
+    groups = h.level(level).faceGroup;
+    progress = conelod::SubProgress(progress, 30, 100);
+  } else {
+    if (!mm.hasDataMask(MeshModel::MM_FACEQUALITY))
+      return Invalid("the mesh has no per-face quality to use as group ids: run Cone LOD: Normal Cone Face Grouping "
+                     "first, or set " + Label(c, "GroupSource") + " to Normal cone groups");
+    const std::vector<float> q = FaceQualities(mm.cm);
+    std::vector<std::vector<int>> ids;
+    s = conelod::GroupIdsFromValues({&q}, ids);
+    if (!s.ok()) return s;
+    groups = std::move(ids[0]);
+  }
+  conelod::GroupQemResult r;
+  s = conelod::SimplifyPreservingGroups(im, groups, p, r, progress);
+  if (!s.ok()) return s;
+  const double seconds = timer.elapsed() / 1000.0;
+
+  std::vector<int> groupsAfter(r.sourceFace.size());
+  for (size_t f = 0; f < r.sourceFace.size(); ++f) groupsAfter[f] = groups[r.sourceFace[f]];
+  conelod::GroupIntegrity gi;
+  conelod::MeasureGroupIntegrity(im, groups, r.mesh, groupsAfter, gi);
+
+  mm.updateDataMask(MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR);
+  conelod::ApplySimplifiedMesh(mm.cm, faceOf, r.mesh, r.sourceFace, r.sourceVertex);
+  if (coneSource)  // faces are in the same order as the groups after compaction
+    for (size_t f = 0; f < groupsAfter.size(); ++f) {
+      mm.cm.face[f].Q() = CMeshO::FaceType::QualityType(groupsAfter[f]);
+      mm.cm.face[f].C() = conelod::GroupColor(groupsAfter[f]);
+    }
+  if (mm.hasDataMask(MeshModel::MM_FACEFACETOPO)) vcg::tri::UpdateTopology<CMeshO>::FaceFace(mm.cm);
+  if (mm.hasDataMask(MeshModel::MM_VERTFACETOPO)) vcg::tri::UpdateTopology<CMeshO>::VertexFace(mm.cm);
+  UpdateBoxAndNormals(mm);
+
+  Report& out = c.report;
+  const std::string source =
+      coneSource ? "normal cone groups, level " + std::to_string(level) : "per-face quality groups";
+  out.log("Group-preserving QEM (%s): faces_in %d faces_out %d target %d (%s) seconds %.3f", source.c_str(),
+          int(im.faceCount()), int(r.mesh.faceCount()), int(p.targetFaces), conelod::ToString(r.stats.stop), seconds);
+  out.log("groups_before %d groups_after %d groups_split %d groups_vanished %d groups_disconnected_in %d "
+          "integrity_percent %.2f",
+          gi.groupsBefore, gi.groupsAfter, gi.groupsSplit, gi.groupsVanished, gi.groupsDisconnectedBefore,
+          100 * gi.intact());
+  if (gi.groupsDisconnectedBefore)
+    out.log("%d groups were already in several pieces in the input: each piece was kept as it was",
+            gi.groupsDisconnectedBefore);
+  out.log("collapses %d; refused evaluations: topology %d, condition 1 %d, condition 2 %d, lock %d, fixed %d, "
+          "geometry %d",
+          int(r.stats.collapses), int(r.stats.refusedTopology), int(r.stats.refusedCondition1),
+          int(r.stats.refusedCondition2), int(r.stats.refusedLock), int(r.stats.refusedFixed),
+          int(r.stats.refusedGeometry));
+  out.figure("faces_out", double(r.mesh.faceCount()));
+  out.figure("groups_before", gi.groupsBefore);
+  out.figure("groups_after", gi.groupsAfter);
+  out.figure("integrity_percent", 100 * gi.intact());
+  return Status::Ok();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cone LOD: Group Integrity
+
+std::vector<ParamSpec> GroupIntegritySpecs(const MeshDocument* doc, const MeshModel* current) {
+  // The default reference: the first other layer (the copy made before an in-place simplification).
+  const MeshModel* reference = current;
+  for (const MeshModel* m : doc ? Layers(*doc) : std::vector<const MeshModel*>())
+    if (m != current) {
+      reference = m;
+      break;
+    }
+  return {MeshParam("ReferenceMesh", reference, "Reference mesh",
+                    "The mesh whose groups (per-face quality) are the reference: the mesh before the "
+                    "simplification, kept as a layer of its own (Filters > Mesh Layer > Duplicate Current Layer "
+                    "before simplifying). The current mesh is measured against it.")};
+}
+
+Status ApplyGroupIntegrity(FilterCall& c) {
+  MeshModel* cur = c.mesh;
+  MeshModel* ref = c.args.mesh("ReferenceMesh");
+  for (MeshModel* m : {ref, cur})
+    if (!m->hasDataMask(MeshModel::MM_FACEQUALITY))
+      return Invalid(QString("layer '%1' has no per-face quality to read group ids from").arg(m->label()));
+  const conelod::IndexedMesh curMesh = conelod::ToIndexedMesh(cur->cm);
+  const std::vector<float> qc = FaceQualities(cur->cm);
+  Report& out = c.report;
+  if (ref == cur) {
+    // Comparing a layer with itself would always say 100 %: count its groups instead, and say how
+    // to compare with the mesh before a simplification.
+    std::vector<std::vector<int>> ids;
+    Status s = conelod::GroupIdsFromValues({&qc}, ids);
+    if (!s.ok()) return s;
+    const conelod::GroupPieces pieces = conelod::CountGroupPieces(curMesh, ids[0]);
+    const int inPieces = int(std::count_if(pieces.pieces.begin(), pieces.pieces.end(), [](int n) { return n > 1; }));
+    out.log("Group integrity: the reference mesh is '%s' itself, so there is nothing to compare (a mesh simplified "
+            "in place keeps no copy of itself before). To measure a simplification, duplicate the layer first "
+            "(Filters > Mesh Layer > Duplicate Current Layer), simplify one of the two and pick the other as %s.",
+            qUtf8Printable(cur->label()), qUtf8Printable(Label(c, "ReferenceMesh")));
+    out.log("groups %d groups_in_several_pieces %d", int(pieces.ids.size()), inPieces);
+    out.figure("groups", double(pieces.ids.size()));
+    out.figure("groups_in_several_pieces", inPieces);
+    return Status::Ok();
+  }
+  const conelod::IndexedMesh refMesh = conelod::ToIndexedMesh(ref->cm);
+  const std::vector<float> qr = FaceQualities(ref->cm);
+  std::vector<std::vector<int>> ids;
+  Status s = conelod::GroupIdsFromValues({&qr, &qc}, ids);
+  if (!s.ok()) return s;
+  conelod::GroupIntegrity gi;
+  s = conelod::MeasureGroupIntegrity(refMesh, ids[0], curMesh, ids[1], gi);
+  if (!s.ok()) return s;
+  out.log("Group integrity of '%s' against '%s' (group id = per-face quality):", qUtf8Printable(cur->label()),
+          qUtf8Printable(ref->label()));
+  out.log("groups_before %d groups_after %d groups_split %d groups_vanished %d groups_disconnected_before %d "
+          "groups_disconnected_after %d groups_new %d integrity_percent %.2f",
+          gi.groupsBefore, gi.groupsAfter, gi.groupsSplit, gi.groupsVanished, gi.groupsDisconnectedBefore,
+          gi.groupsDisconnectedAfter, gi.groupsNew, 100 * gi.intact());
+  auto list = [](const std::vector<int>& v) {
+    QStringList l;
+    for (int id : v) l << QString::number(id);
+    return l.join(" ");
+  };
+  if (!gi.splitIds.empty()) out.log("split groups (first ones): %s", qUtf8Printable(list(gi.splitIds)));
+  if (!gi.vanishedIds.empty()) out.log("vanished groups (first ones): %s", qUtf8Printable(list(gi.vanishedIds)));
+  out.figure("groups_before", gi.groupsBefore);
+  out.figure("groups_after", gi.groupsAfter);
+  out.figure("groups_split", gi.groupsSplit);
+  out.figure("groups_vanished", gi.groupsVanished);
+  out.figure("integrity_percent", 100 * gi.intact());
+  return Status::Ok();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cone LOD: Feature-Preserving Edge Simplification
+
+std::vector<ParamSpec> FeatureSimplifySpecs(const MeshDocument*, const MeshModel* m) {
+  const conelod::FeatureSimplifyParams d;
+  std::vector<ParamSpec> p;
+  p.push_back(FloatParam("FeatureAngleDeg", d.featureAngleDeg, "Feature angle A_t (deg)",
+                         "An edge is a feature edge when its dihedral angle A is at most this. A is the angle the "
+                         "two faces make at the edge (the paper's definition): 180 on a flat region, 90 on a "
+                         "cube edge, near 0 on a knife edge.",
+                         Between(0, 180)));
+  p.push_back(BoolParam("ExtendFeatureLines", d.extendFeatureLines, "Extend feature lines",
+                        "Close gaps in feature lines by edge swaps when the swapped edge is itself a feature "
+                        "edge (the paper's 3.1)."));
+  p.push_back(FloatParam("FeatureCurvature", d.featureCurvature, "Feature vertex curvature K_t",
+                         "A vertex without feature edges whose |K| D^2 reaches this is a feature vertex (kept); "
+                         "K = discrete Gaussian curvature, D = bounding-box diagonal. 0 = off.",
+                         AtLeast(0, "0: off")));
+  p.push_back(FloatParam("CurvatureThreshold", d.curvatureThreshold, "Curvature threshold",
+                         "Vertices whose |K| D^2 (smooth) or |M| D (on a feature line; M = turning angle over "
+                         "half the two edges' length) reaches this are not removed: only the flatter parts are "
+                         "simplified. 0 = no limit.",
+                         AtLeast(0, "0: no limit")));
+  p.push_back(AbsPercParam("MaxErrorDistance", 0.0, Diagonal(m), "Max error distance",
+                           "Stop criterion: a collapse is applied only if every removed vertex of the original "
+                           "mesh stays within this distance of the result (absolute, or % of the bounding-box "
+                           "diagonal). 0 = off.",
+                           AtLeast(0, "0: off")));
+  AddFaceTargetParams(p);
+  p.push_back(BoolParam("GrowErrorBound", d.growErrorBound, "Grow the error bound",
+                        "With a target face count: simplify under an error bound that starts tiny and grows only "
+                        "when no collapse fits (beyond the paper; much closer to the original). Off: the paper's "
+                        "pure curvature order up to the target."));
+  p.push_back(BoolParam("MarkFeatures", true, "Mark the features",
+                        "Select the feature vertices, colour the vertices (red: feature line, blue: feature "
+                        "vertex) and make every non-feature edge faux: the layer's wireframe in Polygonal "
+                        "Modality (layer dialog) then draws the feature lines only."));
+  return p;
+}
+
+Status ApplyFeatureSimplify(FilterCall& c) {
+  MeshModel& mm = *c.mesh;
+  conelod::FeatureSimplifyParams params;
+  params.featureAngleDeg = c.args.number("FeatureAngleDeg");
+  params.extendFeatureLines = c.args.flag("ExtendFeatureLines");
+  params.featureCurvature = c.args.number("FeatureCurvature");
+  params.curvatureThreshold = c.args.number("CurvatureThreshold");
+  params.maxErrorDistance = c.args.number("MaxErrorDistance");
+  params.growErrorBound = c.args.flag("GrowErrorBound");
+  params.targetFaceCount = FaceTarget(c.args, mm.cm.fn);
+  const bool mark = c.args.flag("MarkFeatures");
+  if (params.targetFaceCount == 0 && params.maxErrorDistance == 0)
+    return Invalid("give a stop criterion: " + Label(c, "TargetFaceNum") + ", " + Label(c, "TargetPerc") + " or " +
+                   Label(c, "MaxErrorDistance"));
+
+  std::vector<size_t> faceOf;
+  const conelod::IndexedMesh im = conelod::ToIndexedMesh(mm.cm, &faceOf);
+  conelod::FeatureSimplifyResult r;
+  QElapsedTimer timer;
+  timer.start();
+  const Status s = conelod::FeatureSimplify(im, params, r, c.progress());
+  if (!s.ok()) return s;
+  const double seconds = timer.elapsed() / 1000.0;
+
+  if (mark) mm.updateDataMask(MeshModel::MM_VERTCOLOR);
+  mm.clearDataMask(MeshModel::MM_FACEFACETOPO | MeshModel::MM_VERTFACETOPO);
+  conelod::WriteSimplifiedMesh(mm.cm, faceOf, r, mark);
+  UpdateBoxAndNormals(mm);
+
+  Report& out = c.report;
+  out.log("Feature-preserving simplification: %d -> %d faces in %.3f s (%d collapses%s)%s", int(r.facesIn),
+          int(r.facesOut), seconds, int(r.collapses),
+          r.parts > 1 ? (", in " + std::to_string(r.parts) + " parts on every core").c_str() : "",
+          params.targetFaceCount == 0 ? ""
+          : r.targetReached           ? ", target reached"
+                                      : ", target NOT reached: no allowed collapse left");
+  out.log("faces_out %d", int(r.facesOut));
+  out.log("feature_edges %d (%d made by extension swaps) -> feature_edges_out %d", int(r.featureEdgesIn),
+          int(r.swapEdges), int(r.featureEdges.size()));
+  out.log("feature_vertices %d (kept), feature-line vertices %d, smooth vertices %d", int(r.featureVertices),
+          int(r.lineVerticesIn), int(r.smoothVerticesIn));
+  if (r.finalErrorBound > 0)
+    out.log("error bound at the end %g (%.4f %% of the diagonal)", r.finalErrorBound,
+            100.0 * r.finalErrorBound / std::max(1e-30, conelod::BoundingBoxDiagonal(im)));
+  if (mark)
+    out.log("feature vertices selected and coloured (red: on a feature line, blue: feature vertex); the other "
+            "edges are faux, so the layer's wireframe in Polygonal Modality (layer dialog, wireframe) draws the "
+            "feature lines only; the default wireframe draws every edge");
+  out.figure("faces_out", double(r.facesOut));
+  out.figure("feature_edges", double(r.featureEdgesIn));
+  return Status::Ok();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cone LOD: Face Budget from Screen Pixels
+
+const char* const kBudgetSimplifiers[] = {"None (log the budget only)", "Feature-Preserving Edge Simplification",
+                                          "Quadric Edge Collapse Decimation (MeshLab's, default parameters)"};
+
+std::vector<ParamSpec> PixelBudgetSpecs(const MeshDocument*, const MeshModel*) {
+  const conelod::PixelBudgetParams d;
+  std::vector<ParamSpec> p;
+  p.push_back(IntParam("Width", d.width, "Screen width (pixels)", "Width of the screen the model is shown on.",
+                       AtLeast(1)));
+  p.push_back(IntParam("Height", d.height, "Screen height (pixels)", "Height of the screen the model is shown on.",
+                       AtLeast(1)));
+  p.push_back(FloatParam("PixelFactor", d.pixelFactor, "Faces per covered pixel",
+                         "The budget is this many faces per pixel the model covers (the paper's finding: 50).",
+                         Above(0)));
+  p.push_back(EnumParam("View", 0,
+                        QStringList() << "Worst of the six axis directions" << "+X" << "-X" << "+Y" << "-Y" << "+Z"
+                                      << "-Z" << "Direction below",
+                        "View",
+                        "Direction the model is looked at (orthographic, framed on its bounding sphere). The worst "
+                        "case counts the most pixels."));
+  p.push_back(DirectionParam("ViewDirection", vcg::Point3f(0, 0, -1), "View direction",
+                             "Used when View is 'Direction below': the direction from the eye to the model."));
+  p.push_back(EnumParam("Simplifier", 0,
+                        QStringList() << kBudgetSimplifiers[0] << kBudgetSimplifiers[1] << kBudgetSimplifiers[2],
+                        "Simplify to the budget with",
+                        "None: only log the pixels and the budget. Otherwise the mesh is simplified to the budget "
+                        "(when it has more faces)."));
+  return p;
+}
+
+Status ApplyPixelBudget(FilterCall& c) {
+  MeshModel& mm = *c.mesh;
+  conelod::PixelBudgetParams params;
+  params.width = c.args.integer("Width");
+  params.height = c.args.integer("Height");
+  params.pixelFactor = c.args.number("PixelFactor");
+  const int view = c.args.integer("View");
+  params.view = view == 7 ? conelod::BudgetView::Direction : conelod::BudgetView(view);
+  params.direction = c.args.point("ViewDirection");
+  const int simplifier = c.args.integer("Simplifier");
+
+  const conelod::IndexedMesh im = conelod::ToIndexedMesh(mm.cm);
+  conelod::PixelBudgetResult r;
+  Status s = conelod::ComputePixelBudget(im, params, r, conelod::SubProgress(c.progress(), 0, simplifier == 0 ? 100 : 10));
+  if (!s.ok()) return s;
+  Report& out = c.report;
+  out.log("Face budget at %d x %d, view %s: covered_pixels %d (%.1f %% of the screen)", params.width, params.height,
+          conelod::BudgetViewName(params.view, params.direction).c_str(), int(r.coveredPixels),
+          100.0 * double(r.coveredPixels) / (double(params.width) * params.height));
+  out.log("target_faces %d (= %g x %d pixels); the mesh has %d faces", int(r.targetFaces), params.pixelFactor,
+          int(r.coveredPixels), int(r.currentFaces));
+  out.figure("covered_pixels", double(r.coveredPixels));
+  out.figure("target_faces", double(r.targetFaces));
+  if (r.aboveCurrent) {
+    out.log("The budget is ABOVE the current face count: no reduction is needed%s",
+            simplifier ? " (the mesh was not changed)" : "");
+    return Status::Ok();
+  }
+  if (simplifier == 0) return Status::Ok();
+  const int target = std::max(1, int(r.targetFaces));
+  if (simplifier == 1) {
+    std::vector<size_t> faceOf;
+    const conelod::IndexedMesh again = conelod::ToIndexedMesh(mm.cm, &faceOf);
+    conelod::FeatureSimplifyParams fp;
+    fp.targetFaceCount = size_t(target);
+    conelod::FeatureSimplifyResult fr;
+    s = conelod::FeatureSimplify(again, fp, fr, conelod::SubProgress(c.progress(), 10, 100));
+    if (!s.ok()) return s;
+    mm.clearDataMask(MeshModel::MM_FACEFACETOPO | MeshModel::MM_VERTFACETOPO);
+    conelod::WriteSimplifiedMesh(mm.cm, faceOf, fr, false);
+    UpdateBoxAndNormals(mm);
+  } else {
+    RunBuiltinQuadric(mm, target, c.cb);
+  }
+  out.log("Simplified to the budget with %s: faces_out %d", kBudgetSimplifiers[simplifier], mm.cm.fn);
+  out.figure("faces_out", mm.cm.fn);
+  return Status::Ok();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cone LOD: PCA Recursive Face Partition
+
+std::vector<ParamSpec> PcaPartitionSpecs(const MeshDocument*, const MeshModel* m) {
+  const conelod::PcaPartitionParams d;
+  std::vector<ParamSpec> p;
+  p.push_back(IntParam("TargetClusters", 64, "Target clusters",
+                       "Split until there are this many clusters, largest error first (0: no limit, down "
+                       "to single triangles). A mesh with several components has at least one cluster "
+                       "per component.",
+                       AtLeast(0, "0: no limit")));
+  p.push_back(AbsPercParam("MaxError", 0.0, Diagonal(m) * 0.1, "Max error",
+                           "Clusters whose RMS distance to their best-fit plane (the square root of the "
+                           "smallest eigenvalue of their face-based covariance) is at most this length "
+                           "are not split. 0: no limit.",
+                           AtLeast(0, "0: no limit")));
+  p.push_back(IntParam("MinFaces", d.minFaces, "Min faces",
+                       "Clusters of this many faces or fewer are not split (1: down to triangles).", AtLeast(1)));
+  p.push_back(IntParam("MaxDepth", d.maxDepth, "Max depth",
+                       "Clusters at this depth of the binary tree are not split (the whole mesh is depth "
+                       "0). 0: no limit.",
+                       AtLeast(0, "0: no limit")));
+  return p;
+}
+
+Status ApplyPcaPartition(FilterCall& c) {
+  MeshModel& mm = *c.mesh;
+  conelod::PcaPartitionParams params;
+  params.targetClusters = c.args.integer("TargetClusters");
+  params.maxErrorRms = c.args.number("MaxError");
+  params.minFaces = c.args.integer("MinFaces");
+  params.maxDepth = c.args.integer("MaxDepth");
+
+  std::vector<size_t> faceOf;
+  const conelod::IndexedMesh im = conelod::ToIndexedMesh(mm.cm, &faceOf);
+  conelod::PcaTree tree;
+  QElapsedTimer timer;
+  timer.start();
+  const Status s = conelod::BuildPcaTree(im, params, tree, c.progress());
+  if (!s.ok()) return s;
+  const double seconds = timer.elapsed() / 1000.0;
+  const std::vector<conelod::PcaItem> cut =
+      conelod::CutByCount(tree, params.targetClusters > 0 ? params.targetClusters : tree.faceCount);
+  std::vector<int> faceCluster;
+  conelod::FaceClustersOfCut(tree, cut, faceCluster);
+  const bool connected = conelod::GroupsAreEdgeConnected(conelod::BuildFaceAdjacency(im), faceCluster);
+
+  mm.updateDataMask(MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR);
+  conelod::WriteFaceClusters(mm.cm, faceOf, faceCluster, "conelod_pca_cluster");
+
+  uint32_t smallest = UINT32_MAX, largest = 0;
+  double maxError = 0, meanError = 0;
+  for (conelod::PcaItem item : cut) {
+    const uint32_t n = tree.itemFaceCount(item);
+    smallest = std::min(smallest, n);
+    largest = std::max(largest, n);
+    if (conelod::IsFaceItem(item)) continue;
+    const conelod::PcaNode& node = tree.nodes[size_t(item)];
+    const double e = std::sqrt(double(node.eigenvalues[0]));
+    maxError = std::max(maxError, e);
+    meanError += e * node.area;
+  }
+  meanError = tree.nodes[0].area > 0 ? meanError / tree.nodes[0].area : 0;
+  Report& out = c.report;
+  out.log("PCA recursive face partition: %d faces, %d component(s), tree of %d nodes (depth %d) in %.3f s",
+          int(im.faceCount()), tree.componentCount, int(tree.nodes.size()), tree.maxDepth, seconds);
+  out.log("pca_clusters %d", int(cut.size()));
+  out.log("faces_per_cluster min %u  mean %.1f  max %u", smallest, double(im.faceCount()) / cut.size(), largest);
+  out.log("error_rms max %.6g  area_weighted_mean %.6g  (RMS distance of a cluster to its plane)", maxError,
+          meanError);
+  out.log("all_connected %d", connected ? 1 : 0);
+  out.figure("pca_clusters", double(cut.size()));
+  out.figure("all_connected", connected ? 1 : 0);
+  return Status::Ok();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cone LOD: Progressive Cluster Mesh
+
+std::vector<ParamSpec> ProgressiveMeshSpecs(const MeshDocument*, const MeshModel*) {
+  const conelod::ProgressiveMeshParams d;
+  return {IntParam("TargetClusters", d.targetClusters, "Target clusters",
+                   "Merge the finest clusters back down to this many clusters (never fewer than the "
+                   "connected components).",
+                   AtLeast(1)),
+          FloatParam("MaxNormalTurnDeg", d.maxNormalTurnDeg, "Max normal turn (deg)",
+                     "A collapse may not turn the normal of any face by this angle or more (in (0, "
+                     "180) degrees): no face ever flips.",
+                     Inside(0, 180))};
+}
+
+Status ApplyProgressiveMesh(FilterCall& c) {
+  MeshModel& mm = *c.mesh;
+  conelod::ProgressiveMeshParams params;
+  params.targetClusters = c.args.integer("TargetClusters");
+  params.maxNormalTurnDeg = c.args.number("MaxNormalTurnDeg");
+
+  const conelod::IndexedMesh im = conelod::ToIndexedMesh(mm.cm);
+  QElapsedTimer timer;
+  timer.start();
+  conelod::PcaTree tree;
+  Status s = conelod::BuildPcaTree(im, conelod::PcaPartitionParams(), tree, conelod::SubProgress(c.progress(), 0, 40));
+  if (!s.ok()) return s;
+  conelod::ProgressiveMeshResult r;
+  s = conelod::BuildProgressiveClusterMesh(im, tree, params, r, conelod::SubProgress(c.progress(), 40, 90));
+  if (!s.ok()) return s;
+  const double seconds = timer.elapsed() / 1000.0;
+  conelod::HausdorffResult h;
+  s = conelod::SampledHausdorff(im, r.mesh, 100000, h);
+  const conelod::ManifoldReport check = conelod::CheckManifold(r.mesh);
+
+  MeshModel* layer = c.doc.addNewMesh("", QString("%1 (%2 clusters)").arg(mm.label()).arg(r.clusters), true);
+  if (!layer) return Invalid("could not add a layer");
+  layer->updateDataMask(MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR);
+  conelod::AppendIndexedMesh(layer->cm, r.mesh);
+  for (size_t f = 0; f < layer->cm.face.size(); ++f) {
+    layer->cm.face[f].Q() = CMeshO::FaceType::QualityType(r.faceCluster[f]);
+    layer->cm.face[f].C() = conelod::GroupColor(r.faceCluster[f]);
+  }
+  vcg::tri::UpdateBounding<CMeshO>::Box(layer->cm);
+  vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFaceNormalized(layer->cm);
+  if (c.cb) c.cb(100, "progressive mesh: done");
+
+  Report& out = c.report;
+  out.log("Progressive cluster mesh: %d faces -> %d faces, %d vertices at %d clusters in %.3f s (new layer)",
+          int(im.faceCount()), int(r.mesh.faceCount()), int(r.mesh.vertexCount()), r.clusters, seconds);
+  out.log("progressive_faces %d", int(r.mesh.faceCount()));
+  out.log("progressive_vertices %d", int(r.mesh.vertexCount()));
+  out.log("collapses %d  blocked_vertices %d  locked_vertices %d", int(r.collapses), int(r.blockedVertices),
+          int(r.lockedVertices));
+  out.log("non_manifold_edges %d  non_manifold_vertices %d  misoriented_edges %d", int(check.nonManifoldEdges),
+          int(check.nonManifoldVertices), int(check.misorientedEdges));
+  if (s.ok())
+    out.log("hausdorff %.6g  hausdorff_percent %.4f  (sampled, %% of the bounding-box diagonal)", h.hausdorff,
+            h.diagonal > 0 ? 100 * h.hausdorff / h.diagonal : 0.0);
+  out.figure("progressive_faces", double(r.mesh.faceCount()));
+  out.figure("progressive_vertices", double(r.mesh.vertexCount()));
+  return Status::Ok();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cone LOD: Export LOD File
+
+std::vector<ParamSpec> LodExportSpecs(const MeshDocument*, const MeshModel*) {
+  const conelod::HierarchicalSimplificationParams d;
+  std::vector<ParamSpec> p;
+  p.push_back(SaveFileParam("FileName", "ConeLOD file (*.clod)", "LOD file",
+                            "Where to write the .clod file (no default: type a path or choose it with '...'). A "
+                            "relative path is relative to MeshLab's current directory (meshlabserver: where it "
+                            "was started); the log gives the full path."));
+  AddGroupingParams(p);
+  p.push_back(FloatParam("LevelRatio", d.levelRatio, "Faces kept per level (0..1]",
+                         "Each LOD level targets this fraction of the faces of the level below (level 1: of the "
+                         "mesh); a level stops earlier when its groups allow no further collapse.",
+                         AboveUpTo(0, 1)));
+  p.push_back(BoolParam("LockGroupBoundaries", d.qem.lockGroupBoundaries, "Lock group boundaries",
+                        "No vertex on a group boundary moves: neighbouring groups drawn at different levels "
+                        "then meet without cracks, at the price of less reduction."));
+  AddCollapseOptionParams(p, d.qem, "Weight of the quadrics that keep mesh borders (and group contours) in place.");
+  return p;
+}
+
+Status ApplyLodExport(FilterCall& c) {
+  QString path;
+  Status s = RequirePath(c, "FileName", path);
+  if (!s.ok()) return s;
+  const QString fullPath = QFileInfo(path).absoluteFilePath();
+  conelod::LodBuildParams params;
+  params.grouping = ReadGroupingParams(c.args);
+  params.simplification.levelRatio = c.args.number("LevelRatio");
+  params.simplification.qem.lockGroupBoundaries = c.args.flag("LockGroupBoundaries");
+  ReadCollapseOptions(c.args, params.simplification.qem);
+
+  const conelod::IndexedMesh im = conelod::ToIndexedMesh(c.mesh->cm);
+  s = conelod::RequireValidForFaces(im);
+  if (!s.ok()) return s;
+  const bool replaced = QFileInfo::exists(fullPath);
+  conelod::LodBuildStats stats;
+  s = conelod::BuildLodFile(im, params, path.toStdString(), &stats, c.progress());
+  if (!s.ok()) return Invalid(NameFile(fullPath, s.message));
+
+  Report& out = c.report;
+  out.log("LOD file %s%s: %d faces, %d levels, %d nodes, %.1f KiB in %.3f s (grouping %.3f s, simplification "
+          "%.3f s, writing %.3f s)",
+          qUtf8Printable(fullPath), replaced ? " (replaced the file that was there)" : "", int(stats.inputFaces),
+          stats.levels, int(stats.nodes), stats.fileBytes / 1024.0, stats.seconds, stats.groupingSeconds,
+          stats.simplifySeconds, stats.writeSeconds);
+  for (size_t l = 0; l < stats.levelFaces.size(); ++l)
+    out.log("lod level %d: faces %d nodes %d", int(l), int(stats.levelFaces[l]),
+            l < stats.levelNodes.size() ? int(stats.levelNodes[l]) : 0);
+  out.log("lod_levels %d", stats.levels);
+  out.log("lod_nodes %d", int(stats.nodes));
+  out.log("lod_file_bytes %lld", (long long)stats.fileBytes);
+  out.figure("lod_levels", stats.levels);
+  out.figure("lod_nodes", double(stats.nodes));
+  out.figure("lod_file_bytes", double(stats.fileBytes));
+  return Status::Ok();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cone LOD: Extract View-Dependent LOD
+
+const char* const kLodViewModes[] = {"Perspective, framed from ViewDirection", "Perspective from Eye",
+                                     "Orthographic along ViewDirection"};
+
+// Independent of the current mesh: the extract reads everything from the file.
+std::vector<ParamSpec> LodExtractSpecs(const MeshDocument*, const MeshModel*) {
+  const conelod::LodView d;
+  return {
+      OpenFileParam("FileName", QStringList() << "ConeLOD file (*.clod)", "LOD file",
+                    "The .clod file to read (Cone LOD: Export LOD File or conelod lod build); no default: type a "
+                    "path or choose it with '...'. A relative path is relative to MeshLab's current directory."),
+      EnumParam("ViewMode", 0, QStringList() << kLodViewModes[0] << kLodViewModes[1] << kLodViewModes[2], "View",
+                "Framed: a perspective eye on the line through the model's centre along ViewDirection, "
+                "CameraDistance bounding-sphere radii away. Eye: a perspective eye at Eye. Orthographic: parallel "
+                "projection along ViewDirection."),
+      PositionParam("Eye", vcg::Point3f(0, 0, 0), "Eye position",
+                    "Used when View is 'Perspective from Eye': the eye in model coordinates (Get / View Pos. "
+                    "takes the current camera)."),
+      DirectionParam("ViewDirection", vcg::Point3f(0, 0, -1), "View direction",
+                     "Direction from the eye into the scene (the default looks down -Z, from the +Z side)."),
+      FloatParam("CameraDistance", 3.0, "Camera distance",
+                 "Framed view: the eye's distance from the model's centre, in bounding-sphere radii (> 1)."),
+      IntParam("FaceBudget", 100000, "Face budget",
+               "Refine until the layer would exceed this many faces (the coarsest level is always complete). 0: "
+               "no limit, down to the input's own faces.",
+               AtLeast(0, "0: no limit")),
+      BoolParam("CullBackFacing", d.cullBackFacing, "Refine back-facing groups last",
+                "Groups that face away from the eye entirely (one normal-cone test each) are refined only after "
+                "every other group (as conelod lod extract does unless --no-cull)."),
+      BoolParam("DropBackFacing", false, "Leave back-facing groups out",
+                "The back-facing groups are not written to the layer (conelod lod extract --drop-culled)."),
+  };
+}
+
+Status ApplyLodExtract(FilterCall& c) {
+  QString path;
+  Status s = RequirePath(c, "FileName", path);
+  if (!s.ok()) return s;
+  const QString fullPath = QFileInfo(path).absoluteFilePath();
+  const int mode = c.args.integer("ViewMode");
+  const int budget = c.args.integer("FaceBudget");
+  const double distance = c.args.number("CameraDistance");
+  vcg::Point3d dir = c.args.point("ViewDirection");
+  if (mode != 1 && !(dir.Norm() > 0 && std::isfinite(dir.Norm())))
+    return Invalid(Label(c, "ViewDirection") + " must be a non-zero vector");
+  if (mode == 0 && !(distance > 1 && std::isfinite(distance)))
+    return Invalid(Label(c, "CameraDistance") + " must be > 1 (bounding-sphere radii)");
+  const vcg::Point3d eyeParam = c.args.point("Eye");
+  if (mode == 1 && !std::isfinite(eyeParam.Norm())) return Invalid(Label(c, "Eye") + " must be finite");
+  const bool cull = c.args.flag("CullBackFacing"), drop = c.args.flag("DropBackFacing");
+
+  QElapsedTimer timer;
+  timer.start();
+  if (c.cb) c.cb(0, "reading the LOD file");
+  std::unique_ptr<conelod::LodReader> reader;
+  auto failed = [&](const Status& st) { return Invalid(NameFile(fullPath, st.message)); };
+  s = conelod::LodReader::Open(path.toStdString(), reader);
+  if (!s.ok()) return failed(s);
+  const conelod::LodFileInfo& info = reader->info();
+
+  conelod::LodView view;
+  dir.Normalize();
+  const vcg::Point3d centre = vcg::Point3d::Construct(info.box.Center());
+  const double radius = 0.5 * double(info.box.Diag());
+  view.orthographic = mode == 2;
+  view.viewDir = dir;
+  view.eye = mode == 1 ? eyeParam : centre - dir * (distance * radius);
+  view.faceBudget = budget == 0 ? size_t(-1) : size_t(budget);
+  view.cullBackFacing = cull;
+  conelod::LodCut cut;
+  if (c.cb) c.cb(10, "refining");
+  s = conelod::RefineLod(*reader, view, cut);
+  if (!s.ok()) return failed(s);
+  if (c.cb) c.cb(80, "extracting the cut");
+  conelod::IndexedMesh mesh;
+  std::vector<int> faceLevel;
+  s = conelod::ExtractCutMesh(*reader, cut, !drop, mesh, &faceLevel);
+  if (!s.ok()) return failed(s);
+  const double seconds = timer.elapsed() / 1000.0;
+
+  MeshModel* layer = c.doc.addNewMesh(
+      "", QString("%1 (LOD, %2 faces)").arg(QFileInfo(path).completeBaseName()).arg(mesh.faceCount()), true);
+  if (!layer) return Invalid("could not add a layer");
+  layer->updateDataMask(MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR);
+  conelod::AppendIndexedMesh(layer->cm, mesh);
+  std::vector<size_t> facesPerLevel(size_t(std::max(info.levels, 1)), 0);
+  for (size_t f = 0; f < layer->cm.face.size(); ++f) {
+    const int level = faceLevel[f];
+    layer->cm.face[f].Q() = CMeshO::FaceType::QualityType(level);
+    layer->cm.face[f].C() = conelod::GroupColor(level);  // as conelod lod extract colours its output
+    if (level >= 0 && size_t(level) < facesPerLevel.size()) ++facesPerLevel[size_t(level)];
+  }
+  vcg::tri::UpdateBounding<CMeshO>::Box(layer->cm);
+  vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFaceNormalized(layer->cm);
+  if (c.cb) c.cb(100, "view-dependent LOD: done");
+
+  Report& out = c.report;
+  const vcg::Point3d& e = view.eye;
+  out.log("View-dependent LOD of %s (%s, budget %s%s%s): %d faces, %d vertices from %d nodes in %.3f s (new layer)",
+          qUtf8Printable(fullPath), kLodViewModes[mode],
+          budget == 0 ? "none" : qUtf8Printable(QString::number(budget)),
+          cull ? ", back-facing groups refined last" : "", drop ? ", back-facing groups left out" : "",
+          int(mesh.faceCount()), int(mesh.vertexCount()), int(cut.nodes.size()), seconds);
+  if (mode == 2)
+    out.log("orthographic view direction (%g, %g, %g)", dir[0], dir[1], dir[2]);
+  else
+    out.log("eye (%g, %g, %g)", e[0], e[1], e[2]);
+  for (size_t l = 0; l < facesPerLevel.size(); ++l)
+    if (facesPerLevel[l]) out.log("faces at level %d: %d", int(l), int(facesPerLevel[l]));
+  out.log("lod_faces %d", int(mesh.faceCount()));
+  out.log("lod_cut_faces %d", int(cut.faces));
+  out.log("lod_groups_culled %d", int(cut.groupsCulled));
+  out.log("lod_refinements %d", int(cut.refinements));
+  out.log("lod_max_level_difference %d", cut.maxLevelDifference);
+  out.log("lod_resident_bytes %lld (the file: %lld)", (long long)reader->residentBytes(), (long long)info.fileBytes);
+  out.figure("lod_faces", double(mesh.faceCount()));
+  out.figure("lod_max_level_difference", cut.maxLevelDifference);
+  return Status::Ok();
+}
+
+// ---------------------------------------------------------------------------------------------
+// The table
+
+std::vector<FilterSpec> MakeFilters() {
+  const int quality = MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR;
+  const int geometry = MeshModel::MM_GEOMETRY_AND_TOPOLOGY_CHANGE;
+  std::vector<FilterSpec> t;
+  t.push_back({"Cone LOD: Normal Cone Face Grouping", Menu::FaceColoring, Arity::SingleMesh, quality, quality,
+               QString("Groups the faces into a hierarchy of edge-connected groups whose normals fit in a narrow "
+                       "cone, so that a whole group can be back-face culled with one test. Adjacent faces (then "
+                       "groups) are merged best pair first by v = k_c v_c + k_s v_s + k_n v_n, never letting a "
+                       "group's cone half-angle reach the level's threshold, which grows by a factor per level. "
+                       "Cones are the exact minimal cones of the normals.<br>"
+                       "Writes per-face quality = group id at <i>Display level</i>, a distinct colour per group, "
+                       "and the ids of every level in per-face attributes <tt>conelod_group_L1</tt>, "
+                       "<tt>conelod_group_L2</tt>, ... The log lists groups and cone angles per level.<br>") +
+                   kPaperKamiya,
+               kUnchanged, ConeGroupingSpecs, ApplyConeGrouping});
+  t.push_back({"Cone LOD: Cluster Culling Cost", Menu::Measure, Arity::SingleMesh, MeshModel::MM_NONE,
+               MeshModel::MM_NONE,
+               QString("Measures how much back-face culling work the normal-cone group hierarchy saves: over many "
+                       "view directions uniform on the sphere, the number of group tests plus per-face tests in "
+                       "visible groups, divided by the face count (per-face culling = 1). Two-state (the paper's "
+                       "visible/invisible test) and three-state (fully front-facing groups skip their face "
+                       "tests); the fraction of faces culled at group level against the ideal (all faces that "
+                       "draw nothing). Orthographic views, or a perspective eye at <i>Camera distance</i> "
+                       "bounding-sphere radii. The mesh is not changed.<br>") +
+                   kPaperKamiya,
+               kUnchanged, CullingCostSpecs, ApplyCullingCost});
+  t.push_back({"Cone LOD: Group-Preserving Quadric Edge Collapse", Menu::Remeshing, Arity::SingleMesh,
+               MeshModel::MM_NONE, geometry | quality,
+               QString("Quadric edge collapse simplification (Garland-Heckbert, as the built-in <i>Quadric Edge "
+                       "Collapse Decimation</i>) that keeps face groups intact (the paper's section 6): "
+                       "<b>condition 1</b> refuses every collapse that would split a group or remove its last "
+                       "faces; <b>condition 2</b> refuses every collapse that would create a vertex where three or "
+                       "more groups meet. Group contours still simplify (a contour edge collapses onto the "
+                       "contour; group corners never move). <i>Lock group boundaries</i> keeps every contour "
+                       "vertex where it is (crack-free refinement between groups, less reduction).<br>"
+                       "Target: <i>Target number of faces</i>, or when it is 0 <i>Target fraction</i> of the "
+                       "faces, and/or <i>Max error</i>.<br>"
+                       "Groups: the per-face quality (e.g. from <i>Cone LOD: Normal Cone Face Grouping</i>; equal "
+                       "values = one group), or the normal-cone groups of a hierarchy level computed here (then "
+                       "written to per-face quality and colour). Faces keep their quality, colour and attributes. "
+                       "The log lists faces, groups before/after, groups split or vanished, and the time.<br>") +
+                   kPaperKamiya,
+               kUnchanged, GroupQemSpecs, ApplyGroupQem});
+  t.push_back({"Cone LOD: Group Integrity", Menu::Measure, Arity::SingleMesh, MeshModel::MM_NONE, MeshModel::MM_NONE,
+               QString("Measures whether the face groups of the current mesh are those of <i>Reference mesh</i> "
+                       "(the mesh before a simplification, kept as another layer), group ids being the per-face "
+                       "quality: groups before and after, groups that vanished, groups split into more "
+                       "edge-connected pieces than they had, groups already in several pieces in the reference "
+                       "(reported, not counted as split). A mesh simplified in place has no copy of itself "
+                       "before: duplicate the layer first. With the current mesh as reference nothing is "
+                       "compared: the log counts its groups and those in several pieces. The meshes are not "
+                       "changed.<br>") +
+                   kPaperKamiya,
+               "the meshes were not changed", GroupIntegritySpecs, ApplyGroupIntegrity});
+  t.push_back({"Cone LOD: Feature-Preserving Edge Simplification", Menu::Remeshing, Arity::SingleMesh,
+               MeshModel::MM_NONE,
+               geometry | MeshModel::MM_VERTCOLOR | MeshModel::MM_VERTFLAGSELECT | MeshModel::MM_FACEFLAG,
+               QString("Simplifies the mesh by half-edge collapses (vertices never move) while keeping its sharp "
+                       "features. An edge is a <i>feature edge</i> when its dihedral angle A - the angle the two "
+                       "faces make at the edge, 180 deg on a flat region, 90 deg on a cube edge - is at most "
+                       "<i>Feature angle</i>; broken feature lines are extended by edge swaps; border edges are "
+                       "feature lines too. Vertices with 1 or 3+ feature edges (corners) are never removed; "
+                       "vertices on a feature line are removed only along it; the others go smoothest first "
+                       "(smallest discrete Gaussian curvature), each into the neighbour whose collapse moves the "
+                       "surface least. Stops at <i>Target number of faces</i> (when 0: <i>Target fraction</i> x "
+                       "the faces) or when no collapse keeps every removed vertex within <i>Max error "
+                       "distance</i> of the result. With a target, the error bound grows from tiny until the "
+                       "target is reached (<i>Grow the error bound</i>, beyond the paper). <i>Mark the "
+                       "features</i> selects and colours the feature vertices and makes the other edges faux: "
+                       "the layer's wireframe in <i>Polygonal Modality</i> (layer dialog) then draws the feature "
+                       "lines only (the default wireframe draws every edge).<br>") +
+                   kPaperHayano,
+               kUnchanged, FeatureSimplifySpecs, ApplyFeatureSimplify});
+  t.push_back({"Cone LOD: Face Budget from Screen Pixels", Menu::Remeshing, Arity::SingleMesh, MeshModel::MM_NONE,
+               geometry,
+               QString("Counts the pixels the model covers on a screen of <i>Width</i> x <i>Height</i> "
+                       "(orthographic view framed on the bounding sphere, from an axis or the worst of the six axis "
+                       "directions) and logs the face budget <i>Faces per covered pixel</i> x pixels: the paper "
+                       "found that 50 faces per covered pixel display a scanned model without visible loss at "
+                       "1920x1080, 1600x900, 1280x720 and 800x600. Optionally simplifies the mesh to the budget "
+                       "with the feature-preserving simplifier or with MeshLab's Quadric Edge Collapse Decimation "
+                       "(its default parameters). Says so when the budget is above the current face count.<br>") +
+                   kPaperMizuno,
+               kUnchanged, PixelBudgetSpecs, ApplyPixelBudget});
+  t.push_back({"Cone LOD: PCA Recursive Face Partition", Menu::FaceColoring, Arity::SingleMesh, quality, quality,
+               QString("Splits the mesh recursively into edge-connected face clusters: each cluster is cut by the "
+                       "plane through its area centroid perpendicular to its principal axis, found by a "
+                       "<i>face-based</i> PCA (the covariance of the surface, exact per triangle, so that uneven "
+                       "vertex density does not bias it); the two halves grow from the faces farthest along the "
+                       "axis, and faces reached by neither join the half they touch, so both halves stay "
+                       "connected. The cluster of largest error (the smallest eigenvalue, the variance across the "
+                       "cluster) is split first, until <i>Target clusters</i> clusters or another stop criterion. "
+                       "Several connected components are the first split.<br>"
+                       "Writes per-face quality = cluster id, a distinct colour per cluster and the per-face "
+                       "attribute <tt>conelod_pca_cluster</tt>; the log gives the cluster figures.<br>") +
+                   kPaperTsuji,
+               kUnchanged, PcaPartitionSpecs, ApplyPcaPartition});
+  t.push_back({"Cone LOD: Progressive Cluster Mesh", Menu::Remeshing, Arity::SingleMesh, MeshModel::MM_NONE,
+               MeshModel::MM_NONE,
+               QString("Builds the PCA partition tree down to single triangles, then undoes its splits in order of "
+                       "increasing error down to <i>Target clusters</i> clusters; after each merge every vertex "
+                       "that touches fewer than 3 clusters (the mesh border counting as one) is removed by a "
+                       "half-edge collapse onto its nearest neighbour along the cluster boundary. The result, a "
+                       "coarse mesh whose vertices are the cluster corners, is added as a new layer with per-face "
+                       "quality = cluster id and a colour per cluster. Collapses never break the 2-manifold, flip "
+                       "or turn a face by more than <i>Max normal turn</i>, or remove a cluster; non-manifold parts "
+                       "of the input are left as they are. The current mesh is not changed.<br>") +
+                   kPaperTsuji,
+               "the mesh was not changed and no layer was added", ProgressiveMeshSpecs, ApplyProgressiveMesh});
+  t.push_back({"Cone LOD: Export LOD File", Menu::Remeshing, Arity::SingleMesh, MeshModel::MM_NONE,
+               MeshModel::MM_NONE,
+               QString("Writes the current mesh as a streamable level-of-detail file (<tt>.clod</tt>, the paper's "
+                       "sections 7-8): the faces are grouped by normal cones (the grouping parameters are those of "
+                       "<i>Cone LOD: Normal Cone Face Grouping</i>), the mesh is simplified once per hierarchy "
+                       "level while keeping that level's groups intact (each level keeps <i>Faces kept per "
+                       "level</i> of the faces of the level below, with the options of <i>Cone LOD: "
+                       "Group-Preserving Quadric Edge Collapse</i>), and every group of every level is written as "
+                       "a node of a chunk file with its normal cone, bounding sphere and geometry. A viewer "
+                       "(<tt>conelod-viewer</tt>) or <i>Cone LOD: Extract View-Dependent LOD</i> reads only the "
+                       "nodes it needs. <i>LOD file</i> has no default: type a path or choose one with '...' (a "
+                       "relative path is relative to MeshLab's current directory; the log gives the full path). "
+                       "The mesh is not changed; on failure no file is left.<br>") +
+                   kPaperKamiya,
+               "no file was written", LodExportSpecs, ApplyLodExport});
+  t.push_back({"Cone LOD: Extract View-Dependent LOD", Menu::MeshCreation, Arity::None, MeshModel::MM_NONE,
+               MeshModel::MM_NONE,
+               QString("Reads a <tt>.clod</tt> file (<i>Cone LOD: Export LOD File</i>, <tt>conelod lod build</tt>) "
+                       "and adds a new layer with the view-dependent mesh for one view: starting from the coarsest "
+                       "level, groups are refined breadth-first in the order of the paper's priority f(g) = (1 - "
+                       "cos(angle(e, n) + c)) / 2 (e: towards the eye, n: cone axis, c: cone half-angle), adjacent "
+                       "groups never more than one level apart, until <i>Face budget</i> faces. The view: framed "
+                       "from <i>View direction</i> at <i>Camera distance</i> bounding-sphere radii, the eye "
+                       "position <i>Eye</i> (the dialog's Get / View Pos. fills in the current camera position), "
+                       "or orthographic along <i>View direction</i>. With <i>Refine back-facing groups last</i>, "
+                       "back-facing groups are refined last; with <i>Leave back-facing groups out</i> they are left "
+                       "out of the layer. Per-face quality = LOD level of the face (0 = the input's own faces), a "
+                       "distinct colour per level (those of conelod lod extract). <i>LOD file</i> has no default. "
+                       "The current mesh is not changed.<br>") +
+                   kPaperKamiya,
+               "no layer was added", LodExtractSpecs, ApplyLodExtract});
+  return t;
+}
+
+// Checks every parameter against its ParamSpec; the message names the dialog's label.
+Status CheckArgs(const std::vector<ParamSpec>& specs, const Args& args) {
+  for (const ParamSpec& p : specs) {
+    const QByteArray name = p.name.toUtf8();
+    switch (p.kind) {
+      case ParamKind::Int:
+      case ParamKind::Float:
+      case ParamKind::AbsPerc: {
+        const double v = args.number(name.constData());
+        const Bound& b = p.bound;
+        if (!std::isfinite(v)) return Invalid(Quoted(p) + " must be a finite number");
+        const bool low = b.minOpen ? !(v > b.min) : !(v >= b.min);
+        const bool high = b.maxOpen ? !(v < b.max) : !(v <= b.max);
+        if (!low && !high) break;
+        QString rule;
+        auto num = [](double x) { return QString::number(x, 'g', 10); };
+        if (std::isinf(b.max))
+          rule = (b.minOpen ? "> " : ">= ") + num(b.min);
+        else if (std::isinf(b.min))
+          rule = (b.maxOpen ? "< " : "<= ") + num(b.max);
+        else if (!b.minOpen && !b.maxOpen)
+          rule = "between " + num(b.min) + " and " + num(b.max);
+        else
+          rule = QString("in %1%2, %3%4").arg(b.minOpen ? "(" : "[", num(b.min), num(b.max), b.maxOpen ? ")" : "]");
+        return Invalid(Quoted(p) + " must be " + rule + (b.note ? QString(" (") + b.note + ")" : QString()) +
+                       ", not " + num(v));
+      }
+      case ParamKind::Enum: {
+        const double v = args.number(name.constData());
+        if (!(v >= 0 && v < p.choices.size()))
+          return Invalid(Quoted(p) + " must be one of its " + QString::number(p.choices.size()) + " choices (0 to " +
+                         QString::number(p.choices.size() - 1) + "), not " + QString::number(v));
+        break;
+      }
+      case ParamKind::Position:
+      case ParamKind::Direction: {
+        const vcg::Point3d v = args.point(name.constData());
+        if (!(std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2])))
+          return Invalid(Quoted(p) + " must have finite coordinates");
+        break;
+      }
+      case ParamKind::Mesh:
+        if (!args.mesh(name.constData())) return Invalid(Quoted(p) + " is not a layer of this document");
+        break;
+      case ParamKind::Bool:
+      case ParamKind::OpenFile:
+      case ParamKind::SaveFile: break;
+    }
+  }
+  return Status::Ok();
+}
+
+// A core message that names a parameter by its key ("ConeThresholdDeg must be > 0") names it by
+// the dialog's label instead.
+QString WithLabels(QString message, const std::vector<ParamSpec>& specs) {
+  for (const ParamSpec& p : specs)
+    message.replace(QRegularExpression("\\b" + QRegularExpression::escape(p.name) + "\\b"), Quoted(p));
+  return message;
+}
+
+}  // namespace
+
+const std::vector<FilterSpec>& Filters() {
+  static const std::vector<FilterSpec> table = MakeFilters();
+  return table;
+}
+
+QString RunFilter(const FilterSpec& f, MeshDocument& doc, const Args& args, vcg::CallBackPos* cb, Report& report) {
+  QString message;
+  std::vector<ParamSpec> specs;
+  try {
+    specs = ParamsOf(f, doc);
+    Status s = CheckArgs(specs, args);
+    if (s.ok() && f.arity != Arity::None && !doc.mm()) s = Status::Invalid("there is no current mesh");
+    if (s.ok()) {
+      FilterCall call{doc, doc.mm(), args, cb, report, specs};
+      s = f.apply(call);
+    }
+    if (!s.ok()) message = WithLabels(QString::fromStdString(s.message), specs);
+  } catch (const std::bad_alloc&) {
+    message = "not enough memory for this mesh";
+  } catch (const std::exception& e) {
+    message = QString("internal error: %1").arg(e.what());
+  }
+  if (message.isEmpty()) return message;
+  message += QString(" (%1)").arg(f.untouched);
+  report.error("ConeLOD error: " + message.toStdString());
+  return message;
+}
+
+}  // namespace conelod_plugin
