@@ -1,43 +1,71 @@
-// Drives the built plugin in-process, as MeshLab does (QPluginLoader, initParameterSet,
-// applyFilter on a MeshDocument), to check what meshlabserver cannot show: a filter that fails
-// (bad parameters, bad input, cancellation) leaves the mesh exactly as it was.
-//   plugin_harness PLUGIN.so GOOD.ply NAN.ply       exit 0 when every check passes
+// Drives the built plugin in-process as MeshLab does (its own PluginManager loads it, filters run
+// on a MeshDocument with the parameters MeshLab's dialog would show), in any MeshLab version the
+// plugin is built for (harness_meshlab.h):
+//  - every ConeLOD filter is listed and applied on the bunny, with checks of its results;
+//  - a filter that fails (bad parameters, bad input, cancellation, missing files) says why, in the
+//    dialog's words, and leaves the mesh exactly as it was, adds no layer and leaves no file;
+//  - with --scripts DIR (MeshLab 2022+): every shipped .mlx has the plugin's parameters and
+//    defaults and runs the way MeshLab 2022+ runs filter scripts;
+//  - --digest OUT writes what each filter produced on the bunny (faces, vertices, groups, a hash of
+//    the per-face quality, key figures); --compare REF fails when it differs from REF (the digest
+//    of another MeshLab version: the same output everywhere).
+//   plugin_harness PLUGIN.so BUNNY.ply NAN.ply [--scripts DIR] [--digest OUT] [--compare REF]
+// Exit 0 when every check passes.
 #include <QApplication>
+#include <QDir>
 #include <QFile>
 #include <QFileInfo>
-#include <QPluginLoader>
+#include <QRegularExpression>
 #include <QTemporaryDir>
+#include <QTextStream>
 #include <cmath>
-#include <cstring>
 #include <cstdio>
+#include <cstring>
+#include <map>
 #include <vector>
 
-#include <common/GLLogStream.h>
-#include <common/interfaces.h>
-#include <common/meshmodel.h>
+#include "harness_meshlab.h"
+
 #include <wrap/io_trimesh/import_ply.h>
+
+#define HARNESS_TEXT(x) #x
+#define HARNESS_STRING(x) HARNESS_TEXT(x)
 
 namespace {
 
 int failures = 0;
-#define CHECK(cond, what)                                            \
-  do {                                                               \
-    if (!(cond)) { std::printf("FAIL: %s\n", what); ++failures; }    \
-    else std::printf("ok: %s\n", what);                              \
-  } while (0)
+void Check(bool ok, const QString& what) {
+  std::printf("%s: %s\n", ok ? "ok" : "FAIL", qUtf8Printable(what));
+  if (!ok) ++failures;
+}
 
-// What a filter could change: positions, per-face quality/colour (when enabled), attributes.
+const char* const kGrouping = "Cone LOD: Normal Cone Face Grouping";
+const char* const kCulling = "Cone LOD: Cluster Culling Cost";
+const char* const kGroupQem = "Cone LOD: Group-Preserving Quadric Edge Collapse";
+const char* const kIntegrity = "Cone LOD: Group Integrity";
+const char* const kFeature = "Cone LOD: Feature-Preserving Edge Simplification";
+const char* const kBudget = "Cone LOD: Face Budget from Screen Pixels";
+const char* const kPca = "Cone LOD: PCA Recursive Face Partition";
+const char* const kProgressive = "Cone LOD: Progressive Cluster Mesh";
+const char* const kExport = "Cone LOD: Export LOD File";
+const char* const kExtract = "Cone LOD: Extract View-Dependent LOD";
+const char* const kAll[] = {kGrouping, kCulling, kGroupQem, kIntegrity, kFeature,
+                            kBudget,   kPca,     kProgressive, kExport, kExtract};
+
+// What a filter could change: faces, positions, the data mask, per-face quality and colour, attributes.
 struct Snapshot {
   std::vector<float> coords;
+  std::vector<long> faces;
   int mask = 0;
   std::vector<float> quality;
   std::vector<unsigned> colour;
-  size_t faceAttributes = 0;
+  size_t faceAttributes = 0, vertexAttributes = 0;
   bool operator==(const Snapshot& o) const {
     if (coords.size() != o.coords.size()) return false;
     for (size_t i = 0; i < coords.size(); ++i)  // NaN == NaN here: bitwise
       if (std::memcmp(&coords[i], &o.coords[i], sizeof(float)) != 0) return false;
-    return mask == o.mask && quality == o.quality && colour == o.colour && faceAttributes == o.faceAttributes;
+    return faces == o.faces && mask == o.mask && quality == o.quality && colour == o.colour &&
+           faceAttributes == o.faceAttributes && vertexAttributes == o.vertexAttributes;
   }
 };
 
@@ -45,6 +73,8 @@ Snapshot Take(MeshModel& mm) {
   Snapshot s;
   for (const auto& v : mm.cm.vert)
     for (int k = 0; k < 3; ++k) s.coords.push_back(v.cP()[k]);
+  for (const auto& f : mm.cm.face)
+    for (int k = 0; k < 3; ++k) s.faces.push_back(f.IsD() ? -2 : long(f.cV(k) - &mm.cm.vert[0]));
   s.mask = mm.dataMask();
   if (mm.hasDataMask(MeshModel::MM_FACEQUALITY))
     for (const auto& f : mm.cm.face) s.quality.push_back(f.cQ());
@@ -54,146 +84,457 @@ Snapshot Take(MeshModel& mm) {
       s.colour.push_back(unsigned(c[0]) << 24 | unsigned(c[1]) << 16 | unsigned(c[2]) << 8 | c[3]);
     }
   s.faceAttributes = mm.cm.face_attr.size();
+  s.vertexAttributes = mm.cm.vert_attr.size();
   return s;
 }
 
-MeshModel* Load(MeshDocument& md, const char* path) {
-  MeshModel* mm = md.addNewMesh(path, "m");
+MeshModel* Load(MeshDocument& md, const QString& path) {
+  MeshModel* mm = md.addNewMesh(path, QFileInfo(path).fileName());
   int mask = 0;
-  if (vcg::tri::io::ImporterPLY<CMeshO>::Open(mm->cm, path, mask) != 0) {
-    std::printf("cannot load %s\n", path);
+  if (vcg::tri::io::ImporterPLY<CMeshO>::Open(mm->cm, qUtf8Printable(path), mask) != 0) {
+    std::printf("cannot load %s\n", qUtf8Printable(path));
     std::exit(2);
   }
-  mm->cm.face.EnableFFAdjacency();  // nothing of ours needs it: only to vary the mask
-  mm->cm.face.DisableFFAdjacency();
+  vcg::tri::UpdateBounding<CMeshO>::Box(mm->cm);
+  vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFaceNormalized(mm->cm);
   return mm;
 }
 
-bool cancelAtOnce(const int, const char*) { return false; }
+int Layers(MeshDocument& md) { return harness::LayerCount(md); }
+
+bool CancelAtOnce(const int, const char*) { return false; }
+
+// The number after `key` in the last log line that has it ("two_state_cost 0.6523 ..."), as written.
+QString Figure(GLLogStream& log, const QString& key) {
+  const QRegularExpression re("(?:^|\\s)" + QRegularExpression::escape(key) + "\\s+([-0-9.eE+]+)");
+  const auto& lines = log.logStringList();
+  for (int i = lines.size() - 1; i >= 0; --i) {
+    const QRegularExpressionMatch m = re.match(lines[i].second);
+    if (m.hasMatch()) return m.captured(1);
+  }
+  return "missing";
+}
+
+bool LogHas(GLLogStream& log, const QString& text) {
+  for (const auto& l : log.logStringList())
+    if (l.second.contains(text)) return true;
+  return false;
+}
+
+// What a filter produced on the current layer: faces, vertices, distinct per-face quality values
+// (the groups) and a hash of the per-face quality in face order, plus figures from the log.
+QString Digest(MeshDocument& md, GLLogStream& log, const QStringList& keys) {
+  MeshModel& m = *md.mm();
+  QString d = QString("layers=%1 faces=%2 vertices=%3").arg(Layers(md)).arg(m.cm.fn).arg(m.cm.vn);
+  if (m.hasDataMask(MeshModel::MM_FACEQUALITY)) {
+    std::map<float, int> groups;
+    unsigned long long hash = 1469598103934665603ull;
+    for (const auto& f : m.cm.face) {
+      if (f.IsD()) continue;
+      const float q = f.cQ();
+      ++groups[q];
+      unsigned bits;
+      std::memcpy(&bits, &q, 4);
+      hash = (hash ^ bits) * 1099511628211ull;
+    }
+    d += QString(" groups=%1 quality_hash=%2").arg(groups.size()).arg(hash, 16, 16, QChar('0'));
+  }
+  for (const QString& k : keys) d += " " + k + "=" + Figure(log, k);
+  return d;
+}
+
+struct Run {
+  harness::Plugin& plugin;
+  QString bunny, nanMesh;
+  QTemporaryDir dir;
+  std::map<QString, QString> digest;
+
+  QAction* action(const char* name) { return plugin.action(name); }
+  RichParameterList params(const char* name, MeshDocument& md) { return plugin.params(action(name), md); }
+  QString apply(const char* name, MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb = nullptr) {
+    return plugin.apply(action(name), md, par, cb);
+  }
+  QString apply(const char* name, MeshDocument& md) { return apply(name, md, params(name, md)); }
+
+  // A failing run: a message naming `expect`, none of `mustNotName`, the mesh and document unchanged.
+  QString refused(const char* name, MeshDocument& md, const RichParameterList& par, const QString& expect,
+               const QString& why, vcg::CallBackPos* cb = nullptr, const QString& mustNotName = QString()) {
+    MeshModel* mm = md.mm();
+    if (mm) mm->updateDataMask(plugin.filter()->getRequirements(action(name)));  // MeshLab does this first
+    const Snapshot before = mm ? Take(*mm) : Snapshot();
+    const int layers = Layers(md);
+    const QString message = apply(name, md, par, cb);
+    Check(!message.isEmpty(), QString("%1 refuses %2").arg(name, why));
+    std::printf("   message: %s\n", qUtf8Printable(message));
+    Check(message.contains(expect), QString("  the message says '%1'").arg(expect));
+    if (!mustNotName.isEmpty()) Check(!message.contains(mustNotName), "  and does not name " + mustNotName);
+    Check(Layers(md) == layers && md.mm() == mm, "  no layer is added");
+    if (mm) Check(Take(*mm) == before, "  the mesh is unchanged");
+    Check(LogHas(plugin.log(), "ConeLOD error: " + message), "  the log has the message");
+    return message;
+  }
+};
+
+void ListFilters(Run& r) {
+  const QStringList names = r.plugin.names();
+  Check(names.size() == int(sizeof(kAll) / sizeof(kAll[0])), QString("%1 filters listed").arg(names.size()));
+  for (const char* n : kAll) {
+    Check(names.contains(n), QString("listed: %1").arg(n));
+#if CONELOD_MESHLAB_API >= 2022
+    if (QAction* a = r.action(n)) {
+      MeshDocument md;
+      QStringList ps;
+      for (const RichParameter& p : r.plugin.params(a, md)) ps << harness::Plugin::pythonName(p);
+      std::printf("   pymeshlab: ms.%s(%s)\n", qUtf8Printable(r.plugin.pythonName(a)), qUtf8Printable(ps.join(", ")));
+    }
+#endif
+  }
+}
+
+// Every filter applied on the bunny with the dialog's defaults (file names filled in).
+void ApplyEveryFilter(Run& r) {
+  GLLogStream& log = r.plugin.log();
+  {
+    MeshDocument md;
+    MeshModel* mm = Load(md, r.bunny);
+    const QString m = r.apply(kGrouping, md);
+    Check(m.isEmpty(), QString("grouping succeeds %1").arg(m));
+    Check(mm->hasDataMask(MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR), "  quality and colour enabled");
+    auto l1 = vcg::tri::Allocator<CMeshO>::FindPerFaceAttribute<int>(mm->cm, "conelod_group_L1");
+    Check(vcg::tri::Allocator<CMeshO>::IsValidHandle(mm->cm, l1), "  attribute conelod_group_L1 exists");
+    bool same = true;
+    for (const auto& f : mm->cm.face) same = same && int(f.cQ()) == l1[f];
+    Check(same, "  quality = level-1 group id (Display level 1)");
+    r.digest[kGrouping] = Digest(md, log, {"level 1: groups"});
+
+    const Snapshot grouped = Take(*mm);
+    Check(r.apply(kCulling, md).isEmpty(), "culling cost succeeds");
+    Check(Take(*mm) == grouped, "  culling cost does not change the mesh");
+    const double two = Figure(log, "two_state_cost").toDouble(), three = Figure(log, "three_state_cost").toDouble();
+    Check(three < two && two < 1.0, QString("  three-state %1 < two-state %2 < 1").arg(three).arg(two));
+    r.digest[kCulling] = Digest(md, log, {"two_state_cost", "three_state_cost", "rejected_fraction"});
+
+    // The group-preserving collapse at its defaults (half the faces) on a copy of the grouped layer,
+    // then Group Integrity against the copy: every group intact.
+    MeshModel* before = md.addNewMesh("", "before", false);
+    before->updateDataMask(mm);
+    vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(before->cm, mm->cm, false, true);
+    md.setCurrentMesh(mm->id());
+    Check(r.apply(kGroupQem, md).isEmpty(), "group-preserving collapse succeeds at its defaults");
+    Check(mm->cm.fn <= 69451 / 2 + 1 && mm->cm.fn > 30000, QString("  %1 faces (target: half)").arg(mm->cm.fn));
+    Check(Figure(log, "integrity_percent") == "100.00", "  every group intact");
+    r.digest[kGroupQem] = Digest(md, log, {"faces_out", "groups_after"});
+    RichParameterList par = r.params(kIntegrity, md);
+#if CONELOD_MESHLAB_API >= 2022
+    Check(par.getMeshId("ReferenceMesh") == unsigned(before->id()), "  Group Integrity's default reference: the other layer");
+#else
+    Check(par.getMesh("ReferenceMesh") == before, "  Group Integrity's default reference: the other layer");
+#endif
+    Check(r.apply(kIntegrity, md, par).isEmpty(), "group integrity against the copy succeeds");
+    Check(Figure(log, "integrity_percent") == "100.00" && Figure(log, "groups_split") == "0",
+          "  100 % intact, none split");
+    r.digest[kIntegrity] = Digest(md, log, {"groups_before", "groups_after", "integrity_percent"});
+  }
+  {  // Group Integrity of a layer against itself: no trivial 100 %, an explanation instead.
+    MeshDocument md;
+    MeshModel* mm = Load(md, r.bunny);
+    Check(r.apply(kGrouping, md).isEmpty(), "grouping succeeds");
+    const int lines = log.logStringList().size();
+    Check(r.apply(kIntegrity, md).isEmpty(), "group integrity with one layer succeeds");
+    bool percent = false;
+    for (int i = lines; i < log.logStringList().size(); ++i)
+      percent = percent || log.logStringList()[i].second.contains("integrity_percent");
+    Check(!percent, "  no integrity percentage for a layer compared with itself");
+    Check(LogHas(log, "nothing to compare") && LogHas(log, "Duplicate Current Layer"),
+          "  the log says there is nothing to compare and how to keep a copy");
+    (void)mm;
+  }
+  {
+    MeshDocument md;
+    Load(md, r.bunny);
+    Check(r.apply(kFeature, md).isEmpty(), "feature-preserving simplification succeeds at its defaults");
+    Check(md.mm()->cm.fn == 34726 || md.mm()->cm.fn == 34725, QString("  %1 faces (half)").arg(md.mm()->cm.fn));
+    Check(LogHas(log, "Polygonal Modality"), "  the log says where the feature lines show");
+    r.digest[kFeature] = Digest(md, log, {"faces_out", "feature_edges"});
+  }
+  {
+    MeshDocument md;
+    MeshModel* mm = Load(md, r.bunny);
+    const Snapshot before = Take(*mm);
+    Check(r.apply(kBudget, md).isEmpty(), "face budget succeeds");
+    Check(Take(*mm) == before, "  with Simplifier None the mesh is unchanged");
+    RichParameterList par = r.params(kBudget, md);
+    par.setValue("Width", IntValue(64));
+    par.setValue("Height", IntValue(48));
+    harness::SetEnum(par, "Simplifier", 1);
+    Check(r.apply(kBudget, md, par).isEmpty(), "face budget at 64 x 48 with the feature simplifier");
+    Check(QString::number(mm->cm.fn) == Figure(log, "faces_out"), "  the mesh has the logged faces");
+    r.digest[kBudget] = Digest(md, log, {"covered_pixels", "target_faces", "faces_out"});
+  }
+  {
+    MeshDocument md;
+    Load(md, r.bunny);
+    Check(r.apply(kPca, md).isEmpty(), "PCA partition succeeds");
+    Check(Figure(log, "pca_clusters") == "64" && Figure(log, "all_connected") == "1", "  64 connected clusters");
+    r.digest[kPca] = Digest(md, log, {"pca_clusters"});
+  }
+  {
+    MeshDocument md;
+    MeshModel* mm = Load(md, r.bunny);
+    const Snapshot before = Take(*mm);
+    Check(r.apply(kProgressive, md).isEmpty(), "progressive cluster mesh succeeds");
+    Check(Layers(md) == 2 && md.mm() != mm, "  a new layer, made current");
+    Check(Take(*mm) == before, "  the input layer is unchanged");
+    Check(QString::number(md.mm()->cm.fn) == Figure(log, "progressive_faces"), "  the layer has the logged faces");
+    r.digest[kProgressive] = Digest(md, log, {"progressive_faces", "progressive_vertices"});
+  }
+  {
+    MeshDocument md;
+    MeshModel* mm = Load(md, r.bunny);
+    const Snapshot before = Take(*mm);
+    const QString clod = r.dir.filePath("bunny.clod");
+    RichParameterList par = r.params(kExport, md);
+    harness::SetPath(par, "FileName", clod);
+    Check(r.apply(kExport, md, par).isEmpty(), "export succeeds");
+    Check(QFileInfo(clod).size() > 0 && QString::number(QFileInfo(clod).size()) == Figure(log, "lod_file_bytes"),
+          "  writes the file of the logged size");
+    Check(Take(*mm) == before, "  export leaves the mesh unchanged");
+    r.digest[kExport] = Digest(md, log, {"lod_levels", "lod_nodes"});
+    par = r.params(kExtract, md);
+    harness::SetPath(par, "FileName", clod);
+    par.setValue("FaceBudget", IntValue(0));
+    Check(r.apply(kExtract, md, par).isEmpty(), "extract succeeds");
+    Check(Layers(md) == 2 && md.mm() != mm && md.mm()->cm.fn == mm->cm.fn,
+          "  adds a layer with every face of the input (no budget)");
+    Check(Take(*mm) == before, "  extract leaves the mesh unchanged");
+    par.setValue("FaceBudget", IntValue(8000));
+    Check(r.apply(kExtract, md, par).isEmpty(), "extract with a budget of 8000 faces");
+    Check(md.mm()->cm.fn <= 8000 && md.mm()->cm.fn > 0, QString("  %1 faces").arg(md.mm()->cm.fn));
+    r.digest[kExtract] = Digest(md, log, {"lod_faces", "lod_max_level_difference"});
+  }
+}
+
+void Failures(Run& r) {
+  {  // A bad parameter, in the dialog's words.
+    MeshDocument md;
+    Load(md, r.bunny);
+    RichParameterList par = r.params(kGrouping, md);
+    par.setValue("ConeThresholdDeg", FloatValue(0.0f));
+    r.refused(kGrouping, md, par, "'Cone threshold (deg)' must be > 0", "a cone threshold of 0", nullptr,
+              "ConeThresholdDeg");
+    par = r.params(kGroupQem, md);
+    par.setValue("TargetPerc", FloatValue(1.5f));
+    r.refused(kGroupQem, md, par, "'Target fraction (0..1)' must be between 0 and 1", "a target fraction of 1.5",
+              nullptr, "TargetPerc");
+    par = r.params(kGroupQem, md);
+    par.setValue("TargetPerc", FloatValue(0.0f));
+    r.refused(kGroupQem, md, par, "give a target", "no target at all", nullptr, "TargetFaceNum");
+    par = r.params(kCulling, md);
+    par.setValue("Views", IntValue(0));
+    r.refused(kCulling, md, par, "'View directions' must be between 1 and", "0 views");
+    par = r.params(kFeature, md);
+    par.setValue("TargetPerc", FloatValue(0.0f));
+    r.refused(kFeature, md, par, "give a stop criterion", "no stop criterion", nullptr, "MaxErrorDistance");
+    par = r.params(kBudget, md);
+    par.setValue("Width", IntValue(0));
+    r.refused(kBudget, md, par, "'Screen width (pixels)' must be >= 1", "a width of 0");
+    par = r.params(kProgressive, md);
+    par.setValue("MaxNormalTurnDeg", FloatValue(180.0f));
+    r.refused(kProgressive, md, par, "'Max normal turn (deg)' must be in (0, 180)", "a normal turn of 180");
+  }
+  {  // Group ids from per-face quality, on a mesh without it.
+    MeshDocument md;
+    Load(md, r.bunny);
+    r.refused(kGroupQem, md, r.params(kGroupQem, md), "no per-face quality", "a mesh without group ids", nullptr,
+              "GroupSource");
+  }
+  {  // Cancellation through MeshLab's callback.
+    MeshDocument md;
+    Load(md, r.bunny);
+    for (const char* name : {kGrouping, kFeature, kPca})
+      r.refused(name, md, r.params(name, md), "cancel", "a cancelled run", CancelAtOnce);
+  }
+  {  // NaN coordinates: every filter that reads the mesh refuses them.
+    MeshDocument md;
+    Load(md, r.nanMesh);
+    for (const char* name : {kGrouping, kCulling, kFeature, kBudget, kPca, kProgressive}) {
+      RichParameterList par = r.params(name, md);
+      r.refused(name, md, par, "NaN", "NaN coordinates");
+    }
+    RichParameterList par = r.params(kGroupQem, md);
+    harness::SetEnum(par, "GroupSource", 1);
+    r.refused(kGroupQem, md, par, "NaN", "NaN coordinates");
+    par = r.params(kExport, md);
+    const QString clod = r.dir.filePath("nan.clod");
+    harness::SetPath(par, "FileName", clod);
+    r.refused(kExport, md, par, "NaN", "NaN coordinates");
+    Check(!QFileInfo::exists(clod), "  no file is left");
+  }
+  {  // File parameters: no hidden default file; missing and broken files named.
+    MeshDocument md;
+    MeshModel* mm = Load(md, r.bunny);
+    // MeshLab 2020.09's dialog passes on only a file chosen with "...": the message says so there.
+    const QString how = CONELOD_MESHLAB_API >= 2022 ? "type the path" : "'...' button";
+    for (const char* name : {kExport, kExtract}) {
+      const QString m = r.refused(name, md, r.params(name, md), "'LOD file' is empty", "an empty file name");
+      Check(m.contains(how), "  and says how to give one (" + how + ")");
+    }
+    Check(!QFileInfo::exists("out.clod"), "no out.clod is written or read in the current folder");
+
+    const QString clod = r.dir.filePath("ok.clod"), cancelled = r.dir.filePath("cancelled.clod");
+    RichParameterList par = r.params(kExport, md);
+    harness::SetPath(par, "FileName", cancelled);
+    r.refused(kExport, md, par, "cancel", "a cancelled export", CancelAtOnce);
+    Check(!QFileInfo::exists(cancelled), "  a cancelled export leaves no file");
+    harness::SetPath(par, "FileName", clod);
+    Check(r.apply(kExport, md, par).isEmpty(), "export succeeds");
+    QFile whole(clod);
+    whole.open(QIODevice::ReadOnly);
+    const QByteArray bytes = whole.readAll();
+    const QString truncated = r.dir.filePath("truncated.clod");
+    QFile cut(truncated);
+    cut.open(QIODevice::WriteOnly);
+    cut.write(bytes.left(bytes.size() / 2));
+    cut.close();
+    for (const QString& bad : {r.dir.filePath("missing.clod"), truncated}) {
+      par = r.params(kExtract, md);
+      harness::SetPath(par, "FileName", bad);
+      r.refused(kExtract, md, par, bad, "a missing or truncated file (named)");
+    }
+    (void)mm;
+  }
+  {  // An empty mesh: refused, no file.
+    MeshDocument md;
+    md.addNewMesh("", "empty");
+    const QString clod = r.dir.filePath("empty.clod");
+    RichParameterList par = r.params(kExport, md);
+    harness::SetPath(par, "FileName", clod);
+    r.refused(kExport, md, par, "has no faces", "an empty mesh");
+    Check(!QFileInfo::exists(clod), "  no file is left");
+  }
+}
+
+#if CONELOD_MESHLAB_API >= 2022
+// The attributes MeshLab writes for a parameter's value (not its type, label or tooltip).
+QString ValueXml(const RichParameter& p) {
+  QDomDocument doc;
+  QDomElement e = doc.createElement("Param");
+  p.value().fillToXMLElement(e);
+  QStringList kv;
+  const QDomNamedNodeMap a = e.attributes();
+  for (int i = 0; i < a.count(); ++i) kv << a.item(i).nodeName() + "=" + a.item(i).nodeValue();
+  kv.sort();
+  return kv.join(" ");
+}
+
+void Scripts(Run& r, const QString& dirPath) {
+  const QStringList files = QDir(dirPath).entryList(QStringList() << "*.mlx", QDir::Files, QDir::Name);
+  Check(files.size() == int(sizeof(kAll) / sizeof(kAll[0])), QString("%1 scripts in %2").arg(files.size()).arg(dirPath));
+  for (const QString& file : files) {
+    const QString path = QDir(dirPath).filePath(file);
+    FilterScript script;
+    Check(script.open(path) && script.size() == 1, "FilterScript::open reads " + file);
+    if (script.size() != 1) continue;
+    const QString name = script.front().filterName();
+    QAction* a = r.plugin.action(name);
+    Check(a != nullptr, "  its filter exists: " + name);
+    if (!a) continue;
+    // The script holds every parameter of the filter, at its default (an empty document, as the
+    // shipped scripts were written).
+    MeshDocument empty;
+    const RichParameterList defaults = r.plugin.params(a, empty);
+    const RichParameterList& given = script.front().second;
+    bool same = given.size() == defaults.size();
+    for (const RichParameter& p : defaults) {
+      if (!given.hasParameter(p.name())) {
+        std::printf("   missing %s\n", qUtf8Printable(p.name()));
+        same = false;
+      } else if (ValueXml(given.getParameterByName(p.name())) != ValueXml(p)) {
+        std::printf("   %s: script %s, plugin %s\n", qUtf8Printable(p.name()),
+                    qUtf8Printable(ValueXml(given.getParameterByName(p.name()))), qUtf8Printable(ValueXml(p)));
+        same = false;
+      }
+    }
+    Check(same, "  the script's parameters are the plugin's, at its defaults");
+
+    MeshDocument md;
+    MeshModel* mm = Load(md, r.bunny);
+    const QString clod = r.dir.filePath("script.clod");
+    if (name == kGroupQem || name == kIntegrity) {  // they read group ids: group the bunny first
+      Check(r.apply(kGrouping, md).isEmpty(), "  grouping first");
+      if (name == kIntegrity) {  // as a user would: simplify a copy; the script's reference is layer 0
+        MeshModel* copy = md.addNewMesh("", "copy", true);
+        copy->updateDataMask(mm);
+        vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(copy->cm, mm->cm, false, true);
+        Check(r.plugin.runScript(QDir(dirPath).filePath("group_preserving_quadric_edge_collapse.mlx"), md, nullptr).isEmpty(),
+              "  the copy simplified first");
+      }
+    }
+    if (name == kExport || name == kExtract) {
+      const Snapshot before = Take(*mm);
+      const int layers = Layers(md);
+      const QString m = r.plugin.runScript(path, md, nullptr);
+      Check(m.contains("'LOD file' is empty") && Layers(md) == layers && Take(*mm) == before,
+            "  at its defaults (no file name) it is refused, nothing changed: " + m);
+      if (name == kExtract) {  // needs a file to read
+        RichParameterList par = r.params(kExport, md);
+        harness::SetPath(par, "FileName", clod);
+        r.apply(kExport, md, par);
+      }
+      const QString ok = r.plugin.runScript(path, md, nullptr, {{"FileName", clod}});
+      Check(ok.isEmpty(), "  with a file name it runs " + ok);
+    } else {
+      const QString m = r.plugin.runScript(path, md, nullptr);
+      Check(m.isEmpty(), "  it runs at its defaults " + m);
+    }
+  }
+}
+#endif
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // our lines and MeshLab's stderr stay in order in a log
   QApplication app(argc, argv);
-  if (argc != 4) { std::printf("usage: plugin_harness PLUGIN.so GOOD.ply NAN.ply\n"); return 2; }
-  QPluginLoader loader(argv[1]);
-  auto* plugin = qobject_cast<MeshFilterInterface*>(loader.instance());
-  if (!plugin) { std::printf("cannot load the plugin: %s\n", qPrintable(loader.errorString())); return 2; }
-  GLLogStream log;
-  plugin->setLog(&log);
-  QAction* grouping = plugin->AC("Cone LOD: Normal Cone Face Grouping");
-  QAction* culling = plugin->AC("Cone LOD: Cluster Culling Cost");
-  CHECK(grouping && culling, "both filters found by name");
-  if (!grouping || !culling) return 1;
-
-  auto params = [&](QAction* a, MeshModel& mm) {
-    RichParameterList par;
-    plugin->initParameterSet(a, mm, par);
-    return par;
-  };
-
-  {  // Bad parameter: refused, mesh unchanged.
-    MeshDocument md;
-    MeshModel* mm = Load(md, argv[2]);
-    const Snapshot before = Take(*mm);
-    RichParameterList par = params(grouping, *mm);
-    par.setValue("ConeThresholdDeg", FloatValue(0.0f));
-    CHECK(!plugin->applyFilter(grouping, md, par, nullptr), "ConeThresholdDeg = 0 is refused");
-    CHECK(plugin->errorMsg().contains("'Cone threshold (deg)'") && !plugin->errorMsg().contains("ConeThresholdDeg"),
-          "the message names the dialog's label, 'Cone threshold (deg)'");
-    CHECK(Take(*mm) == before, "the mesh is unchanged after a refused parameter");
+  if (argc < 4) {
+    std::printf("usage: plugin_harness PLUGIN.so BUNNY.ply NAN.ply [--scripts DIR] [--digest OUT] [--compare REF]\n");
+    return 2;
   }
-  {  // Cancellation through MeshLab's callback: refused, mesh unchanged.
-    MeshDocument md;
-    MeshModel* mm = Load(md, argv[2]);
-    const Snapshot before = Take(*mm);
-    CHECK(!plugin->applyFilter(grouping, md, params(grouping, *mm), cancelAtOnce), "a cancelled run fails");
-    CHECK(plugin->errorMsg().contains("cancel"), "the message says it was cancelled");
-    CHECK(Take(*mm) == before, "the mesh is unchanged after cancellation");
+  QString scripts, digestOut, compare;
+  for (int i = 4; i + 1 < argc; i += 2) {
+    const QString opt = argv[i];
+    (opt == "--scripts" ? scripts : opt == "--digest" ? digestOut : compare) = QString::fromLocal8Bit(argv[i + 1]);
   }
-  {  // NaN coordinates: both filters refuse, mesh unchanged.
-    MeshDocument md;
-    MeshModel* mm = Load(md, argv[3]);
-    const Snapshot before = Take(*mm);
-    CHECK(!plugin->applyFilter(grouping, md, params(grouping, *mm), nullptr), "grouping refuses NaN input");
-    CHECK(plugin->errorMsg().contains("NaN"), "the message names NaN");
-    CHECK(!plugin->applyFilter(culling, md, params(culling, *mm), nullptr), "culling cost refuses NaN input");
-    CHECK(Take(*mm) == before, "the mesh is unchanged after NaN input");
-  }
-  {  // Success: quality, colour and one attribute per level are written.
-    MeshDocument md;
-    MeshModel* mm = Load(md, argv[2]);
-    CHECK(plugin->applyFilter(grouping, md, params(grouping, *mm), nullptr), "grouping succeeds");
-    CHECK(mm->hasDataMask(MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR), "quality and colour enabled");
-    auto l1 = vcg::tri::Allocator<CMeshO>::FindPerFaceAttribute<int>(mm->cm, "conelod_group_L1");
-    CHECK(vcg::tri::Allocator<CMeshO>::IsValidHandle(mm->cm, l1), "attribute conelod_group_L1 exists");
-    bool same = true;
-    for (const auto& f : mm->cm.face) same = same && int(f.cQ()) == l1[f];
-    CHECK(same, "quality = level-1 group id (DisplayLevel 1)");
-    const Snapshot after = Take(*mm);
-    CHECK(!plugin->applyFilter(culling, md, [&] { auto p = params(culling, *mm); p.setValue("Views", IntValue(0)); return p; }(), nullptr),
-          "culling cost refuses Views = 0");
-    CHECK(Take(*mm) == after, "a failed culling run leaves the grouped mesh as it was");
-    CHECK(plugin->applyFilter(culling, md, params(culling, *mm), nullptr), "culling cost succeeds");
-    CHECK(Take(*mm) == after, "culling cost does not change the mesh");
-  }
-  {  // The LOD filters: export writes a file and changes nothing; extract adds one layer; failures
-     // (cancelled, missing or corrupt file, empty mesh) leave the mesh as it was, add no layer and
-     // leave no file.
-    QAction* exportLod = plugin->AC("Cone LOD: Export LOD File");
-    QAction* extractLod = plugin->AC("Cone LOD: Extract View-Dependent LOD");
-    CHECK(exportLod && extractLod, "both LOD filters found by name");
-    QTemporaryDir dir;
-    if (exportLod && extractLod && dir.isValid()) {
-      MeshDocument md;
-      MeshModel* mm = Load(md, argv[2]);
-      const Snapshot before = Take(*mm);
-      auto exportParams = [&](MeshModel& m, const QString& path) {
-        RichParameterList p = params(exportLod, m);
-        p.setValue("FileName", FileValue(path));
-        return p;
-      };
-      auto extractParams = [&](const QString& path) {
-        RichParameterList p;
-        plugin->initParameterSet(extractLod, md, p);
-        p.setValue("FileName", FileValue(path));
-        p.setValue("FaceBudget", IntValue(0));
-        return p;
-      };
-      const QString clod = dir.filePath("m.clod"), cancelled = dir.filePath("cancelled.clod");
-      CHECK(!plugin->applyFilter(exportLod, md, exportParams(*mm, cancelled), cancelAtOnce), "a cancelled export fails");
-      CHECK(!QFileInfo::exists(cancelled), "a cancelled export leaves no file");
-      CHECK(plugin->applyFilter(exportLod, md, exportParams(*mm, clod), nullptr), "export succeeds");
-      CHECK(QFileInfo(clod).size() > 0, "export writes the file");
-      CHECK(Take(*mm) == before, "export leaves the mesh unchanged");
+  std::printf("MeshLab plugin API %d (built against MeshLab %s)\n", CONELOD_MESHLAB_API, HARNESS_STRING(MESHLAB_VERSION));
+  harness::Plugin plugin;
+  QString why;
+  const bool loaded = plugin.load(argv[1], why);
+  Check(loaded, "MeshLab's PluginManager loads the plugin " + why);
+  if (!loaded) return 1;
+  Run r{plugin, argv[2], argv[3], {}, {}};
+  ListFilters(r);
+  ApplyEveryFilter(r);
+  Failures(r);
+#if CONELOD_MESHLAB_API >= 2022
+  if (!scripts.isEmpty()) Scripts(r, scripts);
+#else
+  if (!scripts.isEmpty()) Check(false, "--scripts: MeshLab 2020.09's scripts run through meshlabserver (tests/integration/cases.py)");
+#endif
 
-      QFile whole(clod);
-      whole.open(QIODevice::ReadOnly);
-      const QByteArray bytes = whole.readAll();
-      const QString truncated = dir.filePath("truncated.clod");
-      QFile cut(truncated);
-      cut.open(QIODevice::WriteOnly);
-      cut.write(bytes.left(bytes.size() / 2));
-      cut.close();
-      for (const QString& bad : {dir.filePath("missing.clod"), truncated}) {
-        const int layers = md.meshList.size();
-        CHECK(!plugin->applyFilter(extractLod, md, extractParams(bad), nullptr), "extract refuses a missing or truncated file");
-        CHECK(plugin->errorMsg().contains(bad), "the message names the file");
-        CHECK(md.meshList.size() == layers && md.mm() == mm, "no layer is added after a failed extract");
-        CHECK(Take(*mm) == before, "the mesh is unchanged after a failed extract");
-      }
-      const int layers = md.meshList.size();
-      CHECK(plugin->applyFilter(extractLod, md, extractParams(clod), nullptr), "extract succeeds");
-      CHECK(md.meshList.size() == layers + 1 && md.mm() != mm, "extract adds a layer and makes it current");
-      CHECK(md.mm()->cm.fn == mm->cm.fn, "without a budget the extract gives back every face of the input");
-      CHECK(Take(*mm) == before, "extract leaves the mesh unchanged");
-
-      MeshDocument emptyDoc;
-      MeshModel* empty = emptyDoc.addNewMesh("", "empty");
-      const QString emptyClod = dir.filePath("empty.clod");
-      CHECK(!plugin->applyFilter(exportLod, emptyDoc, exportParams(*empty, emptyClod), nullptr), "export refuses an empty mesh");
-      CHECK(!QFileInfo::exists(emptyClod), "a failed export leaves no file");
-    }
+  QString text;
+  for (const auto& kv : r.digest) text += kv.first + ": " + kv.second + "\n";
+  std::printf("digest:\n%s", qUtf8Printable(text));
+  if (!digestOut.isEmpty()) {
+    QFile f(digestOut);
+    Check(f.open(QIODevice::WriteOnly) && f.write(text.toUtf8()) == text.toUtf8().size(), "digest written to " + digestOut);
+  }
+  if (!compare.isEmpty()) {
+    QFile f(compare);
+    const QString ref = f.open(QIODevice::ReadOnly) ? QString::fromUtf8(f.readAll()) : QString();
+    const QStringList mine = text.split('\n'), theirs = ref.split('\n');
+    for (const QString& line : theirs)
+      if (!line.isEmpty()) Check(mine.contains(line), "same as " + QFileInfo(compare).fileName() + ": " + line);
+    Check(!ref.isEmpty() && mine.size() == theirs.size(), "as many results as " + compare);
   }
   std::printf("%d failure(s)\n", failures);
   return failures == 0 ? 0 : 1;
