@@ -68,3 +68,114 @@ apt_get_in() {
   apt_update || return 1
   ( cd "$dir" && apt-get "$@" ) || { echo "apt-get $* failed" >&2; return 1; }
 }
+
+# --- Newer MeshLab versions in Debian roots (scripts/setup.sh --meshlab, scripts/test.sh --meshlab) ---
+# MeshLab 2022.02 ships in Debian 13 (trixie), 2025.07 in unstable (sid); neither installs on
+# Debian 12. Each is used from a root made by debootstrap under $CONELOD_ROOTS (default
+# /var/cache/conelod/roots/<suite>), with the build tools and MeshLab's own sources (the headers
+# and vcglib its plugins build against) in /src/meshlab-src.
+
+CONELOD_ROOTS="${CONELOD_ROOTS:-/var/cache/conelod/roots}"
+CONELOD_MIRROR="${CONELOD_MIRROR:-http://deb.debian.org/debian}"
+# What every root holds besides MeshLab: the plugin's build, and Xvfb + xdotool + ImageMagick for
+# the GUI screenshot.
+ROOT_PKGS=(meshlab cmake g++ make qtbase5-dev libqt5opengl5-dev libeigen3-dev libglew-dev xz-utils
+           ca-certificates xvfb xauth xdotool imagemagick fonts-dejavu-core)
+
+# meshlab_suite VERSION: the Debian suite that ships MeshLab VERSION.
+meshlab_suite() {
+  case "$1" in
+    2022.02) echo trixie ;;
+    2025.07) echo sid ;;
+    *) echo "unsupported MeshLab version '$1' (supported: 2020.09, the default; 2022.02; 2025.07)" >&2; return 1 ;;
+  esac
+}
+
+# root_run ROOT CMD...: runs CMD as root inside ROOT with /proc, /dev/pts and /dev/shm mounted
+# for the command's duration (MeshLab and Xvfb need them) and unmounted afterwards.
+root_run() {
+  local r="$1"; shift
+  local m mounted=()
+  for m in proc dev/pts dev/shm; do
+    mkdir -p "$r/$m"
+    if ! mountpoint -q "$r/$m"; then
+      case "$m" in
+        proc) mount -t proc proc "$r/proc" ;;
+        dev/pts) mount -t devpts devpts "$r/dev/pts" ;;
+        dev/shm) mount -t tmpfs shm "$r/dev/shm" ;;
+      esac || { echo "cannot mount $m in $r" >&2; return 1; }
+      mounted=("$r/$m" "${mounted[@]}")
+    fi
+  done
+  local rc=0
+  chroot "$r" /usr/bin/env -i HOME=/root LANG=C.UTF-8 PATH=/usr/sbin:/usr/bin:/sbin:/bin "$@" || rc=$?
+  for m in "${mounted[@]}"; do umount "$m" || umount -l "$m" || true; done
+  return $rc
+}
+
+# make_meshlab_root VERSION: prints the root of MeshLab VERSION, making it when it is missing or
+# was left unfinished (about a minute on a fast mirror): debootstrap of the suite with ROOT_PKGS,
+# a deb-src entry, and MeshLab's sources unpacked into /src/meshlab-src. Cached: a finished root
+# (marker .conelod-root) is reused as it is.
+make_meshlab_root() {
+  local version="$1" suite r tmp tarball
+  suite="$(meshlab_suite "$version")" || return 1
+  r="$CONELOD_ROOTS/$suite"
+  if [ -f "$r/.conelod-root" ] && [ -f "$r/src/meshlab-src/ML_VERSION" ]; then echo "$r"; return 0; fi
+  need_root "make a Debian $suite root (debootstrap, chroot)" || return 1
+  command -v debootstrap >/dev/null || apt_install_missing debootstrap >&2 || return 1
+  tmp="$r.partial"
+  rm -rf "$tmp" "$r"
+  mkdir -p "$CONELOD_ROOTS"
+  echo "debootstrap $suite (MeshLab $version) into $r ..." >&2
+  local pkgs; pkgs="$(IFS=,; echo "${ROOT_PKGS[*]}")"
+  debootstrap --variant=minbase --include="$pkgs" "$suite" "$tmp" "$CONELOD_MIRROR" >"$CONELOD_ROOTS/$suite.log" 2>&1 \
+    || { tail -20 "$CONELOD_ROOTS/$suite.log" >&2; echo "debootstrap $suite failed (log: $CONELOD_ROOTS/$suite.log)" >&2; return 1; }
+  # A mirror that serves a snapshot has an expired Release file: apt must not refuse it.
+  echo 'Acquire::Check-Valid-Until "false";' > "$tmp/etc/apt/apt.conf.d/99conelod"
+  echo "deb-src $CONELOD_MIRROR $suite main" >> "$tmp/etc/apt/sources.list"
+  cp -L /etc/resolv.conf "$tmp/etc/resolv.conf" 2>/dev/null || true
+  root_run "$tmp" apt-get update -qq >&2 || { echo "apt-get update in the $suite root failed" >&2; return 1; }
+  # MeshLab's Recommends are the libraries of its own plugins (debootstrap installs only Depends):
+  # without them MeshLab opens with an error dialog about the plugins it cannot load.
+  local recommends
+  # (an alternative group, "|Recommends: a" then "Recommends: b", is already met by Depends: skipped)
+  recommends="$(root_run "$tmp" apt-cache depends meshlab | awk '
+    alt { alt = ($1 ~ /^[|]/); next }
+    $1 ~ /^[|]/ { alt = 1; next }
+    $1 == "Recommends:" && $2 !~ /^</ { print $2 }')"
+  # shellcheck disable=SC2086
+  root_run "$tmp" env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $recommends >/dev/null \
+    || { echo "installing MeshLab's recommended libraries in the $suite root failed" >&2; return 1; }
+  mkdir -p "$tmp/src"
+  # Only the .orig tarball is served (the .dsc and .debian.tar.xz are not): apt-get fails, the tarball is there.
+  root_run "$tmp" sh -c 'cd /src && apt-get source --download-only meshlab' >/dev/null 2>&1 || true
+  tarball="$(ls "$tmp"/src/meshlab_*.orig.tar.xz 2>/dev/null | head -1)"
+  [ -n "$tarball" ] || { echo "apt-get source meshlab fetched no .orig.tar.xz in the $suite root" >&2; return 1; }
+  mkdir -p "$tmp/src/meshlab-src"
+  tar xJf "$tarball" -C "$tmp/src/meshlab-src" --strip-components=1 --wildcards \
+    'meshlab-*/ML_VERSION' 'meshlab-*/src/common' 'meshlab-*/src/vcglib' \
+    || { echo "unpacking $tarball failed" >&2; return 1; }
+  [ "$(cat "$tmp/src/meshlab-src/ML_VERSION")" = "$version" ] \
+    || { echo "the $suite root has MeshLab $(cat "$tmp/src/meshlab-src/ML_VERSION"), not $version" >&2; return 1; }
+  date -u +%FT%TZ > "$tmp/.conelod-root"
+  mv "$tmp" "$r"
+  echo "$r"
+}
+
+# build_in_root ROOT SOURCE MESHES: copies the source tree SOURCE (without build outputs) into
+# ROOT/conelod/src, the meshes the harness reads from MESHES into ROOT/conelod/meshes, and builds
+# the plugin and its harness in ROOT/conelod/build (incremental). Prints the plugin's path in ROOT.
+build_in_root() {
+  local r="$1" src="$2" meshes="$3"
+  rm -rf "$r/conelod/src"; mkdir -p "$r/conelod/src" "$r/conelod/meshes"
+  tar -C "$src" --exclude='./build*' --exclude=./deps --exclude=./.git --exclude=./out --exclude='__pycache__' -cf - . \
+    | tar -C "$r/conelod/src" -xf - || return 1
+  if [ -n "$meshes" ] && [ -f "$meshes/stanford_bunny_bun_zipper.ply" ]; then
+    cp -f "$meshes/stanford_bunny_bun_zipper.ply" "$r/conelod/meshes/"
+  fi
+  root_run "$r" cmake -S /conelod/src -B /conelod/build -DCMAKE_BUILD_TYPE=Release -DMESHLAB_SRC=/src/meshlab-src \
+    -DCONELOD_PLUGIN_ONLY=ON -DCONELOD_TEST_MESHES=/conelod/meshes >/dev/null || return 1
+  root_run "$r" cmake --build /conelod/build -j "$(nproc)" --target filter_conelod plugin_harness >&2 || return 1
+  echo "$r/conelod/build/filter_conelod/libfilter_conelod.so"
+}
