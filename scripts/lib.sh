@@ -125,7 +125,11 @@ make_meshlab_root() {
   need_root "make a Debian $suite root (debootstrap, chroot)" || return 1
   command -v debootstrap >/dev/null || apt_install_missing debootstrap >&2 || return 1
   tmp="$r.partial"
-  rm -rf "$tmp" "$r"
+  local d m
+  for d in "$tmp" "$r"; do  # an interrupted root_run may have left its mounts: never delete through them
+    for m in dev/shm dev/pts proc; do mountpoint -q "$d/$m" 2>/dev/null && umount -l "$d/$m"; done
+    rm -rf --one-file-system "$d"
+  done
   mkdir -p "$CONELOD_ROOTS"
   echo "debootstrap $suite (MeshLab $version) into $r ..." >&2
   local pkgs; pkgs="$(IFS=,; echo "${ROOT_PKGS[*]}")"

@@ -8,8 +8,9 @@
 #     scripts/setup.sh --meshlab VERSION): rebuilds it there, runs the plugin harness (every
 #     filter on the bunny, failures, every shipped .mlx run as MeshLab 2022+ runs scripts),
 #     checks that every filter gives the bunny the output it gives in MeshLab 2020.09 (the
-#     harness digest of scripts/test.sh, run before), and for 2025.07 takes a screenshot of the
-#     grouped bunny in the real MeshLab GUI under Xvfb (scripts/gui_screenshot.sh).
+#     harness digest of scripts/test.sh, run before), checks in the real GUI under Xvfb that a
+#     path typed into a file box is written (scripts/gui_file_box.sh), and for 2025.07 takes a
+#     screenshot of the grouped bunny in the GUI (scripts/gui_screenshot.sh).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BUILD="${CONELOD_BUILD_DIR:-$ROOT/build}"
@@ -47,6 +48,10 @@ if [ "$MESHLAB" != 2020.09 ]; then
   else
     echo "test.sh: MeshLab $MESHLAB gives other results than 2020.09 (above)" >&2; exit 1
   fi
+  start=$SECONDS
+  bash "$ROOT/scripts/gui_file_box.sh" --meshlab "$MESHLAB" "$BUILD/meshlab-$MESHLAB-typed-file-path.png" \
+    "$CONELOD_TEST_MESHES/stanford_bunny_bun_zipper.ply"
+  echo "==> MeshLab $MESHLAB: a path typed into the GUI's file box is written ($((SECONDS - start)) s)"
   if [ "$MESHLAB" = 2025.07 ]; then
     start=$SECONDS
     bash "$ROOT/scripts/gui_screenshot.sh" --meshlab "$MESHLAB" "$BUILD/meshlab-$MESHLAB-grouped-bunny.png" \
