@@ -162,6 +162,7 @@ make_meshlab_root() {
     || { echo "unpacking $tarball failed" >&2; return 1; }
   [ "$(cat "$tmp/src/meshlab-src/ML_VERSION")" = "$version" ] \
     || { echo "the $suite root has MeshLab $(cat "$tmp/src/meshlab-src/ML_VERSION"), not $version" >&2; return 1; }
+  root_run "$tmp" apt-get clean  # the downloaded packages (about 250 MB)
   date -u +%FT%TZ > "$tmp/.conelod-root"
   mv "$tmp" "$r"
   echo "$r"
