@@ -26,8 +26,11 @@ void AddParams(const std::vector<ParamSpec>& specs, MeshDocument* md, RichParame
       case ParamKind::Direction: par.addParam(RichPoint3f(p.name, p.point, p.label, p.help)); break;
       case ParamKind::OpenFile: par.addParam(RichOpenFile(p.name, p.path, p.choices, p.label, p.help)); break;
       case ParamKind::SaveFile: par.addParam(RichSaveFile(p.name, p.path, p.choices.value(0), p.label, p.help)); break;
-      case ParamKind::Mesh:
-        par.addParam(RichMesh(p.name, const_cast<MeshModel*>(p.mesh), md, p.label, p.help));
+      case ParamKind::Mesh:  // without a layer, the form that does not assert on an empty document
+        if (p.mesh)
+          par.addParam(RichMesh(p.name, const_cast<MeshModel*>(p.mesh), md, p.label, p.help));
+        else
+          par.addParam(RichMesh(p.name, 0, p.label, p.help));
         break;
     }
   }

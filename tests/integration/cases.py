@@ -208,6 +208,19 @@ def meshlab_bad_inputs(c):
 
 
 @case
+def meshlab_no_input_mesh(c):
+    """Every shipped script with no mesh loaded fails cleanly (255), never aborts meshlabserver: the
+    Group Integrity dialog's mesh parameter used to assert (134) on an empty document."""
+    mlx_dir = os.path.join(c.source, "scripts", "mlx")
+    for script in sorted(os.listdir(mlx_dir)):
+        log = c.out("empty.log")
+        p = subprocess.run(["xvfb-run", "-a", c.server, "-l", log, "-s", os.path.join(mlx_dir, script)],
+                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=300, cwd=c.tmp)
+        assert p.returncode == 255, "%s without a mesh: exit %d\n%s" % (script, p.returncode,
+                                                                      p.stdout.decode(errors="replace")[-1500:])
+
+
+@case
 def meshlab_awkward_inputs(c):
     """Inputs that must work: zero-area faces, non-manifold edges, several components."""
     for mesh, faces in [("zero_area_faces.ply", 4), ("stanford_bunny_bun_zipper_res4.ply", 948), ("boeing.ply", 2564)]:
