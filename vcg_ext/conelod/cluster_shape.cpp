@@ -1,4 +1,5 @@
 // ConeLOD — cluster shape figures (see cluster_shape.h).
+#include "conelod/common.h"
 #include "conelod/cluster_shape.h"
 
 #include <algorithm>
@@ -57,11 +58,11 @@ ClusterShape MeasureClusterShape(const IndexedMesh& m, const std::vector<int>& f
     if (!present[c]) continue;
     ++out.clusters;
     if (perimeter[c] <= 0) continue;  // a closed surface: no boundary to measure
-    weighted += area[c] * std::min(1.0, 4 * 3.14159265358979323846 * area[c] / (perimeter[c] * perimeter[c]));
+    weighted += area[c] * std::min(1.0, 4 * kPi * area[c] / (perimeter[c] * perimeter[c]));
     weight += area[c];
   }
   out.meanCompactness = weight > 0 ? weighted / weight : 0;
-  out.boundaryRatio = totalArea > 0 ? out.boundaryLength / std::sqrt(3.14159265358979323846 * totalArea * out.clusters) : 0;
+  out.boundaryRatio = totalArea > 0 ? out.boundaryLength / std::sqrt(kPi * totalArea * out.clusters) : 0;
   return out;
 }
 

@@ -28,6 +28,7 @@
 // output of the paper's best-first order: the same pairs are scored with the same arithmetic and
 // MinimalCone sees the same normals in the same order (bench/check_grouping prints digests to
 // compare two builds of the code; its "strict-greedy" set is the former default).
+#include "conelod/common.h"
 #include "conelod/cone_grouping.h"
 
 #include <algorithm>
@@ -47,10 +48,7 @@ namespace conelod {
 
 namespace {
 
-constexpr double kPi = NormalCone::kPi;
 constexpr double kDeg = kPi / 180.0;
-
-inline void Prefetch(const void* p) { __builtin_prefetch(p); }
 
 struct Sphere {
   vcg::Point3d c;

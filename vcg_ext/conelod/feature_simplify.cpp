@@ -1,28 +1,25 @@
 // ConeLOD — feature-preserving simplification by edge operations (see feature_simplify.h).
+#include "conelod/common.h"
 #include "conelod/feature_simplify.h"
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <exception>
 #include <limits>
 #include <memory>
-#include <mutex>
 #include <queue>
-#include <thread>
 #include <unordered_map>
 #include <unordered_set>
 
 #include <vcg/space/box3.h>
 
-#include "conelod/cores.h"
+#include "conelod/parallel.h"
 #include "conelod/mesh_check.h"
 
 namespace conelod {
 namespace {
 
 using P3 = vcg::Point3d;
-constexpr double kPi = 3.14159265358979323846;
 constexpr uint32_t kNone = UINT32_MAX;
 constexpr size_t kNoTri = SIZE_MAX;  // no triangle to try first
 
@@ -126,35 +123,6 @@ double DistanceToTris2(const P3& p, const std::vector<Tri>& tris, size_t first, 
     }
   }
   return best;
-}
-
-// Runs body(begin, end, thread) over [0, n) in chunks of `chunk`, on `threads` threads (thread
-// 0 is this one; if no other can be started, this one does it all). The bodies must touch
-// disjoint data. An exception from a body is rethrown here, after every thread has stopped.
-template <class Body>
-void ParallelChunks(size_t n, unsigned threads, size_t chunk, const Body& body) {
-  threads = unsigned(std::max<size_t>(1, std::min<size_t>(threads, (n + chunk - 1) / chunk)));
-  std::atomic<size_t> next(0);
-  std::exception_ptr error;
-  std::mutex errorMutex;
-  auto work = [&](unsigned thread) {
-    try {
-      for (size_t begin; (begin = next.fetch_add(chunk)) < n;) body(begin, std::min(n, begin + chunk), thread);
-    } catch (...) {
-      std::lock_guard<std::mutex> lock(errorMutex);
-      if (!error) error = std::current_exception();
-      next = n;
-    }
-  };
-  std::vector<std::thread> pool;
-  try {
-    for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work, t);
-  } catch (...) {
-    // no (more) threads: the ones started and this one share the work
-  }
-  work(0);
-  for (std::thread& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
 }
 
 // The threads of the first pass and of the set-up's passes: FeatureSimplifyParams::threads, 0 =
@@ -639,8 +607,8 @@ class Evaluator {
   void BuildFan(uint32_t from);
   void PrefetchRecord(uint32_t v) const {  // the vertex's faces (FaceList: two cache lines)
     const char* rec = reinterpret_cast<const char*>(&w_.VF[v]);
-    __builtin_prefetch(rec);
-    __builtin_prefetch(rec + 64);
+    Prefetch(rec);
+    Prefetch(rec + 64);
   }
   P3 Corner(uint32_t f, int k, uint32_t from, uint32_t to) const {
     const uint32_t x = w_.F[f][size_t(k)];
@@ -1207,8 +1175,8 @@ bool Simplifier::Admitted(uint32_t v) const {
 
 void Simplifier::PrefetchCurvatureInputs(uint32_t v) const {
   for (uint32_t f : w_.VF[v]) {
-    __builtin_prefetch(&w_.F[f]);
-    __builtin_prefetch(&w_.faceAngles[f]);
+    Prefetch(&w_.F[f]);
+    Prefetch(&w_.faceAngles[f]);
   }
 }
 
@@ -1383,14 +1351,14 @@ bool Simplifier::RunRound(size_t quota, const Progress* progress, size_t facesIn
     }
     if (ahead != kNone && w.cls[ahead] != VertexClass::Unused)
       for (uint32_t f : w.VF[ahead]) {
-        __builtin_prefetch(&w.F[f]);
+        Prefetch(&w.F[f]);
         if (track_) {
-          __builtin_prefetch(&owned_[f]);
-          __builtin_prefetch(&outError_[f]);
+          Prefetch(&owned_[f]);
+          Prefetch(&outError_[f]);
         }
       }
     if (aheadTo != kNone && w.cls[aheadTo] != VertexClass::Unused)
-      for (uint32_t f : w.VF[aheadTo]) __builtin_prefetch(&w.F[f]);
+      for (uint32_t f : w.VF[aheadTo]) Prefetch(&w.F[f]);
   }
   return false;
 }

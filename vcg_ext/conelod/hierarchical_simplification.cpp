@@ -4,14 +4,11 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
-#include <chrono>
 #include <cmath>
-#include <system_error>
-#include <thread>
 
 #include <vcg/space/box3.h>
 
-#include "conelod/cores.h"
+#include "conelod/parallel.h"
 
 namespace conelod {
 
@@ -169,32 +166,18 @@ Status SimplifyInParts(const IndexedMesh& below, const std::vector<std::vector<i
   for (Part& p : part) p.params = params.qem;
   std::atomic<bool> cancel{false};
   std::atomic<int> next{0};
-  const auto work = [&]() {
+  const auto work = [&](unsigned) {
     for (int i; (i = next.fetch_add(1)) < parts;)
       SimplifyPart(below, groups, partOfFace, shared, i, params.levelRatio, diagonal, cancel, part[size_t(i)]);
   };
-  const int threads = std::min(SimplificationThreads(params), parts);
-  std::vector<std::thread> pool;
-  for (int t = 0; t < threads; ++t) {
-    try {
-      pool.emplace_back(work);
-    } catch (const std::system_error&) {  // no more threads to be had: the started ones do the rest
-      break;
-    }
-  }
-  if (pool.empty()) work();  // not even one: this thread does it all
   // Progress and cancellation from this thread only (MeshLab's callbacks are not thread-safe).
-  if (progress) {
-    for (;;) {
-      int sum = 0;
-      for (const Part& p : part) sum += p.percent.load(std::memory_order_relaxed);
-      if (sum >= 100 * parts) break;
-      if (!cancel.load() && !progress(sum / parts, "Hierarchical simplification: simplifying parts side by side"))
-        cancel.store(true);
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-  }
-  for (std::thread& t : pool) t.join();
+  RunThreadsWhile(unsigned(std::min(SimplificationThreads(params), parts)), work, [&] {
+    if (!progress || cancel.load()) return;
+    int sum = 0;
+    for (const Part& p : part) sum += p.percent.load(std::memory_order_relaxed);
+    if (!progress(std::min(99, sum / parts), "Hierarchical simplification: simplifying parts side by side"))
+      cancel.store(true);
+  });
   for (const Part& p : part)
     if (!p.status.ok() && p.status.code != Status::Code::Cancelled) return p.status;
   if (cancel.load()) return Status::Cancelled();

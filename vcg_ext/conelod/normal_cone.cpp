@@ -12,7 +12,6 @@
 namespace conelod {
 namespace {
 
-constexpr double kPi = NormalCone::kPi;
 constexpr double kHalfPi = kPi / 2;
 // Inside test slack on cosines: normals come from float data, caps from double arithmetic.
 constexpr double kCosEps = 1e-10;

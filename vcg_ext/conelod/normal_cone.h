@@ -21,6 +21,8 @@
 
 #include <vcg/space/point3.h>
 
+#include "conelod/common.h"
+
 namespace conelod {
 
 struct NormalCone {
@@ -35,7 +37,7 @@ struct NormalCone {
   bool cullable() const { return halfAngle < kPi / 2; }  // empty cones are (trivially) cullable
   bool contains(const vcg::Point3d& unitNormal, double tolRad = 1e-9) const;
 
-  static constexpr double kPi = 3.14159265358979323846;
+  static constexpr double kPi = conelod::kPi;
 };
 
 // acos(x) for x in [-1,1] to within 2e-8 rad (Abramowitz & Stegun 4.4.46), several times faster
