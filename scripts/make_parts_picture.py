@@ -6,6 +6,8 @@ recomputed here as in the core (CutIntoParts: the median of the used vertices ac
 side of their box, ties by index), for two parts only.
 
   scripts/make_parts_picture.py IN.ply OUT.ply PICTURE.png   (OUT: conelod feature-simplify IN --target-percent 10)
+
+Renders with tools/render_mesh (CONELOD_BUILD_DIR, default build/).
 """
 import os
 import subprocess
@@ -13,7 +15,23 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from render_ply import read_ply  # noqa: E402
+from meshdata import read_ply_elements  # noqa: E402
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+RENDER = os.path.join(os.environ.get("CONELOD_BUILD_DIR", os.path.join(ROOT, "build")), "tools", "render_mesh")
+
+
+def read_ply(path):
+    """The mesh's vertex positions and its faces as triangles (polygons fanned)."""
+    verts, faces = [], []
+    for name, records in read_ply_elements(path):
+        if name == "vertex":
+            verts = [(r["x"], r["y"], r["z"]) for r in records]
+        elif name == "face":
+            for rec in records:
+                idx = rec.get("vertex_indices", rec.get("vertex_index"))
+                faces.extend((idx[0], idx[k], idx[k + 1]) for k in range(1, len(idx) - 1))
+    return verts, faces
 
 
 def write_coloured(path, verts, faces, colours):
@@ -51,9 +69,9 @@ def main():
         ply = os.path.join(tmp, name + ".ply")
         write_coloured(ply, vs, fs, cols)
         png = os.path.join(tmp, name + ".png")
-        subprocess.check_call([sys.executable, os.path.join(os.path.dirname(os.path.abspath(__file__)), "render_ply.py"),
-                               ply, png, "--size", "600", "--azimuth", "20", "--elevation", "10"]
-                              + (["--edges"] if name == "output" else []))
+        subprocess.check_call([RENDER, ply, png, "--size", "600", "600", "--azimuth", "20", "--elevation", "10",
+                               "--colors", "--no-features"] + (["--wire"] if name == "output" else []),
+                              stdout=subprocess.DEVNULL)
         subprocess.check_call(["convert", png, "-font", "DejaVu-Sans", "-gravity", "North", "-pointsize", "16", "-annotate", "+0+4",
                                "%s (%d faces)" % (name, len(fs)), png])
         panels.append(png)
