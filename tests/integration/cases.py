@@ -23,8 +23,18 @@ CASES = {}
 
 
 def case(fn):
+    """Registers a test case; ctest runs it as it_NAME (tests/CMakeLists.txt asks `--list`). The
+    name's prefix says what it needs: cli_ the conelod tool, viewer_ conelod-viewer, anything else
+    (meshlab_, mlx_) the real meshlabserver of MeshLab 2020.09."""
     CASES[fn.__name__] = fn
     return fn
+
+
+def needs(name):
+    for prefix in ("cli", "viewer"):
+        if name.startswith(prefix + "_"):
+            return prefix
+    return "meshlabserver"
 
 
 class Ctx:
@@ -1098,6 +1108,10 @@ def cli_lod_bad_files(c):
         assert not os.path.exists(c.out("bad.clod"))
 
 def main():
+    if sys.argv[1:] == ["--list"]:  # for CMake: one "NAME NEEDS" line per case
+        for name in sorted(CASES):
+            print(name, needs(name))
+        return 0
     ap = argparse.ArgumentParser()
     ap.add_argument("case", choices=sorted(CASES))
     ap.add_argument("--build", required=True)
