@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "conelod/safe_file.h"
+
 namespace conelod {
 namespace cli {
 
@@ -122,6 +124,22 @@ std::string LoadInput(const std::string& path, CMesh& mesh, IndexedMesh& indexed
 int Fail(int code, const std::string& message) {
   std::fprintf(stderr, "conelod: %s\n", message.c_str());
   return code;
+}
+
+int FailLoad(const std::string& message) { return Fail(IsReadFailure(message) ? kIoError : kBadInput, message); }
+
+std::string CheckOutputs(const std::string& command, int argc, char** argv) {
+  bool hierarchy = false;
+  for (int i = 0; i < argc; ++i) hierarchy |= std::string(argv[i]) == "--hierarchy";
+  for (int i = 0; i + 1 < argc; ++i) {
+    const std::string option = argv[i];
+    if (option != "-o" && option != "--mask") continue;
+    std::string path = argv[i + 1];
+    if (command == "simplify" && hierarchy && option == "-o") path += "_L1.ply";
+    const std::string err = CheckOutputPath(path);
+    if (!err.empty()) return option + ": " + err;
+  }
+  return "";
 }
 
 const std::vector<std::string> kGroupingOptions = {"--cone-weight", "--shape-weight", "--size-weight",

@@ -20,7 +20,7 @@ int CmdInfo(int argc, char** argv) {
   IndexedMesh im;
   std::vector<size_t> faceOf;
   const std::string err = LoadInput(a.positional()[0], mesh, im, faceOf);
-  if (!err.empty()) return Fail(kIoError, err);
+  if (!err.empty()) return FailLoad(err);
   const MeshReport r = CheckMesh(im);
   const Status valid = RequireValidForFaces(r);
   if (a.has("--json")) {

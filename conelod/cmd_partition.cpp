@@ -77,7 +77,7 @@ int CmdPartition(int argc, char** argv) {
   IndexedMesh im;
   std::vector<size_t> faceOf;
   std::string err = LoadInput(a.positional()[0], mesh, im, faceOf);
-  if (!err.empty()) return Fail(kIoError, err);
+  if (!err.empty()) return FailLoad(err);
 
   PcaTree tree;
   Timer timer;
@@ -152,7 +152,7 @@ int CmdProgressive(int argc, char** argv) {
   IndexedMesh im;
   std::vector<size_t> faceOf;
   std::string err = LoadInput(a.positional()[0], mesh, im, faceOf);
-  if (!err.empty()) return Fail(kIoError, err);
+  if (!err.empty()) return FailLoad(err);
 
   Timer timer;
   PcaTree tree;
@@ -228,7 +228,7 @@ int CmdClusterShape(int argc, char** argv) {
   CMesh mesh;
   int mask = 0;
   std::string err = LoadPly(mesh, a.positional()[0], &mask);
-  if (!err.empty()) return Fail(kIoError, err);
+  if (!err.empty()) return FailLoad(err);
   if (!(mask & vcg::tri::io::Mask::IOM_FACEQUALITY))
     return Fail(kBadInput, a.positional()[0] + ": no per-face quality to read the clusters from");
   std::vector<size_t> faceOf;

@@ -112,7 +112,7 @@ int CmdSimplify(int argc, char** argv) {
   CMesh mesh;
   int loadMask = 0;
   std::string err = LoadPly(mesh, input, &loadMask);
-  if (!err.empty()) return Fail(kIoError, err);
+  if (!err.empty()) return FailLoad(err);
   std::vector<size_t> faceOf;
   const IndexedMesh im = ToIndexedMesh(mesh, &faceOf);
   Status s = RequireValidForFaces(im);
