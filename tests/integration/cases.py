@@ -441,7 +441,7 @@ def cli_bad_inputs(c):
             p = c.conelod(cmd, c.mesh(mesh), expect=2)
             assert message in p.stderr.decode(), p.stderr.decode()
     p = c.conelod("group", c.mesh("stanford_bunny_bun_zipper.ply"), "--threshold", "-3", expect=2)
-    assert "ConeThresholdDeg" in p.stderr.decode()
+    assert "--threshold" in p.stderr.decode() and "ConeThresholdDeg" not in p.stderr.decode(), p.stderr.decode()
     c.conelod("group", c.out("missing.ply"), expect=3)
     c.conelod("group", "--bogus", expect=1)
 
