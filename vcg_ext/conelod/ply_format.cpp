@@ -241,6 +241,19 @@ std::string TriangulatePolygon(const std::vector<std::array<float, 3>>& P, const
     N[1] += (double(a[2]) - b[2]) * (double(a[0]) + b[0]);
     N[2] += (double(a[0]) - b[0]) * (double(a[1]) + b[1]);
   }
+  if (!(std::fabs(N[0]) + std::fabs(N[1]) + std::fabs(N[2]) > 0)) {
+    // No net area: collinear corners, or a polygon whose lobes cancel (a bow tie). The plane of
+    // its largest corner triangle tells them apart below (the crossing test).
+    double best = 0;
+    for (size_t i = 2; i < n; ++i) {
+      const auto& a = P[corners[0]]; const auto& b = P[corners[1]]; const auto& c = P[corners[i]];
+      const double e[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
+      const double f[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
+      const double x[3] = {e[1] * f[2] - e[2] * f[1], e[2] * f[0] - e[0] * f[2], e[0] * f[1] - e[1] * f[0]};
+      const double len = std::fabs(x[0]) + std::fabs(x[1]) + std::fabs(x[2]);
+      if (len > best) { best = len; N[0] = x[0]; N[1] = x[1]; N[2] = x[2]; }
+    }
+  }
   const int drop = std::fabs(N[0]) > std::fabs(N[1]) ? (std::fabs(N[0]) > std::fabs(N[2]) ? 0 : 2)
                                                      : (std::fabs(N[1]) > std::fabs(N[2]) ? 1 : 2);
   if (!(std::fabs(N[drop]) > 0)) {  // no area (or NaN): any triangulation is as degenerate; use the fan
@@ -337,8 +350,11 @@ std::string ParsePly(const char* data, size_t size, const std::string& name, Ply
             return file + (in.badToken().empty() ? "ends early, in " + rec : rec + ": '" + in.badToken() + "' is not a number");
           for (int c = 0; c < 3; ++c)
             if (isVertex && int(i) == xyz[c]) {
-              if (std::isfinite(v) && std::fabs(v) > FLT_MAX)
-                return file + rec + " has a coordinate (" + std::to_string(v) + ") beyond single precision (3.4e38)";
+              if (std::isfinite(v) && std::fabs(v) > FLT_MAX) {
+                char text[32];
+                std::snprintf(text, sizeof text, "%g", v);
+                return file + rec + " has a coordinate (" + text + ") beyond single precision (3.4e38)";
+              }
               pos[size_t(c)] = float(v);
             }
           if (int(i) == quality) q = float(v);
