@@ -372,6 +372,24 @@ void Failures(Run& r) {
     r.refused(kExport, md, par, "NaN", "NaN coordinates");
     Check(!QFileInfo::exists(clod), "  no file is left");
   }
+  {  // Coordinates around 1e19 (their squares overflow floats; the sampled distance crashed on
+     // them): every filter that reads the mesh refuses them and leaves it unchanged.
+    MeshDocument md;
+    MeshModel* mm = Load(md, r.bunny);
+    for (auto& v : mm->cm.vert) v.P() *= 1e20f;
+    for (const char* name : {kGrouping, kCulling, kFeature, kBudget, kPca, kProgressive}) {
+      RichParameterList par = r.params(name, md);
+      r.refused(name, md, par, "beyond +-1e18", "coordinates around 1e19");
+    }
+    RichParameterList par = r.params(kGroupQem, md);
+    harness::SetEnum(par, "GroupSource", 1);
+    r.refused(kGroupQem, md, par, "beyond +-1e18", "coordinates around 1e19");
+    par = r.params(kExport, md);
+    const QString clod = r.dir.filePath("huge.clod");
+    harness::SetPath(par, "FileName", clod);
+    r.refused(kExport, md, par, "beyond +-1e18", "coordinates around 1e19");
+    Check(!QFileInfo::exists(clod), "  no file is left");
+  }
   {  // File parameters: no hidden default file; missing and broken files named.
     MeshDocument md;
     MeshModel* mm = Load(md, r.bunny);

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include <vcg/complex/algorithms/update/bounding.h>
 #include <vcg/complex/complex.h>
 #include <wrap/io_trimesh/export_ply.h>
 #include <wrap/io_trimesh/io_mask.h>
@@ -35,6 +36,7 @@ std::string LoadPlyChecked(MeshType& m, const std::string& path, int* loadMask =
     for (int k = 0; k < 3; ++k) fi->V(k) = &m.vert[in.triangles[f][size_t(k)]];
     if (!in.faceQuality.empty() && MeshType::FaceType::HasQuality()) fi->Q() = in.faceQuality[f];
   }
+  vcg::tri::UpdateBounding<MeshType>::Box(m);  // as vcglib's importer leaves it
   if (loadMask)
     *loadMask = vcg::tri::io::Mask::IOM_VERTCOORD | vcg::tri::io::Mask::IOM_FACEINDEX |
                 (in.faceQuality.empty() ? 0 : vcg::tri::io::Mask::IOM_FACEQUALITY);
