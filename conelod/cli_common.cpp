@@ -1,8 +1,12 @@
 // ConeLOD CLI — shared helpers (see cli_common.h).
 #include "cli_common.h"
 
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
+#include <utility>
+
+#include "conelod/safe_file.h"
 
 namespace conelod {
 namespace cli {
@@ -119,9 +123,50 @@ std::string LoadInput(const std::string& path, CMesh& mesh, IndexedMesh& indexed
   return "";
 }
 
+namespace {
+// The core names its parameters as the MeshLab dialog's keys; on the command line they are options.
+const std::pair<const char*, const char*> kOptionOfParameter[] = {
+    {"ConeWeight", "--cone-weight"},   {"ShapeWeight", "--shape-weight"},     {"SizeWeight", "--size-weight"},
+    {"ConeThresholdDeg", "--threshold"}, {"ThresholdGrowth", "--growth"},    {"MaxLevels", "--max-levels"},
+    {"MinTopGroups", "--min-top-groups"}, {"TargetFaceNum", "--target-faces"}, {"TargetPerc", "--target-ratio"},
+    {"QualityThr", "--quality-thr"},   {"BoundaryWeight", "--boundary-weight"}, {"PixelFactor", "--factor"},
+    {"MinFaces", "--min-faces"},       {"MaxErrorDistance", "--max-error"},  {"MaxError", "--max-error"},
+    {"MaxDepth", "--max-depth"},       {"FeatureCurvature", "--feature-curvature"}, {"FeatureAngleDeg", "--angle"},
+    {"CurvatureThreshold", "--curvature-threshold"}, {"TargetClusters", "--clusters"}};
+
+std::string WithOptionNames(std::string text) {
+  auto isWordChar = [](char ch) { return std::isalnum((unsigned char)ch) || ch == '_'; };
+  for (const auto& po : kOptionOfParameter) {
+    const std::string name = po.first;
+    for (size_t at = text.find(name); at != std::string::npos; at = text.find(name, at + 1)) {
+      const size_t end = at + name.size();
+      if ((at > 0 && isWordChar(text[at - 1])) || (end < text.size() && isWordChar(text[end]))) continue;
+      text.replace(at, name.size(), po.second);
+    }
+  }
+  return text;
+}
+}  // namespace
+
 int Fail(int code, const std::string& message) {
-  std::fprintf(stderr, "conelod: %s\n", message.c_str());
+  std::fprintf(stderr, "conelod: %s\n", WithOptionNames(message).c_str());
   return code;
+}
+
+int FailLoad(const std::string& message) { return Fail(IsReadFailure(message) ? kIoError : kBadInput, message); }
+
+std::string CheckOutputs(const std::string& command, int argc, char** argv) {
+  bool hierarchy = false;
+  for (int i = 0; i < argc; ++i) hierarchy |= std::string(argv[i]) == "--hierarchy";
+  for (int i = 0; i + 1 < argc; ++i) {
+    const std::string option = argv[i];
+    if (option != "-o" && option != "--mask") continue;
+    std::string path = argv[i + 1];
+    if (command == "simplify" && hierarchy && option == "-o") path += "_L1.ply";
+    const std::string err = CheckOutputPath(path);
+    if (!err.empty()) return option + ": " + err;
+  }
+  return "";
 }
 
 const std::vector<std::string> kGroupingOptions = {"--cone-weight", "--shape-weight", "--size-weight",

@@ -18,7 +18,7 @@ namespace conelod {
 namespace cli {
 
 // Exit codes: scripts tell a usage mistake from bad input from an I/O failure.
-enum Exit { kOk = 0, kUsage = 1, kBadInput = 2, kIoError = 3 };
+enum Exit { kOk = 0, kUsage = 1, kBadInput = 2, kIoError = 3, kOutOfMemory = 4 };
 
 // "--name value" and "--flag" options plus positional arguments. Options are declared up front
 // so that a misspelt option is an error, not silently ignored.
@@ -82,6 +82,12 @@ class Timer {
 std::string LoadInput(const std::string& path, CMesh& mesh, IndexedMesh& indexed, std::vector<size_t>& faceOfIndex);
 
 int Fail(int code, const std::string& message);  // prints "conelod: message" to stderr
+// Fail for a LoadInput/LoadPly error: kIoError when the file could not be read, kBadInput when it
+// was read and is malformed.
+int FailLoad(const std::string& message);
+// "" when every output the command line names can be written (checked before the work starts:
+// safe_file.h's CheckOutputPath on -o and --mask; `simplify --hierarchy -o P` writes P_L1.ply, ...).
+std::string CheckOutputs(const std::string& command, int argc, char** argv);
 
 // The grouping options shared by `group`, `cull-cost` and `lod build`.
 extern const std::vector<std::string> kGroupingOptions;

@@ -4,6 +4,7 @@
 
 #include "cli_common.h"
 #include "commands.h"
+#include "conelod/safe_file.h"
 #include "conelod/feature_simplify.h"
 #include "conelod/pixel_budget.h"
 #include "conelod/simplify_bridge.h"
@@ -39,7 +40,7 @@ int CmdBudget(int argc, char** argv) {
   IndexedMesh im;
   std::vector<size_t> faceOf;
   std::string err = LoadInput(a.positional()[0], mesh, im, faceOf);
-  if (!err.empty()) return Fail(kIoError, err);
+  if (!err.empty()) return FailLoad(err);
   PixelBudgetResult r;
   Timer timer;
   s = ComputePixelBudget(im, p, r);
@@ -49,12 +50,14 @@ int CmdBudget(int argc, char** argv) {
   if (a.has("--mask")) {
     std::vector<uint8_t> mask;
     CountCoveredPixels(im, FramedView(im, r.viewDirection, p.width, p.height, p.fill), &mask);
-    FILE* f = std::fopen(a.str("--mask").c_str(), "wb");
-    if (!f) return Fail(kIoError, "cannot write '" + a.str("--mask") + "'");
-    std::fprintf(f, "P5\n%d %d\n255\n", p.width, p.height);
+    SafeFile out;
+    std::string err = out.open(a.str("--mask"));
+    if (!err.empty()) return Fail(kIoError, err);
+    std::fprintf(out.file(), "P5\n%d %d\n255\n", p.width, p.height);
     for (uint8_t& m : mask) m = m ? 0 : 255;
-    std::fwrite(mask.data(), 1, mask.size(), f);
-    std::fclose(f);
+    std::fwrite(mask.data(), 1, mask.size(), out.file());
+    err = out.commit();  // checks every write above
+    if (!err.empty()) return Fail(kIoError, err);
   }
 
   FeatureSimplifyResult fr;

@@ -87,7 +87,7 @@ int CmdFeatureSimplify(int argc, char** argv) {
   IndexedMesh im;
   std::vector<size_t> faceOf;
   std::string err = LoadInput(a.positional()[0], mesh, im, faceOf);
-  if (!err.empty()) return Fail(kIoError, err);
+  if (!err.empty()) return FailLoad(err);
   const double diagonal = BoundingBoxDiagonal(im);
   if (a.has("--max-error") && !ParseDistance(a.str("--max-error"), diagonal, p.maxErrorDistance))
     return Fail(kUsage, "--max-error expects a distance >= 0 or a percentage like 0.5%, got '" + a.str("--max-error") + "'");
@@ -181,7 +181,7 @@ int CmdFeatureEdges(int argc, char** argv) {
   IndexedMesh im;
   std::vector<size_t> faceOf;
   std::string err = LoadInput(a.positional()[0], mesh, im, faceOf);
-  if (!err.empty()) return Fail(kIoError, err);
+  if (!err.empty()) return FailLoad(err);
   FeatureInfo info;
   Status s = DetectFeatures(im, p, info);
   if (!s.ok()) return Fail(kBadInput, a.positional()[0] + ": " + s.message);
@@ -193,7 +193,7 @@ int CmdFeatureEdges(int argc, char** argv) {
     IndexedMesh ref;
     std::vector<size_t> refFaceOf;
     err = LoadInput(a.str("--reference"), refMesh, ref, refFaceOf);
-    if (!err.empty()) return Fail(kIoError, err);
+    if (!err.empty()) return FailLoad(err);
     s = CompareFeatureLines(ref, im, p.featureAngleDeg, lineTolPct / 100.0 * BoundingBoxDiagonal(ref), agree);
     if (!s.ok()) return Fail(kBadInput, s.message);
     haveRef = true;

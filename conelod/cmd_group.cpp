@@ -57,7 +57,7 @@ int CmdGroup(int argc, char** argv) {
   IndexedMesh im;
   std::vector<size_t> faceOf;
   std::string err = LoadInput(a.positional()[0], mesh, im, faceOf);
-  if (!err.empty()) return Fail(kIoError, err);
+  if (!err.empty()) return FailLoad(err);
 
   GroupHierarchy h;
   Timer timer;
@@ -132,7 +132,7 @@ int CmdCullCost(int argc, char** argv) {
   IndexedMesh im;
   std::vector<size_t> faceOf;
   const std::string err = LoadInput(a.positional()[0], mesh, im, faceOf);
-  if (!err.empty()) return Fail(kIoError, err);
+  if (!err.empty()) return FailLoad(err);
 
   GroupHierarchy h;
   Timer timer;

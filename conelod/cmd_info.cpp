@@ -20,7 +20,7 @@ int CmdInfo(int argc, char** argv) {
   IndexedMesh im;
   std::vector<size_t> faceOf;
   const std::string err = LoadInput(a.positional()[0], mesh, im, faceOf);
-  if (!err.empty()) return Fail(kIoError, err);
+  if (!err.empty()) return FailLoad(err);
   const MeshReport r = CheckMesh(im);
   const Status valid = RequireValidForFaces(r);
   if (a.has("--json")) {
@@ -28,7 +28,7 @@ int CmdInfo(int argc, char** argv) {
     j.beginObject().field("input", a.positional()[0]).field("vertices", r.vertices).field("faces", r.faces)
         .field("components", r.components).field("border_edges", r.borderEdges)
         .field("non_manifold_edges", r.nonManifoldEdges).field("unreferenced_vertices", r.unreferencedVertices)
-        .field("degenerate_faces", r.degenerateFaces).field("non_finite_vertices", r.nonFiniteVertices)
+        .field("degenerate_faces", r.degenerateFaces).field("non_finite_vertices", r.nonFiniteVertices).field("huge_vertices", r.hugeVertices)
         .field("bad_index_faces", r.badIndexFaces).field("usable", valid.ok());
     if (!valid.ok()) j.field("problem", valid.message);
     j.endObject();

@@ -51,7 +51,7 @@ int LodBuild(int argc, char** argv) {
   std::vector<size_t> faceOf;
   Timer timer;
   std::string err = LoadInput(input, mesh, im, faceOf);
-  if (!err.empty()) return Fail(kIoError, err);
+  if (!err.empty()) return FailLoad(err);
   mesh.Clear();
   const double loadSeconds = timer.seconds();
   Status s = ValidateParams(params.grouping);
@@ -60,6 +60,7 @@ int LodBuild(int argc, char** argv) {
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
   LodBuildStats st;
   s = BuildLodFile(im, params, output, &st);
+  if (!s.ok() && s.message.compare(0, 14, "cannot write '") == 0) return Fail(kIoError, s.message);
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
   if (a.has("--json")) {
     Json j;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 
 #include "cli_common.h"
 #include "commands.h"
@@ -77,7 +78,7 @@ int CmdPartition(int argc, char** argv) {
   IndexedMesh im;
   std::vector<size_t> faceOf;
   std::string err = LoadInput(a.positional()[0], mesh, im, faceOf);
-  if (!err.empty()) return Fail(kIoError, err);
+  if (!err.empty()) return FailLoad(err);
 
   PcaTree tree;
   Timer timer;
@@ -146,13 +147,14 @@ int CmdProgressive(int argc, char** argv) {
     return Fail(kUsage, std::string("expected one input mesh and -o OUT.ply\n") + kProgressiveUsage);
   const Status valid = ValidateParams(params);
   if (!valid.ok()) return Fail(kUsage, valid.message);
-  if (samples < 0) return Fail(kUsage, "--samples must be >= 0");
+  if (samples < 0 || samples > kMaxFaceSamples)
+    return Fail(kUsage, "--samples must be from 0 to " + std::to_string(kMaxFaceSamples));
 
   CMesh mesh;
   IndexedMesh im;
   std::vector<size_t> faceOf;
   std::string err = LoadInput(a.positional()[0], mesh, im, faceOf);
-  if (!err.empty()) return Fail(kIoError, err);
+  if (!err.empty()) return FailLoad(err);
 
   Timer timer;
   PcaTree tree;
@@ -228,15 +230,22 @@ int CmdClusterShape(int argc, char** argv) {
   CMesh mesh;
   int mask = 0;
   std::string err = LoadPly(mesh, a.positional()[0], &mask);
-  if (!err.empty()) return Fail(kIoError, err);
+  if (!err.empty()) return FailLoad(err);
   if (!(mask & vcg::tri::io::Mask::IOM_FACEQUALITY))
     return Fail(kBadInput, a.positional()[0] + ": no per-face quality to read the clusters from");
   std::vector<size_t> faceOf;
   const IndexedMesh im = ToIndexedMesh(mesh, &faceOf);
+  // Cluster ids are labels: renumbered 0..K-1 in order of appearance, so an id of 2e9 costs no more
+  // than an id of 2. -1 marks a face in no cluster; anything else that is no whole number >= 0 is refused.
   std::vector<int> faceCluster(im.faceCount());
+  std::map<float, int> idOf;
   for (size_t i = 0; i < faceOf.size(); ++i) {
     const float q = mesh.face[faceOf[i]].Q();
-    faceCluster[i] = std::isfinite(q) && q >= 0 ? int(std::lround(q)) : -1;
+    if (q == -1) { faceCluster[i] = -1; continue; }
+    if (!(q >= 0 && q == std::floor(q) && q < 2147483648.0f))
+      return Fail(kBadInput, a.positional()[0] + ": face " + std::to_string(faceOf[i]) + " has quality " +
+                                 std::to_string(q) + ": cluster ids must be whole numbers >= 0 (-1: no cluster)");
+    faceCluster[i] = idOf.emplace(q, int(idOf.size())).first->second;
   }
   const ClusterShape shape = MeasureClusterShape(im, faceCluster);
   const bool connected = GroupsAreEdgeConnected(BuildFaceAdjacency(im), faceCluster);

@@ -86,7 +86,8 @@ int CmdSimplify(int argc, char** argv) {
   if (a.positional().size() != 1) return Fail(kUsage, std::string("expected one input mesh\n") + kSimplifyUsage);
   if (targetFaces < 0) return Fail(kUsage, "--target-faces must be >= 0");
   if (!partsError.empty()) return Fail(kUsage, partsError);
-  if (samples < 0) return Fail(kUsage, "--samples must be >= 0");
+  if (samples < 0 || samples > kMaxFaceSamples)
+    return Fail(kUsage, "--samples must be from 0 to " + std::to_string(kMaxFaceSamples));
   if (!hierarchy && (a.has("--threads") || a.has("--faces-per-part") || a.has("--samples")))
     return Fail(kUsage, "--threads, --faces-per-part and --samples go with --hierarchy");
   if (a.has("--target-ratio") && !(targetRatio > 0 && targetRatio <= 1)) return Fail(kUsage, "--target-ratio must be in (0, 1]");
@@ -112,7 +113,7 @@ int CmdSimplify(int argc, char** argv) {
   CMesh mesh;
   int loadMask = 0;
   std::string err = LoadPly(mesh, input, &loadMask);
-  if (!err.empty()) return Fail(kIoError, err);
+  if (!err.empty()) return FailLoad(err);
   std::vector<size_t> faceOf;
   const IndexedMesh im = ToIndexedMesh(mesh, &faceOf);
   Status s = RequireValidForFaces(im);

@@ -1,8 +1,10 @@
 // ConeLOD command-line tool: the same core as the MeshLab plugin, with no X server.
 #include <cstdio>
 #include <cstring>
+#include <new>
 #include <string>
 
+#include "cli_common.h"
 #include "commands.h"
 
 namespace {
@@ -46,7 +48,18 @@ int main(int argc, char** argv) {
         std::printf("%s", *c.usage);
         return 0;
       }
-    return c.run(argc - 2, argv + 2);
+    // Outputs are checked before the work starts, so a bad path never costs a long run.
+    const std::string outputError = conelod::cli::CheckOutputs(c.name, argc - 2, argv + 2);
+    if (!outputError.empty()) {
+      std::fprintf(stderr, "conelod: %s\n", outputError.c_str());
+      return conelod::cli::kIoError;
+    }
+    try {
+      return c.run(argc - 2, argv + 2);
+    } catch (const std::bad_alloc&) {
+      std::fprintf(stderr, "conelod: out of memory (the mesh or an option such as --samples is too large for this machine)\n");
+      return conelod::cli::kOutOfMemory;
+    }
   }
   std::fprintf(stderr, "conelod: unknown command '%s'\n", argv[1]);
   PrintUsage(stderr);

@@ -27,6 +27,7 @@
 #include "conelod/pca_partition.h"
 #include "conelod/pixel_budget.h"
 #include "conelod/progressive_cluster_mesh.h"
+#include "conelod/safe_file.h"
 #include "conelod/sampled_distance.h"
 #include "conelod/simplify_bridge.h"
 #include "conelod/vcg_bridge.h"
@@ -918,6 +919,8 @@ Status ApplyLodExport(FilterCall& c) {
   Status s = RequirePath(c, "FileName", path);
   if (!s.ok()) return s;
   const QString fullPath = QFileInfo(path).absoluteFilePath();
+  const std::string pathError = conelod::CheckOutputPath(path.toStdString());  // before the work, not after
+  if (!pathError.empty()) return Status::Invalid(pathError);
   conelod::LodBuildParams params;
   params.grouping = ReadGroupingParams(c.args);
   params.simplification.levelRatio = c.args.number("LevelRatio");

@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
-# Fuzzes the .clod reader (vcg_ext/fuzz/lod_reader_fuzz.cpp) with libFuzzer under ASan + UBSan for
-# a bounded time. Builds into build-fuzz/ (ignored by git) with clang++; the seed corpus is written
+# Fuzzes the .clod reader (vcg_ext/fuzz/lod_reader_fuzz.cpp) and the PLY input path
+# (vcg_ext/fuzz/ply_reader_fuzz.cpp: read, check, group) with libFuzzer under ASan + UBSan, each for
+# a bounded time. PLY seeds: the generated bad-input corpus (tests/integration/bad_inputs.py) and
+# the small meshes below; inputs that once crashed are kept in vcg_ext/fuzz/regressions/ply/ and
+# always run first. Builds into build-fuzz/ (ignored by git) with clang++; the seed corpus is written
 # at run time by `conelod lod build` from small generated meshes (nothing binary is committed). The
 # fuzz build ignores CRC mismatches (FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION) so that mutations
 # reach the structural checks behind them.
@@ -74,4 +77,35 @@ if [ "$status" -ne 0 ] || [ -n "$(ls -A "$OUT/crashes")" ]; then
   echo "fuzz.sh: FAILED: the reader crashed or leaked; inputs in $OUT/crashes" >&2
   exit 1
 fi
-echo "fuzz.sh: no crash in ${SECONDS_TO_RUN} s"
+echo "fuzz.sh: .clod reader: no crash in ${SECONDS_TO_RUN} s"
+
+# The PLY input path: the checked reader, the input check and the grouping.
+"$CXX_FUZZ" -std=c++14 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
+  -I"$ROOT/vcg_ext" -isystem "$MESHLAB_SRC/vcglib" -isystem /usr/include/eigen3 \
+  "$ROOT/vcg_ext/fuzz/ply_reader_fuzz.cpp" "$ROOT/vcg_ext/conelod/ply_format.cpp" \
+  "$ROOT/vcg_ext/conelod/mesh_check.cpp" "$ROOT/vcg_ext/conelod/indexed_mesh.cpp" \
+  "$ROOT/vcg_ext/conelod/cone_grouping.cpp" "$ROOT/vcg_ext/conelod/normal_cone.cpp" \
+  -o "$OUT/ply_reader_fuzz"
+mkdir -p "$OUT/ply_corpus" "$OUT/ply_crashes"
+cp "$OUT"/seeds/*.ply "$OUT/ply_corpus/"
+python3 - "$OUT/ply_corpus" "$ROOT/tests/integration" <<'PY'
+import sys
+sys.path.insert(0, sys.argv[2])
+import bad_inputs
+for name, data, _ in bad_inputs.corpus():
+    if len(data) < 200000:  # the 1 MiB header case only slows the fuzzer down
+        open("%s/%s.ply" % (sys.argv[1], name), "wb").write(data)
+PY
+REGRESSIONS="$ROOT/vcg_ext/fuzz/regressions/ply"
+if [ -d "$REGRESSIONS" ] && [ -n "$(ls -A "$REGRESSIONS")" ]; then
+  ASAN_OPTIONS=detect_leaks=1 ./ply_reader_fuzz "$REGRESSIONS"/* 2>&1 | tail -n 3
+fi
+ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+  ./ply_reader_fuzz -max_total_time="$SECONDS_TO_RUN" -rss_limit_mb=1024 -malloc_limit_mb=256 -timeout=10 \
+  -artifact_prefix="$OUT/ply_crashes/" -print_final_stats=1 "$OUT/ply_corpus" 2>&1 | tail -n 8
+status=${PIPESTATUS[0]}
+if [ "$status" -ne 0 ] || [ -n "$(ls -A "$OUT/ply_crashes")" ]; then
+  echo "fuzz.sh: FAILED: the PLY path crashed or leaked; inputs in $OUT/ply_crashes (add them to $REGRESSIONS)" >&2
+  exit 1
+fi
+echo "fuzz.sh: PLY path: no crash in ${SECONDS_TO_RUN} s"

@@ -28,6 +28,8 @@
 
 #include <wrap/io_trimesh/import_ply.h>
 
+#include <sys/stat.h>
+
 #define HARNESS_TEXT(x) #x
 #define HARNESS_STRING(x) HARNESS_TEXT(x)
 
@@ -370,6 +372,24 @@ void Failures(Run& r) {
     r.refused(kExport, md, par, "NaN", "NaN coordinates");
     Check(!QFileInfo::exists(clod), "  no file is left");
   }
+  {  // Coordinates around 1e19 (their squares overflow floats; the sampled distance crashed on
+     // them): every filter that reads the mesh refuses them and leaves it unchanged.
+    MeshDocument md;
+    MeshModel* mm = Load(md, r.bunny);
+    for (auto& v : mm->cm.vert) v.P() *= 1e20f;
+    for (const char* name : {kGrouping, kCulling, kFeature, kBudget, kPca, kProgressive}) {
+      RichParameterList par = r.params(name, md);
+      r.refused(name, md, par, "beyond +-1e18", "coordinates around 1e19");
+    }
+    RichParameterList par = r.params(kGroupQem, md);
+    harness::SetEnum(par, "GroupSource", 1);
+    r.refused(kGroupQem, md, par, "beyond +-1e18", "coordinates around 1e19");
+    par = r.params(kExport, md);
+    const QString clod = r.dir.filePath("huge.clod");
+    harness::SetPath(par, "FileName", clod);
+    r.refused(kExport, md, par, "beyond +-1e18", "coordinates around 1e19");
+    Check(!QFileInfo::exists(clod), "  no file is left");
+  }
   {  // File parameters: no hidden default file; missing and broken files named.
     MeshDocument md;
     MeshModel* mm = Load(md, r.bunny);
@@ -391,6 +411,21 @@ void Failures(Run& r) {
     QFile whole(clod);
     whole.open(QIODevice::ReadOnly);
     const QByteArray bytes = whole.readAll();
+    whole.close();
+    // Nothing the user named is lost: a cancelled export over an existing file leaves it as it
+    // was (it was deleted), a FIFO or a missing folder is refused before the work.
+    r.refused(kExport, md, par, "cancel", "a cancelled export over an existing file", CancelAtOnce);
+    whole.open(QIODevice::ReadOnly);
+    Check(whole.readAll() == bytes, "  the existing file is unchanged");
+    whole.close();
+    const QString fifo = r.dir.filePath("fifo.clod");
+    Check(mkfifo(qUtf8Printable(fifo), 0644) == 0, "a FIFO is made");
+    harness::SetPath(par, "FileName", fifo);
+    r.refused(kExport, md, par, "only a regular file is written", "a FIFO as the LOD file");
+    Check(QFileInfo(fifo).exists(), "  the FIFO is still there");
+    harness::SetPath(par, "FileName", r.dir.filePath("no/such/folder/x.clod"));
+    r.refused(kExport, md, par, "No such file or directory", "a file in a missing folder");
+    harness::SetPath(par, "FileName", clod);
     const QString truncated = r.dir.filePath("truncated.clod");
     QFile cut(truncated);
     cut.open(QIODevice::WriteOnly);

@@ -8,12 +8,15 @@
 #include "conelod/lod.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <numeric>
 
 #include "conelod/lod_internal.h"
+#include "conelod/safe_file.h"
 
 namespace conelod {
 namespace {
@@ -27,14 +30,16 @@ double Seconds(std::chrono::steady_clock::time_point t0) {
 // Buffered output with absolute-offset patching (FILE* with a large buffer).
 class OutFile {
  public:
-  bool open(const std::string& path) {
-    f_ = std::fopen(path.c_str(), "wb");
-    if (f_) std::setvbuf(f_, nullptr, _IOFBF, 1 << 20);
-    return f_ != nullptr;
+  // Writes a temporary file beside `path`, renamed over it by close() (safe_file.h).
+  std::string open(const std::string& path) {
+    path_ = path;
+    const std::string err = safe_.open(path);
+    f_ = safe_.file();
+    return err;
   }
-  ~OutFile() { if (f_) std::fclose(f_); }
   bool write(const void* p, size_t n) {
-    if (!ok_ || (n && std::fwrite(p, 1, n, f_) != n)) ok_ = false;
+    if (!ok_) return false;
+    if (n && std::fwrite(p, 1, n, f_) != n) failed();
     offset_ += n;
     return ok_;
   }
@@ -54,19 +59,38 @@ class OutFile {
     if (!ok_) return false;
     if (std::fseek(f_, long(at), SEEK_SET) != 0 || std::fwrite(e.bytes.data(), 1, e.bytes.size(), f_) != e.bytes.size() ||
         std::fseek(f_, 0, SEEK_END) != 0)
-      ok_ = false;
+      failed();
     return ok_;
   }
+  // Commits the file when every write succeeded, else removes the temporary file.
   bool close() {
-    if (f_ && std::fclose(f_) != 0) ok_ = false;
     f_ = nullptr;
+    if (ok_) {
+      error_ = safe_.commit();
+      ok_ = error_.empty();
+    }
+    safe_.discard();
     return ok_;
+  }
+  const std::string& error() const { return error_; }
+  void abandon() {
+    f_ = nullptr;
+    ok_ = false;
+    safe_.discard();
   }
   uint64_t offset() const { return offset_; }
   bool ok() const { return ok_; }
 
  private:
+  void failed() {
+    error_ = "cannot write '" + path_ + "': " + std::strerror(errno);
+    ok_ = false;
+  }
+
+  SafeFile safe_;
+  std::string path_;
   std::FILE* f_ = nullptr;
+  std::string error_;
   uint64_t offset_ = 0;
   bool ok_ = true;
 };
@@ -318,10 +342,10 @@ Status WriteLodFile(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
   }
 
   OutFile out;
-  if (!out.open(path)) return Status::Invalid("cannot create '" + path + "'");
-  auto fail = [&](const std::string& why) {
-    out.close();
-    std::remove(path.c_str());
+  const std::string openError = out.open(path);
+  if (!openError.empty()) return Status::Invalid(openError);
+  auto fail = [&](const std::string& why) {  // the user's file is untouched: only the temporary goes
+    out.abandon();
     return Status::Invalid(why);
   };
 
@@ -484,7 +508,7 @@ Status WriteLodFile(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
       Encoder he;
       EncodeChunkHeader(he, h);
       out.patch(levelOffset[size_t(k)], he);
-      if (!out.ok()) return fail("cannot write '" + path + "'");
+      if (!out.ok()) return fail(out.error());
     }
   }
 
@@ -523,7 +547,7 @@ Status WriteLodFile(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
     e.bytes.insert(e.bytes.end(), header.bytes.begin(), header.bytes.end());
     out.patch(0, e);
   }
-  if (!out.close()) return fail("cannot write '" + path + "'");
+  if (!out.close()) return fail(out.error());
   if (progress) progress(100, "LOD file: written");
 
   if (stats) {

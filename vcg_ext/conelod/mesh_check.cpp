@@ -24,8 +24,10 @@ MeshReport CheckFaces(const IndexedMesh& m, bool anyArea) {
     if (!used[v]) { ++r.unreferencedVertices; continue; }
     const auto& p = m.positions[v];
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) ++r.nonFiniteVertices;
+    else if (std::fabs(p[0]) > kMaxCoordinate || std::fabs(p[1]) > kMaxCoordinate || std::fabs(p[2]) > kMaxCoordinate)
+      ++r.hugeVertices;
   }
-  if (r.badIndexFaces || r.nonFiniteVertices) return r;
+  if (r.badIndexFaces || r.nonFiniteVertices || r.hugeVertices) return r;
   for (size_t f = 0; f < m.faces.size(); ++f) {
     vcg::Point3d n;
     double a;
@@ -39,7 +41,7 @@ MeshReport CheckFaces(const IndexedMesh& m, bool anyArea) {
 
 MeshReport CheckMesh(const IndexedMesh& m, bool withTopology) {
   MeshReport r = CheckFaces(m, false);
-  if (!withTopology || r.badIndexFaces || r.nonFiniteVertices) return r;
+  if (!withTopology || r.badIndexFaces || r.nonFiniteVertices || r.hugeVertices) return r;
   const FaceAdjacency adj = BuildFaceAdjacency(m);
   r.borderEdges = adj.borderEdges;
   r.nonManifoldEdges = adj.nonManifoldEdges;
@@ -61,6 +63,11 @@ Status RequireValidForFaces(const MeshReport& r) {
     return Status::Invalid(std::to_string(r.nonFiniteVertices) +
                            (r.nonFiniteVertices == 1 ? " vertex used by faces has" : " vertices used by faces have") +
                            " NaN or infinite coordinates; remove them first (e.g. Filters > Cleaning and Repairing)");
+  if (r.hugeVertices)
+    return Status::Invalid(std::to_string(r.hugeVertices) +
+                           (r.hugeVertices == 1 ? " vertex used by faces has" : " vertices used by faces have") +
+                           " coordinates beyond +-1e18, whose squares overflow single precision; scale the mesh "
+                           "down first (e.g. Filters > Normals, Curvatures and Orientation > Transform: Scale)");
   if (r.degenerateFaces == r.faces)
     return Status::Invalid("every face of the mesh has zero area: there is no normal to group by");
   return Status::Ok();

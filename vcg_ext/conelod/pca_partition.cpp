@@ -820,6 +820,8 @@ Status BuildPcaTree(const IndexedMesh& mesh, const PcaPartitionParams& params, P
       if (v >= mesh.positions.size()) { valid = false; break; }
       const auto& p = mesh.positions[v];
       if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) valid = false;
+      if (std::fabs(p[0]) > kMaxCoordinate || std::fabs(p[1]) > kMaxCoordinate || std::fabs(p[2]) > kMaxCoordinate)
+        valid = false;
     }
     if (!valid) break;
   }

@@ -54,7 +54,8 @@ Status SampledDistance(const IndexedMesh& from, const IndexedMesh& to, int faceS
   Status s = RequireValidForFaces(from);
   if (s.ok()) s = RequireValidForFaces(to);
   if (!s.ok()) return s;
-  if (faceSamples < 0) return Status::Invalid("the number of samples must be >= 0");
+  if (faceSamples < 0 || faceSamples > kMaxFaceSamples)
+    return Status::Invalid("the number of samples must be from 0 to " + std::to_string(kMaxFaceSamples));
   DMesh target;
   Fill(to, target);
   Grid grid;

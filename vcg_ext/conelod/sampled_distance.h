@@ -20,6 +20,10 @@ struct SurfaceDistance {
   size_t samples = 0;
 };
 
+// The most face samples one distance takes: 10 million samples already resolve a 0.01 % error on
+// a 10-million-face mesh; far more only costs minutes (and crashed vcglib's grid search).
+constexpr int kMaxFaceSamples = 10000000;
+
 // One-sided: from points of `from` (its used vertices plus about `faceSamples` points on its
 // faces, deterministic) to the surface of `to`.
 Status SampledDistance(const IndexedMesh& from, const IndexedMesh& to, int faceSamples, SurfaceDistance& out);

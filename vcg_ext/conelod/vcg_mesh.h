@@ -5,8 +5,7 @@
 #include <string>
 
 #include <vcg/complex/complex.h>
-#include <wrap/io_trimesh/export_ply.h>
-#include <wrap/io_trimesh/import_ply.h>
+#include "conelod/ply_io.h"
 
 namespace conelod {
 
@@ -24,22 +23,16 @@ class CMesh : public vcg::tri::TriMesh<std::vector<CVertex>, std::vector<CFace>>
   ~CMesh() { ClearAttributes(); }
 };
 
-// Loads a PLY (or any format vcg's PLY importer reads). Returns "" or the error message.
+// Loads a PLY through the checked reader (ply_io.h). Returns "" or the error message; messages of a
+// file that could not be opened or read start with "cannot read" (IsReadFailure).
 inline std::string LoadPly(CMesh& m, const std::string& path, int* loadMask = nullptr) {
-  int mask = 0;
-  const int err = vcg::tri::io::ImporterPLY<CMesh>::Open(m, path.c_str(), mask);
-  if (loadMask) *loadMask = mask;
-  if (err != 0 && vcg::tri::io::ImporterPLY<CMesh>::ErrorCritical(err))
-    return std::string("cannot read '") + path + "': " + vcg::tri::io::ImporterPLY<CMesh>::ErrorMsg(err);
-  return "";
+  return LoadPlyChecked(m, path, loadMask);
 }
 
-// Saves a binary PLY with per-face quality and colour (and vertex colour if the input had it).
+// Saves a binary PLY with per-face quality and colour (plus `extraMask`), replacing `path` only
+// when the file is complete (ply_io.h).
 inline std::string SavePly(CMesh& m, const std::string& path, int extraMask = 0) {
-  const int mask = vcg::tri::io::Mask::IOM_FACEQUALITY | vcg::tri::io::Mask::IOM_FACECOLOR | extraMask;
-  const int err = vcg::tri::io::ExporterPLY<CMesh>::Save(m, path.c_str(), mask, true);
-  if (err != 0) return std::string("cannot write '") + path + "': " + vcg::tri::io::ExporterPLY<CMesh>::ErrorMsg(err);
-  return "";
+  return SavePlySafely(m, path, vcg::tri::io::Mask::IOM_FACEQUALITY | vcg::tri::io::Mask::IOM_FACECOLOR | extraMask);
 }
 
 }  // namespace conelod

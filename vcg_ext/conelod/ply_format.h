@@ -1,0 +1,77 @@
+// ConeLOD — a checked PLY reader: the one door every mesh of the command-line tool and the tests
+// comes in by (the plugin gets its mesh from MeshLab).
+//
+// PLY (Turk, "The PLY Polygon File Format") is a text header that declares elements (vertex, face,
+// ...) with counts and typed properties, followed by the records in ASCII or binary (little or
+// big endian). A hostile or broken header can claim any count; this reader checks every count and
+// every list length against the bytes actually left in the file *before* allocating, so a 200-byte
+// file can never ask for gigabytes, and it never reads past the end of the file.
+//
+// Read: ASCII, binary little and big endian; vertex x, y, z of any numeric type (double is
+// rounded to float, the tool's precision); per-face `quality` when present; faces as
+// `vertex_indices` (or `vertex_index`) lists of any count and index type. Every other property
+// and element is skipped. Faces with more than three corners are triangulated by ear clipping in
+// their own plane (a convex polygon gives the fan from its first corner, as vcglib does); a
+// polygon whose edges cross is refused by name, as is a face with fewer than three corners or an
+// index outside the vertex array. OBJ, OFF, STL and gzip files are recognised and refused with
+// "only PLY is read".
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace conelod {
+
+enum class PlyEncoding { Ascii, BinaryLittleEndian, BinaryBigEndian };
+
+struct PlyProperty {
+  std::string name;
+  int type = 0;           // a scalar type code (see ply_format.cpp); for a list, of its items
+  int countType = 0;      // lists only: the type of the item count
+  bool isList = false;
+};
+
+struct PlyElement {
+  std::string name;
+  uint64_t count = 0;
+  std::vector<PlyProperty> properties;
+};
+
+struct PlyHeader {
+  PlyEncoding encoding = PlyEncoding::Ascii;
+  std::vector<PlyElement> elements;
+  size_t headerBytes = 0;  // up to and including the end_header line
+};
+
+// Parses and checks the header of the `size` bytes at `data`: "" or what is wrong. Checks that
+// every element's records can fit in the bytes after the header (exactly for fixed-size binary
+// records, a lower bound with lists or ASCII).
+// `fileBytes`: the whole file's size when `data` holds only its beginning (0: `size`).
+std::string ParsePlyHeader(const char* data, size_t size, PlyHeader& header, uint64_t fileBytes = 0);
+
+// The bytes a binary file with this header has when every list is a triangle (what the tool and
+// vcglib's exporter write): used to check that a written file is complete. 0 for ASCII.
+uint64_t PlyTriangleFileBytes(const PlyHeader& header);
+
+// A mesh as read: positions, triangles, and per-face quality when the file has it.
+struct PlyMesh {
+  std::vector<std::array<float, 3>> positions;
+  std::vector<std::array<uint32_t, 3>> triangles;
+  std::vector<float> faceQuality;   // per triangle (a polygon's triangles share its value), or empty
+  size_t polygons = 0;              // faces with more than three corners (triangulated)
+};
+
+// Reads `path`. "" or a message that names the file and what is wrong with it; `ioError` is set
+// when the file could not be opened or read (as opposed to a malformed file).
+std::string ReadPly(const std::string& path, PlyMesh& mesh, bool* ioError = nullptr);
+// The same from bytes in memory (the fuzzer's entry point); `name` is used in messages.
+std::string ParsePly(const char* data, size_t size, const std::string& name, PlyMesh& mesh);
+
+// Triangulates the polygon `corners` (indices into `positions`) by ear clipping in its plane,
+// appending triangles to `out`. "" or why it cannot (its edges cross).
+std::string TriangulatePolygon(const std::vector<std::array<float, 3>>& positions,
+                               const std::vector<uint32_t>& corners, std::vector<std::array<uint32_t, 3>>& out);
+
+}  // namespace conelod

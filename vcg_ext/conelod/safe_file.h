@@ -1,0 +1,52 @@
+// ConeLOD — writing a file so that a failed write never loses what the user had.
+//
+// Every output of the tool and the plugin (.clod, PLY, images) goes through SafeFile: the bytes are
+// written to a temporary file in the target's own folder, flushed and fsync'ed, and only then
+// renamed over the target, so the target is either its old self or the complete new file. Nothing
+// the user named is ever truncated or deleted: on failure only the temporary file is removed.
+//
+// What a target may be: a missing path in a writable folder, a regular file (replaced; its
+// permission bits are kept), or a symbolic link to a regular file: the file the link points at is
+// replaced (the temporary file goes into that file's folder) and the link itself stays. Anything
+// else (a folder, a device node such as /dev/full, a FIFO, a socket, a dangling link) is refused
+// before anything is written.
+#pragma once
+
+#include <cstdio>
+#include <string>
+
+namespace conelod {
+
+// "" when `path` can be written as described above, else the reason. Creates and removes a
+// temporary file in the target's folder to find out (a read-only file system, a full quota or a
+// folder without write permission all show there). Call it before long work starts.
+std::string CheckOutputPath(const std::string& path);
+
+class SafeFile {
+ public:
+  SafeFile() = default;
+  SafeFile(const SafeFile&) = delete;
+  SafeFile& operator=(const SafeFile&) = delete;
+  ~SafeFile() { discard(); }
+
+  // Creates the temporary file for `path` and opens file() on it. "" or the error.
+  std::string open(const std::string& path);
+  std::FILE* file() const { return file_; }
+  // For writers that want a file name (vcglib's exporters): closes file() and returns the temporary
+  // file's name, which the writer then overwrites.
+  const std::string& releaseForWriter();
+  // Flushes, fsyncs and renames the temporary file over the target. "" or the error; on error the
+  // target is untouched and the temporary file removed.
+  std::string commit();
+  // Removes the temporary file (nothing when committed or never opened).
+  void discard();
+
+ private:
+  std::string target_;   // the file that is replaced (a symbolic link resolved)
+  std::string shown_;    // the path as the user gave it, for messages
+  std::string temp_;
+  std::FILE* file_ = nullptr;
+  unsigned mode_ = 0644;
+};
+
+}  // namespace conelod
