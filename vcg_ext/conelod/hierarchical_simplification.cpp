@@ -11,6 +11,7 @@
 
 #include <vcg/space/box3.h>
 
+#include "conelod/cone_grouping.h"
 #include "conelod/cores.h"
 
 namespace conelod {
@@ -282,7 +283,9 @@ Status BuildSimplifiedLevels(const IndexedMesh& mesh, const GroupHierarchy& hier
     std::vector<const std::vector<int>*> coarser;
     for (size_t j = 1; j < groups.size(); ++j) coarser.push_back(&groups[j]);
 
-    GroupQemParams qp = params.qem;
+    HierarchicalSimplificationParams levelParams = params;  // keepCones: the cones of level k
+    if (params.qem.keepCones) levelParams.qem.coneBound = LevelConeBounds(hierarchy, k);
+    GroupQemParams qp = levelParams.qem;
     qp.targetFaces = std::max<size_t>(1, size_t(std::floor(params.levelRatio * double(facesBelow))));
     L.targetFaces = qp.targetFaces;
     int parts = 1;
@@ -292,7 +295,7 @@ Status BuildSimplifiedLevels(const IndexedMesh& mesh, const GroupHierarchy& hier
     const Progress levelProgress = SubProgress(progress, 100 * (k - 1) / levels, 100 * k / levels);
     Status s = ValidateParams(qp);
     if (s.ok())
-      s = parts > 1 ? SimplifyInParts(*below, groups, parts, (k - 1) % 2, params, r, levelProgress)
+      s = parts > 1 ? SimplifyInParts(*below, groups, parts, (k - 1) % 2, levelParams, r, levelProgress)
                     : SimplifyPreservingGroups(*below, groups[0], qp, r, levelProgress, coarser);
     if (!s.ok()) return s;
     L.mesh = std::move(r.mesh);
