@@ -56,8 +56,8 @@ const char* kSimplifyUsage =
     "  --keep-cones        (cone groups) refuse collapses that widen a group's normal cone past its\n"
     "                      level's threshold; the count of cones over it is always reported\n"
     "  --target-ratio F    target = F x faces (0 < F <= 1)     --max-error E  fraction of bbox diag\n"
-    "  A cone level that cannot reach the target exits 2 naming the faces reached and the level\n"
-    "  that would (the JSON is still printed, OUT.ply still written).\n"
+    "  A cone level L that cannot reach the target (no lock, --max-error or --keep-cones) exits 2 naming\n"
+    "  the faces reached and the level that would (the JSON is still printed, OUT.ply written).\n"
     "options (defaults in brackets): --no-condition1 (with --no-condition2: plain QEM) --lock-boundaries\n"
     "  --quality-thr Q [0.3]  --no-optimal-placement  --preserve-boundary  --boundary-weight W [1]\n"
     "  --no-preserve-normal (allow face flips)\n"
@@ -245,7 +245,9 @@ int CmdSimplify(int argc, char** argv) {
   const int conesOver = coneLevel > 0 ? CountConesOverLimit(r.mesh, groupsAfter, coneLimitDeg) : 0;
   const bool targetReached = p.targetFaces == 0 || r.mesh.faceCount() <= p.targetFaces;
   std::string unreachable;
-  if (coneLevel > 0 && !targetReached) {
+  // (Not with cone:auto, whose stop is reported as any other, nor with the lock, a maximum error
+  // or --keep-cones: those stop early by choice.)
+  if (coneLevel > 0 && !autoLevel && !targetReached && !p.lockGroupBoundaries && !(p.maxError > 0) && !p.keepCones) {
     const int would = AutoGroupLevel(h, p.targetFaces);
     unreachable = input + ": the target of " + std::to_string(p.targetFaces) + " faces cannot be reached with " +
                   std::to_string(h.level(coneLevel).groups.size()) + " groups (level " + std::to_string(coneLevel) +

@@ -538,6 +538,50 @@ TEST(Simplify, BunnyWithNormalConeGroupsStaysIntactAt10And1Percent) {
   }
 }
 
+// Integrity mode at the automatic level: every target reached, every group whole, and
+// (keepCones) no group's cone over its level's threshold where the plain run has some.
+TEST(Simplify, BunnyAtTheAutomaticLevelReachesTheTargetAndKeepsCones) {
+  const IndexedMesh m = LoadReal("stanford_bunny_bun_zipper.ply");
+  GroupHierarchy h;
+  ASSERT_TRUE(BuildConeHierarchy(m, ConeGroupingParams(), h).ok());
+  for (double ratio : {0.5, 0.1, 0.02}) {
+    SCOPED_TRACE(ratio);
+    GroupQemParams p;
+    p.targetFaces = size_t(ratio * double(m.faces.size()));
+    const int level = AutoGroupLevel(h, p.targetFaces);
+    ASSERT_GE(level, 1);
+    EXPECT_LE(h.level(level).groups.size() * kAutoFacesPerGroup, p.targetFaces);
+    if (level > 1) {
+      EXPECT_GT(h.level(level - 1).groups.size() * kAutoFacesPerGroup, p.targetFaces);
+    }
+    const std::vector<int>& g = h.level(level).faceGroup;
+    const double limitDeg = h.level(level).thresholdDeg;
+    EXPECT_EQ(CountConesOverLimit(m, g, limitDeg), 0) << "the input's groups are within their threshold";
+    int over[2] = {0, 0};
+    for (int keep = 0; keep < 2; ++keep) {
+      p.keepCones = keep == 1;
+      p.coneBound = keep ? LevelConeBounds(h, level) : std::vector<NormalCone>();
+      GroupQemResult r;
+      ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+      ExpectValidOutput(m, r);
+      if (!keep) {
+        EXPECT_EQ(r.stats.stop, GroupQemStats::Stop::TargetReached);
+      }
+      GroupIntegrity gi;
+      ASSERT_TRUE(MeasureGroupIntegrity(m, g, r.mesh, GroupsAfter(r, g), gi).ok());
+      EXPECT_EQ(gi.groupsSplit, 0);
+      EXPECT_EQ(gi.groupsVanished, 0);
+      over[keep] = CountConesOverLimit(r.mesh, GroupsAfter(r, g), limitDeg);
+    }
+    EXPECT_EQ(over[1], 0);
+    if (ratio < 0.5) {
+      EXPECT_GT(over[0], 0) << "without keepCones some cones should widen";
+    }
+  }
+  EXPECT_EQ(AutoGroupLevel(h, 1), h.levelCount()) << "no level fits: the top one";
+  EXPECT_EQ(AutoGroupLevel(h, m.faces.size()), 1);
+}
+
 TEST(Simplify, AwkwardScansWork) {
   // Non-manifold edges and duplicate faces (res4), 122 components (boeing), zero-area faces.
   for (const char* name : {"stanford_bunny_bun_zipper_res4.ply", "boeing.ply", "mech_holes_shark.ply"}) {
