@@ -283,11 +283,17 @@ class Simplifier {
   bool keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a, uint32_t n0b,
                        uint32_t n1a, uint32_t n1b);
   int groupIn(int layer, uint32_t f) const { return layer < 0 ? faces_[f].group : coarserDense_[size_t(layer)][f]; }
-  // keepCones: the new normal (unnormalised, squared length lenSq) of a face of dense group g.
-  bool insideCone(int g, const Point3d& n, double lenSq) const {
-    if (size_t(g) >= coneAxis_.size() || !(coneCos_[size_t(g)] > -2)) return true;
-    const double dot = n * coneAxis_[size_t(g)], c = coneCos_[size_t(g)];
-    return c >= 0 ? (dot >= 0 && dot * dot >= c * c * lenSq) : (dot >= 0 || dot * dot <= c * c * lenSq);
+  // keepCones: the new normal (unnormalised, squared length lenSq) of face f stays in the cone
+  // bound of its group in every grouping that has bounds.
+  bool insideCones(uint32_t f, const Point3d& n, double lenSq) const {
+    for (size_t l = 0; l < coneAxis_.size(); ++l) {
+      const size_t g = size_t(l == 0 ? group_[f] : (*coarser_[l - 1])[f]);
+      if (g >= coneAxis_[l].size() || !(coneCos_[l][g] > -2)) continue;
+      const double dot = n * coneAxis_[l][g], c = coneCos_[l][g];
+      if (!(c >= 0 ? (dot >= 0 && dot * dot >= c * c * lenSq) : (dot >= 0 || dot * dot <= c * c * lenSq)))
+        return false;
+    }
+    return true;
   }
 
   const IndexedMesh& mesh_;
@@ -319,8 +325,10 @@ class Simplifier {
   std::vector<FaceRec> faces_;  // group: dense ids 0..n-1 (only equality and counts matter)
   std::vector<std::vector<int>> coarserDense_;  // integrity mode: the coarser groupings, dense ids
   std::vector<std::vector<int>> groupFaces_;    // integrity mode: live faces per group; [0] primary
-  std::vector<Point3d> coneAxis_;               // keepCones: per dense group
-  std::vector<double> coneCos_;                 // cos of its bound; -3: no bound
+  // keepCones, per grouping with bounds ([0] primary, then the coarser ones), per group id: the
+  // bound's axis and the cosine of its half-angle (-3: no bound).
+  std::vector<std::vector<Point3d>> coneAxis_;
+  std::vector<std::vector<double>> coneCos_;
   std::vector<uint32_t> faceMark_;              // integrity search marks (== faceStamp_)
   uint32_t faceStamp_ = 0;
   std::vector<char> faceDead_;
@@ -464,8 +472,8 @@ void Simplifier::init() {
   pos_.resize(nv);
   for (size_t v = 0; v < nv; ++v) pos_[v] = Point3d::Construct(mesh_.positions[v]) - center_;
   faces_.resize(nf);
-  std::vector<int> dense, original;
-  const int groups = DenseIds(group_, dense, &original);
+  std::vector<int> dense;
+  const int groups = DenseIds(group_, dense);
   for (size_t f = 0; f < nf; ++f) {
     static_cast<std::array<uint32_t, 3>&>(faces_[f]) = mesh_.faces[f];
     faces_[f].group = dense[f];
@@ -483,13 +491,18 @@ void Simplifier::init() {
     faceMark_.assign(nf, 0);
   }
   if (p_.keepCones) {
-    coneAxis_.assign(size_t(groups), Point3d(0, 0, 1));
-    coneCos_.assign(size_t(groups), -3.0);
-    for (int g = 0; g < groups; ++g) {
-      const size_t id = size_t(original[size_t(g)]);
-      if (id >= p_.coneBound.size() || p_.coneBound[id].empty() || p_.coneBound[id].halfAngle >= NormalCone::kPi) continue;
-      coneAxis_[size_t(g)] = p_.coneBound[id].axis;
-      coneCos_[size_t(g)] = std::cos(p_.coneBound[id].halfAngle);
+    const size_t layers = 1 + std::min(coarser_.size(), p_.coarserConeBound.size());
+    coneAxis_.resize(layers);
+    coneCos_.resize(layers);
+    for (size_t l = 0; l < layers; ++l) {
+      const std::vector<NormalCone>& bounds = l == 0 ? p_.coneBound : p_.coarserConeBound[l - 1];
+      coneAxis_[l].assign(bounds.size(), Point3d(0, 0, 1));
+      coneCos_[l].assign(bounds.size(), -3.0);
+      for (size_t id = 0; id < bounds.size(); ++id) {
+        if (bounds[id].empty() || bounds[id].halfAngle >= NormalCone::kPi) continue;
+        coneAxis_[l][id] = bounds[id].axis;
+        coneCos_[l][id] = std::cos(bounds[id].halfAngle);
+      }
     }
   }
   faceDead_.assign(nf, 0);
@@ -735,7 +748,7 @@ Candidate Simplifier::judge(uint32_t a, uint32_t b) {
         const double dot = nOld * nNew;
         if (dot < 0 || dot * dot < minCosSq * lenOldSq * lenNewSq) return c;
       }
-      if (p_.keepCones && !insideCone(t.group, nNew, lenNewSq)) {
+      if (p_.keepCones && !insideCones(*f, nNew, lenNewSq)) {
         c.verdict = CollapseVerdict::Cone;
         return c;
       }
@@ -792,8 +805,13 @@ bool Simplifier::keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint32_t e0,
     const auto add = [&](uint32_t f) {
       if (f != kNone && groupIn(layer, f) == G && std::find(nb, nb + nn, f) == nb + nn) nb[nn++] = f;
     };
-    if (g0 == G) { add(n0a); add(n0b); }
-    if (g1 == G) { add(n1a); add(n1b); }
+    // Only one of e0, e1 in G: its (at most two) faces of G next to it become adjacent.
+    if (g0 != g1) continue;
+    // Both: the faces of a closed fan of v1 (or v2) inside G join n0a (n0b) and n1a (n1b).
+    if (layer < 0 ? (interior(a) || interior(b))
+                  : (interiorIn(a, coarserDense_[size_t(layer)]) || interiorIn(b, coarserDense_[size_t(layer)])))
+      continue;
+    add(n0a); add(n0b); add(n1a); add(n1b);
     if (nn <= 1) continue;
     // The fan of the merged vertex: G's faces around a and b but e0, e1; union-find.
     fanScratch_.clear();

@@ -75,6 +75,9 @@ struct GroupQemParams {
                                    // changed face normal of the group must stay in (axis: the group's
                                    // input cone axis, half-angle: its level's threshold); ids past
                                    // the end or empty cones: no bound
+  std::vector<std::vector<NormalCone>> coarserConeBound;  // keepCones: the same per coarser grouping
+                                   // (SimplifyPreservingGroups' coarserGroups, in order), so that a
+                                   // hierarchy's later levels start inside their bounds
   bool lockGroupBoundaries = false;  // no vertex on a group boundary moves
   double qualityThr = 0.3;         // new faces below this quality are penalised (0: no penalty), as vcglib
   bool optimalPlacement = true;    // quadric minimum; false: the better endpoint

@@ -284,7 +284,11 @@ Status BuildSimplifiedLevels(const IndexedMesh& mesh, const GroupHierarchy& hier
     for (size_t j = 1; j < groups.size(); ++j) coarser.push_back(&groups[j]);
 
     HierarchicalSimplificationParams levelParams = params;  // keepCones: the cones of level k
-    if (params.qem.keepCones) levelParams.qem.coneBound = LevelConeBounds(hierarchy, k);
+    if (params.qem.keepCones) {  // every coarser level's bounds too: its faces start inside them
+      levelParams.qem.coneBound = LevelConeBounds(hierarchy, k);
+      levelParams.qem.coarserConeBound.clear();
+      for (int j = k + 1; j <= levels; ++j) levelParams.qem.coarserConeBound.push_back(LevelConeBounds(hierarchy, j));
+    }
     GroupQemParams qp = levelParams.qem;
     qp.targetFaces = std::max<size_t>(1, size_t(std::floor(params.levelRatio * double(facesBelow))));
     L.targetFaces = qp.targetFaces;
