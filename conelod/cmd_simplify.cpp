@@ -24,7 +24,7 @@ void WriteStats(Json& j, const GroupQemStats& s) {
   j.key("refused").beginObject()
       .field("topology", s.refusedTopology).field("condition1", s.refusedCondition1)
       .field("condition2", s.refusedCondition2).field("lock", s.refusedLock).field("fixed", s.refusedFixed)
-      .field("geometry", s.refusedGeometry)
+      .field("geometry", s.refusedGeometry).field("cone", s.refusedCone)
       .endObject();
 }
 
@@ -40,17 +40,25 @@ void WriteGroupsToFaces(CMesh& mesh, const std::vector<int>& faceGroup, bool set
 
 const char* kSimplifyUsage =
     "conelod simplify IN.ply (--target-faces N | --target-ratio F | --max-error E) [--groups SOURCE]\n"
-    "                 [--lock-boundaries] [options] [-o OUT.ply] [--json]\n"
+    "                 [--mode integrity|paper] [--keep-cones] [options] [-o OUT.ply] [--json]\n"
     "conelod simplify IN.ply --hierarchy [--level-ratio R] [options] [-o PREFIX] [--json]\n"
-    "  Quadric edge collapse that keeps the face groups intact (Kamiya-Suzuki-Kawachi, §6):\n"
-    "  condition 1 (no group split or removed) and condition 2 (no new vertex where 3+ groups meet).\n"
+    "  Quadric edge collapse that keeps the face groups intact (Kamiya-Suzuki-Kawachi, §6).\n"
+    "  --mode integrity    (default) every group stays one non-empty piece; contours and group\n"
+    "                      corners move and merge like any vertex (as accurate as plain QEM)\n"
+    "  --mode paper        the paper's condition 1 (no group split or removed) and condition 2 (no\n"
+    "                      new vertex where 3+ groups meet), group corners fixed\n"
     "  OUT.ply keeps per-face quality = group id (colour = group). --hierarchy simplifies once per\n"
     "  level of the normal-cone hierarchy, each level from the one below (PREFIX_L<k>.ply).\n"
     "  --groups quality    per-face quality of IN.ply (default; equal values = one group)\n"
     "  --groups cone:L     level L of the normal-cone hierarchy, default grouping parameters\n"
+    "  --groups cone:auto  the finest level with >= 8 faces per group at the target (top level if none)\n"
     "  --groups pca:K      the K clusters of the recursive PCA face partition\n"
+    "  --keep-cones        (cone groups) refuse collapses that widen a group's normal cone past its\n"
+    "                      level's threshold; the count of cones over it is always reported\n"
     "  --target-ratio F    target = F x faces (0 < F <= 1)     --max-error E  fraction of bbox diag\n"
-    "options (defaults in brackets): --no-condition1 --no-condition2 --lock-boundaries\n"
+    "  A cone level L that cannot reach the target (no lock, --max-error or --keep-cones) exits 2 naming\n"
+    "  the faces reached and the level that would (the JSON is still printed, OUT.ply written).\n"
+    "options (defaults in brackets): --no-condition1 (with --no-condition2: plain QEM) --lock-boundaries\n"
     "  --quality-thr Q [0.3]  --no-optimal-placement  --preserve-boundary  --boundary-weight W [1]\n"
     "  --no-preserve-normal (allow face flips)\n"
     "with --hierarchy: --level-ratio R [0.5]; --faces-per-part P [100000]: a level of at least 2P\n"
@@ -61,9 +69,9 @@ const char* kSimplifyUsage =
 int CmdSimplify(int argc, char** argv) {
   Args a(argc, argv,
          {"-o", "--target-faces", "--target-ratio", "--max-error", "--groups", "--quality-thr", "--boundary-weight",
-          "--level-ratio", "--threads", "--faces-per-part", "--samples"},
+          "--level-ratio", "--threads", "--faces-per-part", "--samples", "--mode"},
          {"--json", "--no-condition1", "--no-condition2", "--lock-boundaries", "--no-optimal-placement",
-          "--preserve-boundary", "--no-preserve-normal", "--hierarchy"});
+          "--preserve-boundary", "--no-preserve-normal", "--hierarchy", "--keep-cones"});
   GroupQemParams p;
   const int targetFaces = a.integer("--target-faces", 0);
   const double targetRatio = a.num("--target-ratio", 0);
@@ -80,6 +88,10 @@ int CmdSimplify(int argc, char** argv) {
   p.optimalPlacement = !a.has("--no-optimal-placement");
   p.preserveBoundary = a.has("--preserve-boundary");
   p.preserveNormal = !a.has("--no-preserve-normal");
+  p.keepCones = a.has("--keep-cones");
+  const std::string mode = a.str("--mode", "integrity");
+  if (mode == "paper") p.mode = GroupMode::Paper;
+  else if (mode != "integrity") return Fail(kUsage, "--mode must be integrity or paper (got '" + mode + "')");
   const bool hierarchy = a.has("--hierarchy");
   const bool json = a.has("--json");
   if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kSimplifyUsage);
@@ -95,10 +107,16 @@ int CmdSimplify(int argc, char** argv) {
     return Fail(kUsage, std::string("give --target-faces, --target-ratio or --max-error\n") + kSimplifyUsage);
   std::string source = a.str("--groups", hierarchy ? "cone:1" : "quality");
   int coneLevel = 0, pcaClusters = 0;
-  if (source.compare(0, 5, "cone:") == 0) {
+  const bool autoLevel = source == "cone:auto";
+  if (autoLevel) {
+    if (hierarchy) return Fail(kUsage, "--hierarchy simplifies every level: cone:auto goes with one target");
+    if (!targetFaces && !a.has("--target-ratio"))
+      return Fail(kUsage, "--groups cone:auto chooses the level for a face count: give --target-faces or --target-ratio");
+    coneLevel = -1;
+  } else if (source.compare(0, 5, "cone:") == 0) {
     char* end = nullptr;
     coneLevel = int(std::strtol(source.c_str() + 5, &end, 10));
-    if (*end || coneLevel < 1) return Fail(kUsage, "--groups cone:L needs a level L >= 1");
+    if (*end || coneLevel < 1) return Fail(kUsage, "--groups cone:L needs a level L >= 1 (or cone:auto)");
   } else if (source.compare(0, 4, "pca:") == 0) {
     char* end = nullptr;
     pcaClusters = int(std::strtol(source.c_str() + 4, &end, 10));
@@ -108,6 +126,8 @@ int CmdSimplify(int argc, char** argv) {
     return Fail(kUsage, "--groups must be quality, cone:L or pca:K\n" + std::string(kSimplifyUsage));
   }
   if (hierarchy && source == "quality") return Fail(kUsage, "--hierarchy simplifies the levels of the normal-cone hierarchy: drop --groups quality");
+  if (p.keepCones && coneLevel == 0)
+    return Fail(kUsage, "--keep-cones keeps the normal cones of cone groups: use --groups cone:L or cone:auto");
   const std::string& input = a.positional()[0];
 
   CMesh mesh;
@@ -122,13 +142,19 @@ int CmdSimplify(int argc, char** argv) {
   // Group ids per face of `im`.
   std::vector<int> groups;
   GroupHierarchy h;
-  if (coneLevel > 0) {
+  if (a.has("--target-ratio")) p.targetFaces = std::max<size_t>(1, size_t(targetRatio * double(im.faceCount())));
+  else p.targetFaces = size_t(targetFaces);
+  if (coneLevel != 0) {
     s = BuildConeHierarchy(im, ConeGroupingParams(), h);
     if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
     if (!hierarchy && coneLevel > h.levelCount())
       return Fail(kUsage, "--groups " + source + ": the normal-cone hierarchy of this mesh has " +
                               std::to_string(h.levelCount()) + " levels");
-    if (!hierarchy) groups = h.level(coneLevel).faceGroup;
+    if (autoLevel) coneLevel = AutoGroupLevel(h, p.targetFaces);
+    if (!hierarchy) {
+      groups = h.level(coneLevel).faceGroup;
+      if (p.keepCones) p.coneBound = LevelConeBounds(h, coneLevel);
+    }
   } else if (pcaClusters > 0) {
     // The cut of the recursive PCA partition at K clusters (built best-first, down to K only).
     PcaPartitionParams pp;
@@ -158,7 +184,8 @@ int CmdSimplify(int argc, char** argv) {
     const double seconds = timer.seconds();
     if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
     Json j;
-    j.beginObject().field("input", input).field("faces_in", im.faceCount()).field("seconds", seconds);
+    j.beginObject().field("input", input).field("faces_in", im.faceCount()).field("seconds", seconds)
+        .field("mode", ToString(p.mode)).field("keep_cones", p.keepCones);
     j.key("levels").beginArray();
     if (!json)
       std::printf("%s: %zu faces, %d levels in %.3f s\n%5s %8s %8s %8s %8s %8s %9s%s\n", input.c_str(), im.faceCount(),
@@ -170,6 +197,9 @@ int CmdSimplify(int argc, char** argv) {
       j.beginObject().field("level", L.level).field("groups_before", gi.groupsBefore).field("groups_after", gi.groupsAfter)
           .field("target_faces", L.targetFaces).field("faces_out", L.mesh.faceCount())
           .field("groups_split", gi.groupsSplit).field("groups_vanished", gi.groupsVanished);
+      const double limitDeg = std::min(h.level(L.level).thresholdDeg, 180.0);
+      j.field("cone_limit_deg", limitDeg)
+          .field("cones_over_threshold", CountConesOverLimit(L.mesh, L.faceGroup, limitDeg));
       HausdorffResult hd;
       if (samples > 0) {
         s = SampledHausdorff(im, L.mesh, samples, hd);
@@ -200,8 +230,6 @@ int CmdSimplify(int argc, char** argv) {
     return kOk;
   }
 
-  if (a.has("--target-ratio")) p.targetFaces = std::max<size_t>(1, size_t(targetRatio * double(im.faceCount())));
-  else p.targetFaces = size_t(targetFaces);
   GroupQemResult r;
   Timer timer;
   s = SimplifyPreservingGroups(im, groups, p, r);
@@ -212,6 +240,23 @@ int CmdSimplify(int argc, char** argv) {
   for (size_t f = 0; f < r.sourceFace.size(); ++f) groupsAfter[f] = groups[r.sourceFace[f]];
   GroupIntegrity gi;
   MeasureGroupIntegrity(im, groups, r.mesh, groupsAfter, gi);
+  // Cone groups: the cones now wider than their level's threshold; and, when the target was
+  // missed, the level that would reach it.
+  const double coneLimitDeg = coneLevel > 0 ? std::min(h.level(coneLevel).thresholdDeg, 180.0) : 0;
+  const int conesOver = coneLevel > 0 ? CountConesOverLimit(r.mesh, groupsAfter, coneLimitDeg) : 0;
+  const bool targetReached = p.targetFaces == 0 || r.mesh.faceCount() <= p.targetFaces;
+  std::string unreachable;
+  // (Not with cone:auto, whose stop is reported as any other, nor with the lock, a maximum error
+  // or --keep-cones: those stop early by choice.)
+  if (coneLevel > 0 && !autoLevel && !targetReached && !p.lockGroupBoundaries && !(p.maxError > 0) && !p.keepCones) {
+    const int would = AutoGroupLevel(h, p.targetFaces);
+    unreachable = input + ": the target of " + std::to_string(p.targetFaces) + " faces cannot be reached with " +
+                  std::to_string(h.level(coneLevel).groups.size()) + " groups (level " + std::to_string(coneLevel) +
+                  "): stopped at " + std::to_string(r.mesh.faceCount()) + " faces (" + ToString(r.stats.stop) + "); " +
+                  (would > coneLevel ? "level " + std::to_string(would) + " (--groups cone:" + std::to_string(would) +
+                                           ", or cone:auto) would reach it"
+                                     : std::string("no coarser level has fewer groups per face: try a larger target"));
+  }
 
   if (a.has("-o")) {
     ApplySimplifiedMesh(mesh, faceOf, r.mesh, r.sourceFace, r.sourceVertex);
@@ -229,7 +274,12 @@ int CmdSimplify(int argc, char** argv) {
         .field("groups_disconnected_in", gi.groupsDisconnectedBefore).field("integrity", gi.intact())
         .field("seconds", seconds)
         .field("condition1", p.condition1).field("condition2", p.condition2)
-        .field("lock_boundaries", p.lockGroupBoundaries);
+        .field("lock_boundaries", p.lockGroupBoundaries)
+        .field("mode", ToString(p.mode)).field("keep_cones", p.keepCones).field("target_reached", targetReached);
+    if (coneLevel > 0)
+      j.field("group_level", coneLevel).field("group_level_automatic", autoLevel)
+          .field("cone_limit_deg", coneLimitDeg).field("cones_over_threshold", conesOver);
+    if (!unreachable.empty()) j.field("message", unreachable);
     WriteStats(j, r.stats);
     if (a.has("-o")) j.field("output", a.str("-o"));
     j.endObject();
@@ -242,11 +292,18 @@ int CmdSimplify(int argc, char** argv) {
     if (gi.groupsDisconnectedBefore)
       std::printf("note: %d groups were already in several pieces in the input; each piece is kept as it is\n",
                   gi.groupsDisconnectedBefore);
-    std::printf("refused evaluations: topology %zu, condition 1 %zu, condition 2 %zu, lock %zu, fixed %zu, geometry %zu\n",
-                r.stats.refusedTopology, r.stats.refusedCondition1, r.stats.refusedCondition2, r.stats.refusedLock,
-                r.stats.refusedFixed, r.stats.refusedGeometry);
+    if (coneLevel > 0)
+      std::printf("normal cones: %d of %d groups over the level-%d threshold of %.1f deg%s%s\n", conesOver,
+                  gi.groupsAfter, coneLevel, coneLimitDeg, autoLevel ? " (level chosen for the target)" : "",
+                  p.keepCones ? " (--keep-cones)" : "");
+    std::printf("refused evaluations (%s mode): topology %zu, %s %zu, condition 2 %zu, lock %zu, fixed %zu, "
+                "geometry %zu, cone %zu\n",
+                ToString(p.mode), r.stats.refusedTopology, p.mode == GroupMode::Paper ? "condition 1" : "integrity",
+                r.stats.refusedCondition1, r.stats.refusedCondition2, r.stats.refusedLock, r.stats.refusedFixed,
+                r.stats.refusedGeometry, r.stats.refusedCone);
     if (a.has("-o")) std::printf("wrote %s (quality and colour = group)\n", a.str("-o").c_str());
   }
+  if (!unreachable.empty()) return Fail(kBadInput, unreachable);
   return kOk;
 }
 

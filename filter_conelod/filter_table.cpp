@@ -404,13 +404,24 @@ std::vector<ParamSpec> GroupQemSpecs(const MeshDocument*, const MeshModel*) {
                         "Per-face quality: the ids already on the mesh (e.g. from Cone LOD: Normal Cone Face "
                         "Grouping). Normal cone groups: computed now at the normal cone level below with the "
                         "default grouping parameters."));
-  p.push_back(IntParam("GroupLevel", 1, "Normal cone level",
+  p.push_back(IntParam("GroupLevel", 0, "Normal cone level (0 = automatic)",
                        "Hierarchy level of the normal cone groups (1 = finest); used when Groups is Normal cone "
-                       "groups."));
+                       "groups. 0: automatic, the finest level whose groups leave at least 8 faces per group at "
+                       "the target (the top level when none does).",
+                       AtLeast(0, "0: automatic")));
+  p.push_back(EnumParam("Mode", d.mode == conelod::GroupMode::Paper ? 1 : 0, QStringList() << "Integrity" << "Paper",
+                        "Group mode",
+                        "Integrity: every group stays one non-empty piece, and group contours and corners move and "
+                        "merge like any vertex (as accurate as the built-in Quadric Edge Collapse). Paper: "
+                        "conditions 1 and 2 of Kamiya, Suzuki and Kawachi, group corners fixed."));
   p.push_back(BoolParam("Condition1", d.condition1, "Condition 1: keep groups whole",
-                        "Refuse collapses that split a group or remove its last faces."));
+                        "Refuse collapses that split a group or remove its last faces (in Integrity mode, the "
+                        "exact integrity test). Off, with condition 2 off: the plain collapse."));
   p.push_back(BoolParam("Condition2", d.condition2, "Condition 2: no new group corners",
-                        "Refuse collapses that create a vertex where 3 or more groups meet."));
+                        "Paper mode: refuse collapses that create a vertex where 3 or more groups meet."));
+  p.push_back(BoolParam("KeepCones", d.keepCones, "Keep normal cones",
+                        "Normal cone groups: refuse collapses that would widen a group's normal cone past its "
+                        "level's threshold (the groups stay as cullable as they were built)."));
   p.push_back(BoolParam("LockGroupBoundaries", d.lockGroupBoundaries, "Lock group boundaries",
                         "No vertex on a group boundary moves: group contours stay exactly as they are."));
   AddCollapseOptionParams(p, d, "Weight of the quadrics that keep mesh borders (and group contours) in place.");
@@ -425,10 +436,20 @@ Status ApplyGroupQem(FilterCall& c) {
   p.condition1 = c.args.flag("Condition1");
   p.condition2 = c.args.flag("Condition2");
   p.lockGroupBoundaries = c.args.flag("LockGroupBoundaries");
+  p.mode = c.args.integer("Mode") == 1 ? conelod::GroupMode::Paper : conelod::GroupMode::Integrity;
+  p.keepCones = c.args.flag("KeepCones");
   ReadCollapseOptions(c.args, p);
   if (p.targetFaces == 0 && p.maxError == 0)
     return Invalid("give a target: " + Label(c, "TargetFaceNum") + ", " + Label(c, "TargetPerc") + " or " +
                    Label(c, "MaxErrorPerc"));
+  const bool coneSource = c.args.integer("GroupSource") == 1;
+  int level = c.args.integer("GroupLevel");
+  if (coneSource && level == 0 && p.targetFaces == 0)
+    return Invalid(Label(c, "GroupLevel") + " 0 (automatic) chooses the level for a face count: give " +
+                   Label(c, "TargetFaceNum") + " or " + Label(c, "TargetPerc"));
+  if (p.keepCones && !coneSource)
+    return Invalid(Label(c, "KeepCones") + " keeps the cones of normal cone groups: set " + Label(c, "GroupSource") +
+                   " to Normal cone groups");
 
   std::vector<size_t> faceOf;
   const conelod::IndexedMesh im = conelod::ToIndexedMesh(mm.cm, &faceOf);
@@ -437,19 +458,21 @@ Status ApplyGroupQem(FilterCall& c) {
   QElapsedTimer timer;
   timer.start();
   std::vector<int> groups;
-  const bool coneSource = c.args.integer("GroupSource") == 1;
-  int level = c.args.integer("GroupLevel");
   conelod::Progress progress = c.progress();
+  conelod::GroupHierarchy h;
+  const bool automatic = coneSource && level == 0;
   if (coneSource) {
-    conelod::GroupHierarchy h;
     s = conelod::BuildConeHierarchy(im, conelod::ConeGroupingParams(), h, conelod::SubProgress(progress, 0, 30));
     if (!s.ok()) return s;
-    if (level < 1 || level > h.levelCount()) {
+    if (automatic) {
+      level = conelod::AutoGroupLevel(h, p.targetFaces);
+    } else if (level > h.levelCount()) {
       c.report.log("GroupLevel %d is outside the %d levels built: using level %d", level, h.levelCount(),
-                   std::min(std::max(level, 1), h.levelCount()));
-      level = std::min(std::max(level, 1), h.levelCount());
+                   h.levelCount());
+      level = h.levelCount();
     }
     groups = h.level(level).faceGroup;
+    if (p.keepCones) p.coneBound = conelod::LevelConeBounds(h, level);
     progress = conelod::SubProgress(progress, 30, 100);
   } else {
     if (!mm.hasDataMask(MeshModel::MM_FACEQUALITY))
@@ -470,6 +493,24 @@ Status ApplyGroupQem(FilterCall& c) {
   for (size_t f = 0; f < r.sourceFace.size(); ++f) groupsAfter[f] = groups[r.sourceFace[f]];
   conelod::GroupIntegrity gi;
   conelod::MeasureGroupIntegrity(im, groups, r.mesh, groupsAfter, gi);
+  // A normal cone level that cannot reach the target: the mesh stays as it was, and the message
+  // says what was reached and which level would reach it.
+  // (Not with the automatic level, whose stop is logged as any other, nor with the lock, a
+  // maximum error or KeepCones: those stop early by choice.)
+  if (coneSource && !automatic && p.targetFaces > 0 && r.mesh.faceCount() > p.targetFaces && !p.lockGroupBoundaries &&
+      p.maxError == 0 && !p.keepCones) {
+    const int would = conelod::AutoGroupLevel(h, p.targetFaces);
+    const std::string message =
+        "the target of " + std::to_string(p.targetFaces) + " faces cannot be reached with the " +
+        std::to_string(h.level(level).groups.size()) + " normal cone groups of level " + std::to_string(level) +
+        ": stopped at " + std::to_string(r.mesh.faceCount()) + " faces (" + conelod::ToString(r.stats.stop) + "); " +
+        (would > level ? Label(c, "GroupLevel").toStdString() + " " + std::to_string(would) + " (or 0, automatic) would reach it"
+                       : std::string("no coarser level has fewer groups: try a larger target"));
+    c.report.log("%s", message.c_str());
+    return Invalid(QString::fromStdString(message));
+  }
+  const double coneLimitDeg = coneSource ? std::min(h.level(level).thresholdDeg, 180.0) : 0;
+  const int conesOver = coneSource ? conelod::CountConesOverLimit(r.mesh, groupsAfter, coneLimitDeg) : 0;
 
   mm.updateDataMask(MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR);
   conelod::ApplySimplifiedMesh(mm.cm, faceOf, r.mesh, r.sourceFace, r.sourceVertex);
@@ -484,7 +525,9 @@ Status ApplyGroupQem(FilterCall& c) {
 
   Report& out = c.report;
   const std::string source =
-      coneSource ? "normal cone groups, level " + std::to_string(level) : "per-face quality groups";
+      (coneSource ? "normal cone groups, level " + std::to_string(level) + (automatic ? " (automatic)" : "")
+                  : std::string("per-face quality groups")) +
+      ", " + conelod::ToString(p.mode) + " mode";
   out.log("Group-preserving QEM (%s): faces_in %d faces_out %d target %d (%s) seconds %.3f", source.c_str(),
           int(im.faceCount()), int(r.mesh.faceCount()), int(p.targetFaces), conelod::ToString(r.stats.stop), seconds);
   out.log("groups_before %d groups_after %d groups_split %d groups_vanished %d groups_disconnected_in %d "
@@ -494,15 +537,22 @@ Status ApplyGroupQem(FilterCall& c) {
   if (gi.groupsDisconnectedBefore)
     out.log("%d groups were already in several pieces in the input: each piece was kept as it was",
             gi.groupsDisconnectedBefore);
+  if (coneSource)
+    out.log("cones_over_threshold %d of %d groups (level %d threshold %.1f deg%s)", conesOver, gi.groupsAfter, level,
+            coneLimitDeg, p.keepCones ? ", KeepCones" : "");
   out.log("collapses %d; refused evaluations: topology %d, condition 1 %d, condition 2 %d, lock %d, fixed %d, "
-          "geometry %d",
+          "geometry %d, cone %d",
           int(r.stats.collapses), int(r.stats.refusedTopology), int(r.stats.refusedCondition1),
           int(r.stats.refusedCondition2), int(r.stats.refusedLock), int(r.stats.refusedFixed),
-          int(r.stats.refusedGeometry));
+          int(r.stats.refusedGeometry), int(r.stats.refusedCone));
   out.figure("faces_out", double(r.mesh.faceCount()));
   out.figure("groups_before", gi.groupsBefore);
   out.figure("groups_after", gi.groupsAfter);
   out.figure("integrity_percent", 100 * gi.intact());
+  if (coneSource) {
+    out.figure("group_level", level);
+    out.figure("cones_over_threshold", conesOver);
+  }
   return Status::Ok();
 }
 

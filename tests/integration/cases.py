@@ -306,13 +306,21 @@ def meshlab_group_qem_bad_inputs(c):
     assert rc == 255 and "no per-face quality" in log, log[-1500:]
     rc, log = c.meshlab([c.mesh("stanford_bunny_bun_zipper.ply")], c.mlx("group_integrity.mlx"), expect_ok=False)
     assert rc == 255 and "no per-face quality" in log, log[-1500:]
-    # Awkward but valid: non-manifold edges, 122 components, zero-area faces.
+    # Awkward but valid: non-manifold edges, 122 components, zero-area faces (automatic level).
     for mesh in ["stanford_bunny_bun_zipper_res4.ply", "boeing.ply", "zero_area_faces.ply"]:
         out = c.out("ok.ply")
         _, log = c.meshlab([c.mesh(mesh)], mlx_with(c, "group_preserving_quadric_edge_collapse.mlx",
-                                                    {"TargetPerc": 0.3, "GroupSource": 1, "GroupLevel": 2}), out)
+                                                    {"TargetPerc": 0.3, "GroupSource": 1}), out)
         assert last_float(log, "integrity_percent") == 100.0, "%s\n%s" % (mesh, log[-1500:])
         assert len(read_ply(out)["faces"]) == last_int(log, "faces_out"), mesh
+    # A level that cannot reach the target (220 groups of res4's level 2 for 284 faces): refused,
+    # with the faces reached and the level that would reach it; nothing saved.
+    out = c.out("unreachable.ply")
+    rc, log = c.meshlab([c.mesh("stanford_bunny_bun_zipper_res4.ply")],
+                        mlx_with(c, "group_preserving_quadric_edge_collapse.mlx",
+                                 {"TargetPerc": 0.3, "GroupSource": 1, "GroupLevel": 2}), out, expect_ok=False)
+    assert rc == 255 and "cannot be reached" in log and "stopped at" in log and "would reach it" in log, log[-1500:]
+    assert not os.path.exists(out), out
 
 
 @case
@@ -495,6 +503,39 @@ def cli_simplify(c):
     assert plain["groups_split"] + plain["groups_vanished"] > 0, plain
     human = c.conelod("simplify", bunny, "--groups", "cone:4", "--target-ratio", "0.5").stdout.decode()
     assert "100.00% intact" in human, human
+
+
+@case
+def cli_simplify_auto_level(c):
+    """cone:auto reaches 50/10/2 % with every group whole; a level that cannot reach the target
+    exits 2 naming the faces reached and the level that would; --keep-cones leaves no cone over."""
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    levels = []
+    for ratio in ("0.5", "0.1", "0.02"):
+        r = json.loads(c.conelod("simplify", bunny, "--groups", "cone:auto", "--target-ratio", ratio, "--json").stdout)
+        for key in ["mode", "group_level", "group_level_automatic", "keep_cones", "cone_limit_deg",
+                    "cones_over_threshold", "target_reached"]:
+            assert key in r, key
+        assert r["mode"] == "integrity" and r["group_level_automatic"] and r["target_reached"], r
+        assert r["faces_out"] <= r["target_faces"] and r["groups_split"] == 0 and r["groups_vanished"] == 0, r
+        assert r["groups_before"] * 8 <= r["target_faces"], r
+        levels.append(r["group_level"])
+    assert levels == sorted(levels) and levels[0] < levels[-1], levels
+    p = c.conelod("simplify", bunny, "--groups", "cone:1", "--target-ratio", "0.02", "--json", expect=2)
+    r = json.loads(p.stdout)
+    err = p.stderr.decode()
+    assert not r["target_reached"] and r["faces_out"] > r["target_faces"] and r["group_level"] == 1, r
+    assert "stopped at %d faces" % r["faces_out"] in err and "level %d" % levels[-1] in err, err
+    assert r["message"] in err, (r["message"], err)
+    kept = json.loads(c.conelod("simplify", bunny, "--groups", "cone:auto", "--target-ratio", "0.1", "--keep-cones",
+                                "--json").stdout)
+    assert kept["keep_cones"] and kept["cones_over_threshold"] == 0 and kept["groups_split"] == 0, kept
+    paper = json.loads(c.conelod("simplify", bunny, "--groups", "cone:4", "--target-ratio", "0.1", "--mode", "paper",
+                                 "--json").stdout)
+    assert paper["mode"] == "paper" and paper["groups_split"] == 0, paper
+    c.conelod("simplify", bunny, "--groups", "cone:auto", "--target-ratio", "0.1", "--mode", "exact", expect=1)
+    c.conelod("simplify", bunny, "--groups", "cone:auto", "--max-error", "0.01", expect=1)  # auto needs a face count
+    c.conelod("simplify", bunny, "--target-ratio", "0.1", "--keep-cones", expect=1)  # quality groups: no cones
 
 
 @case

@@ -344,6 +344,21 @@ void Failures(Run& r) {
     par.setValue("MaxNormalTurnDeg", FloatValue(180.0f));
     r.refused(kProgressive, md, par, "'Max normal turn (deg)' must be in (0, 180)", "a normal turn of 180");
   }
+  {  // A normal cone level that cannot reach the target: the faces reached and the level that would.
+    MeshDocument md;
+    Load(md, r.bunny);
+    RichParameterList par = r.params(kGroupQem, md);
+    harness::SetEnum(par, "GroupSource", 1);
+    par.setValue("GroupLevel", IntValue(1));
+    par.setValue("TargetPerc", FloatValue(0.02f));
+    const QString m = r.refused(kGroupQem, md, par, "cannot be reached with the", "a target level 1 cannot reach");
+    Check(m.contains("stopped at") && m.contains("would reach it"),
+          "  names the faces reached and the level that would reach the target");
+    par.setValue("GroupLevel", IntValue(0));
+    Check(r.apply(kGroupQem, md, par).isEmpty(), "the automatic level (0) reaches the same target");
+    Check(Figure(r.plugin.log(), "integrity_percent") == "100.00", "  every group intact");
+    Check(md.mm()->cm.fn <= 1389, QString("  %1 faces (target 1389)").arg(md.mm()->cm.fn));
+  }
   {  // Group ids from per-face quality, on a mesh without it.
     MeshDocument md;
     Load(md, r.bunny);

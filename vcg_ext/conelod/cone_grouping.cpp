@@ -1255,6 +1255,26 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
 
 }  // namespace
 
+int AutoGroupLevel(const GroupHierarchy& h, size_t targetFaces) {
+  for (int k = 1; k <= h.levelCount(); ++k)
+    if (h.level(k).groups.size() * size_t(kAutoFacesPerGroup) <= targetFaces) return k;
+  return h.levelCount();
+}
+
+std::vector<NormalCone> LevelConeBounds(const GroupHierarchy& h, int level) {
+  std::vector<NormalCone> bounds;
+  if (level < 1 || level > h.levelCount()) return bounds;
+  const GroupLevel& L = h.level(level);
+  const double limit = std::min(L.thresholdDeg, 180.0) * NormalCone::kPi / 180;
+  for (const Group& g : L.groups) {
+    NormalCone c;
+    c.axis = g.cone.axis;
+    c.halfAngle = g.cone.empty() ? -1 : std::max(limit, g.cone.halfAngle);
+    bounds.push_back(c);
+  }
+  return bounds;
+}
+
 double GroupLevel::maxConeDeg() const {
   double m = 0;
   for (const auto& g : groups) m = std::max(m, g.cone.cullable() ? std::max(0.0, g.cone.halfAngle) / kDeg : 180.0);

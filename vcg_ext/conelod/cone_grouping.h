@@ -61,4 +61,16 @@ Status ValidateParams(const ConeGroupingParams& p);
 Status BuildConeHierarchy(const IndexedMesh& mesh, const ConeGroupingParams& params,
                           GroupHierarchy& out, const Progress& progress = Progress());
 
+// The automatic group level for a simplification to `targetFaces`: the finest level of `h` whose
+// groups leave at least kAutoFacesPerGroup faces per group at the target (groups x 8 <= target),
+// the top level when none does (1-based; 0 for an empty hierarchy). Below about 8 faces per group
+// the groups, not the geometry, decide where the collapses go: the error grows quickly and, under
+// 3-4 faces per group, the target stops being reachable.
+constexpr int kAutoFacesPerGroup = 8;
+int AutoGroupLevel(const GroupHierarchy& h, size_t targetFaces);
+
+// Per group id of level `level` (1-based): the cone its face normals must stay in to keep the
+// level's threshold (GroupQemParams::coneBound): the group's cone axis and the level's threshold.
+std::vector<NormalCone> LevelConeBounds(const GroupHierarchy& h, int level);
+
 }  // namespace conelod

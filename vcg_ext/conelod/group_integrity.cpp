@@ -1,6 +1,8 @@
 // ConeLOD — group integrity (see group_integrity.h).
 #include "conelod/group_integrity.h"
 
+#include "conelod/normal_cone.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -85,6 +87,36 @@ Status MeasureGroupIntegrity(const IndexedMesh& before, const std::vector<int>& 
     if (pb.piecesOf(pa.ids[i]) == 0) ++out.groupsNew;
   }
   return Status::Ok();
+}
+
+int CountConesOverLimit(const IndexedMesh& mesh, const std::vector<int>& faceGroup, double limitDeg,
+                        std::vector<int>* overIds) {
+  if (overIds) overIds->clear();
+  if (faceGroup.size() != mesh.faces.size() || !(limitDeg < 180)) return 0;
+  std::vector<uint32_t> order(mesh.faces.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) { return faceGroup[x] < faceGroup[y]; });
+  const double limit = limitDeg * NormalCone::kPi / 180 + 1e-6;
+  int over = 0;
+  std::vector<vcg::Point3d> normals;
+  for (size_t i = 0; i < order.size();) {
+    const int id = faceGroup[order[i]];
+    normals.clear();
+    for (; i < order.size() && faceGroup[order[i]] == id; ++i) {
+      const auto& t = mesh.faces[order[i]];
+      const vcg::Point3d p0 = vcg::Point3d::Construct(mesh.positions[t[0]]);
+      const vcg::Point3d n = (vcg::Point3d::Construct(mesh.positions[t[1]]) - p0) ^
+                             (vcg::Point3d::Construct(mesh.positions[t[2]]) - p0);
+      const double len = n.Norm();
+      if (len > 0) normals.push_back(n / len);
+    }
+    if (normals.empty()) continue;
+    if (MinimalCone(normals).halfAngle > limit) {
+      ++over;
+      if (overIds && overIds->size() < 10) overIds->push_back(id);
+    }
+  }
+  return over;
 }
 
 Status GroupIdsFromValues(const std::vector<const std::vector<float>*>& values, std::vector<std::vector<int>>& ids) {

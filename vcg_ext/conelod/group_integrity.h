@@ -43,6 +43,13 @@ struct GroupIntegrity {
 Status MeasureGroupIntegrity(const IndexedMesh& before, const std::vector<int>& groupBefore, const IndexedMesh& after,
                              const std::vector<int>& groupAfter, GroupIntegrity& out);
 
+// Groups whose faces' normals no longer fit in a cone of half-angle limitDeg (their exact minimal
+// cone, normal_cone.h, is wider by more than 1e-6 rad): after a simplification, the groups of a
+// level whose cones exceed the level's threshold (GroupLevel::thresholdDeg) and so cull worse.
+// Zero-area faces have no normal and are ignored. `overIds` (optional): the first few such ids.
+int CountConesOverLimit(const IndexedMesh& mesh, const std::vector<int>& faceGroup, double limitDeg,
+                        std::vector<int>* overIds = nullptr);
+
 // Group ids from per-face values (e.g. per-face quality): faces with equal values form one group.
 // When every value is an integer in [0, 2^31) the ids are the values; otherwise they are the ranks
 // of the distinct values over all the lists together, so that the same value gets the same id in

@@ -21,6 +21,10 @@ constexpr uint32_t kNone = UINT32_MAX;
 constexpr double kMinNormalCos = 0.2;
 // New faces with quality (2 area / longest edge^2) below this are zero-area for our purposes.
 constexpr double kDegenerateQuality = 1e-6;
+// Integrity mode: when a group's faces next to a collapsing edge are not connected through the
+// merged vertex's fan, a search inside the group looks for a path between them through at most
+// this many faces; a collapse whose path is longer (or missing) is refused.
+constexpr uint32_t kIntegritySearchFaces = 256;
 
 // Symmetric quadric Q(x) = x^T A x + 2 b.x + c, with the total weight w of its planes.
 struct Quadric {
@@ -184,6 +188,31 @@ struct Candidate {
   double priority = 0;  // error / quality penalty
 };
 
+// Dense ids 0..n-1 for group ids >= 0 (in order of first appearance); returns n. `original`, when
+// given, receives the id each dense id stands for.
+int DenseIds(const std::vector<int>& ids, std::vector<int>& dense, std::vector<int>* original = nullptr) {
+  dense.resize(ids.size());
+  if (original) original->clear();
+  int n = 0;
+  const int maxId = ids.empty() ? 0 : *std::max_element(ids.begin(), ids.end());
+  if (size_t(maxId) <= 4 * ids.size() + 1024) {
+    std::vector<int> map(size_t(maxId) + 1, -1);
+    for (size_t f = 0; f < ids.size(); ++f) {
+      int& m = map[size_t(ids[f])];
+      if (m < 0) { m = n++; if (original) original->push_back(ids[f]); }
+      dense[f] = m;
+    }
+    return n;
+  }
+  std::vector<int> sorted(ids);
+  std::sort(sorted.begin(), sorted.end());
+  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+  for (size_t f = 0; f < ids.size(); ++f)
+    dense[f] = int(std::lower_bound(sorted.begin(), sorted.end(), ids[f]) - sorted.begin());
+  if (original) *original = sorted;
+  return int(sorted.size());
+}
+
 inline bool Contains(const std::array<uint32_t, 3>& t, uint32_t v) { return t[0] == v || t[1] == v || t[2] == v; }
 inline uint32_t Third(const std::array<uint32_t, 3>& t, uint32_t a, uint32_t b) {
   for (uint32_t v : t)
@@ -198,7 +227,9 @@ class Simplifier {
              const std::vector<const std::vector<int>*>& coarser, const GroupQemParams& p,
              const GroupQemRegion* region = nullptr)
       : mesh_(mesh), group_(faceGroup), coarser_(coarser), p_(p),
-        groupConstraints_(p.condition1 || p.lockGroupBoundaries),
+        groupConstraints_((p.mode == GroupMode::Paper && p.condition1) || p.lockGroupBoundaries),
+        integrity_(p.mode == GroupMode::Integrity && p.condition1),
+        paperConditions_(p.mode == GroupMode::Paper),
         frozen_(region && !region->frozenVertex.empty() ? region->frozenVertex.data() : nullptr),
         regionDiagonal_(region ? region->diagonal : 0) {}
 
@@ -242,6 +273,28 @@ class Simplifier {
     if (!frozen(a) && !frozen(b)) heap_.push({lowerBound(a, b), a, b, epoch_ | kLazy});
   }
   void pushEdgesOf(uint32_t v);  // lazy entries for every edge of v, heap order restored
+  // Integrity mode: after collapsing (a, b) (faces e0, e1 on the edge; n0a, n0b, n1a, n1b: the
+  // faces across (a, opp0), (b, opp0), (a, opp1), (b, opp1), kNone where there is none), every
+  // group of every grouping is still one piece, as many pieces as before, and not empty.
+  bool keepsGroupsWhole(uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a, uint32_t n0b, uint32_t n1a,
+                        uint32_t n1b);
+  bool keepsGroupsWhole(uint32_t a, uint32_t b);  // finds the faces itself
+  // One grouping: layer < 0 the primary one, else coarserDense_[layer].
+  bool keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a, uint32_t n0b,
+                       uint32_t n1a, uint32_t n1b);
+  int groupIn(int layer, uint32_t f) const { return layer < 0 ? faces_[f].group : coarserDense_[size_t(layer)][f]; }
+  // keepCones: the new normal (unnormalised, squared length lenSq) of face f stays in the cone
+  // bound of its group in every grouping that has bounds.
+  bool insideCones(uint32_t f, const Point3d& n, double lenSq) const {
+    for (size_t l = 0; l < coneAxis_.size(); ++l) {
+      const size_t g = size_t(l == 0 ? group_[f] : (*coarser_[l - 1])[f]);
+      if (g >= coneAxis_[l].size() || !(coneCos_[l][g] > -2)) continue;
+      const double dot = n * coneAxis_[l][g], c = coneCos_[l][g];
+      if (!(c >= 0 ? (dot >= 0 && dot * dot >= c * c * lenSq) : (dot >= 0 || dot * dot <= c * c * lenSq)))
+        return false;
+    }
+    return true;
+  }
 
   const IndexedMesh& mesh_;
   const std::vector<int>& group_;
@@ -254,7 +307,9 @@ class Simplifier {
   // primary groups but one coarser group remain to check.
   bool coarserNested_ = false;
   GroupQemParams p_;
-  const bool groupConstraints_;
+  const bool groupConstraints_;  // contour-aware placement and quadrics (paper mode or the lock)
+  const bool integrity_;         // the integrity test (integrity mode, condition1)
+  const bool paperConditions_;   // conditions 1 and 2 as the paper (paper mode)
   const uint8_t* frozen_;         // per vertex, or null: see GroupQemRegion
   const double regionDiagonal_;   // > 0: the whole mesh's diagonal
 
@@ -267,7 +322,15 @@ class Simplifier {
   struct FaceRec : std::array<uint32_t, 3> {
     int group;
   };
-  std::vector<FaceRec> faces_;
+  std::vector<FaceRec> faces_;  // group: dense ids 0..n-1 (only equality and counts matter)
+  std::vector<std::vector<int>> coarserDense_;  // integrity mode: the coarser groupings, dense ids
+  std::vector<std::vector<int>> groupFaces_;    // integrity mode: live faces per group; [0] primary
+  // keepCones, per grouping with bounds ([0] primary, then the coarser ones), per group id: the
+  // bound's axis and the cosine of its half-angle (-3: no bound).
+  std::vector<std::vector<Point3d>> coneAxis_;
+  std::vector<std::vector<double>> coneCos_;
+  std::vector<uint32_t> faceMark_;              // integrity search marks (== faceStamp_)
+  uint32_t faceStamp_ = 0;
   std::vector<char> faceDead_;
   std::vector<uint32_t> start_, count_, refs_;
   // What the loop reads of a vertex, in one 16-byte record (one cache miss, not six).
@@ -287,7 +350,7 @@ class Simplifier {
   size_t liveFaces_ = 0;
   GroupQemStats stats_;  // evaluations and refusals counted by evaluate()
   // Scratch (no allocation in the loop).
-  std::vector<uint32_t> fanOther_, ring_;
+  std::vector<uint32_t> fanOther_, ring_, fanScratch_, fanParent_, queue_;
   std::vector<int> groupScratch_;
 };
 
@@ -409,9 +472,38 @@ void Simplifier::init() {
   pos_.resize(nv);
   for (size_t v = 0; v < nv; ++v) pos_[v] = Point3d::Construct(mesh_.positions[v]) - center_;
   faces_.resize(nf);
+  std::vector<int> dense;
+  const int groups = DenseIds(group_, dense);
   for (size_t f = 0; f < nf; ++f) {
     static_cast<std::array<uint32_t, 3>&>(faces_[f]) = mesh_.faces[f];
-    faces_[f].group = group_[f];
+    faces_[f].group = dense[f];
+  }
+  if (integrity_) {
+    groupFaces_.assign(1 + coarser_.size(), std::vector<int>());
+    groupFaces_[0].assign(size_t(groups), 0);
+    for (size_t f = 0; f < nf; ++f) ++groupFaces_[0][size_t(dense[f])];
+    coarserDense_.resize(coarser_.size());
+    for (size_t l = 0; l < coarser_.size(); ++l) {
+      const int n = DenseIds(*coarser_[l], coarserDense_[l]);
+      groupFaces_[l + 1].assign(size_t(n), 0);
+      for (size_t f = 0; f < nf; ++f) ++groupFaces_[l + 1][size_t(coarserDense_[l][f])];
+    }
+    faceMark_.assign(nf, 0);
+  }
+  if (p_.keepCones) {
+    const size_t layers = 1 + std::min(coarser_.size(), p_.coarserConeBound.size());
+    coneAxis_.resize(layers);
+    coneCos_.resize(layers);
+    for (size_t l = 0; l < layers; ++l) {
+      const std::vector<NormalCone>& bounds = l == 0 ? p_.coneBound : p_.coarserConeBound[l - 1];
+      coneAxis_[l].assign(bounds.size(), Point3d(0, 0, 1));
+      coneCos_[l].assign(bounds.size(), -3.0);
+      for (size_t id = 0; id < bounds.size(); ++id) {
+        if (bounds[id].empty() || bounds[id].halfAngle >= NormalCone::kPi) continue;
+        coneAxis_[l][id] = bounds[id].axis;
+        coneCos_[l][id] = std::cos(bounds[id].halfAngle);
+      }
+    }
   }
   faceDead_.assign(nf, 0);
   vs_.assign(nv, VertexState());
@@ -538,6 +630,7 @@ Candidate Simplifier::evaluate(uint32_t a, uint32_t b) {
     case CollapseVerdict::Condition2: ++stats_.refusedCondition2; break;
     case CollapseVerdict::FixedEndpoints: ++stats_.refusedFixed; break;
     case CollapseVerdict::Geometry: ++stats_.refusedGeometry; break;
+    case CollapseVerdict::Cone: ++stats_.refusedCone; break;
     default: break;
   }
   return c;
@@ -593,7 +686,11 @@ Candidate Simplifier::judge(uint32_t a, uint32_t b) {
     c.verdict = CollapseVerdict::LockedBoundary;
     return c;
   }
-  if (p_.condition1) {
+  if (integrity_ && !keepsGroupsWhole(a, b, e[0], e[1], n0a, n0b, n1a, n1b)) {
+    c.verdict = CollapseVerdict::Condition1;
+    return c;
+  }
+  if (paperConditions_ && p_.condition1) {
     c.verdict = CollapseVerdict::Condition1;
     const auto primaryGroup = [this](uint32_t f) { return faces_[f].group; };
     if (!condition1(primaryGroup, a, b, e[0], e[1], n0a, n0b, n1a, n1b, nullptr)) return c;
@@ -603,7 +700,7 @@ Candidate Simplifier::judge(uint32_t a, uint32_t b) {
                                        n1a, n1b, layer))
         return c;
   }
-  if (p_.condition2 && ia.groups + ib.groups >= 3) {
+  if (paperConditions_ && p_.condition2 && ia.groups + ib.groups >= 3) {
     c.verdict = CollapseVerdict::Condition2;
     if (std::min(ia.groups, ib.groups) > 2) return c;
     // Groups around the merged vertex: those of the faces of a and b that survive.
@@ -651,12 +748,141 @@ Candidate Simplifier::judge(uint32_t a, uint32_t b) {
         const double dot = nOld * nNew;
         if (dot < 0 || dot * dot < minCosSq * lenOldSq * lenNewSq) return c;
       }
+      if (p_.keepCones && !insideCones(*f, nNew, lenNewSq)) {
+        c.verdict = CollapseVerdict::Cone;
+        return c;
+      }
       minQualitySq = std::min(minQualitySq, qualitySq);
     }
 
   c.verdict = CollapseVerdict::Allowed;
   c.priority = priorityOf(c.error, std::sqrt(minQualitySq), a, b);
   return c;
+}
+
+bool Simplifier::keepsGroupsWhole(uint32_t a, uint32_t b) {
+  uint32_t e[2] = {kNone, kNone};
+  uint32_t ne = 0;
+  for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f)
+    if (Contains(faces_[*f], b)) { if (ne < 2) e[ne] = *f; ++ne; }
+  if (ne == 0 || ne > 2) return false;
+  const uint32_t opp0 = Third(faces_[e[0]], a, b), opp1 = ne == 2 ? Third(faces_[e[1]], a, b) : kNone;
+  uint32_t n[4] = {kNone, kNone, kNone, kNone};  // n0a, n0b, n1a, n1b
+  for (int s = 0; s < 2; ++s) {
+    const uint32_t v = s == 0 ? a : b;
+    for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f) {
+      if (*f == e[0] || *f == e[1]) continue;
+      if (Contains(faces_[*f], opp0)) n[s] = *f;
+      if (opp1 != kNone && Contains(faces_[*f], opp1)) n[2 + s] = *f;
+    }
+  }
+  return keepsGroupsWhole(a, b, e[0], e[1], n[0], n[1], n[2], n[3]);
+}
+
+bool Simplifier::keepsGroupsWhole(uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a, uint32_t n0b,
+                                  uint32_t n1a, uint32_t n1b) {
+  for (int layer = -1; layer < int(coarserDense_.size()); ++layer)
+    if (!keepsGroupWhole(layer, a, b, e0, e1, n0a, n0b, n1a, n1b)) return false;
+  return true;
+}
+
+// With the link condition, collapsing (a, b) removes e0 and e1, keeps every other adjacency and
+// adds two: n0a-n0b (they now share the edge (m, opp0)) and n1a-n1b. So only the groups of e0 and
+// e1 can lose anything: such a group G vanishes when e0/e1 are its last faces, and splits when
+// its faces next to e0/e1 (among n0a, n0b, n1a, n1b) are no longer connected inside G. These are
+// connected when they are through the merged vertex's fan (two faces of the fan are adjacent when
+// they share a vertex other than a and b), and otherwise when a bounded search inside G joins them.
+bool Simplifier::keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a,
+                                 uint32_t n0b, uint32_t n1a, uint32_t n1b) {
+  const std::vector<int>& count = groupFaces_[size_t(layer + 1)];
+  const int g0 = groupIn(layer, e0), g1 = e1 != kNone ? groupIn(layer, e1) : -1;
+  for (int pass = 0; pass < 2; ++pass) {
+    const int G = pass == 0 ? g0 : g1;
+    if (G < 0 || (pass == 1 && G == g0)) continue;
+    if (count[size_t(G)] <= (g0 == G) + (g1 == G)) return false;  // its last faces
+    uint32_t nb[4];
+    int nn = 0;
+    const auto add = [&](uint32_t f) {
+      if (f != kNone && groupIn(layer, f) == G && std::find(nb, nb + nn, f) == nb + nn) nb[nn++] = f;
+    };
+    // Only one of e0, e1 in G: its (at most two) faces of G next to it become adjacent.
+    if (g0 != g1) continue;
+    // Both: the faces of a closed fan of v1 (or v2) inside G join n0a (n0b) and n1a (n1b).
+    if (layer < 0 ? (interior(a) || interior(b))
+                  : (interiorIn(a, coarserDense_[size_t(layer)]) || interiorIn(b, coarserDense_[size_t(layer)])))
+      continue;
+    add(n0a); add(n0b); add(n1a); add(n1b);
+    if (nn <= 1) continue;
+    // The fan of the merged vertex: G's faces around a and b but e0, e1; union-find.
+    fanScratch_.clear();
+    for (uint32_t v : {a, b})
+      for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f)
+        if (*f != e0 && *f != e1 && groupIn(layer, *f) == G) fanScratch_.push_back(*f);
+    const uint32_t k = uint32_t(fanScratch_.size());
+    fanParent_.resize(k);
+    for (uint32_t i = 0; i < k; ++i) fanParent_[i] = i;
+    const auto root = [this](uint32_t i) {
+      while (fanParent_[i] != i) i = fanParent_[i] = fanParent_[fanParent_[i]];
+      return i;
+    };
+    const auto other = [&](uint32_t f, int j) {  // the j-th (0, 1) vertex of f other than a, b
+      const auto& t = faces_[f];
+      int seen = 0;
+      for (uint32_t v : t)
+        if (v != a && v != b && seen++ == j) return v;
+      return kNone;
+    };
+    for (uint32_t i = 0; i < k; ++i) {
+      const uint32_t x0 = other(fanScratch_[i], 0), x1 = other(fanScratch_[i], 1);
+      for (uint32_t j = i + 1; j < k; ++j) {
+        const uint32_t y0 = other(fanScratch_[j], 0), y1 = other(fanScratch_[j], 1);
+        if ((x0 != kNone && (x0 == y0 || x0 == y1)) || (x1 != kNone && (x1 == y0 || x1 == y1)))
+          fanParent_[root(i)] = root(j);
+      }
+    }
+    const auto indexOf = [&](uint32_t f) {
+      return uint32_t(std::find(fanScratch_.begin(), fanScratch_.end(), f) - fanScratch_.begin());
+    };
+    const uint32_t r0 = root(indexOf(nb[0]));
+    bool local = true;
+    for (int i = 1; i < nn && local; ++i) local = root(indexOf(nb[i])) == r0;
+    if (local) continue;
+    // Search inside G, from nb[0]'s piece of the fan, for the other pieces (edges as after the
+    // collapse: e0, e1 gone, n0a-n0b and n1a-n1b adjacent).
+    ++faceStamp_;
+    queue_.clear();
+    for (uint32_t i = 0; i < k; ++i)
+      if (root(i) == r0) { faceMark_[fanScratch_[i]] = faceStamp_; queue_.push_back(fanScratch_[i]); }
+    faceMark_[e0] = faceStamp_;
+    if (e1 != kNone) faceMark_[e1] = faceStamp_;
+    const auto reached = [&]() {
+      for (int i = 1; i < nn; ++i)
+        if (faceMark_[nb[i]] != faceStamp_) return false;
+      return true;
+    };
+    const auto visit = [&](uint32_t f) {
+      if (f == kNone || faceMark_[f] == faceStamp_ || groupIn(layer, f) != G) return;
+      faceMark_[f] = faceStamp_;
+      queue_.push_back(f);
+    };
+    bool joined = false;
+    for (size_t head = 0; head < queue_.size() && queue_.size() <= kIntegritySearchFaces; ++head) {
+      const uint32_t f = queue_[head];
+      const auto& t = faces_[f];
+      for (int j = 0; j < 3; ++j) {
+        const uint32_t u = t[size_t(j)], w = t[size_t((j + 1) % 3)];
+        for (const uint32_t* g = facesBegin(u); g != facesEnd(u); ++g)
+          if (*g != f && Contains(faces_[*g], w)) visit(*g);
+      }
+      if (f == n0a) visit(n0b);
+      if (f == n0b) visit(n0a);
+      if (f == n1a) visit(n1b);
+      if (f == n1b) visit(n1a);
+      if (reached()) { joined = true; break; }
+    }
+    if (!joined && !reached()) return false;
+  }
+  return true;
 }
 
 void Simplifier::pushEdgesOf(uint32_t v) {
@@ -679,6 +905,8 @@ void Simplifier::collapse(const Candidate& c) {
     if (!Contains(faces_[*f], keep)) continue;
     faceDead_[*f] = 1;
     --liveFaces_;
+    if (integrity_)
+      for (size_t l = 0; l < groupFaces_.size(); ++l) --groupFaces_[l][size_t(groupIn(int(l) - 1, *f))];
     const uint32_t o = Third(faces_[*f], keep, gone);
     opposite[no++] = o;
     uint32_t* ob = refs_.data() + start_[o];
@@ -785,6 +1013,13 @@ Status Simplifier::run(const Progress& progress, GroupQemStats& stats) {
     const bool fresh = ep >= vs_[a].touched && ep >= vs_[b].touched;
     Candidate c;
     if (fresh && kind == kJudged) {  // nothing changed since it was judged: only place it again
+      // (and, in integrity mode, search again: a path found around the edge inside its group
+      // may have been cut since by a collapse elsewhere that this edge's faces kept whole)
+      if (integrity_ && !keepsGroupsWhole(a, b)) {
+        ++stats_.refusedCondition1;
+        vs_[a].dropped = vs_[b].dropped = 1;
+        continue;
+      }
       c.verdict = CollapseVerdict::Allowed;
       place(a, b, true, c);
     } else {
@@ -824,6 +1059,7 @@ Status Simplifier::run(const Progress& progress, GroupQemStats& stats) {
   stats.refusedCondition2 = stats_.refusedCondition2;
   stats.refusedFixed = stats_.refusedFixed;
   stats.refusedGeometry = stats_.refusedGeometry;
+  stats.refusedCone = stats_.refusedCone;
   return stats.stop == GroupQemStats::Stop::Cancelled ? Status::Cancelled() : Status::Ok();
 }
 
@@ -878,6 +1114,8 @@ Status ValidateParams(const GroupQemParams& p) {
   return Status::Ok();
 }
 
+const char* ToString(GroupMode m) { return m == GroupMode::Paper ? "paper" : "integrity"; }
+
 const char* ToString(GroupQemStats::Stop s) {
   switch (s) {
     case GroupQemStats::Stop::TargetReached: return "target reached";
@@ -897,6 +1135,7 @@ const char* ToString(CollapseVerdict v) {
     case CollapseVerdict::Condition2: return "condition 2";
     case CollapseVerdict::FixedEndpoints: return "both endpoints fixed";
     case CollapseVerdict::Geometry: return "geometry";
+    case CollapseVerdict::Cone: return "normal cone";
   }
   return "?";
 }

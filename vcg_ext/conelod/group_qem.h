@@ -48,16 +48,36 @@
 #include <vector>
 
 #include "conelod/indexed_mesh.h"
+#include "conelod/normal_cone.h"
 #include "conelod/status.h"
 
 namespace conelod {
+
+// What keeping the groups means (see the top of this file).
+//   Integrity (default): every group stays ONE non-empty edge-connected piece (a group in several
+//     pieces in the input keeps no more pieces than it had) and nothing else is asked: contours and
+//     group corners move and merge as any vertex, with the plain quadrics of vcglib.
+//   Paper: conditions 1 and 2 of Kamiya-Suzuki-Kawachi as they are (contour-aware placement and
+//     quadrics, fixed group corners).
+enum class GroupMode { Integrity, Paper };
+const char* ToString(GroupMode m);  // "integrity", "paper"
 
 struct GroupQemParams {
   size_t targetFaces = 0;          // stop at this many faces or fewer; 0: no face-count target
   double maxError = 0;             // no collapse whose error (RMS distance of the merged quadric,
                                    // as a FRACTION of the bounding-box diagonal) exceeds this; 0: none
-  bool condition1 = true;          // no group is split or destroyed
-  bool condition2 = true;          // no vertex where 3 or more groups meet is created
+  GroupMode mode = GroupMode::Integrity;
+  bool condition1 = true;          // no group is split or destroyed (paper: condition 1; integrity:
+                                   // the exact integrity test; false in both: plain QEM)
+  bool condition2 = true;          // no vertex where 3 or more groups meet is created (paper mode only)
+  bool keepCones = false;          // refuse collapses that turn a face's normal out of its group's coneBound
+  std::vector<NormalCone> coneBound;  // keepCones: per group id (primary grouping), the cone every
+                                   // changed face normal of the group must stay in (axis: the group's
+                                   // input cone axis, half-angle: its level's threshold); ids past
+                                   // the end or empty cones: no bound
+  std::vector<std::vector<NormalCone>> coarserConeBound;  // keepCones: the same per coarser grouping
+                                   // (SimplifyPreservingGroups' coarserGroups, in order), so that a
+                                   // hierarchy's later levels start inside their bounds
   bool lockGroupBoundaries = false;  // no vertex on a group boundary moves
   double qualityThr = 0.3;         // new faces below this quality are penalised (0: no penalty), as vcglib
   bool optimalPlacement = true;    // quadric minimum; false: the better endpoint
@@ -80,6 +100,7 @@ struct GroupQemStats {
   size_t refusedLock = 0;           // lock group boundaries
   size_t refusedFixed = 0;          // both endpoints must stay where they are
   size_t refusedGeometry = 0;       // face flip or zero-area face
+  size_t refusedCone = 0;           // keepCones: a normal would leave its group's cone
   double maxCollapseError = 0;      // largest error of a collapse done, fraction of the bbox diagonal
   enum class Stop { TargetReached, NoMoreCollapses, Cancelled } stop = Stop::NoMoreCollapses;
 };
@@ -119,7 +140,7 @@ Status SimplifyPreservingGroups(const IndexedMesh& mesh, const std::vector<int>&
 // diagnostics). Checks run in this order: topology, lock, condition 1, condition 2, placement
 // (FixedEndpoints: both endpoints must stay where they are), geometry.
 enum class CollapseVerdict {
-  Allowed, NotAnEdge, Topology, LockedBoundary, Condition1, Condition2, FixedEndpoints, Geometry
+  Allowed, NotAnEdge, Topology, LockedBoundary, Condition1, Condition2, FixedEndpoints, Geometry, Cone
 };
 const char* ToString(CollapseVerdict v);
 // Why the simplification stopped, as the CLI and the plugin print it: "target reached", ...

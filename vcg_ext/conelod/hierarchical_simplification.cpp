@@ -8,6 +8,7 @@
 
 #include <vcg/space/box3.h>
 
+#include "conelod/cone_grouping.h"
 #include "conelod/parallel.h"
 
 namespace conelod {
@@ -265,7 +266,13 @@ Status BuildSimplifiedLevels(const IndexedMesh& mesh, const GroupHierarchy& hier
     std::vector<const std::vector<int>*> coarser;
     for (size_t j = 1; j < groups.size(); ++j) coarser.push_back(&groups[j]);
 
-    GroupQemParams qp = params.qem;
+    HierarchicalSimplificationParams levelParams = params;  // keepCones: the cones of level k
+    if (params.qem.keepCones) {  // every coarser level's bounds too: its faces start inside them
+      levelParams.qem.coneBound = LevelConeBounds(hierarchy, k);
+      levelParams.qem.coarserConeBound.clear();
+      for (int j = k + 1; j <= levels; ++j) levelParams.qem.coarserConeBound.push_back(LevelConeBounds(hierarchy, j));
+    }
+    GroupQemParams qp = levelParams.qem;
     qp.targetFaces = std::max<size_t>(1, size_t(std::floor(params.levelRatio * double(facesBelow))));
     L.targetFaces = qp.targetFaces;
     int parts = 1;
@@ -275,7 +282,7 @@ Status BuildSimplifiedLevels(const IndexedMesh& mesh, const GroupHierarchy& hier
     const Progress levelProgress = SubProgress(progress, 100 * (k - 1) / levels, 100 * k / levels);
     Status s = ValidateParams(qp);
     if (s.ok())
-      s = parts > 1 ? SimplifyInParts(*below, groups, parts, (k - 1) % 2, params, r, levelProgress)
+      s = parts > 1 ? SimplifyInParts(*below, groups, parts, (k - 1) % 2, levelParams, r, levelProgress)
                     : SimplifyPreservingGroups(*below, groups[0], qp, r, levelProgress, coarser);
     if (!s.ok()) return s;
     L.mesh = std::move(r.mesh);

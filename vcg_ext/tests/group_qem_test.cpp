@@ -1,5 +1,7 @@
-// Tests of group_qem.h: on tiny grids, each condition (and the lock) refuses the one collapse it
-// exists to refuse and allows it when switched off (so each test fails if its check is removed);
+// Tests of group_qem.h: on tiny grids, each condition of the paper mode (and the lock) refuses the
+// one collapse it exists to refuse and allows it when switched off (so each test fails if its
+// check is removed); the integrity mode's local test agrees with a global recount of the groups'
+// pieces on random collapses and keeps every group whole face by face on real scans;
 // placements keep their constraint; whole runs keep every group intact where the same run
 // without conditions breaks groups; cancellation leaves a valid mesh; bad input and real scans.
 #include "conelod/group_qem.h"
@@ -37,8 +39,10 @@ std::vector<int> QuadGroups(Rule rule) {
   return g;
 }
 
+// The paper's conditions (paper mode), as the tests of conditions 1 and 2 below check them.
 GroupQemParams Conditions(bool c1, bool c2, bool lock = false) {
   GroupQemParams p;
+  p.mode = GroupMode::Paper;
   p.targetFaces = 1;
   p.condition1 = c1;
   p.condition2 = c2;
@@ -178,6 +182,113 @@ TEST(LockGroupBoundaries, NoContourVertexMoves) {
   EXPECT_EQ(p, vcg::Point3f(2, 2, 0));
 }
 
+// --- Integrity mode --------------------------------------------------------------------------
+
+GroupQemParams Integrity() {
+  GroupQemParams p;
+  p.targetFaces = 1;
+  EXPECT_EQ(p.mode, GroupMode::Integrity) << "integrity is the default";
+  return p;
+}
+
+TEST(Integrity, RefusesToPinchAGroupInTwoOrRemoveItsLastFace) {
+  const IndexedMesh m = test::Grid(kN);
+  const auto strip = QuadGroups([](int, int y) { return y == 2 ? 1 : 0; });
+  EXPECT_EQ(EvaluateCollapse(m, strip, Integrity(), V(2, 2), V(2, 3)), CollapseVerdict::Condition1);
+  GroupQemParams plain = Integrity();
+  plain.condition1 = false;
+  EXPECT_EQ(EvaluateCollapse(m, strip, plain, V(2, 2), V(2, 3)), CollapseVerdict::Allowed);
+  // Along the strip (both endpoints on its contour, faces of both groups): nothing is cut.
+  EXPECT_EQ(EvaluateCollapse(m, strip, Integrity(), V(1, 2), V(2, 2)), CollapseVerdict::Allowed);
+  auto g = QuadGroups([](int, int) { return 0; });
+  g[2 * (1 * kN + 1)] = 7;  // face {(1,1), (2,1), (2,2)} alone
+  EXPECT_EQ(EvaluateCollapse(m, g, Integrity(), V(1, 1), V(2, 2)), CollapseVerdict::Condition1);
+  EXPECT_EQ(EvaluateCollapse(m, g, Integrity(), V(2, 1), V(2, 2)), CollapseVerdict::Condition1);
+}
+
+// What the paper refuses and integrity allows: two group corners merge, a corner moves.
+TEST(Integrity, CornersMayMoveAndMerge) {
+  const IndexedMesh m = test::Grid(kN);
+  const auto g = QuadGroups([](int x, int y) { return x <= 1 ? 2 : (x == 3 ? 3 : (y < 2 ? 0 : 1)); });
+  EXPECT_EQ(EvaluateCollapse(m, g, Conditions(true, true), V(2, 2), V(3, 2)), CollapseVerdict::Condition2);
+  vcg::Point3f p;
+  EXPECT_EQ(EvaluateCollapse(m, g, Integrity(), V(2, 2), V(3, 2), &p), CollapseVerdict::Allowed);
+  // A corner and an interior vertex: the merged vertex is where the quadric says (on the plane).
+  EXPECT_EQ(EvaluateCollapse(m, g, Integrity(), V(2, 2), V(1, 2), &p), CollapseVerdict::Allowed);
+  EXPECT_FLOAT_EQ(p[2], 0.f);
+}
+
+// Edge-connected groups grown from random seeds (some of one or two faces).
+std::vector<int> GrownGroups(const IndexedMesh& m, int seeds, uint32_t seed) {
+  const FaceAdjacency adj = BuildFaceAdjacency(m);
+  std::vector<int> g(m.faces.size(), -1);
+  std::vector<uint32_t> frontier;
+  uint32_t r = seed;
+  const auto next = [&r]() { r = r * 1664525u + 1013904223u; return r >> 8; };
+  for (int s = 0; s < seeds; ++s) {
+    const uint32_t f = next() % uint32_t(m.faces.size());
+    if (g[f] < 0) { g[f] = s; frontier.push_back(f); }
+  }
+  while (!frontier.empty()) {
+    const size_t i = next() % frontier.size();
+    const uint32_t f = frontier[i];
+    bool free = false;
+    for (uint32_t k = adj.offsets[f]; k < adj.offsets[f + 1]; ++k) {
+      const uint32_t n = adj.neighbours[k];
+      if (g[n] >= 0) continue;
+      free = true;
+      if (next() % 2) { g[n] = g[f]; frontier.push_back(n); break; }
+    }
+    if (!free) { frontier[i] = frontier.back(); frontier.pop_back(); }
+  }
+  return g;  // every face reached: the test meshes are connected
+}
+
+// The local test against the truth: on random edges of a mesh being simplified at random, the
+// integrity verdict is "allowed" exactly when doing the plain collapse leaves every group in one
+// piece with a face (counted over the whole mesh).
+TEST(Integrity, LocalTestAgreesWithAGlobalRecount) {
+  IndexedMesh m = test::Sphere(4);  // 2048 faces, closed
+  std::vector<int> g = GrownGroups(m, 60, 12345);
+  GroupPieces before = CountGroupPieces(m, g);
+  for (int pieces : before.pieces) ASSERT_EQ(pieces, 1);
+  uint32_t r = 777;
+  const auto next = [&r]() { r = r * 1664525u + 1013904223u; return r >> 8; };
+  GroupQemParams plain = Integrity();
+  plain.condition1 = false;
+  plain.preserveNormal = false;
+  GroupQemParams integrity = plain;
+  integrity.condition1 = true;
+  int allowed = 0, refused = 0;
+  for (int step = 0; step < 1500 && allowed < 400; ++step) {
+    const auto& t = m.faces[next() % m.faces.size()];
+    const int e = int(next() % 3);
+    const uint32_t a = t[size_t(e)], b = t[size_t((e + 1) % 3)];
+    if (EvaluateCollapse(m, g, plain, a, b) != CollapseVerdict::Allowed) continue;
+    // Do it: b becomes a; the faces on the edge go.
+    IndexedMesh after = m;
+    std::vector<int> ga;
+    after.faces.clear();
+    for (size_t f = 0; f < m.faces.size(); ++f) {
+      auto u = m.faces[f];
+      for (auto& v : u) if (v == b) v = a;
+      if (u[0] == u[1] || u[1] == u[2] || u[0] == u[2]) continue;
+      after.faces.push_back(u);
+      ga.push_back(g[f]);
+    }
+    GroupIntegrity gi;
+    ASSERT_TRUE(MeasureGroupIntegrity(m, g, after, ga, gi).ok());
+    const bool whole = gi.groupsSplit == 0 && gi.groupsVanished == 0 && gi.groupsDisconnectedAfter == 0;
+    const CollapseVerdict v = EvaluateCollapse(m, g, integrity, a, b);
+    ASSERT_EQ(v == CollapseVerdict::Allowed, whole) << "step " << step << ": edge " << a << "-" << b << ", "
+                                                   << ToString(v) << ", split " << gi.groupsSplit << ", vanished "
+                                                   << gi.groupsVanished;
+    if (whole) { ++allowed; m = after; g = ga; } else { ++refused; }
+  }
+  EXPECT_GE(allowed, 300);
+  EXPECT_GE(refused, 20) << "the random collapses should hit some that split or remove a group";
+}
+
 // --- Other refusals --------------------------------------------------------------------------
 
 TEST(Topology, RefusesPinchesAndNonEdges) {
@@ -218,16 +329,21 @@ TEST(Simplify, KeepsEveryGroupWhereThePlainCollapseBreaksSome) {
     g.push_back(sector + 16 * (c[2] > 0));
   }
   GroupQemParams p;
-  p.targetFaces = 128;
   GroupQemResult r;
-  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
-  ExpectValidOutput(m, r);
-  EXPECT_LT(r.mesh.faces.size(), 400u);
   GroupIntegrity gi;
-  ASSERT_TRUE(MeasureGroupIntegrity(m, g, r.mesh, GroupsAfter(r, g), gi).ok());
-  EXPECT_EQ(gi.groupsSplit, 0);
-  EXPECT_EQ(gi.groupsVanished, 0);
-  EXPECT_EQ(gi.groupsAfter, 32);
+  for (GroupMode mode : {GroupMode::Paper, GroupMode::Integrity}) {
+    SCOPED_TRACE(ToString(mode));
+    p.mode = mode;
+    p.targetFaces = 128;
+    ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+    ExpectValidOutput(m, r);
+    EXPECT_LT(r.mesh.faces.size(), mode == GroupMode::Paper ? 400u : 129u);
+    ASSERT_TRUE(MeasureGroupIntegrity(m, g, r.mesh, GroupsAfter(r, g), gi).ok());
+    EXPECT_EQ(gi.groupsSplit, 0);
+    EXPECT_EQ(gi.groupsVanished, 0);
+    EXPECT_EQ(gi.groupsAfter, 32);
+    EXPECT_LE(gi.groupsDisconnectedAfter, gi.groupsDisconnectedBefore);
+  }
 
   p.condition1 = p.condition2 = false;
   p.targetFaces = r.mesh.faces.size();
@@ -420,6 +536,50 @@ TEST(Simplify, BunnyWithNormalConeGroupsStaysIntactAt10And1Percent) {
     EXPECT_EQ(gi.groupsSplit, 0);
     EXPECT_EQ(gi.groupsVanished, 0);
   }
+}
+
+// Integrity mode at the automatic level: every target reached, every group whole, and
+// (keepCones) no group's cone over its level's threshold where the plain run has some.
+TEST(Simplify, BunnyAtTheAutomaticLevelReachesTheTargetAndKeepsCones) {
+  const IndexedMesh m = LoadReal("stanford_bunny_bun_zipper.ply");
+  GroupHierarchy h;
+  ASSERT_TRUE(BuildConeHierarchy(m, ConeGroupingParams(), h).ok());
+  for (double ratio : {0.5, 0.1, 0.02}) {
+    SCOPED_TRACE(ratio);
+    GroupQemParams p;
+    p.targetFaces = size_t(ratio * double(m.faces.size()));
+    const int level = AutoGroupLevel(h, p.targetFaces);
+    ASSERT_GE(level, 1);
+    EXPECT_LE(h.level(level).groups.size() * kAutoFacesPerGroup, p.targetFaces);
+    if (level > 1) {
+      EXPECT_GT(h.level(level - 1).groups.size() * kAutoFacesPerGroup, p.targetFaces);
+    }
+    const std::vector<int>& g = h.level(level).faceGroup;
+    const double limitDeg = h.level(level).thresholdDeg;
+    EXPECT_EQ(CountConesOverLimit(m, g, limitDeg), 0) << "the input's groups are within their threshold";
+    int over[2] = {0, 0};
+    for (int keep = 0; keep < 2; ++keep) {
+      p.keepCones = keep == 1;
+      p.coneBound = keep ? LevelConeBounds(h, level) : std::vector<NormalCone>();
+      GroupQemResult r;
+      ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+      ExpectValidOutput(m, r);
+      if (!keep) {
+        EXPECT_EQ(r.stats.stop, GroupQemStats::Stop::TargetReached);
+      }
+      GroupIntegrity gi;
+      ASSERT_TRUE(MeasureGroupIntegrity(m, g, r.mesh, GroupsAfter(r, g), gi).ok());
+      EXPECT_EQ(gi.groupsSplit, 0);
+      EXPECT_EQ(gi.groupsVanished, 0);
+      over[keep] = CountConesOverLimit(r.mesh, GroupsAfter(r, g), limitDeg);
+    }
+    EXPECT_EQ(over[1], 0);
+    if (ratio < 0.5) {
+      EXPECT_GT(over[0], 0) << "without keepCones some cones should widen";
+    }
+  }
+  EXPECT_EQ(AutoGroupLevel(h, 1), h.levelCount()) << "no level fits: the top one";
+  EXPECT_EQ(AutoGroupLevel(h, m.faces.size()), 1);
 }
 
 TEST(Simplify, AwkwardScansWork) {

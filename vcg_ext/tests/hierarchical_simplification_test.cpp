@@ -72,6 +72,37 @@ TEST(BuildSimplifiedLevels, Bunny) {
   EXPECT_LT(levels.back().mesh.faces.size(), m.faces.size() / 20);
 }
 
+// Integrity mode is the default; with keepCones, no group of any level has its cone over its
+// level's threshold (each level keeps the bounds of every coarser level too, so the next level
+// starts inside its own), where the plain run has some; levels in parts do the same.
+TEST(BuildSimplifiedLevels, KeepConesAtEveryLevel) {
+  IndexedMesh m;
+  GroupHierarchy h;
+  ASSERT_NO_FATAL_FAILURE(LoadBunnyWithHierarchy(m, h));
+  HierarchicalSimplificationParams p;
+  EXPECT_EQ(p.qem.mode, GroupMode::Integrity);
+  int overPlain = 0;
+  for (bool keep : {false, true}) {
+    for (size_t perPart : {size_t(0), size_t(10000)}) {
+      SCOPED_TRACE(std::to_string(keep) + " " + std::to_string(perPart));
+      p.qem.keepCones = keep;
+      p.facesPerPart = perPart;
+      std::vector<SimplifiedLevel> levels;
+      ASSERT_TRUE(BuildSimplifiedLevels(m, h, p, levels).ok());
+      ExpectLevelsValid(m, h, levels);
+      for (const SimplifiedLevel& L : levels) {
+        const int over = CountConesOverLimit(L.mesh, L.faceGroup, std::min(h.level(L.level).thresholdDeg, 180.0));
+        if (keep) {
+          EXPECT_EQ(over, 0) << "level " << L.level;
+        } else {
+          overPlain += over;
+        }
+      }
+    }
+  }
+  EXPECT_GT(overPlain, 0) << "without keepCones some cones should widen";
+}
+
 bool SameLevels(const std::vector<SimplifiedLevel>& a, const std::vector<SimplifiedLevel>& b) {
   if (a.size() != b.size()) return false;
   for (size_t i = 0; i < a.size(); ++i)
