@@ -123,13 +123,18 @@ class Comparison:
         self.a = a
         self.tools = tools
         self.meshlab = Meshlab(tools["server"])
-        self.has_auto = self.cli_offers("cone:auto")
+        self.has_auto = None  # whether this CLI takes --groups cone:auto: asked on the first mesh
         self.rows = []
 
-    def cli_offers(self, text):
-        """Whether `conelod simplify`'s usage mentions `text` (feature detection across versions)."""
-        _, out, err, _, _ = run([self.tools["conelod"], "simplify"])
-        return text in out + err
+    def detect_auto(self, mesh):
+        """Feature detection across versions: a CLI without `cone:auto` refuses it as a usage error
+        (exit 1); target ratio 1 makes the probe cheap (grouping only, no collapse)."""
+        rc, _, _, _, _ = run([self.tools["conelod"], "simplify", mesh, "--groups", "cone:auto", "--target-ratio", "1",
+                              "--json"])
+        if rc in (0, 1):
+            self.has_auto = rc == 0
+            if not self.has_auto:
+                print("note: this conelod simplify refuses --groups cone:auto: fixed levels only", flush=True)
 
     # -- one mesh ---------------------------------------------------------------------------------
     def compare_mesh(self, mesh):
@@ -150,6 +155,8 @@ class Comparison:
             for t in a.targets:
                 self.rows.append(self.failed_row(name, faces_in, t, "-", reason))
             return
+        if self.has_auto is None and "auto" in a.levels:
+            self.detect_auto(mesh)
         group_counts = {i + 1: lv.get("groups", -1) for i, lv in enumerate(levels)}
         sources = []
         for s in a.levels:
@@ -183,6 +190,7 @@ class Comparison:
                 row = self.case(mesh, name, work, faces_in, t, asked, src, group_counts, peers)
                 self.rows.append(row)
                 print("  %5g%% %-6s %s" % (100 * t, src, self.row_text(row)), flush=True)
+                write_tsv(self.rows, os.path.join(a.out, "results.tsv"))  # as it goes: a stopped run keeps its rows
 
     def failed_row(self, name, faces_in, t, level, reason):
         row = {c: "" for c in COLUMNS}
@@ -352,7 +360,8 @@ def mesh_table(name, rows):
             md.append("| %g%% | %s | %s | – | – | – | – | – | – | – | – | failed: %s |"
                       % (r["target_pct"], r["level"], r["asked"], r["error"]))
             continue
-        level = r["level"] if r["level"] == str(r["group_level"]) else "%s → %s" % (r["level"], r["group_level"])
+        level = r["level"] if r["group_level"] in ("", r["level"]) or r["level"] == str(r["group_level"]) \
+            else "%s → %s" % (r["level"], r["group_level"])
         md.append("| %g%% | %s (%s) | %s | %s (%.1f%%) | %s / %s / %s | %s | %s | %s / %s / %s | %s%% | %s | %s / %s / %s | %s |" % (
             r["target_pct"], level, r["groups"], r["asked"], r["ours_faces"], r["reached_pct"],
             fmt(r["ours_rms"]), fmt(r["meshlab_rms"]), fmt(r["meshopt_rms"]),
@@ -373,9 +382,11 @@ def overall(rows, a, has_auto):
     off = [abs(r[t + "_faces"] - r["ours_faces"]) for r in ok for t in ("meshlab", "meshopt") if num(r[t + "_faces"])]
     lines.append("- peers at exactly our face count: %d of %d cases%s%s" % (
         len(ok) - len(inexact), len(ok),
-        " (the others at most %d faces away)" % max(off) if inexact and off else "", "".join(
+        " (the others at most %d face(s) away)" % max(off) if inexact and off else "", "".join(
             "\n  - %s %g%% level %s: %s" % (r["mesh"], r["target_pct"], r["level"], r["error"]) for r in inexact)))
-    if has_auto:
+    if "auto" not in a.levels:
+        pass
+    elif has_auto:
         auto = [r for r in rows if r["level"] == "auto"]
         missed = [r for r in auto if r["status"] == "failed" or not r["ours_faces"] <= 1.01 * r["asked"]]
         lines.append("- `cone:auto`: target reached within 1 %% in %d of %d cases%s" % (
@@ -385,7 +396,7 @@ def overall(rows, a, has_auto):
         intact = [r for r in auto if num(r["intact_pct"]) and r["intact_pct"] >= 100.0]
         lines.append("- `cone:auto`: groups 100 %% intact in %d of %d cases" % (len(intact), len(auto)))
     else:
-        lines.append("- `cone:auto`: not offered by this build's `conelod simplify`; fixed levels only")
+        lines.append("- `cone:auto`: refused by this build's `conelod simplify` (exit 1): fixed levels only")
     for label, subset in (("all cases", ok), ("`cone:auto`", [r for r in ok if r["level"] == "auto"])):
         if not subset or (label != "all cases" and not has_auto):
             continue
@@ -402,7 +413,7 @@ def overall(rows, a, has_auto):
     fine = [r for r in ok if r["level"] != "auto" and num(r["groups"]) and r["groups"] > 0
             and r["asked"] >= 8 * r["groups"] and num(r["rms_ratio_meshlab"])]
     if fine:
-        lines.append("- fixed levels with ≥ 8 faces per group at the target: RMS ≤ 1.25× MeshLab's in %d of %d "
+        lines.append("- groups chosen by the user (a level, pca:K) with ≥ 8 faces per group at the target: RMS ≤ 1.25× MeshLab's in %d of %d "
                      "(geometric mean %s)" % (sum(r["rms_ratio_meshlab"] <= 1.25 for r in fine), len(fine),
                                              fmt(geomean([r["rms_ratio_meshlab"] for r in fine]), 2)))
     lines.append("")
@@ -458,6 +469,55 @@ plot {plots}
         print("gnuplot failed: %s" % p.stderr.decode(errors="replace"), file=sys.stderr)
 
 
+TITLE = "# ConeLOD against MeshLab's QEM and meshoptimizer at equal face counts\n"
+
+
+def read_tsv(path):
+    """The rows of a results.tsv, with numbers and yes/no back as Python values."""
+    rows = []
+    with open(path) as f:
+        header = f.readline().rstrip("\n").split("\t")
+        for line in f:
+            row = {c: "" for c in COLUMNS}
+            for k, v in zip(header, line.rstrip("\n").split("\t")):
+                if v in ("yes", "no"):
+                    v = v == "yes"
+                elif k not in ("mesh", "level", "status", "error", "mode"):
+                    try:
+                        v = float(v) if k.endswith(("_rms", "_max", "_s", "_pct")) or k.startswith("rms_") else int(v)
+                    except ValueError:
+                        try:
+                            v = float(v)
+                        except ValueError:
+                            pass
+                row[k] = v
+            rows.append(row)
+    return rows
+
+
+def report_only(a):
+    """summary.md and plots from the results.tsv of earlier runs (e.g. one run per mesh)."""
+    rows = []
+    for path in a.report_from.split(","):
+        if not os.path.isfile(path):
+            sys.exit("--report-from: no file %s" % path)
+        rows += read_tsv(path)
+    has_auto = any(r["level"] == "auto" for r in rows)
+    if not has_auto:
+        a.levels = [s for s in a.levels if s != "auto"]
+    md = [TITLE]
+    for name in dict.fromkeys(r["mesh"] for r in rows):
+        mine = [r for r in rows if r["mesh"] == name]
+        os.makedirs(os.path.join(a.out, "work", name), exist_ok=True)
+        md.append(mesh_table(name, mine))
+        plot(name, mine, a.out)
+    md.append(overall(rows, a, has_auto))
+    with open(os.path.join(a.out, "summary.md"), "w") as f:
+        f.write("\n".join(md))
+    write_tsv(rows, os.path.join(a.out, "results.tsv"))
+    print("wrote %s from %d rows" % (os.path.join(a.out, "summary.md"), len(rows)))
+
+
 def default_meshes(source):
     folder = os.environ.get("CONELOD_TEST_MESHES") or os.path.join(source, "..", "shared", "test_meshes")
     if not os.path.isdir(folder):
@@ -477,6 +537,8 @@ def main():
                     "auto, pca:K [all,auto]")
     ap.add_argument("--samples", type=int, default=500000, help="Hausdorff samples per direction [500000]")
     ap.add_argument("--out", default="qem_compare", help="output folder [qem_compare]")
+    ap.add_argument("--report-from", default="", help="comma-separated results.tsv files of earlier runs: write "
+                    "OUT/summary.md and the plots from them, run nothing")
     ap.add_argument("--ours-args", default="", help="extra options for conelod simplify, e.g. '--keep-cones'")
     a = ap.parse_args()
     try:
@@ -508,7 +570,7 @@ def main():
                 sys.exit("--meshes: no mesh file or test mesh named like %r" % w)
             meshes += hits
         meshes = list(dict.fromkeys(meshes))
-    else:
+    elif not a.report_from:
         meshes, _ = default_meshes(a.source)
     tools = {"conelod": os.path.join(a.build, "conelod", "conelod"),
              "server": os.path.join(a.build, "meshlab", "bin", "meshlabserver"),
@@ -519,11 +581,11 @@ def main():
                      "meshopt_simplify)" % (t, a.build))
     a.out = os.path.abspath(a.out)
     os.makedirs(os.path.join(a.out, "work"), exist_ok=True)
+    if a.report_from:
+        return report_only(a)
 
     c = Comparison(a, tools)
-    if not c.has_auto:
-        print("note: this conelod simplify does not offer --groups cone:auto: fixed levels only", flush=True)
-    md = ["# ConeLOD against MeshLab's QEM and meshoptimizer at equal face counts\n"]
+    md = [TITLE]
     for mesh in meshes:
         start = len(c.rows)
         try:
@@ -535,7 +597,6 @@ def main():
         name = os.path.splitext(os.path.basename(mesh))[0]
         md.append(mesh_table(name, rows))
         plot(name, rows, a.out)
-        write_tsv(c.rows, os.path.join(a.out, "results.tsv"))  # as it goes: an interrupted run keeps its rows
     md.append(overall(c.rows, a, c.has_auto))
     with open(os.path.join(a.out, "summary.md"), "w") as f:
         f.write("\n".join(md))
