@@ -1,6 +1,6 @@
 // ConeLOD benchmark — our group-preserving quadric edge collapse against vcglib's
-// TriEdgeCollapseQuadric (what MeshLab's "Simplification: Quadric Edge Collapse Decimation" runs),
-// on the same mesh, in the same run, at the same targets.
+// TriEdgeCollapseQuadric (what MeshLab's "Simplification: Quadric Edge Collapse Decimation" runs)
+// and meshoptimizer's meshopt_simplify, on the same mesh, in the same run, at the same targets.
 //
 //   bench_simplify [MESH.ply] [--benchmark_* options]
 //   (default mesh: the dragon in CONELOD_TEST_MESHES)
@@ -10,13 +10,18 @@
 //           Finalize, with the filter's default parameters (QualityThr 0.3, OptimalPlacement,
 //           BoundaryWeight 1, no normal check, no topology check);
 //   ours:   ToIndexedMesh, SimplifyPreservingGroups (conditions 1 and 2 on the normal-cone groups
-//           of level --level, or no condition), ApplySimplifiedMesh back into the vcg mesh.
+//           of level --level, or no condition), ApplySimplifiedMesh back into the vcg mesh;
+//   meshopt: ToIndexedMesh, the index buffer, one meshopt_simplify call (target_error 1: no error
+//           limit) to the face count ours (conditions 1+2) reached at that target, so that both
+//           make the same number of faces; the result stays an index buffer (meshoptimizer has no
+//           mesh to write it back into).
 // ours_hierarchy times BuildSimplifiedLevels alone (every level of the normal-cone hierarchy, as
 // `conelod simplify --hierarchy` and the LOD file build run it), without a vcglib counterpart.
 // The groups are computed once, outside the timings. Each run starts from a fresh copy (the copy
 // is not timed). At the end the CPU-time ratio ours / vcglib is printed per target: <= 1 means
-// ours is at least as fast while enforcing the conditions.
+// ours is at least as fast while enforcing the conditions; meshopt's ratio to vcglib beside it.
 #include <benchmark/benchmark.h>
+#include <meshoptimizer.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -65,7 +70,8 @@ conelod::IndexedMesh g_indexed;          // g_mesh as an indexed mesh
 conelod::GroupHierarchy g_hierarchy;     // its normal-cone hierarchy (default parameters)
 int g_level = 4;
 std::string g_path;
-std::map<std::string, double> g_cpu;  // benchmark name -> CPU seconds per iteration
+std::map<std::string, double> g_cpu;     // benchmark name -> CPU seconds per iteration
+std::map<std::string, size_t> g_faces;   // benchmark name -> faces reached
 
 // MeshLab 2020.09's filter: QuadricSimplification() with the filter's default parameters.
 size_t RunVcg(QMesh& m, int targetFaces) {
@@ -95,9 +101,23 @@ size_t RunOurs(QMesh& m, int targetFaces, bool conditions) {
   return size_t(m.fn);
 }
 
-// kind: 0 = vcglib, 1 = ours with conditions 1 and 2, 2 = ours without conditions.
-void BM_Simplify(benchmark::State& state, int kind, double ratio, const std::string& name) {
-  const int target = int(ratio * g_mesh.fn);
+// meshoptimizer's simplifier on the mesh's live faces; returns the faces it kept.
+size_t RunMeshopt(const QMesh& m, int targetFaces) {
+  const conelod::IndexedMesh im = conelod::ToIndexedMesh(m);
+  std::vector<unsigned int> indices, out(im.faceCount() * 3);
+  indices.reserve(im.faceCount() * 3);
+  for (const auto& t : im.faces) indices.insert(indices.end(), t.begin(), t.end());
+  const size_t n = meshopt_simplify(out.data(), indices.data(), indices.size(), &im.positions[0][0], im.vertexCount(),
+                                    sizeof(vcg::Point3f), size_t(targetFaces) * 3, 1.0f, 0, nullptr);
+  return n / 3;
+}
+
+// kind: 0 = vcglib, 1 = ours with conditions 1 and 2, 2 = ours without conditions, 3 = meshopt
+// to the faces that 1 reached (registered after it).
+void BM_Simplify(benchmark::State& state, int kind, double ratio, const std::string& name,
+                 const std::string& sameFacesAs) {
+  int target = int(ratio * g_mesh.fn);
+  if (!sameFacesAs.empty() && g_faces.count(sameFacesAs)) target = int(g_faces[sameFacesAs]);
   size_t faces = 0;
   double cpu = 0;
   for (auto _ : state) {
@@ -106,7 +126,7 @@ void BM_Simplify(benchmark::State& state, int kind, double ratio, const std::str
     vcg::tri::Append<QMesh, QMesh>::MeshCopy(m, g_mesh);
     state.ResumeTiming();
     const std::clock_t c0 = std::clock();
-    faces = kind == 0 ? RunVcg(m, target) : RunOurs(m, target, kind == 1);
+    faces = kind == 0 ? RunVcg(m, target) : kind == 3 ? RunMeshopt(m, target) : RunOurs(m, target, kind == 1);
     cpu += double(std::clock() - c0) / CLOCKS_PER_SEC;
     state.PauseTiming();
     m.Clear();
@@ -118,6 +138,7 @@ void BM_Simplify(benchmark::State& state, int kind, double ratio, const std::str
   state.counters["faces_removed_per_s"] =
       benchmark::Counter(double(g_mesh.fn - int(faces)) * double(state.iterations()), benchmark::Counter::kIsRate);
   g_cpu[name] = cpu / double(state.iterations());
+  g_faces[name] = faces;
 }
 
 void BM_Hierarchy(benchmark::State& state) {
@@ -166,10 +187,11 @@ int main(int argc, char** argv) {
   const double ratios[] = {0.5, 0.1, 0.01};
   for (double r : ratios) {
     const std::string pct = std::to_string(int(r * 100 + 0.5)) + "%";
-    const char* names[] = {"vcglib_quadric/", "ours_conditions_1_2/", "ours_no_condition/"};
-    for (int kind = 0; kind < 3; ++kind) {
+    const char* names[] = {"vcglib_quadric/", "ours_conditions_1_2/", "ours_no_condition/", "meshopt_simplify/"};
+    for (int kind = 0; kind < 4; ++kind) {
       const std::string name = names[kind] + pct;
-      benchmark::RegisterBenchmark(name.c_str(), BM_Simplify, kind, r, name)
+      const std::string sameFacesAs = kind == 3 ? std::string(names[1]) + pct : std::string();
+      benchmark::RegisterBenchmark(name.c_str(), BM_Simplify, kind, r, name, sameFacesAs)
           ->Unit(benchmark::kMillisecond)->Iterations(1);
     }
   }
@@ -177,15 +199,19 @@ int main(int argc, char** argv) {
   int n = int(rest.size());
   benchmark::Initialize(&n, rest.data());
   benchmark::RunSpecifiedBenchmarks();
-  std::printf("\nCPU-time ratio ours / vcglib (<= 1: ours at least as fast):\n");
+  std::printf("\nCPU-time ratio to vcglib (<= 1: at least as fast); meshopt at the faces ours reached:\n");
   for (double r : ratios) {
     const std::string pct = std::to_string(int(r * 100 + 0.5)) + "%";
     const double v = g_cpu["vcglib_quadric/" + pct];
-    const double c = g_cpu["ours_conditions_1_2/" + pct];
-    const double f = g_cpu["ours_no_condition/" + pct];
-    if (v > 0)
-      std::printf("  target %4s: vcglib %.3f s, ours (conditions 1+2) %.3f s = %.2fx, ours (none) %.3f s = %.2fx\n",
-                  pct.c_str(), v, c, c / v, f, f / v);
+    if (!(v > 0)) continue;
+    std::printf("  target %4s: vcglib %.3f s", pct.c_str(), v);
+    const char* labels[][2] = {{"ours_conditions_1_2/", "ours (conditions 1+2)"}, {"ours_no_condition/", "ours (none)"},
+                               {"meshopt_simplify/", "meshopt"}};
+    for (const auto& l : labels)  // those that ran (--benchmark_filter may skip some)
+      if (g_cpu.count(l[0] + pct))
+        std::printf(", %s %.3f s = %.2fx (%zu faces)", l[1], g_cpu[l[0] + pct], g_cpu[l[0] + pct] / v,
+                    g_faces[l[0] + pct]);
+    std::printf("\n");
   }
   if (g_cpu.count("ours_hierarchy"))
     std::printf("  every level of the hierarchy (BuildSimplifiedLevels): ours %.3f s\n", g_cpu["ours_hierarchy"]);

@@ -1,280 +1,607 @@
 #!/usr/bin/env python3
-"""Compares ConeLOD's group-preserving quadric edge collapse with MeshLab's built-in
-"Simplification: Quadric Edge Collapse Decimation", through meshlabserver, on the same grouped
-input, at the same targets. Python 3 standard library only (no numpy). Run it through
-scripts/compare_qem.sh, which finds the build.
+"""Compares ConeLOD's group-preserving quadric edge collapse (`conelod simplify`) with MeshLab's
+"Simplification: Quadric Edge Collapse Decimation" and meshoptimizer's meshopt_simplify at equal
+face counts. Python 3 standard library only. Run it through scripts/compare_qem.sh, which finds
+the build.
 
-For each mesh: `conelod group --level L` writes the grouped input (per-face quality = normal-cone
-group of level L). For each target and each method (built-in QEM; ours with conditions 1 and 2;
-ours with locked group boundaries):
-  - a timing run: meshlabserver loads the grouped input, runs the one simplification filter, saves;
-    its CPU time minus that of the same run without the filter is the filter's time;
-  - a measuring run on the input and the result: Cone LOD: Group Integrity, then MeshLab's
-    Hausdorff Distance both ways (max, mean, RMS as % of the bounding-box diagonal).
-Writes OUT/<mesh>.md (a Markdown table), OUT/<mesh>.tsv, OUT/<mesh>.png (RMS error against the
-face count, gnuplot) and OUT/summary.md.
+For every mesh, every target (fraction of the input's faces) and every group source (each level of
+the mesh's normal-cone hierarchy, plus `auto` when the CLI offers `--groups cone:auto`):
+  1. ours: `conelod simplify MESH --groups cone:L --target-faces T --json -o ours.ply`; it reaches
+     N faces (N may be above T when the groups leave no room);
+  2. MeshLab's QEM (meshlabserver, its dialog's defaults) and meshopt_simplify (tools/
+     meshopt_simplify), both on the same input to EXACTLY N faces: each is asked again with a
+     corrected target until it lands on N (a peer that cannot is flagged in the table);
+  3. the error of each result: MeshLab's Hausdorff Distance both ways between the input and the
+     result (samples on vertices, edges and faces), the larger RMS of the two directions and the
+     larger maximum, in % of the input's bounding-box diagonal;
+  4. group integrity of ours (the CLI's own measure: groups neither split nor vanished) and, when
+     the CLI reports them, the cones over their level's threshold.
+A case that fails (a tool exits with an error, a log without figures) becomes a row with the
+reason; the run goes on. Writes OUT/results.tsv (one row per case), OUT/summary.md (a table per
+mesh and the overall figures), OUT/<mesh>.png (error against faces, one curve per tool) and keeps
+the meshes and logs in OUT/work/.
 """
 import argparse
+import json
+import math
 import os
 import re
 import resource
 import subprocess
 import sys
 import time
-import xml.etree.ElementTree as ET
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from mlx_filters import builtin_qem, hausdorff as hausdorff_filter, script as script_text  # noqa: E402
 
-METHODS = [
-    ("builtin", "MeshLab QEM (built-in)"),
-    ("ours", "ours, conditions 1+2"),
-    ("ours_locked", "ours, locked boundaries"),
-]
+TOOLS = ("ours", "meshlab", "meshopt")
+TOOL_LABEL = {"ours": "ours", "meshlab": "MeshLab QEM", "meshopt": "meshopt_simplify"}
+# results.tsv: one row per (mesh, target, level); these columns, always, in this order.
+COLUMNS = ["mesh", "faces_in", "target_pct", "asked", "level", "group_level", "groups", "status",
+           "ours_faces", "reached_pct", "target_reached", "ours_s", "ours_rms", "ours_max", "intact_pct",
+           "cones_over_threshold", "mode",
+           "meshlab_faces", "meshlab_exact", "meshlab_s", "meshlab_rms", "meshlab_max",
+           "meshopt_faces", "meshopt_exact", "meshopt_s", "meshopt_rms", "meshopt_max",
+           "rms_ratio_meshlab", "rms_ratio_meshopt", "error"]
 
 
-def script(path, filters):
-    with open(path, "w") as f:
-        f.write(script_text(*filters))
+class CaseError(Exception):
+    """A step of one case failed: the case's row says why, the run goes on."""
 
 
-def our_filter(source_dir, target, locked):
-    """Our filter with the shipped defaults (scripts/mlx), the target and the lock set."""
-    root = ET.parse(os.path.join(source_dir, "scripts", "mlx", "group_preserving_quadric_edge_collapse.mlx")).getroot()
-    values = {"TargetFaceNum": str(target), "TargetPerc": "0", "GroupSource": "0",
-              "LockGroupBoundaries": "true" if locked else "false"}
-    for flt in root:
-        for p in flt:
-            if p.get("name") in values:
-                p.set("value", values[p.get("name")])
-    return "".join(" " + ET.tostring(flt, encoding="unicode").strip() + "\n" for flt in root)
-
-
-def integrity_filter(source_dir):
-    root = ET.parse(os.path.join(source_dir, "scripts", "mlx", "group_integrity.mlx")).getroot()
-    return "".join(" " + ET.tostring(flt, encoding="unicode").strip() + "\n" for flt in root)
-
-
-def run_timed(cmd, cwd):
-    """Runs cmd; returns (exit code, CPU seconds of it and its children, wall seconds)."""
+def run(cmd, cwd=None, timeout=3600):
+    """Runs cmd; returns (exit code, stdout, stderr, CPU seconds of it and its children, wall s)."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.time()
-    p = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=cwd)
+    try:
+        p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=cwd, timeout=timeout)
+        rc, out, err = p.returncode, p.stdout.decode(errors="replace"), p.stderr.decode(errors="replace")
+    except subprocess.TimeoutExpired:
+        rc, out, err = 124, "", "timed out after %d s" % timeout
+    except OSError as e:
+        rc, out, err = 127, "", str(e)
     wall = time.time() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    return p.returncode, cpu, wall
+    return rc, out, err, cpu, wall
 
 
-def meshlab(server, inputs, script_path, log, output=None, cwd=None):
-    if os.path.exists(log):
-        os.remove(log)
-    cmd = ["xvfb-run", "-a", server, "-l", log, "-i"] + inputs + ["-s", script_path]
-    if output:
-        cmd += ["-o", output, "-m", "fq", "fc"]
-    rc, cpu, wall = run_timed(cmd, cwd)
-    text = open(log, errors="replace").read() if os.path.exists(log) else ""
-    if rc != 0:
-        sys.exit("meshlabserver failed (%d) on %s:\n%s" % (rc, script_path, text[-3000:]))
-    return text, cpu, wall
+def last_line(text):
+    lines = [l for l in text.strip().splitlines() if l.strip()]
+    return lines[-1].strip() if lines else ""
 
 
 def ply_face_count(path):
-    with open(path, "rb") as f:
-        for raw in f:
-            line = raw.decode("ascii", "replace").strip()
-            if line.startswith("element face"):
-                return int(line.split()[2])
-            if line == "end_header":
-                break
-    return 0
+    try:
+        with open(path, "rb") as f:
+            for raw in f:
+                line = raw.decode("ascii", "replace").strip()
+                if line.startswith("element face"):
+                    return int(line.split()[2])
+                if line == "end_header":
+                    break
+    except OSError:
+        pass
+    return -1
 
 
-def last_number(log, key):
-    vals = re.findall(re.escape(key) + r"\s+([0-9.eE+-]+)", log)
-    return float(vals[-1]) if vals else float("nan")
+class Meshlab:
+    """The private meshlabserver under xvfb-run."""
+
+    def __init__(self, server):
+        self.server = server
+
+    def run(self, inputs, filters, work, tag, output=None):
+        """Runs the filters on the inputs; returns (log text, CPU s). Raises CaseError on failure."""
+        mlx = os.path.join(work, tag + ".mlx")
+        log = os.path.join(work, tag + ".log")
+        with open(mlx, "w") as f:
+            f.write(script_text(*filters))
+        if os.path.exists(log):
+            os.remove(log)
+        cmd = ["xvfb-run", "-a", self.server, "-l", log, "-i"] + inputs + ["-s", mlx]
+        if output:
+            cmd += ["-o", output]
+        rc, out, err, cpu, _ = run(cmd, cwd=work)
+        text = open(log, errors="replace").read() if os.path.exists(log) else ""
+        if rc != 0:
+            raise CaseError("meshlabserver failed (%d) on %s: %s" % (rc, tag, last_line(text + out + err)))
+        return text, cpu
 
 
-def hausdorff(log):
-    """The two Hausdorff results of the log, in script order: (max, mean, rms) in % of the diagonal."""
+def hausdorff_results(log):
+    """Every Hausdorff result of the log, in order: (max, mean, rms) in % of the diagonal."""
     out = []
     for m in re.finditer(r"Values w\.r\.t\. BBox Diag \(([0-9.eE+-]+)\)\s*\n\s*min : ([0-9.eE+-]+)\s+max ([0-9.eE+-]+)"
                          r"\s+mean : ([0-9.eE+-]+)\s+RMS : ([0-9.eE+-]+)", log):
         out.append(tuple(100 * float(m.group(i)) for i in (3, 4, 5)))
-    # meshlabserver repeats the log after each filter: the last two are the two filters of this run.
-    return out[-2:]
+    return out
 
 
+class Comparison:
+    def __init__(self, a, tools):
+        self.a = a
+        self.tools = tools
+        self.meshlab = Meshlab(tools["server"])
+        self.has_auto = None  # whether this CLI takes --groups cone:auto: asked on the first mesh
+        self.rows = []
+
+    def detect_auto(self, mesh):
+        """Feature detection across versions: a CLI without `cone:auto` refuses it as a usage error
+        (exit 1); target ratio 1 makes the probe cheap (grouping only, no collapse)."""
+        rc, _, _, _, _ = run([self.tools["conelod"], "simplify", mesh, "--groups", "cone:auto", "--target-ratio", "1",
+                              "--json"])
+        if rc in (0, 1):
+            self.has_auto = rc == 0
+            if not self.has_auto:
+                print("note: this conelod simplify refuses --groups cone:auto: fixed levels only", flush=True)
+
+    # -- one mesh ---------------------------------------------------------------------------------
+    def compare_mesh(self, mesh):
+        a = self.a
+        name = os.path.splitext(os.path.basename(mesh))[0]
+        work = os.path.join(a.out, "work", name)
+        os.makedirs(work, exist_ok=True)
+        print("== %s" % name, flush=True)
+        faces_in = ply_face_count(mesh)
+        rc, out, err, _, _ = run([self.tools["conelod"], "group", mesh, "--json"])
+        try:
+            levels = json.loads(out)["levels"] if rc == 0 else None
+        except (ValueError, KeyError):
+            levels = None
+        if levels is None:
+            reason = "conelod group failed (%d): %s" % (rc, last_line(err or out))
+            print("  " + reason, flush=True)
+            for t in a.targets:
+                self.rows.append(self.failed_row(name, faces_in, t, "-", reason))
+            return
+        if self.has_auto is None and "auto" in a.levels:
+            self.detect_auto(mesh)
+        group_counts = {i + 1: lv.get("groups", -1) for i, lv in enumerate(levels)}
+        sources = []
+        for s in a.levels:
+            if s == "all":
+                sources += [str(i) for i in range(1, len(levels) + 1)]
+            elif s == "auto":
+                if self.has_auto:
+                    sources.append("auto")
+            elif s.isdigit() and int(s) > len(levels):
+                continue  # a level this mesh does not have
+            else:
+                sources.append(s)
+        sources = list(dict.fromkeys(sources))
+        if not sources:
+            reason = "none of the levels asked (%s) exists: this mesh has %d" % (",".join(a.levels), len(levels))
+            print("  " + reason, flush=True)
+            for t in a.targets:
+                self.rows.append(self.failed_row(name, faces_in, t, "-", reason))
+            return
+
+        # meshlabserver's own CPU time on this input (load, save): subtracted from the QEM runs'.
+        try:
+            _, self.base_cpu = self.meshlab.run([mesh], [], work, "noop", os.path.join(work, "noop.ply"))
+        except CaseError as e:
+            self.base_cpu = 0.0
+            print("  " + str(e), flush=True)
+        peers = {}  # (tool, faces) -> result dict: a peer depends only on the face count asked
+        for t in a.targets:
+            asked = max(1, int(round(t * faces_in)))
+            for src in sources:
+                row = self.case(mesh, name, work, faces_in, t, asked, src, group_counts, peers)
+                self.rows.append(row)
+                print("  %5g%% %-6s %s" % (100 * t, src, self.row_text(row)), flush=True)
+                write_tsv(self.rows, os.path.join(a.out, "results.tsv"))  # as it goes: a stopped run keeps its rows
+
+    def failed_row(self, name, faces_in, t, level, reason):
+        row = {c: "" for c in COLUMNS}
+        row.update(mesh=name, faces_in=faces_in, target_pct=100 * t, asked=max(1, int(round(t * faces_in))),
+                   level=level, status="failed", error=reason)
+        return row
+
+    def row_text(self, r):
+        if r["status"] == "failed":
+            return "FAILED: " + r["error"]
+        return "%s -> %s faces, RMS %s / %s / %s (ours / MeshLab / meshopt), intact %s%%%s" % (
+            r["asked"], r["ours_faces"], fmt(r["ours_rms"]), fmt(r["meshlab_rms"]), fmt(r["meshopt_rms"]),
+            fmt(r["intact_pct"], 1), ("; " + r["error"]) if r["error"] else "")
+
+    # -- one case ---------------------------------------------------------------------------------
+    def case(self, mesh, name, work, faces_in, t, asked, src, group_counts, peers):
+        row = self.failed_row(name, faces_in, t, src, "")
+        tag = "%g_%s" % (100 * t, src.replace(":", ""))
+        groups_arg = "cone:" + src if (src.isdigit() or src == "auto") else src
+        ours = os.path.join(work, "ours_%s.ply" % tag)
+        cmd = [self.tools["conelod"], "simplify", mesh, "--groups", groups_arg, "--target-faces", str(asked),
+               "--json", "-o", ours] + self.a.ours_args
+        rc, out, err, _, _ = run(cmd)
+        try:
+            if rc != 0:
+                raise CaseError("conelod simplify failed (%d): %s" % (rc, last_line(err or out)))
+            try:
+                j = json.loads(out)
+            except ValueError:
+                raise CaseError("conelod simplify printed no JSON: %s" % last_line(out))
+            n = int(j["faces_out"])
+            level = j.get("group_level", int(src) if src.isdigit() else "")
+            row.update(group_level=level, groups=j.get("groups_before", group_counts.get(level, "")),
+                       ours_faces=n, reached_pct=100.0 * n / faces_in,
+                       target_reached=j.get("target_reached", n <= 1.01 * asked),
+                       ours_s=float(j["seconds"]),
+                       intact_pct=100.0 * float(j["integrity"]),
+                       cones_over_threshold=j.get("cones_over_threshold", "n/a"), mode=j.get("mode", "n/a"))
+            notes = []
+            for tool in ("meshlab", "meshopt"):
+                key = (tool, n)
+                if key not in peers:
+                    try:
+                        peers[key] = getattr(self, "peer_" + tool)(mesh, work, n)
+                    except CaseError as e:
+                        peers[key] = {"error": str(e)}
+                p = peers[key]
+                if "error" in p:
+                    notes.append("%s: %s" % (TOOL_LABEL[tool], p["error"]))
+                    continue
+                row.update({tool + "_faces": p["faces"], tool + "_exact": p["faces"] == n, tool + "_s": p["s"]})
+                if p["faces"] != n:
+                    notes.append("%s reached %d faces, not %d" % (TOOL_LABEL[tool], p["faces"], n))
+            # One measuring run for the results not measured yet (a peer's is shared between levels).
+            todo = [("ours", ours, None)] + [(tool, peers[(tool, n)]["path"], peers[(tool, n)])
+                                             for tool in ("meshlab", "meshopt")
+                                             if "error" not in peers[(tool, n)] and "rms" not in peers[(tool, n)]]
+            errors = self.measure(mesh, work, "measure_" + tag, [path for _, path, _ in todo])
+            for (tool, _, p), (rms, mx) in zip(todo, errors):
+                if p is not None:
+                    p["rms"], p["max"] = rms, mx
+                else:
+                    row["ours_rms"], row["ours_max"] = rms, mx
+            for tool in ("meshlab", "meshopt"):
+                p = peers[(tool, n)]
+                if "rms" in p:
+                    row[tool + "_rms"], row[tool + "_max"] = p["rms"], p["max"]
+                    if p["rms"] > 0:
+                        row["rms_ratio_" + tool] = row["ours_rms"] / p["rms"]
+            row["status"] = "ok" if not notes else "peer issue"
+            row["error"] = "; ".join(notes)
+        except CaseError as e:
+            row["status"], row["error"] = "failed", str(e)
+        return row
+
+    def peer_meshlab(self, mesh, work, n):
+        """MeshLab's QEM to exactly n faces: asked for n, then corrected by what it missed by."""
+        best = None
+        ask = n
+        tried = set()
+        for attempt in range(4):
+            tried.add(ask)
+            path = os.path.join(work, "meshlab_%d_%d.ply" % (n, ask))
+            log, cpu = self.meshlab.run([mesh], [builtin_qem(ask)], work, "meshlab_%d_%d" % (n, ask), path)
+            faces = ply_face_count(path)
+            if faces < 0:
+                raise CaseError("MeshLab QEM wrote no mesh")
+            result = {"faces": faces, "s": max(0.0, cpu - self.base_cpu), "path": path}
+            if best is None or abs(faces - n) < abs(best["faces"] - n):
+                best = result
+            if faces == n:
+                break
+            ask = max(1, ask + (n - faces))
+            if ask in tried:
+                ask = ask + (1 if faces < n else -1)
+            if ask in tried:
+                break
+        return best
+
+    def peer_meshopt(self, mesh, work, n):
+        path = os.path.join(work, "meshopt_%d.ply" % n)
+        rc, out, err, _, _ = run([self.tools["meshopt"], mesh, path, "--target-faces", str(n)])
+        if rc != 0:
+            raise CaseError("meshopt_simplify failed (%d): %s" % (rc, last_line(err or out)))
+        try:
+            j = json.loads(out)
+        except ValueError:
+            raise CaseError("meshopt_simplify printed no JSON")
+        return {"faces": int(j["faces"]), "s": float(j["time_ms"]) / 1000.0, "path": path}
+
+    def measure(self, mesh, work, tag, results):
+        """[(RMS, max)] per result: Hausdorff both ways against the input (layer 0), % of the diagonal."""
+        filters = []
+        for i in range(1, len(results) + 1):
+            filters += [hausdorff_filter(i, 0, self.a.samples, sample_edges=True),
+                        hausdorff_filter(0, i, self.a.samples, sample_edges=True)]
+        log, _ = self.meshlab.run([mesh] + results, filters, work, tag)
+        h = hausdorff_results(log)[-2 * len(results):]
+        if len(h) != 2 * len(results):
+            raise CaseError("no Hausdorff figures in %s.log" % tag)
+        return [(max(h[2 * i][2], h[2 * i + 1][2]), max(h[2 * i][0], h[2 * i + 1][0])) for i in range(len(results))]
+
+
+# -- outputs ---------------------------------------------------------------------------------------
 def fmt(x, digits=4):
-    return "n/a" if x != x else ("%.*f" % (digits, x))
+    if x == "" or x is None:
+        return "–"
+    if isinstance(x, bool):
+        return "yes" if x else "no"
+    if isinstance(x, float):
+        return "n/a" if x != x else "%.*f" % (digits, x)
+    return str(x)
 
 
-def compare(mesh, a, tools, out_dir):
-    name = os.path.splitext(os.path.basename(mesh))[0]
-    work = os.path.join(out_dir, "work_" + name)
-    os.makedirs(work, exist_ok=True)
-    print("== %s" % mesh, flush=True)
-
-    import json
-    if a.pca:
-        # Grouped input: per-face quality = cluster of the recursive PCA partition cut at K.
-        grouped = os.path.join(work, name + "_pca%d.ply" % a.pca)
-        info = subprocess.run([tools["conelod"], "partition", mesh, "--clusters", str(a.pca), "-o", grouped, "--json"],
-                              stdout=subprocess.PIPE, check=True)
-        groups = json.loads(info.stdout)["clusters"]
-        source = "%d PCA clusters" % groups
-    else:
-        # Grouped input: per-face quality = normal-cone group of level L (clamped to the levels built).
-        info = subprocess.run([tools["conelod"], "group", mesh, "--json"], stdout=subprocess.PIPE, check=True)
-        levels = json.loads(info.stdout)["levels"]
-        level = min(a.level, len(levels))
-        groups = levels[level - 1]["groups"]
-        grouped = os.path.join(work, name + "_cone%d.ply" % level)
-        subprocess.run([tools["conelod"], "group", mesh, "--level", str(level), "-o", grouped], check=True,
-                       stdout=subprocess.DEVNULL)
-        source = "%d normal-cone groups, level %d" % (groups, level)
-    faces_in = ply_face_count(grouped)
-    print("  %d faces, %s" % (faces_in, source), flush=True)
-
-    noop = os.path.join(work, "noop.mlx")
-    script(noop, [])
-    log = os.path.join(work, "run.log")
-    _, base_cpu, base_wall = meshlab(tools["server"], [grouped], noop, log, os.path.join(work, "noop.ply"), work)
-
-    rows = []
-    for ratio in a.targets:
-        target = max(1, int(ratio * faces_in))
-        todo = list(METHODS)
-        while todo:
-            method, label = todo.pop(0)
-            if method == "builtin_same":
-                label = "MeshLab QEM at our face count"
-            tag = "%s_%g" % (method, ratio)
-            simplified = os.path.join(work, tag + ".ply")
-            run = os.path.join(work, tag + ".mlx")
-            method_target = target
-            if method == "builtin_same":  # ours stopped above the target: the built-in at our face count
-                method_target = next(r["faces"] for r in rows if r["ratio"] == ratio and r["method"] == "ours")
-            script(run, [builtin_qem(method_target) if method.startswith("builtin")
-                         else our_filter(tools["source"], target, method == "ours_locked")])
-            runlog, cpu, wall = meshlab(tools["server"], [grouped], run, log, simplified, work)
-            filter_seconds = last_number(runlog, "seconds") if method.startswith("ours") else float("nan")
-            measure = os.path.join(work, tag + "_measure.mlx")
-            script(measure, [integrity_filter(tools["source"]),
-                             hausdorff_filter(1, 0, a.samples, sample_edges=True),
-                             hausdorff_filter(0, 1, a.samples, sample_edges=True)])
-            mlog, _, _ = meshlab(tools["server"], [grouped, simplified], measure, log, None, work)
-            h = hausdorff(mlog)
-            if len(h) != 2:
-                sys.exit("no Hausdorff figures in the log of %s:\n%s" % (measure, mlog[-2000:]))
-            row = {
-                "mesh": name, "method": method, "label": label, "ratio": ratio, "target": method_target,
-                "faces": ply_face_count(simplified), "cpu": max(0.0, cpu - base_cpu), "wall": max(0.0, wall - base_wall),
-                "filter_seconds": filter_seconds,
-                "ab": h[0], "ba": h[1],
-                "groups_before": last_number(mlog, "groups_before"), "groups_after": last_number(mlog, "groups_after"),
-                "split": last_number(mlog, "groups_split"), "vanished": last_number(mlog, "groups_vanished"),
-                "intact": last_number(mlog, "integrity_percent"),
-            }
-            rows.append(row)
-            if method == "ours" and row["faces"] > 1.01 * target:
-                todo.insert(0, ("builtin_same", ""))
-            print("  %-24s target %7d: %7d faces, %6.2f s CPU, RMS %.4f%% / %.4f%%, %3.0f%% groups intact"
-                  % (label, target, row["faces"], row["cpu"], h[0][2], h[1][2], row["intact"]), flush=True)
-    write_outputs(name, mesh, source, faces_in, rows, out_dir, a)
-    return rows
+def num(x):
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and x == x
 
 
-def write_outputs(name, mesh, source, faces_in, rows, out_dir, a):
-    md = []
-    md.append("### %s (%d faces; %s)\n" % (name, faces_in, source))
-    md.append("| method | target | faces | CPU s | H max → | H mean → | H RMS → | H max ← | H mean ← | H RMS ← "
-              "| groups after | split | vanished | intact |")
-    md.append("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+def geomean(values):
+    values = [v for v in values if num(v) and v > 0]
+    return math.exp(sum(math.log(v) for v in values) / len(values)) if values else float("nan")
+
+
+def write_tsv(rows, path):
+    with open(path, "w") as f:
+        f.write("\t".join(COLUMNS) + "\n")
+        for r in rows:
+            f.write("\t".join(tsv_value(r[c]) for c in COLUMNS) + "\n")
+
+
+def tsv_value(v):
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, float):
+        return "%.6g" % v
+    return str(v).replace("\t", " ").replace("\n", " ")
+
+
+def mesh_table(name, rows):
+    faces_in = rows[0]["faces_in"] if rows else "?"
+    md = ["### %s (%s faces)\n" % (name, faces_in),
+          "| target | level (groups) | asked | reached | RMS ours / MeshLab / meshopt | ratio MeshLab | ratio meshopt "
+          "| max ours / MeshLab / meshopt | intact | cones over threshold | time s ours / MeshLab / meshopt | note |",
+          "|---:|---|---:|---:|---|---:|---:|---|---:|---:|---|---|"]
     for r in rows:
-        md.append("| %s | %g%% (%d) | %d | %.2f | %s | %s | %s | %s | %s | %s | %d | %d | %d | %.1f%% |" % (
-            r["label"], 100 * r["ratio"], r["target"], r["faces"], r["cpu"],
-            fmt(r["ab"][0], 3), fmt(r["ab"][1]), fmt(r["ab"][2]), fmt(r["ba"][0], 3), fmt(r["ba"][1]), fmt(r["ba"][2]),
-            r["groups_after"], r["split"], r["vanished"], r["intact"]))
-    md.append("")
-    md.append("H → : Hausdorff distance from the simplified mesh to the input, H ← : from the input to the simplified "
-              "mesh (MeshLab's Hausdorff Distance, %d samples, vertices + edges + faces), in %% of the input's "
-              "bounding-box diagonal. CPU s: the meshlabserver run's CPU time minus that of the same run without "
-              "the filter." % a.samples)
-    ratios = []
-    for ratio in a.targets:
-        by = {r["method"]: r for r in rows if r["ratio"] == ratio}
-        if "builtin" in by and "ours" in by:
-            rms = lambda r: max(r["ab"][2], r["ba"][2])
-            ref = by.get("builtin_same", by["builtin"])
-            ratios.append("target %g%%: ours %d faces, %.0f%% of groups intact (built-in: %d faces, %.0f%%); RMS "
-                          "(larger of both ways) ours / built-in at %d faces = %.2f; locked boundaries: %d faces, "
-                          "RMS / built-in at the target = %.2f; CPU ours / built-in = %.2f"
-                          % (100 * ratio, by["ours"]["faces"], by["ours"]["intact"], by["builtin"]["faces"],
-                             by["builtin"]["intact"], ref["faces"], rms(by["ours"]) / rms(ref),
-                             by["ours_locked"]["faces"], rms(by["ours_locked"]) / rms(by["builtin"]),
-                             by["ours"]["cpu"] / max(by["builtin"]["cpu"], 1e-9)))
-    md.append("")
-    md.extend("- " + r for r in ratios)
-    md.append("")
-    with open(os.path.join(out_dir, name + ".md"), "w") as f:
-        f.write("\n".join(md) + "\n")
-    tsv = os.path.join(out_dir, name + ".tsv")
-    with open(tsv, "w") as f:
-        f.write("# method\tratio\tfaces\trms_max_both_ways_pct\tcpu_s\tintact_pct\n")
-        for method, _ in METHODS:  # the built-in's series includes its runs at our face counts
-            series = (method, "builtin_same") if method == "builtin" else (method,)
-            for r in sorted((r for r in rows if r["method"] in series), key=lambda r: r["faces"]):
-                f.write("%s\t%g\t%d\t%.6f\t%.3f\t%.2f\n" % (method, r["ratio"], r["faces"],
-                                                          max(r["ab"][2], r["ba"][2]), r["cpu"], r["intact"]))
+        if r["status"] == "failed":
+            md.append("| %g%% | %s | %s | – | – | – | – | – | – | – | – | failed: %s |"
+                      % (r["target_pct"], r["level"], r["asked"], r["error"]))
+            continue
+        level = r["level"] if r["group_level"] in ("", r["level"]) or r["level"] == str(r["group_level"]) \
+            else "%s → %s" % (r["level"], r["group_level"])
+        md.append("| %g%% | %s (%s) | %s | %s (%.1f%%) | %s / %s / %s | %s | %s | %s / %s / %s | %s%% | %s | %s / %s / %s | %s |" % (
+            r["target_pct"], level, r["groups"], r["asked"], r["ours_faces"], r["reached_pct"],
+            fmt(r["ours_rms"]), fmt(r["meshlab_rms"]), fmt(r["meshopt_rms"]),
+            fmt(r["rms_ratio_meshlab"], 2), fmt(r["rms_ratio_meshopt"], 2),
+            fmt(r["ours_max"], 3), fmt(r["meshlab_max"], 3), fmt(r["meshopt_max"], 3),
+            fmt(r["intact_pct"], 1), fmt(r["cones_over_threshold"]),
+            fmt(r["ours_s"], 3), fmt(r["meshlab_s"], 3), fmt(r["meshopt_s"], 3), r["error"]))
+    return "\n".join(md) + "\n"
+
+
+def overall(rows, a, has_auto):
+    ok = [r for r in rows if r["status"] != "failed"]
+    lines = ["## Overall\n"]
+    failed = [r for r in rows if r["status"] == "failed"]
+    lines.append("- cases: %d, failed: %d%s" % (len(rows), len(failed), "".join(
+        "\n  - %s %g%% level %s: %s" % (r["mesh"], r["target_pct"], r["level"], r["error"]) for r in failed)))
+    inexact = [r for r in ok if r["meshlab_exact"] is not True or r["meshopt_exact"] is not True]
+    off = [abs(r[t + "_faces"] - r["ours_faces"]) for r in ok for t in ("meshlab", "meshopt") if num(r[t + "_faces"])]
+    lines.append("- peers at exactly our face count: %d of %d cases%s%s" % (
+        len(ok) - len(inexact), len(ok),
+        " (the others at most %d face(s) away)" % max(off) if inexact and off else "", "".join(
+            "\n  - %s %g%% level %s: %s" % (r["mesh"], r["target_pct"], r["level"], r["error"]) for r in inexact)))
+    if "auto" not in a.levels:
+        pass
+    elif has_auto:
+        auto = [r for r in rows if r["level"] == "auto"]
+        missed = [r for r in auto if r["status"] == "failed" or not r["ours_faces"] <= 1.01 * r["asked"]]
+        lines.append("- `cone:auto`: target reached within 1 %% in %d of %d cases%s" % (
+            len(auto) - len(missed), len(auto), "".join(
+                "\n  - %s %g%%: %s faces for %s asked" % (r["mesh"], r["target_pct"], r["ours_faces"] or "no", r["asked"])
+                for r in missed)))
+        intact = [r for r in auto if num(r["intact_pct"]) and r["intact_pct"] >= 100.0]
+        lines.append("- `cone:auto`: groups 100 %% intact in %d of %d cases" % (len(intact), len(auto)))
+    else:
+        lines.append("- `cone:auto`: refused by this build's `conelod simplify` (exit 1): fixed levels only")
+    for label, subset in (("all cases", ok), ("`cone:auto`", [r for r in ok if r["level"] == "auto"])):
+        if not subset or (label != "all cases" and not has_auto):
+            continue
+        ml = [r["rms_ratio_meshlab"] for r in subset if num(r["rms_ratio_meshlab"])]
+        mo = [r["rms_ratio_meshopt"] for r in subset if num(r["rms_ratio_meshopt"])]
+        maxwin_ml = [r for r in subset if num(r["ours_max"]) and num(r["meshlab_max"]) and r["ours_max"] <= r["meshlab_max"]]
+        maxwin_mo = [r for r in subset if num(r["ours_max"]) and num(r["meshopt_max"]) and r["ours_max"] <= r["meshopt_max"]]
+        lines.append("- %s: RMS ours / MeshLab's QEM: geometric mean %s, worst %s, ≤ 1.1× in %d of %d, ≤ 1.0× in %d; "
+                     "ours / meshopt: geometric mean %s, ≤ 1.0× in %d of %d; max error ≤ MeshLab's in %d of %d, "
+                     "≤ meshopt's in %d of %d" % (
+                         label, fmt(geomean(ml), 2), fmt(max(ml), 2) if ml else "n/a", sum(v <= 1.1 for v in ml),
+                         len(ml), sum(v <= 1.0 for v in ml), fmt(geomean(mo), 2), sum(v <= 1.0 for v in mo), len(mo),
+                         len(maxwin_ml), len(subset), len(maxwin_mo), len(subset)))
+    fine = [r for r in ok if r["level"] != "auto" and num(r["groups"]) and r["groups"] > 0
+            and r["asked"] >= 8 * r["groups"] and num(r["rms_ratio_meshlab"])]
+    if fine:
+        lines.append("- groups chosen by the user (a level, pca:K) with ≥ 8 faces per group at the target: RMS ≤ 1.25× MeshLab's in %d of %d "
+                     "(geometric mean %s)" % (sum(r["rms_ratio_meshlab"] <= 1.25 for r in fine), len(fine),
+                                             fmt(geomean([r["rms_ratio_meshlab"] for r in fine]), 2)))
+    lines.append("")
+    lines.append("RMS / max: MeshLab's Hausdorff Distance between the input and the result both ways (%d samples on "
+                 "vertices, edges and faces), the larger of the two directions, %% of the input's bounding-box "
+                 "diagonal. MeshLab's QEM (dialog defaults) and meshopt_simplify (target_error 1) run to the face "
+                 "count ours reached. Time: ours = `conelod simplify`'s own figure (simplification only); MeshLab = "
+                 "meshlabserver's CPU time minus that of a run without the filter; meshopt = the one call that made "
+                 "the result. Level `a → b`: asked `a`, the CLI used level `b`." % a.samples)
+    return "\n".join(lines) + "\n"
+
+
+def plot(name, rows, out_dir):
+    """OUT/<name>.png: RMS against faces, one curve per tool (ours: cone:auto as a curve, the fixed
+    levels as points)."""
+    dat = os.path.join(out_dir, "work", name, "plot.dat")
+    series = []
+    with open(dat, "w") as f:
+        def block(title, pts, style):
+            pts = sorted(set(p for p in pts if num(p[0]) and num(p[1]) and p[1] > 0))
+            if not pts:
+                return
+            f.write("# %s\n" % title)
+            for x, y in pts:
+                f.write("%d\t%.6g\n" % (x, y))
             f.write("\n\n")
+            series.append((title, style))
+        ok = [r for r in rows if r["status"] != "failed"]
+        block("MeshLab QEM", [(r["meshlab_faces"], r["meshlab_rms"]) for r in ok], "linespoints lw 2 pt 7")
+        block("meshopt_simplify", [(r["meshopt_faces"], r["meshopt_rms"]) for r in ok], "linespoints lw 2 pt 5")
+        block("ours, cone:auto", [(r["ours_faces"], r["ours_rms"]) for r in ok if r["level"] == "auto"],
+              "linespoints lw 2 pt 9")
+        block("ours, fixed levels", [(r["ours_faces"], r["ours_rms"]) for r in ok if r["level"] != "auto"],
+              "points pt 1 ps 1.5")
+    if not series:
+        return
     png = os.path.join(out_dir, name + ".png")
-    gp = """set terminal pngcairo size 720,450 font "DejaVu Sans,10"
+    plots = ", \\\n     ".join("'%s' index %d using 1:2 with %s title \"%s\"" % (dat, i, style, title)
+                              for i, (title, style) in enumerate(series))
+    gp = """set terminal pngcairo size 800,500 font "DejaVu Sans,10"
 set output '{png}'
 set termoption noenhanced
-set title "{name}: RMS Hausdorff distance vs faces ({source})"
+set title "{name}: error at equal face counts"
 set xlabel "faces after simplification"
 set ylabel "RMS distance, % of bbox diagonal (larger of both ways)"
 set logscale xy
 set grid
 set key top right
-plot '{tsv}' index 0 using 3:4 with linespoints lw 2 pt 7 title "MeshLab QEM (built-in)", \\
-     '{tsv}' index 1 using 3:4 with linespoints lw 2 pt 5 title "ours, conditions 1+2", \\
-     '{tsv}' index 2 using 3:4 with linespoints lw 2 pt 9 title "ours, locked group boundaries"
-""".format(png=png, tsv=tsv, name=name, source=source)
+plot {plots}
+""".format(png=png, name=name, plots=plots)
     p = subprocess.run(["gnuplot"], input=gp.encode(), stderr=subprocess.PIPE)
     if p.returncode != 0:
-        print("gnuplot failed: %s" % p.stderr.decode(), file=sys.stderr)
-    print("  wrote %s, %s, %s" % (os.path.join(out_dir, name + ".md"), tsv, png), flush=True)
+        print("gnuplot failed: %s" % p.stderr.decode(errors="replace"), file=sys.stderr)
+
+
+TITLE = "# ConeLOD against MeshLab's QEM and meshoptimizer at equal face counts\n"
+
+
+def read_tsv(path):
+    """The rows of a results.tsv, with numbers and yes/no back as Python values."""
+    rows = []
+    with open(path) as f:
+        header = f.readline().rstrip("\n").split("\t")
+        for line in f:
+            row = {c: "" for c in COLUMNS}
+            for k, v in zip(header, line.rstrip("\n").split("\t")):
+                if v in ("yes", "no"):
+                    v = v == "yes"
+                elif k not in ("mesh", "level", "status", "error", "mode"):
+                    try:
+                        v = float(v) if k.endswith(("_rms", "_max", "_s", "_pct")) or k.startswith("rms_") else int(v)
+                    except ValueError:
+                        try:
+                            v = float(v)
+                        except ValueError:
+                            pass
+                row[k] = v
+            rows.append(row)
+    return rows
+
+
+def report_only(a):
+    """summary.md and plots from the results.tsv of earlier runs (e.g. one run per mesh)."""
+    rows = []
+    for path in a.report_from.split(","):
+        if not os.path.isfile(path):
+            sys.exit("--report-from: no file %s" % path)
+        rows += read_tsv(path)
+    has_auto = any(r["level"] == "auto" for r in rows)
+    if not has_auto:
+        a.levels = [s for s in a.levels if s != "auto"]
+    md = [TITLE]
+    for name in dict.fromkeys(r["mesh"] for r in rows):
+        mine = [r for r in rows if r["mesh"] == name]
+        os.makedirs(os.path.join(a.out, "work", name), exist_ok=True)
+        md.append(mesh_table(name, mine))
+        plot(name, mine, a.out)
+    md.append(overall(rows, a, has_auto))
+    with open(os.path.join(a.out, "summary.md"), "w") as f:
+        f.write("\n".join(md))
+    write_tsv(rows, os.path.join(a.out, "results.tsv"))
+    print("wrote %s from %d rows" % (os.path.join(a.out, "summary.md"), len(rows)))
+
+
+def default_meshes(source):
+    folder = os.environ.get("CONELOD_TEST_MESHES") or os.path.join(source, "..", "shared", "test_meshes")
+    if not os.path.isdir(folder):
+        sys.exit("no test meshes: %s is not a folder (set CONELOD_TEST_MESHES or pass --meshes)" % folder)
+    return sorted(os.path.join(folder, f) for f in os.listdir(folder) if f.endswith(".ply")), folder
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("meshes", nargs="+")
+    ap.add_argument("meshes_pos", nargs="*", metavar="MESH", help="meshes (paths); same as --meshes")
     ap.add_argument("--build", required=True)
     ap.add_argument("--source", required=True)
-    ap.add_argument("--out", default="qem_compare")
-    ap.add_argument("--level", type=int, default=4, help="normal-cone hierarchy level of the groups [4]")
-    ap.add_argument("--pca", type=int, default=0, help="use the K clusters of the PCA partition instead")
-    ap.add_argument("--targets", default="0.5,0.1,0.01", help="target fractions of the input faces [0.5,0.1,0.01]")
-    ap.add_argument("--samples", type=int, default=500000, help="Hausdorff samples [500000]")
+    ap.add_argument("--meshes", default="", help="comma-separated mesh paths, or names (or parts of names) of "
+                    "meshes in the test mesh folder [all of them]")
+    ap.add_argument("--targets", default="0.5,0.1,0.02", help="target fractions of the input faces [0.5,0.1,0.02]")
+    ap.add_argument("--levels", default="all,auto", help="comma-separated group sources: level numbers, all, "
+                    "auto, pca:K [all,auto]")
+    ap.add_argument("--samples", type=int, default=500000, help="Hausdorff samples per direction [500000]")
+    ap.add_argument("--out", default="qem_compare", help="output folder [qem_compare]")
+    ap.add_argument("--report-from", default="", help="comma-separated results.tsv files of earlier runs: write "
+                    "OUT/summary.md and the plots from them, run nothing")
+    ap.add_argument("--ours-args", default="", help="extra options for conelod simplify, e.g. '--keep-cones'")
     a = ap.parse_args()
-    a.targets = [float(t) for t in a.targets.split(",")]
+    try:
+        a.targets = [float(t) for t in a.targets.split(",") if t.strip()]
+    except ValueError:
+        sys.exit("--targets: comma-separated fractions, e.g. 0.5,0.1,0.02")
+    if not a.targets or not all(0 < t <= 1 for t in a.targets):
+        sys.exit("--targets: fractions in (0, 1]")
+    a.levels = [s.strip() for s in a.levels.split(",") if s.strip()]
+    for s in a.levels:
+        if not (s in ("all", "auto") or (s.isdigit() and int(s) >= 1) or re.fullmatch(r"pca:[1-9][0-9]*", s)):
+            sys.exit("--levels: %r is not a level number, all, auto or pca:K" % s)
+    if a.samples < 1000:
+        sys.exit("--samples: at least 1000")
+    a.ours_args = a.ours_args.split()
+
+    wanted = [m for m in a.meshes.split(",") if m.strip()] + a.meshes_pos
+    meshes = []
+    if wanted:
+        pool = None
+        for w in wanted:
+            if os.path.isfile(w):
+                meshes.append(os.path.abspath(w))
+                continue
+            if pool is None:
+                pool, _ = default_meshes(a.source)
+            hits = [p for p in pool if w in os.path.basename(p)]
+            if not hits:
+                sys.exit("--meshes: no mesh file or test mesh named like %r" % w)
+            meshes += hits
+        meshes = list(dict.fromkeys(meshes))
+    elif not a.report_from:
+        meshes, _ = default_meshes(a.source)
     tools = {"conelod": os.path.join(a.build, "conelod", "conelod"),
              "server": os.path.join(a.build, "meshlab", "bin", "meshlabserver"),
-             "source": a.source}
-    for t in ("conelod", "server"):
-        if not os.path.exists(tools[t]):
-            sys.exit("missing %s: build the project first (cmake --build %s)" % (tools[t], a.build))
-    os.makedirs(a.out, exist_ok=True)
+             "meshopt": os.path.join(a.build, "tools", "meshopt_simplify")}
+    for t in tools.values():
+        if not os.path.exists(t):
+            sys.exit("missing %s: build the project first (cmake --build %s --target conelod private_meshlab "
+                     "meshopt_simplify)" % (t, a.build))
     a.out = os.path.abspath(a.out)
-    summary = []
-    for mesh in a.meshes:
-        compare(os.path.abspath(mesh), a, tools, a.out)
-        summary.append(open(os.path.join(a.out, os.path.splitext(os.path.basename(mesh))[0] + ".md")).read())
+    os.makedirs(os.path.join(a.out, "work"), exist_ok=True)
+    if a.report_from:
+        return report_only(a)
+
+    c = Comparison(a, tools)
+    md = [TITLE]
+    for mesh in meshes:
+        start = len(c.rows)
+        try:
+            c.compare_mesh(mesh)
+        except Exception as e:  # never abort the whole run: the mesh's row says what went wrong
+            c.rows.append(c.failed_row(os.path.splitext(os.path.basename(mesh))[0], ply_face_count(mesh),
+                                       a.targets[0], "-", "%s: %s" % (type(e).__name__, e)))
+        rows = c.rows[start:]
+        name = os.path.splitext(os.path.basename(mesh))[0]
+        md.append(mesh_table(name, rows))
+        plot(name, rows, a.out)
+    md.append(overall(c.rows, a, c.has_auto))
     with open(os.path.join(a.out, "summary.md"), "w") as f:
-        f.write("\n".join(summary))
-    print("summary: %s" % os.path.join(a.out, "summary.md"))
+        f.write("\n".join(md))
+    write_tsv(c.rows, os.path.join(a.out, "results.tsv"))
+    print("wrote %s, %s and a PNG per mesh" % (os.path.join(a.out, "summary.md"), os.path.join(a.out, "results.tsv")))
 
 
 if __name__ == "__main__":

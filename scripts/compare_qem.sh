@@ -1,18 +1,22 @@
 #!/usr/bin/env bash
-# Compares ConeLOD's group-preserving quadric edge collapse with MeshLab's built-in "Quadric Edge
-# Collapse Decimation" on each MESH: same grouped input (normal-cone groups of --level L), targets
-# 50%, 10% and 1% of the faces; time, faces reached, Hausdorff distance both ways, group integrity.
-# Writes a Markdown table and a PNG plot per mesh into --out (default: qem_compare/).
+# Compares ConeLOD's group-preserving quadric edge collapse with MeshLab's "Quadric Edge Collapse
+# Decimation" and meshoptimizer's meshopt_simplify at EQUAL face counts: for every mesh, every
+# target and every normal-cone level (plus `auto`), ours runs first and the two peers run to exactly
+# the faces ours reached; errors are two-sided sampled Hausdorff distances (RMS and max, % of the
+# bounding-box diagonal). Writes OUT/results.tsv, OUT/summary.md and a PNG per mesh.
 #
-#   scripts/compare_qem.sh [--level L | --pca K] [--targets 0.5,0.1,0.01] [--samples N] [--out DIR] MESH...
+#   scripts/compare_qem.sh [--meshes bunny,dragon | MESH...] [--targets 0.5,0.1,0.02]
+#                          [--levels all,auto] [--samples N] [--out DIR] [--ours-args '...']
 #
-# Needs a build (CONELOD_BUILD_DIR, default build/) with the plugin and its private meshlabserver,
-# xvfb-run, python3 and gnuplot. Details: scripts/compare_qem.py and docs/group_qem.md.
+# Meshes: every .ply of $CONELOD_TEST_MESHES (default ../shared/test_meshes) unless named. Needs a
+# build (CONELOD_BUILD_DIR, default build/) with conelod, the private meshlabserver
+# (target private_meshlab) and tools/meshopt_simplify; xvfb-run, python3 and gnuplot.
+# Details: scripts/compare_qem.py and docs/group_qem.md.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BUILD="${CONELOD_BUILD_DIR:-$ROOT/build}"
-if [ $# -eq 0 ]; then
-  sed -n '2,10p' "$0" | sed 's/^# \{0,1\}//'
-  exit 1
+if [ "${1:-}" = "-h" ] || [ "${1:-}" = "--help" ]; then
+  sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//'
+  exit 0
 fi
-exec python3 "$ROOT/scripts/compare_qem.py" --build "$BUILD" --source "$ROOT" "$@"
+exec nice python3 "$ROOT/scripts/compare_qem.py" --build "$BUILD" --source "$ROOT" "$@"

@@ -1299,6 +1299,90 @@ def cli_bad_input_corpus(c):
     assert table in doc, ("docs/robustness.md does not hold the table this build generates (%s): "
                           "replace the table there with it" % generated)
 
+def meshopt_tool(c):
+    return os.path.join(c.build, "tools", "meshopt_simplify")
+
+
+@case
+def meshopt_simplify_exact_faces(c):
+    """The meshoptimizer peer lands on exactly the face count asked, also an odd one on a mesh with
+    borders (a border collapse removes one face); says so when it cannot (a closed mesh has an even
+    face count); refuses bad input without writing."""
+    tool = meshopt_tool(c)
+    shark = c.mesh("mech_holes_shark.ply")
+    for target in (5001, 2000, 257):
+        out = c.out("mo_%d.ply" % target)
+        p = subprocess.run([tool, shark, out, "--target-faces", str(target)], stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, timeout=120)
+        assert p.returncode == 0, p.stderr.decode()
+        r = json.loads(p.stdout)
+        assert r["faces"] == target and r["exact"] is True and r["faces_in"] == 10192, r
+        assert r["time_ms"] >= 0 and r["result_error"] > 0, r
+        assert len(read_ply(out)["faces"]) == target
+    p = subprocess.run([tool, c.mesh("couplingdown.ply"), c.out("odd.ply"), "--target-faces", "371"],
+                       stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=120)
+    r = json.loads(p.stdout)
+    assert p.returncode == 0 and r["exact"] is False and r["faces"] in (370, 372), r
+    assert len(read_ply(c.out("odd.ply"))["faces"]) == r["faces"]
+    for args, code, text in [([shark, c.out("x.ply"), "--target-faces", "20000"], 2, "above the input"),
+                             ([c.out("missing.ply"), c.out("x.ply"), "--target-faces", "10"], 2, "cannot read"),
+                             ([shark, c.out("x.ply")], 1, "--target-faces"),
+                             ([shark, c.out("x.ply"), "--target-faces", "ten"], 1, "integer")]:
+        p = subprocess.run([tool] + args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=60)
+        assert p.returncode == code and text in p.stderr.decode(), (args, p.returncode, p.stderr.decode())
+        assert not os.path.exists(c.out("x.ply"))
+
+
+# The columns scripts/compare_qem.sh promises in results.tsv (docs/group_qem.md).
+COMPARE_COLUMNS = ["mesh", "faces_in", "target_pct", "asked", "level", "group_level", "groups", "status",
+                   "ours_faces", "reached_pct", "target_reached", "ours_s", "ours_rms", "ours_max", "intact_pct",
+                   "cones_over_threshold", "mode", "meshlab_faces", "meshlab_exact", "meshlab_s", "meshlab_rms",
+                   "meshlab_max", "meshopt_faces", "meshopt_exact", "meshopt_s", "meshopt_rms", "meshopt_max",
+                   "rms_ratio_meshlab", "rms_ratio_meshopt", "error"]
+
+
+@case
+def compare_qem_smoke(c):
+    """scripts/compare_qem.sh on one small mesh, one target, one level: every column, both peers at
+    exactly our face count, figures in the table and a plot."""
+    out = c.out("cmp")
+    env = dict(os.environ, CONELOD_BUILD_DIR=c.build, CONELOD_TEST_MESHES=c.meshes)
+    p = subprocess.run(["bash", os.path.join(c.source, "scripts", "compare_qem.sh"), "--meshes", "couplingdown",
+                        "--targets", "0.1", "--levels", "2", "--samples", "20000", "--out", out],
+                       stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env, timeout=300)
+    log = p.stdout.decode(errors="replace")
+    assert p.returncode == 0, log
+    lines = open(os.path.join(out, "results.tsv")).read().splitlines()
+    header = lines[0].split("\t")
+    missing = [col for col in COMPARE_COLUMNS if col not in header]
+    assert not missing, "results.tsv lacks %s" % missing
+    rows = [dict(zip(header, l.split("\t"))) for l in lines[1:]]
+    assert len(rows) == 1, rows
+    r = rows[0]
+    assert r["status"] == "ok" and r["error"] == "", r
+    assert r["mesh"] == "couplingdown" and r["level"] == "2" and r["asked"] == "371", r
+    n = int(r["ours_faces"])
+    assert int(r["meshlab_faces"]) == n and int(r["meshopt_faces"]) == n, r
+    assert r["meshlab_exact"] == "yes" and r["meshopt_exact"] == "yes", r
+    for col in ("ours_rms", "meshlab_rms", "meshopt_rms", "ours_max", "meshlab_max", "meshopt_max"):
+        assert float(r[col]) > 0, (col, r)
+    assert abs(float(r["rms_ratio_meshlab"]) - float(r["ours_rms"]) / float(r["meshlab_rms"])) < 1e-3, r
+    assert float(r["intact_pct"]) == 100.0, r
+    summary = open(os.path.join(out, "summary.md")).read()
+    assert "### couplingdown (3714 faces)" in summary and "## Overall" in summary, summary
+    assert "peers at exactly our face count: 1 of 1 cases" in summary, summary
+    assert os.path.getsize(os.path.join(out, "couplingdown.png")) > 1000
+    # A mesh that cannot be read is a failed row, not an aborted run.
+    bad = c.out("bad.ply")
+    with open(bad, "w") as f:
+        f.write("ply\nformat ascii 1.0\nelement vertex 3\n")
+    p = subprocess.run(["bash", os.path.join(c.source, "scripts", "compare_qem.sh"), bad, "--meshes", "couplingdown",
+                        "--targets", "0.5", "--levels", "9", "--samples", "1000", "--out", c.out("cmp2")],
+                       stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env, timeout=300)
+    assert p.returncode == 0, p.stdout.decode(errors="replace")
+    text = open(os.path.join(c.out("cmp2"), "summary.md")).read()
+    assert "failed: conelod group failed" in text, text
+
 
 def main():
     if sys.argv[1:] == ["--list"]:  # for CMake: one "NAME NEEDS" line per case
