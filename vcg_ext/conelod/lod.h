@@ -56,7 +56,7 @@ struct LodBuildParams {
   // are added); levelRatio: each group targets this fraction of its faces; threads.
   HierarchicalSimplificationParams simplification;
   size_t clusterFaces = 128;  // target faces of a cluster (a node), at every level
-  int groupClusters = 4;      // clusters gathered into one group before simplification
+  int groupClusters = 8;      // clusters gathered into one group before simplification
 };
 
 // The cluster DAG before it is written (BuildLodDag), level 0 = the input.
@@ -202,7 +202,9 @@ struct LodView {
                                    // height / (2 tan(fovy/2))) or per model unit (orthographic);
                                    // 0: no screen (ScreenError then orders by error / distance)
   double maxPixelError = 1.0;      // ScreenError with projectionScale > 0: a group is expanded
-                                   // only while its projected error exceeds this many pixels
+                                   // only while its projected error exceeds this many pixels, and
+                                   // groups whose clusters all face away are not expanded; 0: no
+                                   // pixel threshold (refine to the budget)
 };
 
 // The paper's refinement priority f(g) in [0,1] (larger = refine first): with a = angle(e, n),

@@ -255,7 +255,8 @@ Status LodRefiner::Step(size_t maxRefinements) {
   size_t done = 0;
   while (done < maxRefinements && !m.stopped && !m.queue.empty()) {
     const QueueItem top = m.queue.top();
-    if (m.view.priority == LodPriority::ScreenError && m.view.projectionScale > 0 && !top.culled &&
+    const bool pixelStop = m.view.priority == LodPriority::ScreenError && m.view.projectionScale > 0 && m.view.maxPixelError > 0;
+    if (pixelStop && !top.culled &&
         top.priority <= m.view.maxPixelError) {
       // Every visible group left is below a pixel: only back-facing ones could follow, and they
       // are not drawn. Stop here.
@@ -263,7 +264,7 @@ Status LodRefiner::Step(size_t maxRefinements) {
       break;
     }
     m.queue.pop();
-    if (top.culled && m.view.priority == LodPriority::ScreenError && m.view.projectionScale > 0) continue;
+    if (top.culled && pixelStop) continue;  // not drawn: no pixel to gain
     const size_t before = m.cut.refinements;
     Status s = m.expand(top.key);
     if (!s.ok()) {
