@@ -878,6 +878,43 @@ def viewer_headless_bunny(c):
 
 
 @case
+def viewer_no_cracks_armadillo(c):
+    """No crack on screen: the watertight armadillo drawn by conelod-viewer under Xvfb at a middle
+    budget (half its faces, screen-space error of one pixel) shows no background pixel
+    inside the silhouette of its full-budget picture (shrunk by 2 pixels: coarser levels may move
+    the outline), seen from the front and from above, with back-face culling (a crack would show
+    the background through the culled far side)."""
+    clod = build_clod(c, "stanford_armadillo_cgal.ply", "arma.clod")
+    info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
+    faces = info["faces"]
+    for view in ([], ["--eye", "250,200,-150"]):
+        pictures = []
+        for budget, extra in ((faces, ["--pixel-error", "0"]), (faces // 2, [])):
+            png = c.out("arma%d_%d.png" % (len(view), budget))
+            rc, out, err = run_viewer(c, clod, "--screenshot", png, "--size", "360x360", "--refine", "--frames", "0",
+                                      "--no-hud", "--budget", str(budget), "--json", *(view + extra))
+            assert rc == 0, (rc, out, err)
+            refined = json.loads(out.strip().splitlines()[-1])["refined"]
+            assert refined["cut_faces"] <= budget, refined
+            pictures.append((read_png(png), refined))
+        (w, h, full), _ = pictures[0]
+        (_, _, mid), figures = pictures[1]
+        assert figures["max_level"] > figures["min_level"], figures  # a real mix of levels
+        background = full[0][0]  # the clear colour; shaded faces seen edge-on come close to it
+        def is_bg(px):
+            return max(abs(a - b) for a, b in zip(px, background)) <= 2
+        inside = [[not is_bg(full[y][x]) for x in range(w)] for y in range(h)]
+        for _ in range(2):  # erode by one pixel, twice
+            inside = [[inside[y][x] and all(inside[y + dy][x + dx] for dy, dx in ((1, 0), (-1, 0), (0, 1), (0, -1)))
+                       if 0 < x < w - 1 and 0 < y < h - 1 else False for x in range(w)] for y in range(h)]
+        area = sum(sum(row) for row in inside)
+        assert area > 0.05 * w * h, "the model covers only %d pixels" % area
+        holes = [(x, y) for y in range(h) for x in range(w) if inside[y][x] and is_bg(mid[y][x])]
+        assert not holes, "%d background pixels inside the silhouette at %d faces, e.g. %s" % (
+            len(holes), figures["cut_faces"], holes[:5])
+
+
+@case
 def viewer_bad_files(c):
     """Missing, truncated and garbage files: a message naming the file, exit code 2, no crash."""
     clod = build_clod(c, "stanford_bunny_bun_zipper_res4.ply", "small.clod")
