@@ -136,6 +136,10 @@ LodView LodViewerWidget::currentView() const {
   v.eye = vcg::Point3d(e.x(), e.y(), e.z());
   v.faceBudget = options_.faceBudget;
   v.cullBackFacing = options_.cullBackFacing;
+  v.priority = options_.priority;
+  // Pixels per model unit at distance 1: the viewport's height over the view's height there.
+  v.projectionScale = double(std::max(height(), 1)) / (2 * std::tan(0.5 * double(kFovDeg) * M_PI / 180.0));
+  v.maxPixelError = options_.pixelError;
   return v;
 }
 

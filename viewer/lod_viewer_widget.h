@@ -37,6 +37,10 @@ struct ViewerOptions {
   bool refineWhenIdle = true;  // false: only refineToDone() refines (headless measurements)
   bool hud = true;             // the text overlay
   double sliceMs = 8;          // refinement work per idle-time tick (at least the last frame's time)
+  // What the refinement expands first: the screen-space error (refined while a group's error
+  // projects to more than pixelError pixels, within the budget), or the paper's f(g).
+  conelod::LodPriority priority = conelod::LodPriority::ScreenError;
+  double pixelError = 1.0;     // 0: no pixel threshold (refine to the budget)
 };
 
 // What the last frame drew.

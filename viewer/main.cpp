@@ -2,10 +2,12 @@
 // the user is idle (lod_viewer_widget.h). With --screenshot it renders in a real window (run it
 // under xvfb-run without a display), writes the picture, prints the figures and exits.
 //
-//   conelod-viewer FILE.clod [--budget F] [--flat] [--color-levels] [--no-cull] [--no-hud]
+//   conelod-viewer FILE.clod [--budget F] [--priority screen|error|fg] [--pixel-error PX] [--flat]
+//                            [--color-levels] [--no-cull] [--no-hud]
 //   conelod-viewer FILE.clod --screenshot OUT.png [--size WxH] [--eye X,Y,Z] [--budget F]
 //                  [--refine] [--frames N] [--json]
 // Exit codes: 0 ok, 1 usage, 2 bad file, 3 cannot write the picture, 4 no OpenGL.
+#include <cmath>
 #include <QApplication>
 #include <QCommandLineParser>
 #include <QElapsedTimer>
@@ -72,7 +74,16 @@ int main(int argc, char** argv) {
   const QCommandLineOption frames("frames", "with --screenshot: frames timed for the fps figure (default 30)", "N",
                                   "30");
   const QCommandLineOption json("json", "with --screenshot: print the figures as one JSON line");
-  parser.addOptions({budget, flat, colours, noCull, noHud, screenshot, size, eye, refine, frames, json});
+  const QCommandLineOption priority("priority",
+                                    "what is refined first: screen (the error projected in pixels, default), "
+                                    "error (the error in model units) or fg (the paper's f(g))",
+                                    "P", "screen");
+  const QCommandLineOption pixelError("pixel-error",
+                                      "with --priority screen: refine while a group's error projects to more "
+                                      "than this many pixels (default 1; 0: refine to the budget)",
+                                      "PX", "1");
+  parser.addOptions({budget, flat, colours, noCull, noHud, screenshot, size, eye, refine, frames, json, priority,
+                     pixelError});
   if (!parser.parse(QApplication::arguments())) return Fail(1, parser.errorText());
   if (parser.isSet("help")) parser.showHelp(0);
   if (parser.positionalArguments().size() != 1) return Fail(1, "give one .clod file (--help for usage)");
@@ -86,6 +97,14 @@ int main(int argc, char** argv) {
   options.flatShading = parser.isSet(flat);
   options.colourLevels = parser.isSet(colours);
   options.cullBackFacing = !parser.isSet(noCull);
+  const QString pr = parser.value(priority);
+  if (pr == "screen") options.priority = conelod::LodPriority::ScreenError;
+  else if (pr == "error") options.priority = conelod::LodPriority::ObjectError;
+  else if (pr == "fg") options.priority = conelod::LodPriority::ConeFg;
+  else return Fail(1, "--priority needs screen, error or fg");
+  options.pixelError = parser.value(pixelError).toDouble(&ok);
+  if (!ok || !(options.pixelError >= 0) || !std::isfinite(options.pixelError))
+    return Fail(1, "--pixel-error needs a number of pixels >= 0");
   options.hud = !parser.isSet(noHud);
   options.refineWhenIdle = !parser.isSet(screenshot);  // headless: the coarse frame, then --refine at once
   const QStringList wh = parser.value(size).split('x');

@@ -898,7 +898,8 @@ def viewer_headless_bunny(c):
     assert coarse["first_frame_ms"] > 0 and coarse["fps"] > 0 and coarse["resident_bytes"] > 0, coarse
 
     png = c.out("refined.png")
-    rc, out, err = run_viewer(c, clod, "--screenshot", png, "--size", "320x240", "--refine", "--frames", "5", "--json")
+    rc, out, err = run_viewer(c, clod, "--screenshot", png, "--size", "320x240", "--refine", "--frames", "5", "--json",
+                              "--pixel-error", "0")
     assert rc == 0, (rc, out, err)
     refined = json.loads(out.strip().splitlines()[-1])
     r = refined["refined"]
@@ -913,7 +914,7 @@ def viewer_headless_bunny(c):
     for extra in ([], ["--no-cull"]):
         png = c.out("cmp%d.png" % len(pictures))
         rc, out, err = run_viewer(c, clod, "--screenshot", png, "--size", "320x240", "--refine", "--frames", "0",
-                                  "--no-hud", "--eye", "0.15,0.2,0.25", *extra)
+                                  "--no-hud", "--eye", "0.15,0.2,0.25", "--pixel-error", "0", *extra)
         assert rc == 0, (rc, out, err)
         pictures.append(read_png(png)[2])
     differ = sum(1 for a, b in zip(pictures[0], pictures[1]) for p, q in zip(a, b)
@@ -925,6 +926,43 @@ def viewer_headless_bunny(c):
     assert rc == 0, (rc, out, err)
     small = json.loads(out.strip().splitlines()[-1])["refined"]
     assert s["cut_faces"] < small["cut_faces"] <= 20000, small
+
+
+@case
+def viewer_no_cracks_armadillo(c):
+    """No crack on screen: the watertight armadillo drawn by conelod-viewer under Xvfb at a middle
+    budget (half its faces, screen-space error of one pixel) shows no background pixel
+    inside the silhouette of its full-budget picture (shrunk by 2 pixels: coarser levels may move
+    the outline), seen from the front and from above, with back-face culling (a crack would show
+    the background through the culled far side)."""
+    clod = build_clod(c, "stanford_armadillo_cgal.ply", "arma.clod")
+    info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
+    faces = info["faces"]
+    for view in ([], ["--eye", "250,200,-150"]):
+        pictures = []
+        for budget, extra in ((faces, ["--pixel-error", "0"]), (faces // 2, [])):
+            png = c.out("arma%d_%d.png" % (len(view), budget))
+            rc, out, err = run_viewer(c, clod, "--screenshot", png, "--size", "360x360", "--refine", "--frames", "0",
+                                      "--no-hud", "--budget", str(budget), "--json", *(view + extra))
+            assert rc == 0, (rc, out, err)
+            refined = json.loads(out.strip().splitlines()[-1])["refined"]
+            assert refined["cut_faces"] <= budget, refined
+            pictures.append((read_png(png), refined))
+        (w, h, full), _ = pictures[0]
+        (_, _, mid), figures = pictures[1]
+        assert figures["max_level"] > figures["min_level"], figures  # a real mix of levels
+        background = full[0][0]  # the clear colour; shaded faces seen edge-on come close to it
+        def is_bg(px):
+            return max(abs(a - b) for a, b in zip(px, background)) <= 2
+        inside = [[not is_bg(full[y][x]) for x in range(w)] for y in range(h)]
+        for _ in range(2):  # erode by one pixel, twice
+            inside = [[inside[y][x] and all(inside[y + dy][x + dx] for dy, dx in ((1, 0), (-1, 0), (0, 1), (0, -1)))
+                       if 0 < x < w - 1 and 0 < y < h - 1 else False for x in range(w)] for y in range(h)]
+        area = sum(sum(row) for row in inside)
+        assert area > 0.05 * w * h, "the model covers only %d pixels" % area
+        holes = [(x, y) for y in range(h) for x in range(w) if inside[y][x] and is_bg(mid[y][x])]
+        assert not holes, "%d background pixels inside the silhouette at %d faces, e.g. %s" % (
+            len(holes), figures["cut_faces"], holes[:5])
 
 
 @case
@@ -1026,7 +1064,7 @@ def canonical_faces(ply):
 @case
 def cli_lod_round_trip(c):
     """conelod lod build / info / extract on the bunny: the full budget gives the input's faces back;
-    10% gives about 10%, finer where the eye is, adjacent groups at most one level apart."""
+    10% gives about 10% over several levels."""
     bunny = c.mesh("stanford_bunny_bun_zipper.ply")
     clod = c.out("bunny.clod")
     b = json.loads(c.conelod("lod", "build", bunny, "-o", clod, "--json").stdout)
@@ -1034,7 +1072,7 @@ def cli_lod_round_trip(c):
     assert b["file_bytes"] == os.path.getsize(clod), b
     assert all(b["level_faces"][k] <= b["level_faces"][k - 1] for k in range(1, b["levels"])), b
     info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
-    assert info["faces"] == 69451 and info["nodes"] == b["nodes"] and info["version"] == 1, info
+    assert info["faces"] == 69451 and info["nodes"] == b["nodes"] and info["version"] == 2, info
     human = c.conelod("lod", "info", clod).stdout.decode()
     assert "node levels" in human, human
 
@@ -1055,7 +1093,7 @@ def cli_lod_round_trip(c):
     ten = c.out("ten.ply")
     r = json.loads(c.conelod("lod", "extract", clod, "--eye", "0,0.1,0.6", "--budget", "6945", "-o", ten,
                              "--json").stdout)
-    assert 5000 < r["faces"] <= 6945 and r["max_level_difference"] <= 1, r
+    assert 5000 < r["faces"] <= 6945 and r["max_level_difference"] >= 1, r
     assert r["groups_culled"] > 0 and r["groups_drawn"] > 0, r
     ply = read_ply(ten)
     assert len(ply["faces"]) == r["faces"], (len(ply["faces"]), r)
@@ -1072,20 +1110,45 @@ def cli_lod_round_trip(c):
     human = c.conelod("lod", "extract", clod, "--eye", "0,0.1,0.6", "--budget", "10%", "-o", c.out("h.ply"))
     assert "max level difference" in human.stdout.decode(), human.stdout.decode()
 
-    # Levels cut into parts (here every level of 20,000 faces or more) simplified side by side: the
-    # file does not depend on the number of threads, differs from the uncut one, and still gives the
-    # input back at full budget.
+    # Groups simplified side by side: the file does not depend on the number of threads, and still
+    # gives the input back at full budget.
     files = []
     for threads in ("1", "3"):
         files.append(c.out("parts%s.clod" % threads))
-        c.conelod("lod", "build", bunny, "-o", files[-1], "--faces-per-part", "10000", "--threads", threads)
+        c.conelod("lod", "build", bunny, "-o", files[-1], "--threads", threads)
     parts = open(files[0], "rb").read()
     assert parts == open(files[1], "rb").read(), "the .clod file depends on --threads"
-    assert parts != open(clod, "rb").read(), "--faces-per-part 10000 should have cut level 1 into parts"
     r = json.loads(c.conelod("lod", "extract", files[0], "--eye", "0,0.1,0.6", "--budget", "100%", "-o",
                              c.out("parts_full.ply"), "--json").stdout)
     assert r["faces"] == 69451 and r["max_level_difference"] == 0, r
     assert canonical_faces(read_ply(c.out("parts_full.ply"))) == canonical_faces(read_ply(full))
+
+
+@case
+def cli_lod_watertight_cuts(c):
+    """Issue 17's check: the armadillo (watertight) built with defaults, extracted at 5-100% from
+    three eyes, with and without culling; vertices welded at identical positions: no edge used by
+    one face (crack, T-junction) nor by three (overlap)."""
+    arma = c.mesh("stanford_armadillo_cgal.ply")
+    clod = c.out("arma.clod")
+    c.conelod("lod", "build", arma, "-o", clod)
+    for eye in ("0,0,500", "400,100,-300", "-20,30,60"):
+        for budget in ("5%", "20%", "50%", "80%", "100%"):
+            for cull in ([], ["--no-cull"]):
+                out = c.out("cut.ply")
+                r = json.loads(c.conelod("lod", "extract", clod, "--eye", eye, "--budget", budget, "-o", out,
+                                         "--json", *cull).stdout)
+                ply = read_ply(out)
+                pos = ply["positions"]
+                edges = {}
+                for f in ply["faces"]:
+                    for i in range(3):
+                        a, b = pos[f[i]], pos[f[(i + 1) % 3]]
+                        key = (a, b) if a < b else (b, a)
+                        edges[key] = edges.get(key, 0) + 1
+                border = sum(1 for n in edges.values() if n == 1)
+                over = sum(1 for n in edges.values() if n > 2)
+                assert border == 0 and over == 0, (eye, budget, cull, border, over, r["faces"])
 
 
 @case
@@ -1118,6 +1181,8 @@ def cli_lod_bad_files(c):
     version = bytearray(data)
     version[24] = 9  # the version field (the header's checksum is checked after it)
     bad("version.clod", bytes(version), "unsupported .clod version 9")
+    version[24] = 1  # a file of the previous format: named, with what to do
+    bad("version1.clod", bytes(version), "rebuild it with conelod lod build")
     size = bytearray(data)
     struct.pack_into("<Q", size, 16, struct.unpack_from("<Q", data, 16)[0] - 8)  # the root chunk's child size
     bad("size.clod", bytes(size), "corrupt chunk size in the file header")

@@ -1,25 +1,29 @@
 // ConeLOD — the streamable level-of-detail file (.clod), its on-demand reader, and view-dependent
 // refinement.
 //
-// Kamiya, Suzuki, Kawachi, "LODs for efficient displaying triangle meshes", §7-9 (SPEC §4): the
-// model is grouped by normal cones (cone_grouping.h), simplified once per hierarchy level while
-// keeping the groups intact (hierarchical_simplification.h), and written as a file of chunks.
-// A viewer opens it reading only the header, the top of the hierarchy and the coarsest geometry,
-// draws that at once, and refines while the user is idle: breadth-first, in the order of the
-// priority f(g), never letting adjacent groups differ by more than one level, back-facing groups
-// (three-state cone test) last. Geometry is read group by group on demand and can be evicted, so
-// resident memory follows what is drawn, not the model's size. The byte layout is documented in
-// lod_format.md beside this file.
+// Kamiya, Suzuki, Kawachi, "LODs for efficient displaying triangle meshes", §7-9 (SPEC §4), with
+// the crack-free cluster DAG of Karis et al., "Nanite: a deep dive" (SIGGRAPH 2021 course) in place
+// of the paper's tree of groups. The model is cut into clusters (normal-cone groups); at each level
+// neighbouring clusters are gathered into groups, each group is simplified on its own with its
+// outer border locked (GroupQemRegion::frozenVertex), and the simplified group is re-cut into the
+// clusters of the next level. The next level gathers clusters differently, so a border locked at
+// one level is freed at the next. A viewer opens the file reading only the header, the roots
+// and their geometry, draws that at once, and refines while the user is idle; geometry is read
+// node by node on demand and can be evicted, so resident memory follows what is drawn, not the
+// model's size. The byte layout is documented in lod_format.md beside this file.
 //
-// Nodes. A node is one group drawn at one level of detail:
-//   node level k >= 1: group g of hierarchy level k, with the faces of simplified level k that
-//                      belong to g;
-//   node level 0:      group g of hierarchy level 1, with the input's own faces of g (the original
-//                      geometry; extracting every level-0 node gives back the input mesh).
-// Children of a level-k node (k >= 2) are the level-(k-1) nodes of g's child groups; the one child
-// of a level-1 node is the level-0 node of the same group; level-0 nodes are leaves. The roots are
-// the nodes of the top hierarchy level. Every input face is covered by exactly one node of any cut.
-// Node ids are dense (0 .. nodeCount-1), coarsest level first; a node's children have consecutive ids.
+// Nodes. A node is one cluster of one level: level 0 holds the input's own faces (extracting every
+// level-0 node gives back the input mesh). A node of level k >= 1 was made by simplifying one
+// group G of level k-1: its `children` are the clusters of G, its `siblings` every cluster made
+// from G (itself included), its `error` G's error. Unless it is a root it belongs to one group of
+// its own level, whose error is its `parentError` and whose simplified clusters are its `parents`.
+// Replacing all the siblings of a node by their children ("expanding" their group) keeps the
+// cut watertight: the group's border was locked, so the children meet the rest of the cut at the
+// very same vertices. Every cut reached from the roots by expansions, in any order, is
+// crack-free and covers the input exactly once. Vertices carry global ids (input vertices keep
+// their index; a vertex a simplification moved or made gets a new id), identical in every level
+// that uses them: a cut's mesh welds by id, so no border edge and no T-junction appear between
+// levels. Node ids are dense (0 .. nodeCount-1), coarsest level first.
 #pragma once
 
 #include <array>
@@ -44,9 +48,38 @@ namespace conelod {
 // Writing
 
 struct LodBuildParams {
+  // Level-0 clusters: cone half-angle limit grouping.coneThresholdDeg, multiplied by
+  // grouping.thresholdGrowth at each level above (at most 90 degrees); the other grouping
+  // fields are not used by the DAG.
   ConeGroupingParams grouping;
+  // qem: the collapse's options for every group (targetFaces is set per group, frozen borders
+  // are added); levelRatio: each group targets this fraction of its faces; threads.
   HierarchicalSimplificationParams simplification;
+  size_t clusterFaces = 128;  // target faces of a cluster (a node), at every level
+  int groupClusters = 8;      // clusters gathered into one group before simplification
 };
+
+// The cluster DAG before it is written (BuildLodDag), level 0 = the input.
+struct LodDag {
+  std::vector<vcg::Point3f> positions;  // global vertices: [0, input vertices) are the input's
+  size_t inputVertices = 0;
+  struct Level {
+    std::vector<std::array<uint32_t, 3>> faces;  // global vertex ids
+    std::vector<uint32_t> faceCluster;           // per face: its cluster (index within the level)
+    std::vector<int> clusterGroup;               // per cluster: its group at this level (-1: a root)
+    std::vector<int> clusterCreator;             // per cluster: the group of the level below it was made from (-1 at level 0)
+    std::vector<float> clusterError;             // per cluster: its error (the creator group's); 0 at level 0
+    std::vector<float> groupError;               // per group of this level: error of the clusters made from it
+    size_t clusterCount() const { return clusterGroup.size(); }
+  };
+  std::vector<Level> levels;
+};
+
+// Builds the DAG. Errors are geometric, in model units: a group's error is the largest distance
+// from its vertices to its simplified surface plus the largest error of its clusters, so a
+// node's error is at least its children's.
+Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag& out,
+                   const Progress& progress = Progress());
 
 struct LodBuildStats {
   size_t inputVertices = 0, inputFaces = 0;
@@ -55,17 +88,16 @@ struct LodBuildStats {
   std::vector<size_t> levelNodes;   // nodes per node level
   size_t nodes = 0;
   uint64_t fileBytes = 0;
-  double groupingSeconds = 0, simplifySeconds = 0, writeSeconds = 0, seconds = 0;
+  double groupingSeconds = 0, simplifySeconds = 0, writeSeconds = 0, seconds = 0;  // grouping: the
+                                    // level-0 clusters; simplify: the DAG's other levels
 };
 
-// Writes the file for a mesh whose hierarchy and simplified levels are already built (levels[k-1]
-// preserves hierarchy level k). Streams chunk by chunk: the file is never held in memory. On
-// failure no file is left at `path`.
-Status WriteLodFile(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
-                    const std::vector<SimplifiedLevel>& levels, const std::string& path,
+// Writes the file of a DAG built by BuildLodDag from `mesh`. Streams chunk by chunk: the file is
+// never held in memory. On failure no file is left at `path`.
+Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::string& path,
                     LodBuildStats* stats = nullptr, const Progress& progress = Progress());
 
-// Groups, simplifies and writes. The mesh must pass the grouping's input checks.
+// Builds the DAG and writes it. The mesh must pass the grouping's input checks.
 Status BuildLodFile(const IndexedMesh& mesh, const LodBuildParams& params, const std::string& path,
                     LodBuildStats* stats = nullptr, const Progress& progress = Progress());
 
@@ -73,24 +105,26 @@ Status BuildLodFile(const IndexedMesh& mesh, const LodBuildParams& params, const
 // Reading
 
 struct LodNode {
+  static constexpr uint32_t kNoGroup = 0xFFFFFFFFu;
   int level = 0;                 // node level (0 = original geometry)
-  uint32_t group = 0;            // group index within its hierarchy level (level 0: the level-1 group)
-  int64_t parent = -1;           // node id; -1 for a root
-  uint32_t firstChild = 0;       // children are node ids firstChild .. firstChild+childCount-1
-  uint32_t childCount = 0;
-  std::vector<uint32_t> neighbours;  // node ids of the same level whose input faces share an edge with ours
+  uint32_t group = kNoGroup;     // its group within its level; kNoGroup for a root
+  std::vector<uint32_t> children;  // node ids (level - 1): the clusters of the group it was made from
+  std::vector<uint32_t> siblings;  // node ids (same level): every cluster made from that group, itself included
+  std::vector<uint32_t> parents;   // node ids (level + 1): the clusters made from its own group
   NormalCone cone;               // exact minimal cone of the normals of THIS node's faces
   vcg::Point3f center;           // bounding sphere of this node's vertices
   float radius = 0;
   uint32_t faceCount = 0;
   uint32_t vertexCount = 0;
   float error = 0;               // upper estimate of this node's deviation from the input, model units
+                                 // (its creator group's; 0 at level 0; the same for all siblings)
+  float parentError = 0;         // its own group's error (>= error); +infinity for a root
 };
 
 // A node's geometry as read from the file.
 struct LodGeometry {
-  std::vector<uint32_t> vertexIds;              // per local vertex: its index in its level's shared
-                                                //   vertex array (level 0: the input vertex index)
+  std::vector<uint32_t> vertexIds;              // per local vertex: its global id (level 0: the input
+                                                //   vertex index), the same in every level using it
   std::vector<vcg::Point3f> positions;          // per local vertex
   std::vector<std::array<uint32_t, 3>> faces;   // local vertex indices
   size_t bytes() const;
@@ -101,6 +135,7 @@ struct LodFileInfo {
   vcg::Box3f box;                   // of the input's used vertices
   int levels = 0;                   // node levels, level 0 included
   uint64_t inputVertices = 0, inputFaces = 0;
+  uint64_t globalVertices = 0;       // global vertex ids are below this
   std::vector<uint64_t> levelFaces;  // faces per node level
   std::vector<uint64_t> levelNodes;  // nodes per node level
   uint64_t nodeCount = 0;
@@ -125,8 +160,9 @@ class LodReader {
   // were loaded (roots: at Open).
   bool hasNode(uint32_t id) const;
   const LodNode& node(uint32_t id) const;  // requires hasNode(id)
-  Status LoadChildren(uint32_t id);        // makes the records of id's children available
-  Status LoadNode(uint32_t id);            // makes one record available (and its ancestors')
+  Status LoadChildren(uint32_t id);        // makes the records of id's children available (and
+                                           //   checks they belong to the group id was made from)
+  Status LoadNode(uint32_t id);            // makes one record available
   uint32_t levelOfNode(uint32_t id) const;  // from the id alone (ids are dense per level); id < nodeCount
 
   Status LoadGeometry(uint32_t id);               // reads and keeps the node's geometry
@@ -145,15 +181,30 @@ class LodReader {
 // ---------------------------------------------------------------------------------------------
 // View-dependent refinement
 
+// What the refinement expands first. Any order gives a crack-free cut (lod.h's header says why).
+enum class LodPriority {
+  ScreenError,  // the group's error projected at its nearest point (in pixels with projectionScale;
+                //   without, error / distance), largest first; stops below maxPixelError
+  ObjectError,  // the group's error in model units, largest first (the same cut wherever the eye is)
+  ConeFg        // the paper's f(g) (RefinementPriority) of the group's clusters, largest first
+};
+
 struct LodView {
   vcg::Point3d eye{0, 0, 0};       // perspective camera position (model coordinates)
   bool orthographic = false;       // true: an orthographic view looking along viewDir
   vcg::Point3d viewDir{0, 0, -1};  // unit; orthographic only
   size_t faceBudget = 0;           // at most this many faces in the cut (the roots may exceed it)
-  bool cullBackFacing = true;      // back-facing nodes are refined only after every other node
-                                   // (and, at each level, nodes whose cone axis faces away after
-                                   // those facing the eye; lod_refine.cpp says why); false:
-                                   // no node is culled or deferred
+  bool cullBackFacing = true;      // back-facing nodes are flagged culled (not drawn) and groups
+                                   // whose clusters all face away are expanded only after every
+                                   // other group; the selection stays a watertight cut either way
+  LodPriority priority = LodPriority::ScreenError;
+  double projectionScale = 0;      // pixels per model unit at distance 1 (perspective: viewport
+                                   // height / (2 tan(fovy/2))) or per model unit (orthographic);
+                                   // 0: no screen (ScreenError then orders by error / distance)
+  double maxPixelError = 1.0;      // ScreenError with projectionScale > 0: a group is expanded
+                                   // only while its projected error exceeds this many pixels, and
+                                   // groups whose clusters all face away are not expanded; 0: no
+                                   // pixel threshold (refine to the budget)
 };
 
 // The paper's refinement priority f(g) in [0,1] (larger = refine first): with a = angle(e, n),
@@ -167,7 +218,7 @@ struct LodCut {
   size_t faces = 0;              // faces of all nodes of the cut
   size_t drawnFaces = 0;         // faces of the nodes not culled
   size_t groupsDrawn = 0, groupsCulled = 0;
-  int maxLevelDifference = 0;    // over pairs of adjacent nodes of the cut
+  int maxLevelDifference = 0;    // over pairs of cut nodes sharing a vertex
   size_t refinements = 0;        // nodes replaced by their children so far
 };
 
@@ -191,8 +242,9 @@ class LodRefiner {
 // Start() then Step() until Done().
 Status RefineLod(LodReader& reader, const LodView& view, LodCut& cut);
 
-// The cut's geometry as one mesh, vertices shared within a level (so a cut of level-0 nodes gives
-// back the input mesh's faces and vertex positions). includeCulled = false drops culled nodes.
+// The cut's geometry as one mesh, vertices welded by global id (so a cut of level-0 nodes gives
+// back the input mesh's faces and vertex positions, and nodes of different levels share their
+// border vertices). includeCulled = false drops culled nodes.
 // faceLevel / faceNode (optional): per output face, its node level / node id.
 Status ExtractCutMesh(LodReader& reader, const LodCut& cut, bool includeCulled, IndexedMesh& out,
                       std::vector<int>* faceLevel = nullptr, std::vector<uint32_t>* faceNode = nullptr);

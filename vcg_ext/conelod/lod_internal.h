@@ -23,7 +23,7 @@ constexpr uint32_t kGeom = FourCC('G', 'E', 'O', 'M');     // one node's geometr
 constexpr uint32_t kIndex = FourCC('I', 'N', 'D', 'X');    // the offset index, in IBLK blocks
 constexpr uint32_t kIBlock = FourCC('I', 'B', 'L', 'K');
 
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2;  // 2: the cluster DAG (1: the tree of groups, refused)
 constexpr uint32_t kMaxLevels = 64;
 constexpr uint32_t kNoParent = 0xFFFFFFFFu;
 
@@ -39,15 +39,15 @@ struct ChunkHeader {
 };
 
 // Fixed part of the root chunk's data (then kLevelEntryBytes per level).
-constexpr size_t kHeaderFixedBytes = 4 + 4 + 8 * 3 + 4 * 6 + 8 + 8 + 4 + 4;  // = 80
+constexpr size_t kHeaderFixedBytes = 4 + 4 + 8 * 4 + 4 * 6 + 8 + 8 + 4 + 4;  // = 88
 constexpr size_t kLevelEntryBytes = 8 * 6 + 4 + 4;                            // = 56
 constexpr size_t kLevelDataBytes = 4 + 4 + 8 * 3;                            // LEVL data = 32
 constexpr size_t kVertDataBytes = 4 + 4 + 8;                                 // VERT data = 16
 constexpr size_t kIndexDataBytes = 8 + 4 + 4;                                // INDX data = 16
-constexpr size_t kNodeFixedBytes = 4 * 6 + 8 * 4 + 4 * 4 + 4 * 4;             // NODE data = 88 + 4/neighbour
+constexpr size_t kNodeFixedBytes = 4 * 6 + 8 * 4 + 4 * 4 + 4 * 4;             // NODE data = 88 + 4/listed id
 constexpr size_t kIndexEntryBytes = 8 + 8 + 4 + 4;                           // = 24
 constexpr size_t kGeomFixedBytes = 4 * 4;                                    // GEOM data = 16 + arrays
-constexpr uint32_t kGeomHasSourceIds = 1;     // GEOM flag: input vertex ids follow the level ids
+constexpr uint32_t kGeomHasSourceIds = 1;     // GEOM flag: global vertex ids follow the level ids (always set)
 constexpr uint32_t kGeomShortIndices = 2;     // GEOM flag: triangle corners are u16 (vertexCount <= 65536)
 constexpr uint32_t kVertexBlock = 256;     // vertices per VBLK (3 KiB)
 constexpr uint32_t kIndexBlock = 512;      // index entries per IBLK (12 KiB)

@@ -25,6 +25,8 @@ namespace conelod {
 
 using namespace lodfile;
 
+constexpr uint32_t LodNode::kNoGroup;  // (C++14: a definition for odr-uses)
+
 size_t LodGeometry::bytes() const {
   return vertexIds.capacity() * sizeof(uint32_t) + positions.capacity() * sizeof(vcg::Point3f) +
          faces.capacity() * sizeof(faces[0]) + sizeof(LodGeometry);
@@ -225,7 +227,7 @@ struct LodReader::Impl {
   }
 
   // Reads the records of nodes [first, first+count) (one level, consecutive in the file).
-  Status loadRecords(uint32_t first, uint32_t count, int64_t expectedParent) {
+  Status loadRecords(uint32_t first, uint32_t count) {
     if (count == 0) return Status::Ok();
     std::vector<IndexEntry> entries;
     Status s = readIndex(first, count, entries);
@@ -254,10 +256,7 @@ struct LodReader::Impl {
       const uint32_t fileId = d.u32();
       n.level = int(d.u32());
       n.group = d.u32();
-      const uint32_t parent = d.u32();
-      n.parent = parent == kNoParent ? -1 : int64_t(parent);
-      n.firstChild = d.u32();
-      n.childCount = d.u32();
+      const uint32_t children = d.u32(), siblings = d.u32(), parents = d.u32();
       for (int j = 0; j < 3; ++j) n.cone.axis[j] = d.f64();
       n.cone.halfAngle = d.f64();
       for (int j = 0; j < 3; ++j) n.center[j] = d.f32();
@@ -265,38 +264,38 @@ struct LodReader::Impl {
       n.faceCount = d.u32();
       n.vertexCount = d.u32();
       n.error = d.f32();
-      const uint32_t neighbours = d.u32();
+      n.parentError = d.f32();
       const std::string bad = "corrupt record of node " + Num(id) + ": ";
-      if (d.overrun || h.dataBytes != kNodeFixedBytes + uint64_t(neighbours) * 4)
-        return Status::Invalid(bad + "its size does not match its neighbour count");
+      if (d.overrun || h.dataBytes != kNodeFixedBytes + (uint64_t(children) + siblings + parents) * 4)
+        return Status::Invalid(bad + "its size does not match its list lengths");
       if (fileId != id || n.level != int(level)) return Status::Invalid(bad + "wrong id or level");
-      // expectedParent: a node id, -1 for the roots, -2 when unknown (any node of the level above).
-      bool parentOk;
-      if (level + 1 == levels.size()) {
-        parentOk = n.parent == -1;
-      } else {
-        const LevelEntry& up = levels[level + 1];
-        parentOk = expectedParent >= 0 ? n.parent == expectedParent
-                                       : expectedParent == -2 && n.parent >= 0 && uint64_t(n.parent) >= up.firstId &&
-                                             uint64_t(n.parent) < up.firstId + up.nodes;
-      }
-      if (!parentOk) return Status::Invalid(bad + "wrong parent");
-      if (level == 0 ? n.childCount != 0
-                     : (n.childCount == 0 || n.firstChild < levels[level - 1].firstId ||
-                        uint64_t(n.firstChild) + n.childCount > levels[level - 1].firstId + levels[level - 1].nodes))
+      const bool top = level + 1 == levels.size();
+      if (top != (n.group == LodNode::kNoGroup) || top != (parents == 0))
+        return Status::Invalid(bad + (top ? "a root with a group or parents" : "no group or no parents"));
+      if (level == 0 ? (children != 0 || siblings != 1) : (children == 0 || siblings == 0))
         return Status::Invalid(bad + "children out of range");
+      const bool emptyCone = n.cone.halfAngle == NormalCone::Empty().halfAngle;
       if (!(std::isfinite(n.cone.halfAngle) && n.cone.halfAngle <= NormalCone::kPi + 1e-9) ||
-          !std::isfinite(n.cone.axis[0] + n.cone.axis[1] + n.cone.axis[2]) ||
+          !(n.cone.halfAngle >= 0 || emptyCone) || !std::isfinite(n.cone.axis[0] + n.cone.axis[1] + n.cone.axis[2]) ||
           !std::isfinite(n.center[0] + n.center[1] + n.center[2]) || !(n.radius >= 0) || !std::isfinite(n.radius))
-        return Status::Invalid(bad + "non-finite cone or sphere");
-      if (n.vertexCount > uint64_t(3) * n.faceCount || n.faceCount > levels[level].faces)
+        return Status::Invalid(bad + "non-finite or negative cone or sphere");
+      if (!(n.error >= 0) || !std::isfinite(n.error) || (level == 0 && n.error != 0) ||
+          !(n.parentError >= n.error) || (top ? !std::isinf(n.parentError) : !std::isfinite(n.parentError)))
+        return Status::Invalid(bad + "bad error bounds");
+      if (n.vertexCount > uint64_t(3) * n.faceCount || n.faceCount > levels[level].faces || n.faceCount == 0)
         return Status::Invalid(bad + "impossible face or vertex count");
-      n.neighbours.resize(neighbours);
-      for (auto& v : n.neighbours) {
-        v = d.u32();
-        if (v < levels[level].firstId || v >= levels[level].firstId + levels[level].nodes || v == id)
-          return Status::Invalid(bad + "neighbour out of range");
-      }
+      auto readIds = [&](uint32_t count, uint32_t lvl, std::vector<uint32_t>& out) {
+        out.resize(count);
+        for (auto& v : out) {
+          v = d.u32();
+          if (lvl >= levels.size() || v < levels[lvl].firstId || v >= levels[lvl].firstId + levels[lvl].nodes) return false;
+        }
+        return true;
+      };
+      if (!readIds(children, level - 1, n.children)) return Status::Invalid(bad + "child out of range");
+      if (!readIds(siblings, level, n.siblings) || std::find(n.siblings.begin(), n.siblings.end(), id) == n.siblings.end())
+        return Status::Invalid(bad + "sibling out of range");
+      if (!readIds(parents, level + 1, n.parents)) return Status::Invalid(bad + "parent out of range");
       e.geometryOffset = entries[i].geometry;
       e.geometryBytes = entries[i].geometryBytes;
       if (uint64_t(e.geometryBytes) < kChunkHeaderBytes + kGeomFixedBytes + uint64_t(n.faceCount) * 6)
@@ -321,10 +320,10 @@ struct LodReader::Impl {
     Decoder d(buffer.data() + kChunkHeaderBytes, size_t(h.dataBytes));
     const uint32_t fileId = d.u32(), vc = d.u32(), fc = d.u32(), flags = d.u32();
     if (fileId != id || vc != n.vertexCount || fc != n.faceCount ||
-        (flags & ~(kGeomHasSourceIds | kGeomShortIndices)) || (n.level == 0) != bool(flags & kGeomHasSourceIds) ||
+        (flags & ~(kGeomHasSourceIds | kGeomShortIndices)) || !(flags & kGeomHasSourceIds) ||
         ((flags & kGeomShortIndices) && vc > 65536))
       return Status::Invalid(bad + "does not match its record");
-    const uint64_t idArrays = n.level == 0 ? 2 : 1;
+    const uint64_t idArrays = 2;
     const bool shortIndices = flags & kGeomShortIndices;
     if (h.dataBytes != kGeomFixedBytes + idArrays * 4 * uint64_t(vc) + (shortIndices ? 6 : 12) * uint64_t(fc))
       return Status::Invalid(bad + "its size does not match its counts");
@@ -335,12 +334,11 @@ struct LodReader::Impl {
       v = d.u32();
       if (v >= levelVertices) return Status::Invalid(bad + "vertex id out of range");
     }
-    if (n.level == 0) {
-      g->vertexIds.resize(vc);
-      for (auto& v : g->vertexIds) {
-        v = d.u32();
-        if (v >= info.inputVertices) return Status::Invalid(bad + "input vertex id out of range");
-      }
+    g->vertexIds.resize(vc);
+    const uint64_t idLimit = n.level == 0 ? info.inputVertices : info.globalVertices;
+    for (auto& v : g->vertexIds) {
+      v = d.u32();
+      if (v >= idLimit) return Status::Invalid(bad + "global vertex id out of range");
     }
     g->faces.resize(fc);
     for (auto& t : g->faces)
@@ -350,7 +348,6 @@ struct LodReader::Impl {
       }
     s = readPositions(uint32_t(n.level), levelIds, g->positions);
     if (!s.ok()) return Status::Invalid(bad + s.message);
-    if (n.level != 0) g->vertexIds = std::move(levelIds);
     geometryBytes += g->bytes();
     e.geometry = std::move(g);
     return Status::Ok();
@@ -417,6 +414,9 @@ struct LodReader::Impl {
     s = readRange(kChunkHeaderBytes, 4, "the version");
     if (!s.ok()) return s;
     const uint32_t version = Decoder(buffer.data(), 4).u32();
+    if (version == 1)
+      return Status::Invalid("this is a .clod version 1 file (written by an older ConeLOD, whose cuts could have "
+                             "cracks): rebuild it with conelod lod build (this reader reads version " + Num(kVersion) + ")");
     if (version != kVersion)
       return Status::Invalid("unsupported .clod version " + Num(version) + " (this reader reads version " +
                              Num(kVersion) + ")");
@@ -437,9 +437,13 @@ struct LodReader::Impl {
     info.inputVertices = d.u64();
     info.inputFaces = d.u64();
     info.nodeCount = d.u64();
+    info.globalVertices = d.u64();
     float b[6];
     for (float& x : b) x = d.f32();
     info.box = vcg::Box3f(vcg::Point3f(b[0], b[1], b[2]), vcg::Point3f(b[3], b[4], b[5]));
+    for (int j = 0; j < 3; ++j)
+      if (!std::isfinite(b[j]) || !std::isfinite(b[j + 3]) || b[j] > b[j + 3])
+        return Status::Invalid("corrupt file header: its bounding box is not finite or is inverted");
     hierOffset = d.u64();
     indexOffset = d.u64();
     vertexBlock = d.u32();
@@ -474,8 +478,8 @@ struct LodReader::Impl {
         return Status::Invalid(bad + "an offset points past the end of the file");
     }
     if (id != info.nodeCount || info.nodeCount >= kNoParent) return Status::Invalid(bad + "node counts do not add up");
-    if (levels[0].nodes != (levelCount > 1 ? levels[1].nodes : levels[0].nodes) ||
-        levels[0].faces != info.inputFaces)
+    if (levels[0].faces != info.inputFaces || info.globalVertices < info.inputVertices ||
+        info.globalVertices >= kNoParent || info.globalVertices > src->size / 12)
       return Status::Invalid(bad + "level 0 does not match the input");
     if (hierOffset >= src->size || indexOffset >= src->size)
       return Status::Invalid(bad + "an offset points past the end of the file");
@@ -509,6 +513,19 @@ struct LodReader::Impl {
         return Status::Invalid("corrupt chunk size in the index chunk");
       for (uint32_t k = 0; k < levelCount; ++k) {
         LevelEntry& L = levels[k];
+        // The level's container: its data must repeat the header's counts, its VERT follow it.
+        const uint64_t lb = kChunkHeaderBytes + kLevelDataBytes;
+        s = readRange(L.levelOffset, lb, "a level chunk");
+        if (!s.ok()) return s;
+        ChunkHeader lh;
+        s = checkChunk(buffer.data(), lb, kLevel, 0, "a level chunk", lh);
+        if (!s.ok()) return s;
+        Decoder dl(buffer.data() + kChunkHeaderBytes, kLevelDataBytes);
+        const uint32_t lk = dl.u32(), lpad = dl.u32();
+        const uint64_t ln = dl.u64(), lf = dl.u64(), lv = dl.u64();
+        if (lh.dataBytes != kLevelDataBytes || lk != k || lpad != 0 || ln != L.nodes || lf != L.faces || lv != L.vertices ||
+            L.vertOffset != L.levelOffset + lb || lh.totalBytes() > src->size - L.levelOffset)
+          return Status::Invalid("corrupt level chunk of level " + Num(k) + ": it disagrees with the file header");
         const uint64_t vb = kChunkHeaderBytes + kVertDataBytes;
         s = readRange(L.vertOffset, vb, "a vertex chunk");
         if (!s.ok()) return s;
@@ -526,7 +543,7 @@ struct LodReader::Impl {
     }
     // The roots: records and geometry.
     const uint32_t top = levelCount - 1;
-    s = loadRecords(uint32_t(levels[top].firstId), uint32_t(levels[top].nodes), -1);
+    s = loadRecords(uint32_t(levels[top].firstId), uint32_t(levels[top].nodes));
     if (!s.ok()) return s;
     for (uint32_t r = 0; r < levels[top].nodes; ++r) {
       roots.push_back(r);
@@ -576,30 +593,34 @@ uint32_t LodReader::levelOfNode(uint32_t id) const { return impl_->levelOf(id); 
 
 Status LodReader::LoadChildren(uint32_t id) {
   if (!hasNode(id)) return Status::Invalid("LoadChildren: node " + Num(id) + " is not loaded");
-  const LodNode& n = node(id);
-  if (n.childCount == 0) return Status::Ok();
-  bool all = true;
-  for (uint32_t c = 0; c < n.childCount && all; ++c) all = hasNode(n.firstChild + c);
-  if (all) return Status::Ok();
-  // Records already loaded are kept (loadRecords skips them).
-  return impl_->loadRecords(n.firstChild, n.childCount, int64_t(id));
+  const std::vector<uint32_t> children = node(id).children;  // copy: loading records may rehash
+  const float error = node(id).error;
+  // Runs of consecutive ids in one read each (a group's clusters are consecutive).
+  for (size_t i = 0; i < children.size();) {
+    size_t j = i + 1;
+    while (j < children.size() && children[j] == children[j - 1] + 1) ++j;
+    bool all = true;
+    for (size_t k = i; k < j && all; ++k) all = hasNode(children[k]);
+    if (!all) {
+      Status s = impl_->loadRecords(children[i], uint32_t(j - i));
+      if (!s.ok()) return s;
+    }
+    i = j;
+  }
+  // The children are the clusters of one group: the group id was made from, whose error is id's.
+  for (uint32_t c : children) {
+    const LodNode& n = node(c);
+    if (n.parentError != error || n.group != node(children[0]).group)
+      return Status::Invalid("corrupt record of node " + Num(c) + ": it does not belong to the group its parent " +
+                             Num(id) + " was made from");
+  }
+  return Status::Ok();
 }
 
 Status LodReader::LoadNode(uint32_t id) {
   if (id >= impl_->info.nodeCount) return Status::Invalid("LoadNode: no node " + Num(id));
-  // Load the chain up to the first loaded ancestor: each record names its parent.
-  std::vector<uint32_t> chain;
-  uint32_t at = id;
-  while (!hasNode(at)) {
-    Status s = impl_->loadRecords(at, 1, -2);
-    if (!s.ok()) return s;
-    chain.push_back(at);
-    const int64_t p = node(at).parent;
-    if (p < 0) break;
-    at = uint32_t(p);
-    if (chain.size() > impl_->levels.size()) return Status::Invalid("corrupt file: a parent cycle");
-  }
-  return Status::Ok();
+  if (hasNode(id)) return Status::Ok();
+  return impl_->loadRecords(id, 1);
 }
 
 Status LodReader::LoadGeometry(uint32_t id) {
@@ -626,7 +647,9 @@ size_t LodReader::residentBytes() const {
              m.info.levelFaces.capacity() * 16 + m.src->heldBytes() + m.geometryBytes;
   // Hash map: buckets plus one heap node per record (key, entry, next pointer, cached hash).
   b += m.nodes.bucket_count() * sizeof(void*);
-  for (const auto& kv : m.nodes) b += sizeof(kv) + 2 * sizeof(void*) + kv.second.node.neighbours.capacity() * 4;
+  for (const auto& kv : m.nodes)
+    b += sizeof(kv) + 2 * sizeof(void*) +
+         (kv.second.node.children.capacity() + kv.second.node.siblings.capacity() + kv.second.node.parents.capacity()) * 4;
   return b;
 }
 

@@ -1,22 +1,17 @@
-// ConeLOD — view-dependent refinement of a .clod file's node hierarchy, and the cut's mesh (lod.h).
+// ConeLOD — view-dependent refinement of a .clod file's cluster DAG, and the cut's mesh (lod.h).
 //
-// Kamiya, Suzuki, Kawachi, §7: the coarsest level is drawn first; then groups are refined (replaced
-// by their children) breadth-first in the order of f(g) = (1 - cos(angle(e,n) + c)) / 2, adjacent
-// groups never more than one level apart. We keep the cut as nodes in one of three states (below
-// the cut, in it, refined) and a priority queue of the cut's nodes keyed by (back-facing last,
-// coarser level first, larger f first). Refining a node first refines, recursively, every coarser
-// cut node that covers one of its same-level neighbours, as in a restricted quadtree: after each
-// single refinement adjacent cut nodes differ by at most one level. Back-facing nodes (three-state
-// cone test, normal_cone.h) wait until no visible node is left to refine, so a full budget still
-// ends with every node at level 0.
-//
-// Two choices of ours. (1) Within a level, visible nodes whose cone axis points towards the eye
-// come before those whose axis points away, then f decides. f grows with the angle between the
-// axis and the eye, so on its own it refines the far side first wherever the coarse cones are too
-// wide to be culled (most of a small budget on the bunny went to the half facing away); the paper
-// wants the silhouette and rough groups first, which f still orders within each half. (2) The
-// refinement stops at the first node (with the neighbours it forces) that does not fit the budget,
-// rather than skipping it for smaller ones, so the cut stays breadth-first.
+// The cut starts at the roots. A group of the DAG can be expanded once every cluster made from it
+// (the siblings of a node) is in the cut: they are replaced by the group's own clusters (their
+// children). The group's border was locked when it was simplified, so the children meet the rest
+// of the cut at the same vertices: every cut reached this way is watertight, whatever the order
+// of the expansions. The order is a priority queue of the expandable groups (LodPriority): by
+// default the group's error projected on the screen (Karis et al., "Nanite: a deep dive"; refined
+// while it exceeds about a pixel), or its error in model units, or the paper's f(g) (Kamiya,
+// Suzuki, Kawachi §7). Groups whose clusters all face away from the eye (three-state cone test,
+// normal_cone.h) come after every other group, so a full budget still ends at level 0. The
+// refinement stops at the first group whose expansion does not fit the face budget. Culling only
+// flags cut nodes as not drawn: it never changes the selection, so the drawn set is a subset of
+// a watertight cut whose other nodes face away.
 #include "conelod/lod.h"
 
 #include <algorithm>
@@ -43,19 +38,15 @@ namespace {
 enum : uint8_t { kBelow = 0, kInCut = 1, kRefined = 2 };
 
 struct QueueItem {
-  uint8_t culled;
-  int level;
-  uint8_t facesAway;  // visible, but the cone axis points away from the eye
+  uint8_t culled;     // every cluster of the group faces away
   double priority;
-  uint32_t id;
-  // std::priority_queue pops the largest: visible before culled, coarser first, facing the eye
-  // before facing away, larger f first, lower id first (deterministic ties).
+  uint32_t key;       // the group: its clusters' smallest node id
+  // std::priority_queue pops the largest: visible before culled, larger priority first, lower
+  // key first (deterministic ties).
   bool operator<(const QueueItem& o) const {
     if (culled != o.culled) return culled > o.culled;
-    if (level != o.level) return level < o.level;
-    if (facesAway != o.facesAway) return facesAway > o.facesAway;
     if (priority != o.priority) return priority < o.priority;
-    return id > o.id;
+    return key > o.key;
   }
 };
 }  // namespace
@@ -66,6 +57,7 @@ struct LodRefiner::Impl {
   LodView view;
   std::vector<uint8_t> state;                     // per node id
   std::unordered_map<uint32_t, uint32_t> cutPos;  // node id -> its entry in cut.nodes
+  std::unordered_map<uint32_t, uint32_t> present;  // group key -> its clusters in the cut
   mutable LodCut cut;
   mutable bool statsDirty = true;
   std::priority_queue<QueueItem> queue;
@@ -80,11 +72,50 @@ struct LodRefiner::Impl {
     return f == Facing::Back;
   }
 
-  // The cone axis points away from the eye (more than 90 degrees from the direction to it).
-  bool facesAway(const LodNode& n) const {
-    if (!view.cullBackFacing || n.cone.empty() || !n.cone.cullable()) return false;
-    const vcg::Point3d toEye = view.orthographic ? -view.viewDir : view.eye - vcg::Point3d::Construct(n.center);
-    return toEye * n.cone.axis < 0;
+  static uint32_t keyOf(const LodNode& n) { return *std::min_element(n.siblings.begin(), n.siblings.end()); }
+
+  // Priority of expanding the group whose clusters are `siblings` (all in the cut).
+  double priorityOf(const std::vector<uint32_t>& siblings) const {
+    double p = 0;
+    for (uint32_t s : siblings) {
+      const LodNode& n = reader.node(s);
+      double q = 0;
+      switch (view.priority) {
+        case LodPriority::ObjectError: q = n.error; break;
+        case LodPriority::ConeFg: q = RefinementPriority(n, view); break;
+        case LodPriority::ScreenError: {
+          double d;
+          if (view.orthographic) {
+            d = 1;
+          } else {
+            const vcg::Point3d c = vcg::Point3d::Construct(n.center);
+            d = std::max((view.eye - c).Norm() - double(n.radius), 1e-9 * (1 + c.Norm()));
+          }
+          q = double(n.error) / d * (view.projectionScale > 0 ? view.projectionScale : 1.0);
+          break;
+        }
+      }
+      p = std::max(p, q);
+    }
+    // Screen-space error, culling on: weighted by how squarely the group can face the eye,
+    // 1/4 + 3/4 cos(max(0, angle(axis, eye) - half-angle)) at best over its clusters (a group
+    // seen edge-on shows its error at the silhouette only).
+    if (view.priority == LodPriority::ScreenError && view.cullBackFacing) {
+      double facing = 0;
+      for (uint32_t s : siblings) {
+        const LodNode& n = reader.node(s);
+        vcg::Point3d toEye = view.orthographic ? -view.viewDir : view.eye - vcg::Point3d::Construct(n.center);
+        const double len = toEye.Norm();
+        if (n.cone.empty() || !(len > 0)) {
+          facing = 1;
+          break;
+        }
+        const double a = std::acos(std::max(-1.0, std::min(1.0, toEye * n.cone.axis / len)));
+        facing = std::max(facing, std::cos(std::min(NormalCone::kPi / 2, std::max(0.0, a - n.cone.halfAngle))));
+      }
+      p *= 0.25 + 0.75 * facing;
+    }
+    return p;
   }
 
   Status addToCut(uint32_t id) {
@@ -103,8 +134,19 @@ struct LodRefiner::Impl {
       ++cut.groupsDrawn;
       cut.drawnFaces += n.faceCount;
     }
-    if (n.childCount) queue.push({uint8_t(culled), n.level, uint8_t(facesAway(n)), RefinementPriority(n, view), id});
     statsDirty = true;
+    if (!n.children.empty()) {
+      const uint32_t key = keyOf(n);
+      if (++present[key] == n.siblings.size()) {
+        // Every cluster of the group is in the cut: it can be expanded.
+        bool allCulled = view.cullBackFacing;
+        for (uint32_t sib : n.siblings) {
+          if (state[sib] != kInCut) return Status::Invalid("corrupt file: node " + std::to_string(id) + "'s siblings disagree");
+          if (!cut.culled[cutPos[sib]]) allCulled = false;
+        }
+        queue.push({uint8_t(allCulled), priorityOf(n.siblings), key});
+      }
+    }
     return Status::Ok();
   }
 
@@ -131,53 +173,32 @@ struct LodRefiner::Impl {
     statsDirty = true;
   }
 
-  // The cut node that covers node m (m below the cut): its nearest ancestor in the cut.
-  Status covering(uint32_t m, uint32_t& out) {
-    Status s = reader.LoadNode(m);
-    if (!s.ok()) return s;
-    uint32_t at = m;
-    for (size_t guard = 0; state[at] != kInCut; ++guard) {
-      const int64_t p = reader.node(at).parent;
-      if (p < 0 || guard > 64) return Status::Invalid("corrupt file: a node is covered by no node of the cut");
-      at = uint32_t(p);
+  // Replaces the clusters of group `key` (all in the cut) by their children.
+  Status expand(uint32_t key) {
+    if (stopped || state[key] != kInCut) return Status::Ok();
+    const std::vector<uint32_t> siblings = reader.node(key).siblings;  // copies: loading records may rehash
+    const std::vector<uint32_t> children = reader.node(key).children;
+    if (children.empty()) return Status::Ok();
+    for (uint32_t s : siblings)
+      if (s >= state.size() || state[s] != kInCut || reader.node(s).children != children || reader.node(s).siblings != siblings)
+        return Status::Invalid("corrupt file: the clusters made from one group disagree (node " + std::to_string(s) + ")");
+    Status st = reader.LoadChildren(key);
+    if (!st.ok()) return st;
+    size_t removed = 0, added = 0;
+    for (uint32_t s : siblings) removed += reader.node(s).faceCount;
+    for (uint32_t c : children) {
+      if (c >= state.size() || state[c] != kBelow) return Status::Invalid("corrupt file: node " + std::to_string(c) + " is the child of two groups");
+      added += reader.node(c).faceCount;
     }
-    out = at;
-    return Status::Ok();
-  }
-
-  // Replaces node id (in the cut) by its children, first refining coarser neighbours.
-  Status refine(uint32_t id) {
-    if (stopped || state[id] != kInCut) return Status::Ok();
-    const LodNode* n = &reader.node(id);
-    if (n->childCount == 0) return Status::Ok();
-    const int level = n->level;
-    const std::vector<uint32_t> neighbours = n->neighbours;  // copy: loading records may rehash
-    for (uint32_t m : neighbours) {
-      if (m >= state.size()) return Status::Invalid("corrupt file: neighbour id out of range");
-      while (state[m] == kBelow) {
-        uint32_t c = 0;
-        Status s = covering(m, c);
-        if (!s.ok()) return s;
-        if (reader.node(c).level <= level) break;
-        s = refine(c);
-        if (!s.ok() || stopped) return s;
-        if (state[c] == kInCut) return Status::Invalid("corrupt file: a node could not be refined");
-      }
-    }
-    Status s = reader.LoadChildren(id);
-    if (!s.ok()) return s;
-    n = &reader.node(id);
-    size_t childFaces = 0;
-    for (uint32_t c = 0; c < n->childCount; ++c) childFaces += reader.node(n->firstChild + c).faceCount;
-    if (cut.faces - n->faceCount + childFaces > view.faceBudget) {
+    if (cut.faces - removed + added > view.faceBudget) {
       stopped = true;
       return Status::Ok();
     }
-    const uint32_t first = n->firstChild, count = n->childCount;
-    removeFromCut(id);
-    for (uint32_t c = 0; c < count; ++c) {
-      s = addToCut(first + c);
-      if (!s.ok()) return s;
+    for (uint32_t s : siblings) removeFromCut(s);
+    present.erase(key);
+    for (uint32_t c : children) {
+      st = addToCut(c);
+      if (!st.ok()) return st;
     }
     ++cut.refinements;
     return Status::Ok();
@@ -185,38 +206,22 @@ struct LodRefiner::Impl {
 
   void updateStats() const {
     if (!statsDirty) return;
-    // Adjacent cut nodes: for each cut node b and each same-level neighbour m below the cut, the
-    // cut node covering m (m in the cut: same level; m refined: its cut descendants see b from
-    // their side). The covering node is m's nearest ancestor in the cut.
-    int worst = 0;
-    for (uint32_t b : cut.nodes) {
-      const LodNode& nb = reader.node(b);
-      for (uint32_t m : nb.neighbours) {
-        if (state[m] != kBelow) continue;
-        // While the invariant holds, m's parent is in the cut, and it is a neighbour of b's parent
-        // (whose record is loaded: it was refined): found without reading m's record.
-        int diff = 0;
-        if (nb.parent >= 0)
-          for (uint32_t p : reader.node(uint32_t(nb.parent)).neighbours)
-            if (state[p] == kInCut) {
-              const LodNode& np = reader.node(p);
-              if (m >= np.firstChild && m - np.firstChild < np.childCount) diff = 1;
-            }
-        if (diff == 0) {
-          // Otherwise walk up from m, reading its record and its ancestors' if needed.
-          uint32_t at = m;
-          diff = 2;  // also when the file cannot be read: report a violation
-          if (reader.LoadNode(m).ok()) {
-            diff = 0;
-            while (state[at] != kInCut && reader.node(at).parent >= 0) {
-              at = uint32_t(reader.node(at).parent);
-              ++diff;
-            }
-          }
+    // Cut nodes sharing a (global) vertex: the largest difference of their levels.
+    std::unordered_map<uint32_t, std::pair<int, int>> range;
+    for (uint32_t id : cut.nodes) {
+      const LodGeometry* g = reader.geometry(id);
+      if (!g) continue;
+      const int level = reader.node(id).level;
+      for (uint32_t v : g->vertexIds) {
+        auto ins = range.emplace(v, std::make_pair(level, level));
+        if (!ins.second) {
+          ins.first->second.first = std::min(ins.first->second.first, level);
+          ins.first->second.second = std::max(ins.first->second.second, level);
         }
-        worst = std::max(worst, diff);
       }
     }
+    int worst = 0;
+    for (const auto& kv : range) worst = std::max(worst, kv.second.second - kv.second.first);
     cut.maxLevelDifference = worst;
     statsDirty = false;
   }
@@ -232,6 +237,7 @@ Status LodRefiner::Start(const LodView& view) {
   m.view = view;
   m.state.assign(size_t(m.reader.info().nodeCount), kBelow);
   m.cutPos.clear();
+  m.present.clear();
   m.cut = LodCut();
   m.queue = std::priority_queue<QueueItem>();
   m.stopped = false;
@@ -249,10 +255,18 @@ Status LodRefiner::Step(size_t maxRefinements) {
   size_t done = 0;
   while (done < maxRefinements && !m.stopped && !m.queue.empty()) {
     const QueueItem top = m.queue.top();
+    const bool pixelStop = m.view.priority == LodPriority::ScreenError && m.view.projectionScale > 0 && m.view.maxPixelError > 0;
+    if (pixelStop && !top.culled &&
+        top.priority <= m.view.maxPixelError) {
+      // Every visible group left is below a pixel: only back-facing ones could follow, and they
+      // are not drawn. Stop here.
+      m.stopped = true;
+      break;
+    }
     m.queue.pop();
-    if (m.state[top.id] != kInCut) continue;
+    if (top.culled && pixelStop) continue;  // not drawn: no pixel to gain
     const size_t before = m.cut.refinements;
-    Status s = m.refine(top.id);
+    Status s = m.expand(top.key);
     if (!s.ok()) {
       m.stopped = true;
       return s;
@@ -301,8 +315,8 @@ Status ExtractCutMesh(LodReader& reader, const LodCut& cut, bool includeCulled, 
   out.positions.reserve(verts);
   if (faceLevel) faceLevel->reserve(faces);
   if (faceNode) faceNode->reserve(faces);
-  // Vertices are welded by (level, vertex id): shared between nodes of one level.
-  std::unordered_map<uint64_t, uint32_t> weld;
+  // Vertices are welded by global id: shared between nodes of every level.
+  std::unordered_map<uint32_t, uint32_t> weld;
   weld.reserve(verts);
   std::vector<uint32_t> local;
   for (size_t i = 0; i < cut.nodes.size(); ++i) {
@@ -315,8 +329,7 @@ Status ExtractCutMesh(LodReader& reader, const LodCut& cut, bool includeCulled, 
     const int level = reader.node(id).level;
     local.resize(g.vertexIds.size());
     for (size_t v = 0; v < g.vertexIds.size(); ++v) {
-      const uint64_t key = uint64_t(uint32_t(level)) << 32 | g.vertexIds[v];
-      auto ins = weld.emplace(key, uint32_t(out.positions.size()));
+      auto ins = weld.emplace(g.vertexIds[v], uint32_t(out.positions.size()));
       if (ins.second) out.positions.push_back(g.positions[v]);
       local[v] = ins.first->second;
     }

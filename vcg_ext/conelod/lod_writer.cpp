@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <numeric>
 
 #include "conelod/lod_internal.h"
@@ -95,249 +96,190 @@ class OutFile {
   bool ok_ = true;
 };
 
-// One node level as the writer sees it: a mesh, per face its group, and the order of the nodes.
-struct LevelView {
-  const IndexedMesh* mesh = nullptr;
-  const std::vector<int>* faceGroup = nullptr;  // per face of `mesh`: group of hierarchy level max(k,1)
-  const std::vector<uint32_t>* sourceVertex = nullptr;  // null at level 0
-};
-
 struct NodeRecord {
-  uint32_t level = 0, group = 0, parent = kNoParent, firstChild = 0, childCount = 0;
+  uint32_t level = 0, group = LodNode::kNoGroup;
+  std::vector<uint32_t> children, siblings, parents;
   NormalCone cone;
   vcg::Point3f center;
   float radius = 0;
   uint32_t faceCount = 0, vertexCount = 0;
-  float error = 0;
-  std::vector<uint32_t> neighbours;
+  float error = 0, parentError = 0;
 };
 
-// Faces of each node in node order (counting sort by group, then by the node order of groups).
-void BucketFaces(const LevelView& L, const std::vector<uint32_t>& nodeOfGroup, size_t nodes,
-                 std::vector<uint32_t>& start, std::vector<uint32_t>& faces) {
-  const auto& fg = *L.faceGroup;
+// Faces of each node of a level in node order (counting sort by node).
+void BucketFaces(const LodDag::Level& L, const std::vector<uint32_t>& nodeOfCluster, std::vector<uint32_t>& start,
+                 std::vector<uint32_t>& faces) {
+  const size_t nodes = nodeOfCluster.size();
   start.assign(nodes + 1, 0);
-  for (size_t f = 0; f < fg.size(); ++f) ++start[nodeOfGroup[size_t(fg[f])] + 1];
+  for (uint32_t c : L.faceCluster) ++start[nodeOfCluster[c] + 1];
   std::partial_sum(start.begin(), start.end(), start.begin());
-  faces.resize(fg.size());
+  faces.resize(L.faceCluster.size());
   std::vector<uint32_t> at(start.begin(), start.end() - 1);
-  for (size_t f = 0; f < fg.size(); ++f) faces[at[nodeOfGroup[size_t(fg[f])]]++] = uint32_t(f);
+  for (size_t f = 0; f < L.faceCluster.size(); ++f) faces[at[nodeOfCluster[L.faceCluster[f]]]++] = uint32_t(f);
+}
+
+// Per group (or creator) of a level: the node ids of its clusters, CSR.
+void ListBy(const std::vector<int>& key, size_t keys, const std::vector<uint32_t>& nodeId, std::vector<uint32_t>& start,
+            std::vector<uint32_t>& list) {
+  start.assign(keys + 1, 0);
+  for (int k : key)
+    if (k >= 0) ++start[size_t(k) + 1];
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  list.assign(start.back(), 0);
+  std::vector<uint32_t> at(start.begin(), start.end() - 1);
+  for (size_t c = 0; c < key.size(); ++c)
+    if (key[c] >= 0) list[at[size_t(key[c])]++] = nodeId[c];
+  for (size_t k = 0; k < keys; ++k) std::sort(list.begin() + start[k], list.begin() + start[k + 1]);
 }
 
 }  // namespace
 
-Status WriteLodFile(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
-                    const std::vector<SimplifiedLevel>& levels, const std::string& path,
-                    LodBuildStats* stats, const Progress& progress) {
+Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::string& path, LodBuildStats* stats,
+                    const Progress& progress) {
   const auto t0 = std::chrono::steady_clock::now();
-  const int H = hierarchy.levelCount();
-  if (H < 1) return Status::Invalid("the group hierarchy has no level");
-  if (int(levels.size()) != H)
-    return Status::Invalid("expected one simplified level per hierarchy level (" + std::to_string(H) + "), got " +
-                           std::to_string(levels.size()));
-  if (H + 1 > int(kMaxLevels)) return Status::Invalid("too many hierarchy levels for the file format");
-  if (size_t(hierarchy.faceCount) != mesh.faces.size() || mesh.faces.empty())
-    return Status::Invalid("the group hierarchy does not match the mesh");
-  for (int k = 1; k <= H; ++k) {
-    const SimplifiedLevel& S = levels[size_t(k - 1)];
-    if (S.level != k || S.faceGroup.size() != S.mesh.faces.size() || S.sourceVertex.size() != S.mesh.positions.size())
-      return Status::Invalid("simplified level " + std::to_string(k) + " does not match the hierarchy");
-    const size_t groups = hierarchy.level(k).groups.size();
-    for (int g : S.faceGroup)
-      if (g < 0 || size_t(g) >= groups) return Status::Invalid("simplified level " + std::to_string(k) + " has a bad group id");
-    for (const auto& t : S.mesh.faces)
+  const size_t H = dag.levels.size();
+  if (H < 1) return Status::Invalid("the LOD DAG has no level");
+  if (H > kMaxLevels) return Status::Invalid("too many LOD levels for the file format");
+  if (dag.levels[0].faces != mesh.faces || mesh.faces.empty() || dag.inputVertices != mesh.positions.size() ||
+      dag.positions.size() < mesh.positions.size())
+    return Status::Invalid("the LOD DAG does not match the mesh");
+  if (dag.positions.size() >= kNoParent) return Status::Invalid("too many vertices for the file format");
+  for (size_t k = 0; k < H; ++k) {
+    const LodDag::Level& L = dag.levels[k];
+    const std::string bad = "LOD level " + std::to_string(k) + " is inconsistent";
+    const size_t C = L.clusterCount();
+    if (L.faceCluster.size() != L.faces.size() || L.clusterCreator.size() != C || L.clusterError.size() != C || C == 0)
+      return Status::Invalid(bad);
+    for (uint32_t c : L.faceCluster)
+      if (c >= C) return Status::Invalid(bad);
+    for (const auto& t : L.faces)
       for (uint32_t v : t)
-        if (v >= S.mesh.positions.size()) return Status::Invalid("simplified level " + std::to_string(k) + " has a bad vertex index");
+        if (v >= dag.positions.size()) return Status::Invalid(bad + " (a bad vertex index)");
+    const size_t groupsBelow = k ? dag.levels[k - 1].groupError.size() : 0;
+    for (size_t c = 0; c < C; ++c) {
+      if (k == 0 ? L.clusterCreator[c] != -1 : (L.clusterCreator[c] < 0 || size_t(L.clusterCreator[c]) >= groupsBelow))
+        return Status::Invalid(bad + " (a bad creator group)");
+      const int g = L.clusterGroup[c];
+      if (k + 1 == H ? g != -1 : (g < 0 || size_t(g) >= L.groupError.size())) return Status::Invalid(bad + " (a bad group)");
+    }
   }
-  for (const auto& t : mesh.faces)
-    for (uint32_t v : t)
-      if (v >= mesh.positions.size()) return Status::Invalid("the mesh has a face with a bad vertex index");
-  const uint32_t nodeLevels = uint32_t(H + 1);
+  const uint32_t nodeLevels = uint32_t(H);
 
-  // Node order: the top level's groups in order; each finer level lists the children of the level
-  // above node by node, so that a node's children have consecutive ids. Level 0 = level 1's order.
-  std::vector<std::vector<uint32_t>> groupOfNode(nodeLevels), nodeOfGroup(nodeLevels);
-  {
-    auto& top = groupOfNode[size_t(H)];
-    top.resize(hierarchy.level(H).groups.size());
-    std::iota(top.begin(), top.end(), 0u);
-    for (int k = H; k >= 2; --k) {
-      const GroupLevel& GL = hierarchy.level(k);
-      auto& below = groupOfNode[size_t(k - 1)];
-      for (uint32_t g : groupOfNode[size_t(k)]) {
-        const Group& G = GL.groups[g];
-        for (int c = 0; c < G.childCount; ++c) below.push_back(uint32_t(GL.children[size_t(G.firstChild + c)]));
-      }
-      if (below.size() != hierarchy.level(k - 1).groups.size())
-        return Status::Invalid("the group hierarchy's child lists do not cover level " + std::to_string(k - 1));
-    }
-    groupOfNode[0] = groupOfNode[1];
-    for (uint32_t k = 0; k < nodeLevels; ++k) {
-      nodeOfGroup[k].assign(groupOfNode[k].size(), 0);
-      for (size_t i = 0; i < groupOfNode[k].size(); ++i) nodeOfGroup[k][groupOfNode[k][i]] = uint32_t(i);
-    }
+  // Node order within a level: by group (so a group's clusters, a node's children, are
+  // consecutive), then by creator, then by cluster index.
+  std::vector<std::vector<uint32_t>> clusterOfNode(H), nodeOfCluster(H);
+  for (size_t k = 0; k < H; ++k) {
+    const LodDag::Level& L = dag.levels[k];
+    auto& order = clusterOfNode[k];
+    order.resize(L.clusterCount());
+    std::iota(order.begin(), order.end(), 0u);
+    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+      if (L.clusterGroup[a] != L.clusterGroup[b]) return L.clusterGroup[a] < L.clusterGroup[b];
+      return L.clusterCreator[a] < L.clusterCreator[b];
+    });
+    nodeOfCluster[k].assign(order.size(), 0);
+    for (size_t i = 0; i < order.size(); ++i) nodeOfCluster[k][order[i]] = uint32_t(i);
   }
-  // First node id of each level: coarsest first.
   std::vector<uint64_t> firstId(nodeLevels + 1, 0);
   {
     uint64_t id = 0;
     for (int k = int(nodeLevels) - 1; k >= 0; --k) {
       firstId[size_t(k)] = id;
-      id += groupOfNode[size_t(k)].size();
+      id += clusterOfNode[size_t(k)].size();
     }
-    firstId[nodeLevels] = id;  // total
+    firstId[nodeLevels] = id;
     if (id >= kNoParent) return Status::Invalid("too many nodes for the file format");
   }
   const uint64_t nodeCount = firstId[nodeLevels];
-  auto nodeId = [&](uint32_t k, uint32_t indexInLevel) { return uint32_t(firstId[k] + indexInLevel); };
-
-  // Group adjacency at hierarchy level 1 from the input's edges, then mapped up through parents.
-  // Per level: sorted unique pairs (a < b) of group indices.
-  std::vector<std::vector<std::pair<uint32_t, uint32_t>>> adjacency(nodeLevels);
-  {
-    const FaceAdjacency adj = BuildFaceAdjacency(mesh);
-    const auto& fg = hierarchy.level(1).faceGroup;
-    auto& pairs = adjacency[1];
-    for (uint32_t f = 0; f < mesh.faces.size(); ++f)
-      for (uint32_t i = adj.offsets[f]; i < adj.offsets[f + 1]; ++i) {
-        const uint32_t a = uint32_t(fg[f]), b = uint32_t(fg[adj.neighbours[i]]);
-        if (a < b) pairs.emplace_back(a, b);
-      }
-    std::sort(pairs.begin(), pairs.end());
-    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-    for (int k = 2; k <= H; ++k) {
-      const auto& groupsBelow = hierarchy.level(k - 1).groups;
-      auto& up = adjacency[size_t(k)];
-      for (const auto& p : adjacency[size_t(k - 1)]) {
-        uint32_t a = uint32_t(groupsBelow[p.first].parent), b = uint32_t(groupsBelow[p.second].parent);
-        if (a == b) continue;
-        if (a > b) std::swap(a, b);
-        up.emplace_back(a, b);
-      }
-      std::sort(up.begin(), up.end());
-      up.erase(std::unique(up.begin(), up.end()), up.end());
-    }
-    adjacency[0] = adjacency[1];
+  // Node ids per cluster, per level.
+  std::vector<std::vector<uint32_t>> idOfCluster(H);
+  for (size_t k = 0; k < H; ++k) {
+    idOfCluster[k].resize(nodeOfCluster[k].size());
+    for (size_t c = 0; c < nodeOfCluster[k].size(); ++c) idOfCluster[k][c] = uint32_t(firstId[k] + nodeOfCluster[k][c]);
   }
 
   const vcg::Box3d box = UsedVertexBox(mesh);
-  const double diag = box.IsNull() ? 0.0 : box.Diag();
   std::vector<float> levelError(nodeLevels, 0.f);
-  {
-    double e = 0;
-    for (int k = 1; k <= H; ++k) {
-      e = std::max(e, levels[size_t(k - 1)].stats.maxCollapseError);
-      levelError[size_t(k)] = float(e * diag);
-    }
-  }
-  auto view = [&](uint32_t k) {
-    LevelView v;
-    if (k == 0) {
-      v.mesh = &mesh;
-      v.faceGroup = &hierarchy.level(1).faceGroup;
-    } else {
-      v.mesh = &levels[k - 1].mesh;
-      v.faceGroup = &levels[k - 1].faceGroup;
-      v.sourceVertex = &levels[k - 1].sourceVertex;
-    }
-    return v;
-  };
+  for (size_t k = 0; k < H; ++k)
+    for (float e : dag.levels[k].clusterError) levelError[k] = std::max(levelError[k], e);
 
   // Pass 1: node records (and the per-level counts).
   std::vector<NodeRecord> records(nodeCount);
   std::vector<uint64_t> levelVertices(nodeLevels, 0), levelFaces(nodeLevels, 0);
   {
-    std::vector<uint32_t> start, faces, stamp;
+    std::vector<uint32_t> start, faces, stamp(dag.positions.size(), kNoParent);
+    std::vector<uint8_t> used(dag.positions.size(), 0);
     std::vector<vcg::Point3d> normals;
+    std::vector<uint32_t> byGroupStart, byGroup, byCreatorStart, byCreator, aboveStart, above;
     for (uint32_t k = 0; k < nodeLevels; ++k) {
       if (progress && !progress(int(40 * k / nodeLevels), "LOD file: node records")) return Status::Cancelled();
-      const LevelView L = view(k);
-      const size_t nodes = groupOfNode[k].size();
-      BucketFaces(L, nodeOfGroup[k], nodes, start, faces);
-      levelFaces[k] = L.mesh->faces.size();
-      stamp.assign(L.mesh->positions.size(), kNoParent);
-      uint64_t usedVertices = 0;
-      // Neighbour lists: CSR from the sorted pairs.
-      std::vector<uint32_t> nStart(nodes + 1, 0), nList;
-      for (const auto& p : adjacency[k]) {
-        ++nStart[nodeOfGroup[k][p.first] + 1];
-        ++nStart[nodeOfGroup[k][p.second] + 1];
-      }
-      std::partial_sum(nStart.begin(), nStart.end(), nStart.begin());
-      nList.resize(nStart.back());
-      {
-        std::vector<uint32_t> at(nStart.begin(), nStart.end() - 1);
-        for (const auto& p : adjacency[k]) {
-          const uint32_t a = nodeOfGroup[k][p.first], b = nodeOfGroup[k][p.second];
-          nList[at[a]++] = nodeId(k, b);
-          nList[at[b]++] = nodeId(k, a);
-        }
-      }
-      const GroupLevel& GL = hierarchy.level(std::max<int>(1, int(k)));
-      for (uint32_t i = 0; i < nodes; ++i) {
-        NodeRecord& R = records[nodeId(k, i)];
-        const uint32_t g = groupOfNode[k][i];
+      const LodDag::Level& L = dag.levels[k];
+      BucketFaces(L, nodeOfCluster[k], start, faces);
+      levelFaces[k] = L.faces.size();
+      ListBy(L.clusterCreator, k ? dag.levels[k - 1].groupError.size() : 0, idOfCluster[k], byCreatorStart, byCreator);
+      if (k > 0) ListBy(dag.levels[k - 1].clusterGroup, dag.levels[k - 1].groupError.size(), idOfCluster[k - 1], byGroupStart, byGroup);
+      if (k + 1 < nodeLevels)
+        ListBy(dag.levels[k + 1].clusterCreator, L.groupError.size(), idOfCluster[k + 1], aboveStart, above);
+      for (uint32_t i = 0; i < clusterOfNode[k].size(); ++i) {
+        const uint32_t c = clusterOfNode[k][i];
+        NodeRecord& R = records[firstId[k] + i];
         R.level = k;
-        R.group = g;
-        R.error = levelError[k];
-        const Group& G = GL.groups[g];
+        R.error = L.clusterError[c];
         if (k == 0) {
-          R.parent = nodeId(1, i);
+          R.siblings.assign(1, uint32_t(firstId[k] + i));
         } else {
-          R.parent = k == uint32_t(H) ? kNoParent : nodeId(k + 1, nodeOfGroup[k + 1][uint32_t(G.parent)]);
-          if (k == 1) {
-            R.firstChild = nodeId(0, i);
-            R.childCount = 1;
-          } else {
-            // The children were listed in this node's order: find where they start.
-            R.childCount = uint32_t(G.childCount);
-            R.firstChild = G.childCount ? nodeId(k - 1, nodeOfGroup[k - 1][uint32_t(GL.children[size_t(G.firstChild)])]) : 0;
-          }
+          const size_t cr = size_t(L.clusterCreator[c]);
+          R.children.assign(byGroup.begin() + byGroupStart[cr], byGroup.begin() + byGroupStart[cr + 1]);
+          R.siblings.assign(byCreator.begin() + byCreatorStart[cr], byCreator.begin() + byCreatorStart[cr + 1]);
         }
-        R.neighbours.assign(nList.begin() + nStart[i], nList.begin() + nStart[i + 1]);
-        std::sort(R.neighbours.begin(), R.neighbours.end());
+        if (L.clusterGroup[c] >= 0) {
+          const size_t g = size_t(L.clusterGroup[c]);
+          R.group = uint32_t(g);
+          R.parentError = L.groupError[g];
+          R.parents.assign(above.begin() + aboveStart[g], above.begin() + aboveStart[g + 1]);
+        } else {
+          R.parentError = std::numeric_limits<float>::infinity();
+        }
         normals.clear();
         vcg::Box3f nb;
         uint32_t vc = 0;
         for (uint32_t j = start[i]; j < start[i + 1]; ++j) {
-          const uint32_t f = faces[j];
-          vcg::Point3d n;
-          double area;
-          FaceNormalAndArea(*L.mesh, f, n, area);
-          if (area > 0) normals.push_back(n);
-          for (uint32_t v : L.mesh->faces[f]) {
-            nb.Add(L.mesh->positions[v]);
+          const auto& t = L.faces[faces[j]];
+          const vcg::Point3d a = vcg::Point3d::Construct(dag.positions[t[0]]), b = vcg::Point3d::Construct(dag.positions[t[1]]),
+                             cc = vcg::Point3d::Construct(dag.positions[t[2]]);
+          const vcg::Point3d n = (b - a) ^ (cc - a);
+          const double len = n.Norm();
+          const double scale = std::max({(b - a).SquaredNorm(), (cc - a).SquaredNorm(), (cc - b).SquaredNorm()});
+          if (len > 1e-12 * scale && len > 0) normals.push_back(n / len);
+          for (uint32_t v : t) {
+            nb.Add(dag.positions[v]);
+            used[v] = 1;
             if (stamp[v] != i) {
               stamp[v] = i;
               ++vc;
             }
           }
         }
-        // Vertices shared with earlier nodes of the level are counted again here: vertexCount is
-        // the node's own (local) count. Level vertices are counted at their first use.
         R.cone = normals.empty() ? NormalCone::Empty() : MinimalCone(normals);
         R.faceCount = start[i + 1] - start[i];
         R.vertexCount = vc;
         R.center = nb.IsNull() ? vcg::Point3f(0, 0, 0) : nb.Center();
         float r2 = 0;
         for (uint32_t j = start[i]; j < start[i + 1]; ++j)
-          for (uint32_t v : L.mesh->faces[faces[j]]) r2 = std::max(r2, (L.mesh->positions[v] - R.center).SquaredNorm());
+          for (uint32_t v : L.faces[faces[j]]) r2 = std::max(r2, (dag.positions[v] - R.center).SquaredNorm());
         R.radius = std::sqrt(r2) * (1 + 1e-6f);
       }
-      std::vector<uint8_t> used(L.mesh->positions.size(), 0);
-      for (const auto& t : L.mesh->faces)
-        for (uint32_t v : t) used[v] = 1;
-      usedVertices = uint64_t(std::count(used.begin(), used.end(), uint8_t(1)));
+      uint64_t usedVertices = 0;
+      for (const auto& t : L.faces)
+        for (uint32_t v : t)
+          if (used[v] == 1) {
+            used[v] = 2;
+            ++usedVertices;
+          }
+      for (const auto& t : L.faces)
+        for (uint32_t v : t) used[v] = 0;
+      std::fill(stamp.begin(), stamp.end(), kNoParent);
       levelVertices[k] = usedVertices;
-      // Children ids must be consecutive: they are, by construction of the order; check it.
-      if (k >= 2)
-        for (uint32_t i = 0; i < nodes; ++i) {
-          const NodeRecord& R = records[nodeId(k, i)];
-          const Group& G = GL.groups[R.group];
-          for (int c = 0; c < G.childCount; ++c)
-            if (nodeId(k - 1, nodeOfGroup[k - 1][uint32_t(GL.children[size_t(G.firstChild + c)])]) != R.firstChild + uint32_t(c))
-              return Status::Invalid("internal error: children are not consecutive");
-        }
     }
   }
 
@@ -359,6 +301,7 @@ Status WriteLodFile(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
     e.u64(mesh.positions.size());
     e.u64(mesh.faces.size());
     e.u64(nodeCount);
+    e.u64(dag.positions.size());
     for (int i = 0; i < 3; ++i) e.f32(box.IsNull() ? 0.f : float(box.min[i]));
     for (int i = 0; i < 3; ++i) e.f32(box.IsNull() ? 0.f : float(box.max[i]));
     e.u64(hierOffset);
@@ -367,7 +310,7 @@ Status WriteLodFile(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
     e.u32(kIndexBlock);
     for (uint32_t k = 0; k < nodeLevels; ++k) {
       e.u64(levelFaces[k]);
-      e.u64(groupOfNode[k].size());
+      e.u64(clusterOfNode[k].size());
       e.u64(levelVertices[k]);
       e.u64(firstId[k]);
       e.u64(levelOffset[k]);
@@ -395,9 +338,9 @@ Status WriteLodFile(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
       e.u32(id);
       e.u32(R.level);
       e.u32(R.group);
-      e.u32(R.parent);
-      e.u32(R.firstChild);
-      e.u32(R.childCount);
+      e.u32(uint32_t(R.children.size()));
+      e.u32(uint32_t(R.siblings.size()));
+      e.u32(uint32_t(R.parents.size()));
       for (int i = 0; i < 3; ++i) e.f64(R.cone.axis[i]);
       e.f64(R.cone.halfAngle);
       for (int i = 0; i < 3; ++i) e.f32(R.center[i]);
@@ -405,8 +348,10 @@ Status WriteLodFile(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
       e.u32(R.faceCount);
       e.u32(R.vertexCount);
       e.f32(R.error);
-      e.u32(uint32_t(R.neighbours.size()));
-      for (uint32_t n : R.neighbours) e.u32(n);
+      e.f32(R.parentError);
+      for (uint32_t n : R.children) e.u32(n);
+      for (uint32_t n : R.siblings) e.u32(n);
+      for (uint32_t n : R.parents) e.u32(n);
       index[id].record = out.offset();
       index[id].recordBytes = uint32_t(kChunkHeaderBytes + e.bytes.size());
       out.chunk(kNode, e);
@@ -424,7 +369,7 @@ Status WriteLodFile(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
 
   // Geometry, coarsest level first.
   {
-    std::vector<uint32_t> start, faces, levelId, local, order, verts;
+    std::vector<uint32_t> start, faces, levelId(dag.positions.size(), kNoParent), local(dag.positions.size(), kNoParent), order, verts;
     std::vector<vcg::Point3f> block;
     Encoder e;
     for (int k = int(nodeLevels) - 1; k >= 0; --k) {
@@ -432,14 +377,13 @@ Status WriteLodFile(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
         fail("cancelled");  // removes the partial file
         return Status::Cancelled();
       }
-      const LevelView L = view(uint32_t(k));
-      const size_t nodes = groupOfNode[size_t(k)].size();
-      BucketFaces(L, nodeOfGroup[size_t(k)], nodes, start, faces);
+      const LodDag::Level& L = dag.levels[size_t(k)];
+      const size_t nodes = clusterOfNode[size_t(k)].size();
+      BucketFaces(L, nodeOfCluster[size_t(k)], start, faces);
       // Level vertex ids by first use in node order.
-      levelId.assign(L.mesh->positions.size(), kNoParent);
       order.clear();
       for (uint32_t f : faces)
-        for (uint32_t v : L.mesh->faces[f])
+        for (uint32_t v : L.faces[f])
           if (levelId[v] == kNoParent) {
             levelId[v] = uint32_t(order.size());
             order.push_back(v);
@@ -449,7 +393,7 @@ Status WriteLodFile(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
       e.u32(uint32_t(k));
       e.u32(0);
       e.u64(nodes);
-      e.u64(L.mesh->faces.size());
+      e.u64(L.faces.size());
       e.u64(order.size());
       out.chunk(kLevel, e);  // child size patched below
       vertOffset[size_t(k)] = out.offset();
@@ -463,16 +407,15 @@ Status WriteLodFile(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
         e.clear();
         const size_t end = std::min<size_t>(order.size(), size_t((b + 1) * kVertexBlock));
         for (size_t v = size_t(b * kVertexBlock); v < end; ++v)
-          for (int i = 0; i < 3; ++i) e.f32(L.mesh->positions[order[v]][i]);
+          for (int i = 0; i < 3; ++i) e.f32(dag.positions[order[v]][i]);
         out.chunk(kVBlock, e);
       }
-      local.assign(L.mesh->positions.size(), kNoParent);
       for (uint32_t i = 0; i < nodes; ++i) {
-        const uint32_t id = nodeId(uint32_t(k), i);
+        const uint32_t id = uint32_t(firstId[size_t(k)] + i);
         // Local vertices by first use within the node.
         verts.clear();
         for (uint32_t j = start[i]; j < start[i + 1]; ++j)
-          for (uint32_t v : L.mesh->faces[faces[j]])
+          for (uint32_t v : L.faces[faces[j]])
             if (local[v] == kNoParent) {
               local[v] = uint32_t(verts.size());
               verts.push_back(v);
@@ -482,17 +425,17 @@ Status WriteLodFile(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
         e.u32(uint32_t(verts.size()));
         e.u32(start[i + 1] - start[i]);
         const bool shortIndices = verts.size() <= 65536;
-        e.u32((k == 0 ? kGeomHasSourceIds : 0) | (shortIndices ? kGeomShortIndices : 0));
+        e.u32(kGeomHasSourceIds | (shortIndices ? kGeomShortIndices : 0));
         for (uint32_t v : verts) e.u32(levelId[v]);
-        if (k == 0)
-          for (uint32_t v : verts) e.u32(v);
+        for (uint32_t v : verts) e.u32(v);
         for (uint32_t j = start[i]; j < start[i + 1]; ++j)
-          for (uint32_t v : L.mesh->faces[faces[j]]) shortIndices ? e.u16(local[v]) : e.u32(local[v]);
+          for (uint32_t v : L.faces[faces[j]]) shortIndices ? e.u16(local[v]) : e.u32(local[v]);
         for (uint32_t v : verts) local[v] = kNoParent;
         index[id].geometry = out.offset();
         index[id].geometryBytes = uint32_t(kChunkHeaderBytes + e.bytes.size());
         out.chunk(kGeom, e);
       }
+      for (uint32_t v : order) levelId[v] = kNoParent;
       // Patch the LEVL chunk's child size.
       ChunkHeader h;
       h.id = kLevel;
@@ -500,7 +443,7 @@ Status WriteLodFile(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
       d.u32(uint32_t(k));
       d.u32(0);
       d.u64(nodes);
-      d.u64(L.mesh->faces.size());
+      d.u64(L.faces.size());
       d.u64(order.size());
       h.dataBytes = d.bytes.size();
       h.crc = Crc32(d.bytes.data(), d.bytes.size());
@@ -556,7 +499,7 @@ Status WriteLodFile(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
     stats->levels = int(nodeLevels);
     stats->levelFaces.assign(levelFaces.begin(), levelFaces.end());
     stats->levelNodes.clear();
-    for (uint32_t k = 0; k < nodeLevels; ++k) stats->levelNodes.push_back(groupOfNode[k].size());
+    for (uint32_t k = 0; k < nodeLevels; ++k) stats->levelNodes.push_back(clusterOfNode[k].size());
     stats->nodes = size_t(nodeCount);
     stats->fileBytes = fileBytes;
     stats->writeSeconds = Seconds(t0);
@@ -567,20 +510,15 @@ Status WriteLodFile(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
 Status BuildLodFile(const IndexedMesh& mesh, const LodBuildParams& params, const std::string& path,
                     LodBuildStats* stats, const Progress& progress) {
   const auto t0 = std::chrono::steady_clock::now();
-  GroupHierarchy hierarchy;
-  Status s = BuildConeHierarchy(mesh, params.grouping, hierarchy, SubProgress(progress, 0, 25));
+  LodDag dag;
+  Status s = BuildLodDag(mesh, params, dag, SubProgress(progress, 0, 90));
   if (!s.ok()) return s;
-  const double groupingSeconds = Seconds(t0);
-  const auto t1 = std::chrono::steady_clock::now();
-  std::vector<SimplifiedLevel> levels;
-  s = BuildSimplifiedLevels(mesh, hierarchy, params.simplification, levels, SubProgress(progress, 25, 90));
-  if (!s.ok()) return s;
-  const double simplifySeconds = Seconds(t1);
-  s = WriteLodFile(mesh, hierarchy, levels, path, stats, SubProgress(progress, 90, 100));
+  const double dagSeconds = Seconds(t0);
+  s = WriteLodFile(mesh, dag, path, stats, SubProgress(progress, 90, 100));
   if (!s.ok()) return s;
   if (stats) {
-    stats->groupingSeconds = groupingSeconds;
-    stats->simplifySeconds = simplifySeconds;
+    stats->groupingSeconds = 0;
+    stats->simplifySeconds = dagSeconds;
     stats->seconds = Seconds(t0);
   }
   return Status::Ok();

@@ -1,0 +1,149 @@
+// ConeLOD — the fidelity of each level of the .clod LOD, before and after the cluster DAG (issue 17),
+// against MeshLab's Quadric Edge Collapse Decimation (vcglib's TriEdgeCollapseQuadric with the
+// filter's defaults) at the same face count.
+//
+//   lod_fidelity MESH.ply [--samples N] [--dag-only] [--cluster-faces N] [--group-clusters N] [--cone DEG]
+//
+// "tree": the previous .clod levels (BuildConeHierarchy + BuildSimplifiedLevels with the defaults
+// `conelod lod build` used: every level keeps the normal-cone groups of its hierarchy level).
+// "dag": the cluster DAG's levels (BuildLodDag, the defaults of `conelod lod build` now: groups of
+// clusters simplified with their borders locked). For every level: its faces, the RMS of the
+// sampled distance between it and the input (larger of both ways, Metro-like, sampled_distance.h)
+// as a fraction of the diagonal, the same for vcglib's QEM run on the input to that face count,
+// and their ratio. Also the wall seconds of each build (one thread per core).
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <vcg/complex/algorithms/local_optimization.h>
+#include <vcg/complex/algorithms/local_optimization/tri_edge_collapse_quadric.h>
+#include <vcg/complex/complex.h>
+#include <wrap/io_trimesh/import_ply.h>
+
+#include "conelod/builtin_qem_params.h"
+#include "conelod/cone_grouping.h"
+#include "conelod/hierarchical_simplification.h"
+#include "conelod/lod.h"
+#include "conelod/sampled_distance.h"
+#include "conelod/vcg_bridge.h"
+
+namespace {
+
+class QVertex;
+class QFace;
+struct QUsedTypes : public vcg::UsedTypes<vcg::Use<QVertex>::AsVertexType, vcg::Use<QFace>::AsFaceType> {};
+class QVertex : public vcg::Vertex<QUsedTypes, vcg::vertex::VFAdj, vcg::vertex::Coord3f, vcg::vertex::Normal3f,
+                                   vcg::vertex::Mark, vcg::vertex::Qualityf, vcg::vertex::BitFlags> {
+ public:
+  vcg::math::Quadric<double>& Qd() { return q_; }
+
+ private:
+  vcg::math::Quadric<double> q_;
+};
+class QFace : public vcg::Face<QUsedTypes, vcg::face::VFAdj, vcg::face::VertexRef, vcg::face::Normal3f,
+                               vcg::face::Qualityf, vcg::face::BitFlags> {};
+class QMesh : public vcg::tri::TriMesh<std::vector<QVertex>, std::vector<QFace>> {};
+using QPair = vcg::tri::BasicVertexPair<QVertex>;
+class QCollapse : public vcg::tri::TriEdgeCollapseQuadric<QMesh, QPair, QCollapse, vcg::tri::QInfoStandard<QVertex>> {
+ public:
+  using Base = vcg::tri::TriEdgeCollapseQuadric<QMesh, QPair, QCollapse, vcg::tri::QInfoStandard<QVertex>>;
+  QCollapse(const QPair& p, int mark, vcg::BaseParameterClass* pp) : Base(p, mark, pp) {}
+};
+
+conelod::IndexedMesh Vcg(QMesh& input, size_t targetFaces) {
+  QMesh m;
+  vcg::tri::Append<QMesh, QMesh>::MeshCopy(m, input);
+  vcg::tri::UpdateTopology<QMesh>::VertexFace(m);
+  vcg::tri::UpdateFlags<QMesh>::FaceBorderFromVF(m);
+  vcg::tri::TriEdgeCollapseQuadricParameter pp = conelod::BuiltinQemParameters();
+  vcg::LocalOptimization<QMesh> session(m, &pp);
+  session.Init<QCollapse>();
+  session.SetTargetSimplices(int(targetFaces));
+  session.SetTimeBudget(0.1f);
+  while (session.DoOptimization() && size_t(m.fn) > targetFaces) {
+  }
+  session.Finalize<QCollapse>();
+  return conelod::ToIndexedMesh(m);
+}
+
+double Rms(const conelod::IndexedMesh& a, const conelod::IndexedMesh& input, int samples, double diag) {
+  conelod::HausdorffResult h;
+  if (!conelod::SampledHausdorff(a, input, samples, h).ok()) return -1;
+  return std::max(h.ab.rms, h.ba.rms) / diag;
+}
+
+double Wall() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: lod_fidelity MESH.ply [--samples N]\n");
+    return 2;
+  }
+  int samples = 200000;
+  bool tree = true;
+  conelod::LodBuildParams dagParams;
+  for (int i = 2; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--dag-only")) tree = false;
+    if (i + 1 >= argc) break;
+    if (!std::strcmp(argv[i], "--samples")) samples = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--cluster-faces")) dagParams.clusterFaces = size_t(std::atoi(argv[i + 1]));
+    if (!std::strcmp(argv[i], "--group-clusters")) dagParams.groupClusters = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--cone")) dagParams.grouping.coneThresholdDeg = std::atof(argv[i + 1]);
+  }
+  QMesh qm;
+  if (vcg::tri::io::ImporterPLY<QMesh>::Open(qm, argv[1]) != 0) {
+    std::fprintf(stderr, "lod_fidelity: cannot read %s\n", argv[1]);
+    return 1;
+  }
+  vcg::tri::Clean<QMesh>::RemoveUnreferencedVertex(qm);
+  vcg::tri::Allocator<QMesh>::CompactEveryVector(qm);
+  const conelod::IndexedMesh input = conelod::ToIndexedMesh(qm);
+  const vcg::Box3d box = conelod::UsedVertexBox(input);
+  const double diag = box.Diag();
+
+  std::vector<std::pair<std::string, std::vector<conelod::IndexedMesh>>> runs;
+  if (tree) {
+    double w = Wall();
+    conelod::GroupHierarchy h;
+    std::vector<conelod::SimplifiedLevel> levels;
+    if (!conelod::BuildConeHierarchy(input, conelod::ConeGroupingParams(), h).ok() ||
+        !conelod::BuildSimplifiedLevels(input, h, conelod::HierarchicalSimplificationParams(), levels).ok())
+      return 1;
+    std::printf("tree: grouping + levels %.2f s wall\n", Wall() - w);
+    std::vector<conelod::IndexedMesh> meshes;
+    for (auto& l : levels) meshes.push_back(l.mesh);
+    runs.emplace_back("tree", std::move(meshes));
+  }
+  {
+    double w = Wall();
+    conelod::LodDag dag;
+    if (!conelod::BuildLodDag(input, dagParams, dag).ok()) return 1;
+    std::printf("dag: cluster DAG %.2f s wall\n", Wall() - w);
+    std::vector<conelod::IndexedMesh> meshes;
+    for (size_t k = 1; k < dag.levels.size(); ++k) {
+      conelod::IndexedMesh m;
+      m.positions = dag.positions;
+      m.faces = dag.levels[k].faces;
+      meshes.push_back(std::move(m));
+    }
+    runs.emplace_back("dag", std::move(meshes));
+  }
+  for (const auto& run : runs) {
+    std::printf("\n%s, %s (%zu faces): RMS distance to the input, %% of the diagonal\n", run.first.c_str(), argv[1],
+                input.faces.size());
+    std::printf("| level | faces | RMS (%s) | RMS (MeshLab QEM) | ratio |\n|---|---|---|---|---|\n", run.first.c_str());
+    for (size_t k = 0; k < run.second.size(); ++k) {
+      const conelod::IndexedMesh& m = run.second[k];
+      const double ours = Rms(m, input, samples, diag);
+      const double ref = Rms(Vcg(qm, m.faces.size()), input, samples, diag);
+      std::printf("| %zu | %zu | %.4f | %.4f | %.2f |\n", k + 1, m.faces.size(), 100 * ours, 100 * ref, ours / ref);
+      std::fflush(stdout);
+    }
+  }
+  return 0;
+}
