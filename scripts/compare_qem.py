@@ -103,6 +103,11 @@ class Meshlab:
         if output:
             cmd += ["-o", output]
         rc, out, err, cpu, _ = run(cmd, cwd=work)
+        if rc in (134, 139):  # meshlabserver aborts now and then on a long run: once more
+            print("  meshlabserver aborted (%d) on %s: once more" % (rc, tag), flush=True)
+            if os.path.exists(log):
+                os.remove(log)
+            rc, out, err, cpu, _ = run(cmd, cwd=work)
         text = open(log, errors="replace").read() if os.path.exists(log) else ""
         if rc != 0:
             raise CaseError("meshlabserver failed (%d) on %s: %s" % (rc, tag, last_line(text + out + err)))
