@@ -110,7 +110,8 @@ int CmdSimplify(int argc, char** argv) {
   if (autoLevel) {
     if (hierarchy) return Fail(kUsage, "--hierarchy simplifies every level: cone:auto goes with one target");
     if (!targetFaces && !a.has("--target-ratio"))
-      return Fail(kUsage, "--groups cone:auto chooses the level for a face count: give --target-faces or --target-ratio");
+      return Fail(kUsage,
+                  "--groups cone:auto chooses the level for a face count: give --target-faces or --target-ratio");
     coneLevel = -1;
   } else if (source.compare(0, 5, "cone:") == 0) {
     char* end = nullptr;

@@ -503,7 +503,8 @@ Status ApplyGroupQem(FilterCall& c) {
         "the target of " + std::to_string(p.targetFaces) + " faces cannot be reached with the " +
         std::to_string(h.level(level).groups.size()) + " normal cone groups of level " + std::to_string(level) +
         ": stopped at " + std::to_string(r.mesh.faceCount()) + " faces (" + conelod::ToString(r.stats.stop) + "); " +
-        (would > level ? Label(c, "GroupLevel").toStdString() + " " + std::to_string(would) + " (or 0, automatic) would reach it"
+        (would > level ? Label(c, "GroupLevel").toStdString() + " " + std::to_string(would) +
+                             " (or 0, automatic) would reach it"
                        : std::string("no coarser level has fewer groups: try a larger target"));
     c.report.log("%s", message.c_str());
     return Invalid(QString::fromStdString(message));
