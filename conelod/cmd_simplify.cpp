@@ -246,9 +246,11 @@ int CmdSimplify(int argc, char** argv) {
   const int conesOver = coneLevel > 0 ? CountConesOverLimit(r.mesh, groupsAfter, coneLimitDeg) : 0;
   const bool targetReached = p.targetFaces == 0 || r.mesh.faceCount() <= p.targetFaces;
   std::string unreachable;
-  // (Not with cone:auto, whose stop is reported as any other, nor with the lock, a maximum error
-  // or --keep-cones: those stop early by choice.)
-  if (coneLevel > 0 && !autoLevel && !targetReached && !p.lockGroupBoundaries && !(p.maxError > 0) && !p.keepCones) {
+  // (Not with cone:auto, whose stop is reported as any other, nor without condition 1 (no group
+  // then stops anything), nor with the lock, a maximum error or --keep-cones: those stop early by
+  // choice.)
+  if (coneLevel > 0 && !autoLevel && !targetReached && p.condition1 && !p.lockGroupBoundaries &&
+      !(p.maxError > 0) && !p.keepCones) {
     const int would = AutoGroupLevel(h, p.targetFaces);
     unreachable = input + ": the target of " + std::to_string(p.targetFaces) + " faces cannot be reached with " +
                   std::to_string(h.level(coneLevel).groups.size()) + " groups (level " + std::to_string(coneLevel) +

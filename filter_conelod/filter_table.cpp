@@ -494,10 +494,11 @@ Status ApplyGroupQem(FilterCall& c) {
   conelod::MeasureGroupIntegrity(im, groups, r.mesh, groupsAfter, gi);
   // A normal cone level that cannot reach the target: the mesh stays as it was, and the message
   // says what was reached and which level would reach it.
-  // (Not with the automatic level, whose stop is logged as any other, nor with the lock, a
-  // maximum error or KeepCones: those stop early by choice.)
-  if (coneSource && !automatic && p.targetFaces > 0 && r.mesh.faceCount() > p.targetFaces && !p.lockGroupBoundaries &&
-      p.maxError == 0 && !p.keepCones) {
+  // (Not with the automatic level, whose stop is logged as any other, nor without condition 1
+  // (no group then stops anything), nor with the lock, a maximum error or KeepCones: those stop
+  // early by choice.)
+  if (coneSource && !automatic && p.targetFaces > 0 && r.mesh.faceCount() > p.targetFaces && p.condition1 &&
+      !p.lockGroupBoundaries && p.maxError == 0 && !p.keepCones) {
     const int would = conelod::AutoGroupLevel(h, p.targetFaces);
     const std::string message =
         "the target of " + std::to_string(p.targetFaces) + " faces cannot be reached with the " +
