@@ -111,7 +111,8 @@ int CmdSimplify(int argc, char** argv) {
   if (autoLevel) {
     if (hierarchy) return Fail(kUsage, "--hierarchy simplifies every level: cone:auto goes with one target");
     if (!targetFaces && !a.has("--target-ratio"))
-      return Fail(kUsage, "--groups cone:auto chooses the level for a face count: give --target-faces or --target-ratio");
+      return Fail(kUsage,
+                  "--groups cone:auto chooses the level for a face count: give --target-faces or --target-ratio");
     coneLevel = -1;
   } else if (source.compare(0, 5, "cone:") == 0) {
     char* end = nullptr;
@@ -246,9 +247,11 @@ int CmdSimplify(int argc, char** argv) {
   const int conesOver = coneLevel > 0 ? CountConesOverLimit(r.mesh, groupsAfter, coneLimitDeg) : 0;
   const bool targetReached = p.targetFaces == 0 || r.mesh.faceCount() <= p.targetFaces;
   std::string unreachable;
-  // (Not with cone:auto, whose stop is reported as any other, nor with the lock, a maximum error
-  // or --keep-cones: those stop early by choice.)
-  if (coneLevel > 0 && !autoLevel && !targetReached && !p.lockGroupBoundaries && !(p.maxError > 0) && !p.keepCones) {
+  // (Not with cone:auto, whose stop is reported as any other, nor without condition 1 (no group
+  // then stops anything), nor with the lock, a maximum error or --keep-cones: those stop early by
+  // choice.)
+  if (coneLevel > 0 && !autoLevel && !targetReached && p.condition1 && !p.lockGroupBoundaries &&
+      !(p.maxError > 0) && !p.keepCones) {
     const int would = AutoGroupLevel(h, p.targetFaces);
     unreachable = input + ": the target of " + std::to_string(p.targetFaces) + " faces cannot be reached with " +
                   std::to_string(h.level(coneLevel).groups.size()) + " groups (level " + std::to_string(coneLevel) +

@@ -495,16 +495,18 @@ Status ApplyGroupQem(FilterCall& c) {
   conelod::MeasureGroupIntegrity(im, groups, r.mesh, groupsAfter, gi);
   // A normal cone level that cannot reach the target: the mesh stays as it was, and the message
   // says what was reached and which level would reach it.
-  // (Not with the automatic level, whose stop is logged as any other, nor with the lock, a
-  // maximum error or KeepCones: those stop early by choice.)
-  if (coneSource && !automatic && p.targetFaces > 0 && r.mesh.faceCount() > p.targetFaces && !p.lockGroupBoundaries &&
-      p.maxError == 0 && !p.keepCones) {
+  // (Not with the automatic level, whose stop is logged as any other, nor without condition 1
+  // (no group then stops anything), nor with the lock, a maximum error or KeepCones: those stop
+  // early by choice.)
+  if (coneSource && !automatic && p.targetFaces > 0 && r.mesh.faceCount() > p.targetFaces && p.condition1 &&
+      !p.lockGroupBoundaries && p.maxError == 0 && !p.keepCones) {
     const int would = conelod::AutoGroupLevel(h, p.targetFaces);
     const std::string message =
         "the target of " + std::to_string(p.targetFaces) + " faces cannot be reached with the " +
         std::to_string(h.level(level).groups.size()) + " normal cone groups of level " + std::to_string(level) +
         ": stopped at " + std::to_string(r.mesh.faceCount()) + " faces (" + conelod::ToString(r.stats.stop) + "); " +
-        (would > level ? Label(c, "GroupLevel").toStdString() + " " + std::to_string(would) + " (or 0, automatic) would reach it"
+        (would > level ? Label(c, "GroupLevel").toStdString() + " " + std::to_string(would) +
+                             " (or 0, automatic) would reach it"
                        : std::string("no coarser level has fewer groups: try a larger target"));
     c.report.log("%s", message.c_str());
     return Invalid(QString::fromStdString(message));

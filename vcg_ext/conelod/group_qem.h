@@ -2,7 +2,20 @@
 //
 // Kamiya, Suzuki, Kawachi, "LODs for efficient displaying triangle meshes" (§6): QEM edge collapse
 // (Garland & Heckbert, SIGGRAPH 97) in which every collapse of an edge e = (v1, v2) with incident
-// faces f1, f2 keeps the face groups intact:
+// faces f1, f2 keeps the face groups intact, in one of two modes (GroupMode).
+//
+// Integrity mode (the default): after every collapse every group is still one non-empty
+// edge-connected piece, and nothing else is asked (no fixed corners, no contour quadrics: the
+// placement and quadrics of plain QEM). With a manifold neighbourhood and the link condition, a
+// collapse removes f1, f2 and only adds adjacencies (the faces across (v1, x) and (v2, x), x the
+// third vertex of f1 or f2, become neighbours), so only the groups of f1 and f2 can lose anything.
+// Such a group vanishes when f1/f2 are its last faces (refused), and splits exactly when its faces
+// next to f1/f2 are no longer connected inside it: connected through the merged vertex's fan, or
+// by a search inside the group bounded to kIntegritySearchFaces faces (not found: refused). The
+// same test runs for every coarser grouping (hierarchies). keepCones also refuses collapses that
+// turn a changed face's normal out of its group's cone bound.
+//
+// Paper mode: the paper's conditions, as follows.
 //   condition 1 (no group is split or destroyed): f1 has a face of its own group among its
 //     neighbours other than f2, and f2 likewise; and, when f1 and f2 are in the SAME group, v1 or
 //     v2 is not on a group boundary. The paper asks for the last clause in every case; we ask for
@@ -20,21 +33,22 @@
 //     merged into a new 3-group corner).
 //   lock group boundaries (option): no vertex with 2 or more groups around it moves, so no group
 //     contour changes and no contour edge collapses (crack-free refinement between groups).
-// Placement (with condition 1 or the lock): a group corner (3+ groups, or a contour vertex that
-// is not a simple point of one contour), a contour end on the mesh border, a non-manifold vertex
-// and, with preserveBoundary, a mesh-border vertex never move; a collapse with one such endpoint
-// goes to it; a collapse between two points of one contour stays on the old contour segment; an
-// interior vertex collapsing into a contour vertex goes to the contour vertex. Otherwise the new
-// vertex goes to the quadric's minimum (optimalPlacement), falling back to the best point of the
-// edge when the quadric is singular or its minimum lies far from the edge.
+// Placement (paper mode with condition 1, or the lock): a group corner (3+ groups, or a contour
+// vertex that is not a simple point of one contour), a contour end on the mesh border, a
+// non-manifold vertex and, with preserveBoundary, a mesh-border vertex never move; a collapse with
+// one such endpoint goes to it; a collapse between two points of one contour stays on the old
+// contour segment; an interior vertex collapsing into a contour vertex goes to the contour vertex.
+// Otherwise (and in integrity mode always, but for non-manifold and preserved border vertices) the
+// new vertex goes to the quadric's minimum (optimalPlacement), falling back to the best point of
+// the edge when the quadric is singular or its minimum lies far from the edge.
 //
 // Error and priority follow vcglib's TriEdgeCollapseQuadric (what MeshLab's "Quadric Edge Collapse
 // Decimation" runs): face-plane quadrics (area-weighted) plus border-edge quadrics weighted by
-// boundaryWeight (and, with condition 1 or the lock, the same on group contours); priority =
-// error / min(quality of the new faces, qualityThr), quality = 2 area / longest edge^2. Error is
-// the quadric divided by its weight: a mean squared distance. Unlike vcglib we always keep the
-// link condition (no non-manifold edge is created) and, with preserveNormal, refuse collapses that
-// turn a face's normal by more than ~78 degrees (fold-overs).
+// boundaryWeight (and, in paper mode with condition 1 or with the lock, the same on group
+// contours); priority = error / min(quality of the new faces, qualityThr), quality = 2 area /
+// longest edge^2. Error is the quadric divided by its weight: a mean squared distance. Unlike
+// vcglib we always keep the link condition (no non-manifold edge is created) and, with
+// preserveNormal, refuse collapses that turn a face's normal by more than ~78 degrees (fold-overs).
 //
 // The loop is our own rather than vcglib's local_optimization (whose heap allocates one object per
 // candidate and evaluates every candidate in full when it is pushed): flat arrays, per-vertex face
@@ -137,8 +151,9 @@ Status SimplifyPreservingGroups(const IndexedMesh& mesh, const std::vector<int>&
                                 const GroupQemRegion* region = nullptr);
 
 // The verdict on one collapse, as the simplifier would judge it on the unmodified mesh (tests,
-// diagnostics). Checks run in this order: topology, lock, condition 1, condition 2, placement
-// (FixedEndpoints: both endpoints must stay where they are), geometry.
+// diagnostics). Checks run in this order: topology, lock, condition 1 (in integrity mode: the
+// integrity test), condition 2 (paper mode), placement (FixedEndpoints: both endpoints must stay
+// where they are), geometry, cone (keepCones).
 enum class CollapseVerdict {
   Allowed, NotAnEdge, Topology, LockedBoundary, Condition1, Condition2, FixedEndpoints, Geometry, Cone
 };
