@@ -891,6 +891,10 @@ def viewer_bad_files(c):
         assert not os.path.exists(c.out("bad.png")), path
     rc, _, err = run_viewer(c, clod, "--size", "huge")
     assert rc == 1 and "--size" in err, (rc, err)
+    # Not taken as 0 faces or a blank picture: refused with what is wrong.
+    for option, value in (("--budget", "inf"), ("--budget", "nan"), ("--eye", "nan,0,0"), ("--eye", "0,inf,0")):
+        rc, _, err = run_viewer(c, clod, "--screenshot", c.out("bad.png"), option, value)
+        assert rc == 1 and option in err and not os.path.exists(c.out("bad.png")), (option, value, rc, err)
 
 
 def export_lod(c, mesh, clod, expect_ok=True):
