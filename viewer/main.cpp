@@ -15,6 +15,7 @@
 #include <QJsonDocument>
 #include <QJsonObject>
 #include <QSurfaceFormat>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 
@@ -92,7 +93,8 @@ int main(int argc, char** argv) {
   ViewerOptions options;
   bool ok = true;
   const double budgetFaces = parser.value(budget).toDouble(&ok);
-  if (!ok || budgetFaces < 1) return Fail(1, "--budget needs a face count >= 1");
+  if (!ok || !std::isfinite(budgetFaces) || budgetFaces < 1 || budgetFaces > 1e15)  // "inf" parses as a double
+    return Fail(1, "--budget needs a face count from 1 to 1e15");
   options.faceBudget = size_t(budgetFaces);
   options.flatShading = parser.isSet(flat);
   options.colourLevels = parser.isSet(colours);
@@ -115,7 +117,9 @@ int main(int argc, char** argv) {
     const QStringList xyz = parser.value(eye).split(',');
     bool okx = xyz.size() == 3, oky = okx, okz = okx;
     if (okx) eyePosition = QVector3D(xyz[0].toFloat(&okx), xyz[1].toFloat(&oky), xyz[2].toFloat(&okz));
-    if (!okx || !oky || !okz) return Fail(1, "--eye needs X,Y,Z");
+    if (!okx || !oky || !okz || !std::isfinite(eyePosition.x()) || !std::isfinite(eyePosition.y()) ||
+        !std::isfinite(eyePosition.z()))
+      return Fail(1, "--eye needs X,Y,Z (three finite numbers)");
   }
   const int benchFrames = parser.value(frames).toInt(&ok);
   if (!ok || benchFrames < 0) return Fail(1, "--frames needs a count >= 0");

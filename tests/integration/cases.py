@@ -643,7 +643,7 @@ def cli_feature_simplify(c):
         p = c.conelod("feature-simplify", c.mesh(mesh), "--target-faces", "10", expect=2)
         assert message in p.stderr.decode(), p.stderr.decode()
     p = c.conelod("feature-simplify", fandisk, "--target-faces", "10", "--angle", "200", expect=2)
-    assert "FeatureAngleDeg" in p.stderr.decode()
+    assert "--angle" in p.stderr.decode() and "FeatureAngleDeg" not in p.stderr.decode(), p.stderr.decode()
     c.conelod("feature-simplify", fandisk, expect=1)  # no stop criterion
     c.conelod("feature-simplify", fandisk, "--max-error", "lots", expect=1)
     c.conelod("feature-simplify", c.out("missing.ply"), "--target-faces", "10", expect=3)
@@ -980,6 +980,10 @@ def viewer_bad_files(c):
         assert not os.path.exists(c.out("bad.png")), path
     rc, _, err = run_viewer(c, clod, "--size", "huge")
     assert rc == 1 and "--size" in err, (rc, err)
+    # Not taken as 0 faces or a blank picture: refused with what is wrong.
+    for option, value in (("--budget", "inf"), ("--budget", "nan"), ("--eye", "nan,0,0"), ("--eye", "0,inf,0")):
+        rc, _, err = run_viewer(c, clod, "--screenshot", c.out("bad.png"), option, value)
+        assert rc == 1 and option in err and not os.path.exists(c.out("bad.png")), (option, value, rc, err)
 
 
 def export_lod(c, mesh, clod, expect_ok=True):
