@@ -34,17 +34,27 @@ bool ParsePoint(const std::string& text, vcg::Point3d& p) {
 }
 
 int LodBuild(int argc, char** argv) {
-  Args a(argc, argv, With(kGroupingOptions, {"-o", "--level-ratio", "--threads", "--faces-per-part"}), {"--json", "--strict-greedy"});
+  Args a(argc, argv,
+         With(kGroupingOptions, {"-o", "--level-ratio", "--threads", "--faces-per-part", "--cluster-faces", "--group-clusters"}),
+         {"--json", "--strict-greedy"});
   LodBuildParams params;
   params.grouping = ReadGroupingParams(a);
   params.simplification.levelRatio = a.num("--level-ratio", params.simplification.levelRatio);
+  const double clusterFaces = a.num("--cluster-faces", double(params.clusterFaces));
+  const double groupClusters = a.num("--group-clusters", double(params.groupClusters));
+  if (!(clusterFaces >= 4 && clusterFaces <= 65536) || clusterFaces != std::floor(clusterFaces))
+    return Fail(kUsage, "--cluster-faces must be a whole number in [4, 65536]");
+  if (!(groupClusters >= 2 && groupClusters <= 64) || groupClusters != std::floor(groupClusters))
+    return Fail(kUsage, "--group-clusters must be a whole number in [2, 64]");
+  params.clusterFaces = size_t(clusterFaces);
+  params.groupClusters = int(groupClusters);
   const std::string partsError = ReadPartsOptions(a, params.simplification);
   if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kLodUsage);
   if (!partsError.empty()) return Fail(kUsage, partsError);
   if (a.positional().size() != 1 || !a.has("-o"))
     return Fail(kUsage, std::string("expected IN.ply and -o OUT.clod\n") + kLodUsage);
   const double ratio = params.simplification.levelRatio;
-  if (!(ratio > 0 && ratio <= 1)) return Fail(kUsage, "--level-ratio must be in (0, 1]");
+  if (!(ratio > 0 && ratio < 1)) return Fail(kUsage, "--level-ratio must be in (0, 1)");
   const std::string input = a.positional()[0], output = a.str("-o");
   CMesh mesh;
   IndexedMesh im;
@@ -88,7 +98,7 @@ int LodBuild(int argc, char** argv) {
 }
 
 int LodExtract(int argc, char** argv) {
-  Args a(argc, argv, {"-o", "--eye", "--budget"}, {"--json", "--no-cull", "--drop-culled"});
+  Args a(argc, argv, {"-o", "--eye", "--budget", "--priority"}, {"--json", "--no-cull", "--drop-culled"});
   if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kLodUsage);
   if (a.positional().size() != 1) return Fail(kUsage, std::string("expected one .clod file\n") + kLodUsage);
   if (!a.has("--eye") || !a.has("--budget")) return Fail(kUsage, std::string("give --eye and --budget\n") + kLodUsage);
@@ -102,6 +112,13 @@ int LodExtract(int argc, char** argv) {
       (percent && b > 100))
     return Fail(kUsage, "--budget must be a face count N >= 0 or a percentage P% (0-100)");
   view.cullBackFacing = !a.has("--no-cull");
+  if (a.has("--priority")) {
+    const std::string p = a.str("--priority");
+    if (p == "screen") view.priority = LodPriority::ScreenError;
+    else if (p == "error") view.priority = LodPriority::ObjectError;
+    else if (p == "fg") view.priority = LodPriority::ConeFg;
+    else return Fail(kUsage, "--priority must be screen, error or fg");
+  }
   const bool drop = a.has("--drop-culled");
   const std::string input = a.positional()[0];
 
@@ -205,21 +222,25 @@ int LodInfo(int argc, char** argv) {
 }  // namespace
 
 const char* kLodUsage =
-    "conelod lod build IN.ply -o OUT.clod [grouping options] [--level-ratio R] [--threads N]\n"
-    "                  [--faces-per-part P] [--json]\n"
-    "conelod lod extract IN.clod --eye X,Y,Z --budget N|P% -o OUT.ply [--no-cull] [--drop-culled] [--json]\n"
+    "conelod lod build IN.ply -o OUT.clod [grouping options] [--level-ratio R] [--cluster-faces C]\n"
+    "                  [--group-clusters G] [--threads N] [--faces-per-part P] [--json]\n"
+    "conelod lod extract IN.clod --eye X,Y,Z --budget N|P% -o OUT.ply [--priority screen|error|fg]\n"
+    "                  [--no-cull] [--drop-culled] [--json]\n"
     "conelod lod info IN.clod [--json]\n"
-    "  build: groups by normal cones (options as for `group`, --strict-greedy included), simplifies\n"
-    "  once per level keeping the groups (each level R x the faces of the one below [0.5]) and\n"
-    "  writes the streamable .clod file (format: vcg_ext/conelod/lod_format.md). With\n"
-    "  --faces-per-part P [100000; 0: never], a level of at least 2P faces is cut into 2-8 parts of\n"
-    "  about P faces along group contours, simplified side by side on --threads N threads [0: one\n"
-    "  per core]; the cut vertices stay put at that level. The file does not depend on N.\n"
+    "  build: writes the streamable .clod file (format: vcg_ext/conelod/lod_format.md), a DAG of\n"
+    "  clusters whose every cut is watertight: the input is cut into clusters of about C faces\n"
+    "  [128] whose normals stay within --cone-threshold degrees (the grouping option; x\n"
+    "  --threshold-growth per level), G [8] neighbouring clusters are gathered into a group, each\n"
+    "  group is simplified to R x its faces [0.5] with its border locked, on --threads N threads\n"
+    "  [0: one per core], and re-cut into the next level's clusters, until one cluster is left.\n"
+    "  The file does not depend on N. The other grouping options and --faces-per-part are\n"
+    "  accepted for compatibility and not used.\n"
     "  extract: opens the file, refines for a perspective eye at X,Y,Z under a budget of N faces\n"
-    "  (or P% of the input's), coarser levels first, adjacent groups at most one level apart,\n"
-    "  back-facing groups last (--no-cull: no back-face test), and writes the cut as OUT.ply with\n"
-    "  per-face quality = node level (0 = the input's faces) and a colour per level.\n"
-    "  --drop-culled leaves the back-facing groups out of OUT.ply.\n";
+    "  (or P% of the input's), expanding first the groups whose error (in model units) divided by\n"
+    "  their distance to the eye is largest (--priority error: the error alone; fg: the paper's\n"
+    "  f(g)), back-facing groups last (--no-cull: no back-face test); every cut is crack-free.\n"
+    "  Writes the cut as OUT.ply with per-face quality = node level (0 = the input's faces) and a\n"
+    "  colour per level. --drop-culled leaves the back-facing groups out of OUT.ply.\n";
 
 int CmdLod(int argc, char** argv) {
   if (argc < 1) return Fail(kUsage, std::string("expected build, extract or info\n") + kLodUsage);

@@ -1,10 +1,11 @@
 // ConeLOD — writing the .clod file (lod.h; byte layout in lod_format.md).
 //
 // Kamiya, Suzuki, Kawachi, §8: a file of chunks, each an id, its size and its data followed by
-// sub-chunks. The writer first computes the small per-node records (cone, sphere, neighbours:
-// about 100 bytes a node), then streams the geometry level by level, coarsest first, through one
-// reused buffer: the only per-level arrays it holds are the level's face order and vertex
-// renumbering. Container sizes and the header's offsets are patched in place at the end.
+// sub-chunks. The writer takes the cluster DAG (lod_dag.cpp), first computes the small per-node
+// records (cone, sphere, errors, the children / siblings / parents lists: about 100-150 bytes a
+// node), then streams the geometry level by level, coarsest first, through one reused buffer:
+// besides the DAG it holds only the level's face order and vertex renumbering. Container sizes
+// and the header's offsets are patched in place at the end.
 #include "conelod/lod.h"
 
 #include <algorithm>

@@ -1,0 +1,74 @@
+#!/usr/bin/env python3
+"""Crack edges of .clod cuts per budget (issue 17's table): for each mesh, `conelod lod build` with
+the defaults, then `conelod lod extract` from an eye 2 diagonals in front of the box (+Z) at each
+budget, vertices welded at identical positions, edges used by one face that the input does not
+have counted (cracks, T-junctions), and edges used by 3+ faces (overlaps).
+
+  scripts/lod_cracks.py CONELOD MESH.ply... [--budgets 5,20,50,80,100] [--no-cull] [--tmp DIR]
+"""
+import os
+import subprocess
+import sys
+import tempfile
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests", "integration"))
+from cases import read_ply  # noqa: E402
+
+
+def edges(ply):
+    pos, count = ply["positions"], {}
+    for f in ply["faces"]:
+        for i in range(3):
+            a, b = pos[f[i]], pos[f[(i + 1) % 3]]
+            key = (a, b) if a < b else (b, a)
+            count[key] = count.get(key, 0) + 1
+    return count
+
+
+def main(argv):
+    budgets, cull, tmp, args = [5, 20, 50, 80, 100], [], None, []
+    i = 1
+    while i < len(argv):
+        if argv[i] == "--budgets":
+            budgets = [int(b) for b in argv[i + 1].split(",")]
+            i += 1
+        elif argv[i] == "--no-cull":
+            cull = ["--no-cull"]
+        elif argv[i] == "--tmp":
+            tmp = argv[i + 1]
+            i += 1
+        else:
+            args.append(argv[i])
+        i += 1
+    if len(args) < 2:
+        print(__doc__)
+        return 2
+    conelod, meshes = args[0], args[1:]
+    tmp = tmp or tempfile.mkdtemp(prefix="lod_cracks_")
+    print("| mesh | faces | " + " | ".join("%d %%" % b for b in budgets) + " |")
+    print("|---|---|" + "---|" * len(budgets))
+    for mesh in meshes:
+        src = read_ply(mesh)
+        inborder = {k for k, n in edges(src).items() if n == 1}
+        pos = src["positions"]
+        lo = [min(p[k] for p in pos) for k in range(3)]
+        hi = [max(p[k] for p in pos) for k in range(3)]
+        diag = sum((h - l) ** 2 for h, l in zip(hi, lo)) ** 0.5
+        eye = "%g,%g,%g" % ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2 + 2 * diag)
+        clod = os.path.join(tmp, os.path.basename(mesh) + ".clod")
+        subprocess.run([conelod, "lod", "build", mesh, "-o", clod], check=True, stdout=subprocess.DEVNULL)
+        cells = []
+        for b in budgets:
+            out = os.path.join(tmp, "cut.ply")
+            subprocess.run([conelod, "lod", "extract", clod, "--eye", eye, "--budget", "%d%%" % b, "-o", out] + cull,
+                           check=True, stdout=subprocess.DEVNULL)
+            e = edges(read_ply(out))
+            border = sum(1 for k, n in e.items() if n == 1 and k not in inborder)
+            over = sum(1 for n in e.values() if n > 2)
+            cells.append("{:,}".format(border) + ("" if over == 0 else " (+%d over-used)" % over))
+        print("| %s | %s | %s |" % (os.path.basename(mesh), "{:,}".format(len(src["faces"])), " | ".join(cells)))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
