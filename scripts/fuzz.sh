@@ -30,7 +30,7 @@ mkdir -p "$OUT/corpus" "$OUT/seeds" "$OUT/crashes"
   -DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION \
   -I"$ROOT/vcg_ext" -isystem "$MESHLAB_SRC/vcglib" -isystem /usr/include/eigen3 \
   "$ROOT/vcg_ext/fuzz/lod_reader_fuzz.cpp" "$ROOT/vcg_ext/conelod/lod_reader.cpp" \
-  "$ROOT/vcg_ext/conelod/lod_refine.cpp" "$ROOT/vcg_ext/conelod/normal_cone.cpp" \
+  "$ROOT/vcg_ext/conelod/lod_refine.cpp" "$ROOT/vcg_ext/conelod/normal_cone.cpp" -lz \
   -o "$OUT/lod_reader_fuzz"
 
 # Seeds: an octahedron subdivided once and twice (32 and 128 faces, a sphere) and a bumpy variant,

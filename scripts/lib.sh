@@ -79,7 +79,7 @@ CONELOD_ROOTS="${CONELOD_ROOTS:-/var/cache/conelod/roots}"
 CONELOD_MIRROR="${CONELOD_MIRROR:-http://deb.debian.org/debian}"
 # What every root holds besides MeshLab: the plugin's build, and Xvfb + xdotool + ImageMagick for
 # the GUI screenshot.
-ROOT_PKGS=(meshlab cmake g++ make qtbase5-dev libqt5opengl5-dev libeigen3-dev libglew-dev xz-utils
+ROOT_PKGS=(meshlab cmake g++ make qtbase5-dev libqt5opengl5-dev libeigen3-dev libglew-dev zlib1g-dev xz-utils
            ca-certificates xvfb xauth xdotool imagemagick fonts-dejavu-core)
 
 # meshlab_suite VERSION: the Debian suite that ships MeshLab VERSION.
@@ -116,12 +116,26 @@ root_run() {
 # make_meshlab_root VERSION: prints the root of MeshLab VERSION, making it when it is missing or
 # was left unfinished (about a minute on a fast mirror): debootstrap of the suite with ROOT_PKGS,
 # a deb-src entry, and MeshLab's sources unpacked into /src/meshlab-src. Cached: a finished root
-# (marker .conelod-root) is reused as it is.
+# (marker .conelod-root) is reused, with whatever ROOT_PKGS it lacks (added since it was made) installed.
 make_meshlab_root() {
   local version="$1" suite r tmp tarball
   suite="$(meshlab_suite "$version")" || return 1
   r="$CONELOD_ROOTS/$suite"
-  if [ -f "$r/.conelod-root" ] && [ -f "$r/src/meshlab-src/ML_VERSION" ]; then echo "$r"; return 0; fi
+  if [ -f "$r/.conelod-root" ] && [ -f "$r/src/meshlab-src/ML_VERSION" ]; then
+    local p missing=()
+    for p in "${ROOT_PKGS[@]}"; do
+      chroot "$r" dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'ok installed' || missing+=("$p")
+    done
+    if [ ${#missing[@]} -gt 0 ]; then
+      echo "adding ${missing[*]} to the $suite root" >&2
+      cp -L /etc/resolv.conf "$r/etc/resolv.conf" 2>/dev/null || true
+      { root_run "$r" apt-get update -qq && root_run "$r" env DEBIAN_FRONTEND=noninteractive \
+          apt-get install -y -qq --no-install-recommends "${missing[@]}" && root_run "$r" apt-get clean; } >&2 \
+        || { echo "installing ${missing[*]} in the $suite root failed" >&2; return 1; }
+    fi
+    echo "$r"
+    return 0
+  fi
   need_root "make a Debian $suite root (debootstrap, chroot)" || return 1
   command -v debootstrap >/dev/null || apt_install_missing debootstrap >&2 || return 1
   tmp="$r.partial"

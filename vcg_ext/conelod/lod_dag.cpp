@@ -21,10 +21,9 @@
 #include <limits>
 #include <numeric>
 #include <queue>
-#include <thread>
 #include <unordered_map>
 
-#include "conelod/cores.h"
+#include "conelod/parallel.h"
 #include "conelod/mesh_check.h"
 
 namespace conelod {
@@ -414,14 +413,10 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
     std::vector<GroupResult> results(static_cast<size_t>(G));
     {
       std::atomic<int> next(0);
-      auto work = [&]() {
+      RunThreads(std::min<unsigned>(threads, unsigned(G)), [&](unsigned) {
         for (int g = next++; g < G; g = next++)
           SimplifyGroup(L.faces, groupFaces[size_t(g)], dag.positions, shared, params, diagonal, results[size_t(g)]);
-      };
-      std::vector<std::thread> pool;
-      for (unsigned t = 1; t < std::min<unsigned>(threads, unsigned(G)); ++t) pool.emplace_back(work);
-      work();
-      for (auto& t : pool) t.join();
+      });
     }
     size_t newFaces = 0;
     for (const auto& r : results) newFaces += r.faces.size();

@@ -8,12 +8,13 @@
 // every chunk's CRC-32 is checked before its data is used.
 #include "conelod/lod.h"
 
+#include <zlib.h>
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -100,26 +101,16 @@ constexpr bool kCheckCrc = true;
 }  // namespace
 
 uint32_t lodfile::Crc32(const void* data, size_t bytes, uint32_t crc) {
-  // CRC-32 (IEEE 802.3, zlib's), slicing by 4: one table per byte position of a 32-bit word.
-  static const auto tables = [] {
-    std::array<std::array<uint32_t, 256>, 4> t{};
-    for (uint32_t i = 0; i < 256; ++i) {
-      uint32_t c = i;
-      for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-      t[0][i] = c;
-    }
-    for (uint32_t i = 0; i < 256; ++i)
-      for (size_t k = 1; k < 4; ++k) t[k][i] = (t[k - 1][i] >> 8) ^ t[0][t[k - 1][i] & 0xFF];
-    return t;
-  }();
-  const uint8_t* p = static_cast<const uint8_t*>(data);
-  crc = ~crc;
-  for (; bytes >= 4; bytes -= 4, p += 4) {
-    crc ^= uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
-    crc = tables[3][crc & 0xFF] ^ tables[2][(crc >> 8) & 0xFF] ^ tables[1][(crc >> 16) & 0xFF] ^ tables[0][crc >> 24];
-  }
-  for (; bytes > 0; --bytes, ++p) crc = tables[0][(crc ^ *p) & 0xFF] ^ (crc >> 8);
-  return ~crc;
+  // CRC-32 (IEEE 802.3) is zlib's; its length argument is 32-bit, so larger blocks go in pieces.
+  const Bytef* p = static_cast<const Bytef*>(data);
+  uLong c = crc;
+  do {
+    const size_t n = std::min<size_t>(bytes, 1u << 30);
+    c = crc32(c, p, uInt(n));
+    p += n;
+    bytes -= n;
+  } while (bytes > 0);
+  return uint32_t(c);
 }
 
 std::string lodfile::ChunkName(uint32_t id) {

@@ -171,6 +171,13 @@ LodView Eye(double x, double y, double z, size_t budget, bool cull = true) {
 
 // --- Priority ---------------------------------------------------------------------------------
 
+// The chunks' checksum is zlib's CRC-32: the standard check value, and the same in pieces.
+TEST(Checksum, IsTheStandardCrc32) {
+  EXPECT_EQ(Crc32("123456789", 9), 0xCBF43926u);
+  EXPECT_EQ(Crc32(nullptr, 0), 0u);
+  EXPECT_EQ(Crc32("6789", 4, Crc32("12345", 5)), 0xCBF43926u);
+}
+
 TEST(RefinementPriority, FollowsThePapersFormula) {
   LodNode n;
   n.cone.axis = vcg::Point3d(0, 0, 1);
