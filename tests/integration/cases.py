@@ -1303,7 +1303,7 @@ def cli_write_refuses_special_files(c):
 
 CORPUS_COMMANDS = [
     ("info", []), ("group", ["-o", "OUT.ply"]), ("cull-cost", ["--views", "8"]),
-    ("simplify", ["--groups", "cone:1", "--target-ratio", "0.5", "-o", "OUT.ply"]),
+    ("simplify", ["--groups", "cone:auto", "--target-ratio", "0.5", "-o", "OUT.ply"]),
     ("feature-simplify", ["--target-percent", "50", "-o", "OUT.ply"]), ("feature-edges", []),
     ("budget", ["--width", "64", "--height", "64"]), ("partition", ["--clusters", "4", "-o", "OUT.ply"]),
     ("progressive", ["--clusters", "4", "--samples", "1000", "-o", "OUT.ply"]), ("cluster-shape", []),
