@@ -24,7 +24,7 @@
 #include <thread>
 #include <unordered_map>
 
-#include "conelod/cores.h"
+#include "conelod/parallel.h"
 #include "conelod/mesh_check.h"
 
 namespace conelod {
