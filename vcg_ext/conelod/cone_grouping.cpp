@@ -305,7 +305,7 @@ class BestTree {
 class HierarchyBuilder {
  public:
   HierarchyBuilder(const IndexedMesh& m, const ConeGroupingParams& p, const Progress& cb)
-      : mesh_(m), params_(p), progress_(cb), faceCount_(int(m.faces.size())) {}
+      : mesh_(m), params_(p), progress_(cb), faceCount_(int(m.faces.size())), scale_(NormalizingScale(m)) {}
 
   Status run(GroupHierarchy& out);
 
@@ -342,6 +342,11 @@ class HierarchyBuilder {
   const ConeGroupingParams& params_;
   const Progress& progress_;
   const int faceCount_;
+  // The units' spheres and area vectors are in coordinates times scale_ (NormalizingScale), so
+  // that their float squares neither overflow nor vanish whatever the model's size: the scores
+  // and so the groups do not depend on it. The groups' boxes, spheres and areas are given back in
+  // the mesh's coordinates (exactly: scale_ is a power of two).
+  const double scale_;
 
   // Circular face lists, one per unit (Chain::tail). From level 2 on the faces are renumbered
   // (meshFace_), each level-1 group's faces contiguous in the order of its list: the lists above
@@ -1058,9 +1063,12 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   }
   for (size_t g = 0; g < groupCount; ++g) {
     Unit& unit = units_[g];
-    if (std::sqrt(r2[g]) < unit.radius) unit.setSphere(Sphere{boxCenter[g], std::sqrt(r2[g])});
-    level.groups[g].center = vcg::Point3f(unit.center[0], unit.center[1], unit.center[2]);
-    level.groups[g].radius = unit.radius;
+    const double r = std::sqrt(r2[g]) * scale_;
+    if (r < unit.radius) unit.setSphere(Sphere{boxCenter[g] * scale_, r});
+    const double inv = 1 / scale_;
+    level.groups[g].center = vcg::Point3f(float(unit.center[0] * inv), float(unit.center[1] * inv),
+                                          float(unit.center[2] * inv));
+    level.groups[g].radius = float(unit.radius * inv);
   }
   out.levels.push_back(std::move(level));
 }
@@ -1201,10 +1209,11 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     FaceNormalAndArea(mesh_, size_t(f), n, area);
     u.setCone(n.SquaredNorm() > 0.5 ? NormalCone::Of(n) : NormalCone::Empty());
     if (!l1Normal_.empty()) l1Normal_[size_t(f)] = vcg::Point3f::Construct(n);
-    for (int k = 0; k < 3; ++k) u.vecArea[k] = float(n[k] * area);
-    u.setSphere(TriangleSphere(vcg::Point3d::Construct(mesh_.positions[t[0]]),
-                               vcg::Point3d::Construct(mesh_.positions[t[1]]),
-                               vcg::Point3d::Construct(mesh_.positions[t[2]])));
+    const double scaledArea = area * scale_ * scale_;
+    for (int k = 0; k < 3; ++k) u.vecArea[k] = float(n[k] * scaledArea);
+    u.setSphere(TriangleSphere(vcg::Point3d::Construct(mesh_.positions[t[0]]) * scale_,
+                               vcg::Point3d::Construct(mesh_.positions[t[1]]) * scale_,
+                               vcg::Point3d::Construct(mesh_.positions[t[2]]) * scale_));
     u.faceCount = 1;
     faceNext_[size_t(f)] = f;
     chains_[size_t(f)] = Chain{f, 1, links_[size_t(f)].nbCount};

@@ -4,6 +4,7 @@
 #include "conelod/face_adjacency.h"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 
 namespace conelod {
@@ -25,6 +26,17 @@ vcg::Box3d UsedVertexBox(const IndexedMesh& m) {
   for (size_t v = 0; v < m.positions.size(); ++v)
     if (used[v]) box.Add(vcg::Point3d::Construct(m.positions[v]));
   return box;
+}
+
+double NormalizingScale(const IndexedMesh& m) {
+  const vcg::Box3d box = UsedVertexBox(m);
+  if (box.IsNull()) return 1;
+  const double d = box.Diag();
+  if (!(d > 0) || !std::isfinite(d)) return 1;
+  // Within float's normal range both ways (coordinates are floats), so the scale and its inverse
+  // are exact in float as in double.
+  const int e = std::max(-120, std::min(120, int(std::lround(std::log2(d)))));
+  return std::ldexp(1.0, -e);
 }
 
 FaceAdjacency BuildFaceAdjacency(const IndexedMesh& m) {

@@ -53,6 +53,13 @@ void ComputeFaceNormalsAndAreas(const IndexedMesh& m, std::vector<vcg::Point3d>&
 // ignored); null when there are none.
 vcg::Box3d UsedVertexBox(const IndexedMesh& m);
 
+// The power of two 2^-round(log2(d)), d the diagonal of UsedVertexBox (1 when there is no
+// box, a zero or non-finite diagonal): coordinates times it span about 1. Multiplying by a power
+// of two is exact, so what is computed on scaled coordinates (in float, where squares of areas of
+// a model 2^34 times too large overflow and those of one 2^34 times too small vanish) is the
+// unscaled result times a power of two, bit for bit, at any scale of the model.
+double NormalizingScale(const IndexedMesh& m);
+
 // Edge adjacency of faces, CSR: the faces sharing an edge with face f are
 // neighbours[offsets[f] .. offsets[f+1]). Faces sharing a non-manifold edge are all neighbours of
 // each other. A face is never its own neighbour and appears once in a list.

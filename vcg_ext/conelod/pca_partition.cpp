@@ -288,7 +288,7 @@ class TreeBuilder {
   bool canSplit(const PcaNode& n) const {
     if (n.faceCount <= uint32_t(std::max(1, params_.minFaces))) return false;
     if (params_.maxDepth > 0 && n.depth >= params_.maxDepth) return false;
-    if (params_.maxErrorRms > 0 && std::sqrt(double(n.eigenvalues[0])) <= params_.maxErrorRms) return false;
+    if (params_.maxErrorRms > 0 && std::sqrt(double(n.eigenvalues[0])) <= params_.maxErrorRms * scale_) return false;
     return true;
   }
   void renumber();
@@ -309,7 +309,12 @@ class TreeBuilder {
   // touches neighbours of neighbours, stays in cache. Positions are the input's floats.
   IndexedMesh local_;
   std::vector<uint32_t> inputFace_;    // local face -> input face
-  Vec3 origin_{0, 0, 0};               // the bounding-box centre
+  Vec3 origin_{0, 0, 0};               // the bounding-box centre (times scale_)
+  // While splitting, every length is in coordinates times scale_ (NormalizingScale): the faces'
+  // float areas and second moments (lengths to the fourth) neither overflow nor vanish whatever
+  // the model's size, so the splits do not depend on it. The nodes are given back in the mesh's
+  // coordinates at the end (exactly: scale_ is a power of two).
+  double scale_ = 1;
   // What a split reads and writes per face, in one 32-byte record: the R pass warms the cache
   // lines that the region growing then reads (neighbour lists and marks).
   struct FaceRecord {
@@ -348,7 +353,8 @@ void TreeBuilder::renumber() {
   vcg::Box3d box;
   for (const auto& t : mesh_.faces)
     for (uint32_t v : t) box.Add(vcg::Point3d::Construct(mesh_.positions[v]));
-  origin_ = Vec3(box.Center()[0], box.Center()[1], box.Center()[2]);
+  scale_ = NormalizingScale(mesh_);
+  origin_ = Vec3(box.Center()[0], box.Center()[1], box.Center()[2]) * scale_;
   const Vec3 lo(box.min[0], box.min[1], box.min[2]);
   Vec3 scale;
   for (int k = 0; k < 3; ++k) scale[k] = box.Dim()[k] > 0 ? 1023.999 / box.Dim()[k] : 0.0;
@@ -391,15 +397,15 @@ void TreeBuilder::renumber() {
   for (uint32_t f = 0; f < nf; ++f) {
     const auto& t = local_.faces[f];
     const Vec3 c = (ToVec(local_.positions[t[0]]) + ToVec(local_.positions[t[1]]) + ToVec(local_.positions[t[2]])) / 3;
-    rec_[f].centroid = ToPoint(c - origin_);
+    rec_[f].centroid = ToPoint(c * scale_ - origin_);
     vcg::Point3d n;
-    const double area = FaceNormalOf(local_, f, n);
+    const double area = FaceNormalOf(local_, f, n) * scale_ * scale_;
     rec_[f].area = float(area);
     rec_[f].mark = 0;
     double o[6] = {0, 0, 0, 0, 0, 0};
     for (uint32_t v : t) {
-      const double ux = local_.positions[v][0] - c[0], uy = local_.positions[v][1] - c[1],
-                   uz = local_.positions[v][2] - c[2];
+      const double ux = (local_.positions[v][0] - c[0]) * scale_, uy = (local_.positions[v][1] - c[1]) * scale_,
+                   uz = (local_.positions[v][2] - c[2]) * scale_;
       o[0] += ux * ux; o[1] += ux * uy; o[2] += ux * uz; o[3] += uy * uy; o[4] += uy * uz; o[5] += uz * uz;
     }
     const double k = area / 12;
@@ -792,6 +798,12 @@ Status TreeBuilder::run(const Progress& progress) {
   ownMoment_ = std::vector<std::array<float, 6>>();
   members_ = std::vector<uint32_t>();
   side2_ = std::vector<uint32_t>();
+  const double inv = 1 / scale_;
+  for (PcaNode& node : tree_.nodes) {
+    node.area = float(node.area * inv * inv);
+    node.centroid = ToPoint(ToVec(node.centroid) * inv);
+    node.eigenvalues = ToPoint(ToVec(node.eigenvalues) * (inv * inv));
+  }
   if (progress && !progress(92, "PCA partition: cones and boxes")) return Status::Cancelled();
   computeBounds();
   local_ = IndexedMesh();

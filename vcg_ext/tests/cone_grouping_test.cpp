@@ -167,6 +167,36 @@ TEST(ConeGrouping, SphereHierarchyIsValid) {
   ExpectValidHierarchy(sphere, h);
 }
 
+TEST(ConeGrouping, GroupsDoNotDependOnTheModelsScale) {
+  // Scaling by a power of two changes no bit of the normals, nor of any ratio of lengths or
+  // areas: the groups must be the same at every scale. Float sums of squared areas used to
+  // overflow above 2^34 and underflow below 2^-34 (114-177 level-1 groups instead of 121).
+  const IndexedMesh sphere = test::Sphere(5);  // 8192 faces
+  GroupHierarchy ref;
+  ASSERT_TRUE(BuildConeHierarchy(sphere, ConeGroupingParams(), ref).ok());
+  ASSERT_GE(ref.levelCount(), 2);
+  for (int k : {-40, -34, -20, 20, 34, 40}) {
+    IndexedMesh scaled = sphere;
+    for (auto& p : scaled.positions) p *= std::ldexp(1.0f, k);
+    GroupHierarchy h;
+    ASSERT_TRUE(BuildConeHierarchy(scaled, ConeGroupingParams(), h).ok()) << "2^" << k;
+    ASSERT_EQ(h.levelCount(), ref.levelCount()) << "2^" << k;
+    for (int l = 1; l <= ref.levelCount(); ++l) {
+      const GroupLevel& a = ref.level(l);
+      const GroupLevel& b = h.level(l);
+      ASSERT_EQ(b.groups.size(), a.groups.size()) << "2^" << k << ", level " << l;
+      EXPECT_EQ(b.faceGroup, a.faceGroup) << "2^" << k << ", level " << l;
+      for (size_t g = 0; g < a.groups.size(); ++g) {
+        EXPECT_EQ(b.groups[g].cone.halfAngle, a.groups[g].cone.halfAngle);
+        // Geometry scales exactly with the mesh.
+        EXPECT_EQ(b.groups[g].radius, std::ldexp(a.groups[g].radius, k)) << "2^" << k << ", group " << g;
+        EXPECT_EQ(b.groups[g].box.max[0], std::ldexp(a.groups[g].box.max[0], k));
+        EXPECT_EQ(b.groups[g].area, std::ldexp(a.groups[g].area, 2 * k));
+      }
+    }
+  }
+}
+
 TEST(ConeGrouping, ConeWeightMakesTighterGroups) {
   // With only the cone term, groups prefer to stay tight: the mean cone at level 1 is smaller
   // than with only the size term, which ignores the cone (threshold aside).

@@ -111,5 +111,23 @@ TEST(CheckMesh, AllZeroAreaFacesAreRefused) {
   EXPECT_NE(s.message.find("zero area"), std::string::npos);
 }
 
+TEST(IndexedMesh, NormalizingScaleIsThePowerOfTwoThatBringsTheDiagonalToAboutOne) {
+  IndexedMesh cube = test::Cube();  // diagonal sqrt(3): log2 0.79, rounded to 1
+  EXPECT_EQ(NormalizingScale(cube), 0.5);
+  for (int k : {-60, -20, 20, 60}) {
+    IndexedMesh scaled = cube;
+    for (auto& p : scaled.positions) p *= std::ldexp(1.0f, k);
+    EXPECT_EQ(NormalizingScale(scaled), std::ldexp(0.5, -k)) << k;
+  }
+  // Unused vertices do not count; no faces, or a single point, give 1.
+  cube.positions.emplace_back(1e6f, 0.f, 0.f);
+  EXPECT_EQ(NormalizingScale(cube), 0.5);
+  EXPECT_EQ(NormalizingScale(IndexedMesh()), 1.0);
+  IndexedMesh point;
+  point.positions = {{5, 5, 5}};
+  point.faces = {{0, 0, 0}};
+  EXPECT_EQ(NormalizingScale(point), 1.0);
+}
+
 }  // namespace
 }  // namespace conelod

@@ -458,6 +458,33 @@ TEST(PcaTree, Deterministic) {
   for (size_t i = 0; i < a.nodes.size(); ++i) EXPECT_EQ(a.nodes[i].eigenvalues, b.nodes[i].eigenvalues);
 }
 
+TEST(PcaTree, TreeDoesNotDependOnTheModelsScale) {
+  // Scaling by a power of two changes no ratio of lengths, areas or moments: the tree (every
+  // split) must be the same at every scale, and its figures scale exactly.
+  const IndexedMesh sphere = test::Sphere(5);  // 8192 faces
+  PcaTree ref;
+  ASSERT_TRUE(BuildPcaTree(sphere, PcaPartitionParams(), ref).ok());
+  for (int k : {-40, -34, -20, 20, 34, 40}) {
+    IndexedMesh scaled = sphere;
+    for (auto& p : scaled.positions) p *= std::ldexp(1.0f, k);
+    PcaTree t;
+    ASSERT_TRUE(BuildPcaTree(scaled, PcaPartitionParams(), t).ok()) << "2^" << k;
+    EXPECT_EQ(t.faceOrder, ref.faceOrder) << "2^" << k;
+    ASSERT_EQ(t.nodes.size(), ref.nodes.size()) << "2^" << k;
+    int bad = 0;
+    for (size_t i = 0; i < ref.nodes.size(); ++i) {
+      const PcaNode& a = ref.nodes[i];
+      const PcaNode& b = t.nodes[i];
+      const bool same = a.child[0] == b.child[0] && a.child[1] == b.child[1] && a.firstFace == b.firstFace &&
+                        a.faceCount == b.faceCount && b.area == std::ldexp(a.area, 2 * k) &&
+                        b.eigenvalues[0] == std::ldexp(a.eigenvalues[0], 2 * k) &&
+                        b.eigenvalues[2] == std::ldexp(a.eigenvalues[2], 2 * k) && b.axis == a.axis;
+      if (!same && ++bad <= 3) ADD_FAILURE() << "2^" << k << ": node " << i << " differs";
+    }
+    EXPECT_EQ(CutByCount(t, 100), CutByCount(ref, 100)) << "2^" << k;
+  }
+}
+
 TEST(PcaGroups, HierarchyFromNestedCutsFeedsTheCullingCost) {
   const IndexedMesh m = test::Sphere(4);
   PcaTree tree;
