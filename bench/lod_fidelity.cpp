@@ -3,7 +3,7 @@
 // filter's defaults) at the same face count.
 //
 //   lod_fidelity MESH.ply [--samples N] [--dag-only] [--cluster-faces N] [--group-clusters N] [--cone DEG]
-//                [--max-faces N]
+//                [--max-faces N] [--max-group-error F]
 //
 // "tree": the previous .clod levels (BuildConeHierarchy + BuildSimplifiedLevels with the defaults
 // `conelod lod build` used: every level keeps the normal-cone groups of its hierarchy level).
@@ -13,6 +13,7 @@
 // as a fraction of the diagonal, the same for vcglib's QEM run on the input to that face count,
 // and their ratio. Also the wall seconds of each build (one thread per core). --max-faces N: only
 // the levels of at most N faces are compared (the coarse ones; MeshLab's QEM on a large input is slow).
+// --max-group-error 1: the DAG without the cap on a group's collapse error (as before it had one).
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -96,6 +97,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--samples")) samples = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--cluster-faces")) dagParams.clusterFaces = size_t(std::atoi(argv[i + 1]));
     if (!std::strcmp(argv[i], "--group-clusters")) dagParams.groupClusters = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--max-group-error")) dagParams.maxGroupError = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--max-faces")) maxFaces = size_t(std::atoll(argv[i + 1]));
     if (!std::strcmp(argv[i], "--cone")) dagParams.grouping.coneThresholdDeg = std::atof(argv[i + 1]);
   }
