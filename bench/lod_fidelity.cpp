@@ -3,6 +3,7 @@
 // filter's defaults) at the same face count.
 //
 //   lod_fidelity MESH.ply [--samples N] [--dag-only] [--cluster-faces N] [--group-clusters N] [--cone DEG]
+//                [--max-faces N] [--max-group-error F]
 //
 // "tree": the previous .clod levels (BuildConeHierarchy + BuildSimplifiedLevels with the defaults
 // `conelod lod build` used: every level keeps the normal-cone groups of its hierarchy level).
@@ -10,7 +11,9 @@
 // clusters simplified with their borders locked). For every level: its faces, the RMS of the
 // sampled distance between it and the input (larger of both ways, Metro-like, sampled_distance.h)
 // as a fraction of the diagonal, the same for vcglib's QEM run on the input to that face count,
-// and their ratio. Also the wall seconds of each build (one thread per core).
+// and their ratio. Also the wall seconds of each build (one thread per core). --max-faces N: only
+// the levels of at most N faces are compared (the coarse ones; MeshLab's QEM on a large input is slow).
+// --max-group-error 1: the DAG without the cap on a group's collapse error (as before it had one).
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -85,6 +88,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   int samples = 200000;
+  size_t maxFaces = 0;  // 0: every level
   bool tree = true;
   conelod::LodBuildParams dagParams;
   for (int i = 2; i < argc; ++i) {
@@ -93,6 +97,8 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--samples")) samples = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--cluster-faces")) dagParams.clusterFaces = size_t(std::atoi(argv[i + 1]));
     if (!std::strcmp(argv[i], "--group-clusters")) dagParams.groupClusters = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--max-group-error")) dagParams.maxGroupError = std::atof(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--max-faces")) maxFaces = size_t(std::atoll(argv[i + 1]));
     if (!std::strcmp(argv[i], "--cone")) dagParams.grouping.coneThresholdDeg = std::atof(argv[i + 1]);
   }
   QMesh qm;
@@ -139,6 +145,10 @@ int main(int argc, char** argv) {
     std::printf("| level | faces | RMS (%s) | RMS (MeshLab QEM) | ratio |\n|---|---|---|---|---|\n", run.first.c_str());
     for (size_t k = 0; k < run.second.size(); ++k) {
       const conelod::IndexedMesh& m = run.second[k];
+      if (maxFaces > 0 && m.faces.size() > maxFaces) {
+        std::printf("| %zu | %zu | | | |\n", k + 1, m.faces.size());
+        continue;
+      }
       const double ours = Rms(m, input, samples, diag);
       const double ref = Rms(Vcg(qm, m.faces.size()), input, samples, diag);
       std::printf("| %zu | %zu | %.4f | %.4f | %.2f |\n", k + 1, m.faces.size(), 100 * ours, 100 * ref, ours / ref);

@@ -8,6 +8,9 @@
 //   3. each group is simplified on its own to levelRatio of its faces by the group-preserving
 //      collapse (group_qem.h) with every vertex it shares with another group frozen
 //      (GroupQemRegion): its outer border keeps its vertices, ids and positions bit for bit;
+//      no collapse costs more than maxGroupError of the diagonal, so a group whose locked border
+//      leaves no cheap collapse stops short of the ratio instead of folding (once a whole level
+//      no longer shrinks under the cap, the levels above go on without it);
 //   4. the simplified group is re-cut into clusters (step 1 on its faces): the next level;
 //   5. repeat from 2 until one cluster is left or a level no longer shrinks.
 // A group's error is the largest distance from its vertices (before) to its simplified faces plus
@@ -278,7 +281,7 @@ struct GroupResult {
 
 void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32_t>& groupFaces,
                    const std::vector<vcg::Point3f>& positions, const std::vector<uint8_t>& sharedVertex,
-                   const LodBuildParams& params, double diagonal, GroupResult& out) {
+                   const LodBuildParams& params, double maxError, double diagonal, GroupResult& out) {
   IndexedMesh local;
   std::unordered_map<uint32_t, uint32_t> toLocal;
   out.localToGlobal.clear();
@@ -304,6 +307,7 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
   GroupQemParams qem = params.simplification.qem;
   qem.targetFaces = std::max<size_t>(1, size_t(std::floor(double(local.faces.size()) * params.simplification.levelRatio)));
   qem.lockGroupBoundaries = false;
+  if (maxError > 0) qem.maxError = qem.maxError > 0 ? std::min(qem.maxError, maxError) : maxError;
   const std::vector<int> oneGroup(local.faces.size(), 0);
   GroupQemResult res;
   const Status s = SimplifyPreservingGroups(local, oneGroup, qem, res, Progress(), {}, &region);
@@ -371,6 +375,8 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
     return Status::Invalid("the level ratio must lie in (0, 1)");
   if (params.clusterFaces < 4 || params.clusterFaces > 65536) return Status::Invalid("cluster faces must lie in [4, 65536]");
   if (params.groupClusters < 2 || params.groupClusters > 64) return Status::Invalid("group clusters must lie in [2, 64]");
+  if (!(params.maxGroupError > 0 && params.maxGroupError <= 1))
+    return Status::Invalid("the largest group error must lie in (0, 1] (a fraction of the diagonal)");
   if (!(params.grouping.coneThresholdDeg > 0) || !(params.grouping.thresholdGrowth >= 1))
     return Status::Invalid("the cone threshold must be > 0 and its growth >= 1");
   const double kDeg = NormalCone::kPi / 180;
@@ -389,6 +395,7 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
     L0.clusterError.assign(C, 0.f);
   }
   const unsigned threads = unsigned(std::max(1, SimplificationThreads(params.simplification)));
+  double cap = params.maxGroupError;  // 0 once the capped levels no longer shrink
   for (int k = 0; size_t(k + 2) < 64; ++k) {
     if (progress && !progress(std::min(95, 10 + 8 * k), "LOD: simplifying groups")) {
       dag = LodDag();
@@ -415,12 +422,18 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
       std::atomic<int> next(0);
       RunThreads(std::min<unsigned>(threads, unsigned(G)), [&](unsigned) {
         for (int g = next++; g < G; g = next++)
-          SimplifyGroup(L.faces, groupFaces[size_t(g)], dag.positions, shared, params, diagonal, results[size_t(g)]);
+          SimplifyGroup(L.faces, groupFaces[size_t(g)], dag.positions, shared, params, cap, diagonal,
+                        results[size_t(g)]);
       });
     }
     size_t newFaces = 0;
     for (const auto& r : results) newFaces += r.faces.size();
-    if (double(newFaces) > 0.97 * double(L.faces.size())) break;  // no longer shrinks: L is the top
+    if (double(newFaces) > 0.97 * double(L.faces.size())) {
+      if (cap == 0) break;  // no longer shrinks: L is the top
+      cap = 0;              // the levels above go on to one cluster without the cap, as before
+      --k;
+      continue;
+    }
     // The new level: global ids for the new vertices (group order: deterministic), re-cut clusters.
     LodDag::Level N;
     std::vector<float> groupError(static_cast<size_t>(G), 0.f);

@@ -736,6 +736,7 @@ TEST(Lod, WriterRefusesMismatchedInput) {
   EXPECT_FALSE(WriteLodFile(m, dag, "/nonexistent-dir/x.clod").ok());
   EXPECT_FALSE(BuildLodDag(m, [] { LodBuildParams q; q.clusterFaces = 1; return q; }(), dag).ok());
   EXPECT_FALSE(BuildLodDag(m, [] { LodBuildParams q; q.simplification.levelRatio = 1; return q; }(), dag).ok());
+  EXPECT_FALSE(BuildLodDag(m, [] { LodBuildParams q; q.maxGroupError = 0; return q; }(), dag).ok());
 }
 
 TEST(Lod, CancellingLeavesNoFile) {
