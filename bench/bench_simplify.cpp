@@ -112,7 +112,7 @@ size_t RunMeshopt(const QMesh& m, int targetFaces) {
   return n / 3;
 }
 
-// kind: 0 = vcglib, 1 = ours with conditions 1 and 2, 2 = ours without conditions, 3 = meshopt
+// kind: 0 = vcglib, 1 = ours (default: integrity mode), 2 = ours without conditions, 3 = meshopt
 // to the faces that 1 reached (registered after it).
 void BM_Simplify(benchmark::State& state, int kind, double ratio, const std::string& name,
                  const std::string& sameFacesAs) {
@@ -187,7 +187,7 @@ int main(int argc, char** argv) {
   const double ratios[] = {0.5, 0.1, 0.01};
   for (double r : ratios) {
     const std::string pct = std::to_string(int(r * 100 + 0.5)) + "%";
-    const char* names[] = {"vcglib_quadric/", "ours_conditions_1_2/", "ours_no_condition/", "meshopt_simplify/"};
+    const char* names[] = {"vcglib_quadric/", "ours_integrity/", "ours_no_condition/", "meshopt_simplify/"};
     for (int kind = 0; kind < 4; ++kind) {
       const std::string name = names[kind] + pct;
       const std::string sameFacesAs = kind == 3 ? std::string(names[1]) + pct : std::string();
@@ -205,7 +205,7 @@ int main(int argc, char** argv) {
     const double v = g_cpu["vcglib_quadric/" + pct];
     if (!(v > 0)) continue;
     std::printf("  target %4s: vcglib %.3f s", pct.c_str(), v);
-    const char* labels[][2] = {{"ours_conditions_1_2/", "ours (conditions 1+2)"}, {"ours_no_condition/", "ours (none)"},
+    const char* labels[][2] = {{"ours_integrity/", "ours (integrity, the default)"}, {"ours_no_condition/", "ours (none)"},
                                {"meshopt_simplify/", "meshopt"}};
     for (const auto& l : labels)  // those that ran (--benchmark_filter may skip some)
       if (g_cpu.count(l[0] + pct))

@@ -960,9 +960,8 @@ std::vector<ParamSpec> LodExportSpecs(const MeshDocument*, const MeshModel*) {
                          "mesh); a level stops earlier when its groups allow no further collapse.",
                          AboveUpTo(0, 1)));
   p.push_back(BoolParam("LockGroupBoundaries", d.qem.lockGroupBoundaries, "Lock group boundaries",
-                        "Not needed any more and not used: every cut of the file is crack-free (each group of "
-                        "clusters is simplified with its outer border locked, and the next level groups the "
-                        "clusters differently). Kept so that saved scripts still run."));
+                        "Not used: every cut of the file is crack-free without it. Kept so that saved "
+                        "scripts still run."));
   AddCollapseOptionParams(p, d.qem, "Weight of the quadrics that keep mesh borders (and group contours) in place.");
   return p;
 }
@@ -1243,14 +1242,11 @@ std::vector<FilterSpec> MakeFilters() {
   t.push_back({"Cone LOD: Export LOD File", Menu::Remeshing, Arity::SingleMesh, MeshModel::MM_NONE,
                MeshModel::MM_NONE,
                QString("Writes the current mesh as a streamable level-of-detail file (<tt>.clod</tt>, the paper's "
-                       "sections 7-8, version 2) whose every cut is crack-free: the mesh is cut into clusters of "
-                       "about 128 faces whose normals stay within the grouping's <i>cone threshold</i> (growing "
-                       "level by level; the other grouping parameters are not used), eight neighbouring clusters "
-                       "form a group, each group is simplified with its outer border locked to <i>Faces kept per "
-                       "level</i> of its faces (with the options of <i>Cone LOD: Group-Preserving Quadric Edge "
-                       "Collapse</i>) and re-cut into the clusters of the next level, which groups them "
-                       "differently (a DAG of clusters, as Nanite's). Every cluster is written as a node of a "
-                       "chunk file with its normal cone, bounding sphere, error and geometry. A viewer "
+                       "sections 7-8) whose every cut is crack-free: clusters of about 128 faces within the "
+                       "grouping's <i>cone threshold</i> are gathered eight at a time, each group is simplified "
+                       "with its border locked (<i>Faces kept per level</i>, with the options of <i>Cone LOD: "
+                       "Group-Preserving Quadric Edge Collapse</i>) and re-cut into the next level's clusters. Every "
+                       "cluster is a node with its normal cone, bounding sphere, error and geometry. A viewer "
                        "(<tt>conelod-viewer</tt>) or <i>Cone LOD: Extract View-Dependent LOD</i> reads only the "
                        "nodes it needs. <i>LOD file</i> has no default: type a path or choose one with '...' (a "
                        "relative path is relative to MeshLab's current directory; the log gives the full path). "

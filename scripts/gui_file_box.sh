@@ -21,8 +21,8 @@ if [ "${1:-}" = --inside ]; then
   case "$VERSION" in
     # menu: Filters, Remeshing..., Export LOD File; dialog (relative): LOD file box, Apply
     2020.09) MENU=(121 10 275 160 559 111); BOX=(280 298); APPLY=(339 774) ;;
-    2022.02) MENU=(116 9 260 148 589 80); BOX=(317 251); APPLY=(360 749) ;;
-    2025.07) MENU=(116 9 260 148 589 91); BOX=(317 252); APPLY=(360 838) ;;
+    2022.02) MENU=(116 9 260 148 589 80); BOX=(317 238); APPLY=(360 749) ;;
+    2025.07) MENU=(116 9 260 148 589 91); BOX=(317 238); APPLY=(360 838) ;;
     *) echo "gui_file_box.sh: no click positions for MeshLab $VERSION" >&2; exit 1 ;;
   esac
   work="$(mktemp -d)"
