@@ -10,6 +10,10 @@
 #endif
 
 namespace conelod {
+
+// The out-of-line definition C++14 needs when kPi is bound to a reference (std::min, std::max).
+constexpr double NormalCone::kPi;
+
 namespace {
 
 constexpr double kHalfPi = kPi / 2;
