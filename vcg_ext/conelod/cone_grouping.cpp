@@ -732,7 +732,8 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
   }
   lu.nbCount = count;
   lp.nbCount = 0;
-  std::memcpy(arena_.data() + lu.nbOffset, scratchList_.data(), size_t(count) * sizeof(Neighbour));
+  if (count > 0)  // an empty list may have no storage: memcpy from null is undefined even for 0 bytes
+    std::memcpy(arena_.data() + lu.nbOffset, scratchList_.data(), size_t(count) * sizeof(Neighbour));
   setBest(u);
 
   // Each neighbour: its entries for u and p become one entry for u with the new score; pairs not
