@@ -23,15 +23,39 @@ CXX_FUZZ="${CXX_FUZZ:-clang++}"
 [ -f "$MESHLAB_SRC/vcglib/vcg/complex/complex.h" ] || { echo "fuzz.sh: vcglib not found under $MESHLAB_SRC (run scripts/setup.sh)" >&2; exit 1; }
 [ -x "$CONELOD" ] || { echo "fuzz.sh: $CONELOD not built (run scripts/setup.sh or set CONELOD)" >&2; exit 1; }
 command -v "$CXX_FUZZ" >/dev/null || { echo "fuzz.sh: $CXX_FUZZ not found (Debian: clang, libclang-rt-14-dev)" >&2; exit 1; }
-mkdir -p "$OUT/corpus" "$OUT/seeds" "$OUT/crashes"
+mkdir -p "$OUT/corpus" "$OUT/seeds" "$OUT/crashes" "$OUT/ply_corpus" "$OUT/ply_crashes"
+
+# build_fuzzer NAME SOURCE... [-DFLAG...]: one libFuzzer binary under ASan + UBSan in $OUT/NAME.
+build_fuzzer() {
+  local name="$1"; shift
+  "$CXX_FUZZ" -std=c++14 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
+    -I"$ROOT/vcg_ext" -isystem "$MESHLAB_SRC/vcglib" -isystem /usr/include/eigen3 "$@" -lz \
+    -o "$OUT/$name"
+}
+
+# run_fuzzer NAME CORPUS CRASHES WHAT: fuzzes for SECONDS_TO_RUN, fails on a crash, a leak or a
+# file left in CRASHES.
+run_fuzzer() {
+  local name="$1" corpus="$2" crashes="$3" what="$4" status
+  (cd "$OUT" && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+    "./$name" -max_total_time="$SECONDS_TO_RUN" -rss_limit_mb=1024 -malloc_limit_mb=256 -timeout=10 \
+    -artifact_prefix="$crashes/" -print_final_stats=1 "$corpus" 2>&1 | tail -n 12) && status=0 || status=$?
+  if [ "$status" -ne 0 ] || [ -n "$(ls -A "$crashes")" ]; then
+    echo "fuzz.sh: FAILED: $what crashed or leaked; inputs in $crashes (keep them in vcg_ext/fuzz/regressions/)" >&2
+    exit 1
+  fi
+  echo "fuzz.sh: $what: no crash in ${SECONDS_TO_RUN} s"
+}
 
 # The reader, the refiner and the cone tests they use: nothing else of the core is needed.
-"$CXX_FUZZ" -std=c++14 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
-  -DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION \
-  -I"$ROOT/vcg_ext" -isystem "$MESHLAB_SRC/vcglib" -isystem /usr/include/eigen3 \
+build_fuzzer lod_reader_fuzz -DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION \
   "$ROOT/vcg_ext/fuzz/lod_reader_fuzz.cpp" "$ROOT/vcg_ext/conelod/lod_reader.cpp" \
-  "$ROOT/vcg_ext/conelod/lod_refine.cpp" "$ROOT/vcg_ext/conelod/normal_cone.cpp" -lz \
-  -o "$OUT/lod_reader_fuzz"
+  "$ROOT/vcg_ext/conelod/lod_refine.cpp" "$ROOT/vcg_ext/conelod/normal_cone.cpp"
+# The PLY input path: the checked reader, the input check and the grouping.
+build_fuzzer ply_reader_fuzz \
+  "$ROOT/vcg_ext/fuzz/ply_reader_fuzz.cpp" "$ROOT/vcg_ext/conelod/ply_format.cpp" \
+  "$ROOT/vcg_ext/conelod/mesh_check.cpp" "$ROOT/vcg_ext/conelod/indexed_mesh.cpp" \
+  "$ROOT/vcg_ext/conelod/cone_grouping.cpp" "$ROOT/vcg_ext/conelod/normal_cone.cpp"
 
 # Seeds: an octahedron subdivided once and twice (32 and 128 faces, a sphere) and a bumpy variant,
 # with default and two-level hierarchies.
@@ -68,25 +92,8 @@ for m in "$OUT"/seeds/*.ply; do
   "$CONELOD" lod build "$m" -o "$OUT/corpus/${b}_2levels.clod" --max-levels 2 >/dev/null
 done
 echo "fuzz.sh: $(ls "$OUT/corpus" | wc -l) inputs in the corpus; fuzzing for ${SECONDS_TO_RUN} s"
-cd "$OUT"
-ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-  ./lod_reader_fuzz -max_total_time="$SECONDS_TO_RUN" -rss_limit_mb=1024 -malloc_limit_mb=256 -timeout=10 \
-  -artifact_prefix="$OUT/crashes/" -print_final_stats=1 "$OUT/corpus" 2>&1 | tail -n 25
-status=${PIPESTATUS[0]}
-if [ "$status" -ne 0 ] || [ -n "$(ls -A "$OUT/crashes")" ]; then
-  echo "fuzz.sh: FAILED: the reader crashed or leaked; inputs in $OUT/crashes" >&2
-  exit 1
-fi
-echo "fuzz.sh: .clod reader: no crash in ${SECONDS_TO_RUN} s"
+run_fuzzer lod_reader_fuzz "$OUT/corpus" "$OUT/crashes" ".clod reader"
 
-# The PLY input path: the checked reader, the input check and the grouping.
-"$CXX_FUZZ" -std=c++14 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
-  -I"$ROOT/vcg_ext" -isystem "$MESHLAB_SRC/vcglib" -isystem /usr/include/eigen3 \
-  "$ROOT/vcg_ext/fuzz/ply_reader_fuzz.cpp" "$ROOT/vcg_ext/conelod/ply_format.cpp" \
-  "$ROOT/vcg_ext/conelod/mesh_check.cpp" "$ROOT/vcg_ext/conelod/indexed_mesh.cpp" \
-  "$ROOT/vcg_ext/conelod/cone_grouping.cpp" "$ROOT/vcg_ext/conelod/normal_cone.cpp" \
-  -o "$OUT/ply_reader_fuzz"
-mkdir -p "$OUT/ply_corpus" "$OUT/ply_crashes"
 cp "$OUT"/seeds/*.ply "$OUT/ply_corpus/"
 python3 - "$OUT/ply_corpus" "$ROOT/tests/integration" <<'PY'
 import sys
@@ -96,16 +103,10 @@ for name, data, _ in bad_inputs.corpus():
     if len(data) < 200000:  # the 1 MiB header case only slows the fuzzer down
         open("%s/%s.ply" % (sys.argv[1], name), "wb").write(data)
 PY
-REGRESSIONS="$ROOT/vcg_ext/fuzz/regressions/ply"
-if [ -d "$REGRESSIONS" ] && [ -n "$(ls -A "$REGRESSIONS")" ]; then
-  ASAN_OPTIONS=detect_leaks=1 ./ply_reader_fuzz "$REGRESSIONS"/* 2>&1 | tail -n 3
-fi
-ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-  ./ply_reader_fuzz -max_total_time="$SECONDS_TO_RUN" -rss_limit_mb=1024 -malloc_limit_mb=256 -timeout=10 \
-  -artifact_prefix="$OUT/ply_crashes/" -print_final_stats=1 "$OUT/ply_corpus" 2>&1 | tail -n 8
-status=${PIPESTATUS[0]}
-if [ "$status" -ne 0 ] || [ -n "$(ls -A "$OUT/ply_crashes")" ]; then
-  echo "fuzz.sh: FAILED: the PLY path crashed or leaked; inputs in $OUT/ply_crashes (add them to $REGRESSIONS)" >&2
-  exit 1
-fi
-echo "fuzz.sh: PLY path: no crash in ${SECONDS_TO_RUN} s"
+# Inputs that once crashed run first, each on its own.
+for r in "$ROOT"/vcg_ext/fuzz/regressions/ply/*; do
+  [ -f "$r" ] || continue
+  ASAN_OPTIONS=detect_leaks=1 "$OUT/ply_reader_fuzz" "$r" >/dev/null 2>&1 ||
+    { echo "fuzz.sh: FAILED: regression input $r crashes again" >&2; exit 1; }
+done
+run_fuzzer ply_reader_fuzz "$OUT/ply_corpus" "$OUT/ply_crashes" "PLY path"
