@@ -29,40 +29,18 @@
 #include <map>
 #include <string>
 
-#include <vcg/complex/algorithms/local_optimization.h>
-#include <vcg/complex/algorithms/local_optimization/tri_edge_collapse_quadric.h>
 #include <vcg/complex/complex.h>
 #include <wrap/io_trimesh/import_ply.h>
 
-#include "conelod/builtin_qem_params.h"
 #include "conelod/cone_grouping.h"
 #include "conelod/group_qem.h"
 #include "conelod/hierarchical_simplification.h"
 #include "conelod/vcg_bridge.h"
+#include "meshlab_qem.h"
 
 namespace {
 
-// The vertex/face types of vcglib's decimation sample (tridecimator): VF adjacency, mark, quadric.
-class QVertex;
-class QFace;
-struct QUsedTypes : public vcg::UsedTypes<vcg::Use<QVertex>::AsVertexType, vcg::Use<QFace>::AsFaceType> {};
-class QVertex : public vcg::Vertex<QUsedTypes, vcg::vertex::VFAdj, vcg::vertex::Coord3f, vcg::vertex::Normal3f,
-                                   vcg::vertex::Mark, vcg::vertex::Qualityf, vcg::vertex::BitFlags> {
- public:
-  vcg::math::Quadric<double>& Qd() { return q_; }
-
- private:
-  vcg::math::Quadric<double> q_;
-};
-class QFace : public vcg::Face<QUsedTypes, vcg::face::VFAdj, vcg::face::VertexRef, vcg::face::Normal3f,
-                               vcg::face::Qualityf, vcg::face::BitFlags> {};
-class QMesh : public vcg::tri::TriMesh<std::vector<QVertex>, std::vector<QFace>> {};
-using QPair = vcg::tri::BasicVertexPair<QVertex>;
-class QCollapse : public vcg::tri::TriEdgeCollapseQuadric<QMesh, QPair, QCollapse, vcg::tri::QInfoStandard<QVertex>> {
- public:
-  using Base = vcg::tri::TriEdgeCollapseQuadric<QMesh, QPair, QCollapse, vcg::tri::QInfoStandard<QVertex>>;
-  QCollapse(const QPair& p, int mark, vcg::BaseParameterClass* pp) : Base(p, mark, pp) {}
-};
+using conelod_bench::QMesh;
 
 QMesh g_mesh;
 std::vector<int> g_groups;  // normal-cone groups at g_level, per face of g_mesh
@@ -74,19 +52,7 @@ std::map<std::string, double> g_cpu;     // benchmark name -> CPU seconds per it
 std::map<std::string, size_t> g_faces;   // benchmark name -> faces reached
 
 // MeshLab 2020.09's filter: QuadricSimplification() with the filter's default parameters.
-size_t RunVcg(QMesh& m, int targetFaces) {
-  vcg::tri::UpdateTopology<QMesh>::VertexFace(m);
-  vcg::tri::UpdateFlags<QMesh>::FaceBorderFromVF(m);
-  vcg::tri::TriEdgeCollapseQuadricParameter pp = conelod::BuiltinQemParameters();
-  vcg::LocalOptimization<QMesh> session(m, &pp);
-  session.Init<QCollapse>();
-  session.SetTargetSimplices(targetFaces);
-  session.SetTimeBudget(0.1f);
-  while (session.DoOptimization() && m.fn > targetFaces) {
-  }
-  session.Finalize<QCollapse>();
-  return size_t(m.fn);
-}
+size_t RunVcg(QMesh& m, int targetFaces) { return conelod_bench::RunMeshLabQem(m, size_t(targetFaces)); }
 
 size_t RunOurs(QMesh& m, int targetFaces, bool conditions) {
   std::vector<size_t> faceOf;

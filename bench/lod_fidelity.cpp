@@ -21,54 +21,24 @@
 #include <string>
 #include <vector>
 
-#include <vcg/complex/algorithms/local_optimization.h>
-#include <vcg/complex/algorithms/local_optimization/tri_edge_collapse_quadric.h>
 #include <vcg/complex/complex.h>
 #include <wrap/io_trimesh/import_ply.h>
 
-#include "conelod/builtin_qem_params.h"
 #include "conelod/cone_grouping.h"
 #include "conelod/hierarchical_simplification.h"
 #include "conelod/lod.h"
 #include "conelod/sampled_distance.h"
 #include "conelod/vcg_bridge.h"
+#include "meshlab_qem.h"
 
 namespace {
 
-class QVertex;
-class QFace;
-struct QUsedTypes : public vcg::UsedTypes<vcg::Use<QVertex>::AsVertexType, vcg::Use<QFace>::AsFaceType> {};
-class QVertex : public vcg::Vertex<QUsedTypes, vcg::vertex::VFAdj, vcg::vertex::Coord3f, vcg::vertex::Normal3f,
-                                   vcg::vertex::Mark, vcg::vertex::Qualityf, vcg::vertex::BitFlags> {
- public:
-  vcg::math::Quadric<double>& Qd() { return q_; }
-
- private:
-  vcg::math::Quadric<double> q_;
-};
-class QFace : public vcg::Face<QUsedTypes, vcg::face::VFAdj, vcg::face::VertexRef, vcg::face::Normal3f,
-                               vcg::face::Qualityf, vcg::face::BitFlags> {};
-class QMesh : public vcg::tri::TriMesh<std::vector<QVertex>, std::vector<QFace>> {};
-using QPair = vcg::tri::BasicVertexPair<QVertex>;
-class QCollapse : public vcg::tri::TriEdgeCollapseQuadric<QMesh, QPair, QCollapse, vcg::tri::QInfoStandard<QVertex>> {
- public:
-  using Base = vcg::tri::TriEdgeCollapseQuadric<QMesh, QPair, QCollapse, vcg::tri::QInfoStandard<QVertex>>;
-  QCollapse(const QPair& p, int mark, vcg::BaseParameterClass* pp) : Base(p, mark, pp) {}
-};
+using conelod_bench::QMesh;
 
 conelod::IndexedMesh Vcg(QMesh& input, size_t targetFaces) {
   QMesh m;
   vcg::tri::Append<QMesh, QMesh>::MeshCopy(m, input);
-  vcg::tri::UpdateTopology<QMesh>::VertexFace(m);
-  vcg::tri::UpdateFlags<QMesh>::FaceBorderFromVF(m);
-  vcg::tri::TriEdgeCollapseQuadricParameter pp = conelod::BuiltinQemParameters();
-  vcg::LocalOptimization<QMesh> session(m, &pp);
-  session.Init<QCollapse>();
-  session.SetTargetSimplices(int(targetFaces));
-  session.SetTimeBudget(0.1f);
-  while (session.DoOptimization() && size_t(m.fn) > targetFaces) {
-  }
-  session.Finalize<QCollapse>();
+  conelod_bench::RunMeshLabQem(m, targetFaces);
   return conelod::ToIndexedMesh(m);
 }
 
