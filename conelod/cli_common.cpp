@@ -111,9 +111,9 @@ Json& Json::value(const std::string& v) {
   return *this;
 }
 
-Json& Json::beginObject() { separator(); out_ += "{"; first_.push_back(true); return *this; }
-Json& Json::endObject() { out_ += "}"; first_.pop_back(); return *this; }
-Json& Json::beginArray() { separator(); out_ += "["; first_.push_back(true); return *this; }
+Json& Json::BeginObject() { separator(); out_ += "{"; first_.push_back(true); return *this; }
+Json& Json::EndObject() { out_ += "}"; first_.pop_back(); return *this; }
+Json& Json::BeginArray() { separator(); out_ += "["; first_.push_back(true); return *this; }
 Json& Json::endArray() { out_ += "]"; first_.pop_back(); return *this; }
 
 std::string LoadInput(const std::string& path, CMesh& mesh, IndexedMesh& indexed, std::vector<size_t>& faceOfIndex) {

@@ -52,9 +52,9 @@ class Json {
   Json& value(bool v);
   Json& value(const std::string& v);
   Json& value(const char* v) { return value(std::string(v)); }
-  Json& beginObject();
-  Json& endObject();
-  Json& beginArray();
+  Json& BeginObject();
+  Json& EndObject();
+  Json& BeginArray();
   Json& endArray();
   template <class T>
   Json& field(const std::string& k, const T& v) { return key(k).value(v); }

@@ -78,7 +78,7 @@ int CmdBudget(int argc, char** argv) {
   const std::string view = BudgetViewName(p.view, p.direction);
   if (a.has("--json")) {
     Json j;
-    j.beginObject().field("input", a.positional()[0])
+    j.BeginObject().field("input", a.positional()[0])
         .field("covered_pixels", r.coveredPixels).field("target_faces", r.targetFaces)
         .field("faces", r.currentFaces).field("above_current", r.aboveCurrent)
         .field("width", p.width).field("height", p.height).field("factor", p.pixelFactor).field("fill", p.fill)
@@ -88,12 +88,12 @@ int CmdBudget(int argc, char** argv) {
         .field("screen_fraction", double(r.coveredPixels) / (double(p.width) * p.height))
         .field("seconds", seconds);
     if (p.view == BudgetView::WorstAxis) {
-      j.key("axis_pixels").beginArray();
+      j.key("axis_pixels").BeginArray();
       for (size_t v : r.axisPixels) j.value(v);
       j.endArray();
     }
     if (a.has("-o")) j.field("output", a.str("-o")).field("faces_out", simplified ? fr.facesOut : r.currentFaces);
-    j.endObject();
+    j.EndObject();
     std::printf("%s\n", j.str().c_str());
   } else {
     std::printf("%s at %d x %d, view %s: %zu covered pixels (%.1f %% of the screen)\n", a.positional()[0].c_str(),

@@ -120,7 +120,7 @@ int CmdFeatureSimplify(int argc, char** argv) {
 
   if (a.has("--json")) {
     Json j;
-    j.beginObject().field("input", a.positional()[0])
+    j.BeginObject().field("input", a.positional()[0])
         .field("faces_in", r.facesIn).field("faces_out", r.facesOut)
         .field("feature_edges", r.featureEdgesIn).field("feature_vertices", r.featureVertices)
         .field("seconds", seconds)
@@ -140,7 +140,7 @@ int CmdFeatureSimplify(int argc, char** argv) {
                  agree.referenceLength > 0 ? agree.referenceLengthCovered / agree.referenceLength : 1.0);
     }
     if (a.has("-o")) j.field("output", a.str("-o"));
-    j.endObject();
+    j.EndObject();
     std::printf("%s\n", j.str().c_str());
   } else {
     const std::string parts = r.parts > 1 ? "; in " + std::to_string(r.parts) + " parts" : "";
@@ -201,7 +201,7 @@ int CmdFeatureEdges(int argc, char** argv) {
 
   if (a.has("--json")) {
     Json j;
-    j.beginObject().field("input", a.positional()[0]).field("faces", im.faceCount())
+    j.BeginObject().field("input", a.positional()[0]).field("faces", im.faceCount())
         .field("feature_edges", info.featureEdges.size()).field("dihedral_edges", info.dihedralEdges)
         .field("swap_edges", info.swapEdges).field("removed_by_swaps", info.removedBySwaps)
         .field("border_edges", info.borderEdges).field("non_manifold_edges", info.nonManifoldEdges)
@@ -213,7 +213,7 @@ int CmdFeatureEdges(int argc, char** argv) {
           .field("line_edges", agree.simplifiedEdges).field("line_edges_on_reference_lines", agree.simplifiedOnReference)
           .field("reference_line_length_covered",
                  agree.referenceLength > 0 ? agree.referenceLengthCovered / agree.referenceLength : 1.0);
-    j.endObject();
+    j.EndObject();
     std::printf("%s\n", j.str().c_str());
   } else {
     std::printf("%s: %zu faces; feature edges %zu (dihedral %zu, made by swaps %zu, removed by swaps %zu, border %zu, "

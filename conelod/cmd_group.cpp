@@ -13,12 +13,12 @@ namespace cli {
 namespace {
 
 void WriteParams(Json& j, const ConeGroupingParams& p) {
-  j.key("params").beginObject()
+  j.key("params").BeginObject()
       .field("cone_weight", p.coneWeight).field("shape_weight", p.shapeWeight).field("size_weight", p.sizeWeight)
       .field("threshold_deg", p.coneThresholdDeg).field("growth", p.thresholdGrowth)
       .field("max_levels", p.maxLevels).field("min_top_groups", p.minTopGroups)
       .field("strict_greedy", p.strictGreedy)
-      .endObject();
+      .EndObject();
 }
 
 }  // namespace
@@ -76,21 +76,21 @@ int CmdGroup(int argc, char** argv) {
 
   if (json) {
     Json j;
-    j.beginObject().field("input", a.positional()[0]).field("faces", im.faceCount()).field("seconds", seconds);
+    j.BeginObject().field("input", a.positional()[0]).field("faces", im.faceCount()).field("seconds", seconds);
     j.field("faces_per_second", seconds > 0 ? double(im.faceCount()) / seconds : 0.0);
     WriteParams(j, params);
-    j.key("levels").beginArray();
+    j.key("levels").BeginArray();
     for (int l = 1; l <= h.levelCount(); ++l) {
       const GroupLevel& lv = h.level(l);
-      j.beginObject().field("level", l).field("groups", lv.groups.size())
+      j.BeginObject().field("level", l).field("groups", lv.groups.size())
           .field("max_cone_deg", lv.maxConeDeg()).field("mean_cone_deg", lv.meanConeDeg())
           .field("threshold_deg", lv.thresholdDeg).field("uncullable_groups", lv.uncullableGroups())
           .field("all_connected", GroupsAreEdgeConnected(adj, lv.faceGroup))
-          .endObject();
+          .EndObject();
     }
     j.endArray();
     if (a.has("-o")) j.field("output", a.str("-o")).field("display_level", displayLevel);
-    j.endObject();
+    j.EndObject();
     std::printf("%s\n", j.str().c_str());
   } else {
     std::printf("%s: %zu faces, %d levels in %.3f s (%.0f faces/s)\n", a.positional()[0].c_str(), im.faceCount(),
@@ -161,7 +161,7 @@ int CmdCullCost(int argc, char** argv) {
 
   if (a.has("--json")) {
     Json j;
-    j.beginObject().field("input", a.positional()[0]).field("faces", im.faceCount())
+    j.BeginObject().field("input", a.positional()[0]).field("faces", im.faceCount())
         .field("views", r.views).field("perspective", r.perspective).field("camera_distance", r.cameraDistance)
         .field("two_state_cost", r.twoState.mean).field("two_state_min", r.twoState.min)
         .field("two_state_max", r.twoState.max)
@@ -177,12 +177,12 @@ int CmdCullCost(int argc, char** argv) {
         .field("grouping_seconds", groupSeconds).field("cost_seconds", costTimer.seconds());
     if (pca) {
       j.field("grouping", "pca").field("pca_clusters", int(h.level(1).groups.size()));
-      j.key("params").beginObject().field("pca", pcaClusters).field("pca_levels", pcaLevels).endObject();
+      j.key("params").BeginObject().field("pca", pcaClusters).field("pca_levels", pcaLevels).EndObject();
     } else {
       j.field("grouping", "normal_cone");
       WriteParams(j, params);
     }
-    j.endObject();
+    j.EndObject();
     std::printf("%s\n", j.str().c_str());
   } else {
     std::printf("%s: %zu faces, %d levels of %s (%zu groups at level 1, %zu at the top), %d %s views\n",

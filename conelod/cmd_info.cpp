@@ -25,13 +25,13 @@ int CmdInfo(int argc, char** argv) {
   const Status valid = RequireValidForFaces(r);
   if (a.has("--json")) {
     Json j;
-    j.beginObject().field("input", a.positional()[0]).field("vertices", r.vertices).field("faces", r.faces)
+    j.BeginObject().field("input", a.positional()[0]).field("vertices", r.vertices).field("faces", r.faces)
         .field("components", r.components).field("border_edges", r.borderEdges)
         .field("non_manifold_edges", r.nonManifoldEdges).field("unreferenced_vertices", r.unreferencedVertices)
         .field("degenerate_faces", r.degenerateFaces).field("non_finite_vertices", r.nonFiniteVertices).field("huge_vertices", r.hugeVertices)
         .field("bad_index_faces", r.badIndexFaces).field("usable", valid.ok());
     if (!valid.ok()) j.field("problem", valid.message);
-    j.endObject();
+    j.EndObject();
     std::printf("%s\n", j.str().c_str());
   } else {
     std::printf("%s\n  vertices %zu (unreferenced %zu, non-finite %zu)\n  faces %zu (zero-area %zu, bad index %zu)\n"

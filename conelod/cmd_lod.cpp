@@ -74,16 +74,16 @@ int LodBuild(int argc, char** argv) {
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
   if (a.has("--json")) {
     Json j;
-    j.beginObject().field("input", input).field("output", output).field("vertices", st.inputVertices)
+    j.BeginObject().field("input", input).field("output", output).field("vertices", st.inputVertices)
         .field("faces", st.inputFaces).field("levels", st.levels).field("nodes", st.nodes)
         .field("file_bytes", size_t(st.fileBytes)).field("load_seconds", loadSeconds)
         .field("grouping_seconds", st.groupingSeconds).field("simplify_seconds", st.simplifySeconds)
         .field("write_seconds", st.writeSeconds).field("seconds", st.seconds);
-    j.key("level_faces").beginArray();
+    j.key("level_faces").BeginArray();
     for (size_t f : st.levelFaces) j.value(f);
-    j.endArray().key("level_nodes").beginArray();
+    j.endArray().key("level_nodes").BeginArray();
     for (size_t n : st.levelNodes) j.value(n);
-    j.endArray().endObject();
+    j.endArray().EndObject();
     std::printf("%s\n", j.str().c_str());
   } else {
     std::printf("%s: %zu faces -> %s: %d node levels, %zu nodes, %llu bytes in %.3f s "
@@ -157,17 +157,17 @@ int LodExtract(int argc, char** argv) {
   }
   if (a.has("--json")) {
     Json j;
-    j.beginObject().field("input", input).field("faces", out.faces.size()).field("cut_faces", cut.faces)
+    j.BeginObject().field("input", input).field("faces", out.faces.size()).field("cut_faces", cut.faces)
         .field("budget", view.faceBudget).field("groups_drawn", cut.groupsDrawn)
         .field("groups_culled", cut.groupsCulled).field("culled_faces", cut.faces - cut.drawnFaces)
         .field("max_level_difference", cut.maxLevelDifference).field("refinements", cut.refinements)
         .field("resident_bytes", resident).field("open_seconds", openSeconds).field("seconds", seconds);
-    j.key("levels").beginArray();
+    j.key("levels").BeginArray();
     for (int k = 0; k < levels; ++k)
-      j.beginObject().field("level", k).field("nodes", levelNodes[size_t(k)]).field("faces", levelFaces[size_t(k)]).endObject();
+      j.BeginObject().field("level", k).field("nodes", levelNodes[size_t(k)]).field("faces", levelFaces[size_t(k)]).EndObject();
     j.endArray();
     if (a.has("-o")) j.field("output", a.str("-o"));
-    j.endObject();
+    j.EndObject();
     std::printf("%s\n", j.str().c_str());
   } else {
     std::printf("%s: cut of %zu faces (budget %zu), %zu groups drawn, %zu culled, max level difference %d, "
@@ -194,16 +194,16 @@ int LodInfo(int argc, char** argv) {
   const LodFileInfo& i = reader->info();
   if (a.has("--json")) {
     Json j;
-    j.beginObject().field("input", a.positional()[0]).field("version", int(i.version))
+    j.BeginObject().field("input", a.positional()[0]).field("version", int(i.version))
         .field("vertices", size_t(i.inputVertices)).field("faces", size_t(i.inputFaces)).field("levels", i.levels)
         .field("nodes", size_t(i.nodeCount)).field("file_bytes", size_t(i.fileBytes))
         .field("roots", reader->roots().size()).field("resident_bytes", reader->residentBytes())
         .field("open_seconds", seconds);
-    j.key("level_faces").beginArray();
+    j.key("level_faces").BeginArray();
     for (auto f : i.levelFaces) j.value(size_t(f));
-    j.endArray().key("level_nodes").beginArray();
+    j.endArray().key("level_nodes").BeginArray();
     for (auto n : i.levelNodes) j.value(size_t(n));
-    j.endArray().endObject();
+    j.endArray().EndObject();
     std::printf("%s\n", j.str().c_str());
   } else {
     std::printf("%s: .clod version %u, %llu vertices, %llu faces, %d node levels, %llu nodes, %llu bytes\n",

@@ -113,14 +113,14 @@ int CmdPartition(int argc, char** argv) {
   }
   if (a.has("--json")) {
     Json j;
-    j.beginObject().field("input", a.positional()[0]).field("faces", im.faceCount())
+    j.BeginObject().field("input", a.positional()[0]).field("faces", im.faceCount())
         .field("components", tree.componentCount).field("clusters", cut.size()).field("seconds", seconds)
         .field("all_connected", connected).field("tree_nodes", tree.nodes.size())
         .field("tree_depth", tree.maxDepth).field("tree_bytes", tree.memoryBytes()).field("full_tree", full)
         .field("max_error_rms", maxError).field("mean_error_rms", meanError).field("largest_cluster_faces", largest);
     if (a.has("--verify")) j.field("tree_valid", verify.empty());
     if (a.has("-o")) j.field("output", a.str("-o"));
-    j.endObject();
+    j.EndObject();
     std::printf("%s\n", j.str().c_str());
   } else {
     std::printf("%s: %zu faces, %d component(s); PCA tree of %zu nodes, depth %d, built in %.3f s%s\n",
@@ -187,7 +187,7 @@ int CmdProgressive(int argc, char** argv) {
   const double pct = h.diagonal > 0 ? 100 * h.hausdorff / h.diagonal : 0;
   if (a.has("--json")) {
     Json j;
-    j.beginObject().field("input", a.positional()[0]).field("input_faces", im.faceCount())
+    j.BeginObject().field("input", a.positional()[0]).field("input_faces", im.faceCount())
         .field("clusters", r.clusters).field("faces", r.mesh.faceCount()).field("vertices", r.mesh.vertexCount())
         .field("seconds", seconds).field("tree_seconds", treeSeconds)
         .field("collapses", r.collapses).field("blocked_vertices", r.blockedVertices)
@@ -203,7 +203,7 @@ int CmdProgressive(int argc, char** argv) {
           .field("rms_distance_from_input", h.ab.rms).field("faces_against_surface", against);
     }
     j.field("output", a.str("-o"));
-    j.endObject();
+    j.EndObject();
     std::printf("%s\n", j.str().c_str());
   } else {
     std::printf("%s: %zu faces -> %zu faces, %zu vertices at %d clusters in %.3f s (tree %.3f s)\n",
@@ -251,9 +251,9 @@ int CmdClusterShape(int argc, char** argv) {
   const bool connected = GroupsAreEdgeConnected(BuildFaceAdjacency(im), faceCluster);
   if (a.has("--json")) {
     Json j;
-    j.beginObject().field("input", a.positional()[0]).field("faces", im.faceCount()).field("clusters", shape.clusters)
+    j.BeginObject().field("input", a.positional()[0]).field("faces", im.faceCount()).field("clusters", shape.clusters)
         .field("boundary_length", shape.boundaryLength).field("boundary_ratio", shape.boundaryRatio)
-        .field("mean_compactness", shape.meanCompactness).field("all_connected", connected).endObject();
+        .field("mean_compactness", shape.meanCompactness).field("all_connected", connected).EndObject();
     std::printf("%s\n", j.str().c_str());
   } else {
     std::printf("%s: %zu faces in %d clusters (all edge-connected: %s)\n", a.positional()[0].c_str(), im.faceCount(),

@@ -21,11 +21,11 @@ namespace {
 void WriteStats(Json& j, const GroupQemStats& s) {
   j.field("collapses", s.collapses).field("evaluations", s.evaluations).field("stop", ToString(s.stop))
       .field("max_collapse_error", s.maxCollapseError);
-  j.key("refused").beginObject()
+  j.key("refused").BeginObject()
       .field("topology", s.refusedTopology).field("condition1", s.refusedCondition1)
       .field("condition2", s.refusedCondition2).field("lock", s.refusedLock).field("fixed", s.refusedFixed)
       .field("geometry", s.refusedGeometry).field("cone", s.refusedCone)
-      .endObject();
+      .EndObject();
 }
 
 // Per-face quality and colour of the saved mesh: the face's group.
@@ -185,9 +185,9 @@ int CmdSimplify(int argc, char** argv) {
     const double seconds = timer.seconds();
     if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
     Json j;
-    j.beginObject().field("input", input).field("faces_in", im.faceCount()).field("seconds", seconds)
+    j.BeginObject().field("input", input).field("faces_in", im.faceCount()).field("seconds", seconds)
         .field("mode", ToString(p.mode)).field("keep_cones", p.keepCones);
-    j.key("levels").beginArray();
+    j.key("levels").BeginArray();
     if (!json)
       std::printf("%s: %zu faces, %d levels in %.3f s\n%5s %8s %8s %8s %8s %8s %9s%s\n", input.c_str(), im.faceCount(),
                   int(levels.size()), seconds, "level", "groups", "target", "faces", "split", "vanished", "intact%",
@@ -195,7 +195,7 @@ int CmdSimplify(int argc, char** argv) {
     for (const SimplifiedLevel& L : levels) {
       GroupIntegrity gi;
       MeasureGroupIntegrity(im, h.level(L.level).faceGroup, L.mesh, L.faceGroup, gi);
-      j.beginObject().field("level", L.level).field("groups_before", gi.groupsBefore).field("groups_after", gi.groupsAfter)
+      j.BeginObject().field("level", L.level).field("groups_before", gi.groupsBefore).field("groups_after", gi.groupsAfter)
           .field("target_faces", L.targetFaces).field("faces_out", L.mesh.faceCount())
           .field("groups_split", gi.groupsSplit).field("groups_vanished", gi.groupsVanished);
       const double limitDeg = std::min(h.level(L.level).thresholdDeg, 180.0);
@@ -209,7 +209,7 @@ int CmdSimplify(int argc, char** argv) {
             .field("mean_distance_to_input", hd.ba.mean).field("diagonal", hd.diagonal);
       }
       WriteStats(j, L.stats);
-      j.endObject();
+      j.EndObject();
       if (!json)
         std::printf("%5d %8d %8zu %8zu %8d %8d %9.2f", L.level, gi.groupsBefore, L.targetFaces, L.mesh.faceCount(),
                     gi.groupsSplit, gi.groupsVanished, 100 * gi.intact());
@@ -226,7 +226,7 @@ int CmdSimplify(int argc, char** argv) {
         if (!err.empty()) return Fail(kIoError, err);
       }
     }
-    j.endArray().endObject();
+    j.endArray().EndObject();
     if (json) std::printf("%s\n", j.str().c_str());
     return kOk;
   }
@@ -270,7 +270,7 @@ int CmdSimplify(int argc, char** argv) {
 
   if (json) {
     Json j;
-    j.beginObject().field("input", input).field("group_source", source)
+    j.BeginObject().field("input", input).field("group_source", source)
         .field("faces_in", im.faceCount()).field("faces_out", r.mesh.faceCount()).field("target_faces", p.targetFaces)
         .field("groups_before", gi.groupsBefore).field("groups_after", gi.groupsAfter)
         .field("groups_split", gi.groupsSplit).field("groups_vanished", gi.groupsVanished)
@@ -285,7 +285,7 @@ int CmdSimplify(int argc, char** argv) {
     if (!unreachable.empty()) j.field("message", unreachable);
     WriteStats(j, r.stats);
     if (a.has("-o")) j.field("output", a.str("-o"));
-    j.endObject();
+    j.EndObject();
     std::printf("%s\n", j.str().c_str());
   } else {
     std::printf("%s: %zu -> %zu faces (target %zu, %s) in %.3f s, %zu collapses\n", input.c_str(), im.faceCount(),

@@ -5,7 +5,7 @@
 // merge only changes pairs that involve the merged unit, so only its neighbours are revisited:
 // a neighbour whose best partner was one of the merged units rescans its own neighbours, the
 // others compare their pair with the new unit against their best. At level 1, sweeps in unit
-// order first merge the mutual best pairs (runLevel; the tree is built after them).
+// order first merge the mutual best pairs (RunLevel; the tree is built after them).
 //
 // The loop is bound by memory latency (each merge touches ~20 units scattered over the mesh), so
 // the per-unit state is split by access pattern and packed: the geometry every evaluation reads
@@ -18,11 +18,11 @@
 // the mesh, rather than keeping them in double: the build's peak memory stays under twice the
 // loaded mesh's.
 // Once level 1's merges are done and its arrays freed, the faces are renumbered group by group
-// (renumberFaces, which keeps their normals and areas), so level 1's final exact cones and the
+// (RenumberFaces, which keeps their normals and areas), so level 1's final exact cones and the
 // upper levels read normals in order; each level-1 group's distinct vertices are collected in the
 // same pass, and every level's spheres read those rather than the faces. Exact cones rarely run
 // Welzl's algorithm in the default mode:
-// above level 1 they start from the support of the merged units' cones (trySupportCone), at
+// above level 1 they start from the support of the merged units' cones (TrySupportCone), at
 // level 1 (no supports kept) from the cap of two far normals (seededCone); either guess is
 // checked against every normal. With strictGreedy none of this changes a bit of the
 // output of the paper's best-first order: the same pairs are scored with the same arithmetic and
@@ -314,8 +314,8 @@ class HierarchyBuilder {
   __attribute__((always_inline)) inline float evaluate(const Unit& a, const Unit& b) const;
   // From the cached scores of u's list. Inlined: it is the core of a merge's neighbour updates.
   __attribute__((always_inline)) inline void setBest(int u);
-  void mergeUnits(int u, int p);
-  bool runLevel(double thresholdDeg, bool localMaximaFirst, long& mergesSoFar);
+  void MergeUnits(int u, int p);
+  bool RunLevel(double thresholdDeg, bool localMaximaFirst, long& mergesSoFar);
   void setThreshold(double thresholdDeg) {
     thresholdOn_ = thresholdDeg < 180.0;
     // A cone of pi/2 or more cannot be culled and is stored as pi, above any threshold under 180
@@ -323,11 +323,11 @@ class HierarchyBuilder {
     // just under pi/2 could merge into a group whose exact cone is uncullable.)
     thresholdRad_ = std::min(thresholdDeg * kDeg, kPi / 2);
   }
-  bool reportProgress(long mergesSoFar);
-  void emitLevel(double thresholdDeg, GroupHierarchy& out, bool firstLevel);
+  bool ReportProgress(long mergesSoFar);
+  void EmitLevel(double thresholdDeg, GroupHierarchy& out, bool firstLevel);
   void nextLevelUnits();
-  void makeConeExact(int u);
-  void makeCone(int u);  // makeConeExact without the widening for l1Normal_
+  void MakeConeExact(int u);
+  void MakeCone(int u);  // MakeConeExact without the widening for l1Normal_
   bool alive(int u) const { return chains_[size_t(u)].tail >= 0; }
   Neighbour* nbBegin(int u) { return arena_.data() + links_[size_t(u)].nbOffset; }
   Neighbour* nbEnd(int u) { return nbBegin(u) + links_[size_t(u)].nbCount; }
@@ -336,7 +336,7 @@ class HierarchyBuilder {
     for (Neighbour* e = nbBegin(u); e != nbEnd(u); ++e)
       if (e->id == w) { e->score = score; return; }
   }
-  void compactArena(size_t room);
+  void CompactArena(size_t room);
 
   const IndexedMesh& mesh_;
   const ConeGroupingParams& params_;
@@ -363,7 +363,7 @@ class HierarchyBuilder {
   BigVector<vcg::Point3f> l1Normal_;
   BigVector<double> faceArea_;  // from level 2 on: every mesh face's area (FaceNormalAndArea), by mesh face
   int meshFace(int f) const { return meshFace_.empty() ? f : meshFace_[size_t(f)]; }
-  void renumberFaces();
+  void RenumberFaces();
   // From level 1's emission on: the distinct vertices of every level-1 group, group by group
   // (group g's are l1Verts_[l1VertBegin_[g], l1VertBegin_[g + 1])), and each level-1 group's group
   // at the level last emitted. A group's tight sphere (and level 1's box) is a maximum (minimum)
@@ -372,7 +372,7 @@ class HierarchyBuilder {
   BigVector<vcg::Point3f> l1Verts_;
   BigVector<uint32_t> l1VertBegin_;
   BigVector<int> l1Group_;
-  // Above level 1: the unit that absorbed each dead unit of the level (mergeUnits).
+  // Above level 1: the unit that absorbed each dead unit of the level (MergeUnits).
   BigVector<int> absorbedBy_;
   // From level 2 on, unless strictGreedy: per unit, up to three normals of its faces whose
   // minimal cone is the unit's exact cone, or (after a merge) a guess of it: the support of the
@@ -380,9 +380,9 @@ class HierarchyBuilder {
   // every normal of the unit lies in it, it is the minimal cone (the minimal cone of a subset
   // that holds them all), found with one scan instead of Welzl's algorithm.
   BigVector<ConeSupport> support_;
-  bool trySupportCone(int u);
+  bool TrySupportCone(int u);
   bool seededCone(int u);
-  bool refineCone(int u);  // on scratchSupport_ and normalRuns_
+  bool RefineCone(int u);  // on scratchSupport_ and normalRuns_
   std::vector<vcg::Point3d> scratchSupport_, scratchTrial_;
   // The normals of the unit whose exact cone is being made, in the order of its face list, as
   // runs: of faceNormal_ from level 2 on (read in place: the scans above need no copy), of
@@ -411,7 +411,7 @@ class HierarchyBuilder {
   std::vector<int> scratchFaces_;
   std::vector<vcg::Point3d> scratchNormals_;
   std::vector<Neighbour> scratchList_;
-  // Found by emitLevel: the level's group of each unit, the unit of each group.
+  // Found by EmitLevel: the level's group of each unit, the unit of each group.
   std::vector<int> idOfUnit_, rootOfGroup_;
   double thresholdRad_ = kPi;
   // A unit's cone is recomputed exactly once its face count reaches this many times the count at
@@ -420,7 +420,7 @@ class HierarchyBuilder {
   bool thresholdOn_ = false;
   bool prescored_ = false;  // level 1, default mode: run() scored every pair with the units
   int aliveCount_ = 0;
-  // During level 1's sweeps: per unit, whether it was marked since its last visit (runLevel).
+  // During level 1's sweeps: per unit, whether it was marked since its last visit (RunLevel).
   uint8_t* dirty_ = nullptr;
   bool cancelled_ = false;
 };
@@ -462,8 +462,8 @@ void HierarchyBuilder::setBest(int u) {
   }
 }
 
-void HierarchyBuilder::makeConeExact(int u) {
-  makeCone(u);
+void HierarchyBuilder::MakeConeExact(int u) {
+  MakeCone(u);
   if (!l1Normal_.empty()) {
     // From normals rounded to float (each off its direction by ~1e-7 rad): widened by 1e-6 rad to
     // stay a bound of the true normals' cone. Emission recomputes every level-1 cone exactly.
@@ -475,11 +475,11 @@ void HierarchyBuilder::makeConeExact(int u) {
   }
 }
 
-void HierarchyBuilder::makeCone(int u) {
+void HierarchyBuilder::MakeCone(int u) {
   const int tail = chains_[size_t(u)].tail;
   int f = tail;
   if (!faceNormal_.empty()) {
-    // The list is made of runs of consecutive faces (renumberFaces): their normals are runs of
+    // The list is made of runs of consecutive faces (RenumberFaces): their normals are runs of
     // faceNormal_, in the list's order.
     normalRuns_.clear();
     int head = faceNext_[size_t(tail)];
@@ -490,7 +490,7 @@ void HierarchyBuilder::makeCone(int u) {
       if (last == tail) break;
       head = faceNext_[size_t(last)];
     }
-    if (!support_.empty() && trySupportCone(u)) return;
+    if (!support_.empty() && TrySupportCone(u)) return;
   } else if (!l1Normal_.empty()) {
     scratchNormals_.clear();
     do {
@@ -531,21 +531,21 @@ void HierarchyBuilder::makeCone(int u) {
   chains_[size_t(u)].exactSize = units_[size_t(u)].faceCount;
 }
 
-// makeConeExact's shortcut (see support_), on the normals in normalRuns_: true when the
+// MakeConeExact's shortcut (see support_), on the normals in normalRuns_: true when the
 // unit's cone was set. The guess is the minimal cone of a few normals; the normals outside it
 // join them and the guess is made again (the cone only grows towards the true one), a few times
 // at most before leaving the work to Welzl's algorithm on all the normals.
-bool HierarchyBuilder::trySupportCone(int u) {
+bool HierarchyBuilder::TrySupportCone(int u) {
   ConeSupport& support = support_[size_t(u)];
   if (support.count == 0) return false;
   scratchSupport_.assign(support.normal, support.normal + support.count);
-  return refineCone(u);
+  return RefineCone(u);
 }
 
 // Level 1, default mode (no support known): the first guess comes from the normals themselves,
 // the one farthest from the unit's current axis (the union bound's, or the exact cone's) and the
 // one farthest from that. Their cap, checked here against every normal, holds them all for most
-// groups: that is the minimal cone; else the normals outside join the two in refineCone. Empty
+// groups: that is the minimal cone; else the normals outside join the two in RefineCone. Empty
 // or uncullable units are left to Welzl. (Before, Welzl ran on all the normals of every level-1
 // exact cone: the bunny's build took 516 M instructions, 485 M since; MinimalCone's share of
 // the dragon's profile went from 6.8% to 1.6%.)
@@ -593,7 +593,7 @@ bool HierarchyBuilder::seededCone(int u) {
     return true;
   });
   if (!few) return false;
-  if (outside > 0) return refineCone(u);
+  if (outside > 0) return RefineCone(u);
   NormalCone cone;
   cone.axis = axis2;
   cone.halfAngle = std::acos(std::min(1.0, cosHalf));
@@ -612,7 +612,7 @@ bool HierarchyBuilder::seededCone(int u) {
 // normalRuns_ outside it join them and the guess is made again (the cone only grows towards
 // the true one), a few times at most before leaving the work to Welzl's algorithm on all the
 // normals (false). True: the unit's cone (and support, where kept) was set.
-bool HierarchyBuilder::refineCone(int u) {
+bool HierarchyBuilder::RefineCone(int u) {
   std::vector<vcg::Point3d>& chosen = scratchSupport_;
   ConeSupport found;
   for (int round = 0; round < 4; ++round) {
@@ -642,12 +642,12 @@ bool HierarchyBuilder::refineCone(int u) {
   return false;
 }
 
-void HierarchyBuilder::mergeUnits(int u, int p) {
+void HierarchyBuilder::MergeUnits(int u, int p) {
   Link& lu = links_[size_t(u)];
   Link& lp = links_[size_t(p)];
   // Room for the merged list with its slack, should it not fit u's slot; made while p is alive.
   const size_t room = 2 * (size_t(lu.nbCount) + size_t(lp.nbCount));
-  if (arena_.size() + room > arena_.capacity()) compactArena(room);
+  if (arena_.size() + room > arena_.capacity()) CompactArena(room);
   // A merge is bound by memory latency: ask for every neighbour's state and geometry now, so
   // that the misses overlap each other and the cone arithmetic below.
   Prefetch(&units_[size_t(p)]);
@@ -695,7 +695,7 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
     MinimalCone(scratchSupport_, sa);
   }
   if (stillExact) ac.exactSize = a.faceCount;
-  else if (a.faceCount >= int64_t(exactGrowth_) * ac.exactSize) makeConeExact(u);  // amortized: each face O(log N) times
+  else if (a.faceCount >= int64_t(exactGrowth_) * ac.exactSize) MakeConeExact(u);  // amortized: each face O(log N) times
 
   // The merged unit's list: both lists without u and p, deduplicated, each pair re-scored. It
   // goes back into u's slot when it fits (a unit absorbing a small neighbour rarely gains
@@ -770,7 +770,7 @@ void HierarchyBuilder::mergeUnits(int u, int p) {
 
 // Slides the live lists down over the dead ones, in arena order (no copy of the arena), and makes
 // sure `room` more entries fit. The new order overwrites the old one as it is read.
-void HierarchyBuilder::compactArena(size_t room) {
+void HierarchyBuilder::CompactArena(size_t room) {
   const bool identity = arenaOrder_.empty();
   if (identity) arenaOrder_.reserve(size_t(aliveCount_));
   size_t write = 0, kept = 0;
@@ -804,7 +804,7 @@ void HierarchyBuilder::compactArena(size_t room) {
   if (write + room > arena_.capacity()) arena_.reserve(write + room + write / 2);
 }
 
-bool HierarchyBuilder::reportProgress(long mergesSoFar) {
+bool HierarchyBuilder::ReportProgress(long mergesSoFar) {
   if ((mergesSoFar & 0x3FFF) != 0 || !progress_) return true;
   const int pct = int(95.0 * double(mergesSoFar) / std::max(1, faceCount_ - 1));
   if (progress_(std::min(95, pct), "grouping faces by normal cones")) return true;
@@ -812,7 +812,7 @@ bool HierarchyBuilder::reportProgress(long mergesSoFar) {
   return false;
 }
 
-bool HierarchyBuilder::runLevel(double thresholdDeg, bool localMaximaFirst, long& mergesSoFar) {
+bool HierarchyBuilder::RunLevel(double thresholdDeg, bool localMaximaFirst, long& mergesSoFar) {
   setThreshold(thresholdDeg);
   const size_t n = units_.size();
   aliveCount_ = int(n);
@@ -878,9 +878,9 @@ bool HierarchyBuilder::runLevel(double thresholdDeg, bool localMaximaFirst, long
       while (alive(u) && aliveCount_ > minGroups) {
         const int b = links_[size_t(u)].bestPartner;
         if (b < 0 || links_[size_t(b)].bestPartner != u) break;
-        mergeUnits(u, b);
+        MergeUnits(u, b);
         ++merges;
-        if (!reportProgress(mergesSoFar + merges)) return false;
+        if (!ReportProgress(mergesSoFar + merges)) return false;
       }
       return true;
     };
@@ -920,15 +920,15 @@ bool HierarchyBuilder::runLevel(double thresholdDeg, bool localMaximaFirst, long
   tree_.build();
   while (!tree_.empty() && aliveCount_ > minGroups) {
     const int u = tree_.top();
-    mergeUnits(u, links_[size_t(u)].bestPartner);
+    MergeUnits(u, links_[size_t(u)].bestPartner);
     ++merges;
-    if (!reportProgress(mergesSoFar + merges)) return false;
+    if (!ReportProgress(mergesSoFar + merges)) return false;
   }
   mergesSoFar += merges;
   return merges > 0;
 }
 
-void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool firstLevel) {
+void HierarchyBuilder::EmitLevel(double thresholdDeg, GroupHierarchy& out, bool firstLevel) {
   const size_t n = units_.size();
   GroupLevel level;
   level.thresholdDeg = thresholdDeg;
@@ -986,7 +986,7 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     nextLevelUnits();
     // Renumbered now, the exact cones below read the normals in memory order, computed once for
     // this level and the next ones (the level-1 merges read them rounded, or from the mesh).
-    if (firstLevel) renumberFaces();
+    if (firstLevel) RenumberFaces();
   }
   if (firstLevel && !params_.strictGreedy) support_.assign(groupCount, ConeSupport());
   level.groups.resize(groupCount);
@@ -1018,7 +1018,7 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   // max do not depend on the order, but for the sign of a zero); tight spheres from the
   // vertices, in face order (which reads the mesh sequentially).
   for (size_t g = 0; g < groupCount; ++g) {
-    if (chains_[g].exactSize != units_[g].faceCount || (firstLevel && !support_.empty())) makeConeExact(int(g));
+    if (chains_[g].exactSize != units_[g].faceCount || (firstLevel && !support_.empty())) MakeConeExact(int(g));
     Group& grp = level.groups[g];
     grp.cone = units_[g].cone();
     grp.faceCount = units_[g].faceCount;
@@ -1077,7 +1077,7 @@ void HierarchyBuilder::emitLevel(double thresholdDeg, GroupHierarchy& out, bool 
 // After level 1: faces renumbered group by group, each group's in the order of its list (so the
 // normals' order, which MinimalCone's last bits depend on, is unchanged), with their normals and
 // areas; and, in the same pass over the faces, each level-1 group's distinct vertices (l1Verts_).
-void HierarchyBuilder::renumberFaces() {
+void HierarchyBuilder::RenumberFaces() {
   const size_t nf = size_t(faceCount_);
   const size_t groups = units_.size();  // the units are the level's groups, all alive
   meshFace_.resize(nf);
@@ -1131,7 +1131,7 @@ void HierarchyBuilder::renumberFaces() {
   l1VertBegin_[groups] = uint32_t(l1Verts_.size());
 }
 
-// The groups found by emitLevel (rootOfGroup_, idOfUnit_) become the units of the next level
+// The groups found by EmitLevel (rootOfGroup_, idOfUnit_) become the units of the next level
 // (their lists already name live units only); this level's arrays are released.
 void HierarchyBuilder::nextLevelUnits() {
   const size_t g = rootOfGroup_.size();
@@ -1198,7 +1198,7 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
   }
 
   // Level-1 units: one per face. In the default mode each pair is scored once, from its lower
-  // unit (runLevel); here already, as soon as both units are made.
+  // unit (RunLevel); here already, as soon as both units are made.
   const bool scoreNow = !params_.strictGreedy;
   if (scoreNow) setThreshold(std::min(params_.coneThresholdDeg, 180.0));
   prescored_ = scoreNow;
@@ -1219,8 +1219,8 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     faceNext_[size_t(f)] = f;
     chains_[size_t(f)] = Chain{f, 1, links_[size_t(f)].nbCount};
     if (scoreNow) {
-      // The pairs with the faces before this one, scored as runLevel would score them (from the
-      // lower unit), while those faces' units are still in the cache: runLevel then only picks
+      // The pairs with the faces before this one, scored as RunLevel would score them (from the
+      // lower unit), while those faces' units are still in the cache: RunLevel then only picks
       // each unit's best.
       for (Neighbour* nb = nbBegin(f); nb != nbEnd(f); ++nb) {
         const int w = nb->id;
@@ -1240,18 +1240,18 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     // a quarter fewer normals); the looser bounds leave 1-3% more level-1 groups, culling as well
     // (docs/cone_grouping.md). Above it a refresh costs about one scan (support_).
     exactGrowth_ = params_.strictGreedy ? 2 : (level == 1 ? 8 : 4);
-    const bool merged = runLevel(std::min(threshold, 180.0), level == 1 && !params_.strictGreedy, merges);
+    const bool merged = RunLevel(std::min(threshold, 180.0), level == 1 && !params_.strictGreedy, merges);
     prescored_ = false;
     BigVector<vcg::Point3f>().swap(l1Normal_);  // before the level's output grows
     if (cancelled_) { out = GroupHierarchy(); return Status::Cancelled(); }
     if (!merged && level > 1) break;  // nothing changed: the previous level is the top
-    emitLevel(std::min(threshold, 180.0), out, level == 1);
+    EmitLevel(std::min(threshold, 180.0), out, level == 1);
     if (int(out.levels.back().groups.size()) <= std::max(1, params_.minTopGroups)) break;
     if (level == params_.maxLevels) break;
     threshold *= params_.thresholdGrowth;
   }
 
-  // Areas per group, from the faces' areas (renumberFaces) in face order: the same sums on every
+  // Areas per group, from the faces' areas (RenumberFaces) in face order: the same sums on every
   // run. Level by level: each group's sum still takes its faces in face order.
   for (auto& lv : out.levels) {
     Group* groups = lv.groups.data();

@@ -672,9 +672,9 @@ struct QueueState : TrackingStore {
 // §3.3-3.4: the collapse engine on a Work — one lane: its queues, its deferred vertices under the
 // common error bound, its collapses. The whole mesh is one lane; a mesh simplified in parts has one
 // lane per part and a seam lane (Simplify), and the parts' lanes run at the same time.
-class Simplifier : public Evaluator {
+class FeatureSimplifier : public Evaluator {
  public:
-  Simplifier(Work& w, const FeatureSimplifyParams& p, QueueState& q)
+  FeatureSimplifier(Work& w, const FeatureSimplifyParams& p, QueueState& q)
       : Evaluator(w, p, q), q_(q), stamp_(q.stamp), visit_(q.visit), queued_(q.queued), fanChanged_(q.fanChanged),
         retry_(q.retry), deferredMark_(q.deferredMark), ahead_(q.ahead), aheadStamp_(q.aheadStamp) {}
 
@@ -694,7 +694,7 @@ class Simplifier : public Evaluator {
   // Lanes of a mesh simplified in parts (Simplify): the part of each vertex, the lanes by
   // part, and whether this is the seam lane (which runs alone, with Work::frozen lifted, on the
   // vertices of the seams and on the vertices their collapses touch).
-  void SetParts(const std::vector<uint8_t>* part, std::vector<char>* seam, const std::vector<Simplifier*>* lanes,
+  void SetParts(const std::vector<uint8_t>* part, std::vector<char>* seam, const std::vector<FeatureSimplifier*>* lanes,
                 bool seamLane, uint32_t index, uint32_t count) {
     part_ = part;
     seam_ = seam;
@@ -704,7 +704,7 @@ class Simplifier : public Evaluator {
     markStep_ = count;
   }
   // A part's lane: queues for the seam lane the seam vertices Push was asked for.
-  void HandPendingTo(Simplifier& seamLane);
+  void HandPendingTo(FeatureSimplifier& seamLane);
 
   bool track_ = false;  // original vertices are tracked (an error bound is in force)
   bool grow_ = false;   // the bound grows until the target face count is reached
@@ -759,11 +759,11 @@ class Simplifier : public Evaluator {
   std::vector<Deferred> admitted_;  // Admit's vertices to put back in their queues
   size_t popsK_ = 0, popsM_ = 0, iter_ = 0;
   // The lane whose first pass ahead covers v (its aheadLeft_), and whose deferred queue takes v.
-  Simplifier& Owner(uint32_t v) { return part_ && !(seamLane_ && (*seam_)[v]) ? *(*lanes_)[(*part_)[v]] : *this; }
+  FeatureSimplifier& Owner(uint32_t v) { return part_ && !(seamLane_ && (*seam_)[v]) ? *(*lanes_)[(*part_)[v]] : *this; }
   const std::vector<uint8_t>* part_ = nullptr;
   std::vector<char>* seam_ = nullptr;
   uint32_t markStep_ = 1;
-  const std::vector<Simplifier*>* lanes_ = nullptr;
+  const std::vector<FeatureSimplifier*>* lanes_ = nullptr;
   bool seamLane_ = false;
   std::vector<std::pair<uint32_t, bool>> pending_;  // seam vertices to push (recompute K / M)
   std::vector<Tri> newFan_;           // the faces around `to` after a collapse, as triangles
@@ -1059,7 +1059,7 @@ Evaluation Evaluator::Evaluate(uint32_t v, uint32_t retryTo, double bound, bool 
   return ev;
 }
 
-void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
+void FeatureSimplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
   Work& w = w_;
   ResetCaches();
   const bool track = track_;
@@ -1166,21 +1166,21 @@ void Simplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
       }
 }
 
-bool Simplifier::Admitted(uint32_t v) const {
+bool FeatureSimplifier::Admitted(uint32_t v) const {
   if (p_.curvatureThreshold <= 0) return true;
   const Work& w = w_;
   const double curv = w.cls[v] == VertexClass::Smooth ? std::abs(w.K[v]) * (w.diag * w.diag) : std::abs(w.M[v]) * w.diag;
   return curv < p_.curvatureThreshold;
 }
 
-void Simplifier::PrefetchCurvatureInputs(uint32_t v) const {
+void FeatureSimplifier::PrefetchCurvatureInputs(uint32_t v) const {
   for (uint32_t f : w_.VF[v]) {
     Prefetch(&w_.F[f]);
     Prefetch(&w_.faceAngles[f]);
   }
 }
 
-void Simplifier::Push(uint32_t v, bool recompute) {
+void FeatureSimplifier::Push(uint32_t v, bool recompute) {
   Work& w = w_;
   if (!seamLane_ && w.frozen && (*w.frozen)[v]) {  // a seam vertex: the seam lane's
     pending_.push_back({v, recompute});
@@ -1204,14 +1204,14 @@ void Simplifier::Push(uint32_t v, bool recompute) {
 
 // The smallest error among the deferred vertices (stale entries dropped): the next bound is at
 // least this (and at least x1.25 the current one, so that each round admits many vertices).
-bool Simplifier::SmallestDeferred(double& error) {
+bool FeatureSimplifier::SmallestDeferred(double& error) {
   while (!deferred_.empty() && deferred_.top().stamp != stamp_[deferred_.top().v]) deferred_.pop();
   if (deferred_.empty()) return false;
   error = deferred_.top().error;
   return true;
 }
 
-void Simplifier::Admit() {
+void FeatureSimplifier::Admit() {
   admitted_.clear();
   while (!deferred_.empty() && deferred_.top().error <= bound_) {
     const Deferred d = deferred_.top();
@@ -1237,7 +1237,7 @@ void Simplifier::Admit() {
 // aheadStamp_ of its own vertices and its evaluator's scratch; nothing is collapsed meanwhile.
 // If a thread fails, nothing made ahead is used. Progress is reported (and cancellation seen)
 // on this thread only, between chunks; false: cancelled.
-bool Simplifier::FirstPassAhead(unsigned threads, const Progress& progress) {
+bool FeatureSimplifier::FirstPassAhead(unsigned threads, const Progress& progress) {
   const uint32_t nv = uint32_t(w_.P.size());
   ahead_.assign(nv, Evaluation());
   aheadStamp_.assign(nv, kNone);
@@ -1283,7 +1283,7 @@ bool Simplifier::FirstPassAhead(unsigned threads, const Progress& progress) {
 // After a collapse: the evaluations made ahead that it may have changed — every vertex within two
 // rings of `to` (from's old ring is in to's new one), since an evaluation reads its vertex's fan
 // and its neighbours' fans, feature edges and tracking — are no longer used.
-void Simplifier::InvalidateAhead(uint32_t from, uint32_t to) {
+void FeatureSimplifier::InvalidateAhead(uint32_t from, uint32_t to) {
   DropAhead(from);
   DropAhead(to);
   for (uint32_t f : w_.VF[to])
@@ -1292,7 +1292,7 @@ void Simplifier::InvalidateAhead(uint32_t from, uint32_t to) {
         for (uint32_t z : w_.F[g]) DropAhead(z);
 }
 
-bool Simplifier::RunRound(size_t quota, const Progress* progress, size_t facesIn, size_t target, size_t facesBefore,
+bool FeatureSimplifier::RunRound(size_t quota, const Progress* progress, size_t facesIn, size_t target, size_t facesBefore,
                           size_t lanes, std::atomic<bool>& cancelled) {
   Work& w = w_;
   const size_t start = removed_;
@@ -1363,7 +1363,7 @@ bool Simplifier::RunRound(size_t quota, const Progress* progress, size_t facesIn
   return false;
 }
 
-void Simplifier::HandPendingTo(Simplifier& seamLane) {
+void FeatureSimplifier::HandPendingTo(FeatureSimplifier& seamLane) {
   for (const auto& x : pending_)
     if (!queued_[x.first] || x.second) seamLane.Push(x.first, x.second);
   pending_.clear();
@@ -1420,7 +1420,7 @@ std::vector<uint8_t> CutIntoParts(const Work& w, unsigned parts) {
 // A round that reaches the target is shared between the parts' lanes still busy in proportion to
 // their faces, so that the result depends neither on which lane runs first nor on the number of
 // threads. Progress is reported on this thread only. False: cancelled.
-bool RunLanes(Work& w, const std::vector<Simplifier*>& lanes, Simplifier* seamLane, const FeatureSimplifyParams& p,
+bool RunLanes(Work& w, const std::vector<FeatureSimplifier*>& lanes, FeatureSimplifier* seamLane, const FeatureSimplifyParams& p,
               size_t facesIn, unsigned threads, const Progress& progress) {
   const size_t target = p.targetFaceCount;
   const std::vector<char>* seam = w.frozen;  // lifted while the seam lane runs
@@ -1430,7 +1430,7 @@ bool RunLanes(Work& w, const std::vector<Simplifier*>& lanes, Simplifier* seamLa
   bool seamAdmit = false, seamDone = seamLane == nullptr;
   for (;;) {
     size_t removed = seamLane ? seamLane->removed_ : 0;
-    for (const Simplifier* l : lanes) removed += l->removed_;
+    for (const FeatureSimplifier* l : lanes) removed += l->removed_;
     const size_t faces = facesIn - removed;
     if (target > 0 && faces <= target) return true;
     std::vector<size_t> active;
@@ -1459,7 +1459,7 @@ bool RunLanes(Work& w, const std::vector<Simplifier*>& lanes, Simplifier* seamLa
         active.resize(kept);
       }
       auto run = [&](size_t i, bool reporting) {
-        Simplifier& l = *lanes[i];
+        FeatureSimplifier& l = *lanes[i];
         if (admit[i]) l.Admit();
         admit[i] = 0;
         if (l.RunRound(quota[i], reporting ? &progress : nullptr, facesIn, target, faces, active.size(), cancelled))
@@ -1476,7 +1476,7 @@ bool RunLanes(Work& w, const std::vector<Simplifier*>& lanes, Simplifier* seamLa
     }
     if (!seamDone) {
       w.frozen = nullptr;  // the seams are free while the seam lane runs alone
-      for (Simplifier* l : lanes) l->HandPendingTo(*seamLane);
+      for (FeatureSimplifier* l : lanes) l->HandPendingTo(*seamLane);
       if (seamAdmit) seamLane->Admit();
       seamLane->RunRound(target > 0 ? faces - target : std::numeric_limits<size_t>::max(), &progress, facesIn,
                          target, faces, 1, cancelled);
@@ -1491,11 +1491,11 @@ bool RunLanes(Work& w, const std::vector<Simplifier*>& lanes, Simplifier* seamLa
     if (!lanes[0]->grow_) return true;
     double smallest = std::numeric_limits<double>::infinity();
     bool any = false;
-    auto consider = [&](Simplifier* l) {
+    auto consider = [&](FeatureSimplifier* l) {
       double e = 0;
       if (l->SmallestDeferred(e)) { any = true; smallest = std::min(smallest, e); }
     };
-    for (Simplifier* l : lanes) consider(l);
+    for (FeatureSimplifier* l : lanes) consider(l);
     if (seamLane) consider(seamLane);
     if (!any) return true;
     double next = std::max(lanes[0]->bound_ * 1.25, smallest);
@@ -1503,7 +1503,7 @@ bool RunLanes(Work& w, const std::vector<Simplifier*>& lanes, Simplifier* seamLa
       if (smallest > p.maxErrorDistance) return true;
       next = std::min(next, p.maxErrorDistance);
     }
-    for (Simplifier* l : lanes) l->bound_ = next;
+    for (FeatureSimplifier* l : lanes) l->bound_ = next;
     if (seamLane) seamLane->bound_ = next;
     std::fill(exhausted.begin(), exhausted.end(), 0);
     std::fill(admit.begin(), admit.end(), 1);
@@ -1547,28 +1547,28 @@ Status Simplify(Work& w, const FeatureSimplifyParams& p, FeatureSimplifyResult& 
       if (w.alive[f] && SpansParts(part, w.F[f]))
         for (uint32_t v : w.F[f]) seam[v] = 1;
   }
-  std::vector<std::unique_ptr<Simplifier>> store;
-  std::vector<Simplifier*> lanes;
+  std::vector<std::unique_ptr<FeatureSimplifier>> store;
+  std::vector<FeatureSimplifier*> lanes;
   for (unsigned i = 0; i < parts + (parts > 1 ? 1 : 0); ++i) {
-    store.emplace_back(new Simplifier(w, p, q));
+    store.emplace_back(new FeatureSimplifier(w, p, q));
     store.back()->track_ = track;
     store.back()->grow_ = grow;
     store.back()->bound_ = bound;
     if (i < parts) lanes.push_back(store.back().get());
   }
-  Simplifier* seamLane = parts > 1 ? store.back().get() : nullptr;
+  FeatureSimplifier* seamLane = parts > 1 ? store.back().get() : nullptr;
   if (parts > 1) {
     for (unsigned i = 0; i < parts; ++i) lanes[i]->SetParts(&part, &seam, &lanes, false, i, parts + 1);
     seamLane->SetParts(&part, &seam, &lanes, true, parts, parts + 1);
   }
-  auto laneOf = [&](uint32_t v) -> Simplifier& {
+  auto laneOf = [&](uint32_t v) -> FeatureSimplifier& {
     if (parts == 1) return *lanes[0];
     return seam[v] ? *seamLane : *lanes[part[v]];
   };
   for (uint32_t f = 0; f < w.F.size(); ++f)
     if (w.alive[f]) (parts > 1 ? *lanes[part[w.F[f][0]]] : *lanes[0]).faces_ += 1;
   for (uint32_t v = 0; v < nv; ++v) {
-    Simplifier& l = laneOf(v);
+    FeatureSimplifier& l = laneOf(v);
     if (w.cls[v] == VertexClass::Smooth) ++l.nK_;
     if (w.cls[v] == VertexClass::FeatureLine) ++l.nM_;
     if (&l != seamLane) l.Push(v, false);  // Classify has just computed K and M
@@ -1583,7 +1583,7 @@ Status Simplify(Work& w, const FeatureSimplifyParams& p, FeatureSimplifyResult& 
       w.frozen = nullptr;
       return Status::Cancelled();
     }
-    for (Simplifier* l : lanes) l->aheadLeft_ = 0;
+    for (FeatureSimplifier* l : lanes) l->aheadLeft_ = 0;
     for (uint32_t v = 0; v < nv; ++v)
       if (q.aheadStamp[v] != kNone) laneOf(v).aheadLeft_ += 1;
   }
@@ -1715,7 +1715,7 @@ CollapseRefusal CheckFeatureCollapse(const IndexedMesh& mesh, const FeatureSimpl
   if (!ValidateAndCheckInput(mesh, params).ok() || !w.Build(mesh, params).ok()) return CollapseRefusal::NotAnEdge;
   if (from >= w.P.size() || to >= w.P.size()) return CollapseRefusal::NotAnEdge;
   QueueState q;
-  Simplifier simp(w, params, q);
+  FeatureSimplifier simp(w, params, q);
   return simp.Check(from, to, nullptr, nullptr, true);
 }
 

@@ -119,20 +119,20 @@ class EntryHeap {
   }
   void push(const HeapEntry& e) {
     append(e);
-    siftUp(n_ - 1);
+    SiftUp(n_ - 1);
   }
   HeapEntry pop() {
     const HeapEntry top = h_[0];
     h_[0] = h_[--n_];
-    if (n_ > 0) siftDown(0);
+    if (n_ > 0) SiftDown(0);
     return top;
   }
   void heapify() {
     for (size_t i = n_ / 4 + 1; i-- > 0;)
-      if (i < n_) siftDown(i);
+      if (i < n_) SiftDown(i);
   }
   template <class Pred>
-  void removeIf(Pred pred) {
+  void RemoveIf(Pred pred) {
     n_ = size_t(std::remove_if(h_, h_ + n_, pred) - h_);
     heapify();
   }
@@ -147,7 +147,7 @@ class EntryHeap {
     h_ = h;
     cap_ = cap;
   }
-  void siftUp(size_t i) {
+  void SiftUp(size_t i) {
     const HeapEntry x = h_[i];
     while (i > 0) {
       const size_t parent = (i - 1) / 4;
@@ -157,7 +157,7 @@ class EntryHeap {
     }
     h_[i] = x;
   }
-  void siftDown(size_t i) {
+  void SiftDown(size_t i) {
     const HeapEntry x = h_[i];
     const size_t n = n_;
     for (;;) {
@@ -221,9 +221,9 @@ inline uint32_t Third(const std::array<uint32_t, 3>& t, uint32_t a, uint32_t b) 
 }
 inline float ToFloat(double x) { return float(std::min(x, double(std::numeric_limits<float>::max()))); }
 
-class Simplifier {
+class GroupQemSimplifier {
  public:
-  Simplifier(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
+  GroupQemSimplifier(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
              const std::vector<const std::vector<int>*>& coarser, const GroupQemParams& p,
              const GroupQemRegion* region = nullptr)
       : mesh_(mesh), group_(faceGroup), coarser_(coarser), p_(p),
@@ -243,8 +243,8 @@ class Simplifier {
   // Face list of v: refs_[start_[v] .. start_[v] + count_[v]).
   const uint32_t* facesBegin(uint32_t v) const { return refs_.data() + start_[v]; }
   const uint32_t* facesEnd(uint32_t v) const { return refs_.data() + start_[v] + count_[v]; }
-  void buildFaceLists();
-  void analyzeVertex(uint32_t v);
+  void BuildFaceLists();
+  void AnalyzeVertex(uint32_t v);
   bool interior(uint32_t v) const { return (vs_[v].info.flags & kClosed) && vs_[v].info.groups == 1; }
   bool interiorIn(uint32_t v, const std::vector<int>& layer) const;
   bool fixedVertex(uint32_t v) const;
@@ -269,10 +269,10 @@ class Simplifier {
   float lowerBound(uint32_t a, uint32_t b) const;
   void collapse(const Candidate& c);
   bool frozen(uint32_t v) const { return frozen_ && frozen_[v]; }
-  void pushLazy(uint32_t a, uint32_t b) {
+  void PushLazy(uint32_t a, uint32_t b) {
     if (!frozen(a) && !frozen(b)) heap_.push({lowerBound(a, b), a, b, epoch_ | kLazy});
   }
-  void pushEdgesOf(uint32_t v);  // lazy entries for every edge of v, heap order restored
+  void PushEdgesOf(uint32_t v);  // lazy entries for every edge of v, heap order restored
   // Integrity mode: after collapsing (a, b) (faces e0, e1 on the edge; n0a, n0b, n1a, n1b: the
   // faces across (a, opp0), (b, opp0), (a, opp1), (b, opp1), kNone where there is none), every
   // group of every grouping is still one piece, as many pieces as before, and not empty.
@@ -354,7 +354,7 @@ class Simplifier {
   std::vector<int> groupScratch_;
 };
 
-void Simplifier::buildFaceLists() {
+void GroupQemSimplifier::BuildFaceLists() {
   const size_t nv = pos_.size();
   start_.assign(nv, 0);
   count_.assign(nv, 0);
@@ -379,7 +379,7 @@ void Simplifier::buildFaceLists() {
   }
 }
 
-void Simplifier::analyzeVertex(uint32_t v) {
+void GroupQemSimplifier::AnalyzeVertex(uint32_t v) {
   VertexInfo& vi = vs_[v].info;
   const uint32_t k = count_[v];
   if (k == 0) { vi.flags = kIsolated; vi.groups = 0; return; }
@@ -440,7 +440,7 @@ void Simplifier::analyzeVertex(uint32_t v) {
   else vi.flags = kOpen;
 }
 
-bool Simplifier::interiorIn(uint32_t v, const std::vector<int>& layer) const {
+bool GroupQemSimplifier::interiorIn(uint32_t v, const std::vector<int>& layer) const {
   if (!(vs_[v].info.flags & kClosed)) return false;
   const int g = layer[*facesBegin(v)];
   for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f)
@@ -448,7 +448,7 @@ bool Simplifier::interiorIn(uint32_t v, const std::vector<int>& layer) const {
   return true;
 }
 
-bool Simplifier::fixedVertex(uint32_t v) const {
+bool GroupQemSimplifier::fixedVertex(uint32_t v) const {
   const VertexInfo& vi = vs_[v].info;
   if (vi.flags & kNonManifold) return true;
   if (p_.preserveBoundary && (vi.flags & kOpen)) return true;
@@ -459,7 +459,7 @@ bool Simplifier::fixedVertex(uint32_t v) const {
   return false;
 }
 
-void Simplifier::init() {
+void GroupQemSimplifier::init() {
   const size_t nv = mesh_.positions.size(), nf = mesh_.faces.size();
   // Work around the bounding-box centre: quadrics lose less precision near the origin.
   vcg::Box3<double> box;
@@ -508,8 +508,8 @@ void Simplifier::init() {
   faceDead_.assign(nf, 0);
   vs_.assign(nv, VertexState());
   liveFaces_ = nf;
-  buildFaceLists();
-  for (uint32_t v = 0; v < nv; ++v) analyzeVertex(v);
+  BuildFaceLists();
+  for (uint32_t v = 0; v < nv; ++v) AnalyzeVertex(v);
   coarserNested_ = !coarser_.empty();
   if (coarserNested_) {
     const int maxGroup = nf > 0 ? *std::max_element(group_.begin(), group_.end()) : 0;
@@ -558,7 +558,7 @@ void Simplifier::init() {
 }
 
 template <class GroupOf>
-bool Simplifier::condition1(const GroupOf& g, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a,
+bool GroupQemSimplifier::condition1(const GroupOf& g, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a,
                             uint32_t n0b, uint32_t n1a, uint32_t n1b, const std::vector<int>* layer) const {
   // f1 (and f2) keep a face of their own group among their other neighbours...
   const int g0 = g(e0);
@@ -571,7 +571,7 @@ bool Simplifier::condition1(const GroupOf& g, uint32_t a, uint32_t b, uint32_t e
   return layer ? (interiorIn(a, *layer) || interiorIn(b, *layer)) : (interior(a) || interior(b));
 }
 
-bool Simplifier::place(uint32_t a, uint32_t b, bool contourEdge, Candidate& c) const {
+bool GroupQemSimplifier::place(uint32_t a, uint32_t b, bool contourEdge, Candidate& c) const {
   const bool fixedA = fixedVertex(a), fixedB = fixedVertex(b);
   if (fixedA && fixedB) return false;
   const bool contourA = contourVertex(a), contourB = contourVertex(b);
@@ -602,7 +602,7 @@ bool Simplifier::place(uint32_t a, uint32_t b, bool contourEdge, Candidate& c) c
   return true;
 }
 
-double Simplifier::priorityOf(double error, double quality, uint32_t a, uint32_t b) const {
+double GroupQemSimplifier::priorityOf(double error, double quality, uint32_t a, uint32_t b) const {
   if (error <= floorError_) error = floorError_ * std::sqrt((pos_[b] - pos_[a]).SquaredNorm()) / diag_;
   if (p_.qualityThr > 0) error /= std::max(std::min(quality, p_.qualityThr), kDegenerateQuality);
   return error;
@@ -610,7 +610,7 @@ double Simplifier::priorityOf(double error, double quality, uint32_t a, uint32_t
 
 // At most the priority judge() would give: the error at the quadric's unconstrained minimum (or
 // of the better endpoint), with the best quality.
-float Simplifier::lowerBound(uint32_t a, uint32_t b) const {
+float GroupQemSimplifier::lowerBound(uint32_t a, uint32_t b) const {
   Quadric q = quadric_[a];
   q += quadric_[b];
   Point3d x;
@@ -620,7 +620,7 @@ float Simplifier::lowerBound(uint32_t a, uint32_t b) const {
   return ToFloat(priorityOf(error, 1.0, a, b));
 }
 
-Candidate Simplifier::evaluate(uint32_t a, uint32_t b) {
+Candidate GroupQemSimplifier::evaluate(uint32_t a, uint32_t b) {
   ++stats_.evaluations;
   Candidate c = judge(a, b);
   switch (c.verdict) {
@@ -636,7 +636,7 @@ Candidate Simplifier::evaluate(uint32_t a, uint32_t b) {
   return c;
 }
 
-Candidate Simplifier::judge(uint32_t a, uint32_t b) {
+Candidate GroupQemSimplifier::judge(uint32_t a, uint32_t b) {
   Candidate c;
   if (a == b || vs_[a].dead || vs_[b].dead) return c;
   // Faces on the edge.
@@ -760,7 +760,7 @@ Candidate Simplifier::judge(uint32_t a, uint32_t b) {
   return c;
 }
 
-bool Simplifier::keepsGroupsWhole(uint32_t a, uint32_t b) {
+bool GroupQemSimplifier::keepsGroupsWhole(uint32_t a, uint32_t b) {
   uint32_t e[2] = {kNone, kNone};
   uint32_t ne = 0;
   for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f)
@@ -779,7 +779,7 @@ bool Simplifier::keepsGroupsWhole(uint32_t a, uint32_t b) {
   return keepsGroupsWhole(a, b, e[0], e[1], n[0], n[1], n[2], n[3]);
 }
 
-bool Simplifier::keepsGroupsWhole(uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a, uint32_t n0b,
+bool GroupQemSimplifier::keepsGroupsWhole(uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a, uint32_t n0b,
                                   uint32_t n1a, uint32_t n1b) {
   for (int layer = -1; layer < int(coarserDense_.size()); ++layer)
     if (!keepsGroupWhole(layer, a, b, e0, e1, n0a, n0b, n1a, n1b)) return false;
@@ -792,7 +792,7 @@ bool Simplifier::keepsGroupsWhole(uint32_t a, uint32_t b, uint32_t e0, uint32_t 
 // its faces next to e0/e1 (among n0a, n0b, n1a, n1b) are no longer connected inside G. These are
 // connected when they are through the merged vertex's fan (two faces of the fan are adjacent when
 // they share a vertex other than a and b), and otherwise when a bounded search inside G joins them.
-bool Simplifier::keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a,
+bool GroupQemSimplifier::keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a,
                                  uint32_t n0b, uint32_t n1a, uint32_t n1b) {
   const std::vector<int>& count = groupFaces_[size_t(layer + 1)];
   const int g0 = groupIn(layer, e0), g1 = e1 != kNone ? groupIn(layer, e1) : -1;
@@ -885,18 +885,18 @@ bool Simplifier::keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint32_t e0,
   return true;
 }
 
-void Simplifier::pushEdgesOf(uint32_t v) {
+void GroupQemSimplifier::PushEdgesOf(uint32_t v) {
   ++stamp_;
   vs_[v].mark = stamp_;
   for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f)
     for (uint32_t u : faces_[*f])
       if (vs_[u].mark != stamp_) {
         vs_[u].mark = stamp_;
-        pushLazy(v, u);
+        PushLazy(v, u);
       }
 }
 
-void Simplifier::collapse(const Candidate& c) {
+void GroupQemSimplifier::collapse(const Candidate& c) {
   const uint32_t keep = c.keep, gone = c.remove;
   // The faces on the edge die and leave the lists of their opposite vertices.
   uint32_t opposite[2] = {kNone, kNone};
@@ -919,7 +919,7 @@ void Simplifier::collapse(const Candidate& c) {
       if (!faceDead_[*f])
         for (auto& v : faces_[*f]) if (v == gone) v = keep;
     count_[gone] = 0;
-    buildFaceLists();
+    BuildFaceLists();
   } else {
     const uint32_t begin = uint32_t(refs_.size());
     for (uint32_t v : {keep, gone}) {
@@ -941,12 +941,12 @@ void Simplifier::collapse(const Candidate& c) {
   quadric_[keep] += quadric_[gone];
   ++epoch_;
   vs_[keep].lastSurvive = vs_[keep].touched = epoch_;
-  analyzeVertex(keep);
+  AnalyzeVertex(keep);
   // An opposite vertex lost a face: its groups may have changed, and with them what its edges may do.
   for (int i = 0; i < no; ++i) {
     const uint32_t o = opposite[i];
     const VertexInfo before = vs_[o].info;
-    analyzeVertex(o);
+    AnalyzeVertex(o);
     if (vs_[o].info.flags != before.flags || vs_[o].info.groups != before.groups) vs_[o].dropped = 1;
   }
   // The ring's neighbourhoods changed; those with dropped collapses get all their edges queued again.
@@ -958,17 +958,17 @@ void Simplifier::collapse(const Candidate& c) {
       if (vs_[u].mark != stamp_) {
         vs_[u].mark = stamp_;
         vs_[u].touched = epoch_;
-        pushLazy(keep, u);
+        PushLazy(keep, u);
         if (vs_[u].dropped) ring_.push_back(u);
       }
   for (uint32_t u : ring_) {
     vs_[u].dropped = 0;
     vs_[u].lastSurvive = epoch_;
-    pushEdgesOf(u);
+    PushEdgesOf(u);
   }
 }
 
-Status Simplifier::run(const Progress& progress, GroupQemStats& stats) {
+Status GroupQemSimplifier::run(const Progress& progress, GroupQemStats& stats) {
   stats.facesIn = mesh_.faces.size();
   // Every edge once, from its lower endpoint, at its lower bound.
   heap_.reserve(mesh_.faces.size() * 2);
@@ -1043,7 +1043,7 @@ Status Simplifier::run(const Progress& progress, GroupQemStats& stats) {
     ++stats.collapses;
     stats.maxCollapseError = std::max(stats.maxCollapseError, std::sqrt(c.error) / diag_);
     if (heap_.size() > std::max(4 * liveFaces_ + 1024, compactFloor)) {
-      heap_.removeIf([&](const HeapEntry& h) {
+      heap_.RemoveIf([&](const HeapEntry& h) {
         const uint32_t e = h.tag & kEpochMask;
         return vs_[h.a].dead || vs_[h.b].dead || e < vs_[h.a].lastSurvive || e < vs_[h.b].lastSurvive;
       });
@@ -1063,7 +1063,7 @@ Status Simplifier::run(const Progress& progress, GroupQemStats& stats) {
   return stats.stop == GroupQemStats::Stop::Cancelled ? Status::Cancelled() : Status::Ok();
 }
 
-void Simplifier::output(GroupQemResult& out) const {
+void GroupQemSimplifier::output(GroupQemResult& out) const {
   out.mesh.positions.clear();
   out.mesh.faces.clear();
   out.sourceFace.clear();
@@ -1154,7 +1154,7 @@ Status SimplifyPreservingGroups(const IndexedMesh& mesh, const std::vector<int>&
                            std::to_string(mesh.positions.size()) + " vertices");
   if (region && !(region->diagonal >= 0 && std::isfinite(region->diagonal)))
     return Status::Invalid("the region's diagonal must be finite and >= 0");
-  Simplifier simplifier(mesh, faceGroup, coarserGroups, params, region);
+  GroupQemSimplifier simplifier(mesh, faceGroup, coarserGroups, params, region);
   simplifier.init();
   s = simplifier.run(progress, out.stats);
   if (s.ok() || s.code == Status::Code::Cancelled) simplifier.output(out);
@@ -1167,7 +1167,7 @@ CollapseVerdict EvaluateCollapse(const IndexedMesh& mesh, const std::vector<int>
   const std::vector<const std::vector<int>*> none;
   if (!CheckInput(mesh, faceGroup, none).ok() || v1 >= mesh.positions.size() || v2 >= mesh.positions.size())
     return CollapseVerdict::NotAnEdge;
-  Simplifier simplifier(mesh, faceGroup, none, params);
+  GroupQemSimplifier simplifier(mesh, faceGroup, none, params);
   simplifier.init();
   const Candidate c = simplifier.evaluate(v1, v2);
   if (newPosition && c.verdict == CollapseVerdict::Allowed) {

@@ -154,7 +154,7 @@ struct LodReader::Impl {
   }
 
   // Reads [offset, offset+n) into `buffer`, checking it lies in the file.
-  Status readRange(uint64_t offset, uint64_t n, const char* what) {
+  Status ReadRange(uint64_t offset, uint64_t n, const char* what) {
     if (offset > src->size || n > src->size - offset)
       return Status::Invalid(std::string("corrupt file: ") + what + " at offset " + Num(offset) + " (" + Num(n) +
                              " bytes) lies past the end of the file (" + Num(src->size) + " bytes)");
@@ -166,7 +166,7 @@ struct LodReader::Impl {
 
   // Checks the chunk whose header is at p (within a buffer of `avail` bytes): its id, its size
   // (data + children == `expectedTotal` when non-zero), the data within `avail`, the CRC.
-  static Status checkChunk(const uint8_t* p, uint64_t avail, uint32_t id, uint64_t expectedTotal, const char* what,
+  static Status CheckChunk(const uint8_t* p, uint64_t avail, uint32_t id, uint64_t expectedTotal, const char* what,
                            ChunkHeader& h) {
     if (avail < kChunkHeaderBytes) return Status::Invalid(std::string("truncated ") + what);
     h = DecodeChunkHeader(p);
@@ -182,7 +182,7 @@ struct LodReader::Impl {
   }
 
   // Index entries of nodes [first, first+count).
-  Status readIndex(uint32_t first, uint32_t count, std::vector<IndexEntry>& out) {
+  Status ReadIndex(uint32_t first, uint32_t count, std::vector<IndexEntry>& out) {
     out.clear();
     const uint64_t blocksData = kChunkHeaderBytes + kIndexDataBytes;
     const uint64_t blockBytes = kChunkHeaderBytes + uint64_t(indexBlock) * kIndexEntryBytes;
@@ -191,10 +191,10 @@ struct LodReader::Impl {
       if (b != cachedIndexBlock) {
         const uint64_t entries = std::min<uint64_t>(indexBlock, info.nodeCount - b * indexBlock);
         const uint64_t bytes = kChunkHeaderBytes + entries * kIndexEntryBytes;
-        Status s = readRange(indexOffset + blocksData + b * blockBytes, bytes, "index block");
+        Status s = ReadRange(indexOffset + blocksData + b * blockBytes, bytes, "index block");
         if (!s.ok()) return s;
         ChunkHeader h;
-        s = checkChunk(buffer.data(), bytes, kIBlock, bytes, "index block", h);
+        s = CheckChunk(buffer.data(), bytes, kIBlock, bytes, "index block", h);
         if (!s.ok()) return s;
         indexCache.resize(size_t(entries));
         Decoder d(buffer.data() + kChunkHeaderBytes, size_t(entries * kIndexEntryBytes));
@@ -218,10 +218,10 @@ struct LodReader::Impl {
   }
 
   // Reads the records of nodes [first, first+count) (one level, consecutive in the file).
-  Status loadRecords(uint32_t first, uint32_t count) {
+  Status LoadRecords(uint32_t first, uint32_t count) {
     if (count == 0) return Status::Ok();
     std::vector<IndexEntry> entries;
-    Status s = readIndex(first, count, entries);
+    Status s = ReadIndex(first, count, entries);
     if (!s.ok()) return s;
     uint64_t span = 0;
     for (uint32_t i = 0; i < count; ++i) {
@@ -230,14 +230,14 @@ struct LodReader::Impl {
                                " are not consecutive");
       span += entries[i].recordBytes;
     }
-    s = readRange(entries[0].record, span, "node records");
+    s = ReadRange(entries[0].record, span, "node records");
     if (!s.ok()) return s;
     const uint32_t level = levelOf(first);
     uint64_t at = 0;
     for (uint32_t i = 0; i < count; ++i) {
       const uint32_t id = first + i;
       ChunkHeader h;
-      s = checkChunk(buffer.data() + at, entries[i].recordBytes, kNode, entries[i].recordBytes,
+      s = CheckChunk(buffer.data() + at, entries[i].recordBytes, kNode, entries[i].recordBytes,
                      "the record of a node", h);
       if (!s.ok()) return Status::Invalid(s.message + " " + Num(id));
       Decoder d(buffer.data() + at + kChunkHeaderBytes, size_t(h.dataBytes));
@@ -297,16 +297,16 @@ struct LodReader::Impl {
     return Status::Ok();
   }
 
-  Status loadGeometry(uint32_t id) {
+  Status LoadGeometry(uint32_t id) {
     auto it = nodes.find(id);
     Entry& e = it->second;
     if (e.geometry) return Status::Ok();
     const LodNode& n = e.node;
     const std::string bad = "corrupt geometry of node " + Num(id) + ": ";
-    Status s = readRange(e.geometryOffset, e.geometryBytes, "node geometry");
+    Status s = ReadRange(e.geometryOffset, e.geometryBytes, "node geometry");
     if (!s.ok()) return s;
     ChunkHeader h;
-    s = checkChunk(buffer.data(), e.geometryBytes, kGeom, e.geometryBytes, "the geometry of a node", h);
+    s = CheckChunk(buffer.data(), e.geometryBytes, kGeom, e.geometryBytes, "the geometry of a node", h);
     if (!s.ok()) return Status::Invalid(s.message + " " + Num(id));
     Decoder d(buffer.data() + kChunkHeaderBytes, size_t(h.dataBytes));
     const uint32_t fileId = d.u32(), vc = d.u32(), fc = d.u32(), flags = d.u32();
@@ -337,7 +337,7 @@ struct LodReader::Impl {
         v = shortIndices ? d.u16() : d.u32();
         if (v >= vc) return Status::Invalid(bad + "face index out of range");
       }
-    s = readPositions(uint32_t(n.level), levelIds, g->positions);
+    s = ReadPositions(uint32_t(n.level), levelIds, g->positions);
     if (!s.ok()) return Status::Invalid(bad + s.message);
     geometryBytes += g->bytes();
     e.geometry = std::move(g);
@@ -346,7 +346,7 @@ struct LodReader::Impl {
 
   // Positions of the given level vertices: reads the VBLK blocks they lie in, runs of consecutive
   // blocks in one read.
-  Status readPositions(uint32_t level, const std::vector<uint32_t>& ids, std::vector<vcg::Point3f>& out) {
+  Status ReadPositions(uint32_t level, const std::vector<uint32_t>& ids, std::vector<vcg::Point3f>& out) {
     out.resize(ids.size());
     if (ids.empty()) return Status::Ok();
     // Local vertices sorted by level id (id << 32 | local index), swept block by block.
@@ -369,7 +369,7 @@ struct LodReader::Impl {
       const uint64_t firstVertex = uint64_t(blocks[i]) * vertexBlock;
       const uint64_t lastEnd = std::min<uint64_t>(L.vertices, uint64_t(blocks[j - 1] + 1) * vertexBlock);
       const uint64_t runBytes = uint64_t(j - i) * kChunkHeaderBytes + (lastEnd - firstVertex) * 12;
-      Status s = readRange(base + uint64_t(blocks[i]) * fullBlockBytes, runBytes, "vertex blocks");
+      Status s = ReadRange(base + uint64_t(blocks[i]) * fullBlockBytes, runBytes, "vertex blocks");
       if (!s.ok()) return s;
       uint64_t at = 0;
       for (size_t b = i; b < j; ++b) {
@@ -377,7 +377,7 @@ struct LodReader::Impl {
         const uint64_t v1 = std::min<uint64_t>(L.vertices, v0 + vertexBlock);
         const uint64_t bytes = kChunkHeaderBytes + (v1 - v0) * 12;
         ChunkHeader h;
-        s = checkChunk(buffer.data() + at, bytes, kVBlock, bytes, "a vertex block", h);
+        s = CheckChunk(buffer.data() + at, bytes, kVBlock, bytes, "a vertex block", h);
         if (!s.ok()) return s;
         const uint8_t* p = buffer.data() + at + kChunkHeaderBytes;
         for (; next < byId.size() && (byId[next] >> 32) < v1; ++next) {
@@ -397,12 +397,12 @@ struct LodReader::Impl {
     const std::string trunc = "truncated .clod file: ";
     if (src->size < kChunkHeaderBytes)
       return Status::Invalid(trunc + Num(src->size) + " bytes, shorter than a chunk header");
-    Status s = readRange(0, kChunkHeaderBytes, "the file header");
+    Status s = ReadRange(0, kChunkHeaderBytes, "the file header");
     if (!s.ok()) return s;
     const ChunkHeader h = DecodeChunkHeader(buffer.data());
     if (h.id != kRoot) return Status::Invalid("not a .clod file (wrong magic: " + ChunkName(h.id) + ", expected CLOD)");
     if (src->size < kChunkHeaderBytes + 4) return Status::Invalid(trunc + "no version field");
-    s = readRange(kChunkHeaderBytes, 4, "the version");
+    s = ReadRange(kChunkHeaderBytes, 4, "the version");
     if (!s.ok()) return s;
     const uint32_t version = Decoder(buffer.data(), 4).u32();
     if (version == 1)
@@ -419,7 +419,7 @@ struct LodReader::Impl {
     if (h.totalBytes() < src->size)
       return Status::Invalid("corrupt chunk size in the file header: it says " + Num(h.totalBytes()) +
                              " bytes, the file has " + Num(src->size));
-    s = readRange(kChunkHeaderBytes, h.dataBytes, "the file header");
+    s = ReadRange(kChunkHeaderBytes, h.dataBytes, "the file header");
     if (!s.ok()) return s;
     if (kCheckCrc && Crc32(buffer.data(), size_t(h.dataBytes)) != h.crc) return Status::Invalid("checksum mismatch in the file header");
     Decoder d(buffer.data(), size_t(h.dataBytes));
@@ -482,17 +482,17 @@ struct LodReader::Impl {
     }
     // The containers the header points to.
     {
-      s = readRange(hierOffset, kChunkHeaderBytes, "the hierarchy chunk");
+      s = ReadRange(hierOffset, kChunkHeaderBytes, "the hierarchy chunk");
       if (!s.ok()) return s;
       ChunkHeader hh;
-      s = checkChunk(buffer.data(), kChunkHeaderBytes, kHier, 0, "the hierarchy chunk", hh);
+      s = CheckChunk(buffer.data(), kChunkHeaderBytes, kHier, 0, "the hierarchy chunk", hh);
       if (!s.ok()) return s;
       if (hh.childBytes > src->size - hierOffset) return Status::Invalid("corrupt chunk size in the hierarchy chunk");
       const uint64_t indexBytes = kChunkHeaderBytes + kIndexDataBytes;
-      s = readRange(indexOffset, indexBytes, "the index chunk");
+      s = ReadRange(indexOffset, indexBytes, "the index chunk");
       if (!s.ok()) return s;
       ChunkHeader ih;
-      s = checkChunk(buffer.data(), indexBytes, kIndex, 0, "the index chunk", ih);
+      s = CheckChunk(buffer.data(), indexBytes, kIndex, 0, "the index chunk", ih);
       if (!s.ok()) return s;
       Decoder di(buffer.data() + kChunkHeaderBytes, kIndexDataBytes);
       const uint64_t entries = di.u64();
@@ -506,10 +506,10 @@ struct LodReader::Impl {
         LevelEntry& L = levels[k];
         // The level's container: its data must repeat the header's counts, its VERT follow it.
         const uint64_t lb = kChunkHeaderBytes + kLevelDataBytes;
-        s = readRange(L.levelOffset, lb, "a level chunk");
+        s = ReadRange(L.levelOffset, lb, "a level chunk");
         if (!s.ok()) return s;
         ChunkHeader lh;
-        s = checkChunk(buffer.data(), lb, kLevel, 0, "a level chunk", lh);
+        s = CheckChunk(buffer.data(), lb, kLevel, 0, "a level chunk", lh);
         if (!s.ok()) return s;
         Decoder dl(buffer.data() + kChunkHeaderBytes, kLevelDataBytes);
         const uint32_t lk = dl.u32(), lpad = dl.u32();
@@ -518,10 +518,10 @@ struct LodReader::Impl {
             L.vertOffset != L.levelOffset + lb || lh.totalBytes() > src->size - L.levelOffset)
           return Status::Invalid("corrupt level chunk of level " + Num(k) + ": it disagrees with the file header");
         const uint64_t vb = kChunkHeaderBytes + kVertDataBytes;
-        s = readRange(L.vertOffset, vb, "a vertex chunk");
+        s = ReadRange(L.vertOffset, vb, "a vertex chunk");
         if (!s.ok()) return s;
         ChunkHeader vh;
-        s = checkChunk(buffer.data(), vb, kVert, 0, "a vertex chunk", vh);
+        s = CheckChunk(buffer.data(), vb, kVert, 0, "a vertex chunk", vh);
         if (!s.ok()) return s;
         Decoder dv(buffer.data() + kChunkHeaderBytes, kVertDataBytes);
         const uint32_t level = dv.u32(), block = dv.u32();
@@ -534,11 +534,11 @@ struct LodReader::Impl {
     }
     // The roots: records and geometry.
     const uint32_t top = levelCount - 1;
-    s = loadRecords(uint32_t(levels[top].firstId), uint32_t(levels[top].nodes));
+    s = LoadRecords(uint32_t(levels[top].firstId), uint32_t(levels[top].nodes));
     if (!s.ok()) return s;
     for (uint32_t r = 0; r < levels[top].nodes; ++r) {
       roots.push_back(r);
-      s = loadGeometry(r);
+      s = LoadGeometry(r);
       if (!s.ok()) return s;
     }
     return Status::Ok();
@@ -593,7 +593,7 @@ Status LodReader::LoadChildren(uint32_t id) {
     bool all = true;
     for (size_t k = i; k < j && all; ++k) all = hasNode(children[k]);
     if (!all) {
-      Status s = impl_->loadRecords(children[i], uint32_t(j - i));
+      Status s = impl_->LoadRecords(children[i], uint32_t(j - i));
       if (!s.ok()) return s;
     }
     i = j;
@@ -611,12 +611,12 @@ Status LodReader::LoadChildren(uint32_t id) {
 Status LodReader::LoadNode(uint32_t id) {
   if (id >= impl_->info.nodeCount) return Status::Invalid("LoadNode: no node " + Num(id));
   if (hasNode(id)) return Status::Ok();
-  return impl_->loadRecords(id, 1);
+  return impl_->LoadRecords(id, 1);
 }
 
 Status LodReader::LoadGeometry(uint32_t id) {
   if (!hasNode(id)) return Status::Invalid("LoadGeometry: node " + Num(id) + " is not loaded");
-  return impl_->loadGeometry(id);
+  return impl_->LoadGeometry(id);
 }
 
 const LodGeometry* LodReader::geometry(uint32_t id) const {

@@ -118,7 +118,7 @@ struct LodRefiner::Impl {
     return p;
   }
 
-  Status addToCut(uint32_t id) {
+  Status AddToCut(uint32_t id) {
     Status s = reader.LoadGeometry(id);
     if (!s.ok()) return s;
     const LodNode& n = reader.node(id);
@@ -150,7 +150,7 @@ struct LodRefiner::Impl {
     return Status::Ok();
   }
 
-  void removeFromCut(uint32_t id) {
+  void RemoveFromCut(uint32_t id) {
     const LodNode& n = reader.node(id);
     const uint32_t at = cutPos[id];
     const bool culled = cut.culled[at] != 0;
@@ -194,17 +194,17 @@ struct LodRefiner::Impl {
       stopped = true;
       return Status::Ok();
     }
-    for (uint32_t s : siblings) removeFromCut(s);
+    for (uint32_t s : siblings) RemoveFromCut(s);
     present.erase(key);
     for (uint32_t c : children) {
-      st = addToCut(c);
+      st = AddToCut(c);
       if (!st.ok()) return st;
     }
     ++cut.refinements;
     return Status::Ok();
   }
 
-  void updateStats() const {
+  void UpdateStats() const {
     if (!statsDirty) return;
     // Cut nodes sharing a (global) vertex: the largest difference of their levels.
     std::unordered_map<uint32_t, std::pair<int, int>> range;
@@ -243,7 +243,7 @@ Status LodRefiner::Start(const LodView& view) {
   m.stopped = false;
   m.started = true;
   for (uint32_t r : m.reader.roots()) {
-    Status s = m.addToCut(r);
+    Status s = m.AddToCut(r);
     if (!s.ok()) return s;
   }
   return Status::Ok();
@@ -279,7 +279,7 @@ Status LodRefiner::Step(size_t maxRefinements) {
 bool LodRefiner::Done() const { return !impl_->started || impl_->stopped || impl_->queue.empty(); }
 
 const LodCut& LodRefiner::cut() const {
-  impl_->updateStats();
+  impl_->UpdateStats();
   return impl_->cut;
 }
 

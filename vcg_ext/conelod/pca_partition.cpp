@@ -293,12 +293,12 @@ class TreeBuilder {
   }
   void renumber();
   Moments sum(uint32_t firstFace, uint32_t faceCount) const;
-  int32_t makeNode(int32_t parent, uint32_t firstFace, uint32_t faceCount, int32_t depth, const Moments& m);
+  int32_t MakeNode(int32_t parent, uint32_t firstFace, uint32_t faceCount, int32_t depth, const Moments& m);
   void split(const Pending& p, Pending out[2], int& outCount);
   uint32_t grow(uint32_t seed, uint32_t accept, uint32_t mark, uint32_t* out);
-  void growBoth(uint32_t seed1, uint32_t seed2, uint32_t& left, uint32_t& right);
-  void attachLeftovers(uint32_t begin, uint32_t end, uint32_t& left, uint32_t& right);
-  void computeBounds();
+  void GrowBoth(uint32_t seed1, uint32_t seed2, uint32_t& left, uint32_t& right);
+  void AttachLeftovers(uint32_t begin, uint32_t end, uint32_t& left, uint32_t& right);
+  void ComputeBounds();
   void toInputNumbering();
 
   const IndexedMesh& mesh_;
@@ -327,7 +327,7 @@ class TreeBuilder {
   // Calls fn(g) for every neighbour g of f, and for the sentinel record (whose mark matches no
   // state) in place of missing neighbours: the common case runs without branches on the mesh.
   template <class F>
-  void forNeighbours(uint32_t f, F&& fn) const {
+  void ForNeighbours(uint32_t f, F&& fn) const {
     const uint32_t* nb = rec_[f].nbr;
     if (nb[0] == kManyNeighbours) {  // more than three (non-manifold edges): the full lists
       for (uint32_t i = adj_.offsets[f]; i < adj_.offsets[f + 1]; ++i) fn(adj_.neighbours[i]);
@@ -449,7 +449,7 @@ Moments TreeBuilder::sum(uint32_t firstFace, uint32_t faceCount) const {
   return m;
 }
 
-int32_t TreeBuilder::makeNode(int32_t parent, uint32_t firstFace, uint32_t faceCount, int32_t depth, const Moments& m) {
+int32_t TreeBuilder::MakeNode(int32_t parent, uint32_t firstFace, uint32_t faceCount, int32_t depth, const Moments& m) {
   const int32_t id = int32_t(tree_.nodes.size());
   tree_.nodes.emplace_back();
   PcaNode& n = tree_.nodes.back();
@@ -482,7 +482,7 @@ uint32_t TreeBuilder::grow(uint32_t seed, uint32_t accept, uint32_t mark, uint32
   out[0] = seed;
   uint32_t head = 0, tail = 1;
   while (head != tail) {
-    forNeighbours(out[head++], [&](uint32_t g) {
+    ForNeighbours(out[head++], [&](uint32_t g) {
       const uint32_t m = rec[g].mark;
       const bool take = m == accept;
       rec[g].mark = take ? mark : m;
@@ -497,7 +497,7 @@ uint32_t TreeBuilder::grow(uint32_t seed, uint32_t accept, uint32_t mark, uint32
 // split plane (every face centroid on it, or no area). Side 1 is written forwards from `left`,
 // side 2 backwards from `right` (one past the end); each face goes to the side that reaches it
 // first, so both sides are connected and non-empty.
-void TreeBuilder::growBoth(uint32_t seed1, uint32_t seed2, uint32_t& left, uint32_t& right) {
+void TreeBuilder::GrowBoth(uint32_t seed1, uint32_t seed2, uint32_t& left, uint32_t& right) {
   uint32_t* order = tree_.faceOrder.data();
   const uint32_t base = generation_ << kStateBits;
   for (uint32_t f : members_) rec_[f].mark = base | kOnPlane;
@@ -511,7 +511,7 @@ void TreeBuilder::growBoth(uint32_t seed1, uint32_t seed2, uint32_t& left, uint3
       const bool first = side == 0;
       if (first ? head1 >= left : head2 < right) continue;
       const uint32_t f = first ? order[head1++] : order[head2--];
-      forNeighbours(f, [&](uint32_t g) {
+      ForNeighbours(f, [&](uint32_t g) {
         if (rec_[g].mark != (base | kOnPlane)) return;
         rec_[g].mark = base | (first ? kSide1 : kSide2);
         if (first) order[left++] = g; else order[--right] = g;
@@ -523,7 +523,7 @@ void TreeBuilder::growBoth(uint32_t seed1, uint32_t seed2, uint32_t& left, uint3
 // Faces reached by neither growth: each connected region of them joins, whole, the side it
 // shares more edges with (the side with fewer faces on a tie). The regions are written into the
 // gap [left, right) of faceOrder and moved to the chosen side's end.
-void TreeBuilder::attachLeftovers(uint32_t begin, uint32_t end, uint32_t& left, uint32_t& right) {
+void TreeBuilder::AttachLeftovers(uint32_t begin, uint32_t end, uint32_t& left, uint32_t& right) {
   uint32_t* order = tree_.faceOrder.data();
   const uint32_t base = generation_ << kStateBits;
   for (uint32_t seed : members_) {
@@ -534,7 +534,7 @@ void TreeBuilder::attachLeftovers(uint32_t begin, uint32_t end, uint32_t& left, 
     order[tail++] = seed;
     uint64_t touch1 = 0, touch2 = 0;
     while (head < tail) {
-      forNeighbours(order[head++], [&](uint32_t g) {
+      ForNeighbours(order[head++], [&](uint32_t g) {
         const uint32_t m = rec_[g].mark;
         if ((m >> kStateBits) != generation_) return;  // not in this cluster
         const uint32_t sg = m & kStateMask;
@@ -562,7 +562,7 @@ void TreeBuilder::attachLeftovers(uint32_t begin, uint32_t end, uint32_t& left, 
 
 // Splits p.node into two edge-connected halves; `out` receives the halves that are nodes.
 void TreeBuilder::split(const Pending& p, Pending out[2], int& outCount) {
-  const PcaNode node = tree_.nodes[size_t(p.node)];  // a copy: makeNode() appends to the array
+  const PcaNode node = tree_.nodes[size_t(p.node)];  // a copy: MakeNode() appends to the array
   const uint32_t n = node.faceCount, begin = node.firstFace, end = begin + n;
   uint32_t* order = tree_.faceOrder.data();
   outCount = 0;
@@ -602,9 +602,9 @@ void TreeBuilder::split(const Pending& p, Pending out[2], int& outCount) {
     right -= n2;
     std::memcpy(order + right, side2_.data(), n2 * sizeof(uint32_t));
   } else {
-    growBoth(members_[0], members_[n - 1], left, right);
+    GrowBoth(members_[0], members_[n - 1], left, right);
   }
-  if (left < right) attachLeftovers(begin, end, left, right);
+  if (left < right) AttachLeftovers(begin, end, left, right);
 
   // The halves [begin, left) and [left, end). Only the smaller one is summed.
   const uint32_t n1 = left - begin, n2 = end - left;
@@ -620,7 +620,7 @@ void TreeBuilder::split(const Pending& p, Pending out[2], int& outCount) {
     if (count[k] == 1) {
       item = ItemOfFace(order[first[k]]);
     } else {
-      item = makeNode(p.node, first[k], count[k], node.depth + 1, *m[k]);
+      item = MakeNode(p.node, first[k], count[k], node.depth + 1, *m[k]);
       out[outCount++] = Pending{item, *m[k]};
     }
     tree_.nodes[size_t(p.node)].child[k] = item;
@@ -630,7 +630,7 @@ void TreeBuilder::split(const Pending& p, Pending out[2], int& outCount) {
 // Cones and boxes bottom-up: a child's index is above its parent's, so a backward sweep sees
 // every child before its parent. Single faces give their own normal and box; a leaf cluster (a
 // stop criterion held) gets the exact minimal cone of its normals.
-void TreeBuilder::computeBounds() {
+void TreeBuilder::ComputeBounds() {
   tree_.bounds.resize(tree_.nodes.size());
   auto addFace = [this](vcg::Box3f& b, uint32_t f) {
     for (uint32_t v : local_.faces[f]) b.Add(local_.positions[v]);
@@ -734,7 +734,7 @@ Status TreeBuilder::run(const Progress& progress) {
 
   std::vector<Pending> pending;  // clusters that may be split
   const Moments all = sum(0, nf);
-  makeNode(-1, 0, nf, 0, all);  // the root
+  MakeNode(-1, 0, nf, 0, all);  // the root
   int clusters = 1;
   if (components > 1) {
     tree_.components.resize(size_t(components));
@@ -745,7 +745,7 @@ Status TreeBuilder::run(const Progress& progress) {
         continue;
       }
       const Moments m = sum(first, count);
-      tree_.components[size_t(c)] = makeNode(0, first, count, 1, m);
+      tree_.components[size_t(c)] = MakeNode(0, first, count, 1, m);
       pending.push_back(Pending{tree_.components[size_t(c)], m});
     }
     clusters = components;
@@ -805,7 +805,7 @@ Status TreeBuilder::run(const Progress& progress) {
     node.eigenvalues = ToPoint(ToVec(node.eigenvalues) * (inv * inv));
   }
   if (progress && !progress(92, "PCA partition: cones and boxes")) return Status::Cancelled();
-  computeBounds();
+  ComputeBounds();
   local_ = IndexedMesh();
   toInputNumbering();
   int maxDepth = 0;

@@ -52,7 +52,7 @@ std::string SavePlySafely(MeshType& m, const std::string& path, int mask) {
   SafeFile out;
   std::string err = out.open(path);
   if (!err.empty()) return err;
-  const std::string& temp = out.releaseForWriter();
+  const std::string& temp = out.ReleaseForWriter();
   const int e = vcg::tri::io::ExporterPLY<MeshType>::Save(m, temp.c_str(), mask, true);
   if (e != 0) return "cannot write '" + path + "': " + vcg::tri::io::ExporterPLY<MeshType>::ErrorMsg(e);
   std::FILE* f = std::fopen(temp.c_str(), "rb");

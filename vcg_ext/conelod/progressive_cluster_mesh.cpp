@@ -31,9 +31,9 @@ struct Ring {
   int clusters = 0;      // distinct clusters of the faces around, counted up to 3
 };
 
-class Simplifier {
+class ClusterMeshSimplifier {
  public:
-  Simplifier(const IndexedMesh& mesh, const PcaTree& tree, double cosTurn)
+  ClusterMeshSimplifier(const IndexedMesh& mesh, const PcaTree& tree, double cosTurn)
       : tree_(tree), cosTurn_(cosTurn), tri_(mesh.faces) {
     pos_.reserve(mesh.positions.size());
     for (const auto& p : mesh.positions) pos_.push_back(vcg::Point3d::Construct(p));
@@ -134,7 +134,7 @@ class Simplifier {
       queued_[u] = 0;
       if (vf_[u].empty() || locked_[u]) continue;
       uint32_t v;
-      if (!tryCollapse(u, v)) continue;
+      if (!TryCollapse(u, v)) continue;
       ++collapses_;
       // The target and its ring changed: they may now be removable, or removable where they were not.
       push(v);
@@ -216,7 +216,7 @@ class Simplifier {
     return t[0] == v || t[1] == v || t[2] == v;
   }
 
-  bool tryCollapse(uint32_t u, uint32_t& target) {
+  bool TryCollapse(uint32_t u, uint32_t& target) {
     analyze(u, ring_);
     if (!ring_.manifold) return false;
     const int clusters = ring_.clusters + (ring_.border ? 1 : 0);
@@ -341,7 +341,7 @@ Status BuildProgressiveClusterMesh(const IndexedMesh& mesh, const PcaTree& tree,
   const int target = int(cut.size());
   int clusters = tree.leafClusterCount();
 
-  Simplifier simplifier(mesh, tree, std::cos(params.maxNormalTurnDeg * NormalCone::kPi / 180));
+  ClusterMeshSimplifier simplifier(mesh, tree, std::cos(params.maxNormalTurnDeg * NormalCone::kPi / 180));
   if (progress && !progress(10, "progressive mesh: set-up")) return Status::Cancelled();
   const int merges = std::max(0, clusters - target);
   int done = 0;

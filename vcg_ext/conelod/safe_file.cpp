@@ -106,7 +106,7 @@ std::string SafeFile::open(const std::string& path) {
   return "";
 }
 
-const std::string& SafeFile::releaseForWriter() {
+const std::string& SafeFile::ReleaseForWriter() {
   if (file_) std::fclose(file_);
   file_ = nullptr;
   return temp_;

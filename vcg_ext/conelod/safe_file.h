@@ -34,7 +34,7 @@ class SafeFile {
   std::FILE* file() const { return file_; }
   // For writers that want a file name (vcglib's exporters): closes file() and returns the temporary
   // file's name, which the writer then overwrites.
-  const std::string& releaseForWriter();
+  const std::string& ReleaseForWriter();
   // Flushes, fsyncs and renames the temporary file over the target. "" or the error; on error the
   // target is untouched and the temporary file removed.
   std::string commit();
