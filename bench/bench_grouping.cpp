@@ -24,7 +24,7 @@
 
 #include <benchmark/benchmark.h>
 
-#include "conelod/cone_grouping.h"
+#include "conelod/grouping/cone_grouping.h"
 #include "conelod/process_memory.h"
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"

@@ -1,4 +1,4 @@
-// ConeLOD benchmark — the .clod LOD file (lod.h): build time, file size, time to the first image,
+// ConeLOD benchmark — the .clod LOD file (lod_build.h, lod_read.h): build time, file size, time to the first image,
 // resident memory of the on-demand reader against loading the whole mesh with vcglib.
 //
 //   bench_lod [MESH.ply...] [--budget-fraction F] [--keep DIR]
@@ -29,9 +29,10 @@
 #include <string>
 #include <vector>
 
-#include "conelod/lod.h"
+#include "conelod/lod/lod_build.h"
+#include "conelod/lod/lod_read.h"
 #include "conelod/process_memory.h"
-#include "conelod/sorted_faces.h"
+#include "conelod/mesh/sorted_faces.h"
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"
 

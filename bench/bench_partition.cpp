@@ -21,7 +21,7 @@
 #include <new>
 #include <string>
 
-#include "conelod/pca_partition.h"
+#include "conelod/pca/pca_partition.h"
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"
 

@@ -32,9 +32,9 @@
 #include <vcg/complex/complex.h>
 #include <wrap/io_trimesh/import_ply.h>
 
-#include "conelod/cone_grouping.h"
-#include "conelod/group_qem.h"
-#include "conelod/hierarchical_simplification.h"
+#include "conelod/grouping/cone_grouping.h"
+#include "conelod/simplify/group_qem.h"
+#include "conelod/simplify/hierarchical_simplification.h"
 #include "conelod/vcg_bridge.h"
 #include "meshlab_qem.h"
 

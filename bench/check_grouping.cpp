@@ -22,7 +22,7 @@
 #include <utility>
 #include <vector>
 
-#include "conelod/cone_grouping.h"
+#include "conelod/grouping/cone_grouping.h"
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"
 

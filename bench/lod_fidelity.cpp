@@ -24,10 +24,10 @@
 #include <vcg/complex/complex.h>
 #include <wrap/io_trimesh/import_ply.h>
 
-#include "conelod/cone_grouping.h"
-#include "conelod/hierarchical_simplification.h"
-#include "conelod/lod.h"
-#include "conelod/sampled_distance.h"
+#include "conelod/grouping/cone_grouping.h"
+#include "conelod/simplify/hierarchical_simplification.h"
+#include "conelod/lod/lod_build.h"
+#include "conelod/mesh/sampled_distance.h"
 #include "conelod/vcg_bridge.h"
 #include "meshlab_qem.h"
 

@@ -6,7 +6,7 @@
 #include <cstdlib>
 #include <utility>
 
-#include "conelod/safe_file.h"
+#include "conelod/mesh/safe_file.h"
 
 namespace conelod {
 namespace cli {

@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "conelod/cone_grouping.h"
-#include "conelod/hierarchical_simplification.h"
-#include "conelod/indexed_mesh.h"
+#include "conelod/grouping/cone_grouping.h"
+#include "conelod/simplify/hierarchical_simplification.h"
+#include "conelod/mesh/indexed_mesh.h"
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"
 

@@ -1,12 +1,12 @@
-// ConeLOD CLI — `conelod budget`: the face budget from screen pixels (SPEC §5,
-// Mizuno-Okumoto-Takata-Joe), optionally simplifying to it with the feature-preserving simplifier.
+// ConeLOD CLI — `conelod budget`: the face budget from screen pixels (Mizuno,
+// Okumoto, Takata, Joe), optionally simplifying to it with the feature-preserving simplifier.
 #include <cstdio>
 
 #include "cli_common.h"
 #include "commands.h"
-#include "conelod/safe_file.h"
-#include "conelod/feature_simplify.h"
-#include "conelod/pixel_budget.h"
+#include "conelod/mesh/safe_file.h"
+#include "conelod/feature/feature_simplify.h"
+#include "conelod/budget/pixel_budget.h"
 #include "conelod/simplify_bridge.h"
 
 namespace conelod {

@@ -1,11 +1,11 @@
 // ConeLOD CLI — `conelod feature-simplify` and `conelod feature-edges`: feature-preserving
-// simplification by edge operations (SPEC §6, Hayano-Matsuoka-Ueda) and its feature lines.
+// simplification by edge operations (Hayano, Matsuoka, Ueda) and its feature lines.
 #include <cstdio>
 #include <cstdlib>
 
 #include "cli_common.h"
 #include "commands.h"
-#include "conelod/feature_simplify.h"
+#include "conelod/feature/feature_simplify.h"
 #include "conelod/simplify_bridge.h"
 
 namespace conelod {

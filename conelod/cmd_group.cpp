@@ -1,12 +1,12 @@
-// ConeLOD CLI — `conelod group` and `conelod cull-cost`: normal-cone face grouping (SPEC §1) and
+// ConeLOD CLI — `conelod group` and `conelod cull-cost`: normal-cone face grouping (Kamiya, Suzuki, Kawachi) and
 // the culling-cost experiment of the paper's §5.
 #include <cstdio>
 
 #include "cli_common.h"
 #include "commands.h"
-#include "conelod/cone_grouping.h"
-#include "conelod/culling_cost.h"
-#include "conelod/pca_partition.h"
+#include "conelod/grouping/cone_grouping.h"
+#include "conelod/grouping/culling_cost.h"
+#include "conelod/pca/pca_partition.h"
 
 namespace conelod {
 namespace cli {

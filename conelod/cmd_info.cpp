@@ -3,7 +3,7 @@
 
 #include "cli_common.h"
 #include "commands.h"
-#include "conelod/mesh_check.h"
+#include "conelod/mesh/mesh_check.h"
 
 namespace conelod {
 namespace cli {

@@ -1,5 +1,5 @@
 // ConeLOD CLI — `conelod lod`: build the streamable .clod LOD file, extract a view-dependent cut of
-// it, describe it (Kamiya-Suzuki-Kawachi §7-9, SPEC §4; vcg_ext/conelod/lod.h).
+// it, describe it (Kamiya, Suzuki, Kawachi §7-9; vcg_ext/conelod/lod/).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -7,9 +7,10 @@
 
 #include "cli_common.h"
 #include "commands.h"
-#include "conelod/group_colors.h"
-#include "conelod/lod.h"
-#include "conelod/mesh_check.h"
+#include "conelod/grouping/group_colors.h"
+#include "conelod/lod/lod_build.h"
+#include "conelod/lod/lod_read.h"
+#include "conelod/mesh/mesh_check.h"
 
 namespace conelod {
 namespace cli {
@@ -227,7 +228,7 @@ const char* kLodUsage =
     "conelod lod extract IN.clod --eye X,Y,Z --budget N|P% -o OUT.ply [--priority screen|error|fg]\n"
     "                  [--no-cull] [--drop-culled] [--json]\n"
     "conelod lod info IN.clod [--json]\n"
-    "  build: writes the streamable .clod file (format: vcg_ext/conelod/lod_format.md), a DAG of\n"
+    "  build: writes the streamable .clod file (format: vcg_ext/conelod/lod/lod_format.md), a DAG of\n"
     "  clusters whose every cut is watertight: the input is cut into clusters of about C faces\n"
     "  [128] whose normals stay within --cone-threshold degrees (the grouping option; x\n"
     "  --threshold-growth per level), G [8] neighbouring clusters are gathered into a group, each\n"

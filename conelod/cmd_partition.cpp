@@ -1,5 +1,5 @@
 // ConeLOD CLI — `conelod partition` and `conelod progressive`: the recursive PCA face partition
-// and its progressive cluster mesh (SPEC §2, Tsuji-Zha-Kurazume-Hasegawa).
+// and its progressive cluster mesh (Tsuji, Zha, Kurazume, Hasegawa).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -7,11 +7,11 @@
 
 #include "cli_common.h"
 #include "commands.h"
-#include "conelod/cluster_shape.h"
-#include "conelod/manifold_check.h"
-#include "conelod/pca_partition.h"
-#include "conelod/progressive_cluster_mesh.h"
-#include "conelod/sampled_distance.h"
+#include "conelod/grouping/cluster_shape.h"
+#include "conelod/mesh/manifold_check.h"
+#include "conelod/pca/pca_partition.h"
+#include "conelod/pca/progressive_cluster_mesh.h"
+#include "conelod/mesh/sampled_distance.h"
 
 namespace conelod {
 namespace cli {

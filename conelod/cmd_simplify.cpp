@@ -1,18 +1,18 @@
-// ConeLOD CLI — `conelod simplify`: group-preserving quadric edge collapse (SPEC §3), one target
-// or one simplified mesh per level of the normal-cone hierarchy (--hierarchy).
+// ConeLOD CLI — `conelod simplify`: group-preserving quadric edge collapse (Kamiya, Suzuki,
+// Kawachi §6), one target or one simplified mesh per level of the normal-cone hierarchy (--hierarchy).
 #include <cstdio>
 #include <cstdlib>
 
 #include "cli_common.h"
 #include "commands.h"
-#include "conelod/cone_grouping.h"
-#include "conelod/group_colors.h"
-#include "conelod/group_integrity.h"
-#include "conelod/group_qem.h"
-#include "conelod/hierarchical_simplification.h"
-#include "conelod/mesh_check.h"
-#include "conelod/pca_partition.h"
-#include "conelod/sampled_distance.h"
+#include "conelod/grouping/cone_grouping.h"
+#include "conelod/grouping/group_colors.h"
+#include "conelod/simplify/group_integrity.h"
+#include "conelod/simplify/group_qem.h"
+#include "conelod/simplify/hierarchical_simplification.h"
+#include "conelod/mesh/mesh_check.h"
+#include "conelod/pca/pca_partition.h"
+#include "conelod/mesh/sampled_distance.h"
 
 namespace conelod {
 namespace cli {

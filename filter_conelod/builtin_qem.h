@@ -13,7 +13,7 @@
 #include <vcg/complex/algorithms/local_optimization.h>
 #include <vcg/complex/algorithms/local_optimization/tri_edge_collapse_quadric.h>
 
-#include "conelod/builtin_qem_params.h"
+#include "conelod/simplify/builtin_qem_params.h"
 
 namespace conelod_plugin {
 

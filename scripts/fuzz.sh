@@ -49,13 +49,13 @@ run_fuzzer() {
 
 # The reader, the refiner and the cone tests they use: nothing else of the core is needed.
 build_fuzzer lod_reader_fuzz -DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION \
-  "$ROOT/vcg_ext/fuzz/lod_reader_fuzz.cpp" "$ROOT/vcg_ext/conelod/lod_reader.cpp" \
-  "$ROOT/vcg_ext/conelod/lod_refine.cpp" "$ROOT/vcg_ext/conelod/normal_cone.cpp"
+  "$ROOT/vcg_ext/fuzz/lod_reader_fuzz.cpp" "$ROOT/vcg_ext/conelod/lod/lod_reader.cpp" \
+  "$ROOT/vcg_ext/conelod/lod/lod_refine.cpp" "$ROOT/vcg_ext/conelod/grouping/normal_cone.cpp"
 # The PLY input path: the checked reader, the input check and the grouping.
 build_fuzzer ply_reader_fuzz \
-  "$ROOT/vcg_ext/fuzz/ply_reader_fuzz.cpp" "$ROOT/vcg_ext/conelod/ply_format.cpp" \
-  "$ROOT/vcg_ext/conelod/mesh_check.cpp" "$ROOT/vcg_ext/conelod/indexed_mesh.cpp" \
-  "$ROOT/vcg_ext/conelod/cone_grouping.cpp" "$ROOT/vcg_ext/conelod/normal_cone.cpp"
+  "$ROOT/vcg_ext/fuzz/ply_reader_fuzz.cpp" "$ROOT/vcg_ext/conelod/mesh/ply_format.cpp" \
+  "$ROOT/vcg_ext/conelod/mesh/mesh_check.cpp" "$ROOT/vcg_ext/conelod/mesh/indexed_mesh.cpp" \
+  "$ROOT/vcg_ext/conelod/grouping/cone_grouping.cpp" "$ROOT/vcg_ext/conelod/grouping/normal_cone.cpp"
 
 # Seeds: an octahedron subdivided once and twice (32 and 128 faces, a sphere) and a bumpy variant,
 # with default and two-level hierarchies.

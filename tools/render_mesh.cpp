@@ -18,8 +18,8 @@
 
 #include <zlib.h>
 
-#include "conelod/feature_simplify.h"
-#include "conelod/pixel_budget.h"
+#include "conelod/feature/feature_simplify.h"
+#include "conelod/budget/pixel_budget.h"
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"
 

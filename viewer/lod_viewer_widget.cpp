@@ -10,8 +10,8 @@
 #include <unordered_set>
 #include <vector>
 
-#include "conelod/group_colors.h"
-#include "conelod/normal_cone.h"
+#include "conelod/grouping/group_colors.h"
+#include "conelod/grouping/normal_cone.h"
 #include "conelod/process_memory.h"
 
 using namespace conelod;

@@ -1,6 +1,6 @@
 // conelod-viewer: the widget that draws a .clod file and refines it while the user is idle.
 //
-// Kamiya, Suzuki, Kawachi, "LODs for efficient displaying triangle meshes", §7 (SPEC §4): the
+// Kamiya, Suzuki, Kawachi, "LODs for efficient displaying triangle meshes", §7: the
 // coarsest level is drawn at once; while the user rotates or zooms only that level is drawn, and
 // when the view has been still for a moment the cut is refined in idle-time slices, in the order
 // of the paper's priority f(g), until the face budget or the finest level is reached. Every frame
@@ -26,7 +26,7 @@
 #include <string>
 #include <unordered_map>
 
-#include "conelod/lod.h"
+#include "conelod/lod/lod_read.h"
 
 struct ViewerOptions {
   size_t faceBudget = 500000;  // faces of the refined cut (the roots may exceed it)

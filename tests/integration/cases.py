@@ -702,7 +702,7 @@ def cli_budget(c):
     c.conelod("budget", bunny, "--width", "0", expect=1)
     p = c.conelod("budget", c.mesh("no_faces.ply"), expect=2)
     assert "has no faces" in p.stderr.decode()
-# --- PCA partition and progressive cluster mesh (SPEC §2) ----------------------------------
+# --- PCA partition and progressive cluster mesh (Tsuji-Zha-Kurazume-Hasegawa) --------------------
 
 @case
 def meshlab_lists_pca_filters(c):

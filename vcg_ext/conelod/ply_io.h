@@ -12,8 +12,8 @@
 #include <wrap/io_trimesh/export_ply.h>
 #include <wrap/io_trimesh/io_mask.h>
 
-#include "conelod/ply_format.h"
-#include "conelod/safe_file.h"
+#include "conelod/mesh/ply_format.h"
+#include "conelod/mesh/safe_file.h"
 
 namespace conelod {
 

@@ -11,7 +11,7 @@
 
 #include <vcg/complex/complex.h>
 
-#include "conelod/feature_simplify.h"
+#include "conelod/feature/feature_simplify.h"
 
 namespace conelod {
 

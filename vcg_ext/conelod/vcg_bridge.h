@@ -10,9 +10,9 @@
 
 #include <vcg/complex/complex.h>
 
-#include "conelod/group_colors.h"
-#include "conelod/group_hierarchy.h"
-#include "conelod/indexed_mesh.h"
+#include "conelod/grouping/group_colors.h"
+#include "conelod/grouping/group_hierarchy.h"
+#include "conelod/mesh/indexed_mesh.h"
 
 namespace conelod {
 

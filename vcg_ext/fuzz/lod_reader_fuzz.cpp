@@ -1,4 +1,4 @@
-// ConeLOD — libFuzzer target for the .clod reader (lod.h): any byte string must open cleanly or be
+// ConeLOD — libFuzzer target for the .clod reader (lod_read.h): any byte string must open cleanly or be
 // refused with a Status, never crash, read out of bounds or allocate more than the input justifies.
 // Opened inputs are refined at two budgets, for two eyes, extracted, and their geometry evicted.
 // Built and run by scripts/fuzz.sh (clang++ -fsanitize=fuzzer,address,undefined), with a seed
@@ -8,7 +8,7 @@
 #include <memory>
 #include <vector>
 
-#include "conelod/lod.h"
+#include "conelod/lod/lod_read.h"
 
 using namespace conelod;
 

@@ -8,9 +8,9 @@
 #include <cstdint>
 #include <string>
 
-#include "conelod/cone_grouping.h"
-#include "conelod/mesh_check.h"
-#include "conelod/ply_format.h"
+#include "conelod/grouping/cone_grouping.h"
+#include "conelod/mesh/mesh_check.h"
+#include "conelod/mesh/ply_format.h"
 
 using namespace conelod;
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <utility>
 
-#include "conelod/indexed_mesh.h"
+#include "conelod/mesh/indexed_mesh.h"
 
 namespace conelod {
 namespace test {

@@ -1,0 +1,76 @@
+// ConeLOD — hierarchical face grouping by an evaluation function.
+//
+// Kamiya, Suzuki, Kawachi, "LODs for efficient displaying triangle meshes" (§4): adjacent units
+// (faces at level 1, groups of the previous level above) are merged greedily, best pair first,
+// by  v = k_c v_c + k_s v_s + k_n v_n  (eq. 2), with
+//   v_c = (pi - c) / pi     c = the merged group's cone HALF-angle, in radians (the paper's
+//                           "cone": the largest angle between the group normal and a face normal);
+//                           the same half-angle is bounded by the cone threshold;
+//   v_s = S_p / S_c         projected area over the area of the enclosing circle; S_p is the
+//                           length of the group's vector area (its area projected on the plane
+//                           normal to its mean normal, exact while the projection does not fold)
+//                           and S_c = pi r^2 with r the radius of the group's bounding sphere, an
+//                           upper bound of the projection's enclosing circle (so v_s is a lower
+//                           bound, computed in O(1) per candidate);
+//   v_n = (N - n) / N       N faces in the mesh, n faces in the merged group.
+// Pairs whose merged cone reaches the level's threshold are not merged. A level ends when no pair
+// is left or when the number of groups reaches minTopGroups; the next level repeats the process
+// on the groups with the threshold multiplied by thresholdGrowth.
+//
+// Merge order. The paper pops the best pair of the whole mesh at every step. Level 1 (nearly all
+// the merges) first merges local maxima instead: sweeps over the units in index order merge
+// every pair that is the best pair of both its units, and the merged unit goes on merging while
+// its best pair stays mutual; once a sweep merges nothing, the best-first order finishes the
+// level. A mutual best pair is what the best-first order would merge too unless a better pair
+// next to it changed first; the sweeps visit the mesh in memory order, where the best-first
+// order jumps across the whole mesh at every merge (1.6-2x faster on the dragon, same culling
+// cost: docs/cone_grouping.md). Levels above the first keep the best-first order.
+//
+// Candidate cones are the exact union of the two units' cones (an upper bound of the merged
+// normals' minimal cone, so the threshold is never exceeded); a group's cone is recomputed
+// exactly (MinimalCone, Welzl) whenever its face count has grown 8-fold at level 1 and 4-fold
+// above (2-fold everywhere with strictGreedy) since the last exact computation — amortized
+// O(N log N) — and every group of the output has its exact cone.
+#pragma once
+
+#include "conelod/grouping/group_hierarchy.h"
+#include "conelod/mesh/indexed_mesh.h"
+#include "conelod/status.h"
+
+namespace conelod {
+
+struct ConeGroupingParams {
+  double coneWeight = 1.0;         // k_c
+  double shapeWeight = 0.5;        // k_s
+  double sizeWeight = 0.5;         // k_n
+  double coneThresholdDeg = 15.0;  // level-1 limit on the group cone half-angle; >= 180: no limit
+  double thresholdGrowth = 1.6;    // the limit is multiplied by this at each level above the first
+  int maxLevels = 8;               // at most this many levels
+  int minTopGroups = 8;            // stop merging once a level has this many groups (or fewer)
+  // true: every level merges strictly the best pair of the whole level first and recomputes
+  // cones exactly at every doubling (the paper's order; the output of ConeLOD before local
+  // maxima, bit for bit; about 1.6-2x slower). false: see "Merge order" above.
+  bool strictGreedy = false;
+};
+
+// Checks the parameters; Ok or a message naming the bad one.
+Status ValidateParams(const ConeGroupingParams& p);
+
+// Builds the hierarchy. The mesh must pass RequireValidForFaces (checked here too). On failure or
+// cancellation `out` is left empty.
+Status BuildConeHierarchy(const IndexedMesh& mesh, const ConeGroupingParams& params,
+                          GroupHierarchy& out, const Progress& progress = Progress());
+
+// The automatic group level for a simplification to `targetFaces`: the finest level of `h` whose
+// groups leave at least kAutoFacesPerGroup faces per group at the target (groups x 8 <= target),
+// the top level when none does (1-based; 0 for an empty hierarchy). Below about 8 faces per group
+// the groups, not the geometry, decide where the collapses go: the error grows quickly and, under
+// 3-4 faces per group, the target stops being reachable.
+constexpr int kAutoFacesPerGroup = 8;
+int AutoGroupLevel(const GroupHierarchy& h, size_t targetFaces);
+
+// Per group id of level `level` (1-based): the cone its face normals must stay in to keep the
+// level's threshold (GroupQemParams::coneBound): the group's cone axis and the level's threshold.
+std::vector<NormalCone> LevelConeBounds(const GroupHierarchy& h, int level);
+
+}  // namespace conelod

@@ -1,0 +1,485 @@
+// ConeLOD — building the crack-free cluster DAG of the .clod file (lod_build.h).
+//
+// Karis et al., "Nanite: a deep dive" (SIGGRAPH 2021 course), with the clusters of Kamiya, Suzuki,
+// Kawachi (normal-cone groups, so every node keeps a tight cone for back-face culling):
+//   1. level 0: the input cut into clusters of about clusterFaces faces whose normals stay within
+//      a cone (region growing from a seed face, the cone limit growing level by level);
+//   2. neighbouring clusters (sharing the most edges) are gathered into groups of groupClusters;
+//   3. each group is simplified on its own to levelRatio of its faces by the group-preserving
+//      collapse (group_qem.h) with every vertex it shares with another group frozen
+//      (GroupQemRegion): its outer border keeps its vertices, ids and positions bit for bit;
+//      no collapse costs more than maxGroupError of the diagonal, so a group whose locked border
+//      leaves no cheap collapse stops short of the ratio instead of folding (once a whole level
+//      no longer shrinks under the cap, the levels above go on without it);
+//   4. the simplified group is re-cut into clusters (step 1 on its faces): the next level;
+//   5. repeat from 2 until one cluster is left or a level no longer shrinks.
+// A group's error is the largest distance from its vertices (before) to its simplified faces plus
+// the largest error of its clusters: monotonic up the DAG, in model units. Groups are simplified
+// side by side on several threads; the result does not depend on their number.
+#include "conelod/lod/lod_build.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <queue>
+#include <unordered_map>
+
+#include "conelod/parallel.h"
+#include "conelod/mesh/mesh_check.h"
+
+namespace conelod {
+namespace {
+
+using Face = std::array<uint32_t, 3>;
+
+// Faces sharing an edge (by vertex ids), CSR. Works on any id space (sorts the edges).
+void EdgeAdjacency(const std::vector<Face>& faces, std::vector<uint32_t>& offsets, std::vector<uint32_t>& list) {
+  struct E { uint64_t key; uint32_t face; };
+  std::vector<E> edges;
+  edges.reserve(faces.size() * 3);
+  for (uint32_t f = 0; f < faces.size(); ++f)
+    for (int i = 0; i < 3; ++i) {
+      uint32_t a = faces[f][size_t(i)], b = faces[f][size_t((i + 1) % 3)];
+      if (a > b) std::swap(a, b);
+      edges.push_back({uint64_t(a) << 32 | b, f});
+    }
+  std::sort(edges.begin(), edges.end(), [](const E& x, const E& y) { return x.key < y.key || (x.key == y.key && x.face < y.face); });
+  std::vector<uint32_t> count(faces.size() + 1, 0);
+  for (size_t i = 0; i < edges.size();) {
+    size_t j = i;
+    while (j < edges.size() && edges[j].key == edges[i].key) ++j;
+    for (size_t a = i; a < j; ++a)
+      for (size_t b = i; b < j; ++b)
+        if (a != b && edges[a].face != edges[b].face) ++count[edges[a].face + 1];
+    i = j;
+  }
+  std::partial_sum(count.begin(), count.end(), count.begin());
+  offsets = count;
+  list.assign(offsets.back(), 0);
+  std::vector<uint32_t> at(offsets.begin(), offsets.end() - 1);
+  for (size_t i = 0; i < edges.size();) {
+    size_t j = i;
+    while (j < edges.size() && edges[j].key == edges[i].key) ++j;
+    for (size_t a = i; a < j; ++a)
+      for (size_t b = i; b < j; ++b)
+        if (a != b && edges[a].face != edges[b].face) list[at[edges[a].face]++] = edges[b].face;
+    i = j;
+  }
+}
+
+vcg::Point3d Normal(const std::vector<vcg::Point3f>& pos, const Face& t) {
+  const vcg::Point3d a = vcg::Point3d::Construct(pos[t[0]]), b = vcg::Point3d::Construct(pos[t[1]]),
+                     c = vcg::Point3d::Construct(pos[t[2]]);
+  vcg::Point3d n = (b - a) ^ (c - a);
+  const double l = n.Norm();
+  return l > 0 ? n / l : vcg::Point3d(0, 0, 0);
+}
+
+// Cuts faces into clusters of about `cap` faces whose normals stay within maxAngle of their seed's
+// (one cluster grown at a time, nearest normal first); clusters under cap/4 then join the
+// neighbouring cluster they share the most edges with. Returns the cluster count.
+uint32_t GrowClusters(const std::vector<Face>& faces, const std::vector<vcg::Point3f>& pos, size_t cap, double maxAngle,
+                      std::vector<uint32_t>& cluster) {
+  const uint32_t F = uint32_t(faces.size());
+  cluster.assign(F, ~0u);
+  if (F == 0) return 0;
+  std::vector<uint32_t> off, adj;
+  EdgeAdjacency(faces, off, adj);
+  std::vector<vcg::Point3d> n(F);
+  for (uint32_t f = 0; f < F; ++f) n[f] = Normal(pos, faces[f]);
+  const double minDot = std::cos(std::min(maxAngle, NormalCone::kPi));
+  cap = std::max<size_t>(cap, 1);
+  std::vector<uint32_t> size;
+  using Item = std::pair<double, uint32_t>;  // (-dot, face): smallest first
+  std::vector<Item> heap;
+  std::vector<uint32_t> queued(F, ~0u);
+  for (uint32_t seed = 0; seed < F; ++seed) {
+    if (cluster[seed] != ~0u) continue;
+    const uint32_t c = uint32_t(size.size());
+    size.push_back(0);
+    const vcg::Point3d axis = n[seed];
+    heap.clear();
+    heap.push_back({-1.0, seed});
+    queued[seed] = c;
+    while (!heap.empty() && size[c] < cap) {
+      std::pop_heap(heap.begin(), heap.end(), std::greater<Item>());
+      const uint32_t f = heap.back().second;
+      heap.pop_back();
+      if (cluster[f] != ~0u) continue;
+      cluster[f] = c;
+      ++size[c];
+      for (uint32_t i = off[f]; i < off[f + 1]; ++i) {
+        const uint32_t g = adj[i];
+        if (cluster[g] != ~0u || queued[g] == c) continue;
+        const double d = n[g].SquaredNorm() > 0 && axis.SquaredNorm() > 0 ? n[g] * axis : 1.0;
+        if (d < minDot) continue;
+        queued[g] = c;
+        heap.push_back({-d, g});
+        std::push_heap(heap.begin(), heap.end(), std::greater<Item>());
+      }
+    }
+  }
+  // Small clusters join a neighbour (deterministic: smallest first, ties by index).
+  const uint32_t C = uint32_t(size.size());
+  std::vector<uint32_t> start(C + 1, 0), members(F);
+  for (uint32_t f = 0; f < F; ++f) ++start[cluster[f] + 1];
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  {
+    std::vector<uint32_t> at(start.begin(), start.end() - 1);
+    for (uint32_t f = 0; f < F; ++f) members[at[cluster[f]]++] = f;
+  }
+  std::vector<uint32_t> merged(C);
+  std::iota(merged.begin(), merged.end(), 0u);
+  auto find = [&](uint32_t x) {
+    while (merged[x] != x) x = merged[x] = merged[merged[x]];
+    return x;
+  };
+  std::vector<uint32_t> order(C);
+  std::iota(order.begin(), order.end(), 0u);
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return size[a] < size[b]; });
+  std::unordered_map<uint32_t, uint32_t> shared;
+  for (uint32_t c : order) {
+    if (size[find(c)] * 4 >= cap || find(c) != c) continue;
+    shared.clear();
+    for (uint32_t j = start[c]; j < start[c + 1]; ++j)
+      for (uint32_t i = off[members[j]]; i < off[members[j] + 1]; ++i) {
+        const uint32_t o = find(cluster[adj[i]]);
+        if (o != c) ++shared[o];
+      }
+    uint32_t best = ~0u, bestCount = 0;
+    for (const auto& kv : shared)
+      if (kv.second > bestCount || (kv.second == bestCount && kv.first < best)) {
+        best = kv.first;
+        bestCount = kv.second;
+      }
+    if (best == ~0u) continue;
+    merged[c] = best;
+    size[best] += size[c];
+    // Members move with the union-find; rewrite their cluster at the end.
+    for (uint32_t j = start[c]; j < start[c + 1]; ++j) cluster[members[j]] = best;
+  }
+  std::vector<uint32_t> dense(C, ~0u);
+  uint32_t next = 0;
+  for (uint32_t f = 0; f < F; ++f) {
+    const uint32_t r = find(cluster[f]);
+    if (dense[r] == ~0u) dense[r] = next++;
+    cluster[f] = dense[r];
+  }
+  return next;
+}
+
+// Gathers the clusters of a level into groups of about `per` neighbouring clusters (those sharing
+// the most edges first). Returns the group count.
+int GroupClusters(const LodDag::Level& L, int per, std::vector<int>& group) {
+  const uint32_t C = uint32_t(L.clusterCount());
+  // Cluster adjacency weighted by shared edges.
+  struct E { uint64_t key; uint32_t cluster; };
+  std::vector<E> edges;
+  edges.reserve(L.faces.size() * 3);
+  for (uint32_t f = 0; f < L.faces.size(); ++f)
+    for (int i = 0; i < 3; ++i) {
+      uint32_t a = L.faces[f][size_t(i)], b = L.faces[f][size_t((i + 1) % 3)];
+      if (a > b) std::swap(a, b);
+      edges.push_back({uint64_t(a) << 32 | b, L.faceCluster[f]});
+    }
+  std::sort(edges.begin(), edges.end(), [](const E& x, const E& y) { return x.key < y.key || (x.key == y.key && x.cluster < y.cluster); });
+  std::vector<std::pair<uint64_t, uint32_t>> pairs;  // (a << 32 | b, 1) per shared edge, a != b
+  for (size_t i = 0; i < edges.size();) {
+    size_t j = i;
+    while (j < edges.size() && edges[j].key == edges[i].key) ++j;
+    for (size_t a = i; a < j; ++a)
+      for (size_t b = i; b < j; ++b)
+        if (edges[a].cluster != edges[b].cluster) pairs.push_back({uint64_t(edges[a].cluster) << 32 | edges[b].cluster, 1});
+    i = j;
+  }
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<uint32_t> off(C + 1, 0), nb, w;
+  for (size_t i = 0; i < pairs.size();) {
+    size_t j = i;
+    while (j < pairs.size() && pairs[j].first == pairs[i].first) ++j;
+    const uint32_t a = uint32_t(pairs[i].first >> 32);
+    ++off[a + 1];
+    nb.push_back(uint32_t(pairs[i].first & 0xFFFFFFFFu));
+    w.push_back(uint32_t(j - i));
+    i = j;
+  }
+  std::partial_sum(off.begin(), off.end(), off.begin());
+  group.assign(C, -1);
+  int groups = 0;
+  // Visit clusters breadth-first (locality); a new group starts at each unassigned cluster.
+  std::vector<uint32_t> bfs;
+  std::vector<uint8_t> seen(C, 0);
+  for (uint32_t s = 0; s < C; ++s) {
+    if (seen[s]) continue;
+    seen[s] = 1;
+    bfs.push_back(s);
+    for (size_t h = bfs.size() - 1; h < bfs.size(); ++h)
+      for (uint32_t i = off[bfs[h]]; i < off[bfs[h] + 1]; ++i)
+        if (!seen[nb[i]]) {
+          seen[nb[i]] = 1;
+          bfs.push_back(nb[i]);
+        }
+  }
+  std::unordered_map<uint32_t, uint32_t> gain;
+  std::vector<uint32_t> members;
+  for (uint32_t c : bfs) {
+    if (group[c] >= 0) continue;
+    const int g = groups++;
+    group[c] = g;
+    members.assign(1, c);
+    gain.clear();
+    while (int(members.size()) < per) {
+      for (uint32_t i = off[members.back()]; i < off[members.back() + 1]; ++i)
+        if (group[nb[i]] < 0) gain[nb[i]] += w[i];
+      uint32_t best = ~0u, bestGain = 0;
+      for (const auto& kv : gain)
+        if (group[kv.first] < 0 && (kv.second > bestGain || (kv.second == bestGain && kv.first < best))) {
+          best = kv.first;
+          bestGain = kv.second;
+        }
+      if (best == ~0u) break;
+      group[best] = g;
+      members.push_back(best);
+      gain.erase(best);
+    }
+  }
+  return groups;
+}
+
+// Squared distance from p to triangle abc (Ericson, Real-Time Collision Detection, 5.1.5).
+double PointTriangleDistance2(const vcg::Point3d& p, const vcg::Point3d& a, const vcg::Point3d& b, const vcg::Point3d& c) {
+  const vcg::Point3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab * ap, d2 = ac * ap;
+  if (d1 <= 0 && d2 <= 0) return ap.SquaredNorm();
+  const vcg::Point3d bp = p - b;
+  const double d3 = ab * bp, d4 = ac * bp;
+  if (d3 >= 0 && d4 <= d3) return bp.SquaredNorm();
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return (p - (a + ab * (d1 / (d1 - d3)))).SquaredNorm();
+  const vcg::Point3d cp = p - c;
+  const double d5 = ab * cp, d6 = ac * cp;
+  if (d6 >= 0 && d5 <= d6) return cp.SquaredNorm();
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return (p - (a + ac * (d2 / (d2 - d6)))).SquaredNorm();
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return (p - (b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))))).SquaredNorm();
+  const double den = 1 / (va + vb + vc);
+  return (p - (a + ab * (vb * den) + ac * (vc * den))).SquaredNorm();
+}
+
+// One group simplified: its faces in the group's local vertex ids, the positions of the vertices
+// it made (local ids >= the group's input vertex count refer to them), its error.
+struct GroupResult {
+  std::vector<Face> faces;               // local vertex ids: < keptBase: input vertex; else newPositions
+  std::vector<uint32_t> localToGlobal;   // per input local vertex: its global id
+  std::vector<vcg::Point3f> newPositions;
+  double distance = 0;
+  bool ok = false;
+};
+
+void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32_t>& groupFaces,
+                   const std::vector<vcg::Point3f>& positions, const std::vector<uint8_t>& sharedVertex,
+                   const LodBuildParams& params, double maxError, double diagonal, GroupResult& out) {
+  IndexedMesh local;
+  std::unordered_map<uint32_t, uint32_t> toLocal;
+  out.localToGlobal.clear();
+  local.faces.reserve(groupFaces.size());
+  for (uint32_t f : groupFaces) {
+    Face t;
+    for (int i = 0; i < 3; ++i) {
+      const uint32_t v = levelFaces[f][size_t(i)];
+      auto ins = toLocal.emplace(v, uint32_t(out.localToGlobal.size()));
+      if (ins.second) {
+        out.localToGlobal.push_back(v);
+        local.positions.push_back(positions[v]);
+      }
+      t[size_t(i)] = ins.first->second;
+    }
+    local.faces.push_back(t);
+  }
+  const uint32_t V = uint32_t(local.positions.size());
+  GroupQemRegion region;
+  region.frozenVertex.resize(V);
+  for (uint32_t v = 0; v < V; ++v) region.frozenVertex[v] = sharedVertex[out.localToGlobal[v]];
+  region.diagonal = diagonal;
+  GroupQemParams qem = params.simplification.qem;
+  qem.targetFaces = std::max<size_t>(1, size_t(std::floor(double(local.faces.size()) * params.simplification.levelRatio)));
+  qem.lockGroupBoundaries = false;
+  if (maxError > 0) qem.maxError = qem.maxError > 0 ? std::min(qem.maxError, maxError) : maxError;
+  const std::vector<int> oneGroup(local.faces.size(), 0);
+  GroupQemResult res;
+  const Status s = SimplifyPreservingGroups(local, oneGroup, qem, res, Progress(), {}, &region);
+  out.faces.clear();
+  out.newPositions.clear();
+  out.distance = 0;
+  if (!s.ok() || res.mesh.faces.empty()) {  // the group stays as it is
+    out.faces = local.faces;
+    out.ok = true;
+    return;
+  }
+  // Output vertex -> local id. A frozen vertex never moves: it keeps its id and its position bit
+  // for bit (the simplifier works around the group's centre in double, which can change the last
+  // bits of a coordinate near 0, so its output position is not used). Another vertex keeps its
+  // id when it did not move (within 1e-9 of the diagonal: the same rounding), else it is new.
+  std::vector<uint32_t> outId(res.mesh.positions.size());
+  const float still = float(1e-9 * diagonal);
+  for (size_t v = 0; v < res.mesh.positions.size(); ++v) {
+    const uint32_t src = res.sourceVertex[v];
+    const vcg::Point3f& p = res.mesh.positions[v];
+    const vcg::Point3f& q = local.positions[src];
+    if (region.frozenVertex[src] || (std::fabs(p[0] - q[0]) <= still && std::fabs(p[1] - q[1]) <= still &&
+                                     std::fabs(p[2] - q[2]) <= still)) {
+      outId[v] = src;
+    } else {
+      outId[v] = V + uint32_t(out.newPositions.size());
+      out.newPositions.push_back(p);
+    }
+  }
+  for (const auto& t : res.mesh.faces) out.faces.push_back({outId[t[0]], outId[t[1]], outId[t[2]]});
+  // One-sided distance: every input vertex of the group to the simplified faces.
+  auto P = [&](uint32_t id) {
+    return vcg::Point3d::Construct(id < V ? local.positions[id] : out.newPositions[id - V]);
+  };
+  std::vector<std::array<vcg::Point3d, 3>> tri(out.faces.size());
+  for (size_t f = 0; f < out.faces.size(); ++f) tri[f] = {P(out.faces[f][0]), P(out.faces[f][1]), P(out.faces[f][2])};
+  double worst2 = 0;
+  for (uint32_t v = 0; v < V; ++v) {
+    if (region.frozenVertex[v]) continue;  // on the simplified surface
+    const vcg::Point3d p = vcg::Point3d::Construct(local.positions[v]);
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& t : tri) {
+      best = std::min(best, PointTriangleDistance2(p, t[0], t[1], t[2]));
+      if (best <= worst2) break;  // cannot raise the maximum
+    }
+    worst2 = std::max(worst2, best);
+  }
+  out.distance = std::sqrt(worst2);
+  out.ok = true;
+}
+
+}  // namespace
+
+Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag& dag, const Progress& progress) {
+  dag = LodDag();
+  Status s = RequireValidForFaces(mesh);
+  if (!s.ok()) return s;
+  {
+    GroupQemParams q = params.simplification.qem;
+    q.targetFaces = 1;  // set per group
+    s = ValidateParams(q);
+  }
+  if (!s.ok()) return s;
+  if (!(params.simplification.levelRatio > 0 && params.simplification.levelRatio < 1))
+    return Status::Invalid("the level ratio must lie in (0, 1)");
+  if (params.clusterFaces < 4 || params.clusterFaces > 65536) return Status::Invalid("cluster faces must lie in [4, 65536]");
+  if (params.groupClusters < 2 || params.groupClusters > 64) return Status::Invalid("group clusters must lie in [2, 64]");
+  if (!(params.maxGroupError > 0 && params.maxGroupError <= 1))
+    return Status::Invalid("the largest group error must lie in (0, 1] (a fraction of the diagonal)");
+  if (!(params.grouping.coneThresholdDeg > 0) || !(params.grouping.thresholdGrowth >= 1))
+    return Status::Invalid("the cone threshold must be > 0 and its growth >= 1");
+  const double kDeg = NormalCone::kPi / 180;
+  const vcg::Box3d box = UsedVertexBox(mesh);
+  const double diagonal = box.IsNull() ? 0.0 : box.Diag();
+  dag.positions = mesh.positions;
+  dag.inputVertices = mesh.positions.size();
+  dag.levels.emplace_back();
+  {
+    LodDag::Level& L0 = dag.levels[0];
+    L0.faces = mesh.faces;
+    const uint32_t C = GrowClusters(L0.faces, dag.positions, params.clusterFaces,
+                                    std::min(90.0, params.grouping.coneThresholdDeg) * kDeg, L0.faceCluster);
+    L0.clusterGroup.assign(C, -1);
+    L0.clusterCreator.assign(C, -1);
+    L0.clusterError.assign(C, 0.f);
+  }
+  const unsigned threads = unsigned(std::max(1, SimplificationThreads(params.simplification)));
+  double cap = params.maxGroupError;  // 0 once the capped levels no longer shrink
+  for (int k = 0; size_t(k + 2) < 64; ++k) {
+    if (progress && !progress(std::min(95, 10 + 8 * k), "LOD: simplifying groups")) {
+      dag = LodDag();
+      return Status::Cancelled();
+    }
+    LodDag::Level& L = dag.levels[size_t(k)];
+    if (L.clusterCount() <= 1) break;
+    std::vector<int> group;
+    const int G = GroupClusters(L, params.groupClusters, group);
+    // Faces per group; vertices shared by two groups stay frozen.
+    std::vector<std::vector<uint32_t>> groupFaces(static_cast<size_t>(G));
+    for (uint32_t f = 0; f < L.faces.size(); ++f) groupFaces[size_t(group[L.faceCluster[f]])].push_back(f);
+    std::vector<int> owner(dag.positions.size(), -1);
+    std::vector<uint8_t> shared(dag.positions.size(), 0);
+    for (uint32_t f = 0; f < L.faces.size(); ++f) {
+      const int g = group[L.faceCluster[f]];
+      for (uint32_t v : L.faces[f]) {
+        if (owner[v] < 0) owner[v] = g;
+        else if (owner[v] != g) shared[v] = 1;
+      }
+    }
+    std::vector<GroupResult> results(static_cast<size_t>(G));
+    {
+      std::atomic<int> next(0);
+      RunThreads(std::min<unsigned>(threads, unsigned(G)), [&](unsigned) {
+        for (int g = next++; g < G; g = next++)
+          SimplifyGroup(L.faces, groupFaces[size_t(g)], dag.positions, shared, params, cap, diagonal,
+                        results[size_t(g)]);
+      });
+    }
+    size_t newFaces = 0;
+    for (const auto& r : results) newFaces += r.faces.size();
+    if (double(newFaces) > 0.97 * double(L.faces.size())) {
+      if (cap == 0) break;  // no longer shrinks: L is the top
+      cap = 0;              // the levels above go on to one cluster without the cap, as before
+      --k;
+      continue;
+    }
+    // The new level: global ids for the new vertices (group order: deterministic), re-cut clusters.
+    LodDag::Level N;
+    std::vector<float> groupError(static_cast<size_t>(G), 0.f);
+    std::vector<double> maxChild(static_cast<size_t>(G), 0.0);
+    for (uint32_t c = 0; c < L.clusterCount(); ++c)
+      maxChild[size_t(group[c])] = std::max(maxChild[size_t(group[c])], double(L.clusterError[c]));
+    const double angle = std::min(90.0, params.grouping.coneThresholdDeg * std::pow(params.grouping.thresholdGrowth, k + 1)) * kDeg;
+    std::vector<uint32_t> clusterOfFace;
+    for (int g = 0; g < G; ++g) {
+      GroupResult& r = results[size_t(g)];
+      const uint32_t V = uint32_t(r.localToGlobal.size());
+      const uint32_t firstNew = uint32_t(dag.positions.size());
+      dag.positions.insert(dag.positions.end(), r.newPositions.begin(), r.newPositions.end());
+      std::vector<Face> faces;
+      faces.reserve(r.faces.size());
+      for (const auto& t : r.faces) {
+        Face u;
+        for (int i = 0; i < 3; ++i) u[size_t(i)] = t[size_t(i)] < V ? r.localToGlobal[t[size_t(i)]] : firstNew + (t[size_t(i)] - V);
+        faces.push_back(u);
+      }
+      // Errors grow strictly up the DAG (a tiny relative step when the distance is 0), so that
+      // a group's error is above every error below it even in float.
+      double e = maxChild[size_t(g)] + r.distance;
+      float ef = float(e);
+      const float floor = float(maxChild[size_t(g)]);
+      if (!(ef > floor)) ef = std::nextafter(std::max(floor, 0.f), std::numeric_limits<float>::infinity());
+      groupError[size_t(g)] = ef;
+      const uint32_t C = GrowClusters(faces, dag.positions, params.clusterFaces, angle, clusterOfFace);
+      const uint32_t base = uint32_t(N.clusterCount());
+      for (size_t f = 0; f < faces.size(); ++f) {
+        N.faces.push_back(faces[f]);
+        N.faceCluster.push_back(base + clusterOfFace[f]);
+      }
+      for (uint32_t c = 0; c < C; ++c) {
+        N.clusterGroup.push_back(-1);
+        N.clusterCreator.push_back(g);
+        N.clusterError.push_back(ef);
+      }
+      r = GroupResult();  // free it
+    }
+    L.clusterGroup = group;
+    L.groupError = groupError;
+    dag.levels.push_back(std::move(N));
+  }
+  if (progress) progress(100, "LOD: DAG built");
+  return Status::Ok();
+}
+
+}  // namespace conelod

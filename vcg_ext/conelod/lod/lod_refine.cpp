@@ -1,0 +1,346 @@
+// ConeLOD — view-dependent refinement of a .clod file's cluster DAG, and the cut's mesh (lod_read.h).
+//
+// The cut starts at the roots. A group of the DAG can be expanded once every cluster made from it
+// (the siblings of a node) is in the cut: they are replaced by the group's own clusters (their
+// children). The group's border was locked when it was simplified, so the children meet the rest
+// of the cut at the same vertices: every cut reached this way is watertight, whatever the order
+// of the expansions. The order is a priority queue of the expandable groups (LodPriority): by
+// default the group's error projected on the screen (Karis et al., "Nanite: a deep dive"; refined
+// while it exceeds about a pixel), or its error in model units, or the paper's f(g) (Kamiya,
+// Suzuki, Kawachi §7). Groups whose clusters all face away from the eye (three-state cone test,
+// normal_cone.h) come after every other group, so a full budget still ends at level 0. The
+// refinement stops at the first group whose expansion does not fit the face budget. Culling only
+// flags cut nodes as not drawn: it never changes the selection, so the drawn set is a subset of
+// a watertight cut whose other nodes face away.
+#include "conelod/lod/lod_read.h"
+
+#include <algorithm>
+#include <cmath>
+#include <queue>
+#include <unordered_map>
+
+namespace conelod {
+
+double RefinementPriority(const LodNode& node, const LodView& view) {
+  if (node.cone.empty()) return 0;
+  vcg::Point3d e = view.orthographic ? -view.viewDir : view.eye - vcg::Point3d::Construct(node.center);
+  const double len = e.Norm();
+  if (!(len > 0)) return 1;  // the eye is at the node's centre: refine it early
+  e /= len;
+  double d = e * node.cone.axis;
+  d = std::max(-1.0, std::min(1.0, d));
+  const double a = std::acos(d) + std::max(0.0, node.cone.halfAngle);
+  if (a >= NormalCone::kPi) return 1;
+  return (1 - std::cos(a)) / 2;
+}
+
+namespace {
+enum : uint8_t { kBelow = 0, kInCut = 1, kRefined = 2 };
+
+struct QueueItem {
+  uint8_t culled;     // every cluster of the group faces away
+  double priority;
+  uint32_t key;       // the group: its clusters' smallest node id
+  // std::priority_queue pops the largest: visible before culled, larger priority first, lower
+  // key first (deterministic ties).
+  bool operator<(const QueueItem& o) const {
+    if (culled != o.culled) return culled > o.culled;
+    if (priority != o.priority) return priority < o.priority;
+    return key > o.key;
+  }
+};
+}  // namespace
+
+struct LodRefiner::Impl {
+  explicit Impl(LodReader& r) : reader(r) {}
+  LodReader& reader;
+  LodView view;
+  std::vector<uint8_t> state;                     // per node id
+  std::unordered_map<uint32_t, uint32_t> cutPos;  // node id -> its entry in cut.nodes
+  std::unordered_map<uint32_t, uint32_t> present;  // group key -> its clusters in the cut
+  mutable LodCut cut;
+  mutable bool statsDirty = true;
+  std::priority_queue<QueueItem> queue;
+  bool stopped = false;
+  bool started = false;
+
+  bool culledNode(const LodNode& n) const {
+    if (!view.cullBackFacing) return false;
+    const Facing f = view.orthographic
+                         ? ClassifyOrtho(n.cone, view.viewDir)
+                         : ClassifyPerspective(n.cone, vcg::Point3d::Construct(n.center), n.radius, view.eye);
+    return f == Facing::Back;
+  }
+
+  static uint32_t keyOf(const LodNode& n) { return *std::min_element(n.siblings.begin(), n.siblings.end()); }
+
+  // Priority of expanding the group whose clusters are `siblings` (all in the cut).
+  double priorityOf(const std::vector<uint32_t>& siblings) const {
+    double p = 0;
+    for (uint32_t s : siblings) {
+      const LodNode& n = reader.node(s);
+      double q = 0;
+      switch (view.priority) {
+        case LodPriority::ObjectError: q = n.error; break;
+        case LodPriority::ConeFg: q = RefinementPriority(n, view); break;
+        case LodPriority::ScreenError: {
+          double d;
+          if (view.orthographic) {
+            d = 1;
+          } else {
+            const vcg::Point3d c = vcg::Point3d::Construct(n.center);
+            d = std::max((view.eye - c).Norm() - double(n.radius), 1e-9 * (1 + c.Norm()));
+          }
+          q = double(n.error) / d * (view.projectionScale > 0 ? view.projectionScale : 1.0);
+          break;
+        }
+      }
+      p = std::max(p, q);
+    }
+    // Screen-space error, culling on: weighted by how squarely the group can face the eye,
+    // 1/4 + 3/4 cos(max(0, angle(axis, eye) - half-angle)) at best over its clusters (a group
+    // seen edge-on shows its error at the silhouette only).
+    if (view.priority == LodPriority::ScreenError && view.cullBackFacing) {
+      double facing = 0;
+      for (uint32_t s : siblings) {
+        const LodNode& n = reader.node(s);
+        vcg::Point3d toEye = view.orthographic ? -view.viewDir : view.eye - vcg::Point3d::Construct(n.center);
+        const double len = toEye.Norm();
+        if (n.cone.empty() || !(len > 0)) {
+          facing = 1;
+          break;
+        }
+        const double a = std::acos(std::max(-1.0, std::min(1.0, toEye * n.cone.axis / len)));
+        facing = std::max(facing, std::cos(std::min(NormalCone::kPi / 2, std::max(0.0, a - n.cone.halfAngle))));
+      }
+      p *= 0.25 + 0.75 * facing;
+    }
+    return p;
+  }
+
+  Status AddToCut(uint32_t id) {
+    Status s = reader.LoadGeometry(id);
+    if (!s.ok()) return s;
+    const LodNode& n = reader.node(id);
+    const bool culled = culledNode(n);
+    state[id] = kInCut;
+    cutPos[id] = uint32_t(cut.nodes.size());
+    cut.nodes.push_back(id);
+    cut.culled.push_back(culled ? 1 : 0);
+    cut.faces += n.faceCount;
+    if (culled) {
+      ++cut.groupsCulled;
+    } else {
+      ++cut.groupsDrawn;
+      cut.drawnFaces += n.faceCount;
+    }
+    statsDirty = true;
+    if (!n.children.empty()) {
+      const uint32_t key = keyOf(n);
+      if (++present[key] == n.siblings.size()) {
+        // Every cluster of the group is in the cut: it can be expanded.
+        bool allCulled = view.cullBackFacing;
+        for (uint32_t sib : n.siblings) {
+          if (state[sib] != kInCut) return Status::Invalid("corrupt file: node " + std::to_string(id) + "'s siblings disagree");
+          if (!cut.culled[cutPos[sib]]) allCulled = false;
+        }
+        queue.push({uint8_t(allCulled), priorityOf(n.siblings), key});
+      }
+    }
+    return Status::Ok();
+  }
+
+  void RemoveFromCut(uint32_t id) {
+    const LodNode& n = reader.node(id);
+    const uint32_t at = cutPos[id];
+    const bool culled = cut.culled[at] != 0;
+    cut.faces -= n.faceCount;
+    if (culled) {
+      --cut.groupsCulled;
+    } else {
+      --cut.groupsDrawn;
+      cut.drawnFaces -= n.faceCount;
+    }
+    const uint32_t last = cut.nodes.back();
+    cut.nodes[at] = last;
+    cut.culled[at] = cut.culled.back();
+    cutPos[last] = at;
+    cut.nodes.pop_back();
+    cut.culled.pop_back();
+    cutPos.erase(id);
+    state[id] = kRefined;
+    reader.EvictGeometry(id);
+    statsDirty = true;
+  }
+
+  // Replaces the clusters of group `key` (all in the cut) by their children.
+  Status expand(uint32_t key) {
+    if (stopped || state[key] != kInCut) return Status::Ok();
+    const std::vector<uint32_t> siblings = reader.node(key).siblings;  // copies: loading records may rehash
+    const std::vector<uint32_t> children = reader.node(key).children;
+    if (children.empty()) return Status::Ok();
+    for (uint32_t s : siblings)
+      if (s >= state.size() || state[s] != kInCut || reader.node(s).children != children || reader.node(s).siblings != siblings)
+        return Status::Invalid("corrupt file: the clusters made from one group disagree (node " + std::to_string(s) + ")");
+    Status st = reader.LoadChildren(key);
+    if (!st.ok()) return st;
+    size_t removed = 0, added = 0;
+    for (uint32_t s : siblings) removed += reader.node(s).faceCount;
+    for (uint32_t c : children) {
+      if (c >= state.size() || state[c] != kBelow) return Status::Invalid("corrupt file: node " + std::to_string(c) + " is the child of two groups");
+      added += reader.node(c).faceCount;
+    }
+    if (cut.faces - removed + added > view.faceBudget) {
+      stopped = true;
+      return Status::Ok();
+    }
+    for (uint32_t s : siblings) RemoveFromCut(s);
+    present.erase(key);
+    for (uint32_t c : children) {
+      st = AddToCut(c);
+      if (!st.ok()) return st;
+    }
+    ++cut.refinements;
+    return Status::Ok();
+  }
+
+  void UpdateStats() const {
+    if (!statsDirty) return;
+    // Cut nodes sharing a (global) vertex: the largest difference of their levels.
+    std::unordered_map<uint32_t, std::pair<int, int>> range;
+    for (uint32_t id : cut.nodes) {
+      const LodGeometry* g = reader.geometry(id);
+      if (!g) continue;
+      const int level = reader.node(id).level;
+      for (uint32_t v : g->vertexIds) {
+        auto ins = range.emplace(v, std::make_pair(level, level));
+        if (!ins.second) {
+          ins.first->second.first = std::min(ins.first->second.first, level);
+          ins.first->second.second = std::max(ins.first->second.second, level);
+        }
+      }
+    }
+    int worst = 0;
+    for (const auto& kv : range) worst = std::max(worst, kv.second.second - kv.second.first);
+    cut.maxLevelDifference = worst;
+    statsDirty = false;
+  }
+};
+
+LodRefiner::LodRefiner(LodReader& reader) : impl_(new Impl(reader)) {}
+LodRefiner::~LodRefiner() = default;
+
+Status LodRefiner::Start(const LodView& view) {
+  Impl& m = *impl_;
+  // Geometry of the previous cut goes (the roots' is read again just below when needed).
+  for (uint32_t id : m.cut.nodes) m.reader.EvictGeometry(id);
+  m.view = view;
+  m.state.assign(size_t(m.reader.info().nodeCount), kBelow);
+  m.cutPos.clear();
+  m.present.clear();
+  m.cut = LodCut();
+  m.queue = std::priority_queue<QueueItem>();
+  m.stopped = false;
+  m.started = true;
+  for (uint32_t r : m.reader.roots()) {
+    Status s = m.AddToCut(r);
+    if (!s.ok()) return s;
+  }
+  return Status::Ok();
+}
+
+Status LodRefiner::Step(size_t maxRefinements) {
+  Impl& m = *impl_;
+  if (!m.started) return Status::Invalid("LodRefiner::Step before Start");
+  size_t done = 0;
+  while (done < maxRefinements && !m.stopped && !m.queue.empty()) {
+    const QueueItem top = m.queue.top();
+    const bool pixelStop = m.view.priority == LodPriority::ScreenError && m.view.projectionScale > 0 && m.view.maxPixelError > 0;
+    if (pixelStop && !top.culled &&
+        top.priority <= m.view.maxPixelError) {
+      // Every visible group left is below a pixel: only back-facing ones could follow, and they
+      // are not drawn. Stop here.
+      m.stopped = true;
+      break;
+    }
+    m.queue.pop();
+    if (top.culled && pixelStop) continue;  // not drawn: no pixel to gain
+    const size_t before = m.cut.refinements;
+    Status s = m.expand(top.key);
+    if (!s.ok()) {
+      m.stopped = true;
+      return s;
+    }
+    done += m.cut.refinements - before;
+  }
+  return Status::Ok();
+}
+
+bool LodRefiner::Done() const { return !impl_->started || impl_->stopped || impl_->queue.empty(); }
+
+const LodCut& LodRefiner::cut() const {
+  impl_->UpdateStats();
+  return impl_->cut;
+}
+
+Status RefineLod(LodReader& reader, const LodView& view, LodCut& cut) {
+  LodRefiner r(reader);
+  Status s = r.Start(view);
+  if (!s.ok()) return s;
+  while (!r.Done()) {
+    s = r.Step(size_t(1) << 30);
+    if (!s.ok()) return s;
+  }
+  cut = r.cut();
+  return Status::Ok();
+}
+
+Status ExtractCutMesh(LodReader& reader, const LodCut& cut, bool includeCulled, IndexedMesh& out,
+                      std::vector<int>* faceLevel, std::vector<uint32_t>* faceNode) {
+  out = IndexedMesh();
+  if (faceLevel) faceLevel->clear();
+  if (faceNode) faceNode->clear();
+  if (cut.culled.size() != cut.nodes.size()) return Status::Invalid("ExtractCutMesh: the cut's culled flags do not match its nodes");
+  size_t faces = 0, verts = 0;
+  for (size_t i = 0; i < cut.nodes.size(); ++i) {
+    const uint32_t id = cut.nodes[i];
+    if (id >= reader.info().nodeCount) return Status::Invalid("ExtractCutMesh: no node " + std::to_string(id));
+    if (!includeCulled && cut.culled[i]) continue;
+    Status s = reader.LoadNode(id);
+    if (!s.ok()) return s;
+    faces += reader.node(id).faceCount;
+    verts += reader.node(id).vertexCount;
+  }
+  out.faces.reserve(faces);
+  out.positions.reserve(verts);
+  if (faceLevel) faceLevel->reserve(faces);
+  if (faceNode) faceNode->reserve(faces);
+  // Vertices are welded by global id: shared between nodes of every level.
+  std::unordered_map<uint32_t, uint32_t> weld;
+  weld.reserve(verts);
+  std::vector<uint32_t> local;
+  for (size_t i = 0; i < cut.nodes.size(); ++i) {
+    if (!includeCulled && cut.culled[i]) continue;
+    const uint32_t id = cut.nodes[i];
+    const bool wasLoaded = reader.geometry(id) != nullptr;
+    Status s = reader.LoadGeometry(id);
+    if (!s.ok()) return s;
+    const LodGeometry& g = *reader.geometry(id);
+    const int level = reader.node(id).level;
+    local.resize(g.vertexIds.size());
+    for (size_t v = 0; v < g.vertexIds.size(); ++v) {
+      auto ins = weld.emplace(g.vertexIds[v], uint32_t(out.positions.size()));
+      if (ins.second) out.positions.push_back(g.positions[v]);
+      local[v] = ins.first->second;
+    }
+    for (const auto& t : g.faces) {
+      out.faces.push_back({local[t[0]], local[t[1]], local[t[2]]});
+      if (faceLevel) faceLevel->push_back(level);
+      if (faceNode) faceNode->push_back(id);
+    }
+    if (!wasLoaded) reader.EvictGeometry(id);  // leave the reader as it was
+  }
+  return Status::Ok();
+}
+
+}  // namespace conelod

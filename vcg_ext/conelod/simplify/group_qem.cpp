@@ -1,0 +1,1180 @@
+// ConeLOD — group-preserving quadric edge collapse (see group_qem.h).
+#include "conelod/simplify/group_qem.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include <vcg/space/box3.h>
+
+#include "conelod/mesh/mesh_check.h"
+
+namespace conelod {
+
+namespace {
+
+using vcg::Point3d;
+constexpr uint32_t kNone = UINT32_MAX;
+
+// A face normal may turn by at most acos(0.2) ~ 78 degrees in a collapse (preserveNormal).
+constexpr double kMinNormalCos = 0.2;
+// New faces with quality (2 area / longest edge^2) below this are zero-area for our purposes.
+constexpr double kDegenerateQuality = 1e-6;
+// Integrity mode: when a group's faces next to a collapsing edge are not connected through the
+// merged vertex's fan, a search inside the group looks for a path between them through at most
+// this many faces; a collapse whose path is longer (or missing) is refused.
+constexpr uint32_t kIntegritySearchFaces = 256;
+
+// Symmetric quadric Q(x) = x^T A x + 2 b.x + c, with the total weight w of its planes.
+struct Quadric {
+  double a00 = 0, a01 = 0, a02 = 0, a11 = 0, a12 = 0, a22 = 0, b0 = 0, b1 = 0, b2 = 0, c = 0, w = 0;
+
+  // Plane n.x + d = 0, n unit.
+  void addPlane(const Point3d& n, double d, double weight) {
+    a00 += weight * n[0] * n[0]; a01 += weight * n[0] * n[1]; a02 += weight * n[0] * n[2];
+    a11 += weight * n[1] * n[1]; a12 += weight * n[1] * n[2]; a22 += weight * n[2] * n[2];
+    b0 += weight * d * n[0]; b1 += weight * d * n[1]; b2 += weight * d * n[2];
+    c += weight * d * d;
+    w += weight;
+  }
+  Quadric& operator+=(const Quadric& q) {
+    a00 += q.a00; a01 += q.a01; a02 += q.a02; a11 += q.a11; a12 += q.a12; a22 += q.a22;
+    b0 += q.b0; b1 += q.b1; b2 += q.b2; c += q.c; w += q.w;
+    return *this;
+  }
+  // A x (no b).
+  Point3d apply(const Point3d& p) const {
+    return Point3d(a00 * p[0] + a01 * p[1] + a02 * p[2], a01 * p[0] + a11 * p[1] + a12 * p[2],
+                   a02 * p[0] + a12 * p[1] + a22 * p[2]);
+  }
+  double eval(const Point3d& p) const {
+    const Point3d ap = apply(p);
+    return p * ap + 2 * (b0 * p[0] + b1 * p[1] + b2 * p[2]) + c;
+  }
+  // Mean squared distance to the planes at p.
+  double error(const Point3d& p) const { return w > 0 ? std::max(0.0, eval(p) / w) : 0.0; }
+  // Solves A x = -b; false when A is near-singular (flat or crease neighbourhoods).
+  bool minimum(Point3d& x) const {
+    const double c00 = a11 * a22 - a12 * a12, c01 = a02 * a12 - a01 * a22, c02 = a01 * a12 - a02 * a11;
+    const double det = a00 * c00 + a01 * c01 + a02 * c02;
+    const double scale = (a00 + a11 + a22) / 3;
+    if (!(std::fabs(det) > 1e-6 * scale * scale * scale)) return false;
+    const double c11 = a00 * a22 - a02 * a02, c12 = a01 * a02 - a00 * a12, c22 = a00 * a11 - a01 * a01;
+    const double inv = -1.0 / det;
+    x = Point3d((c00 * b0 + c01 * b1 + c02 * b2) * inv, (c01 * b0 + c11 * b1 + c12 * b2) * inv,
+                (c02 * b0 + c12 * b1 + c22 * b2) * inv);
+    return std::isfinite(x[0]) && std::isfinite(x[1]) && std::isfinite(x[2]);
+  }
+  // Minimum on the segment p0 + t (p1 - p0), t in [0,1].
+  Point3d segmentMinimum(const Point3d& p0, const Point3d& p1) const {
+    const Point3d d = p1 - p0;
+    const double dad = d * apply(d);
+    if (!(dad > 0)) return (p0 + p1) * 0.5;
+    const double t = -(d * apply(p0) + b0 * d[0] + b1 * d[1] + b2 * d[2]) / dad;
+    return p0 + d * std::min(1.0, std::max(0.0, t));
+  }
+};
+
+// Per-vertex fan structure and groups (primary grouping).
+enum VertexFlag : uint8_t {
+  kClosed = 1,         // one closed manifold fan
+  kOpen = 2,           // one open manifold fan (a mesh-border vertex)
+  kNonManifold = 4,    // several fans, an edge with 3+ faces, or a face using the vertex twice
+  kSimpleContour = 8,  // closed fan, 2 groups, 2 sectors: a plain point of one group contour
+  kIsolated = 16,      // no face
+};
+struct VertexInfo {
+  uint8_t flags = kIsolated;
+  uint8_t groups = 0;  // distinct groups around, saturated at 255
+};
+
+// Heap entries are 16 bytes. The top bit of `tag` says what `priority` is:
+//   kLazy     a lower bound (quadric minimum, best quality): pushed without judging the collapse;
+//   kJudged   the full priority, judged at the entry's epoch (the low 31 bits).
+// An entry is superseded when an endpoint survived a collapse after it was pushed (that pushed
+// the endpoint's edges anew), and stale when an endpoint's neighbourhood changed since (it is
+// judged again when popped). A fresh judged entry is executed without judging it again.
+struct HeapEntry {
+  float priority;
+  uint32_t a, b;
+  uint32_t tag;
+};
+
+// 4-ary min-heap on priority: half the depth of a binary heap. The heap is the largest and most
+// randomly accessed array of a run, so the four children of a node (64 bytes) are placed in one
+// cache line: the array starts 16 bytes before a line boundary, so that children 4i+1..4i+4 begin
+// on one.
+class EntryHeap {
+ public:
+  void reserve(size_t n) {
+    if (n > cap_) grow(n);
+  }
+  bool empty() const { return n_ == 0; }
+  size_t size() const { return n_; }
+  const HeapEntry& top() const { return h_[0]; }
+  void append(const HeapEntry& e) {  // unordered; heapify() before popping
+    if (n_ == cap_) grow(2 * cap_ + 64);
+    h_[n_++] = e;
+  }
+  void push(const HeapEntry& e) {
+    append(e);
+    SiftUp(n_ - 1);
+  }
+  HeapEntry pop() {
+    const HeapEntry top = h_[0];
+    h_[0] = h_[--n_];
+    if (n_ > 0) SiftDown(0);
+    return top;
+  }
+  void heapify() {
+    for (size_t i = n_ / 4 + 1; i-- > 0;)
+      if (i < n_) SiftDown(i);
+  }
+  template <class Pred>
+  void RemoveIf(Pred pred) {
+    n_ = size_t(std::remove_if(h_, h_ + n_, pred) - h_);
+    heapify();
+  }
+
+ private:
+  void grow(size_t cap) {
+    std::vector<HeapEntry> storage(cap + 4);  // + room to align
+    const uintptr_t addr = reinterpret_cast<uintptr_t>(storage.data());
+    HeapEntry* h = storage.data() + ((48 - addr % 64 + 64) % 64) / sizeof(HeapEntry);
+    std::copy(h_, h_ + n_, h);
+    storage_.swap(storage);
+    h_ = h;
+    cap_ = cap;
+  }
+  void SiftUp(size_t i) {
+    const HeapEntry x = h_[i];
+    while (i > 0) {
+      const size_t parent = (i - 1) / 4;
+      if (!(x.priority < h_[parent].priority)) break;
+      h_[i] = h_[parent];
+      i = parent;
+    }
+    h_[i] = x;
+  }
+  void SiftDown(size_t i) {
+    const HeapEntry x = h_[i];
+    const size_t n = n_;
+    for (;;) {
+      const size_t first = 4 * i + 1;
+      if (first >= n) break;
+      size_t best = first;
+      const size_t end = std::min(first + 4, n);
+      for (size_t j = first + 1; j < end; ++j)
+        if (h_[j].priority < h_[best].priority) best = j;
+      if (!(h_[best].priority < x.priority)) break;
+      h_[i] = h_[best];
+      i = best;
+    }
+    h_[i] = x;
+  }
+  std::vector<HeapEntry> storage_;
+  HeapEntry* h_ = nullptr;  // storage_.data() + 0..3, at 48 modulo 64 bytes
+  size_t n_ = 0, cap_ = 0;
+};
+static_assert(sizeof(HeapEntry) == 16, "four heap entries per cache line");
+constexpr uint32_t kLazy = 0, kJudged = 1u << 31, kKindMask = kJudged, kEpochMask = ~kKindMask;
+
+struct Candidate {
+  CollapseVerdict verdict = CollapseVerdict::NotAnEdge;
+  uint32_t keep = kNone, remove = kNone;
+  Point3d position;
+  double error = 0;     // mean squared distance
+  double priority = 0;  // error / quality penalty
+};
+
+// Dense ids 0..n-1 for group ids >= 0 (in order of first appearance); returns n. `original`, when
+// given, receives the id each dense id stands for.
+int DenseIds(const std::vector<int>& ids, std::vector<int>& dense, std::vector<int>* original = nullptr) {
+  dense.resize(ids.size());
+  if (original) original->clear();
+  int n = 0;
+  const int maxId = ids.empty() ? 0 : *std::max_element(ids.begin(), ids.end());
+  if (size_t(maxId) <= 4 * ids.size() + 1024) {
+    std::vector<int> map(size_t(maxId) + 1, -1);
+    for (size_t f = 0; f < ids.size(); ++f) {
+      int& m = map[size_t(ids[f])];
+      if (m < 0) { m = n++; if (original) original->push_back(ids[f]); }
+      dense[f] = m;
+    }
+    return n;
+  }
+  std::vector<int> sorted(ids);
+  std::sort(sorted.begin(), sorted.end());
+  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+  for (size_t f = 0; f < ids.size(); ++f)
+    dense[f] = int(std::lower_bound(sorted.begin(), sorted.end(), ids[f]) - sorted.begin());
+  if (original) *original = sorted;
+  return int(sorted.size());
+}
+
+inline bool Contains(const std::array<uint32_t, 3>& t, uint32_t v) { return t[0] == v || t[1] == v || t[2] == v; }
+inline uint32_t Third(const std::array<uint32_t, 3>& t, uint32_t a, uint32_t b) {
+  for (uint32_t v : t)
+    if (v != a && v != b) return v;
+  return kNone;
+}
+inline float ToFloat(double x) { return float(std::min(x, double(std::numeric_limits<float>::max()))); }
+
+class GroupQemSimplifier {
+ public:
+  GroupQemSimplifier(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
+             const std::vector<const std::vector<int>*>& coarser, const GroupQemParams& p,
+             const GroupQemRegion* region = nullptr)
+      : mesh_(mesh), group_(faceGroup), coarser_(coarser), p_(p),
+        groupConstraints_((p.mode == GroupMode::Paper && p.condition1) || p.lockGroupBoundaries),
+        integrity_(p.mode == GroupMode::Integrity && p.condition1),
+        paperConditions_(p.mode == GroupMode::Paper),
+        frozen_(region && !region->frozenVertex.empty() ? region->frozenVertex.data() : nullptr),
+        regionDiagonal_(region ? region->diagonal : 0) {}
+
+  void init();
+  Candidate evaluate(uint32_t a, uint32_t b);  // judge() + counts
+  Status run(const Progress& progress, GroupQemStats& stats);
+  void output(GroupQemResult& out) const;
+  Point3d inputPosition(const Point3d& p) const { return p + center_; }
+
+ private:
+  // Face list of v: refs_[start_[v] .. start_[v] + count_[v]).
+  const uint32_t* facesBegin(uint32_t v) const { return refs_.data() + start_[v]; }
+  const uint32_t* facesEnd(uint32_t v) const { return refs_.data() + start_[v] + count_[v]; }
+  void BuildFaceLists();
+  void AnalyzeVertex(uint32_t v);
+  bool interior(uint32_t v) const { return (vs_[v].info.flags & kClosed) && vs_[v].info.groups == 1; }
+  bool interiorIn(uint32_t v, const std::vector<int>& layer) const;
+  bool fixedVertex(uint32_t v) const;
+  bool contourVertex(uint32_t v) const {
+    const VertexInfo& vi = vs_[v].info;
+    return groupConstraints_ && !p_.lockGroupBoundaries && vi.groups == 2 && (vi.flags & kSimpleContour);
+  }
+  Candidate judge(uint32_t a, uint32_t b);
+  // g(f): the group of face f; layer: the coarser grouping it reads, null for the primary one.
+  template <class GroupOf>
+  bool condition1(const GroupOf& g, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a, uint32_t n0b,
+                  uint32_t n1a, uint32_t n1b, const std::vector<int>* layer) const;
+  // Condition 1 for a coarser grouping whose groups are unions of the primary ones, once the
+  // primary grouping passed it (see coarserNested_).
+  bool condition1Nested(const std::vector<int>& g, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1) const {
+    return e1 == kNone || g[e0] != g[e1] || faces_[e0].group == faces_[e1].group || interiorIn(a, g) ||
+           interiorIn(b, g);
+  }
+  // Where the merged vertex goes (c.keep, c.position); false: both endpoints must stay.
+  bool place(uint32_t a, uint32_t b, bool contourEdge, Candidate& c) const;
+  double priorityOf(double error, double quality, uint32_t a, uint32_t b) const;
+  float lowerBound(uint32_t a, uint32_t b) const;
+  void collapse(const Candidate& c);
+  bool frozen(uint32_t v) const { return frozen_ && frozen_[v]; }
+  void PushLazy(uint32_t a, uint32_t b) {
+    if (!frozen(a) && !frozen(b)) heap_.push({lowerBound(a, b), a, b, epoch_ | kLazy});
+  }
+  void PushEdgesOf(uint32_t v);  // lazy entries for every edge of v, heap order restored
+  // Integrity mode: after collapsing (a, b) (faces e0, e1 on the edge; n0a, n0b, n1a, n1b: the
+  // faces across (a, opp0), (b, opp0), (a, opp1), (b, opp1), kNone where there is none), every
+  // group of every grouping is still one piece, as many pieces as before, and not empty.
+  bool keepsGroupsWhole(uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a, uint32_t n0b, uint32_t n1a,
+                        uint32_t n1b);
+  bool keepsGroupsWhole(uint32_t a, uint32_t b);  // finds the faces itself
+  // One grouping: layer < 0 the primary one, else coarserDense_[layer].
+  bool keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a, uint32_t n0b,
+                       uint32_t n1a, uint32_t n1b);
+  int groupIn(int layer, uint32_t f) const { return layer < 0 ? faces_[f].group : coarserDense_[size_t(layer)][f]; }
+  // keepCones: the new normal (unnormalised, squared length lenSq) of face f stays in the cone
+  // bound of its group in every grouping that has bounds.
+  bool insideCones(uint32_t f, const Point3d& n, double lenSq) const {
+    for (size_t l = 0; l < coneAxis_.size(); ++l) {
+      const size_t g = size_t(l == 0 ? group_[f] : (*coarser_[l - 1])[f]);
+      if (g >= coneAxis_[l].size() || !(coneCos_[l][g] > -2)) continue;
+      const double dot = n * coneAxis_[l][g], c = coneCos_[l][g];
+      if (!(c >= 0 ? (dot >= 0 && dot * dot >= c * c * lenSq) : (dot >= 0 || dot * dot <= c * c * lenSq)))
+        return false;
+    }
+    return true;
+  }
+
+  const IndexedMesh& mesh_;
+  const std::vector<int>& group_;
+  const std::vector<const std::vector<int>*>& coarser_;
+  // Every coarser grouping is a union of the primary groups (as the levels of a GroupHierarchy):
+  // faces in one primary group are in one coarser group. Then a collapse that passes condition 1
+  // for the primary groups passes its first two clauses for the coarser ones (a neighbour in f1's
+  // primary group is in its coarser group), and the third wherever f1 and f2 share a primary group
+  // (a fan inside one primary group is inside one coarser group): only f1 and f2 in different
+  // primary groups but one coarser group remain to check.
+  bool coarserNested_ = false;
+  GroupQemParams p_;
+  const bool groupConstraints_;  // contour-aware placement and quadrics (paper mode or the lock)
+  const bool integrity_;         // the integrity test (integrity mode, condition1)
+  const bool paperConditions_;   // conditions 1 and 2 as the paper (paper mode)
+  const uint8_t* frozen_;         // per vertex, or null: see GroupQemRegion
+  const double regionDiagonal_;   // > 0: the whole mesh's diagonal
+
+  Point3d center_;
+  double diag_ = 1;
+  double floorError_ = 0;
+  std::vector<Point3d> pos_;
+  std::vector<Quadric> quadric_;
+  // A face with its (primary) group: the judging reads both, in one 16-byte record.
+  struct FaceRec : std::array<uint32_t, 3> {
+    int group;
+  };
+  std::vector<FaceRec> faces_;  // group: dense ids 0..n-1 (only equality and counts matter)
+  std::vector<std::vector<int>> coarserDense_;  // integrity mode: the coarser groupings, dense ids
+  std::vector<std::vector<int>> groupFaces_;    // integrity mode: live faces per group; [0] primary
+  // keepCones, per grouping with bounds ([0] primary, then the coarser ones), per group id: the
+  // bound's axis and the cosine of its half-angle (-3: no bound).
+  std::vector<std::vector<Point3d>> coneAxis_;
+  std::vector<std::vector<double>> coneCos_;
+  std::vector<uint32_t> faceMark_;              // integrity search marks (== faceStamp_)
+  uint32_t faceStamp_ = 0;
+  std::vector<char> faceDead_;
+  std::vector<uint32_t> start_, count_, refs_;
+  // What the loop reads of a vertex, in one 16-byte record (one cache miss, not six).
+  struct VertexState {
+    uint32_t lastSurvive = 0;  // epoch at which the vertex last survived a collapse
+    uint32_t touched = 0;      // epoch at which its neighbourhood last changed
+    uint32_t mark = 0;         // visit mark (== stamp_)
+    VertexInfo info;
+    char dead = 0;
+    char dropped = 0;  // a refused collapse at it left the heap: queue its edges again when its
+                       // neighbourhood changes (the collapse may have become possible)
+  };
+  std::vector<VertexState> vs_;
+  uint32_t stamp_ = 0;
+  uint32_t epoch_ = 1;
+  EntryHeap heap_;
+  size_t liveFaces_ = 0;
+  GroupQemStats stats_;  // evaluations and refusals counted by evaluate()
+  // Scratch (no allocation in the loop).
+  std::vector<uint32_t> fanOther_, ring_, fanScratch_, fanParent_, queue_;
+  std::vector<int> groupScratch_;
+};
+
+void GroupQemSimplifier::BuildFaceLists() {
+  const size_t nv = pos_.size();
+  start_.assign(nv, 0);
+  count_.assign(nv, 0);
+  for (size_t f = 0; f < faces_.size(); ++f) {
+    if (faceDead_[f]) continue;
+    const auto& t = faces_[f];
+    ++count_[t[0]];
+    if (t[1] != t[0]) ++count_[t[1]];
+    if (t[2] != t[0] && t[2] != t[1]) ++count_[t[2]];
+  }
+  uint32_t total = 0;
+  for (size_t v = 0; v < nv; ++v) { start_[v] = total; total += count_[v]; count_[v] = 0; }
+  // Twice the room: a collapse appends the survivor's new list at the end; we rebuild when full.
+  refs_.assign(std::max<size_t>(size_t(total) * 2, 64), 0);
+  refs_.resize(total);
+  for (uint32_t f = 0; f < faces_.size(); ++f) {
+    if (faceDead_[f]) continue;
+    const auto& t = faces_[f];
+    refs_[start_[t[0]] + count_[t[0]]++] = f;
+    if (t[1] != t[0]) refs_[start_[t[1]] + count_[t[1]]++] = f;
+    if (t[2] != t[0] && t[2] != t[1]) refs_[start_[t[2]] + count_[t[2]]++] = f;
+  }
+}
+
+void GroupQemSimplifier::AnalyzeVertex(uint32_t v) {
+  VertexInfo& vi = vs_[v].info;
+  const uint32_t k = count_[v];
+  if (k == 0) { vi.flags = kIsolated; vi.groups = 0; return; }
+  const uint32_t* fl = facesBegin(v);
+  // Distinct groups.
+  groupScratch_.clear();
+  for (uint32_t i = 0; i < k; ++i) {
+    const int g = faces_[fl[i]].group;
+    if (std::find(groupScratch_.begin(), groupScratch_.end(), g) == groupScratch_.end()) groupScratch_.push_back(g);
+  }
+  vi.groups = uint8_t(std::min<size_t>(groupScratch_.size(), 255));
+  // The two other vertices of each face, in slots 2i and 2i+1.
+  fanOther_.resize(2 * size_t(k));
+  bool nonManifold = false;
+  for (uint32_t i = 0; i < k; ++i) {
+    const auto& t = faces_[fl[i]];
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) nonManifold = true;
+    const int j = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+    fanOther_[2 * i] = t[size_t((j + 1) % 3)];
+    fanOther_[2 * i + 1] = t[size_t((j + 2) % 3)];
+  }
+  // How many faces use each edge (v, u): 1 = border, 2 = manifold, 3+ = non-manifold.
+  uint32_t borderEnds = 0, startFace = 0, startVertex = fanOther_[0];
+  for (uint32_t s = 0; s < 2 * k && !nonManifold; ++s) {
+    uint32_t uses = 0;
+    for (uint32_t r = 0; r < 2 * k; ++r) uses += fanOther_[r] == fanOther_[s];
+    if (uses > 2) nonManifold = true;
+    if (uses == 1) {
+      ++borderEnds;
+      startFace = s / 2;
+      startVertex = fanOther_[s];
+    }
+  }
+  if (borderEnds != 0 && borderEnds != 2) nonManifold = true;
+  // Walk the fan from startFace entering over startVertex; count the faces reached and the group
+  // changes between consecutive faces.
+  uint32_t visited = 0, changes = 0;
+  if (!nonManifold) {
+    uint32_t cur = startFace, in = startVertex;
+    for (;;) {
+      ++visited;
+      const uint32_t out = fanOther_[2 * cur] == in ? fanOther_[2 * cur + 1] : fanOther_[2 * cur];
+      uint32_t next = kNone;
+      for (uint32_t i = 0; i < k; ++i)
+        if (i != cur && (fanOther_[2 * i] == out || fanOther_[2 * i + 1] == out)) { next = i; break; }
+      if (next == kNone || next == startFace || visited > k) {
+        if (next == startFace && faces_[fl[cur]].group != faces_[fl[next]].group) ++changes;
+        break;
+      }
+      if (faces_[fl[cur]].group != faces_[fl[next]].group) ++changes;
+      cur = next;
+      in = out;
+    }
+    if (visited != k) nonManifold = true;
+  }
+  if (nonManifold) vi.flags = kNonManifold;
+  else if (borderEnds == 0) vi.flags = kClosed | ((vi.groups == 2 && changes == 2) ? kSimpleContour : 0);
+  else vi.flags = kOpen;
+}
+
+bool GroupQemSimplifier::interiorIn(uint32_t v, const std::vector<int>& layer) const {
+  if (!(vs_[v].info.flags & kClosed)) return false;
+  const int g = layer[*facesBegin(v)];
+  for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f)
+    if (layer[*f] != g) return false;
+  return true;
+}
+
+bool GroupQemSimplifier::fixedVertex(uint32_t v) const {
+  const VertexInfo& vi = vs_[v].info;
+  if (vi.flags & kNonManifold) return true;
+  if (p_.preserveBoundary && (vi.flags & kOpen)) return true;
+  if (groupConstraints_ && vi.groups >= 2) {
+    if (p_.lockGroupBoundaries) return true;
+    if (vi.groups > 2 || !(vi.flags & kSimpleContour)) return true;  // a corner, or a contour end
+  }
+  return false;
+}
+
+void GroupQemSimplifier::init() {
+  const size_t nv = mesh_.positions.size(), nf = mesh_.faces.size();
+  // Work around the bounding-box centre: quadrics lose less precision near the origin.
+  vcg::Box3<double> box;
+  for (const auto& t : mesh_.faces)
+    for (uint32_t v : t) box.Add(Point3d::Construct(mesh_.positions[v]));
+  center_ = box.Center();
+  diag_ = regionDiagonal_ > 0 ? regionDiagonal_ : (box.Diag() > 0 ? box.Diag() : 1.0);
+  // As vcglib: errors below a floor (~1e-6 of the diagonal) are equal, and shorter edges go first.
+  floorError_ = 1e-12 * diag_ * diag_;
+  pos_.resize(nv);
+  for (size_t v = 0; v < nv; ++v) pos_[v] = Point3d::Construct(mesh_.positions[v]) - center_;
+  faces_.resize(nf);
+  std::vector<int> dense;
+  const int groups = DenseIds(group_, dense);
+  for (size_t f = 0; f < nf; ++f) {
+    static_cast<std::array<uint32_t, 3>&>(faces_[f]) = mesh_.faces[f];
+    faces_[f].group = dense[f];
+  }
+  if (integrity_) {
+    groupFaces_.assign(1 + coarser_.size(), std::vector<int>());
+    groupFaces_[0].assign(size_t(groups), 0);
+    for (size_t f = 0; f < nf; ++f) ++groupFaces_[0][size_t(dense[f])];
+    coarserDense_.resize(coarser_.size());
+    for (size_t l = 0; l < coarser_.size(); ++l) {
+      const int n = DenseIds(*coarser_[l], coarserDense_[l]);
+      groupFaces_[l + 1].assign(size_t(n), 0);
+      for (size_t f = 0; f < nf; ++f) ++groupFaces_[l + 1][size_t(coarserDense_[l][f])];
+    }
+    faceMark_.assign(nf, 0);
+  }
+  if (p_.keepCones) {
+    const size_t layers = 1 + std::min(coarser_.size(), p_.coarserConeBound.size());
+    coneAxis_.resize(layers);
+    coneCos_.resize(layers);
+    for (size_t l = 0; l < layers; ++l) {
+      const std::vector<NormalCone>& bounds = l == 0 ? p_.coneBound : p_.coarserConeBound[l - 1];
+      coneAxis_[l].assign(bounds.size(), Point3d(0, 0, 1));
+      coneCos_[l].assign(bounds.size(), -3.0);
+      for (size_t id = 0; id < bounds.size(); ++id) {
+        if (bounds[id].empty() || bounds[id].halfAngle >= NormalCone::kPi) continue;
+        coneAxis_[l][id] = bounds[id].axis;
+        coneCos_[l][id] = std::cos(bounds[id].halfAngle);
+      }
+    }
+  }
+  faceDead_.assign(nf, 0);
+  vs_.assign(nv, VertexState());
+  liveFaces_ = nf;
+  BuildFaceLists();
+  for (uint32_t v = 0; v < nv; ++v) AnalyzeVertex(v);
+  coarserNested_ = !coarser_.empty();
+  if (coarserNested_) {
+    const int maxGroup = nf > 0 ? *std::max_element(group_.begin(), group_.end()) : 0;
+    std::vector<int> coarserOf(size_t(maxGroup) + 1);
+    for (const auto* layer : coarser_) {
+      std::fill(coarserOf.begin(), coarserOf.end(), -1);
+      for (size_t f = 0; f < nf && coarserNested_; ++f) {
+        int& c = coarserOf[size_t(group_[f])];
+        if (c < 0) c = (*layer)[f];
+        else if (c != (*layer)[f]) coarserNested_ = false;
+      }
+    }
+  }
+
+  // Quadrics: area-weighted face planes; border (and group-contour) edges add the plane through
+  // the edge orthogonal to the face, weighted by boundaryWeight * length^2.
+  quadric_.assign(nv, Quadric());
+  for (uint32_t f = 0; f < nf; ++f) {
+    const auto& t = faces_[f];
+    const Point3d n = (pos_[t[1]] - pos_[t[0]]) ^ (pos_[t[2]] - pos_[t[0]]);
+    const double len = n.Norm();
+    if (!(len > 0)) continue;
+    const Point3d un = n / len;
+    const double d = -(un * pos_[t[0]]);
+    for (uint32_t v : t) quadric_[v].addPlane(un, d, 0.5 * len);
+    if (p_.boundaryWeight <= 0) continue;
+    for (int e = 0; e < 3; ++e) {
+      const uint32_t u = t[size_t(e)], w = t[size_t((e + 1) % 3)];
+      if (u == w) continue;
+      uint32_t others = 0, other = kNone;
+      for (const uint32_t* g = facesBegin(u); g != facesEnd(u); ++g)
+        if (*g != f && Contains(faces_[*g], w)) { ++others; other = *g; }
+      const bool border = others == 0;
+      const bool contour = groupConstraints_ && others == 1 && faces_[other].group != faces_[f].group;
+      if (!border && !contour) continue;
+      const Point3d edge = pos_[w] - pos_[u];
+      Point3d dir = un ^ edge;
+      const double dl = dir.Norm();
+      if (!(dl > 0)) continue;
+      dir /= dl;
+      const double weight = p_.boundaryWeight * edge.SquaredNorm();
+      quadric_[u].addPlane(dir, -(dir * pos_[u]), weight);
+      quadric_[w].addPlane(dir, -(dir * pos_[w]), weight);
+    }
+  }
+}
+
+template <class GroupOf>
+bool GroupQemSimplifier::condition1(const GroupOf& g, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a,
+                            uint32_t n0b, uint32_t n1a, uint32_t n1b, const std::vector<int>* layer) const {
+  // f1 (and f2) keep a face of their own group among their other neighbours...
+  const int g0 = g(e0);
+  if (!((n0a != kNone && g(n0a) == g0) || (n0b != kNone && g(n0b) == g0))) return false;
+  if (e1 == kNone) return true;
+  const int g1 = g(e1);
+  if (!((n1a != kNone && g(n1a) == g1) || (n1b != kNone && g(n1b) == g1))) return false;
+  // ...and, when both are in one group, one endpoint's whole closed fan is in it.
+  if (g0 != g1) return true;
+  return layer ? (interiorIn(a, *layer) || interiorIn(b, *layer)) : (interior(a) || interior(b));
+}
+
+bool GroupQemSimplifier::place(uint32_t a, uint32_t b, bool contourEdge, Candidate& c) const {
+  const bool fixedA = fixedVertex(a), fixedB = fixedVertex(b);
+  if (fixedA && fixedB) return false;
+  const bool contourA = contourVertex(a), contourB = contourVertex(b);
+  Quadric q = quadric_[a];
+  q += quadric_[b];
+  if (fixedA || (contourA && !contourB)) { c.keep = a; c.position = pos_[a]; }
+  else if (fixedB || (contourB && !contourA)) { c.keep = b; c.position = pos_[b]; }
+  else if (contourA && contourB) {
+    // Two points of one contour (condition 1 allows no other case): stay on the old segment.
+    if (!contourEdge) return false;
+    c.keep = b;
+    c.position = p_.optimalPlacement ? q.segmentMinimum(pos_[a], pos_[b])
+                                     : (q.eval(pos_[a]) < q.eval(pos_[b]) ? pos_[a] : pos_[b]);
+  } else if (p_.optimalPlacement) {
+    c.keep = b;
+    Point3d x;
+    const double edgeSq = (pos_[b] - pos_[a]).SquaredNorm();
+    if (q.minimum(x) && (x - (pos_[a] + pos_[b]) * 0.5).SquaredNorm() <= 4 * edgeSq) c.position = x;
+    else c.position = q.segmentMinimum(pos_[a], pos_[b]);
+  } else {
+    c.keep = b;
+    c.position = pos_[b];
+    if (q.eval(pos_[a]) < q.eval(pos_[b])) c.position = pos_[a];
+  }
+  if (c.position == pos_[a]) c.keep = a;
+  c.remove = c.keep == a ? b : a;
+  c.error = q.error(c.position);
+  return true;
+}
+
+double GroupQemSimplifier::priorityOf(double error, double quality, uint32_t a, uint32_t b) const {
+  if (error <= floorError_) error = floorError_ * std::sqrt((pos_[b] - pos_[a]).SquaredNorm()) / diag_;
+  if (p_.qualityThr > 0) error /= std::max(std::min(quality, p_.qualityThr), kDegenerateQuality);
+  return error;
+}
+
+// At most the priority judge() would give: the error at the quadric's unconstrained minimum (or
+// of the better endpoint), with the best quality.
+float GroupQemSimplifier::lowerBound(uint32_t a, uint32_t b) const {
+  Quadric q = quadric_[a];
+  q += quadric_[b];
+  Point3d x;
+  double error;
+  if (p_.optimalPlacement && q.minimum(x)) error = q.error(x);
+  else error = std::min({q.error(pos_[a]), q.error(pos_[b]), q.error(q.segmentMinimum(pos_[a], pos_[b]))});
+  return ToFloat(priorityOf(error, 1.0, a, b));
+}
+
+Candidate GroupQemSimplifier::evaluate(uint32_t a, uint32_t b) {
+  ++stats_.evaluations;
+  Candidate c = judge(a, b);
+  switch (c.verdict) {
+    case CollapseVerdict::Topology: ++stats_.refusedTopology; break;
+    case CollapseVerdict::LockedBoundary: ++stats_.refusedLock; break;
+    case CollapseVerdict::Condition1: ++stats_.refusedCondition1; break;
+    case CollapseVerdict::Condition2: ++stats_.refusedCondition2; break;
+    case CollapseVerdict::FixedEndpoints: ++stats_.refusedFixed; break;
+    case CollapseVerdict::Geometry: ++stats_.refusedGeometry; break;
+    case CollapseVerdict::Cone: ++stats_.refusedCone; break;
+    default: break;
+  }
+  return c;
+}
+
+Candidate GroupQemSimplifier::judge(uint32_t a, uint32_t b) {
+  Candidate c;
+  if (a == b || vs_[a].dead || vs_[b].dead) return c;
+  // Faces on the edge.
+  uint32_t e[2] = {kNone, kNone};
+  uint32_t ne = 0;
+  for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f)
+    if (Contains(faces_[*f], b)) { if (ne < 2) e[ne] = *f; ++ne; }
+  if (ne == 0) return c;
+  if (frozen(a) || frozen(b)) {  // shared with another part of the mesh
+    c.verdict = CollapseVerdict::FixedEndpoints;
+    return c;
+  }
+  c.verdict = CollapseVerdict::Topology;
+  const VertexInfo ia = vs_[a].info, ib = vs_[b].info;
+  if (ne > 2 || ((ia.flags | ib.flags) & kNonManifold)) return c;
+  if (ne == 2 && (ia.flags & kOpen) && (ib.flags & kOpen)) return c;  // would pinch the surface
+  const uint32_t opp0 = Third(faces_[e[0]], a, b), opp1 = ne == 2 ? Third(faces_[e[1]], a, b) : kNone;
+  if (opp0 == opp1) return c;
+  // Link condition: a and b have no common neighbour but the opposite vertices, and faces
+  // (a, opp0, opp1) and (b, opp0, opp1) do not both exist (a tetrahedron: they would merge).
+  // On the way, the faces across the edges (a, opp) and (b, opp), for condition 1.
+  ++stamp_;
+  uint32_t n0a = kNone, n1a = kNone, n0b = kNone, n1b = kNone;
+  bool oppFaceA = false;
+  for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f) {
+    if (*f == e[0] || *f == e[1]) continue;
+    const auto& t = faces_[*f];
+    for (uint32_t u : t) vs_[u].mark = stamp_;
+    const bool has0 = Contains(t, opp0), has1 = opp1 != kNone && Contains(t, opp1);
+    if (has0) n0a = *f;
+    if (has1) n1a = *f;
+    oppFaceA |= has0 && has1;
+  }
+  for (const uint32_t* f = facesBegin(b); f != facesEnd(b); ++f) {
+    if (*f == e[0] || *f == e[1]) continue;
+    const auto& t = faces_[*f];
+    for (uint32_t u : t)
+      if (u != b && u != opp0 && u != opp1 && vs_[u].mark == stamp_) return c;
+    const bool has0 = Contains(t, opp0), has1 = opp1 != kNone && Contains(t, opp1);
+    if (has0) n0b = *f;
+    if (has1) n1b = *f;
+    if (has0 && has1 && oppFaceA) return c;
+  }
+
+  // Group conditions.
+  if (p_.lockGroupBoundaries && ia.groups >= 2 && ib.groups >= 2) {
+    c.verdict = CollapseVerdict::LockedBoundary;
+    return c;
+  }
+  if (integrity_ && !keepsGroupsWhole(a, b, e[0], e[1], n0a, n0b, n1a, n1b)) {
+    c.verdict = CollapseVerdict::Condition1;
+    return c;
+  }
+  if (paperConditions_ && p_.condition1) {
+    c.verdict = CollapseVerdict::Condition1;
+    const auto primaryGroup = [this](uint32_t f) { return faces_[f].group; };
+    if (!condition1(primaryGroup, a, b, e[0], e[1], n0a, n0b, n1a, n1b, nullptr)) return c;
+    for (const auto* layer : coarser_)
+      if (coarserNested_ ? !condition1Nested(*layer, a, b, e[0], e[1])
+                         : !condition1([layer](uint32_t f) { return (*layer)[f]; }, a, b, e[0], e[1], n0a, n0b,
+                                       n1a, n1b, layer))
+        return c;
+  }
+  if (paperConditions_ && p_.condition2 && ia.groups + ib.groups >= 3) {
+    c.verdict = CollapseVerdict::Condition2;
+    if (std::min(ia.groups, ib.groups) > 2) return c;
+    // Groups around the merged vertex: those of the faces of a and b that survive.
+    groupScratch_.clear();
+    const size_t limit = std::max<size_t>({2, ia.groups, ib.groups});
+    for (uint32_t v : {a, b})
+      for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f) {
+        if (*f == e[0] || *f == e[1]) continue;
+        const int g = faces_[*f].group;
+        if (std::find(groupScratch_.begin(), groupScratch_.end(), g) == groupScratch_.end()) {
+          groupScratch_.push_back(g);
+          if (groupScratch_.size() > limit) return c;
+        }
+      }
+  }
+
+  c.verdict = CollapseVerdict::FixedEndpoints;
+  if (!place(a, b, ne == 2 && faces_[e[0]].group != faces_[e[1]].group, c)) return c;
+
+  // Geometry of the faces that survive: no flip, no zero-area face; their worst quality
+  // (2 area / longest edge^2, compared squared: no square root per face).
+  c.verdict = CollapseVerdict::Geometry;
+  double minQualitySq = std::numeric_limits<double>::max();
+  const double minCosSq = kMinNormalCos * kMinNormalCos, degenerateSq = kDegenerateQuality * kDegenerateQuality;
+  for (uint32_t v : {a, b})
+    for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f) {
+      if (*f == e[0] || *f == e[1]) continue;
+      const auto& t = faces_[*f];
+      // Rotate so that the moving vertex comes first.
+      const int j = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+      const Point3d& p1 = pos_[t[size_t((j + 1) % 3)]];
+      const Point3d& p2 = pos_[t[size_t((j + 2) % 3)]];
+      const Point3d d1 = p1 - pos_[v], d2 = p2 - pos_[v];
+      const Point3d n1 = p1 - c.position, n2 = p2 - c.position;
+      const Point3d nOld = d1 ^ d2, nNew = n1 ^ n2;
+      const double lenNewSq = nNew.SquaredNorm();
+      const double longestSq = std::max({n1.SquaredNorm(), n2.SquaredNorm(), (p2 - p1).SquaredNorm()});
+      const double qualitySq = longestSq > 0 ? lenNewSq / (longestSq * longestSq) : 0;
+      const double lenOldSq = nOld.SquaredNorm();
+      if (qualitySq < degenerateSq) {
+        if (lenOldSq > 0) return c;  // would create a zero-area face
+        continue;                    // was already degenerate: leave it to the user's cleaning
+      }
+      if (p_.preserveNormal && lenOldSq > 0) {
+        const double dot = nOld * nNew;
+        if (dot < 0 || dot * dot < minCosSq * lenOldSq * lenNewSq) return c;
+      }
+      if (p_.keepCones && !insideCones(*f, nNew, lenNewSq)) {
+        c.verdict = CollapseVerdict::Cone;
+        return c;
+      }
+      minQualitySq = std::min(minQualitySq, qualitySq);
+    }
+
+  c.verdict = CollapseVerdict::Allowed;
+  c.priority = priorityOf(c.error, std::sqrt(minQualitySq), a, b);
+  return c;
+}
+
+bool GroupQemSimplifier::keepsGroupsWhole(uint32_t a, uint32_t b) {
+  uint32_t e[2] = {kNone, kNone};
+  uint32_t ne = 0;
+  for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f)
+    if (Contains(faces_[*f], b)) { if (ne < 2) e[ne] = *f; ++ne; }
+  if (ne == 0 || ne > 2) return false;
+  const uint32_t opp0 = Third(faces_[e[0]], a, b), opp1 = ne == 2 ? Third(faces_[e[1]], a, b) : kNone;
+  uint32_t n[4] = {kNone, kNone, kNone, kNone};  // n0a, n0b, n1a, n1b
+  for (int s = 0; s < 2; ++s) {
+    const uint32_t v = s == 0 ? a : b;
+    for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f) {
+      if (*f == e[0] || *f == e[1]) continue;
+      if (Contains(faces_[*f], opp0)) n[s] = *f;
+      if (opp1 != kNone && Contains(faces_[*f], opp1)) n[2 + s] = *f;
+    }
+  }
+  return keepsGroupsWhole(a, b, e[0], e[1], n[0], n[1], n[2], n[3]);
+}
+
+bool GroupQemSimplifier::keepsGroupsWhole(uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a, uint32_t n0b,
+                                  uint32_t n1a, uint32_t n1b) {
+  for (int layer = -1; layer < int(coarserDense_.size()); ++layer)
+    if (!keepsGroupWhole(layer, a, b, e0, e1, n0a, n0b, n1a, n1b)) return false;
+  return true;
+}
+
+// With the link condition, collapsing (a, b) removes e0 and e1, keeps every other adjacency and
+// adds two: n0a-n0b (they now share the edge (m, opp0)) and n1a-n1b. So only the groups of e0 and
+// e1 can lose anything: such a group G vanishes when e0/e1 are its last faces, and splits when
+// its faces next to e0/e1 (among n0a, n0b, n1a, n1b) are no longer connected inside G. These are
+// connected when they are through the merged vertex's fan (two faces of the fan are adjacent when
+// they share a vertex other than a and b), and otherwise when a bounded search inside G joins them.
+bool GroupQemSimplifier::keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a,
+                                 uint32_t n0b, uint32_t n1a, uint32_t n1b) {
+  const std::vector<int>& count = groupFaces_[size_t(layer + 1)];
+  const int g0 = groupIn(layer, e0), g1 = e1 != kNone ? groupIn(layer, e1) : -1;
+  for (int pass = 0; pass < 2; ++pass) {
+    const int G = pass == 0 ? g0 : g1;
+    if (G < 0 || (pass == 1 && G == g0)) continue;
+    if (count[size_t(G)] <= (g0 == G) + (g1 == G)) return false;  // its last faces
+    uint32_t nb[4];
+    int nn = 0;
+    const auto add = [&](uint32_t f) {
+      if (f != kNone && groupIn(layer, f) == G && std::find(nb, nb + nn, f) == nb + nn) nb[nn++] = f;
+    };
+    // Only one of e0, e1 in G: its (at most two) faces of G next to it become adjacent.
+    if (g0 != g1) continue;
+    // Both: the faces of a closed fan of v1 (or v2) inside G join n0a (n0b) and n1a (n1b).
+    if (layer < 0 ? (interior(a) || interior(b))
+                  : (interiorIn(a, coarserDense_[size_t(layer)]) || interiorIn(b, coarserDense_[size_t(layer)])))
+      continue;
+    add(n0a); add(n0b); add(n1a); add(n1b);
+    if (nn <= 1) continue;
+    // The fan of the merged vertex: G's faces around a and b but e0, e1; union-find.
+    fanScratch_.clear();
+    for (uint32_t v : {a, b})
+      for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f)
+        if (*f != e0 && *f != e1 && groupIn(layer, *f) == G) fanScratch_.push_back(*f);
+    const uint32_t k = uint32_t(fanScratch_.size());
+    fanParent_.resize(k);
+    for (uint32_t i = 0; i < k; ++i) fanParent_[i] = i;
+    const auto root = [this](uint32_t i) {
+      while (fanParent_[i] != i) i = fanParent_[i] = fanParent_[fanParent_[i]];
+      return i;
+    };
+    const auto other = [&](uint32_t f, int j) {  // the j-th (0, 1) vertex of f other than a, b
+      const auto& t = faces_[f];
+      int seen = 0;
+      for (uint32_t v : t)
+        if (v != a && v != b && seen++ == j) return v;
+      return kNone;
+    };
+    for (uint32_t i = 0; i < k; ++i) {
+      const uint32_t x0 = other(fanScratch_[i], 0), x1 = other(fanScratch_[i], 1);
+      for (uint32_t j = i + 1; j < k; ++j) {
+        const uint32_t y0 = other(fanScratch_[j], 0), y1 = other(fanScratch_[j], 1);
+        if ((x0 != kNone && (x0 == y0 || x0 == y1)) || (x1 != kNone && (x1 == y0 || x1 == y1)))
+          fanParent_[root(i)] = root(j);
+      }
+    }
+    const auto indexOf = [&](uint32_t f) {
+      return uint32_t(std::find(fanScratch_.begin(), fanScratch_.end(), f) - fanScratch_.begin());
+    };
+    const uint32_t r0 = root(indexOf(nb[0]));
+    bool local = true;
+    for (int i = 1; i < nn && local; ++i) local = root(indexOf(nb[i])) == r0;
+    if (local) continue;
+    // Search inside G, from nb[0]'s piece of the fan, for the other pieces (edges as after the
+    // collapse: e0, e1 gone, n0a-n0b and n1a-n1b adjacent).
+    ++faceStamp_;
+    queue_.clear();
+    for (uint32_t i = 0; i < k; ++i)
+      if (root(i) == r0) { faceMark_[fanScratch_[i]] = faceStamp_; queue_.push_back(fanScratch_[i]); }
+    faceMark_[e0] = faceStamp_;
+    if (e1 != kNone) faceMark_[e1] = faceStamp_;
+    const auto reached = [&]() {
+      for (int i = 1; i < nn; ++i)
+        if (faceMark_[nb[i]] != faceStamp_) return false;
+      return true;
+    };
+    const auto visit = [&](uint32_t f) {
+      if (f == kNone || faceMark_[f] == faceStamp_ || groupIn(layer, f) != G) return;
+      faceMark_[f] = faceStamp_;
+      queue_.push_back(f);
+    };
+    bool joined = false;
+    for (size_t head = 0; head < queue_.size() && queue_.size() <= kIntegritySearchFaces; ++head) {
+      const uint32_t f = queue_[head];
+      const auto& t = faces_[f];
+      for (int j = 0; j < 3; ++j) {
+        const uint32_t u = t[size_t(j)], w = t[size_t((j + 1) % 3)];
+        for (const uint32_t* g = facesBegin(u); g != facesEnd(u); ++g)
+          if (*g != f && Contains(faces_[*g], w)) visit(*g);
+      }
+      if (f == n0a) visit(n0b);
+      if (f == n0b) visit(n0a);
+      if (f == n1a) visit(n1b);
+      if (f == n1b) visit(n1a);
+      if (reached()) { joined = true; break; }
+    }
+    if (!joined && !reached()) return false;
+  }
+  return true;
+}
+
+void GroupQemSimplifier::PushEdgesOf(uint32_t v) {
+  ++stamp_;
+  vs_[v].mark = stamp_;
+  for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f)
+    for (uint32_t u : faces_[*f])
+      if (vs_[u].mark != stamp_) {
+        vs_[u].mark = stamp_;
+        PushLazy(v, u);
+      }
+}
+
+void GroupQemSimplifier::collapse(const Candidate& c) {
+  const uint32_t keep = c.keep, gone = c.remove;
+  // The faces on the edge die and leave the lists of their opposite vertices.
+  uint32_t opposite[2] = {kNone, kNone};
+  int no = 0;
+  for (const uint32_t* f = facesBegin(gone); f != facesEnd(gone); ++f) {
+    if (!Contains(faces_[*f], keep)) continue;
+    faceDead_[*f] = 1;
+    --liveFaces_;
+    if (integrity_)
+      for (size_t l = 0; l < groupFaces_.size(); ++l) --groupFaces_[l][size_t(groupIn(int(l) - 1, *f))];
+    const uint32_t o = Third(faces_[*f], keep, gone);
+    opposite[no++] = o;
+    uint32_t* ob = refs_.data() + start_[o];
+    for (uint32_t i = 0; i < count_[o]; ++i)
+      if (ob[i] == *f) { ob[i] = ob[--count_[o]]; break; }
+  }
+  // The survivor's new list goes at the end of refs_ (rebuilt from scratch when full).
+  if (refs_.size() + count_[keep] + count_[gone] > refs_.capacity()) {
+    for (const uint32_t* f = facesBegin(gone); f != facesEnd(gone); ++f)
+      if (!faceDead_[*f])
+        for (auto& v : faces_[*f]) if (v == gone) v = keep;
+    count_[gone] = 0;
+    BuildFaceLists();
+  } else {
+    const uint32_t begin = uint32_t(refs_.size());
+    for (uint32_t v : {keep, gone}) {
+      const uint32_t s = start_[v], n = count_[v];
+      for (uint32_t i = 0; i < n; ++i) {
+        const uint32_t f = refs_[s + i];
+        if (faceDead_[f]) continue;
+        if (v == gone)
+          for (auto& x : faces_[f]) if (x == gone) x = keep;
+        refs_.push_back(f);
+      }
+    }
+    start_[keep] = begin;
+    count_[keep] = uint32_t(refs_.size()) - begin;
+    count_[gone] = 0;
+  }
+  vs_[gone].dead = 1;
+  pos_[keep] = c.position;
+  quadric_[keep] += quadric_[gone];
+  ++epoch_;
+  vs_[keep].lastSurvive = vs_[keep].touched = epoch_;
+  AnalyzeVertex(keep);
+  // An opposite vertex lost a face: its groups may have changed, and with them what its edges may do.
+  for (int i = 0; i < no; ++i) {
+    const uint32_t o = opposite[i];
+    const VertexInfo before = vs_[o].info;
+    AnalyzeVertex(o);
+    if (vs_[o].info.flags != before.flags || vs_[o].info.groups != before.groups) vs_[o].dropped = 1;
+  }
+  // The ring's neighbourhoods changed; those with dropped collapses get all their edges queued again.
+  ring_.clear();
+  ++stamp_;
+  vs_[keep].mark = stamp_;
+  for (const uint32_t* f = facesBegin(keep); f != facesEnd(keep); ++f)
+    for (uint32_t u : faces_[*f])
+      if (vs_[u].mark != stamp_) {
+        vs_[u].mark = stamp_;
+        vs_[u].touched = epoch_;
+        PushLazy(keep, u);
+        if (vs_[u].dropped) ring_.push_back(u);
+      }
+  for (uint32_t u : ring_) {
+    vs_[u].dropped = 0;
+    vs_[u].lastSurvive = epoch_;
+    PushEdgesOf(u);
+  }
+}
+
+Status GroupQemSimplifier::run(const Progress& progress, GroupQemStats& stats) {
+  stats.facesIn = mesh_.faces.size();
+  // Every edge once, from its lower endpoint, at its lower bound.
+  heap_.reserve(mesh_.faces.size() * 2);
+  const uint32_t nv = uint32_t(pos_.size());
+  for (uint32_t v = 0; v < nv; ++v) {
+    ++stamp_;
+    for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f)
+      for (uint32_t u : faces_[*f])
+        if (u > v && vs_[u].mark != stamp_) {
+          vs_[u].mark = stamp_;
+          if (frozen(v) || frozen(u)) continue;
+          heap_.append({lowerBound(v, u), v, u, epoch_ | kLazy});
+        }
+    if (progress && (v & 0xffff) == 0 && !progress(int(5.0 * v / nv), "Group-preserving QEM: queueing edges")) {
+      stats.stop = GroupQemStats::Stop::Cancelled;
+      stats.facesOut = liveFaces_;
+      return Status::Cancelled();
+    }
+  }
+  heap_.heapify();
+
+  const size_t target = p_.targetFaces;
+  const double maxErrorSq = p_.maxError > 0 ? (p_.maxError * diag_) * (p_.maxError * diag_) : -1;
+  const size_t toRemove = stats.facesIn > target ? stats.facesIn - target : 1;
+  size_t nextReport = 0;
+  // Superseded entries are dropped in one sequential sweep when the heap outgrows the mesh.
+  size_t compactFloor = 0;
+  stats.stop = GroupQemStats::Stop::NoMoreCollapses;
+  while (!heap_.empty()) {
+    if (liveFaces_ <= target) break;
+    const size_t done = stats.facesIn - liveFaces_;
+    if (progress && done >= nextReport) {
+      if (!progress(5 + int(93.0 * std::min(1.0, double(done) / double(toRemove))), "Group-preserving QEM: collapsing")) {
+        stats.stop = GroupQemStats::Stop::Cancelled;
+        break;
+      }
+      nextReport = done + std::max<size_t>(toRemove / 100, 1);
+    }
+    const HeapEntry top = heap_.pop();
+    const uint32_t a = top.a, b = top.b, kind = top.tag & kKindMask, ep = top.tag & kEpochMask;
+    if (vs_[a].dead || vs_[b].dead || ep < vs_[a].lastSurvive || ep < vs_[b].lastSurvive) continue;  // superseded
+    const bool fresh = ep >= vs_[a].touched && ep >= vs_[b].touched;
+    Candidate c;
+    if (fresh && kind == kJudged) {  // nothing changed since it was judged: only place it again
+      // (and, in integrity mode, search again: a path found around the edge inside its group
+      // may have been cut since by a collapse elsewhere that this edge's faces kept whole)
+      if (integrity_ && !keepsGroupsWhole(a, b)) {
+        ++stats_.refusedCondition1;
+        vs_[a].dropped = vs_[b].dropped = 1;
+        continue;
+      }
+      c.verdict = CollapseVerdict::Allowed;
+      place(a, b, true, c);
+    } else {
+      c = evaluate(a, b);
+      if (c.verdict == CollapseVerdict::NotAnEdge) continue;
+      if (c.verdict != CollapseVerdict::Allowed) {  // queued again if a's or b's neighbourhood changes
+        vs_[a].dropped = vs_[b].dropped = 1;
+        continue;
+      }
+      // Costs change as the neighbourhood does: re-queue a collapse dearer than the next one.
+      if (!heap_.empty() && float(c.priority) > heap_.top().priority) {
+        heap_.push({ToFloat(c.priority), a, b, epoch_ | kJudged});
+        continue;
+      }
+    }
+    if (maxErrorSq >= 0 && c.error > maxErrorSq) {
+      vs_[a].dropped = vs_[b].dropped = 1;
+      continue;
+    }
+    collapse(c);
+    ++stats.collapses;
+    stats.maxCollapseError = std::max(stats.maxCollapseError, std::sqrt(c.error) / diag_);
+    if (heap_.size() > std::max(4 * liveFaces_ + 1024, compactFloor)) {
+      heap_.RemoveIf([&](const HeapEntry& h) {
+        const uint32_t e = h.tag & kEpochMask;
+        return vs_[h.a].dead || vs_[h.b].dead || e < vs_[h.a].lastSurvive || e < vs_[h.b].lastSurvive;
+      });
+      compactFloor = 2 * heap_.size();
+    }
+  }
+  if (liveFaces_ <= target && stats.stop != GroupQemStats::Stop::Cancelled) stats.stop = GroupQemStats::Stop::TargetReached;
+  stats.facesOut = liveFaces_;
+  stats.evaluations = stats_.evaluations;
+  stats.refusedTopology = stats_.refusedTopology;
+  stats.refusedLock = stats_.refusedLock;
+  stats.refusedCondition1 = stats_.refusedCondition1;
+  stats.refusedCondition2 = stats_.refusedCondition2;
+  stats.refusedFixed = stats_.refusedFixed;
+  stats.refusedGeometry = stats_.refusedGeometry;
+  stats.refusedCone = stats_.refusedCone;
+  return stats.stop == GroupQemStats::Stop::Cancelled ? Status::Cancelled() : Status::Ok();
+}
+
+void GroupQemSimplifier::output(GroupQemResult& out) const {
+  out.mesh.positions.clear();
+  out.mesh.faces.clear();
+  out.sourceFace.clear();
+  out.sourceVertex.clear();
+  std::vector<uint32_t> remap(pos_.size(), kNone);
+  for (uint32_t v = 0; v < pos_.size(); ++v) {
+    if (vs_[v].dead) continue;
+    remap[v] = uint32_t(out.mesh.positions.size());
+    const Point3d p = inputPosition(pos_[v]);
+    out.mesh.positions.emplace_back(float(p[0]), float(p[1]), float(p[2]));
+    out.sourceVertex.push_back(v);
+  }
+  out.mesh.faces.reserve(liveFaces_);
+  out.sourceFace.reserve(liveFaces_);
+  for (uint32_t f = 0; f < faces_.size(); ++f) {
+    if (faceDead_[f]) continue;
+    const auto& t = faces_[f];
+    out.mesh.faces.push_back({remap[t[0]], remap[t[1]], remap[t[2]]});
+    out.sourceFace.push_back(f);
+  }
+}
+
+Status CheckInput(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
+                  const std::vector<const std::vector<int>*>& coarser) {
+  Status s = RequireValidForFaces(mesh);
+  if (!s.ok()) return s;
+  if (faceGroup.size() != mesh.faces.size())
+    return Status::Invalid("the group ids are " + std::to_string(faceGroup.size()) + " for " +
+                           std::to_string(mesh.faces.size()) + " faces");
+  for (int g : faceGroup)
+    if (g < 0) return Status::Invalid("group ids must be >= 0 (found " + std::to_string(g) + ")");
+  for (const auto* layer : coarser)
+    if (!layer || layer->size() != mesh.faces.size())
+      return Status::Invalid("a coarser grouping does not have one id per face");
+  if (mesh.faces.size() >= size_t(kEpochMask) / 2)
+    return Status::Invalid("the mesh has too many faces for this simplifier (2^29 at most)");
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status ValidateParams(const GroupQemParams& p) {
+  if (p.targetFaces == 0 && !(p.maxError > 0))
+    return Status::Invalid("give a target: TargetFaceNum/TargetPerc (a face count) or a maximum error");
+  if (!(p.maxError >= 0) || !std::isfinite(p.maxError)) return Status::Invalid("the maximum error must be >= 0");
+  if (!(p.qualityThr >= 0 && p.qualityThr <= 1)) return Status::Invalid("QualityThr must be between 0 and 1");
+  if (!(p.boundaryWeight >= 0) || !std::isfinite(p.boundaryWeight)) return Status::Invalid("BoundaryWeight must be >= 0");
+  return Status::Ok();
+}
+
+const char* ToString(GroupMode m) { return m == GroupMode::Paper ? "paper" : "integrity"; }
+
+const char* ToString(GroupQemStats::Stop s) {
+  switch (s) {
+    case GroupQemStats::Stop::TargetReached: return "target reached";
+    case GroupQemStats::Stop::NoMoreCollapses: return "no allowed collapse left";
+    case GroupQemStats::Stop::Cancelled: return "cancelled";
+  }
+  return "?";
+}
+
+const char* ToString(CollapseVerdict v) {
+  switch (v) {
+    case CollapseVerdict::Allowed: return "allowed";
+    case CollapseVerdict::NotAnEdge: return "not an edge";
+    case CollapseVerdict::Topology: return "topology";
+    case CollapseVerdict::LockedBoundary: return "locked group boundary";
+    case CollapseVerdict::Condition1: return "condition 1";
+    case CollapseVerdict::Condition2: return "condition 2";
+    case CollapseVerdict::FixedEndpoints: return "both endpoints fixed";
+    case CollapseVerdict::Geometry: return "geometry";
+    case CollapseVerdict::Cone: return "normal cone";
+  }
+  return "?";
+}
+
+Status SimplifyPreservingGroups(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
+                                const GroupQemParams& params, GroupQemResult& out, const Progress& progress,
+                                const std::vector<const std::vector<int>*>& coarserGroups,
+                                const GroupQemRegion* region) {
+  out = GroupQemResult();
+  Status s = ValidateParams(params);
+  if (!s.ok()) return s;
+  s = CheckInput(mesh, faceGroup, coarserGroups);
+  if (!s.ok()) return s;
+  if (region && !region->frozenVertex.empty() && region->frozenVertex.size() != mesh.positions.size())
+    return Status::Invalid("the frozen-vertex flags are " + std::to_string(region->frozenVertex.size()) + " for " +
+                           std::to_string(mesh.positions.size()) + " vertices");
+  if (region && !(region->diagonal >= 0 && std::isfinite(region->diagonal)))
+    return Status::Invalid("the region's diagonal must be finite and >= 0");
+  GroupQemSimplifier simplifier(mesh, faceGroup, coarserGroups, params, region);
+  simplifier.init();
+  s = simplifier.run(progress, out.stats);
+  if (s.ok() || s.code == Status::Code::Cancelled) simplifier.output(out);
+  if (s.ok() && progress) progress(100, "Group-preserving QEM: done");
+  return s;
+}
+
+CollapseVerdict EvaluateCollapse(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
+                                 const GroupQemParams& params, uint32_t v1, uint32_t v2, vcg::Point3f* newPosition) {
+  const std::vector<const std::vector<int>*> none;
+  if (!CheckInput(mesh, faceGroup, none).ok() || v1 >= mesh.positions.size() || v2 >= mesh.positions.size())
+    return CollapseVerdict::NotAnEdge;
+  GroupQemSimplifier simplifier(mesh, faceGroup, none, params);
+  simplifier.init();
+  const Candidate c = simplifier.evaluate(v1, v2);
+  if (newPosition && c.verdict == CollapseVerdict::Allowed) {
+    const Point3d p = simplifier.inputPosition(c.position);
+    *newPosition = vcg::Point3f(float(p[0]), float(p[1]), float(p[2]));
+  }
+  return c.verdict;
+}
+
+}  // namespace conelod

@@ -1,0 +1,167 @@
+// ConeLOD — group-preserving quadric edge collapse.
+//
+// Kamiya, Suzuki, Kawachi, "LODs for efficient displaying triangle meshes" (§6): QEM edge collapse
+// (Garland & Heckbert, SIGGRAPH 97) in which every collapse of an edge e = (v1, v2) with incident
+// faces f1, f2 keeps the face groups intact, in one of two modes (GroupMode).
+//
+// Integrity mode (the default): after every collapse every group is still one non-empty
+// edge-connected piece, and nothing else is asked (no fixed corners, no contour quadrics: the
+// placement and quadrics of plain QEM). With a manifold neighbourhood and the link condition, a
+// collapse removes f1, f2 and only adds adjacencies (the faces across (v1, x) and (v2, x), x the
+// third vertex of f1 or f2, become neighbours), so only the groups of f1 and f2 can lose anything.
+// Such a group vanishes when f1/f2 are its last faces (refused), and splits exactly when its faces
+// next to f1/f2 are no longer connected inside it: connected through the merged vertex's fan, or
+// by a search inside the group bounded to kIntegritySearchFaces faces (not found: refused). The
+// same test runs for every coarser grouping (hierarchies). keepCones also refuses collapses that
+// turn a changed face's normal out of its group's cone bound.
+//
+// Paper mode: the paper's conditions, as follows.
+//   condition 1 (no group is split or destroyed): f1 has a face of its own group among its
+//     neighbours other than f2, and f2 likewise; and, when f1 and f2 are in the SAME group, v1 or
+//     v2 is not on a group boundary. The paper asks for the last clause in every case; we ask for
+//     it only where it matters, which lets a contour edge (f1, f2 in two groups) collapse and the
+//     group contours simplify, as the paper intends. With a manifold neighbourhood and the link
+//     condition (both always checked) a collapse only removes f1, f2 and only makes faces
+//     adjacent, never separates them; removing f1 cannot cut f1's group when f1's two other
+//     neighbours become adjacent, and f1 + f2 of one group cannot cut it when one endpoint's whole
+//     closed fan is in that group. So condition 1 guarantees that no group is split or vanishes
+//     (group_qem_test.cpp checks it face by face). "Not on a group boundary" = every face around
+//     the vertex in one group and a closed manifold fan (a mesh-border vertex does not qualify).
+//   condition 2 (no vertex where many groups meet is created): v1 or v2 has at most 2 groups
+//     around it (the paper), and the merged vertex has no more groups around it than
+//     max(2, groups at v1, groups at v2) (so two contour vertices of different contours are not
+//     merged into a new 3-group corner).
+//   lock group boundaries (option): no vertex with 2 or more groups around it moves, so no group
+//     contour changes and no contour edge collapses (crack-free refinement between groups).
+// Placement (paper mode with condition 1, or the lock): a group corner (3+ groups, or a contour
+// vertex that is not a simple point of one contour), a contour end on the mesh border, a
+// non-manifold vertex and, with preserveBoundary, a mesh-border vertex never move; a collapse with
+// one such endpoint goes to it; a collapse between two points of one contour stays on the old
+// contour segment; an interior vertex collapsing into a contour vertex goes to the contour vertex.
+// Otherwise (and in integrity mode always, but for non-manifold and preserved border vertices) the
+// new vertex goes to the quadric's minimum (optimalPlacement), falling back to the best point of
+// the edge when the quadric is singular or its minimum lies far from the edge.
+//
+// Error and priority follow vcglib's TriEdgeCollapseQuadric (what MeshLab's "Quadric Edge Collapse
+// Decimation" runs): face-plane quadrics (area-weighted) plus border-edge quadrics weighted by
+// boundaryWeight (and, in paper mode with condition 1 or with the lock, the same on group
+// contours); priority = error / min(quality of the new faces, qualityThr), quality = 2 area /
+// longest edge^2. Error is the quadric divided by its weight: a mean squared distance. Unlike
+// vcglib we always keep the link condition (no non-manifold edge is created) and, with
+// preserveNormal, refuse collapses that turn a face's normal by more than ~78 degrees (fold-overs).
+//
+// The loop is our own rather than vcglib's local_optimization (whose heap allocates one object per
+// candidate and evaluates every candidate in full when it is pushed): flat arrays, per-vertex face
+// lists in one array, a 4-ary heap of 16-byte entries, and lazy evaluation: an edge is queued at a
+// cheap lower bound of its priority and judged in full (checks, placement, quality) only when it
+// reaches the top; a judged entry whose neighbourhood has not changed since is executed as is.
+// bench/bench_simplify.cpp times it against vcglib's TriEdgeCollapseQuadric in the same run.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "conelod/mesh/indexed_mesh.h"
+#include "conelod/grouping/normal_cone.h"
+#include "conelod/status.h"
+
+namespace conelod {
+
+// What keeping the groups means (see the top of this file).
+//   Integrity (default): every group stays ONE non-empty edge-connected piece (a group in several
+//     pieces in the input keeps no more pieces than it had) and nothing else is asked: contours and
+//     group corners move and merge as any vertex, with the plain quadrics of vcglib.
+//   Paper: conditions 1 and 2 of Kamiya-Suzuki-Kawachi as they are (contour-aware placement and
+//     quadrics, fixed group corners).
+enum class GroupMode { Integrity, Paper };
+const char* ToString(GroupMode m);  // "integrity", "paper"
+
+struct GroupQemParams {
+  size_t targetFaces = 0;          // stop at this many faces or fewer; 0: no face-count target
+  double maxError = 0;             // no collapse whose error (RMS distance of the merged quadric,
+                                   // as a FRACTION of the bounding-box diagonal) exceeds this; 0: none
+  GroupMode mode = GroupMode::Integrity;
+  bool condition1 = true;          // no group is split or destroyed (paper: condition 1; integrity:
+                                   // the exact integrity test; false in both: plain QEM)
+  bool condition2 = true;          // no vertex where 3 or more groups meet is created (paper mode only)
+  bool keepCones = false;          // refuse collapses that turn a face's normal out of its group's coneBound
+  std::vector<NormalCone> coneBound;  // keepCones: per group id (primary grouping), the cone every
+                                   // changed face normal of the group must stay in (axis: the group's
+                                   // input cone axis, half-angle: its level's threshold); ids past
+                                   // the end or empty cones: no bound
+  std::vector<std::vector<NormalCone>> coarserConeBound;  // keepCones: the same per coarser grouping
+                                   // (SimplifyPreservingGroups' coarserGroups, in order), so that a
+                                   // hierarchy's later levels start inside their bounds
+  bool lockGroupBoundaries = false;  // no vertex on a group boundary moves
+  double qualityThr = 0.3;         // new faces below this quality are penalised (0: no penalty), as vcglib
+  bool optimalPlacement = true;    // quadric minimum; false: the better endpoint
+  bool preserveBoundary = false;   // mesh-border vertices never move
+  double boundaryWeight = 1.0;     // weight of the border (and group-contour) quadrics
+  bool preserveNormal = true;      // refuse collapses that flip a face (normal turning > ~78 degrees)
+};
+
+// Ok, or a message naming the bad parameter.
+Status ValidateParams(const GroupQemParams& p);
+
+struct GroupQemStats {
+  size_t facesIn = 0, facesOut = 0;
+  size_t collapses = 0;
+  size_t evaluations = 0;           // candidate collapses evaluated (cost of the run)
+  // Evaluations refused, by the first reason found (one edge may be counted several times).
+  size_t refusedTopology = 0;       // non-manifold edge/vertex, link condition, pinch
+  size_t refusedCondition1 = 0;
+  size_t refusedCondition2 = 0;
+  size_t refusedLock = 0;           // lock group boundaries
+  size_t refusedFixed = 0;          // both endpoints must stay where they are
+  size_t refusedGeometry = 0;       // face flip or zero-area face
+  size_t refusedCone = 0;           // keepCones: a normal would leave its group's cone
+  double maxCollapseError = 0;      // largest error of a collapse done, fraction of the bbox diagonal
+  enum class Stop { TargetReached, NoMoreCollapses, Cancelled } stop = Stop::NoMoreCollapses;
+};
+
+struct GroupQemResult {
+  IndexedMesh mesh;                  // the simplified mesh (vertices in input order, minus the removed)
+  std::vector<uint32_t> sourceFace;  // per output face: the input face it is (collapses only remove faces)
+  std::vector<uint32_t> sourceVertex;  // per output vertex: the input vertex kept at it (moved, possibly)
+  GroupQemStats stats;
+};
+
+// A part of a larger mesh, simplified on its own (hierarchical_simplification.cpp simplifies the
+// parts of a large level side by side). Every face around a vertex that is not frozen is in the
+// part, so its quadric, fan, groups and conditions are the same as in the whole mesh; a frozen
+// vertex (one shared with another part) never moves and no edge at it collapses, so the parts
+// never touch each other's faces.
+struct GroupQemRegion {
+  std::vector<uint8_t> frozenVertex;  // per vertex of the part: 1 = shared with another part
+  double diagonal = 0;                // the whole mesh's bounding-box diagonal (errors and ties are
+                                      // relative to it); 0: the part's own
+};
+
+// Simplifies `mesh` until targetFaces (and/or maxError) is reached or no allowed collapse is left.
+// faceGroup: one group id (>= 0) per face. `coarserGroups` (optional): further groupings whose
+// groups condition 1 must also keep intact (hierarchical simplification: a finer level's groups
+// being intact does not keep their unions connected). On bad input `out` is left empty; on
+// cancellation by `progress` the run stops at once and `out` holds the valid mesh reached so far
+// (Status::Cancelled): callers that promise to leave the user's data untouched just drop it.
+// `region` (optional): `mesh` is a part of a larger mesh (see GroupQemRegion).
+Status SimplifyPreservingGroups(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
+                                const GroupQemParams& params, GroupQemResult& out,
+                                const Progress& progress = Progress(),
+                                const std::vector<const std::vector<int>*>& coarserGroups = {},
+                                const GroupQemRegion* region = nullptr);
+
+// The verdict on one collapse, as the simplifier would judge it on the unmodified mesh (tests,
+// diagnostics). Checks run in this order: topology, lock, condition 1 (in integrity mode: the
+// integrity test), condition 2 (paper mode), placement (FixedEndpoints: both endpoints must stay
+// where they are), geometry, cone (keepCones).
+enum class CollapseVerdict {
+  Allowed, NotAnEdge, Topology, LockedBoundary, Condition1, Condition2, FixedEndpoints, Geometry, Cone
+};
+const char* ToString(CollapseVerdict v);
+// Why the simplification stopped, as the CLI and the plugin print it: "target reached", ...
+const char* ToString(GroupQemStats::Stop s);
+CollapseVerdict EvaluateCollapse(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
+                                 const GroupQemParams& params, uint32_t v1, uint32_t v2,
+                                 vcg::Point3f* newPosition = nullptr);
+
+}  // namespace conelod

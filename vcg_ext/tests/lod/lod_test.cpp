@@ -1,0 +1,879 @@
+// Tests of lod_build.h and lod_read.h: the .clod file written, read back and refined. Tiny meshes built in code with
+// exact expectations, then the bunny: the full-budget round trip gives the input back exactly,
+// small budgets give fewer faces and finer levels where the eye looks, and every kind of bad file
+// is refused with its message. Then the cracks: cuts of watertight meshes (a sphere, a torus, the
+// armadillo) at many eyes, budgets and priorities, with and without culling, welded by position
+// (not by the file's ids), have no border edge, no over-used edge and, culled nodes dropped,
+// border edges only against culled nodes.
+#include "conelod/lod/lod_build.h"
+#include "conelod/lod/lod_read.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <map>
+#include <unordered_map>
+
+#include <unistd.h>
+
+#include "conelod/lod/lod_internal.h"
+#include "conelod/mesh/sorted_faces.h"
+#include "conelod/vcg_bridge.h"
+#include "conelod/vcg_mesh.h"
+#include "test_util.h"
+
+namespace conelod {
+namespace {
+
+using namespace lodfile;
+
+// Per process: ctest runs the tests of this file in parallel processes, each building its files.
+std::string TempPath(const std::string& name) {
+  return ::testing::TempDir() + "conelod_lod_test_" + std::to_string(getpid()) + "_" + name;
+}
+
+std::vector<uint8_t> ReadBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::vector<uint8_t>(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// A mesh, its DAG, and its .clod file (path and bytes).
+struct Built {
+  IndexedMesh mesh;
+  LodDag dag;
+  LodBuildStats stats;
+  std::string path;
+  std::vector<uint8_t> bytes;
+};
+
+void Build(Built& b, const std::string& name, const LodBuildParams& p = LodBuildParams()) {
+  const Status d = BuildLodDag(b.mesh, p, b.dag);
+  ASSERT_TRUE(d.ok()) << d.message;
+  b.path = TempPath(name + ".clod");
+  const Status s = WriteLodFile(b.mesh, b.dag, b.path, &b.stats);
+  ASSERT_TRUE(s.ok()) << s.message;
+  b.bytes = ReadBytes(b.path);
+  ASSERT_EQ(b.bytes.size(), b.stats.fileBytes);
+}
+
+// Edges of a mesh whose vertices are welded by identical position (bit for bit), with the number
+// of faces using each.
+using PosKey = std::array<float, 3>;
+using EdgeKey = std::pair<PosKey, PosKey>;
+struct EdgeKeyHash {
+  size_t operator()(const EdgeKey& e) const {
+    uint64_t h = 1469598103934665603ull;
+    for (const PosKey* k : {&e.first, &e.second})
+      for (float x : *k) {
+        uint32_t u;
+        std::memcpy(&u, &x, 4);
+        h = (h ^ u) * 1099511628211ull;
+      }
+    return size_t(h ^ (h >> 29));
+  }
+};
+using EdgeMap = std::unordered_map<EdgeKey, int, EdgeKeyHash>;
+EdgeMap EdgesByPosition(const IndexedMesh& m) {
+  EdgeMap edges;
+  edges.reserve(m.faces.size() * 2);
+  for (const auto& t : m.faces)
+    for (int i = 0; i < 3; ++i) {
+      const vcg::Point3f& a = m.positions[t[size_t(i)]];
+      const vcg::Point3f& b = m.positions[t[size_t((i + 1) % 3)]];
+      PosKey ka{{a[0], a[1], a[2]}}, kb{{b[0], b[1], b[2]}};
+      if (kb < ka) std::swap(ka, kb);
+      ++edges[{ka, kb}];
+    }
+  return edges;
+}
+
+struct CrackCount {
+  size_t border = 0, overused = 0, drawnBorderNotCulled = 0;
+};
+
+// Checks a cut: no node twice, its face count, and its cracks: the mesh of the whole cut welded by
+// position has `border` edges used by one face (a crack or a T-junction when the input has none)
+// and `overused` edges used by 3+ faces (overlap); the drawn nodes alone have
+// `drawnBorderNotCulled` border edges that no culled node of the cut has (a hole culling made
+// visible; input borders excepted).
+CrackCount CheckCut(const Built& b, LodReader& r, const LodCut& cut) {
+  std::vector<uint32_t> nodes = cut.nodes;
+  std::sort(nodes.begin(), nodes.end());
+  EXPECT_TRUE(std::adjacent_find(nodes.begin(), nodes.end()) == nodes.end()) << "a node twice in the cut";
+  size_t faces = 0;
+  for (uint32_t id : cut.nodes) faces += r.node(id).faceCount;
+  EXPECT_EQ(faces, cut.faces);
+  CrackCount c;
+  IndexedMesh all, drawn;
+  EXPECT_TRUE(ExtractCutMesh(r, cut, true, all).ok());
+  EXPECT_TRUE(ExtractCutMesh(r, cut, false, drawn).ok());
+  EXPECT_EQ(all.faces.size(), cut.faces);
+  EXPECT_EQ(drawn.faces.size(), cut.drawnFaces);
+  const auto input = EdgesByPosition(b.mesh);
+  for (const auto& e : EdgesByPosition(all)) {
+    if (e.second == 1 && !(input.count(e.first) && input.at(e.first) == 1)) ++c.border;
+    if (e.second > 2) ++c.overused;
+  }
+  LodCut culledOnly = cut;
+  for (auto& f : culledOnly.culled) f = uint8_t(!f);
+  IndexedMesh culled;
+  EXPECT_TRUE(ExtractCutMesh(r, culledOnly, false, culled).ok());
+  const auto culledEdges = EdgesByPosition(culled);
+  for (const auto& e : EdgesByPosition(drawn))
+    if (e.second == 1 && !culledEdges.count(e.first) && !(input.count(e.first) && input.at(e.first) == 1))
+      ++c.drawnBorderNotCulled;
+  return c;
+}
+
+std::unique_ptr<LodReader> OpenOk(const std::vector<uint8_t>& bytes) {
+  std::unique_ptr<LodReader> r;
+  const Status s = LodReader::OpenMemory(bytes, r);
+  EXPECT_TRUE(s.ok()) << s.message;
+  return r;
+}
+
+std::string OpenError(const std::vector<uint8_t>& bytes) {
+  std::unique_ptr<LodReader> r;
+  const Status s = LodReader::OpenMemory(bytes, r);
+  if (s.ok()) return "";
+  EXPECT_FALSE(r);
+  return s.message;
+}
+
+// Opens, refines at full budget and extracts: "" or the first error.
+std::string FullReadError(const std::vector<uint8_t>& bytes) {
+  std::unique_ptr<LodReader> r;
+  Status s = LodReader::OpenMemory(bytes, r);
+  if (!s.ok()) return s.message;
+  LodView v;
+  v.eye = vcg::Point3d(0, 0, 10);
+  v.faceBudget = size_t(1) << 40;
+  LodCut cut;
+  s = RefineLod(*r, v, cut);
+  if (!s.ok()) return s.message;
+  IndexedMesh m;
+  s = ExtractCutMesh(*r, cut, true, m);
+  return s.ok() ? "" : s.message;
+}
+
+LodView Eye(double x, double y, double z, size_t budget, bool cull = true) {
+  LodView v;
+  v.eye = vcg::Point3d(x, y, z);
+  v.faceBudget = budget;
+  v.cullBackFacing = cull;
+  return v;
+}
+
+// --- Priority ---------------------------------------------------------------------------------
+
+// The chunks' checksum is zlib's CRC-32: the standard check value, and the same in pieces.
+TEST(Checksum, IsTheStandardCrc32) {
+  EXPECT_EQ(Crc32("123456789", 9), 0xCBF43926u);
+  EXPECT_EQ(Crc32(nullptr, 0), 0u);
+  EXPECT_EQ(Crc32("6789", 4, Crc32("12345", 5)), 0xCBF43926u);
+}
+
+TEST(RefinementPriority, FollowsThePapersFormula) {
+  LodNode n;
+  n.cone.axis = vcg::Point3d(0, 0, 1);
+  n.cone.halfAngle = 0;
+  n.center = vcg::Point3f(0, 0, 0);
+  // Facing the eye: a + c = 0 -> 0; seen edge-on: a = pi/2 -> 1/2; from behind -> 1.
+  EXPECT_NEAR(RefinementPriority(n, Eye(0, 0, 5, 0)), 0.0, 1e-12);
+  EXPECT_NEAR(RefinementPriority(n, Eye(5, 0, 0, 0)), 0.5, 1e-12);
+  EXPECT_NEAR(RefinementPriority(n, Eye(0, 0, -5, 0)), 1.0, 1e-12);
+  // A wide cone raises it: a = pi/4, c = pi/4 -> (1 - cos(pi/2)) / 2 = 1/2; a + c >= pi -> 1.
+  n.cone.halfAngle = NormalCone::kPi / 4;
+  EXPECT_NEAR(RefinementPriority(n, Eye(1, 0, 1, 0)), 0.5, 1e-12);
+  EXPECT_EQ(RefinementPriority(n, Eye(-1, 0, -1, 0)), 1.0);
+  // Orthographic: e = -viewDir.
+  LodView o;
+  o.orthographic = true;
+  o.viewDir = vcg::Point3d(0, 0, -1);
+  n.cone.halfAngle = 0;
+  EXPECT_NEAR(RefinementPriority(n, o), 0.0, 1e-12);
+}
+
+// --- A tiny mesh: exact structure -------------------------------------------------------------
+
+class TinyLod : public ::testing::Test {
+ protected:
+  static void SetUpTestCase() {
+    tiny_ = new Built;
+    tiny_->mesh = test::Sphere(2);  // 128 faces, 66 vertices
+    LodBuildParams p;
+    p.clusterFaces = 16;
+    Build(*tiny_, "sphere", p);
+  }
+  static void TearDownTestCase() {
+    std::remove(tiny_->path.c_str());
+    delete tiny_;
+  }
+  static Built* tiny_;
+};
+Built* TinyLod::tiny_ = nullptr;
+
+TEST_F(TinyLod, HeaderAndNodeStructure) {
+  const Built& b = *tiny_;
+  auto r = OpenOk(b.bytes);
+  ASSERT_TRUE(r);
+  const LodFileInfo& i = r->info();
+  const size_t H = b.dag.levels.size();
+  ASSERT_GE(H, 3u) << "the tiny sphere should give a DAG of several levels";
+  EXPECT_EQ(i.version, 2u);
+  EXPECT_EQ(i.levels, int(H));
+  EXPECT_EQ(i.inputFaces, 128u);
+  EXPECT_EQ(i.inputVertices, 66u);
+  EXPECT_EQ(i.globalVertices, b.dag.positions.size());
+  EXPECT_EQ(i.fileBytes, b.bytes.size());
+  for (size_t k = 0; k < H; ++k) {
+    EXPECT_EQ(i.levelNodes[k], b.dag.levels[k].clusterCount());
+    EXPECT_EQ(i.levelFaces[k], b.dag.levels[k].faces.size());
+    if (k) EXPECT_LT(i.levelFaces[k], i.levelFaces[k - 1]);
+  }
+  EXPECT_NEAR(i.box.min[0], -1, 1e-6);
+  EXPECT_NEAR(i.box.max[2], 1, 1e-6);
+  // Roots: the top level's nodes, ids 0..; records and geometry loaded at Open.
+  ASSERT_EQ(r->roots().size(), i.levelNodes.back());
+  for (size_t k = 0; k < r->roots().size(); ++k) {
+    EXPECT_EQ(r->roots()[k], uint32_t(k));
+    ASSERT_TRUE(r->hasNode(uint32_t(k)));
+    EXPECT_EQ(r->node(uint32_t(k)).level, int(H) - 1);
+    EXPECT_EQ(r->node(uint32_t(k)).group, LodNode::kNoGroup);
+    EXPECT_TRUE(r->node(uint32_t(k)).parents.empty());
+    EXPECT_TRUE(std::isinf(r->node(uint32_t(k)).parentError));
+    EXPECT_NE(r->geometry(uint32_t(k)), nullptr);
+  }
+  // Nothing finer is loaded at Open.
+  EXPECT_FALSE(r->hasNode(uint32_t(r->roots().size())));
+  // Walk every node through the children lists: children at the level below, all in one group
+  // whose error is the node's; siblings share children; errors grow up the DAG; the border of a
+  // group (its children's vertices also used outside it) is kept by the clusters made from it.
+  std::vector<uint32_t> todo = r->roots();
+  std::vector<uint8_t> seen(size_t(i.nodeCount), 0);
+  size_t count = 0;
+  while (!todo.empty()) {
+    const uint32_t id = todo.back();
+    todo.pop_back();
+    if (seen[id]) continue;
+    seen[id] = 1;
+    ++count;
+    ASSERT_TRUE(r->LoadChildren(id).ok());
+    const LodNode n = r->node(id);
+    EXPECT_EQ(r->levelOfNode(id), uint32_t(n.level));
+    EXPECT_LE(n.error, n.parentError);
+    if (n.level == 0) {
+      EXPECT_TRUE(n.children.empty());
+      EXPECT_EQ(n.error, 0.f);
+    } else {
+      EXPECT_FALSE(n.children.empty());
+      EXPECT_GT(n.error, 0.f);
+    }
+    for (uint32_t s : n.siblings) {
+      ASSERT_TRUE(r->LoadNode(s).ok());
+      EXPECT_EQ(r->node(s).children, n.children);
+      EXPECT_EQ(r->node(s).error, n.error);
+    }
+    for (uint32_t c : n.children) {
+      ASSERT_TRUE(r->hasNode(c));
+      const LodNode& cn = r->node(c);
+      EXPECT_EQ(cn.level, n.level - 1);
+      EXPECT_EQ(cn.parentError, n.error);
+      EXPECT_LE(cn.error, n.error);
+      std::vector<uint32_t> p = cn.parents, sib = n.siblings;
+      std::sort(p.begin(), p.end());
+      std::sort(sib.begin(), sib.end());
+      EXPECT_EQ(p, sib) << "a child's parents are the clusters made from its group";
+      todo.push_back(c);
+    }
+    // Every face's normal lies in the node's cone (exact minimal cone of its own faces).
+    ASSERT_TRUE(r->LoadGeometry(id).ok());
+    const LodGeometry& g = *r->geometry(id);
+    EXPECT_EQ(g.faces.size(), n.faceCount);
+    EXPECT_EQ(g.positions.size(), n.vertexCount);
+    for (size_t v = 0; v < g.vertexIds.size(); ++v) EXPECT_EQ(g.positions[v], b.dag.positions[g.vertexIds[v]]);
+    for (const auto& t : g.faces) {
+      IndexedMesh one;
+      one.positions = {g.positions[t[0]], g.positions[t[1]], g.positions[t[2]]};
+      one.faces = {{0, 1, 2}};
+      vcg::Point3d nrm;
+      double area;
+      FaceNormalAndArea(one, 0, nrm, area);
+      if (area > 0) {
+        EXPECT_TRUE(n.cone.contains(nrm, 1e-7));
+      }
+      for (uint32_t v : t) EXPECT_LE((g.positions[v] - n.center).Norm(), n.radius * (1 + 1e-5f));
+    }
+  }
+  EXPECT_EQ(count, i.nodeCount);
+}
+
+TEST_F(TinyLod, FullBudgetGivesTheInputBack) {
+  const Built& b = *tiny_;
+  auto r = OpenOk(b.bytes);
+  ASSERT_TRUE(r);
+  LodCut cut;
+  ASSERT_TRUE(RefineLod(*r, Eye(0.3, 0.2, 5, 1000), cut).ok());
+  EXPECT_EQ(cut.faces, 128u);
+  for (uint32_t id : cut.nodes) EXPECT_EQ(r->node(id).level, 0);
+  const CrackCount c = CheckCut(b, *r, cut);
+  EXPECT_EQ(c.border, 0u);
+  EXPECT_EQ(c.overused, 0u);
+  IndexedMesh out;
+  std::vector<int> level;
+  ASSERT_TRUE(ExtractCutMesh(*r, cut, true, out, &level).ok());
+  EXPECT_EQ(out.faces.size(), 128u);
+  EXPECT_EQ(out.positions.size(), 66u);  // welded: the input's shared vertices
+  EXPECT_EQ(SortedFacePositions(out), SortedFacePositions(b.mesh));
+  EXPECT_TRUE(std::all_of(level.begin(), level.end(), [](int l) { return l == 0; }));
+  // The level-0 vertex ids are the input's vertex indices.
+  for (uint32_t id : cut.nodes) {
+    const LodGeometry& g = *r->geometry(id);
+    for (size_t v = 0; v < g.vertexIds.size(); ++v) EXPECT_EQ(g.positions[v], b.mesh.positions[g.vertexIds[v]]);
+  }
+}
+
+TEST_F(TinyLod, ZeroBudgetKeepsTheRoots) {
+  auto r = OpenOk(tiny_->bytes);
+  ASSERT_TRUE(r);
+  LodCut cut;
+  ASSERT_TRUE(RefineLod(*r, Eye(0, 0, 5, 0), cut).ok());
+  std::vector<uint32_t> nodes = cut.nodes;
+  std::sort(nodes.begin(), nodes.end());
+  EXPECT_EQ(nodes, r->roots());
+  EXPECT_EQ(cut.refinements, 0u);
+  EXPECT_EQ(cut.faces, r->info().levelFaces.back());
+}
+
+TEST_F(TinyLod, FileAndMemoryReadersAgree) {
+  std::unique_ptr<LodReader> a, m;
+  ASSERT_TRUE(LodReader::Open(tiny_->path, a).ok());
+  m = OpenOk(tiny_->bytes);
+  LodCut ca, cm;
+  ASSERT_TRUE(RefineLod(*a, Eye(0, 3, 1, 60), ca).ok());
+  ASSERT_TRUE(RefineLod(*m, Eye(0, 3, 1, 60), cm).ok());
+  EXPECT_EQ(ca.nodes, cm.nodes);
+  EXPECT_EQ(ca.culled, cm.culled);
+}
+
+TEST_F(TinyLod, EveryFlippedByteIsReadOrRefused) {
+  // A bounded in-test fuzz: each byte of the file flipped in turn must give a clean result or an
+  // error, never a crash (ASan/UBSan builds run this too). Almost every flip must be refused
+  // (the CRCs); a flip in a padding field may pass.
+  const std::vector<uint8_t>& good = tiny_->bytes;
+  ASSERT_EQ(FullReadError(good), "");
+  // Every byte of the header, then a sample of the rest (the fuzz target, scripts/fuzz.sh, goes
+  // further), so that the test stays quick under the sanitizers.
+  size_t refused = 0, tried = 0;
+  const size_t header = kChunkHeaderBytes + size_t(DecodeChunkHeader(good.data()).dataBytes);
+  const size_t stride = std::max<size_t>(1, good.size() / 600);
+  for (size_t at = 0; at < good.size(); at += at < header ? 1 : stride) {
+    std::vector<uint8_t> bad = good;
+    bad[at] ^= 0x5A;
+    if (!FullReadError(bad).empty()) ++refused;
+    ++tried;
+  }
+  EXPECT_GE(refused, tried * 99 / 100) << "of " << tried << " flipped bytes";
+  // And every truncation.
+  for (size_t n = 0; n < good.size(); n += stride) {
+    std::vector<uint8_t> cut(good.begin(), good.begin() + long(n));
+    EXPECT_NE(FullReadError(cut), "") << n << " bytes";
+  }
+}
+
+// --- Bad files: each refused with its message ---------------------------------------------------
+
+// Rewrites the chunk at `at` after `edit` changed its data, with a fresh CRC (so that only the
+// intended inconsistency remains).
+void Rechecksum(std::vector<uint8_t>& bytes, size_t at) {
+  ChunkHeader h = DecodeChunkHeader(bytes.data() + at);
+  const uint32_t crc = Crc32(bytes.data() + at + kChunkHeaderBytes, size_t(h.dataBytes));
+  for (int i = 0; i < 4; ++i) bytes[at + 4 + size_t(i)] = uint8_t(crc >> (8 * i));
+}
+void PutU64(std::vector<uint8_t>& bytes, size_t at, uint64_t v) {
+  for (int i = 0; i < 8; ++i) bytes[at + size_t(i)] = uint8_t(v >> (8 * i));
+}
+void PutU32(std::vector<uint8_t>& bytes, size_t at, uint32_t v) {
+  for (int i = 0; i < 4; ++i) bytes[at + size_t(i)] = uint8_t(v >> (8 * i));
+}
+
+TEST_F(TinyLod, BadFilesAreRefusedWithTheirReason) {
+  const std::vector<uint8_t>& good = tiny_->bytes;
+  auto has = [](const std::string& msg, const std::string& what) {
+    return msg.find(what) != std::string::npos;
+  };
+  {  // truncated
+    std::vector<uint8_t> b(good.begin(), good.end() - 100);
+    EXPECT_TRUE(has(OpenError(b), "truncated")) << OpenError(b);
+    b.resize(10);
+    EXPECT_TRUE(has(OpenError(b), "truncated")) << OpenError(b);
+    EXPECT_TRUE(has(OpenError({}), "truncated"));
+  }
+  {  // wrong magic
+    std::vector<uint8_t> b = good;
+    b[0] = 'X';
+    EXPECT_TRUE(has(OpenError(b), "wrong magic")) << OpenError(b);
+    std::vector<uint8_t> ply = {'p', 'l', 'y', '\n', 'f', 'o', 'r', 'm', 'a', 't', ' ', 'b', 'i', 'n', 'a', 'r', 'y',
+                                '_', 'l', 'i', 't', 't', 'l', 'e', '_', 'e'};
+    EXPECT_TRUE(has(OpenError(ply), "not a .clod file")) << OpenError(ply);
+  }
+  {  // wrong version (a valid checksum: a file from a future writer)
+    std::vector<uint8_t> b = good;
+    b[kChunkHeaderBytes] = 7;
+    Rechecksum(b, 0);
+    EXPECT_TRUE(has(OpenError(b), "unsupported .clod version 7")) << OpenError(b);
+    // A file of the previous version (the tree of groups): named, with what to do.
+    b[kChunkHeaderBytes] = 1;
+    Rechecksum(b, 0);
+    EXPECT_TRUE(has(OpenError(b), ".clod version 1 file (written by an older ConeLOD")) << OpenError(b);
+    EXPECT_TRUE(has(OpenError(b), "rebuild it with conelod lod build")) << OpenError(b);
+  }
+  {  // decoded values checked even with valid checksums: a NaN bounding box
+    std::vector<uint8_t> b = good;
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    uint32_t u;
+    std::memcpy(&u, &nan, 4);
+    for (int k = 0; k < 4; ++k) b[kChunkHeaderBytes + 40 + size_t(k)] = uint8_t(u >> (8 * k));
+    Rechecksum(b, 0);
+    EXPECT_TRUE(has(OpenError(b), "bounding box")) << OpenError(b);
+  }
+  {  // a root's record with a negative cone angle, then a negative error, checksum redone
+    const size_t hier = size_t(Decoder(good.data() + kChunkHeaderBytes + 64, 8).u64());
+    const size_t rec = hier + kChunkHeaderBytes;  // node 0's record
+    std::vector<uint8_t> b = good;
+    const double neg = -0.5;
+    uint64_t u;
+    std::memcpy(&u, &neg, 8);
+    PutU64(b, rec + kChunkHeaderBytes + 48, u);
+    Rechecksum(b, rec);
+    EXPECT_TRUE(has(OpenError(b), "negative cone")) << OpenError(b);
+    b = good;
+    const float negf = -1.f;
+    uint32_t w;
+    std::memcpy(&w, &negf, 4);
+    for (int k = 0; k < 4; ++k) b[rec + kChunkHeaderBytes + 80 + size_t(k)] = uint8_t(w >> (8 * k));
+    Rechecksum(b, rec);
+    EXPECT_TRUE(has(OpenError(b), "bad error bounds")) << OpenError(b);
+    b = good;
+    PutU32(b, rec + kChunkHeaderBytes + 12, 1000);  // child count: the size no longer matches
+    Rechecksum(b, rec);
+    EXPECT_TRUE(has(OpenError(b), "list lengths")) << OpenError(b);
+  }
+  {  // corrupted chunk size: the root's child size
+    std::vector<uint8_t> b = good;
+    PutU64(b, 16, DecodeChunkHeader(b.data()).childBytes + 1000);
+    EXPECT_TRUE(has(OpenError(b), "truncated")) << OpenError(b);
+    PutU64(b, 16, DecodeChunkHeader(good.data()).childBytes - 8);
+    EXPECT_TRUE(has(OpenError(b), "corrupt chunk size")) << OpenError(b);
+    b = good;
+    PutU64(b, 8, uint64_t(1) << 60);  // the header's data size
+    EXPECT_TRUE(has(OpenError(b), "corrupt chunk size")) << OpenError(b);
+  }
+  {  // corrupted chunk size: a node record's (found through the index)
+    std::vector<uint8_t> b = good;
+    const size_t hier = size_t(Decoder(b.data() + kChunkHeaderBytes + 64, 8).u64());  // hierarchy offset
+    const size_t firstRecord = hier + kChunkHeaderBytes;
+    PutU64(b, firstRecord + 8, 1000000);
+    EXPECT_TRUE(has(OpenError(b), "corrupt chunk size")) << OpenError(b);
+  }
+  {  // corrupted checksum: one byte of the header's data, then one of a root's geometry
+    std::vector<uint8_t> b = good;
+    const ChunkHeader h0 = DecodeChunkHeader(good.data());
+    b[kChunkHeaderBytes + 20] ^= 1;
+    EXPECT_TRUE(has(OpenError(b), "checksum mismatch in the file header")) << OpenError(b);
+    b = good;
+    b[kChunkHeaderBytes + h0.dataBytes - 1] ^= 1;  // the last level entry's padding is covered too
+    EXPECT_TRUE(has(OpenError(b), "checksum mismatch")) << OpenError(b);
+    // The last bytes of the file are the last index block's entries: only read on demand.
+    b = good;
+    b[b.size() - 30] ^= 0x40;
+    const std::string e = FullReadError(b);
+    EXPECT_TRUE(has(e, "checksum mismatch in index block")) << e;
+  }
+  {  // a vertex block's checksum: found when the geometry using it is read
+    std::vector<uint8_t> b = good;
+    const size_t level0 = kChunkHeaderBytes + kHeaderFixedBytes;  // level 0's entry
+    const size_t vert = size_t(Decoder(b.data() + level0 + 40, 8).u64());
+    b[vert + kChunkHeaderBytes + kVertDataBytes + kChunkHeaderBytes + 5] ^= 0x10;
+    EXPECT_EQ(OpenError(b), "");
+    const std::string e = FullReadError(b);
+    EXPECT_TRUE(has(e, "checksum mismatch in a vertex block")) << e;
+  }
+  {  // offsets past the end: the index offset, the hierarchy offset (valid header checksum)
+    std::vector<uint8_t> b = good;
+    PutU64(b, kChunkHeaderBytes + 72, b.size() + 4096);  // index offset
+    Rechecksum(b, 0);
+    EXPECT_TRUE(has(OpenError(b), "past the end")) << OpenError(b);
+    b = good;
+    PutU64(b, kChunkHeaderBytes + 64, uint64_t(1) << 62);  // hierarchy offset
+    Rechecksum(b, 0);
+    EXPECT_TRUE(has(OpenError(b), "past the end")) << OpenError(b);
+  }
+  {  // huge counts: refused before anything is allocated
+    std::vector<uint8_t> b = good;
+    PutU64(b, kChunkHeaderBytes + kHeaderFixedBytes, uint64_t(1) << 40);  // level 0's face count
+    Rechecksum(b, 0);
+    EXPECT_TRUE(has(OpenError(b), "larger than the file")) << OpenError(b);
+  }
+  {  // a missing file
+    std::unique_ptr<LodReader> r;
+    const Status s = LodReader::Open(TempPath("does_not_exist.clod"), r);
+    EXPECT_FALSE(s.ok());
+    EXPECT_TRUE(has(s.message, "cannot open")) << s.message;
+  }
+}
+
+// --- The bunny --------------------------------------------------------------------------------
+
+class BunnyLod : public ::testing::Test {
+ protected:
+  static void SetUpTestCase() {
+    bunny_ = new Built;
+    CMesh m;
+    ASSERT_EQ(LoadPly(m, test::MeshPath("stanford_bunny_bun_zipper.ply")), "");
+    bunny_->mesh = ToIndexedMesh(m);
+    Build(*bunny_, "bunny");
+  }
+  static void TearDownTestCase() {
+    std::remove(bunny_->path.c_str());
+    delete bunny_;
+  }
+  static std::unique_ptr<LodReader> Open() {
+    std::unique_ptr<LodReader> r;
+    const Status s = LodReader::Open(bunny_->path, r);
+    EXPECT_TRUE(s.ok()) << s.message;
+    return r;
+  }
+  static Built* bunny_;
+};
+Built* BunnyLod::bunny_ = nullptr;
+
+TEST_F(BunnyLod, FullBudgetRoundTripIsExact) {
+  auto r = Open();
+  ASSERT_TRUE(r);
+  LodCut cut;
+  ASSERT_TRUE(RefineLod(*r, Eye(0, 0.1, 0.6, size_t(1) << 30), cut).ok());
+  EXPECT_EQ(cut.faces, 69451u);
+  EXPECT_GT(cut.groupsCulled, 0u);  // culled nodes are refined too, last
+  EXPECT_EQ(cut.maxLevelDifference, 0);
+  const CrackCount c = CheckCut(*bunny_, *r, cut);
+  EXPECT_EQ(c.border, 0u);
+  IndexedMesh out;
+  ASSERT_TRUE(ExtractCutMesh(*r, cut, true, out).ok());
+  EXPECT_EQ(out.faces.size(), 69451u);
+  EXPECT_EQ(SortedFacePositions(out), SortedFacePositions(bunny_->mesh));
+  // Welded: the input's used vertices (the bunny has unreferenced ones).
+  std::vector<uint8_t> used(bunny_->mesh.positions.size(), 0);
+  for (const auto& t : bunny_->mesh.faces)
+    for (uint32_t v : t) used[v] = 1;
+  EXPECT_EQ(out.positions.size(), size_t(std::count(used.begin(), used.end(), 1)));
+}
+
+TEST_F(BunnyLod, SmallBudgetsRefineWhereTheEyeLooks) {
+  auto r = Open();
+  ASSERT_TRUE(r);
+  const vcg::Box3f box = r->info().box;
+  const vcg::Point3f c = box.Center();
+  const double d = 1 * box.Diag();  // near enough for the screen-space error to tell the halves apart
+  size_t previous = 0;
+  for (double fraction : {0.02, 0.05, 0.1, 0.3}) {
+    SCOPED_TRACE(fraction);
+    const size_t budget = size_t(fraction * 69451);
+    // Eye on +z: the front half (z above the centre) should be finer than the back half.
+    LodCut cut;
+    ASSERT_TRUE(RefineLod(*r, Eye(c[0], c[1], c[2] + d, budget), cut).ok());
+    EXPECT_LE(cut.faces, budget);
+    EXPECT_GT(cut.faces, budget * 8 / 10);  // the budget is used
+    EXPECT_GT(cut.faces, previous);
+    previous = cut.faces;
+    // (The bunny has holes, whose borders the coarse levels move: its cracks are not counted
+    // here; LodCracks below checks watertight meshes.)
+    EXPECT_EQ(CheckCut(*bunny_, *r, cut).overused, 0u);
+    // Per half of the model (node centre's z above / below the centre): the mean level of the
+    // cut's nodes, and the faces drawn.
+    auto halves = [&](const LodCut& k, double out[4]) {
+      double sum[2] = {0, 0}, count[2] = {0, 0}, drawn[2] = {0, 0};
+      for (size_t i = 0; i < k.nodes.size(); ++i) {
+        const LodNode& n = r->node(k.nodes[i]);
+        const int side = n.center[2] > c[2] ? 0 : 1;
+        sum[side] += n.level * double(n.faceCount);
+        count[side] += n.faceCount;
+        if (!k.culled[i]) drawn[side] += n.faceCount;
+      }
+      out[0] = sum[0] / std::max(1.0, count[0]);
+      out[1] = sum[1] / std::max(1.0, count[1]);
+      out[2] = drawn[0];
+      out[3] = drawn[1];
+    };
+    double h[4];
+    halves(cut, h);
+    IndexedMesh out;
+    ASSERT_TRUE(ExtractCutMesh(*r, cut, true, out).ok());
+    EXPECT_EQ(out.faces.size(), cut.faces);
+    EXPECT_LT(out.faces.size(), 69451u);
+    // At 2% the cut is the roots and a few more (541 faces at the top level): too coarse to say.
+    if (fraction < 0.05) continue;
+    // The same budget from -z: each half is finer, and has more faces drawn, when the eye looks
+    // at it than when it looks at the other half (compared between the two eyes, as the bunny's
+    // halves differ in size and detail).
+    LodCut other;
+    ASSERT_TRUE(RefineLod(*r, Eye(c[0], c[1], c[2] - d, budget), other).ok());
+    double o[4];
+    halves(other, o);
+    EXPECT_LT(h[0], o[0]) << "the +z half should be finer seen from +z";
+    EXPECT_GT(h[1], o[1]) << "the -z half should be finer seen from -z";
+    EXPECT_GT(h[2], o[2]) << "more faces drawn on the +z half seen from +z";
+    EXPECT_LT(h[3], o[3]) << "more faces drawn on the -z half seen from -z";
+  }
+}
+
+TEST_F(BunnyLod, CulledNodesFaceAwayFromTheEye) {
+  auto r = Open();
+  ASSERT_TRUE(r);
+  const vcg::Point3d eye(0.3, 0.2, 0.5);
+  LodCut cut;
+  ASSERT_TRUE(RefineLod(*r, Eye(eye[0], eye[1], eye[2], 20000), cut).ok());
+  ASSERT_GT(cut.groupsCulled, 0u);
+  size_t checked = 0;
+  for (size_t i = 0; i < cut.nodes.size(); ++i) {
+    if (!cut.culled[i]) continue;
+    ASSERT_TRUE(r->LoadGeometry(cut.nodes[i]).ok());
+    const LodGeometry& g = *r->geometry(cut.nodes[i]);
+    for (const auto& t : g.faces) {
+      const vcg::Point3d a = vcg::Point3d::Construct(g.positions[t[0]]);
+      const vcg::Point3d n = (vcg::Point3d::Construct(g.positions[t[1]]) - a) ^ (vcg::Point3d::Construct(g.positions[t[2]]) - a);
+      EXPECT_LE(n * (eye - a), 1e-12) << "a culled face looks at the eye";
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 0u);
+  // Without culling nothing is flagged.
+  ASSERT_TRUE(RefineLod(*r, Eye(eye[0], eye[1], eye[2], 20000, false), cut).ok());
+  EXPECT_EQ(cut.groupsCulled, 0u);
+  EXPECT_EQ(cut.drawnFaces, cut.faces);
+}
+
+TEST_F(BunnyLod, StepwiseRefinementMatchesRefineLod) {
+  auto r = Open();
+  ASSERT_TRUE(r);
+  const LodView view = Eye(-0.2, 0.15, 0.4, 15000);
+  LodCut whole;
+  ASSERT_TRUE(RefineLod(*r, view, whole).ok());
+  LodRefiner refiner(*r);
+  ASSERT_TRUE(refiner.Start(view).ok());
+  size_t steps = 0;
+  while (!refiner.Done()) {
+    ASSERT_TRUE(refiner.Step(7).ok());
+    ++steps;
+  }
+  EXPECT_GT(steps, 3u);
+  std::vector<uint32_t> a = whole.nodes, b = refiner.cut().nodes;
+  std::sort(a.begin(), a.end());
+  std::sort(b.begin(), b.end());
+  EXPECT_EQ(a, b);
+}
+
+TEST_F(BunnyLod, EvictionLowersResidentBytes) {
+  auto r = Open();
+  ASSERT_TRUE(r);
+  const size_t atOpen = r->residentBytes();
+  LodCut cut;
+  ASSERT_TRUE(RefineLod(*r, Eye(0, 0.1, 0.6, 20000), cut).ok());
+  const size_t refined = r->residentBytes();
+  EXPECT_GT(refined, atOpen);
+  size_t evicted = 0;
+  for (uint32_t id : cut.nodes)
+    if (r->geometry(id)) {
+      r->EvictGeometry(id);
+      ++evicted;
+      EXPECT_EQ(r->geometry(id), nullptr);
+    }
+  EXPECT_GT(evicted, 0u);
+  EXPECT_LT(r->residentBytes(), refined - 20000 * 6);  // at least the triangles went
+  // The refiner starting again evicts what it no longer draws.
+  LodRefiner refiner(*r);
+  ASSERT_TRUE(refiner.Start(Eye(0, 0.1, 0.6, 40000)).ok());
+  while (!refiner.Done()) ASSERT_TRUE(refiner.Step(64).ok());
+  const size_t big = r->residentBytes();
+  ASSERT_TRUE(refiner.Start(Eye(0, 0.1, 0.6, 0)).ok());
+  EXPECT_LT(r->residentBytes(), big);
+  for (uint32_t id : refiner.cut().nodes) EXPECT_NE(r->geometry(id), nullptr);
+}
+
+TEST_F(BunnyLod, ResidentMemoryFollowsTheCutNotTheModel) {
+  auto r = Open();
+  ASSERT_TRUE(r);
+  // The whole model as the core holds it: positions and faces.
+  const size_t model = bunny_->mesh.positions.size() * 12 + bunny_->mesh.faces.size() * 12;
+  EXPECT_LT(r->residentBytes(), model / 20) << "coarsest level";
+  LodCut cut;
+  ASSERT_TRUE(RefineLod(*r, Eye(0, 0.1, 0.6, 69451 / 10), cut).ok());
+  EXPECT_LT(r->residentBytes(), model / 4) << "10% budget";
+}
+
+TEST(Lod, WriterRefusesMismatchedInput) {
+  IndexedMesh m = test::Sphere(2);
+  LodDag dag;
+  const std::string path = TempPath("refused.clod");
+  std::remove(path.c_str());
+  EXPECT_FALSE(WriteLodFile(m, dag, path).ok());  // no levels
+  LodBuildParams p;
+  p.clusterFaces = 16;
+  ASSERT_TRUE(BuildLodDag(m, p, dag).ok());
+  LodDag bad = dag;
+  bad.levels[0].faceCluster[0] = 1 << 20;
+  EXPECT_FALSE(WriteLodFile(m, bad, path).ok());
+  bad = dag;
+  bad.levels.back().faces[0][0] = 1u << 30;
+  EXPECT_FALSE(WriteLodFile(m, bad, path).ok());
+  std::ifstream in(path);
+  EXPECT_FALSE(in.good()) << "no file is left behind";
+  EXPECT_FALSE(WriteLodFile(m, dag, "/nonexistent-dir/x.clod").ok());
+  EXPECT_FALSE(BuildLodDag(m, [] { LodBuildParams q; q.clusterFaces = 1; return q; }(), dag).ok());
+  EXPECT_FALSE(BuildLodDag(m, [] { LodBuildParams q; q.simplification.levelRatio = 1; return q; }(), dag).ok());
+  EXPECT_FALSE(BuildLodDag(m, [] { LodBuildParams q; q.maxGroupError = 0; return q; }(), dag).ok());
+}
+
+TEST(Lod, CancellingLeavesNoFile) {
+  IndexedMesh m = test::Sphere(3);
+  const std::string path = TempPath("cancelled.clod");
+  std::remove(path.c_str());
+  // Stop at each stage in turn: grouping, simplification, records, geometry.
+  for (int stopAt : {1, 30, 91, 97}) {
+    int last = -1;
+    const Progress stop = [&](int percent, const char*) {
+      EXPECT_GE(percent, last) << "progress must rise";
+      last = percent;
+      return percent < stopAt;
+    };
+    const Status s = BuildLodFile(m, LodBuildParams(), path, nullptr, stop);
+    EXPECT_EQ(s.code, Status::Code::Cancelled) << stopAt;
+    std::ifstream in(path);
+    EXPECT_FALSE(in.good()) << "a cancelled build leaves no file (" << stopAt << ")";
+  }
+}
+
+TEST(Lod, BuildLodFileReportsItsFigures) {
+  IndexedMesh m = test::Sphere(3);  // 512 faces
+  LodBuildParams p;
+  LodBuildStats st;
+  const std::string path = TempPath("stats.clod");
+  ASSERT_TRUE(BuildLodFile(m, p, path, &st).ok());
+  EXPECT_EQ(st.inputFaces, 512u);
+  EXPECT_EQ(st.levelFaces[0], 512u);
+  ASSERT_EQ(size_t(st.levels), st.levelFaces.size());
+  for (size_t k = 1; k < st.levelFaces.size(); ++k) EXPECT_LE(st.levelFaces[k], st.levelFaces[k - 1]);
+  EXPECT_EQ(st.levelNodes.back(), 1u);
+  EXPECT_EQ(ReadBytes(path).size(), st.fileBytes);
+  std::remove(path.c_str());
+}
+
+// --- Cracks -----------------------------------------------------------------------------------
+
+// A torus of n x m quads (two triangles each): watertight, genus 1.
+IndexedMesh Torus(int n, int m, float R, float r) {
+  IndexedMesh t;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) {
+      const double u = 2 * NormalCone::kPi * i / n, v = 2 * NormalCone::kPi * j / m;
+      t.positions.emplace_back(float((R + r * std::cos(v)) * std::cos(u)), float((R + r * std::cos(v)) * std::sin(u)),
+                               float(r * std::sin(v)));
+    }
+  auto id = [&](int i, int j) { return uint32_t(((i + n) % n) * m + (j + m) % m); };
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) {
+      t.faces.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      t.faces.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  return t;
+}
+
+size_t InputBorderEdges(const IndexedMesh& m) {
+  size_t k = 0;
+  for (const auto& e : EdgesByPosition(m)) k += e.second != 2;
+  return k;
+}
+
+// Every cut of a watertight mesh, at every eye, budget and priority, with and without culling,
+// is watertight: welded by position, no edge used by one face (crack, T-junction) or by three
+// (overlap); the drawn nodes' border lies along culled nodes only.
+void ExpectCrackFree(Built& b, const std::string& name) {
+  ASSERT_EQ(InputBorderEdges(b.mesh), 0u) << name << " must be watertight for this test";
+  Build(b, name);
+  std::unique_ptr<LodReader> r;
+  ASSERT_TRUE(LodReader::Open(b.path, r).ok());
+  const vcg::Box3f box = r->info().box;
+  const vcg::Point3d c = vcg::Point3d::Construct(box.Center());
+  const double d = box.Diag();
+  const std::vector<vcg::Point3d> eyes = {c + vcg::Point3d(0, 0, 2 * d), c + vcg::Point3d(0, 0, -2 * d),
+                                          c + vcg::Point3d(1.5 * d, 0.3 * d, 0), c + vcg::Point3d(-0.2 * d, 1.2 * d, 0.4 * d),
+                                          c + vcg::Point3d(0.3 * d, 0.1 * d, 0.45 * d),  // close: strong screen-space falloff
+                                          c};                                          // inside the model
+  const size_t F = b.mesh.faces.size();
+  size_t cuts = 0, mixed = 0;
+  for (const auto& eye : eyes)
+    for (double pct : {0.0, 5.0, 20.0, 50.0, 80.0, 100.0})
+      for (bool cull : {true, false})
+        for (LodPriority pr : {LodPriority::ScreenError, LodPriority::ObjectError, LodPriority::ConeFg}) {
+          LodView v;
+          v.eye = eye;
+          v.faceBudget = size_t(double(F) * pct / 100);
+          v.cullBackFacing = cull;
+          v.priority = pr;
+          LodCut cut;
+          ASSERT_TRUE(RefineLod(*r, v, cut).ok());
+          SCOPED_TRACE(name + " budget " + std::to_string(pct) + "% cull " + std::to_string(cull) + " priority " +
+                       std::to_string(int(pr)) + " eye " + std::to_string(eye[0]) + "," + std::to_string(eye[1]) + "," +
+                       std::to_string(eye[2]));
+          const CrackCount k = CheckCut(b, *r, cut);
+          EXPECT_EQ(k.border, 0u);
+          EXPECT_EQ(k.overused, 0u);
+          EXPECT_EQ(k.drawnBorderNotCulled, 0u);
+          if (pct == 100) EXPECT_EQ(cut.faces, F);
+          if (pct > 0) EXPECT_LE(cut.faces, std::max(v.faceBudget, size_t(r->info().levelFaces.back())));
+          ++cuts;
+          mixed += cut.maxLevelDifference > 0;
+        }
+  EXPECT_GT(mixed, cuts / 3) << "most cuts should mix levels (else the test proves little)";
+  // A screen-space cut with a real projection: refined where the error exceeds a pixel.
+  LodView v;
+  v.eye = eyes[4];
+  v.faceBudget = F;
+  v.projectionScale = 1000 / (2 * std::tan(0.5 * 0.7));  // 1000 pixels, 40 degrees
+  v.maxPixelError = 1;
+  LodCut cut;
+  ASSERT_TRUE(RefineLod(*r, v, cut).ok());
+  const CrackCount k = CheckCut(b, *r, cut);
+  EXPECT_EQ(k.border, 0u);
+  EXPECT_EQ(k.overused, 0u);
+  std::remove(b.path.c_str());
+}
+
+TEST(LodCracks, SphereCutsAreWatertight) {
+  Built b;
+  b.mesh = test::Sphere(5);  // 8192 faces
+  ExpectCrackFree(b, "sphere");
+}
+
+TEST(LodCracks, TorusCutsAreWatertight) {
+  Built b;
+  b.mesh = Torus(96, 48, 1.f, 0.35f);  // 9216 faces
+  ExpectCrackFree(b, "torus");
+}
+
+TEST(LodCracks, ArmadilloCutsAreWatertight) {
+  Built b;
+  CMesh m;
+  ASSERT_EQ(LoadPly(m, test::MeshPath("stanford_armadillo_cgal.ply")), "");
+  b.mesh = ToIndexedMesh(m);
+  ExpectCrackFree(b, "armadillo");
+}
+
+}  // namespace
+}  // namespace conelod

@@ -1,0 +1,627 @@
+// Tests of group_qem.h: on tiny grids, each condition of the paper mode (and the lock) refuses the
+// one collapse it exists to refuse and allows it when switched off (so each test fails if its
+// check is removed); the integrity mode's local test agrees with a global recount of the groups'
+// pieces on random collapses and keeps every group whole face by face on real scans;
+// placements keep their constraint; whole runs keep every group intact where the same run
+// without conditions breaks groups; cancellation leaves a valid mesh; bad input and real scans.
+#include "conelod/simplify/group_qem.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "conelod/grouping/cone_grouping.h"
+#include "conelod/simplify/group_integrity.h"
+#include "conelod/mesh/mesh_check.h"
+#include "conelod/vcg_bridge.h"
+#include "conelod/vcg_mesh.h"
+#include "test_util.h"
+
+namespace conelod {
+namespace {
+
+// Grid(n) numbering (test_util.h): vertex (x, y) = y (n+1) + x; quad (x, y) has faces
+// 2 (y n + x) = {(x,y), (x+1,y), (x+1,y+1)} and 2 (y n + x) + 1 = {(x,y), (x+1,y+1), (x,y+1)}.
+constexpr int kN = 4;
+uint32_t V(int x, int y) { return uint32_t(y * (kN + 1) + x); }
+
+// Per-face groups of Grid(kN) from a per-quad rule.
+template <class Rule>
+std::vector<int> QuadGroups(Rule rule) {
+  std::vector<int> g;
+  for (int y = 0; y < kN; ++y)
+    for (int x = 0; x < kN; ++x) {
+      g.push_back(rule(x, y));
+      g.push_back(rule(x, y));
+    }
+  return g;
+}
+
+// The paper's conditions (paper mode), as the tests of conditions 1 and 2 below check them.
+GroupQemParams Conditions(bool c1, bool c2, bool lock = false) {
+  GroupQemParams p;
+  p.mode = GroupMode::Paper;
+  p.targetFaces = 1;
+  p.condition1 = c1;
+  p.condition2 = c2;
+  p.lockGroupBoundaries = lock;
+  return p;
+}
+
+IndexedMesh LoadReal(const std::string& name) {
+  CMesh m;
+  EXPECT_EQ(LoadPly(m, test::MeshPath(name)), "") << "the real test meshes live in ../shared/test_meshes";
+  return ToIndexedMesh(m);
+}
+
+std::vector<int> GroupsAfter(const GroupQemResult& r, const std::vector<int>& groups) {
+  std::vector<int> g;
+  for (uint32_t f : r.sourceFace) g.push_back(groups[f]);
+  return g;
+}
+
+// What every output promises: valid indices, no face using a vertex twice, no new non-manifold
+// edge, faces a subset of the input's in input order.
+void ExpectValidOutput(const IndexedMesh& in, const GroupQemResult& r) {
+  ASSERT_EQ(r.mesh.faces.size(), r.sourceFace.size());
+  ASSERT_EQ(r.mesh.positions.size(), r.sourceVertex.size());
+  for (const auto& t : r.mesh.faces) {
+    for (uint32_t v : t) ASSERT_LT(v, r.mesh.positions.size());
+    EXPECT_TRUE(t[0] != t[1] && t[1] != t[2] && t[0] != t[2]) << "a face uses a vertex twice";
+  }
+  for (size_t i = 1; i < r.sourceFace.size(); ++i) ASSERT_LT(r.sourceFace[i - 1], r.sourceFace[i]);
+  for (size_t i = 1; i < r.sourceVertex.size(); ++i) ASSERT_LT(r.sourceVertex[i - 1], r.sourceVertex[i]);
+  for (const auto& p : r.mesh.positions)
+    ASSERT_TRUE(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]));
+  EXPECT_EQ(r.stats.facesOut, r.mesh.faces.size());
+  EXPECT_LE(BuildFaceAdjacency(r.mesh).nonManifoldEdges, BuildFaceAdjacency(in).nonManifoldEdges);
+}
+
+// --- Condition 1 -----------------------------------------------------------------------------
+
+// Group 1 is the strip of quads y = 2, one quad high. The vertical edge (2,2)-(2,3) inside it has
+// both its faces in group 1 and both endpoints on the strip's contours: collapsing it pinches the
+// strip into a left and a right piece.
+TEST(Condition1, RefusesToPinchAGroupInTwo) {
+  const IndexedMesh m = test::Grid(kN);
+  const auto g = QuadGroups([](int, int y) { return y == 2 ? 1 : 0; });
+  EXPECT_EQ(EvaluateCollapse(m, g, Conditions(true, true), V(2, 2), V(2, 3)), CollapseVerdict::Condition1);
+  EXPECT_EQ(EvaluateCollapse(m, g, Conditions(true, true), V(2, 3), V(2, 2)), CollapseVerdict::Condition1);
+  // Without condition 1 the same collapse goes through (and splits group 1: see below).
+  EXPECT_EQ(EvaluateCollapse(m, g, Conditions(false, true), V(2, 2), V(2, 3)), CollapseVerdict::Allowed);
+  // An edge of the strip with an endpoint inside group 0 is fine: (2,1) is interior to group 0.
+  EXPECT_EQ(EvaluateCollapse(m, g, Conditions(true, true), V(2, 1), V(2, 2)), CollapseVerdict::Allowed);
+}
+
+TEST(Condition1, ThePinchSplitsTheGroupWhenAllowed) {
+  // Doing the collapse of the test above (cond. 1 off) really splits group 1; the integrity
+  // measure sees it.
+  const IndexedMesh m = test::Grid(kN);
+  const auto g = QuadGroups([](int, int y) { return y == 2 ? 1 : 0; });
+  IndexedMesh after = m;
+  std::vector<int> ga;
+  std::vector<std::array<uint32_t, 3>> faces;
+  for (size_t f = 0; f < m.faces.size(); ++f) {
+    auto t = m.faces[f];
+    for (auto& v : t) if (v == V(2, 3)) v = V(2, 2);
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+    faces.push_back(t);
+    ga.push_back(g[f]);
+  }
+  after.faces = faces;
+  GroupIntegrity gi;
+  ASSERT_TRUE(MeasureGroupIntegrity(m, g, after, ga, gi).ok());
+  EXPECT_EQ(gi.groupsSplit, 1);
+  EXPECT_EQ(gi.splitIds, std::vector<int>{1});
+}
+
+// A group of one face vanishes with any of its edges.
+TEST(Condition1, RefusesToRemoveTheLastFaceOfAGroup) {
+  const IndexedMesh m = test::Grid(kN);
+  auto g = QuadGroups([](int, int) { return 0; });
+  const size_t single = 2 * (1 * kN + 1);  // face {(1,1), (2,1), (2,2)}
+  g[single] = 7;
+  EXPECT_EQ(EvaluateCollapse(m, g, Conditions(true, false), V(1, 1), V(2, 2)), CollapseVerdict::Condition1);
+  EXPECT_EQ(EvaluateCollapse(m, g, Conditions(true, false), V(2, 1), V(2, 2)), CollapseVerdict::Condition1);
+  EXPECT_EQ(EvaluateCollapse(m, g, Conditions(false, false), V(1, 1), V(2, 2)), CollapseVerdict::Allowed);
+}
+
+// Two groups side by side (x < 2, x >= 2): the contour edge (2,1)-(2,2) may collapse (the paper's
+// contour simplification), onto the contour; an interior vertex goes to the contour vertex.
+TEST(Condition1, ContourEdgesCollapseAlongTheContour) {
+  const IndexedMesh m = test::Grid(kN);
+  const auto g = QuadGroups([](int x, int) { return x < 2 ? 0 : 1; });
+  vcg::Point3f p;
+  ASSERT_EQ(EvaluateCollapse(m, g, Conditions(true, true), V(2, 1), V(2, 2), &p), CollapseVerdict::Allowed);
+  EXPECT_FLOAT_EQ(p[0], 2.f);  // on the contour line x = 2, between the endpoints
+  EXPECT_GE(p[1], 1.f);
+  EXPECT_LE(p[1], 2.f);
+  ASSERT_EQ(EvaluateCollapse(m, g, Conditions(true, true), V(1, 2), V(2, 2), &p), CollapseVerdict::Allowed);
+  EXPECT_EQ(p, vcg::Point3f(2, 2, 0));  // the contour vertex does not move
+  // A contour end on the mesh border stays too.
+  ASSERT_EQ(EvaluateCollapse(m, g, Conditions(true, true), V(2, 0), V(2, 1), &p), CollapseVerdict::Allowed);
+  EXPECT_EQ(p, vcg::Point3f(2, 0, 0));
+}
+
+// --- Condition 2 -----------------------------------------------------------------------------
+
+// Quads x <= 1: group 0, x = 2: group 1, x = 3: group 2. (2,2) lies between groups 0|1 and (3,2)
+// between 1|2: merging them would create a vertex where 0, 1 and 2 meet.
+TEST(Condition2, RefusesToMergeTwoContoursIntoANewCorner) {
+  const IndexedMesh m = test::Grid(kN);
+  const auto g = QuadGroups([](int x, int) { return x <= 1 ? 0 : (x == 2 ? 1 : 2); });
+  EXPECT_EQ(EvaluateCollapse(m, g, Conditions(false, true), V(2, 2), V(3, 2)), CollapseVerdict::Condition2);
+  EXPECT_EQ(EvaluateCollapse(m, g, Conditions(false, false), V(2, 2), V(3, 2)), CollapseVerdict::Allowed);
+}
+
+// The paper's test: two corners (3 groups each) never merge. Quads x <= 1: C, x = 3: D, and the
+// column x = 2 is A below y = 2 and B above: (2,2) has {A,B,C}, (3,2) has {A,B,D}.
+TEST(Condition2, RefusesToMergeTwoCorners) {
+  const IndexedMesh m = test::Grid(kN);
+  const auto g = QuadGroups([](int x, int y) { return x <= 1 ? 2 : (x == 3 ? 3 : (y < 2 ? 0 : 1)); });
+  EXPECT_EQ(EvaluateCollapse(m, g, Conditions(true, true), V(2, 2), V(3, 2)), CollapseVerdict::Condition2);
+  EXPECT_EQ(EvaluateCollapse(m, g, Conditions(false, true), V(2, 2), V(3, 2)), CollapseVerdict::Condition2);
+  EXPECT_EQ(EvaluateCollapse(m, g, Conditions(false, false), V(2, 2), V(3, 2)), CollapseVerdict::Allowed);
+  // With condition 1 (and so fixed corners) but no condition 2, two corners still cannot both stay.
+  EXPECT_EQ(EvaluateCollapse(m, g, Conditions(true, false), V(2, 2), V(3, 2)), CollapseVerdict::FixedEndpoints);
+}
+
+// --- Lock group boundaries -------------------------------------------------------------------
+
+TEST(LockGroupBoundaries, NoContourVertexMoves) {
+  const IndexedMesh m = test::Grid(kN);
+  const auto g = QuadGroups([](int x, int) { return x < 2 ? 0 : 1; });
+  // The contour edge that condition 1 alone allows (test above) is refused.
+  EXPECT_EQ(EvaluateCollapse(m, g, Conditions(true, true, true), V(2, 1), V(2, 2)), CollapseVerdict::LockedBoundary);
+  EXPECT_EQ(EvaluateCollapse(m, g, Conditions(false, false, true), V(2, 1), V(2, 2)), CollapseVerdict::LockedBoundary);
+  // An interior vertex may still collapse into a contour vertex, which stays where it is.
+  vcg::Point3f p;
+  ASSERT_EQ(EvaluateCollapse(m, g, Conditions(true, true, true), V(1, 2), V(2, 2), &p), CollapseVerdict::Allowed);
+  EXPECT_EQ(p, vcg::Point3f(2, 2, 0));
+}
+
+// --- Integrity mode --------------------------------------------------------------------------
+
+GroupQemParams Integrity() {
+  GroupQemParams p;
+  p.targetFaces = 1;
+  EXPECT_EQ(p.mode, GroupMode::Integrity) << "integrity is the default";
+  return p;
+}
+
+TEST(Integrity, RefusesToPinchAGroupInTwoOrRemoveItsLastFace) {
+  const IndexedMesh m = test::Grid(kN);
+  const auto strip = QuadGroups([](int, int y) { return y == 2 ? 1 : 0; });
+  EXPECT_EQ(EvaluateCollapse(m, strip, Integrity(), V(2, 2), V(2, 3)), CollapseVerdict::Condition1);
+  GroupQemParams plain = Integrity();
+  plain.condition1 = false;
+  EXPECT_EQ(EvaluateCollapse(m, strip, plain, V(2, 2), V(2, 3)), CollapseVerdict::Allowed);
+  // Along the strip (both endpoints on its contour, faces of both groups): nothing is cut.
+  EXPECT_EQ(EvaluateCollapse(m, strip, Integrity(), V(1, 2), V(2, 2)), CollapseVerdict::Allowed);
+  auto g = QuadGroups([](int, int) { return 0; });
+  g[2 * (1 * kN + 1)] = 7;  // face {(1,1), (2,1), (2,2)} alone
+  EXPECT_EQ(EvaluateCollapse(m, g, Integrity(), V(1, 1), V(2, 2)), CollapseVerdict::Condition1);
+  EXPECT_EQ(EvaluateCollapse(m, g, Integrity(), V(2, 1), V(2, 2)), CollapseVerdict::Condition1);
+}
+
+// What the paper refuses and integrity allows: two group corners merge, a corner moves.
+TEST(Integrity, CornersMayMoveAndMerge) {
+  const IndexedMesh m = test::Grid(kN);
+  const auto g = QuadGroups([](int x, int y) { return x <= 1 ? 2 : (x == 3 ? 3 : (y < 2 ? 0 : 1)); });
+  EXPECT_EQ(EvaluateCollapse(m, g, Conditions(true, true), V(2, 2), V(3, 2)), CollapseVerdict::Condition2);
+  vcg::Point3f p;
+  EXPECT_EQ(EvaluateCollapse(m, g, Integrity(), V(2, 2), V(3, 2), &p), CollapseVerdict::Allowed);
+  // A corner and an interior vertex: the merged vertex is where the quadric says (on the plane).
+  EXPECT_EQ(EvaluateCollapse(m, g, Integrity(), V(2, 2), V(1, 2), &p), CollapseVerdict::Allowed);
+  EXPECT_FLOAT_EQ(p[2], 0.f);
+}
+
+// Edge-connected groups grown from random seeds (some of one or two faces).
+std::vector<int> GrownGroups(const IndexedMesh& m, int seeds, uint32_t seed) {
+  const FaceAdjacency adj = BuildFaceAdjacency(m);
+  std::vector<int> g(m.faces.size(), -1);
+  std::vector<uint32_t> frontier;
+  uint32_t r = seed;
+  const auto next = [&r]() { r = r * 1664525u + 1013904223u; return r >> 8; };
+  for (int s = 0; s < seeds; ++s) {
+    const uint32_t f = next() % uint32_t(m.faces.size());
+    if (g[f] < 0) { g[f] = s; frontier.push_back(f); }
+  }
+  while (!frontier.empty()) {
+    const size_t i = next() % frontier.size();
+    const uint32_t f = frontier[i];
+    bool free = false;
+    for (uint32_t k = adj.offsets[f]; k < adj.offsets[f + 1]; ++k) {
+      const uint32_t n = adj.neighbours[k];
+      if (g[n] >= 0) continue;
+      free = true;
+      if (next() % 2) { g[n] = g[f]; frontier.push_back(n); break; }
+    }
+    if (!free) { frontier[i] = frontier.back(); frontier.pop_back(); }
+  }
+  return g;  // every face reached: the test meshes are connected
+}
+
+// The local test against the truth: on random edges of a mesh being simplified at random, the
+// integrity verdict is "allowed" exactly when doing the plain collapse leaves every group in one
+// piece with a face (counted over the whole mesh).
+TEST(Integrity, LocalTestAgreesWithAGlobalRecount) {
+  IndexedMesh m = test::Sphere(4);  // 2048 faces, closed
+  std::vector<int> g = GrownGroups(m, 60, 12345);
+  GroupPieces before = CountGroupPieces(m, g);
+  for (int pieces : before.pieces) ASSERT_EQ(pieces, 1);
+  uint32_t r = 777;
+  const auto next = [&r]() { r = r * 1664525u + 1013904223u; return r >> 8; };
+  GroupQemParams plain = Integrity();
+  plain.condition1 = false;
+  plain.preserveNormal = false;
+  GroupQemParams integrity = plain;
+  integrity.condition1 = true;
+  int allowed = 0, refused = 0;
+  for (int step = 0; step < 1500 && allowed < 400; ++step) {
+    const auto& t = m.faces[next() % m.faces.size()];
+    const int e = int(next() % 3);
+    const uint32_t a = t[size_t(e)], b = t[size_t((e + 1) % 3)];
+    if (EvaluateCollapse(m, g, plain, a, b) != CollapseVerdict::Allowed) continue;
+    // Do it: b becomes a; the faces on the edge go.
+    IndexedMesh after = m;
+    std::vector<int> ga;
+    after.faces.clear();
+    for (size_t f = 0; f < m.faces.size(); ++f) {
+      auto u = m.faces[f];
+      for (auto& v : u) if (v == b) v = a;
+      if (u[0] == u[1] || u[1] == u[2] || u[0] == u[2]) continue;
+      after.faces.push_back(u);
+      ga.push_back(g[f]);
+    }
+    GroupIntegrity gi;
+    ASSERT_TRUE(MeasureGroupIntegrity(m, g, after, ga, gi).ok());
+    const bool whole = gi.groupsSplit == 0 && gi.groupsVanished == 0 && gi.groupsDisconnectedAfter == 0;
+    const CollapseVerdict v = EvaluateCollapse(m, g, integrity, a, b);
+    ASSERT_EQ(v == CollapseVerdict::Allowed, whole) << "step " << step << ": edge " << a << "-" << b << ", "
+                                                   << ToString(v) << ", split " << gi.groupsSplit << ", vanished "
+                                                   << gi.groupsVanished;
+    if (whole) { ++allowed; m = after; g = ga; } else { ++refused; }
+  }
+  EXPECT_GE(allowed, 300);
+  EXPECT_GE(refused, 20) << "the random collapses should hit some that split or remove a group";
+}
+
+// --- Other refusals --------------------------------------------------------------------------
+
+TEST(Topology, RefusesPinchesAndNonEdges) {
+  const IndexedMesh m = test::Grid(kN);
+  const std::vector<int> g(m.faces.size(), 0);
+  // (3,0)-(4,1) is an inner diagonal between two border vertices: it would pinch the sheet.
+  EXPECT_EQ(EvaluateCollapse(m, g, Conditions(true, true), V(3, 0), V(4, 1)), CollapseVerdict::Topology);
+  EXPECT_EQ(EvaluateCollapse(m, g, Conditions(true, true), V(0, 0), V(2, 2)), CollapseVerdict::NotAnEdge);
+  // A tetrahedron: every collapse breaks the link condition.
+  IndexedMesh tet;
+  tet.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  tet.faces = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
+  EXPECT_EQ(EvaluateCollapse(tet, std::vector<int>(4, 0), Conditions(false, false), 0, 1), CollapseVerdict::Topology);
+}
+
+TEST(PreserveBoundary, BorderVerticesStay) {
+  const IndexedMesh m = test::Grid(kN);
+  const std::vector<int> g(m.faces.size(), 0);
+  GroupQemParams p = Conditions(true, true);
+  p.preserveBoundary = true;
+  vcg::Point3f pos;
+  ASSERT_EQ(EvaluateCollapse(m, g, p, V(1, 1), V(1, 0), &pos), CollapseVerdict::Allowed);
+  EXPECT_EQ(pos, vcg::Point3f(1, 0, 0));
+  EXPECT_EQ(EvaluateCollapse(m, g, p, V(1, 0), V(2, 0)), CollapseVerdict::FixedEndpoints);
+}
+
+// --- Whole runs ------------------------------------------------------------------------------
+
+// 32 groups on a sphere (16 longitude sectors x 2 hemispheres): the conditions keep them all
+// intact; the plain collapse to the same face count breaks some (so the test would fail if the
+// checks were removed).
+TEST(Simplify, KeepsEveryGroupWhereThePlainCollapseBreaksSome) {
+  const IndexedMesh m = test::Sphere(4);  // 2048 faces
+  std::vector<int> g;
+  for (const auto& t : m.faces) {
+    const vcg::Point3f c = (m.positions[t[0]] + m.positions[t[1]] + m.positions[t[2]]) / 3.f;
+    const int sector = std::min(15, int((std::atan2(c[1], c[0]) + M_PI) / (2 * M_PI) * 16));
+    g.push_back(sector + 16 * (c[2] > 0));
+  }
+  GroupQemParams p;
+  GroupQemResult r;
+  GroupIntegrity gi;
+  for (GroupMode mode : {GroupMode::Paper, GroupMode::Integrity}) {
+    SCOPED_TRACE(ToString(mode));
+    p.mode = mode;
+    p.targetFaces = 128;
+    ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+    ExpectValidOutput(m, r);
+    EXPECT_LT(r.mesh.faces.size(), mode == GroupMode::Paper ? 400u : 129u);
+    ASSERT_TRUE(MeasureGroupIntegrity(m, g, r.mesh, GroupsAfter(r, g), gi).ok());
+    EXPECT_EQ(gi.groupsSplit, 0);
+    EXPECT_EQ(gi.groupsVanished, 0);
+    EXPECT_EQ(gi.groupsAfter, 32);
+    EXPECT_LE(gi.groupsDisconnectedAfter, gi.groupsDisconnectedBefore);
+  }
+
+  p.condition1 = p.condition2 = false;
+  p.targetFaces = r.mesh.faces.size();
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+  ExpectValidOutput(m, r);
+  ASSERT_TRUE(MeasureGroupIntegrity(m, g, r.mesh, GroupsAfter(r, g), gi).ok());
+  EXPECT_GT(gi.groupsSplit + gi.groupsVanished, 0) << "the plain collapse should break groups at this size";
+}
+
+// A part of a larger mesh: the frozen vertices (shared with other parts) neither move nor go, and
+// the rest simplifies as usual.
+TEST(Simplify, FrozenVerticesOfARegionStayWhereTheyAre) {
+  const IndexedMesh m = test::Sphere(4);  // 2048 faces
+  std::vector<int> g(m.faces.size(), 0);
+  GroupQemRegion region;
+  region.frozenVertex.resize(m.positions.size());
+  size_t frozen = 0;
+  for (size_t v = 0; v < m.positions.size(); ++v) {
+    region.frozenVertex[v] = std::fabs(m.positions[v][2]) < 0.15f;  // a band around the equator
+    frozen += region.frozenVertex[v];
+  }
+  ASSERT_GT(frozen, 20u);
+  region.diagonal = 10;  // a larger whole mesh
+  GroupQemParams p;
+  p.targetFaces = 400;
+  GroupQemResult r;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r, Progress(), {}, &region).ok());
+  ExpectValidOutput(m, r);
+  EXPECT_LE(r.mesh.faces.size(), 400u) << "the caps have room to simplify";
+  std::vector<int> kept(m.positions.size(), -1);
+  for (size_t i = 0; i < r.sourceVertex.size(); ++i) kept[r.sourceVertex[i]] = int(i);
+  for (size_t v = 0; v < m.positions.size(); ++v) {
+    if (!region.frozenVertex[v]) continue;
+    ASSERT_GE(kept[v], 0) << "frozen vertex " << v << " was removed";
+    EXPECT_EQ(r.mesh.positions[size_t(kept[v])], m.positions[v]) << "frozen vertex " << v << " moved";
+  }
+  // Errors are fractions of the region's diagonal (10), not of the sphere's own (2 sqrt 3).
+  GroupQemRegion ownDiagonal = region;
+  ownDiagonal.diagonal = 0;
+  GroupQemResult own;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, own, Progress(), {}, &ownDiagonal).ok());
+  EXPECT_NEAR(r.stats.maxCollapseError / own.stats.maxCollapseError, 2 * std::sqrt(3.0) / 10, 0.05);
+
+  GroupQemRegion bad;
+  bad.frozenVertex.resize(3);
+  EXPECT_EQ(SimplifyPreservingGroups(m, g, p, r, Progress(), {}, &bad).code, Status::Code::InvalidInput);
+  bad.frozenVertex.clear();
+  bad.diagonal = std::nan("");
+  EXPECT_EQ(SimplifyPreservingGroups(m, g, p, r, Progress(), {}, &bad).code, Status::Code::InvalidInput);
+}
+
+TEST(Simplify, LockedContoursDoNotChange) {
+  const IndexedMesh m = test::Sphere(3);
+  std::vector<int> g;
+  for (const auto& t : m.faces) g.push_back(m.positions[t[0]][2] + m.positions[t[1]][2] + m.positions[t[2]][2] > 0);
+  GroupQemParams p;
+  p.targetFaces = 50;
+  p.lockGroupBoundaries = true;
+  GroupQemResult r;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+  ExpectValidOutput(m, r);
+  // Every input vertex on the contour (faces of both groups around it) is still there, unmoved.
+  std::vector<std::set<int>> around(m.positions.size());
+  for (size_t f = 0; f < m.faces.size(); ++f)
+    for (uint32_t v : m.faces[f]) around[v].insert(g[f]);
+  std::vector<int> outOf(m.positions.size(), -1);
+  for (size_t o = 0; o < r.sourceVertex.size(); ++o) outOf[r.sourceVertex[o]] = int(o);
+  int contour = 0;
+  for (size_t v = 0; v < m.positions.size(); ++v) {
+    if (around[v].size() < 2) continue;
+    ++contour;
+    ASSERT_GE(outOf[v], 0) << "contour vertex " << v << " was removed";
+    EXPECT_EQ(r.mesh.positions[size_t(outOf[v])], m.positions[v]);
+  }
+  EXPECT_GT(contour, 10);
+  EXPECT_GT(r.mesh.faces.size(), 50u) << "the locked contour cannot reach 50 faces";
+}
+
+TEST(Simplify, MaxErrorStopsEarly) {
+  const IndexedMesh m = test::Sphere(4);
+  const std::vector<int> g(m.faces.size(), 0);
+  GroupQemParams p;
+  p.maxError = 0.005;
+  GroupQemResult coarse, fine;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, fine).ok());
+  p.maxError = 0.05;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, coarse).ok());
+  EXPECT_LT(fine.mesh.faces.size(), m.faces.size());
+  EXPECT_LT(coarse.mesh.faces.size(), fine.mesh.faces.size());
+  EXPECT_LE(fine.stats.maxCollapseError, 0.005);
+  EXPECT_LE(coarse.stats.maxCollapseError, 0.05);
+}
+
+TEST(Simplify, GroupsDisconnectedOnInputStayAsTheyAre) {
+  // Group 1 = two separate blocks of the grid; each keeps being one piece, none is "joined".
+  const IndexedMesh m = test::Grid(8);
+  std::vector<int> g;
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x) g.insert(g.end(), 2, ((x < 3 && y < 3) || (x > 4 && y > 4)) ? 1 : 0);
+  GroupQemParams p;
+  p.targetFaces = 20;
+  GroupQemResult r;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+  GroupIntegrity gi;
+  ASSERT_TRUE(MeasureGroupIntegrity(m, g, r.mesh, GroupsAfter(r, g), gi).ok());
+  EXPECT_EQ(gi.groupsDisconnectedBefore, 1);
+  EXPECT_EQ(gi.groupsDisconnectedAfter, 1);
+  EXPECT_EQ(gi.groupsSplit, 0);
+  EXPECT_EQ(gi.groupsVanished, 0);
+}
+
+TEST(Simplify, CancellationStopsAtOnceAndLeavesAValidMesh) {
+  const IndexedMesh m = test::Sphere(5);  // 8192 faces
+  std::vector<int> g;
+  for (const auto& t : m.faces) g.push_back(m.positions[t[0]][0] > 0);
+  GroupQemParams p;
+  p.targetFaces = 100;
+  int calls = 0, last = -1;
+  bool rising = true;
+  GroupQemResult r;
+  const Status s = SimplifyPreservingGroups(m, g, p, r, [&](int percent, const char*) {
+    rising = rising && percent >= last && percent <= 100;
+    last = percent;
+    return ++calls < 30;  // stop in the middle of the collapses
+  });
+  EXPECT_EQ(s.code, Status::Code::Cancelled);
+  EXPECT_EQ(r.stats.stop, GroupQemStats::Stop::Cancelled);
+  EXPECT_EQ(calls, 30) << "the run went on after the callback said stop";
+  EXPECT_TRUE(rising);
+  ExpectValidOutput(m, r);
+  EXPECT_LT(r.mesh.faces.size(), m.faces.size());
+  EXPECT_GT(r.mesh.faces.size(), 100u);
+  EXPECT_TRUE(RequireValidForFaces(CheckMesh(r.mesh)).ok());
+  GroupIntegrity gi;
+  ASSERT_TRUE(MeasureGroupIntegrity(m, g, r.mesh, GroupsAfter(r, g), gi).ok());
+  EXPECT_EQ(gi.groupsSplit + gi.groupsVanished, 0);
+  // A full run reports 100 at the end.
+  last = -1;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r, [&](int percent, const char*) { last = percent; return true; }).ok());
+  EXPECT_EQ(last, 100);
+}
+
+TEST(Simplify, BadInputIsRefusedWithAClearMessage) {
+  const IndexedMesh grid = test::Grid(2);
+  std::vector<int> g(grid.faces.size(), 0);
+  GroupQemParams p;
+  p.targetFaces = 2;
+  GroupQemResult r;
+  IndexedMesh empty;
+  empty.positions = {{0, 0, 0}};
+  Status s = SimplifyPreservingGroups(empty, {}, p, r);
+  EXPECT_EQ(s.code, Status::Code::InvalidInput);
+  EXPECT_NE(s.message.find("no faces"), std::string::npos) << s.message;
+  IndexedMesh nan = grid;
+  nan.positions[4][1] = std::nanf("");
+  s = SimplifyPreservingGroups(nan, g, p, r);
+  EXPECT_NE(s.message.find("NaN"), std::string::npos) << s.message;
+  EXPECT_TRUE(r.mesh.faces.empty());
+  s = SimplifyPreservingGroups(grid, std::vector<int>(3, 0), p, r);
+  EXPECT_NE(s.message.find("group ids"), std::string::npos) << s.message;
+  g[1] = -2;
+  s = SimplifyPreservingGroups(grid, g, p, r);
+  EXPECT_NE(s.message.find(">= 0"), std::string::npos) << s.message;
+  g[1] = 0;
+  p.targetFaces = 0;
+  s = SimplifyPreservingGroups(grid, g, p, r);
+  EXPECT_NE(s.message.find("target"), std::string::npos) << s.message;
+  p.targetFaces = 2;
+  p.qualityThr = 2;
+  EXPECT_NE(SimplifyPreservingGroups(grid, g, p, r).message.find("QualityThr"), std::string::npos);
+}
+
+// --- Real scans ------------------------------------------------------------------------------
+
+TEST(Simplify, BunnyWithNormalConeGroupsStaysIntactAt10And1Percent) {
+  const IndexedMesh m = LoadReal("stanford_bunny_bun_zipper.ply");
+  GroupHierarchy h;
+  ASSERT_TRUE(BuildConeHierarchy(m, ConeGroupingParams(), h).ok());
+  const std::vector<int>& g = h.level(4).faceGroup;
+  for (double ratio : {0.1, 0.01}) {
+    SCOPED_TRACE(ratio);
+    GroupQemParams p;
+    p.targetFaces = size_t(ratio * double(m.faces.size()));
+    GroupQemResult r;
+    ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+    ExpectValidOutput(m, r);
+    EXPECT_LE(r.mesh.faces.size(), p.targetFaces);
+    GroupIntegrity gi;
+    ASSERT_TRUE(MeasureGroupIntegrity(m, g, r.mesh, GroupsAfter(r, g), gi).ok());
+    EXPECT_EQ(gi.groupsSplit, 0);
+    EXPECT_EQ(gi.groupsVanished, 0);
+  }
+}
+
+// Integrity mode at the automatic level: every target reached, every group whole, and
+// (keepCones) no group's cone over its level's threshold where the plain run has some.
+TEST(Simplify, BunnyAtTheAutomaticLevelReachesTheTargetAndKeepsCones) {
+  const IndexedMesh m = LoadReal("stanford_bunny_bun_zipper.ply");
+  GroupHierarchy h;
+  ASSERT_TRUE(BuildConeHierarchy(m, ConeGroupingParams(), h).ok());
+  for (double ratio : {0.5, 0.1, 0.02}) {
+    SCOPED_TRACE(ratio);
+    GroupQemParams p;
+    p.targetFaces = size_t(ratio * double(m.faces.size()));
+    const int level = AutoGroupLevel(h, p.targetFaces);
+    ASSERT_GE(level, 1);
+    EXPECT_LE(h.level(level).groups.size() * kAutoFacesPerGroup, p.targetFaces);
+    if (level > 1) {
+      EXPECT_GT(h.level(level - 1).groups.size() * kAutoFacesPerGroup, p.targetFaces);
+    }
+    const std::vector<int>& g = h.level(level).faceGroup;
+    const double limitDeg = h.level(level).thresholdDeg;
+    EXPECT_EQ(CountConesOverLimit(m, g, limitDeg), 0) << "the input's groups are within their threshold";
+    int over[2] = {0, 0};
+    for (int keep = 0; keep < 2; ++keep) {
+      p.keepCones = keep == 1;
+      p.coneBound = keep ? LevelConeBounds(h, level) : std::vector<NormalCone>();
+      GroupQemResult r;
+      ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+      ExpectValidOutput(m, r);
+      if (!keep) {
+        EXPECT_EQ(r.stats.stop, GroupQemStats::Stop::TargetReached);
+      }
+      GroupIntegrity gi;
+      ASSERT_TRUE(MeasureGroupIntegrity(m, g, r.mesh, GroupsAfter(r, g), gi).ok());
+      EXPECT_EQ(gi.groupsSplit, 0);
+      EXPECT_EQ(gi.groupsVanished, 0);
+      over[keep] = CountConesOverLimit(r.mesh, GroupsAfter(r, g), limitDeg);
+    }
+    EXPECT_EQ(over[1], 0);
+    if (ratio < 0.5) {
+      EXPECT_GT(over[0], 0) << "without keepCones some cones should widen";
+    }
+  }
+  EXPECT_EQ(AutoGroupLevel(h, 1), h.levelCount()) << "no level fits: the top one";
+  EXPECT_EQ(AutoGroupLevel(h, m.faces.size()), 1);
+}
+
+TEST(Simplify, AwkwardScansWork) {
+  // Non-manifold edges and duplicate faces (res4), 122 components (boeing), zero-area faces.
+  for (const char* name : {"stanford_bunny_bun_zipper_res4.ply", "boeing.ply", "mech_holes_shark.ply"}) {
+    SCOPED_TRACE(name);
+    const IndexedMesh m = LoadReal(name);
+    GroupHierarchy h;
+    ASSERT_TRUE(BuildConeHierarchy(m, ConeGroupingParams(), h).ok());
+    const std::vector<int>& g = h.level(std::min(3, h.levelCount())).faceGroup;
+    GroupQemParams p;
+    p.targetFaces = m.faces.size() / 5;
+    GroupQemResult r;
+    ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+    ExpectValidOutput(m, r);
+    EXPECT_LT(r.mesh.faces.size(), m.faces.size());
+    GroupIntegrity gi;
+    ASSERT_TRUE(MeasureGroupIntegrity(m, g, r.mesh, GroupsAfter(r, g), gi).ok());
+    EXPECT_EQ(gi.groupsSplit, 0);
+    EXPECT_EQ(gi.groupsVanished, 0);
+  }
+}
+
+TEST(Simplify, ZeroAreaFacesAreLeftAlone) {
+  // test_meshes/zero_area_faces.ply: a square, a face using a vertex twice, a collinear face, an
+  // unreferenced vertex. Nothing may crash; the degenerate faces' vertices never move.
+  IndexedMesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.5f, 0, 0}, {7, 7, 7}};
+  m.faces = {{0, 1, 2}, {0, 2, 3}, {0, 1, 1}, {0, 4, 1}};
+  GroupQemParams p;
+  p.targetFaces = 1;
+  GroupQemResult r;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, std::vector<int>(4, 0), p, r).ok());
+  EXPECT_EQ(r.mesh.positions.size(), r.sourceVertex.size());
+  for (const auto& t : r.mesh.faces)
+    for (uint32_t v : t) EXPECT_LT(v, r.mesh.positions.size());
+  for (size_t o = 0; o < r.sourceVertex.size(); ++o) {
+    if (r.sourceVertex[o] == 0 || r.sourceVertex[o] == 1) {
+      EXPECT_EQ(r.mesh.positions[o], m.positions[r.sourceVertex[o]]);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace conelod
