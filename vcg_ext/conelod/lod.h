@@ -56,7 +56,7 @@ struct LodBuildParams {
   // are added); levelRatio: each group targets this fraction of its faces; threads.
   HierarchicalSimplificationParams simplification;
   size_t clusterFaces = 128;  // target faces of a cluster (a node), at every level
-  int groupClusters = 8;      // clusters gathered into one group before simplification
+  int groupClusters = 12;     // clusters gathered into one group before simplification
   // No collapse in a group costs more than this (RMS distance of its quadric, fraction of the
   // diagonal; the smaller of this and simplification.qem.maxError when that is set): a group
   // whose locked border leaves no cheap collapse stops short of levelRatio rather than fold.
