@@ -443,10 +443,10 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
   // The top. When a level no longer shrinks (the locked borders between groups leave no collapse
   // under the cap), each connected part of the mesh of at most 4 groups' clusters becomes one
   // group: nothing of it is locked, and a part down to one cluster stays as it is. When that no
-  // longer shrinks either, the cap is doubled, twice, and then a level must shrink by a quarter
+  // longer shrinks either, the cap is doubled, once, and then a level must shrink by a quarter
   // (a smaller step is a near copy of poor collapses: the dragon's last levels were 3-4x MeshLab's
-  // RMS). Only a top still above 1 % of the input goes on without the cap (a coarse input: the
-  // tests' tiny spheres).
+  // RMS uncapped, 1.0x with the cap doubled twice). Only a top still above 1 % of the input goes
+  // on without the cap (a coarse input: the tests' tiny spheres).
   double cap = params.maxGroupError;  // 0: no cap
   bool wholeParts = false;
   const size_t wholeUpTo = size_t(4 * params.groupClusters);
@@ -494,7 +494,7 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
     for (const auto& r : results) newFaces += r.faces.size();
     if (double(newFaces) > (cap > params.maxGroupError ? 0.75 : 0.97) * double(L.faces.size())) {
       if (!wholeParts) wholeParts = true;
-      else if (cap > 0 && cap < 4 * params.maxGroupError) cap *= 2;
+      else if (cap > 0 && cap < 2 * params.maxGroupError) cap *= 2;
       else if (cap > 0 && 100 * L.faces.size() > mesh.faces.size()) cap = 0;
       else break;  // no longer shrinks: L is the top
       --k;
