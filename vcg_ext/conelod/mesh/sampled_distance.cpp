@@ -35,6 +35,20 @@ void Fill(const IndexedMesh& in, DMesh& m) {
   vcg::tri::UpdateBounding<DMesh>::Box(m);
 }
 
+// Indexes the faces of `target` for closest-face queries at points inside `queries`. vcglib's
+// GridStaticPtr takes a point strictly inside its box to be in a cell, but float rounding can
+// put a point just below the box's upper side into the cell past the last one (an out-of-range
+// read, a crash on real meshes). The box here holds every query point with a margin, so no point
+// is near its sides.
+void IndexFaces(DMesh& target, vcg::Box3f queries, Grid& grid) {
+  queries.Add(target.bbox);
+  const float size = std::max({std::fabs(queries.min[0]), std::fabs(queries.min[1]), std::fabs(queries.min[2]),
+                               std::fabs(queries.max[0]), std::fabs(queries.max[1]), std::fabs(queries.max[2])});
+  const float margin = std::max(0.01f * queries.Diag(), std::max(1e-6f * size, 1e-30f));
+  queries.Offset(margin);
+  grid.Set(target.face.begin(), target.face.end(), queries);
+}
+
 uint64_t Next(uint64_t& s) {  // xorshift64*
   s ^= s >> 12; s ^= s << 25; s ^= s >> 27;
   return s * 0x2545F4914F6CDD1Dull;
@@ -58,11 +72,11 @@ Status SampledDistance(const IndexedMesh& from, const IndexedMesh& to, int faceS
     return Status::Invalid("the number of samples must be from 0 to " + std::to_string(kMaxFaceSamples));
   DMesh target;
   Fill(to, target);
-  Grid grid;
-  grid.Set(target.face.begin(), target.face.end());
   vcg::Box3f box = target.bbox;
   for (const auto& t : from.faces)
     for (uint32_t v : t) box.Add(from.positions[v]);
+  Grid grid;
+  IndexFaces(target, box, grid);
   const float maxDist = 2 * box.Diag() + 1;
   Accumulator acc;
   auto sample = [&](const vcg::Point3f& p) {
@@ -119,8 +133,11 @@ size_t CountFacesAgainstSurface(const IndexedMesh& coarse, const IndexedMesh& re
   if (reference.faces.empty()) return 0;
   DMesh target;
   Fill(reference, target);
+  vcg::Box3f box;
+  for (const auto& t : coarse.faces)
+    for (uint32_t v : t) box.Add(coarse.positions[v]);
   Grid grid;
-  grid.Set(target.face.begin(), target.face.end());
+  IndexFaces(target, box, grid);
   const float maxDist = 2 * target.bbox.Diag() + 1;
   std::vector<vcg::Point3d> normals;
   std::vector<double> areas;

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "conelod/vcg_bridge.h"
+#include "conelod/vcg_mesh.h"
 #include "test_util.h"
 
 namespace conelod {
@@ -46,6 +48,25 @@ TEST(SampledDistance, FacesAgainstTheSurface) {
   EXPECT_EQ(CountFacesAgainstSurface(flipped, grid), 0u);
   for (size_t f = 0; f < 5; ++f) std::swap(flipped.faces[f][1], flipped.faces[f][2]);
   EXPECT_EQ(CountFacesAgainstSurface(flipped, grid), 5u);
+}
+
+TEST(SampledDistance, PointJustBelowTheGridsUpperSide) {
+  // A level of the armadillo's hierarchy (test_meshes/grid_rounding_target.ply) and a query point
+  // just below the upper z side of the box vcglib's grid used to build around it: float rounding
+  // put the point in the cell past the last one (an out-of-range read that crashed
+  // `conelod simplify --hierarchy --samples 200000` on the armadillo).
+  CMesh m;
+  ASSERT_EQ(LoadPly(m, std::string(CONELOD_SOURCE_DIR) + "/test_meshes/grid_rounding_target.ply"), "");
+  const IndexedMesh target = ToIndexedMesh(m);
+  IndexedMesh query;
+  const vcg::Point3f p(-4.39941788f, -7.07787657f, 57.0442238f);
+  query.positions = {p, p + vcg::Point3f(-0.5f, 0, 0), p + vcg::Point3f(0, -0.5f, 0)};
+  query.faces = {{{0, 1, 2}}};
+  SurfaceDistance d;
+  ASSERT_TRUE(SampledDistance(query, target, 100, d).ok());
+  EXPECT_EQ(d.samples, 103u);
+  EXPECT_GT(d.max, 0.0);
+  EXPECT_LT(d.max, 20.0);
 }
 
 TEST(SampledDistance, BadInput) {
