@@ -138,7 +138,9 @@ int main(int argc, char** argv) {
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
 
-  std::printf("\nBuildConeHierarchy, default parameters, one thread. Memory: RSS growth in MiB; target: build peak < 2x loaded mesh.\n");
+  std::printf(
+      "\nBuildConeHierarchy, default parameters, one thread. Memory: RSS growth in MiB; target: build peak < 2x loaded "
+      "mesh.\n");
   std::printf("%-30s %9s %7s %9s %12s %10s %10s %11s %10s %7s\n", "mesh", "faces", "levels", "L1 groups", "ms/build",
               "faces/s", "load MiB", "(indexed)", "peak MiB", "ratio");
   bool allOk = true;
@@ -149,9 +151,9 @@ int main(int argc, char** argv) {
     }
     const double ratio = m->loadBytes > 0 ? m->buildPeakBytes / m->loadBytes : 0;
     allOk = allOk && ratio < 2.0 && m->peakReset;
-    std::printf("%-30s %9zu %7d %9d %12.1f %10.0f %10.1f %11.1f %10.1f %6.2fx%s\n", m->name.c_str(), m->mesh.faceCount(),
-                m->levels, m->level1Groups, 1e3 * m->secondsPerBuild, m->facesPerSecond, m->loadBytes / (1 << 20),
-                m->indexedBytes / (1 << 20), m->buildPeakBytes / (1 << 20), ratio,
+    std::printf("%-30s %9zu %7d %9d %12.1f %10.0f %10.1f %11.1f %10.1f %6.2fx%s\n", m->name.c_str(),
+                m->mesh.faceCount(), m->levels, m->level1Groups, 1e3 * m->secondsPerBuild, m->facesPerSecond,
+                m->loadBytes / (1 << 20), m->indexedBytes / (1 << 20), m->buildPeakBytes / (1 << 20), ratio,
                 m->peakReset ? "" : "  (peak not reset: clear_refs failed)");
   }
   std::printf("memory target (peak < 2x loaded mesh): %s\n", allOk ? "met" : "NOT met");

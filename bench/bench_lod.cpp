@@ -62,7 +62,9 @@ size_t Rasterise(const IndexedMesh& m, const vcg::Point3d& eye, const vcg::Point
   right.Normalize();
   up = right ^ fwd;
   const double focal = 0.5 * h / std::tan(0.5 * 40.0 * NormalCone::kPi / 180.0);  // 40 degrees vertical
-  struct P { double x, y, z; };
+  struct P {
+    double x, y, z;
+  };
   std::vector<P> proj(m.positions.size());
   for (size_t i = 0; i < m.positions.size(); ++i) {
     const vcg::Point3d d = vcg::Point3d::Construct(m.positions[i]) - eye;
@@ -76,11 +78,14 @@ size_t Rasterise(const IndexedMesh& m, const vcg::Point3d& eye, const vcg::Point
     const double area = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
     if (area >= 0) continue;  // back-facing (counter-clockwise seen from outside, y down)
     const vcg::Point3d pa = vcg::Point3d::Construct(m.positions[t[0]]);
-    vcg::Point3d n = (vcg::Point3d::Construct(m.positions[t[1]]) - pa) ^ (vcg::Point3d::Construct(m.positions[t[2]]) - pa);
+    vcg::Point3d n =
+        (vcg::Point3d::Construct(m.positions[t[1]]) - pa) ^ (vcg::Point3d::Construct(m.positions[t[2]]) - pa);
     n.Normalize();
     const uint8_t shade = uint8_t(40 + 215 * std::max(0.0, -(n * fwd)));
-    const int x0 = std::max(0, int(std::floor(std::min({a.x, b.x, c.x})))), x1 = std::min(w - 1, int(std::ceil(std::max({a.x, b.x, c.x}))));
-    const int y0 = std::max(0, int(std::floor(std::min({a.y, b.y, c.y})))), y1 = std::min(h - 1, int(std::ceil(std::max({a.y, b.y, c.y}))));
+    const int x0 = std::max(0, int(std::floor(std::min({a.x, b.x, c.x})))),
+              x1 = std::min(w - 1, int(std::ceil(std::max({a.x, b.x, c.x}))));
+    const int y0 = std::max(0, int(std::floor(std::min({a.y, b.y, c.y})))),
+              y1 = std::min(h - 1, int(std::ceil(std::max({a.y, b.y, c.y}))));
     for (int y = y0; y <= y1; ++y)
       for (int x = x0; x <= x1; ++x) {
         const double px = x + 0.5, py = y + 0.5;
@@ -150,11 +155,12 @@ int ChildReader(const std::string& file, double fraction) {
   if (!s.ok()) return 1;
   const double refineCpu = CpuSeconds() - c1;
   const size_t rssBudget = ProcessStatusBytes("VmRSS") - before;
-  std::printf("open_cpu=%.6f first_image_cpu=%.6f first_image_wall=%.6f first_faces=%zu first_pixels=%zu "
-              "resident_open=%zu rss_open=%zu resident_budget=%zu rss_budget=%zu budget_faces=%zu cut_faces=%zu "
-              "refine_cpu=%.6f max_level_difference=%d hwm=%zu\n",
-              openCpu, firstCpu, firstWall, first.faces.size(), pixels, residentOpen, rssOpen, r->residentBytes(),
-              rssBudget, view.faceBudget, cut.faces, refineCpu, cut.maxLevelDifference, ProcessStatusBytes("VmHWM"));
+  std::printf(
+      "open_cpu=%.6f first_image_cpu=%.6f first_image_wall=%.6f first_faces=%zu first_pixels=%zu "
+      "resident_open=%zu rss_open=%zu resident_budget=%zu rss_budget=%zu budget_faces=%zu cut_faces=%zu "
+      "refine_cpu=%.6f max_level_difference=%d hwm=%zu\n",
+      openCpu, firstCpu, firstWall, first.faces.size(), pixels, residentOpen, rssOpen, r->residentBytes(), rssBudget,
+      view.faceBudget, cut.faces, refineCpu, cut.maxLevelDifference, ProcessStatusBytes("VmHWM"));
   return 0;
 }
 
@@ -191,9 +197,12 @@ int main(int argc, char** argv) {
   std::string keep;
   std::vector<std::string> meshes;
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--budget-fraction") && i + 1 < argc) fraction = std::atof(argv[++i]);
-    else if (!std::strcmp(argv[i], "--keep") && i + 1 < argc) keep = argv[++i];
-    else meshes.push_back(argv[i]);
+    if (!std::strcmp(argv[i], "--budget-fraction") && i + 1 < argc)
+      fraction = std::atof(argv[++i]);
+    else if (!std::strcmp(argv[i], "--keep") && i + 1 < argc)
+      keep = argv[++i];
+    else
+      meshes.push_back(argv[i]);
   }
   if (meshes.empty()) {
     const char* env = std::getenv("CONELOD_TEST_MESHES");
@@ -209,7 +218,8 @@ int main(int argc, char** argv) {
     const IndexedMesh mesh = ToIndexedMesh(cm);
     cm.Clear();
     const std::string name = path.substr(path.find_last_of('/') + 1);
-    const std::string file = (keep.empty() ? std::string("/tmp") : keep) + "/bench_lod_" + std::to_string(getpid()) + "_" + name + ".clod";
+    const std::string file =
+        (keep.empty() ? std::string("/tmp") : keep) + "/bench_lod_" + std::to_string(getpid()) + "_" + name + ".clod";
 
     // Build: the DAG (clusters, groups simplified side by side), then the file.
     LodBuildParams params;
@@ -254,32 +264,38 @@ int main(int argc, char** argv) {
     const double vcgBytes = vcg["vcg_rss_growth"];
     const double buildWall = simplifyWall + writeWall;
     std::printf("\n== %s: %zu faces, %zu vertices\n", name.c_str(), mesh.faces.size(), mesh.positions.size());
-    std::printf("build, %d threads: %.2f s wall = cluster DAG %.2f + writing %.3f s wall "
-                "(DAG %.2f s CPU, writing %.3f s CPU); process peak %.1f MiB\n",
-                threads, buildWall, simplifyWall, writeWall, simplifyCpu, writeCpu, double(writeHwm) / 1048576.0);
+    std::printf(
+        "build, %d threads: %.2f s wall = cluster DAG %.2f + writing %.3f s wall "
+        "(DAG %.2f s CPU, writing %.3f s CPU); process peak %.1f MiB\n",
+        threads, buildWall, simplifyWall, writeWall, simplifyCpu, writeCpu, double(writeHwm) / 1048576.0);
     std::printf("file: %llu bytes (%.2f bytes/input face), %d node levels, %zu nodes; faces per level (0 = input):",
-                (unsigned long long)st.fileBytes, double(st.fileBytes) / double(mesh.faces.size()), st.levels, st.nodes);
+                (unsigned long long)st.fileBytes, double(st.fileBytes) / double(mesh.faces.size()), st.levels,
+                st.nodes);
     for (size_t f : st.levelFaces) std::printf(" %zu", f);
-    std::printf("\nround trip at full budget: %s (%zu vertices welded)", exact ? "EXACT" : "DIFFERS", roundTripVertices);
-    std::printf("\nfirst image (open + coarsest cut + extract + rasterise 1024x768): %.4f s CPU [%.4f s wall], "
-                "%.0f faces, %.0f pixels; open alone %.4f s CPU\n",
-                rd["first_image_cpu"], rd["first_image_wall"], rd["first_faces"], rd["first_pixels"], rd["open_cpu"]);
+    std::printf("\nround trip at full budget: %s (%zu vertices welded)", exact ? "EXACT" : "DIFFERS",
+                roundTripVertices);
+    std::printf(
+        "\nfirst image (open + coarsest cut + extract + rasterise 1024x768): %.4f s CPU [%.4f s wall], "
+        "%.0f faces, %.0f pixels; open alone %.4f s CPU\n",
+        rd["first_image_cpu"], rd["first_image_wall"], rd["first_faces"], rd["first_pixels"], rd["open_cpu"]);
     std::printf("vcglib LoadPly: RSS growth %.2f MiB\n", vcgBytes / 1048576.0);
     std::printf("reader, coarsest level: residentBytes %.1f KiB (%.2f%% of vcglib), RSS growth %.1f KiB (%.2f%%)\n",
                 rd["resident_open"] / 1024, 100 * rd["resident_open"] / vcgBytes, rd["rss_open"] / 1024,
                 100 * rd["rss_open"] / vcgBytes);
-    std::printf("reader, %.0f%% budget (%.0f faces, cut %.0f, refined in %.3f s CPU, max level difference %.0f): "
-                "residentBytes %.2f MiB (%.2f%%), RSS growth %.2f MiB (%.2f%%)\n",
-                100 * fraction, rd["budget_faces"], rd["cut_faces"], rd["refine_cpu"], rd["max_level_difference"],
-                rd["resident_budget"] / 1048576, 100 * rd["resident_budget"] / vcgBytes, rd["rss_budget"] / 1048576,
-                100 * rd["rss_budget"] / vcgBytes);
+    std::printf(
+        "reader, %.0f%% budget (%.0f faces, cut %.0f, refined in %.3f s CPU, max level difference %.0f): "
+        "residentBytes %.2f MiB (%.2f%%), RSS growth %.2f MiB (%.2f%%)\n",
+        100 * fraction, rd["budget_faces"], rd["cut_faces"], rd["refine_cpu"], rd["max_level_difference"],
+        rd["resident_budget"] / 1048576, 100 * rd["resident_budget"] / vcgBytes, rd["rss_budget"] / 1048576,
+        100 * rd["rss_budget"] / vcgBytes);
     const bool memOpen = std::max(rd["resident_open"], rd["rss_open"]) <= 0.05 * vcgBytes;
     const bool memBudget = std::max(rd["resident_budget"], rd["rss_budget"]) <= 0.20 * vcgBytes;
     const bool firstFast = rd["first_image_cpu"] < 0.2;
     const bool buildFast = buildWall < 10;
-    std::printf("targets: coarsest <= 5%% %s, %.0f%% budget <= 20%% %s, first image < 0.2 s %s, build < 10 s (wall) %s\n",
-                memOpen ? "MET" : "NOT MET", 100 * fraction, memBudget ? "MET" : "NOT MET", firstFast ? "MET" : "NOT MET",
-                buildFast ? "MET" : "NOT MET");
+    std::printf(
+        "targets: coarsest <= 5%% %s, %.0f%% budget <= 20%% %s, first image < 0.2 s %s, build < 10 s (wall) %s\n",
+        memOpen ? "MET" : "NOT MET", 100 * fraction, memBudget ? "MET" : "NOT MET", firstFast ? "MET" : "NOT MET",
+        buildFast ? "MET" : "NOT MET");
     if (keep.empty()) std::remove(file.c_str());
   }
   return 0;

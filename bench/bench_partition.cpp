@@ -52,7 +52,10 @@ Loaded* Load(const std::string& name) {
     slot.reset(new Loaded);
     const size_t before = HeapNow();
     const std::string err = conelod::LoadPly(slot->mesh, MeshPath(name));
-    if (!err.empty()) { std::fprintf(stderr, "%s\n", err.c_str()); std::exit(1); }
+    if (!err.empty()) {
+      std::fprintf(stderr, "%s\n", err.c_str());
+      std::exit(1);
+    }
     const size_t loaded = HeapNow();
     slot->indexed = conelod::ToIndexedMesh(slot->mesh);
     slot->meshBytes = double(loaded - before);
@@ -71,7 +74,10 @@ void FullTree(benchmark::State& state, const std::string& name) {
     ResetPeak();
     const conelod::Status s = conelod::BuildPcaTree(m->indexed, conelod::PcaPartitionParams(), tree);
     peakExtra = double(Peak() - before);
-    if (!s.ok()) { state.SkipWithError(s.message.c_str()); return; }
+    if (!s.ok()) {
+      state.SkipWithError(s.message.c_str());
+      return;
+    }
     benchmark::DoNotOptimize(tree.nodes.data());
   }
   const double mb = 1.0 / (1024 * 1024);
@@ -86,7 +92,8 @@ void FullTree(benchmark::State& state, const std::string& name) {
   state.counters["indexed_MB"] = m->indexedBytes * mb;
   state.counters["peak_vs_mesh"] = peakExtra / meshBytes;
   state.counters["tree_vs_mesh"] = double(tree.memoryBytes()) / meshBytes;
-  state.counters["faces_per_s"] = benchmark::Counter(double(m->indexed.faceCount()), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["faces_per_s"] =
+      benchmark::Counter(double(m->indexed.faceCount()), benchmark::Counter::kIsIterationInvariantRate);
 }
 
 void CutAt1000(benchmark::State& state, const std::string& name) {
@@ -95,15 +102,22 @@ void CutAt1000(benchmark::State& state, const std::string& name) {
   p.targetClusters = 1000;
   for (auto _ : state) {
     conelod::PcaTree tree;
-    if (!conelod::BuildPcaTree(m->indexed, p, tree).ok()) { state.SkipWithError("failed"); return; }
+    if (!conelod::BuildPcaTree(m->indexed, p, tree).ok()) {
+      state.SkipWithError("failed");
+      return;
+    }
     benchmark::DoNotOptimize(tree.nodes.data());
   }
 }
 
 }  // namespace
 
-BENCHMARK_CAPTURE(FullTree, bunny, std::string("stanford_bunny_bun_zipper.ply"))->Unit(benchmark::kMillisecond)->MinTime(2);
-BENCHMARK_CAPTURE(FullTree, dragon, std::string("stanford_dragon_vrip_binary.ply"))->Unit(benchmark::kMillisecond)->MinTime(5);
+BENCHMARK_CAPTURE(FullTree, bunny, std::string("stanford_bunny_bun_zipper.ply"))
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(2);
+BENCHMARK_CAPTURE(FullTree, dragon, std::string("stanford_dragon_vrip_binary.ply"))
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(5);
 BENCHMARK_CAPTURE(CutAt1000, bunny, std::string("stanford_bunny_bun_zipper.ply"))->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(CutAt1000, dragon, std::string("stanford_dragon_vrip_binary.ply"))->Unit(benchmark::kMillisecond);
 

@@ -43,13 +43,13 @@ namespace {
 using conelod_bench::QMesh;
 
 QMesh g_mesh;
-std::vector<int> g_groups;  // normal-cone groups at g_level, per face of g_mesh
-conelod::IndexedMesh g_indexed;          // g_mesh as an indexed mesh
-conelod::GroupHierarchy g_hierarchy;     // its normal-cone hierarchy (default parameters)
+std::vector<int> g_groups;            // normal-cone groups at g_level, per face of g_mesh
+conelod::IndexedMesh g_indexed;       // g_mesh as an indexed mesh
+conelod::GroupHierarchy g_hierarchy;  // its normal-cone hierarchy (default parameters)
 int g_level = 4;
 std::string g_path;
-std::map<std::string, double> g_cpu;     // benchmark name -> CPU seconds per iteration
-std::map<std::string, size_t> g_faces;   // benchmark name -> faces reached
+std::map<std::string, double> g_cpu;    // benchmark name -> CPU seconds per iteration
+std::map<std::string, size_t> g_faces;  // benchmark name -> faces reached
 
 // MeshLab 2020.09's filter: QuadricSimplification() with the filter's default parameters.
 size_t RunVcg(QMesh& m, int targetFaces) { return conelod_bench::RunMeshLabQem(m, size_t(targetFaces)); }
@@ -62,7 +62,10 @@ size_t RunOurs(QMesh& m, int targetFaces, bool conditions) {
   p.condition1 = p.condition2 = conditions;
   conelod::GroupQemResult r;
   const conelod::Status s = conelod::SimplifyPreservingGroups(im, g_groups, p, r);
-  if (!s.ok()) { std::fprintf(stderr, "%s\n", s.message.c_str()); std::exit(1); }
+  if (!s.ok()) {
+    std::fprintf(stderr, "%s\n", s.message.c_str());
+    std::exit(1);
+  }
   conelod::ApplySimplifiedMesh(m, faceOf, r.mesh, r.sourceFace, r.sourceVertex);
   return size_t(m.fn);
 }
@@ -116,7 +119,10 @@ void BM_Hierarchy(benchmark::State& state) {
     const conelod::Status s =
         conelod::BuildSimplifiedLevels(g_indexed, g_hierarchy, conelod::HierarchicalSimplificationParams(), out);
     cpu += double(std::clock() - c0) / CLOCKS_PER_SEC;
-    if (!s.ok()) { std::fprintf(stderr, "%s\n", s.message.c_str()); std::exit(1); }
+    if (!s.ok()) {
+      std::fprintf(stderr, "%s\n", s.message.c_str());
+      std::exit(1);
+    }
     levels = out.size();
     faces = out.empty() ? 0 : out.back().mesh.faces.size();
   }
@@ -132,9 +138,12 @@ int main(int argc, char** argv) {
   std::vector<char*> rest = {argv[0]};
   g_path = std::string(CONELOD_TEST_MESHES) + "/stanford_dragon_vrip_binary.ply";
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--level") && i + 1 < argc) g_level = std::atoi(argv[++i]);
-    else if (std::strncmp(argv[i], "--benchmark", 11) == 0) rest.push_back(argv[i]);
-    else g_path = argv[i];
+    if (!std::strcmp(argv[i], "--level") && i + 1 < argc)
+      g_level = std::atoi(argv[++i]);
+    else if (std::strncmp(argv[i], "--benchmark", 11) == 0)
+      rest.push_back(argv[i]);
+    else
+      g_path = argv[i];
   }
   int mask = 0;
   if (vcg::tri::io::ImporterPLY<QMesh>::Open(g_mesh, g_path.c_str(), mask) != 0 && g_mesh.fn == 0) {
@@ -158,7 +167,8 @@ int main(int argc, char** argv) {
       const std::string name = names[kind] + pct;
       const std::string sameFacesAs = kind == 3 ? std::string(names[1]) + pct : std::string();
       benchmark::RegisterBenchmark(name.c_str(), BM_Simplify, kind, r, name, sameFacesAs)
-          ->Unit(benchmark::kMillisecond)->Iterations(1);
+          ->Unit(benchmark::kMillisecond)
+          ->Iterations(1);
     }
   }
   benchmark::RegisterBenchmark("ours_hierarchy", BM_Hierarchy)->Unit(benchmark::kMillisecond)->Iterations(1);
@@ -171,7 +181,8 @@ int main(int argc, char** argv) {
     const double v = g_cpu["vcglib_quadric/" + pct];
     if (!(v > 0)) continue;
     std::printf("  target %4s: vcglib %.3f s", pct.c_str(), v);
-    const char* labels[][2] = {{"ours_integrity/", "ours (integrity, the default)"}, {"ours_no_condition/", "ours (none)"},
+    const char* labels[][2] = {{"ours_integrity/", "ours (integrity, the default)"},
+                               {"ours_no_condition/", "ours (none)"},
                                {"meshopt_simplify/", "meshopt"}};
     for (const auto& l : labels)  // those that ran (--benchmark_filter may skip some)
       if (g_cpu.count(l[0] + pct))

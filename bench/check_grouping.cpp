@@ -34,10 +34,15 @@ struct Hash {
   uint64_t h = 1469598103934665603ull;  // FNV-1a
   void bytes(const void* p, size_t n) {
     const unsigned char* b = static_cast<const unsigned char*>(p);
-    for (size_t i = 0; i < n; ++i) { h ^= b[i]; h *= 1099511628211ull; }
+    for (size_t i = 0; i < n; ++i) {
+      h ^= b[i];
+      h *= 1099511628211ull;
+    }
   }
   template <class T>
-  void add(const T& v) { bytes(&v, sizeof v); }
+  void add(const T& v) {
+    bytes(&v, sizeof v);
+  }
 };
 
 int failures = 0;
@@ -54,18 +59,27 @@ std::vector<std::string> CheckHierarchy(const IndexedMesh& m, const FaceAdjacenc
     const GroupLevel& lv = h.level(l);
     const size_t ng = lv.groups.size();
     const std::string at = "level " + std::to_string(l) + ": ";
-    if (lv.faceGroup.size() != nf) { Fail(at + "faceGroup size"); continue; }
+    if (lv.faceGroup.size() != nf) {
+      Fail(at + "faceGroup size");
+      continue;
+    }
     // Ids in order of first appearance over faces.
     int next = 0;
     bool badIds = false;
     std::vector<std::vector<uint32_t>> facesOf(ng);
     for (size_t f = 0; f < nf; ++f) {
       const int g = lv.faceGroup[f];
-      if (g < 0 || size_t(g) >= ng || g > next) { badIds = true; break; }
+      if (g < 0 || size_t(g) >= ng || g > next) {
+        badIds = true;
+        break;
+      }
       if (g == next) ++next;
       facesOf[size_t(g)].push_back(uint32_t(f));
     }
-    if (badIds || size_t(next) != ng) { Fail(at + "group ids not numbered by first appearance"); continue; }
+    if (badIds || size_t(next) != ng) {
+      Fail(at + "group ids not numbered by first appearance");
+      continue;
+    }
     if (!GroupsAreEdgeConnected(adj, lv.faceGroup)) Fail(at + "a group is not edge-connected");
 
     // Children and parents.
@@ -76,9 +90,12 @@ std::vector<std::string> CheckHierarchy(const IndexedMesh& m, const FaceAdjacenc
       if (grp.faceCount != int(facesOf[g].size())) Fail(at + "faceCount of group " + std::to_string(g));
       for (int c = grp.firstChild; c < grp.firstChild + grp.childCount; ++c) {
         const int child = lv.children[size_t(c)];
-        const bool ok = l == 1 ? lv.faceGroup[size_t(child)] == int(g)
-                               : h.level(l - 1).groups[size_t(child)].parent == int(g);
-        if (!ok) { Fail(at + "child link of group " + std::to_string(g)); break; }
+        const bool ok =
+            l == 1 ? lv.faceGroup[size_t(child)] == int(g) : h.level(l - 1).groups[size_t(child)].parent == int(g);
+        if (!ok) {
+          Fail(at + "child link of group " + std::to_string(g));
+          break;
+        }
       }
       if ((l == h.levelCount()) != (grp.parent < 0)) Fail(at + "parent link of group " + std::to_string(g));
     }
@@ -110,8 +127,9 @@ std::vector<std::string> CheckHierarchy(const IndexedMesh& m, const FaceAdjacenc
       vcg::Box3f box;
       // In double; the slack is the rounding of a float coordinate (the centre is stored in float).
       const vcg::Point3d center = vcg::Point3d::Construct(grp.center);
-      const double slack = 1e-6 * grp.radius + std::ldexp(std::max({std::fabs(center[0]), std::fabs(center[1]),
-                                                                    std::fabs(center[2])}), -23);
+      const double slack =
+          1e-6 * grp.radius +
+          std::ldexp(std::max({std::fabs(center[0]), std::fabs(center[1]), std::fabs(center[2])}), -23);
       double miss = 0;
       for (uint32_t f : facesOf[g])
         for (uint32_t v : m.faces[f]) {
@@ -124,15 +142,21 @@ std::vector<std::string> CheckHierarchy(const IndexedMesh& m, const FaceAdjacenc
         Fail(at + buf);
       }
       if (!(box.min == grp.box.min && box.max == grp.box.max)) Fail(at + "box of group " + std::to_string(g));
-      geometry.add(grp.cone.axis); geometry.add(grp.cone.halfAngle);
-      geometry.add(grp.center); geometry.add(grp.radius);
-      geometry.add(grp.box.min); geometry.add(grp.box.max);
-      geometry.add(grp.faceCount); geometry.add(grp.area); geometry.add(grp.parent);
+      geometry.add(grp.cone.axis);
+      geometry.add(grp.cone.halfAngle);
+      geometry.add(grp.center);
+      geometry.add(grp.radius);
+      geometry.add(grp.box.min);
+      geometry.add(grp.box.max);
+      geometry.add(grp.faceCount);
+      geometry.add(grp.area);
+      geometry.add(grp.parent);
     }
     if (lv.thresholdDeg < 180 && maxDeg > lv.thresholdDeg) Fail(at + "a cone exceeds the threshold");
     char buf[200];
-    std::snprintf(buf, sizeof buf, "level %d groups %zu max_cone_deg %.6f partition %016" PRIx64 " geometry %016" PRIx64,
-                  l, ng, maxDeg, partition.h, geometry.h);
+    std::snprintf(buf, sizeof buf,
+                  "level %d groups %zu max_cone_deg %.6f partition %016" PRIx64 " geometry %016" PRIx64, l, ng, maxDeg,
+                  partition.h, geometry.h);
     lines.push_back(buf);
   }
   return lines;
@@ -142,7 +166,9 @@ std::vector<std::string> CheckHierarchy(const IndexedMesh& m, const FaceAdjacenc
 struct Rng {
   uint64_t s = 0x2545F4914F6CDD1Dull;
   double next() {  // [0, 1)
-    s ^= s >> 12; s ^= s << 25; s ^= s >> 27;
+    s ^= s >> 12;
+    s ^= s << 25;
+    s ^= s >> 27;
     return double((s * 0x2545F4914F6CDD1Dull) >> 11) / 9007199254740992.0;
   }
 };
@@ -161,8 +187,13 @@ IndexedMesh Terrain(Rng& rng) {
   for (uint32_t i = 0; i < uint32_t(k); ++i)
     for (uint32_t j = 0; j < uint32_t(k); ++j) {
       const uint32_t a = i * (k + 1) + j, b = a + 1, c = a + k + 1, d = c + 1;
-      if (rng.next() < 0.5) { m.faces.push_back({a, c, b}); m.faces.push_back({b, c, d}); }
-      else { m.faces.push_back({a, c, d}); m.faces.push_back({a, d, b}); }
+      if (rng.next() < 0.5) {
+        m.faces.push_back({a, c, b});
+        m.faces.push_back({b, c, d});
+      } else {
+        m.faces.push_back({a, c, d});
+        m.faces.push_back({a, d, b});
+      }
     }
   return m;
 }
@@ -206,7 +237,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: check_grouping [--synthetic] [MESH.ply...]\n");
     return 1;
   }
-  struct Named { const char* name; ConeGroupingParams p; };
+  struct Named {
+    const char* name;
+    ConeGroupingParams p;
+  };
   std::vector<Named> sets(4);
   sets[0].name = "default";
   sets[1].name = "cone-only";
@@ -229,7 +263,10 @@ int main(int argc, char** argv) {
     }
     CMesh cm;
     const std::string err = LoadPly(cm, argv[i]);
-    if (!err.empty()) { std::fprintf(stderr, "%s\n", err.c_str()); return 1; }
+    if (!err.empty()) {
+      std::fprintf(stderr, "%s\n", err.c_str());
+      return 1;
+    }
     meshes.emplace_back(argv[i], ToIndexedMesh(cm));
   }
   for (const auto& named : meshes) {

@@ -44,14 +44,20 @@ void BM_FeatureSimplify(benchmark::State& state) {
     out = r.facesOut;
   }
   state.SetLabel(std::string(kMeshes[state.range(0)]) + " -> " + std::to_string(out) + " faces" +
-                 (p.growErrorBound ? "" : " (paper order)") +
-                 (p.threads == 1 ? ", 1 thread" : ""));
-  state.counters["faces_per_s"] = benchmark::Counter(double(m.faceCount()), benchmark::Counter::kIsIterationInvariantRate);
+                 (p.growErrorBound ? "" : " (paper order)") + (p.threads == 1 ? ", 1 thread" : ""));
+  state.counters["faces_per_s"] =
+      benchmark::Counter(double(m.faceCount()), benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_FeatureSimplify)
-    ->Args({0, 10, 1, 0})->Args({0, 10, 1, 1})->Args({0, 50, 1, 0})->Args({0, 10, 0, 0})->Args({0, 50, 0, 0})
-    ->Args({1, 10, 1, 0})->Args({2, 10, 1, 0})
-    ->MeasureProcessCPUTime()->UseRealTime()
+    ->Args({0, 10, 1, 0})
+    ->Args({0, 10, 1, 1})
+    ->Args({0, 50, 1, 0})
+    ->Args({0, 10, 0, 0})
+    ->Args({0, 50, 0, 0})
+    ->Args({1, 10, 1, 0})
+    ->Args({2, 10, 1, 0})
+    ->MeasureProcessCPUTime()
+    ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 
 void BM_DetectFeatures(benchmark::State& state) {

@@ -24,7 +24,10 @@ Args::Args(int argc, char** argv, const std::vector<std::string>& valueOptions,
       if (contains(flagOptions, a)) {
         values_[a] = "1";
       } else if (contains(valueOptions, a)) {
-        if (i + 1 >= argc) { error_ = "option " + a + " needs a value"; return; }
+        if (i + 1 >= argc) {
+          error_ = "option " + a + " needs a value";
+          return;
+        }
         values_[a] = argv[++i];
       } else {
         error_ = "unknown option " + a;
@@ -66,7 +69,10 @@ int Args::integer(const std::string& name, int def) {
 }
 
 void Json::separator() {
-  if (afterKey_) { afterKey_ = false; return; }
+  if (afterKey_) {
+    afterKey_ = false;
+    return;
+  }
   if (!first_.back()) out_ += ",";
   first_.back() = false;
 }
@@ -80,7 +86,10 @@ Json& Json::key(const std::string& k) {
 
 Json& Json::value(double v) {
   separator();
-  if (!std::isfinite(v)) { out_ += "null"; return *this; }
+  if (!std::isfinite(v)) {
+    out_ += "null";
+    return *this;
+  }
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.6g", v);
   out_ += buf;
@@ -103,18 +112,42 @@ Json& Json::value(const std::string& v) {
   separator();
   out_ += "\"";
   for (char c : v) {
-    if (c == '"' || c == '\\') { out_ += '\\'; out_ += c; }
-    else if ((unsigned char)c < 0x20) { char b[8]; std::snprintf(b, sizeof b, "\\u%04x", c); out_ += b; }
-    else out_ += c;
+    if (c == '"' || c == '\\') {
+      out_ += '\\';
+      out_ += c;
+    } else if ((unsigned char)c < 0x20) {
+      char b[8];
+      std::snprintf(b, sizeof b, "\\u%04x", c);
+      out_ += b;
+    } else
+      out_ += c;
   }
   out_ += "\"";
   return *this;
 }
 
-Json& Json::BeginObject() { separator(); out_ += "{"; first_.push_back(true); return *this; }
-Json& Json::EndObject() { out_ += "}"; first_.pop_back(); return *this; }
-Json& Json::BeginArray() { separator(); out_ += "["; first_.push_back(true); return *this; }
-Json& Json::endArray() { out_ += "]"; first_.pop_back(); return *this; }
+Json& Json::BeginObject() {
+  separator();
+  out_ += "{";
+  first_.push_back(true);
+  return *this;
+}
+Json& Json::EndObject() {
+  out_ += "}";
+  first_.pop_back();
+  return *this;
+}
+Json& Json::BeginArray() {
+  separator();
+  out_ += "[";
+  first_.push_back(true);
+  return *this;
+}
+Json& Json::endArray() {
+  out_ += "]";
+  first_.pop_back();
+  return *this;
+}
 
 std::string LoadInput(const std::string& path, CMesh& mesh, IndexedMesh& indexed, std::vector<size_t>& faceOfIndex) {
   const std::string err = LoadPly(mesh, path);
@@ -125,14 +158,26 @@ std::string LoadInput(const std::string& path, CMesh& mesh, IndexedMesh& indexed
 
 namespace {
 // The core names its parameters as the MeshLab dialog's keys; on the command line they are options.
-const std::pair<const char*, const char*> kOptionOfParameter[] = {
-    {"ConeWeight", "--cone-weight"},   {"ShapeWeight", "--shape-weight"},     {"SizeWeight", "--size-weight"},
-    {"ConeThresholdDeg", "--threshold"}, {"ThresholdGrowth", "--growth"},    {"MaxLevels", "--max-levels"},
-    {"MinTopGroups", "--min-top-groups"}, {"TargetFaceNum", "--target-faces"}, {"TargetPerc", "--target-ratio"},
-    {"QualityThr", "--quality-thr"},   {"BoundaryWeight", "--boundary-weight"}, {"PixelFactor", "--factor"},
-    {"MinFaces", "--min-faces"},       {"MaxErrorDistance", "--max-error"},  {"MaxError", "--max-error"},
-    {"MaxDepth", "--max-depth"},       {"FeatureCurvature", "--feature-curvature"}, {"FeatureAngleDeg", "--angle"},
-    {"CurvatureThreshold", "--curvature-threshold"}, {"TargetClusters", "--clusters"}};
+const std::pair<const char*, const char*> kOptionOfParameter[] = {{"ConeWeight", "--cone-weight"},
+                                                                  {"ShapeWeight", "--shape-weight"},
+                                                                  {"SizeWeight", "--size-weight"},
+                                                                  {"ConeThresholdDeg", "--threshold"},
+                                                                  {"ThresholdGrowth", "--growth"},
+                                                                  {"MaxLevels", "--max-levels"},
+                                                                  {"MinTopGroups", "--min-top-groups"},
+                                                                  {"TargetFaceNum", "--target-faces"},
+                                                                  {"TargetPerc", "--target-ratio"},
+                                                                  {"QualityThr", "--quality-thr"},
+                                                                  {"BoundaryWeight", "--boundary-weight"},
+                                                                  {"PixelFactor", "--factor"},
+                                                                  {"MinFaces", "--min-faces"},
+                                                                  {"MaxErrorDistance", "--max-error"},
+                                                                  {"MaxError", "--max-error"},
+                                                                  {"MaxDepth", "--max-depth"},
+                                                                  {"FeatureCurvature", "--feature-curvature"},
+                                                                  {"FeatureAngleDeg", "--angle"},
+                                                                  {"CurvatureThreshold", "--curvature-threshold"},
+                                                                  {"TargetClusters", "--clusters"}};
 
 std::string WithOptionNames(std::string text) {
   auto isWordChar = [](char ch) { return std::isalnum((unsigned char)ch) || ch == '_'; };
@@ -169,9 +214,8 @@ std::string CheckOutputs(const std::string& command, int argc, char** argv) {
   return "";
 }
 
-const std::vector<std::string> kGroupingOptions = {"--cone-weight", "--shape-weight", "--size-weight",
-                                                    "--threshold",   "--growth",       "--max-levels",
-                                                    "--min-top-groups"};
+const std::vector<std::string> kGroupingOptions = {"--cone-weight", "--shape-weight", "--size-weight",   "--threshold",
+                                                   "--growth",      "--max-levels",   "--min-top-groups"};
 
 ConeGroupingParams ReadGroupingParams(Args& a) {
   ConeGroupingParams p;

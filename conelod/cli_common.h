@@ -57,7 +57,9 @@ class Json {
   Json& BeginArray();
   Json& endArray();
   template <class T>
-  Json& field(const std::string& k, const T& v) { return key(k).value(v); }
+  Json& field(const std::string& k, const T& v) {
+    return key(k).value(v);
+  }
   const std::string& str() const { return out_; }
 
  private:
@@ -70,9 +72,7 @@ class Json {
 class Timer {
  public:
   Timer() : start_(std::chrono::steady_clock::now()) {}
-  double seconds() const {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  }
+  double seconds() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
 
  private:
   std::chrono::steady_clock::time_point start_;

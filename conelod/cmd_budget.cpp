@@ -78,12 +78,19 @@ int CmdBudget(int argc, char** argv) {
   const std::string view = BudgetViewName(p.view, p.direction);
   if (a.has("--json")) {
     Json j;
-    j.BeginObject().field("input", a.positional()[0])
-        .field("covered_pixels", r.coveredPixels).field("target_faces", r.targetFaces)
-        .field("faces", r.currentFaces).field("above_current", r.aboveCurrent)
-        .field("width", p.width).field("height", p.height).field("factor", p.pixelFactor).field("fill", p.fill)
+    j.BeginObject()
+        .field("input", a.positional()[0])
+        .field("covered_pixels", r.coveredPixels)
+        .field("target_faces", r.targetFaces)
+        .field("faces", r.currentFaces)
+        .field("above_current", r.aboveCurrent)
+        .field("width", p.width)
+        .field("height", p.height)
+        .field("factor", p.pixelFactor)
+        .field("fill", p.fill)
         .field("view", view)
-        .field("view_direction_x", r.viewDirection[0]).field("view_direction_y", r.viewDirection[1])
+        .field("view_direction_x", r.viewDirection[0])
+        .field("view_direction_y", r.viewDirection[1])
         .field("view_direction_z", r.viewDirection[2])
         .field("screen_fraction", double(r.coveredPixels) / (double(p.width) * p.height))
         .field("seconds", seconds);

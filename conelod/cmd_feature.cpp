@@ -64,9 +64,8 @@ const char* kFeatureEdgesUsage =
 
 int CmdFeatureSimplify(int argc, char** argv) {
   std::vector<std::string> valueOptions = kFeatureOptions;
-  valueOptions.insert(valueOptions.end(),
-                      {"-o", "--target-faces", "--target-percent", "--max-error", "--line-tolerance", "--threads",
-                       "--faces-per-part"});
+  valueOptions.insert(valueOptions.end(), {"-o", "--target-faces", "--target-percent", "--max-error",
+                                           "--line-tolerance", "--threads", "--faces-per-part"});
   Args a(argc, argv, valueOptions, {"--json", "--no-extend", "--mark", "--no-grow"});
   FeatureSimplifyParams p = ReadFeatureParams(a);
   const double targetPercent = a.num("--target-percent", 0);
@@ -90,7 +89,8 @@ int CmdFeatureSimplify(int argc, char** argv) {
   if (!err.empty()) return FailLoad(err);
   const double diagonal = BoundingBoxDiagonal(im);
   if (a.has("--max-error") && !ParseDistance(a.str("--max-error"), diagonal, p.maxErrorDistance))
-    return Fail(kUsage, "--max-error expects a distance >= 0 or a percentage like 0.5%, got '" + a.str("--max-error") + "'");
+    return Fail(kUsage,
+                "--max-error expects a distance >= 0 or a percentage like 0.5%, got '" + a.str("--max-error") + "'");
   p.targetFaceCount = size_t(targetFaces);
   p.growErrorBound = !a.has("--no-grow");
   if (a.has("--target-percent")) p.targetFaceCount = size_t(double(im.faceCount()) * targetPercent / 100.0 + 0.5);
@@ -120,21 +120,32 @@ int CmdFeatureSimplify(int argc, char** argv) {
 
   if (a.has("--json")) {
     Json j;
-    j.BeginObject().field("input", a.positional()[0])
-        .field("faces_in", r.facesIn).field("faces_out", r.facesOut)
-        .field("feature_edges", r.featureEdgesIn).field("feature_vertices", r.featureVertices)
+    j.BeginObject()
+        .field("input", a.positional()[0])
+        .field("faces_in", r.facesIn)
+        .field("faces_out", r.facesOut)
+        .field("feature_edges", r.featureEdgesIn)
+        .field("feature_vertices", r.featureVertices)
         .field("seconds", seconds)
-        .field("feature_edges_out", r.featureEdges.size()).field("swap_edges", r.swapEdges)
-        .field("feature_line_vertices", r.lineVerticesIn).field("smooth_vertices", r.smoothVerticesIn)
-        .field("collapses", r.collapses).field("target_faces", p.targetFaceCount)
-        .field("target_reached", r.targetReached).field("max_error_distance", p.maxErrorDistance)
-        .field("max_collapse_distance", r.maxCollapseDistance).field("max_tracked_error", r.maxTrackedError)
-        .field("final_error_bound", r.finalErrorBound).field("grow_error_bound", p.growErrorBound)
+        .field("feature_edges_out", r.featureEdges.size())
+        .field("swap_edges", r.swapEdges)
+        .field("feature_line_vertices", r.lineVerticesIn)
+        .field("smooth_vertices", r.smoothVerticesIn)
+        .field("collapses", r.collapses)
+        .field("target_faces", p.targetFaceCount)
+        .field("target_reached", r.targetReached)
+        .field("max_error_distance", p.maxErrorDistance)
+        .field("max_collapse_distance", r.maxCollapseDistance)
+        .field("max_tracked_error", r.maxTrackedError)
+        .field("final_error_bound", r.finalErrorBound)
+        .field("grow_error_bound", p.growErrorBound)
         .field("parts", size_t(r.parts))
-        .field("diagonal", diagonal).field("feature_angle_deg", p.featureAngleDeg);
+        .field("diagonal", diagonal)
+        .field("feature_angle_deg", p.featureAngleDeg);
     if (sa.ok()) {
       j.field("line_tolerance", lineTolPct / 100.0 * diagonal)
-          .field("input_line_edges", agree.referenceEdges).field("output_line_edges", agree.simplifiedEdges)
+          .field("input_line_edges", agree.referenceEdges)
+          .field("output_line_edges", agree.simplifiedEdges)
           .field("output_line_edges_on_input_lines", agree.simplifiedOnReference)
           .field("input_line_length_covered",
                  agree.referenceLength > 0 ? agree.referenceLengthCovered / agree.referenceLength : 1.0);
@@ -150,18 +161,19 @@ int CmdFeatureSimplify(int argc, char** argv) {
                 : r.targetReached      ? "target reached"
                                        : "target NOT reached: no allowed collapse left",
                 parts.c_str());
-    std::printf("feature edges %zu (%zu made by extension swaps) -> %zu; feature vertices %zu (kept); "
-                "feature-line vertices %zu; smooth vertices %zu\n",
-                r.featureEdgesIn, r.swapEdges, r.featureEdges.size(), r.featureVertices, r.lineVerticesIn,
-                r.smoothVerticesIn);
+    std::printf(
+        "feature edges %zu (%zu made by extension swaps) -> %zu; feature vertices %zu (kept); "
+        "feature-line vertices %zu; smooth vertices %zu\n",
+        r.featureEdgesIn, r.swapEdges, r.featureEdges.size(), r.featureVertices, r.lineVerticesIn, r.smoothVerticesIn);
     if (p.maxErrorDistance > 0)
       std::printf("error bound %.6g (%.3f %% of the diagonal); largest tracked error %.6g\n", p.maxErrorDistance,
                   100 * p.maxErrorDistance / diagonal, r.maxTrackedError);
     if (sa.ok())
-      std::printf("feature lines (A <= %.1f deg): %zu of the output's %zu feature edges lie on the input's lines; "
-                  "%.1f %% of the input's line length is covered\n",
-                  p.featureAngleDeg, agree.simplifiedOnReference, agree.simplifiedEdges,
-                  agree.referenceLength > 0 ? 100 * agree.referenceLengthCovered / agree.referenceLength : 100.0);
+      std::printf(
+          "feature lines (A <= %.1f deg): %zu of the output's %zu feature edges lie on the input's lines; "
+          "%.1f %% of the input's line length is covered\n",
+          p.featureAngleDeg, agree.simplifiedOnReference, agree.simplifiedEdges,
+          agree.referenceLength > 0 ? 100 * agree.referenceLengthCovered / agree.referenceLength : 100.0);
     if (a.has("-o")) std::printf("wrote %s\n", a.str("-o").c_str());
   }
   return kOk;
@@ -201,33 +213,40 @@ int CmdFeatureEdges(int argc, char** argv) {
 
   if (a.has("--json")) {
     Json j;
-    j.BeginObject().field("input", a.positional()[0]).field("faces", im.faceCount())
-        .field("feature_edges", info.featureEdges.size()).field("dihedral_edges", info.dihedralEdges)
-        .field("swap_edges", info.swapEdges).field("removed_by_swaps", info.removedBySwaps)
-        .field("border_edges", info.borderEdges).field("non_manifold_edges", info.nonManifoldEdges)
+    j.BeginObject()
+        .field("input", a.positional()[0])
+        .field("faces", im.faceCount())
+        .field("feature_edges", info.featureEdges.size())
+        .field("dihedral_edges", info.dihedralEdges)
+        .field("swap_edges", info.swapEdges)
+        .field("removed_by_swaps", info.removedBySwaps)
+        .field("border_edges", info.borderEdges)
+        .field("non_manifold_edges", info.nonManifoldEdges)
         .field("feature_vertices", info.count(VertexClass::Feature))
         .field("feature_line_vertices", info.count(VertexClass::FeatureLine))
         .field("smooth_vertices", info.count(VertexClass::Smooth));
     if (haveRef)
-      j.field("reference", a.str("--reference")).field("reference_line_edges", agree.referenceEdges)
-          .field("line_edges", agree.simplifiedEdges).field("line_edges_on_reference_lines", agree.simplifiedOnReference)
+      j.field("reference", a.str("--reference"))
+          .field("reference_line_edges", agree.referenceEdges)
+          .field("line_edges", agree.simplifiedEdges)
+          .field("line_edges_on_reference_lines", agree.simplifiedOnReference)
           .field("reference_line_length_covered",
                  agree.referenceLength > 0 ? agree.referenceLengthCovered / agree.referenceLength : 1.0);
     j.EndObject();
     std::printf("%s\n", j.str().c_str());
   } else {
-    std::printf("%s: %zu faces; feature edges %zu (dihedral %zu, made by swaps %zu, removed by swaps %zu, border %zu, "
-                "non-manifold %zu)\nvertices: feature %zu, feature line %zu, smooth %zu\n",
-                a.positional()[0].c_str(), im.faceCount(), info.featureEdges.size(), info.dihedralEdges,
-                info.swapEdges, info.removedBySwaps, info.borderEdges, info.nonManifoldEdges,
-                info.count(VertexClass::Feature), info.count(VertexClass::FeatureLine),
-                info.count(VertexClass::Smooth));
+    std::printf(
+        "%s: %zu faces; feature edges %zu (dihedral %zu, made by swaps %zu, removed by swaps %zu, border %zu, "
+        "non-manifold %zu)\nvertices: feature %zu, feature line %zu, smooth %zu\n",
+        a.positional()[0].c_str(), im.faceCount(), info.featureEdges.size(), info.dihedralEdges, info.swapEdges,
+        info.removedBySwaps, info.borderEdges, info.nonManifoldEdges, info.count(VertexClass::Feature),
+        info.count(VertexClass::FeatureLine), info.count(VertexClass::Smooth));
     if (haveRef)
-      std::printf("against %s: %zu of %zu feature edges lie on its %zu feature edges; %.1f %% of its line length "
-                  "covered\n",
-                  a.str("--reference").c_str(), agree.simplifiedOnReference, agree.simplifiedEdges,
-                  agree.referenceEdges,
-                  agree.referenceLength > 0 ? 100 * agree.referenceLengthCovered / agree.referenceLength : 100.0);
+      std::printf(
+          "against %s: %zu of %zu feature edges lie on its %zu feature edges; %.1f %% of its line length "
+          "covered\n",
+          a.str("--reference").c_str(), agree.simplifiedOnReference, agree.simplifiedEdges, agree.referenceEdges,
+          agree.referenceLength > 0 ? 100 * agree.referenceLengthCovered / agree.referenceLength : 100.0);
   }
   return kOk;
 }

@@ -13,10 +13,15 @@ namespace cli {
 namespace {
 
 void WriteParams(Json& j, const ConeGroupingParams& p) {
-  j.key("params").BeginObject()
-      .field("cone_weight", p.coneWeight).field("shape_weight", p.shapeWeight).field("size_weight", p.sizeWeight)
-      .field("threshold_deg", p.coneThresholdDeg).field("growth", p.thresholdGrowth)
-      .field("max_levels", p.maxLevels).field("min_top_groups", p.minTopGroups)
+  j.key("params")
+      .BeginObject()
+      .field("cone_weight", p.coneWeight)
+      .field("shape_weight", p.shapeWeight)
+      .field("size_weight", p.sizeWeight)
+      .field("threshold_deg", p.coneThresholdDeg)
+      .field("growth", p.thresholdGrowth)
+      .field("max_levels", p.maxLevels)
+      .field("min_top_groups", p.minTopGroups)
       .field("strict_greedy", p.strictGreedy)
       .EndObject();
 }
@@ -82,9 +87,13 @@ int CmdGroup(int argc, char** argv) {
     j.key("levels").BeginArray();
     for (int l = 1; l <= h.levelCount(); ++l) {
       const GroupLevel& lv = h.level(l);
-      j.BeginObject().field("level", l).field("groups", lv.groups.size())
-          .field("max_cone_deg", lv.maxConeDeg()).field("mean_cone_deg", lv.meanConeDeg())
-          .field("threshold_deg", lv.thresholdDeg).field("uncullable_groups", lv.uncullableGroups())
+      j.BeginObject()
+          .field("level", l)
+          .field("groups", lv.groups.size())
+          .field("max_cone_deg", lv.maxConeDeg())
+          .field("mean_cone_deg", lv.meanConeDeg())
+          .field("threshold_deg", lv.thresholdDeg)
+          .field("uncullable_groups", lv.uncullableGroups())
           .field("all_connected", GroupsAreEdgeConnected(adj, lv.faceGroup))
           .EndObject();
     }
@@ -102,7 +111,8 @@ int CmdGroup(int argc, char** argv) {
       std::printf("%5d %10.1f %8zu %13.2f %14.2f %10d %9s\n", l, lv.thresholdDeg, lv.groups.size(), lv.maxConeDeg(),
                   lv.meanConeDeg(), lv.uncullableGroups(), GroupsAreEdgeConnected(adj, lv.faceGroup) ? "yes" : "NO");
     }
-    if (a.has("-o")) std::printf("wrote %s (quality and colour = group at level %d)\n", a.str("-o").c_str(), displayLevel);
+    if (a.has("-o"))
+      std::printf("wrote %s (quality and colour = group at level %d)\n", a.str("-o").c_str(), displayLevel);
   }
   return kOk;
 }
@@ -121,7 +131,8 @@ int CmdCullCost(int argc, char** argv) {
   if (pca) {
     for (const auto& o : kGroupingOptions)
       if (a.has(o)) return Fail(kUsage, o + " is a normal-cone grouping option: it does not go with --pca");
-    if (a.has("--strict-greedy")) return Fail(kUsage, "--strict-greedy is a normal-cone grouping option: it does not go with --pca");
+    if (a.has("--strict-greedy"))
+      return Fail(kUsage, "--strict-greedy is a normal-cone grouping option: it does not go with --pca");
     if (pcaClusters < 1) return Fail(kUsage, "--pca needs a cluster count >= 1");
     if (pcaLevels < 1 || pcaLevels > 16) return Fail(kUsage, "--pca-levels must be between 1 and 16");
   } else if (a.has("--pca-levels")) {
@@ -161,20 +172,28 @@ int CmdCullCost(int argc, char** argv) {
 
   if (a.has("--json")) {
     Json j;
-    j.BeginObject().field("input", a.positional()[0]).field("faces", im.faceCount())
-        .field("views", r.views).field("perspective", r.perspective).field("camera_distance", r.cameraDistance)
-        .field("two_state_cost", r.twoState.mean).field("two_state_min", r.twoState.min)
+    j.BeginObject()
+        .field("input", a.positional()[0])
+        .field("faces", im.faceCount())
+        .field("views", r.views)
+        .field("perspective", r.perspective)
+        .field("camera_distance", r.cameraDistance)
+        .field("two_state_cost", r.twoState.mean)
+        .field("two_state_min", r.twoState.min)
         .field("two_state_max", r.twoState.max)
-        .field("three_state_cost", r.threeState.mean).field("three_state_min", r.threeState.min)
+        .field("three_state_cost", r.threeState.mean)
+        .field("three_state_min", r.threeState.min)
         .field("three_state_max", r.threeState.max)
-        .field("rejected_fraction", r.rejectedFraction).field("ideal_fraction", r.idealFraction)
+        .field("rejected_fraction", r.rejectedFraction)
+        .field("ideal_fraction", r.idealFraction)
         .field("culled_of_ideal", r.idealFraction > 0 ? r.rejectedFraction / r.idealFraction : 0.0)
         .field("front_accepted_fraction", r.frontAcceptedFraction)
         .field("mean_group_tests", r.meanGroupTests)
         .field("levels", h.levelCount())
         .field("level1_groups", h.level(1).groups.size())
         .field("top_groups", h.level(h.levelCount()).groups.size())
-        .field("grouping_seconds", groupSeconds).field("cost_seconds", costTimer.seconds());
+        .field("grouping_seconds", groupSeconds)
+        .field("cost_seconds", costTimer.seconds());
     if (pca) {
       j.field("grouping", "pca").field("pca_clusters", int(h.level(1).groups.size()));
       j.key("params").BeginObject().field("pca", pcaClusters).field("pca_levels", pcaLevels).EndObject();
@@ -186,15 +205,17 @@ int CmdCullCost(int argc, char** argv) {
     std::printf("%s\n", j.str().c_str());
   } else {
     std::printf("%s: %zu faces, %d levels of %s (%zu groups at level 1, %zu at the top), %d %s views\n",
-                a.positional()[0].c_str(), im.faceCount(), h.levelCount(),
-                pca ? "PCA clusters" : "normal-cone groups", h.level(1).groups.size(),
-                h.level(h.levelCount()).groups.size(), r.views, r.perspective ? "perspective" : "orthographic");
+                a.positional()[0].c_str(), im.faceCount(), h.levelCount(), pca ? "PCA clusters" : "normal-cone groups",
+                h.level(1).groups.size(), h.level(h.levelCount()).groups.size(), r.views,
+                r.perspective ? "perspective" : "orthographic");
     std::printf("culling cost (tests / faces; per-face culling = 1):\n");
-    std::printf("  %-12s mean %.4f  min %.4f  max %.4f\n", "two-state", r.twoState.mean, r.twoState.min, r.twoState.max);
+    std::printf("  %-12s mean %.4f  min %.4f  max %.4f\n", "two-state", r.twoState.mean, r.twoState.min,
+                r.twoState.max);
     std::printf("  %-12s mean %.4f  min %.4f  max %.4f\n", "three-state", r.threeState.mean, r.threeState.min,
                 r.threeState.max);
-    std::printf("faces culled at group level: %.4f of all faces; faces that draw nothing (ideal): %.4f (%.1f%% of ideal)\n",
-                r.rejectedFraction, r.idealFraction, r.idealFraction > 0 ? 100 * r.rejectedFraction / r.idealFraction : 0.0);
+    std::printf(
+        "faces culled at group level: %.4f of all faces; faces that draw nothing (ideal): %.4f (%.1f%% of ideal)\n",
+        r.rejectedFraction, r.idealFraction, r.idealFraction > 0 ? 100 * r.rejectedFraction / r.idealFraction : 0.0);
     std::printf("faces accepted by a fully-front group test (three-state): %.4f\n", r.frontAcceptedFraction);
   }
   return kOk;

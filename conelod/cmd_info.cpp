@@ -25,20 +25,29 @@ int CmdInfo(int argc, char** argv) {
   const Status valid = RequireValidForFaces(r);
   if (a.has("--json")) {
     Json j;
-    j.BeginObject().field("input", a.positional()[0]).field("vertices", r.vertices).field("faces", r.faces)
-        .field("components", r.components).field("border_edges", r.borderEdges)
-        .field("non_manifold_edges", r.nonManifoldEdges).field("unreferenced_vertices", r.unreferencedVertices)
-        .field("degenerate_faces", r.degenerateFaces).field("non_finite_vertices", r.nonFiniteVertices).field("huge_vertices", r.hugeVertices)
-        .field("bad_index_faces", r.badIndexFaces).field("usable", valid.ok());
+    j.BeginObject()
+        .field("input", a.positional()[0])
+        .field("vertices", r.vertices)
+        .field("faces", r.faces)
+        .field("components", r.components)
+        .field("border_edges", r.borderEdges)
+        .field("non_manifold_edges", r.nonManifoldEdges)
+        .field("unreferenced_vertices", r.unreferencedVertices)
+        .field("degenerate_faces", r.degenerateFaces)
+        .field("non_finite_vertices", r.nonFiniteVertices)
+        .field("huge_vertices", r.hugeVertices)
+        .field("bad_index_faces", r.badIndexFaces)
+        .field("usable", valid.ok());
     if (!valid.ok()) j.field("problem", valid.message);
     j.EndObject();
     std::printf("%s\n", j.str().c_str());
   } else {
-    std::printf("%s\n  vertices %zu (unreferenced %zu, non-finite %zu)\n  faces %zu (zero-area %zu, bad index %zu)\n"
-                "  components %d\n  border edges %zu\n  non-manifold edges %zu\n  %s%s\n",
-                a.positional()[0].c_str(), r.vertices, r.unreferencedVertices, r.nonFiniteVertices, r.faces,
-                r.degenerateFaces, r.badIndexFaces, r.components, r.borderEdges, r.nonManifoldEdges,
-                valid.ok() ? "usable by the face filters" : "NOT usable: ", valid.ok() ? "" : valid.message.c_str());
+    std::printf(
+        "%s\n  vertices %zu (unreferenced %zu, non-finite %zu)\n  faces %zu (zero-area %zu, bad index %zu)\n"
+        "  components %d\n  border edges %zu\n  non-manifold edges %zu\n  %s%s\n",
+        a.positional()[0].c_str(), r.vertices, r.unreferencedVertices, r.nonFiniteVertices, r.faces, r.degenerateFaces,
+        r.badIndexFaces, r.components, r.borderEdges, r.nonManifoldEdges,
+        valid.ok() ? "usable by the face filters" : "NOT usable: ", valid.ok() ? "" : valid.message.c_str());
   }
   return kOk;
 }

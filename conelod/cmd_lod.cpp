@@ -36,7 +36,8 @@ bool ParsePoint(const std::string& text, vcg::Point3d& p) {
 
 int LodBuild(int argc, char** argv) {
   Args a(argc, argv,
-         With(kGroupingOptions, {"-o", "--level-ratio", "--threads", "--faces-per-part", "--cluster-faces", "--group-clusters"}),
+         With(kGroupingOptions,
+              {"-o", "--level-ratio", "--threads", "--faces-per-part", "--cluster-faces", "--group-clusters"}),
          {"--json", "--strict-greedy"});
   LodBuildParams params;
   params.grouping = ReadGroupingParams(a);
@@ -75,11 +76,19 @@ int LodBuild(int argc, char** argv) {
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
   if (a.has("--json")) {
     Json j;
-    j.BeginObject().field("input", input).field("output", output).field("vertices", st.inputVertices)
-        .field("faces", st.inputFaces).field("levels", st.levels).field("nodes", st.nodes)
-        .field("file_bytes", size_t(st.fileBytes)).field("load_seconds", loadSeconds)
-        .field("grouping_seconds", st.groupingSeconds).field("simplify_seconds", st.simplifySeconds)
-        .field("write_seconds", st.writeSeconds).field("seconds", st.seconds);
+    j.BeginObject()
+        .field("input", input)
+        .field("output", output)
+        .field("vertices", st.inputVertices)
+        .field("faces", st.inputFaces)
+        .field("levels", st.levels)
+        .field("nodes", st.nodes)
+        .field("file_bytes", size_t(st.fileBytes))
+        .field("load_seconds", loadSeconds)
+        .field("grouping_seconds", st.groupingSeconds)
+        .field("simplify_seconds", st.simplifySeconds)
+        .field("write_seconds", st.writeSeconds)
+        .field("seconds", st.seconds);
     j.key("level_faces").BeginArray();
     for (size_t f : st.levelFaces) j.value(f);
     j.endArray().key("level_nodes").BeginArray();
@@ -87,10 +96,11 @@ int LodBuild(int argc, char** argv) {
     j.endArray().EndObject();
     std::printf("%s\n", j.str().c_str());
   } else {
-    std::printf("%s: %zu faces -> %s: %d node levels, %zu nodes, %llu bytes in %.3f s "
-                "(grouping %.3f s, simplification %.3f s, writing %.3f s)\n",
-                input.c_str(), st.inputFaces, output.c_str(), st.levels, st.nodes, (unsigned long long)st.fileBytes,
-                st.seconds, st.groupingSeconds, st.simplifySeconds, st.writeSeconds);
+    std::printf(
+        "%s: %zu faces -> %s: %d node levels, %zu nodes, %llu bytes in %.3f s "
+        "(grouping %.3f s, simplification %.3f s, writing %.3f s)\n",
+        input.c_str(), st.inputFaces, output.c_str(), st.levels, st.nodes, (unsigned long long)st.fileBytes, st.seconds,
+        st.groupingSeconds, st.simplifySeconds, st.writeSeconds);
     std::printf("%5s %8s %10s\n", "level", "nodes", "faces");
     for (int k = st.levels - 1; k >= 0; --k)
       std::printf("%5d %8zu %10zu\n", k, st.levelNodes[size_t(k)], st.levelFaces[size_t(k)]);
@@ -109,16 +119,19 @@ int LodExtract(int argc, char** argv) {
   bool percent = !budget.empty() && budget.back() == '%';
   char* end = nullptr;
   const double b = std::strtod(budget.c_str(), &end);
-  if (end == budget.c_str() || *end != (percent ? '%' : '\0') || !(b >= 0) || !std::isfinite(b) ||
-      (percent && b > 100))
+  if (end == budget.c_str() || *end != (percent ? '%' : '\0') || !(b >= 0) || !std::isfinite(b) || (percent && b > 100))
     return Fail(kUsage, "--budget must be a face count N >= 0 or a percentage P% (0-100)");
   view.cullBackFacing = !a.has("--no-cull");
   if (a.has("--priority")) {
     const std::string p = a.str("--priority");
-    if (p == "screen") view.priority = LodPriority::ScreenError;
-    else if (p == "error") view.priority = LodPriority::ObjectError;
-    else if (p == "fg") view.priority = LodPriority::ConeFg;
-    else return Fail(kUsage, "--priority must be screen, error or fg");
+    if (p == "screen")
+      view.priority = LodPriority::ScreenError;
+    else if (p == "error")
+      view.priority = LodPriority::ObjectError;
+    else if (p == "fg")
+      view.priority = LodPriority::ConeFg;
+    else
+      return Fail(kUsage, "--priority must be screen, error or fg");
   }
   const bool drop = a.has("--drop-culled");
   const std::string input = a.positional()[0];
@@ -158,25 +171,39 @@ int LodExtract(int argc, char** argv) {
   }
   if (a.has("--json")) {
     Json j;
-    j.BeginObject().field("input", input).field("faces", out.faces.size()).field("cut_faces", cut.faces)
-        .field("budget", view.faceBudget).field("groups_drawn", cut.groupsDrawn)
-        .field("groups_culled", cut.groupsCulled).field("culled_faces", cut.faces - cut.drawnFaces)
-        .field("max_level_difference", cut.maxLevelDifference).field("refinements", cut.refinements)
-        .field("resident_bytes", resident).field("open_seconds", openSeconds).field("seconds", seconds);
+    j.BeginObject()
+        .field("input", input)
+        .field("faces", out.faces.size())
+        .field("cut_faces", cut.faces)
+        .field("budget", view.faceBudget)
+        .field("groups_drawn", cut.groupsDrawn)
+        .field("groups_culled", cut.groupsCulled)
+        .field("culled_faces", cut.faces - cut.drawnFaces)
+        .field("max_level_difference", cut.maxLevelDifference)
+        .field("refinements", cut.refinements)
+        .field("resident_bytes", resident)
+        .field("open_seconds", openSeconds)
+        .field("seconds", seconds);
     j.key("levels").BeginArray();
     for (int k = 0; k < levels; ++k)
-      j.BeginObject().field("level", k).field("nodes", levelNodes[size_t(k)]).field("faces", levelFaces[size_t(k)]).EndObject();
+      j.BeginObject()
+          .field("level", k)
+          .field("nodes", levelNodes[size_t(k)])
+          .field("faces", levelFaces[size_t(k)])
+          .EndObject();
     j.endArray();
     if (a.has("-o")) j.field("output", a.str("-o"));
     j.EndObject();
     std::printf("%s\n", j.str().c_str());
   } else {
-    std::printf("%s: cut of %zu faces (budget %zu), %zu groups drawn, %zu culled, max level difference %d, "
-                "%zu bytes resident, %.3f s\n",
-                input.c_str(), cut.faces, view.faceBudget, cut.groupsDrawn, cut.groupsCulled, cut.maxLevelDifference,
-                resident, seconds);
+    std::printf(
+        "%s: cut of %zu faces (budget %zu), %zu groups drawn, %zu culled, max level difference %d, "
+        "%zu bytes resident, %.3f s\n",
+        input.c_str(), cut.faces, view.faceBudget, cut.groupsDrawn, cut.groupsCulled, cut.maxLevelDifference, resident,
+        seconds);
     std::printf("%5s %8s %10s\n", "level", "nodes", "faces");
-    for (int k = levels - 1; k >= 0; --k) std::printf("%5d %8zu %10zu\n", k, levelNodes[size_t(k)], levelFaces[size_t(k)]);
+    for (int k = levels - 1; k >= 0; --k)
+      std::printf("%5d %8zu %10zu\n", k, levelNodes[size_t(k)], levelFaces[size_t(k)]);
     if (a.has("-o"))
       std::printf("wrote %s: %zu faces (quality and colour = node level)\n", a.str("-o").c_str(), out.faces.size());
   }
@@ -195,10 +222,16 @@ int LodInfo(int argc, char** argv) {
   const LodFileInfo& i = reader->info();
   if (a.has("--json")) {
     Json j;
-    j.BeginObject().field("input", a.positional()[0]).field("version", int(i.version))
-        .field("vertices", size_t(i.inputVertices)).field("faces", size_t(i.inputFaces)).field("levels", i.levels)
-        .field("nodes", size_t(i.nodeCount)).field("file_bytes", size_t(i.fileBytes))
-        .field("roots", reader->roots().size()).field("resident_bytes", reader->residentBytes())
+    j.BeginObject()
+        .field("input", a.positional()[0])
+        .field("version", int(i.version))
+        .field("vertices", size_t(i.inputVertices))
+        .field("faces", size_t(i.inputFaces))
+        .field("levels", i.levels)
+        .field("nodes", size_t(i.nodeCount))
+        .field("file_bytes", size_t(i.fileBytes))
+        .field("roots", reader->roots().size())
+        .field("resident_bytes", reader->residentBytes())
         .field("open_seconds", seconds);
     j.key("level_faces").BeginArray();
     for (auto f : i.levelFaces) j.value(size_t(f));

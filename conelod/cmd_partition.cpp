@@ -113,11 +113,20 @@ int CmdPartition(int argc, char** argv) {
   }
   if (a.has("--json")) {
     Json j;
-    j.BeginObject().field("input", a.positional()[0]).field("faces", im.faceCount())
-        .field("components", tree.componentCount).field("clusters", cut.size()).field("seconds", seconds)
-        .field("all_connected", connected).field("tree_nodes", tree.nodes.size())
-        .field("tree_depth", tree.maxDepth).field("tree_bytes", tree.memoryBytes()).field("full_tree", full)
-        .field("max_error_rms", maxError).field("mean_error_rms", meanError).field("largest_cluster_faces", largest);
+    j.BeginObject()
+        .field("input", a.positional()[0])
+        .field("faces", im.faceCount())
+        .field("components", tree.componentCount)
+        .field("clusters", cut.size())
+        .field("seconds", seconds)
+        .field("all_connected", connected)
+        .field("tree_nodes", tree.nodes.size())
+        .field("tree_depth", tree.maxDepth)
+        .field("tree_bytes", tree.memoryBytes())
+        .field("full_tree", full)
+        .field("max_error_rms", maxError)
+        .field("mean_error_rms", meanError)
+        .field("largest_cluster_faces", largest);
     if (a.has("--verify")) j.field("tree_valid", verify.empty());
     if (a.has("-o")) j.field("output", a.str("-o"));
     j.EndObject();
@@ -187,20 +196,33 @@ int CmdProgressive(int argc, char** argv) {
   const double pct = h.diagonal > 0 ? 100 * h.hausdorff / h.diagonal : 0;
   if (a.has("--json")) {
     Json j;
-    j.BeginObject().field("input", a.positional()[0]).field("input_faces", im.faceCount())
-        .field("clusters", r.clusters).field("faces", r.mesh.faceCount()).field("vertices", r.mesh.vertexCount())
-        .field("seconds", seconds).field("tree_seconds", treeSeconds)
-        .field("collapses", r.collapses).field("blocked_vertices", r.blockedVertices)
+    j.BeginObject()
+        .field("input", a.positional()[0])
+        .field("input_faces", im.faceCount())
+        .field("clusters", r.clusters)
+        .field("faces", r.mesh.faceCount())
+        .field("vertices", r.mesh.vertexCount())
+        .field("seconds", seconds)
+        .field("tree_seconds", treeSeconds)
+        .field("collapses", r.collapses)
+        .field("blocked_vertices", r.blockedVertices)
         .field("locked_vertices", r.lockedVertices)
-        .field("input_manifold", in.valid()).field("manifold", outCheck.valid())
+        .field("input_manifold", in.valid())
+        .field("manifold", outCheck.valid())
         .field("non_manifold_edges", outCheck.nonManifoldEdges)
         .field("non_manifold_vertices", outCheck.nonManifoldVertices)
-        .field("misoriented_edges", outCheck.misorientedEdges).field("degenerate_faces", outCheck.degenerateFaces)
-        .field("border_edges", outCheck.borderEdges).field("input_border_edges", in.borderEdges);
+        .field("misoriented_edges", outCheck.misorientedEdges)
+        .field("degenerate_faces", outCheck.degenerateFaces)
+        .field("border_edges", outCheck.borderEdges)
+        .field("input_border_edges", in.borderEdges);
     if (samples > 0) {
-      j.field("hausdorff", h.hausdorff).field("hausdorff_percent", pct).field("diagonal", h.diagonal)
-          .field("mean_distance_to_input", h.ba.mean).field("mean_distance_from_input", h.ab.mean)
-          .field("rms_distance_from_input", h.ab.rms).field("faces_against_surface", against);
+      j.field("hausdorff", h.hausdorff)
+          .field("hausdorff_percent", pct)
+          .field("diagonal", h.diagonal)
+          .field("mean_distance_to_input", h.ba.mean)
+          .field("mean_distance_from_input", h.ab.mean)
+          .field("rms_distance_from_input", h.ab.rms)
+          .field("faces_against_surface", against);
     }
     j.field("output", a.str("-o"));
     j.EndObject();
@@ -215,9 +237,10 @@ int CmdProgressive(int argc, char** argv) {
                 outCheck.valid() ? "yes" : "NO", outCheck.nonManifoldEdges, outCheck.nonManifoldVertices,
                 outCheck.misorientedEdges, in.valid() ? "yes" : "no");
     if (samples > 0)
-      std::printf("Hausdorff distance %.6g (%.3f%% of the diagonal); mean from input %.6g, to input %.6g; "
-                  "faces against the surface %zu\n",
-                  h.hausdorff, pct, h.ab.mean, h.ba.mean, against);
+      std::printf(
+          "Hausdorff distance %.6g (%.3f%% of the diagonal); mean from input %.6g, to input %.6g; "
+          "faces against the surface %zu\n",
+          h.hausdorff, pct, h.ab.mean, h.ba.mean, against);
     std::printf("wrote %s\n", a.str("-o").c_str());
   }
   return kOk;
@@ -241,7 +264,10 @@ int CmdClusterShape(int argc, char** argv) {
   std::map<float, int> idOf;
   for (size_t i = 0; i < faceOf.size(); ++i) {
     const float q = mesh.face[faceOf[i]].Q();
-    if (q == -1) { faceCluster[i] = -1; continue; }
+    if (q == -1) {
+      faceCluster[i] = -1;
+      continue;
+    }
     if (!(q >= 0 && q == std::floor(q) && q < 2147483648.0f))
       return Fail(kBadInput, a.positional()[0] + ": face " + std::to_string(faceOf[i]) + " has quality " +
                                  std::to_string(q) + ": cluster ids must be whole numbers >= 0 (-1: no cluster)");
@@ -251,9 +277,15 @@ int CmdClusterShape(int argc, char** argv) {
   const bool connected = GroupsAreEdgeConnected(BuildFaceAdjacency(im), faceCluster);
   if (a.has("--json")) {
     Json j;
-    j.BeginObject().field("input", a.positional()[0]).field("faces", im.faceCount()).field("clusters", shape.clusters)
-        .field("boundary_length", shape.boundaryLength).field("boundary_ratio", shape.boundaryRatio)
-        .field("mean_compactness", shape.meanCompactness).field("all_connected", connected).EndObject();
+    j.BeginObject()
+        .field("input", a.positional()[0])
+        .field("faces", im.faceCount())
+        .field("clusters", shape.clusters)
+        .field("boundary_length", shape.boundaryLength)
+        .field("boundary_ratio", shape.boundaryRatio)
+        .field("mean_compactness", shape.meanCompactness)
+        .field("all_connected", connected)
+        .EndObject();
     std::printf("%s\n", j.str().c_str());
   } else {
     std::printf("%s: %zu faces in %d clusters (all edge-connected: %s)\n", a.positional()[0].c_str(), im.faceCount(),

@@ -19,12 +19,19 @@ namespace cli {
 namespace {
 
 void WriteStats(Json& j, const GroupQemStats& s) {
-  j.field("collapses", s.collapses).field("evaluations", s.evaluations).field("stop", ToString(s.stop))
+  j.field("collapses", s.collapses)
+      .field("evaluations", s.evaluations)
+      .field("stop", ToString(s.stop))
       .field("max_collapse_error", s.maxCollapseError);
-  j.key("refused").BeginObject()
-      .field("topology", s.refusedTopology).field("condition1", s.refusedCondition1)
-      .field("condition2", s.refusedCondition2).field("lock", s.refusedLock).field("fixed", s.refusedFixed)
-      .field("geometry", s.refusedGeometry).field("cone", s.refusedCone)
+  j.key("refused")
+      .BeginObject()
+      .field("topology", s.refusedTopology)
+      .field("condition1", s.refusedCondition1)
+      .field("condition2", s.refusedCondition2)
+      .field("lock", s.refusedLock)
+      .field("fixed", s.refusedFixed)
+      .field("geometry", s.refusedGeometry)
+      .field("cone", s.refusedCone)
       .EndObject();
 }
 
@@ -90,8 +97,10 @@ int CmdSimplify(int argc, char** argv) {
   p.preserveNormal = !a.has("--no-preserve-normal");
   p.keepCones = a.has("--keep-cones");
   const std::string mode = a.str("--mode", "integrity");
-  if (mode == "paper") p.mode = GroupMode::Paper;
-  else if (mode != "integrity") return Fail(kUsage, "--mode must be integrity or paper (got '" + mode + "')");
+  if (mode == "paper")
+    p.mode = GroupMode::Paper;
+  else if (mode != "integrity")
+    return Fail(kUsage, "--mode must be integrity or paper (got '" + mode + "')");
   const bool hierarchy = a.has("--hierarchy");
   const bool json = a.has("--json");
   if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kSimplifyUsage);
@@ -102,7 +111,8 @@ int CmdSimplify(int argc, char** argv) {
     return Fail(kUsage, "--samples must be from 0 to " + std::to_string(kMaxFaceSamples));
   if (!hierarchy && (a.has("--threads") || a.has("--faces-per-part") || a.has("--samples")))
     return Fail(kUsage, "--threads, --faces-per-part and --samples go with --hierarchy");
-  if (a.has("--target-ratio") && !(targetRatio > 0 && targetRatio <= 1)) return Fail(kUsage, "--target-ratio must be in (0, 1]");
+  if (a.has("--target-ratio") && !(targetRatio > 0 && targetRatio <= 1))
+    return Fail(kUsage, "--target-ratio must be in (0, 1]");
   if (!hierarchy && !targetFaces && !a.has("--target-ratio") && !a.has("--max-error"))
     return Fail(kUsage, std::string("give --target-faces, --target-ratio or --max-error\n") + kSimplifyUsage);
   std::string source = a.str("--groups", hierarchy ? "cone:1" : "quality");
@@ -126,7 +136,8 @@ int CmdSimplify(int argc, char** argv) {
   } else if (source != "quality") {
     return Fail(kUsage, "--groups must be quality, cone:L or pca:K\n" + std::string(kSimplifyUsage));
   }
-  if (hierarchy && source == "quality") return Fail(kUsage, "--hierarchy simplifies the levels of the normal-cone hierarchy: drop --groups quality");
+  if (hierarchy && source == "quality")
+    return Fail(kUsage, "--hierarchy simplifies the levels of the normal-cone hierarchy: drop --groups quality");
   if (p.keepCones && coneLevel == 0)
     return Fail(kUsage, "--keep-cones keeps the normal cones of cone groups: use --groups cone:L or cone:auto");
   const std::string& input = a.positional()[0];
@@ -143,8 +154,10 @@ int CmdSimplify(int argc, char** argv) {
   // Group ids per face of `im`.
   std::vector<int> groups;
   GroupHierarchy h;
-  if (a.has("--target-ratio")) p.targetFaces = std::max<size_t>(1, size_t(targetRatio * double(im.faceCount())));
-  else p.targetFaces = size_t(targetFaces);
+  if (a.has("--target-ratio"))
+    p.targetFaces = std::max<size_t>(1, size_t(targetRatio * double(im.faceCount())));
+  else
+    p.targetFaces = size_t(targetFaces);
   if (coneLevel != 0) {
     s = BuildConeHierarchy(im, ConeGroupingParams(), h);
     if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
@@ -185,8 +198,12 @@ int CmdSimplify(int argc, char** argv) {
     const double seconds = timer.seconds();
     if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
     Json j;
-    j.BeginObject().field("input", input).field("faces_in", im.faceCount()).field("seconds", seconds)
-        .field("mode", ToString(p.mode)).field("keep_cones", p.keepCones);
+    j.BeginObject()
+        .field("input", input)
+        .field("faces_in", im.faceCount())
+        .field("seconds", seconds)
+        .field("mode", ToString(p.mode))
+        .field("keep_cones", p.keepCones);
     j.key("levels").BeginArray();
     if (!json)
       std::printf("%s: %zu faces, %d levels in %.3f s\n%5s %8s %8s %8s %8s %8s %9s%s\n", input.c_str(), im.faceCount(),
@@ -195,9 +212,14 @@ int CmdSimplify(int argc, char** argv) {
     for (const SimplifiedLevel& L : levels) {
       GroupIntegrity gi;
       MeasureGroupIntegrity(im, h.level(L.level).faceGroup, L.mesh, L.faceGroup, gi);
-      j.BeginObject().field("level", L.level).field("groups_before", gi.groupsBefore).field("groups_after", gi.groupsAfter)
-          .field("target_faces", L.targetFaces).field("faces_out", L.mesh.faceCount())
-          .field("groups_split", gi.groupsSplit).field("groups_vanished", gi.groupsVanished);
+      j.BeginObject()
+          .field("level", L.level)
+          .field("groups_before", gi.groupsBefore)
+          .field("groups_after", gi.groupsAfter)
+          .field("target_faces", L.targetFaces)
+          .field("faces_out", L.mesh.faceCount())
+          .field("groups_split", gi.groupsSplit)
+          .field("groups_vanished", gi.groupsVanished);
       const double limitDeg = std::min(h.level(L.level).thresholdDeg, 180.0);
       j.field("cone_limit_deg", limitDeg)
           .field("cones_over_threshold", CountConesOverLimit(L.mesh, L.faceGroup, limitDeg));
@@ -205,8 +227,10 @@ int CmdSimplify(int argc, char** argv) {
       if (samples > 0) {
         s = SampledHausdorff(im, L.mesh, samples, hd);
         if (!s.ok()) return Fail(kBadInput, "distance: " + s.message);
-        j.field("hausdorff", hd.hausdorff).field("mean_distance_from_input", hd.ab.mean)
-            .field("mean_distance_to_input", hd.ba.mean).field("diagonal", hd.diagonal);
+        j.field("hausdorff", hd.hausdorff)
+            .field("mean_distance_from_input", hd.ab.mean)
+            .field("mean_distance_to_input", hd.ba.mean)
+            .field("diagonal", hd.diagonal);
       }
       WriteStats(j, L.stats);
       j.EndObject();
@@ -250,8 +274,8 @@ int CmdSimplify(int argc, char** argv) {
   // (Not with cone:auto, whose stop is reported as any other, nor without condition 1 (no group
   // then stops anything), nor with the lock, a maximum error or --keep-cones: those stop early by
   // choice.)
-  if (coneLevel > 0 && !autoLevel && !targetReached && p.condition1 && !p.lockGroupBoundaries &&
-      !(p.maxError > 0) && !p.keepCones) {
+  if (coneLevel > 0 && !autoLevel && !targetReached && p.condition1 && !p.lockGroupBoundaries && !(p.maxError > 0) &&
+      !p.keepCones) {
     const int would = AutoGroupLevel(h, p.targetFaces);
     unreachable = input + ": the target of " + std::to_string(p.targetFaces) + " faces cannot be reached with " +
                   std::to_string(h.level(coneLevel).groups.size()) + " groups (level " + std::to_string(coneLevel) +
@@ -270,18 +294,30 @@ int CmdSimplify(int argc, char** argv) {
 
   if (json) {
     Json j;
-    j.BeginObject().field("input", input).field("group_source", source)
-        .field("faces_in", im.faceCount()).field("faces_out", r.mesh.faceCount()).field("target_faces", p.targetFaces)
-        .field("groups_before", gi.groupsBefore).field("groups_after", gi.groupsAfter)
-        .field("groups_split", gi.groupsSplit).field("groups_vanished", gi.groupsVanished)
-        .field("groups_disconnected_in", gi.groupsDisconnectedBefore).field("integrity", gi.intact())
+    j.BeginObject()
+        .field("input", input)
+        .field("group_source", source)
+        .field("faces_in", im.faceCount())
+        .field("faces_out", r.mesh.faceCount())
+        .field("target_faces", p.targetFaces)
+        .field("groups_before", gi.groupsBefore)
+        .field("groups_after", gi.groupsAfter)
+        .field("groups_split", gi.groupsSplit)
+        .field("groups_vanished", gi.groupsVanished)
+        .field("groups_disconnected_in", gi.groupsDisconnectedBefore)
+        .field("integrity", gi.intact())
         .field("seconds", seconds)
-        .field("condition1", p.condition1).field("condition2", p.condition2)
+        .field("condition1", p.condition1)
+        .field("condition2", p.condition2)
         .field("lock_boundaries", p.lockGroupBoundaries)
-        .field("mode", ToString(p.mode)).field("keep_cones", p.keepCones).field("target_reached", targetReached);
+        .field("mode", ToString(p.mode))
+        .field("keep_cones", p.keepCones)
+        .field("target_reached", targetReached);
     if (coneLevel > 0)
-      j.field("group_level", coneLevel).field("group_level_automatic", autoLevel)
-          .field("cone_limit_deg", coneLimitDeg).field("cones_over_threshold", conesOver);
+      j.field("group_level", coneLevel)
+          .field("group_level_automatic", autoLevel)
+          .field("cone_limit_deg", coneLimitDeg)
+          .field("cones_over_threshold", conesOver);
     if (!unreachable.empty()) j.field("message", unreachable);
     WriteStats(j, r.stats);
     if (a.has("-o")) j.field("output", a.str("-o"));
@@ -299,11 +335,12 @@ int CmdSimplify(int argc, char** argv) {
       std::printf("normal cones: %d of %d groups over the level-%d threshold of %.1f deg%s%s\n", conesOver,
                   gi.groupsAfter, coneLevel, coneLimitDeg, autoLevel ? " (level chosen for the target)" : "",
                   p.keepCones ? " (--keep-cones)" : "");
-    std::printf("refused evaluations (%s mode): topology %zu, %s %zu, condition 2 %zu, lock %zu, fixed %zu, "
-                "geometry %zu, cone %zu\n",
-                ToString(p.mode), r.stats.refusedTopology, p.mode == GroupMode::Paper ? "condition 1" : "integrity",
-                r.stats.refusedCondition1, r.stats.refusedCondition2, r.stats.refusedLock, r.stats.refusedFixed,
-                r.stats.refusedGeometry, r.stats.refusedCone);
+    std::printf(
+        "refused evaluations (%s mode): topology %zu, %s %zu, condition 2 %zu, lock %zu, fixed %zu, "
+        "geometry %zu, cone %zu\n",
+        ToString(p.mode), r.stats.refusedTopology, p.mode == GroupMode::Paper ? "condition 1" : "integrity",
+        r.stats.refusedCondition1, r.stats.refusedCondition2, r.stats.refusedLock, r.stats.refusedFixed,
+        r.stats.refusedGeometry, r.stats.refusedCone);
     if (a.has("-o")) std::printf("wrote %s (quality and colour = group)\n", a.str("-o").c_str());
   }
   if (!unreachable.empty()) return Fail(kBadInput, unreachable);

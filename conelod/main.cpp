@@ -57,7 +57,8 @@ int main(int argc, char** argv) {
     try {
       return c.run(argc - 2, argv + 2);
     } catch (const std::bad_alloc&) {
-      std::fprintf(stderr, "conelod: out of memory (the mesh or an option such as --samples is too large for this machine)\n");
+      std::fprintf(stderr,
+                   "conelod: out of memory (the mesh or an option such as --samples is too large for this machine)\n");
       return conelod::cli::kOutOfMemory;
     }
   }

@@ -44,8 +44,12 @@ using conelod::Status;
 // ---------------------------------------------------------------------------------------------
 // Parameters, values, report
 
-Bound AtLeast(double min, const char* note) { return Bound{min, std::numeric_limits<double>::infinity(), false, false, note}; }
-Bound Above(double min, const char* note) { return Bound{min, std::numeric_limits<double>::infinity(), true, false, note}; }
+Bound AtLeast(double min, const char* note) {
+  return Bound{min, std::numeric_limits<double>::infinity(), false, false, note};
+}
+Bound Above(double min, const char* note) {
+  return Bound{min, std::numeric_limits<double>::infinity(), true, false, note};
+}
 Bound Between(double min, double max, const char* note) { return Bound{min, max, false, false, note}; }
 Bound AboveUpTo(double min, double max, const char* note) { return Bound{min, max, true, false, note}; }
 static Bound Inside(double min, double max, const char* note = nullptr) { return Bound{min, max, true, true, note}; }
@@ -238,8 +242,7 @@ void AddGroupingParams(std::vector<ParamSpec>& p) {
   p.push_back(FloatParam("ThresholdGrowth", d.thresholdGrowth, "Threshold growth per level",
                          "The cone threshold is multiplied by this factor at each level above the first (>= 1).",
                          AtLeast(1)));
-  p.push_back(IntParam("MaxLevels", d.maxLevels, "Max levels", "At most this many hierarchy levels.",
-                       Between(1, 64)));
+  p.push_back(IntParam("MaxLevels", d.maxLevels, "Max levels", "At most this many hierarchy levels.", Between(1, 64)));
   p.push_back(IntParam("MinTopGroups", d.minTopGroups, "Min top-level groups",
                        "Merging stops once a level has this many groups (or fewer).", AtLeast(1)));
 }
@@ -257,7 +260,8 @@ conelod::ConeGroupingParams ReadGroupingParams(const Args& a) {
 }
 
 // The collapse options shared by the group-preserving QEM and the LOD export (which runs it per level).
-void AddCollapseOptionParams(std::vector<ParamSpec>& p, const conelod::GroupQemParams& d, const char* boundaryWeightHelp) {
+void AddCollapseOptionParams(std::vector<ParamSpec>& p, const conelod::GroupQemParams& d,
+                             const char* boundaryWeightHelp) {
   p.push_back(FloatParam("QualityThr", d.qualityThr, "Quality threshold",
                          "Collapses creating faces of quality (2 area / longest edge^2) below this are penalised, "
                          "as in the built-in filter. 0: no penalty.",
@@ -266,8 +270,8 @@ void AddCollapseOptionParams(std::vector<ParamSpec>& p, const conelod::GroupQemP
                         "The merged vertex goes where the quadric error is least; otherwise to the better endpoint."));
   p.push_back(BoolParam("PreserveBoundary", d.preserveBoundary, "Preserve Boundary of the mesh",
                         "Vertices on the mesh border never move."));
-  p.push_back(FloatParam("BoundaryWeight", d.boundaryWeight, "Boundary Preserving Weight", boundaryWeightHelp,
-                         AtLeast(0)));
+  p.push_back(
+      FloatParam("BoundaryWeight", d.boundaryWeight, "Boundary Preserving Weight", boundaryWeightHelp, AtLeast(0)));
   p.push_back(BoolParam("PreserveNormal", d.preserveNormal, "Preserve Normal",
                         "Refuse collapses that turn a face's normal by more than about 78 degrees (fold-overs)."));
 }
@@ -351,8 +355,8 @@ Status ApplyConeGrouping(FilterCall& c) {
 std::vector<ParamSpec> CullingCostSpecs(const MeshDocument*, const MeshModel*) {
   std::vector<ParamSpec> p;
   AddGroupingParams(p);
-  p.push_back(IntParam("Views", 1000, "View directions", "Number of view directions, uniform on the sphere.",
-                       Between(1, 1e7)));
+  p.push_back(
+      IntParam("Views", 1000, "View directions", "Number of view directions, uniform on the sphere.", Between(1, 1e7)));
   p.push_back(FloatParam("CameraDistance", 0.0, "Camera distance",
                          "0: orthographic views (the paper's test). Otherwise a perspective eye at this many "
                          "bounding-sphere radii (> 1) from the model's centre."));
@@ -401,7 +405,10 @@ std::vector<ParamSpec> GroupQemSpecs(const MeshDocument*, const MeshModel*) {
                          "If non zero, no collapse whose quadric error (RMS distance) exceeds this percentage of "
                          "the bounding-box diagonal is done. 0: no limit.",
                          AtLeast(0, "0: no limit")));
-  p.push_back(EnumParam("GroupSource", 0, QStringList() << "Per-face quality" << "Normal cone groups", "Groups",
+  p.push_back(EnumParam("GroupSource", 0,
+                        QStringList() << "Per-face quality"
+                                      << "Normal cone groups",
+                        "Groups",
                         "Per-face quality: the ids already on the mesh (e.g. from Cone LOD: Normal Cone Face "
                         "Grouping). Normal cone groups: computed now at the normal cone level below with the "
                         "default grouping parameters."));
@@ -410,7 +417,9 @@ std::vector<ParamSpec> GroupQemSpecs(const MeshDocument*, const MeshModel*) {
                        "groups. 0: automatic, the finest level whose groups leave at least 8 faces per group at "
                        "the target (the top level when none does).",
                        AtLeast(0, "0: automatic")));
-  p.push_back(EnumParam("Mode", d.mode == conelod::GroupMode::Paper ? 1 : 0, QStringList() << "Integrity" << "Paper",
+  p.push_back(EnumParam("Mode", d.mode == conelod::GroupMode::Paper ? 1 : 0,
+                        QStringList() << "Integrity"
+                                      << "Paper",
                         "Group mode",
                         "Integrity: every group stays one non-empty piece, and group contours and corners move and "
                         "merge like any vertex (as accurate as the built-in Quadric Edge Collapse). Paper: "
@@ -477,8 +486,10 @@ Status ApplyGroupQem(FilterCall& c) {
     progress = conelod::SubProgress(progress, 30, 100);
   } else {
     if (!mm.hasDataMask(MeshModel::MM_FACEQUALITY))
-      return Invalid("the mesh has no per-face quality to use as group ids: run Cone LOD: Normal Cone Face Grouping "
-                     "first, or set " + Label(c, "GroupSource") + " to Normal cone groups");
+      return Invalid(
+          "the mesh has no per-face quality to use as group ids: run Cone LOD: Normal Cone Face Grouping "
+          "first, or set " +
+          Label(c, "GroupSource") + " to Normal cone groups");
     const std::vector<float> q = FaceQualities(mm.cm);
     std::vector<std::vector<int>> ids;
     s = conelod::GroupIdsFromValues({&q}, ids);
@@ -506,9 +517,9 @@ Status ApplyGroupQem(FilterCall& c) {
         "the target of " + std::to_string(p.targetFaces) + " faces cannot be reached with the " +
         std::to_string(h.level(level).groups.size()) + " normal cone groups of level " + std::to_string(level) +
         ": stopped at " + std::to_string(r.mesh.faceCount()) + " faces (" + conelod::ToString(r.stats.stop) + "); " +
-        (would > level ? Label(c, "GroupLevel").toStdString() + " " + std::to_string(would) +
-                             " (or 0, automatic) would reach it"
-                       : std::string("no coarser level has fewer groups: try a larger target"));
+        (would > level
+             ? Label(c, "GroupLevel").toStdString() + " " + std::to_string(would) + " (or 0, automatic) would reach it"
+             : std::string("no coarser level has fewer groups: try a larger target"));
     c.report.log("%s", message.c_str());
     return Invalid(QString::fromStdString(message));
   }
@@ -533,21 +544,23 @@ Status ApplyGroupQem(FilterCall& c) {
       ", " + conelod::ToString(p.mode) + " mode";
   out.log("Group-preserving QEM (%s): faces_in %d faces_out %d target %d (%s) seconds %.3f", source.c_str(),
           int(im.faceCount()), int(r.mesh.faceCount()), int(p.targetFaces), conelod::ToString(r.stats.stop), seconds);
-  out.log("groups_before %d groups_after %d groups_split %d groups_vanished %d groups_disconnected_in %d "
-          "integrity_percent %.2f",
-          gi.groupsBefore, gi.groupsAfter, gi.groupsSplit, gi.groupsVanished, gi.groupsDisconnectedBefore,
-          100 * gi.intact());
+  out.log(
+      "groups_before %d groups_after %d groups_split %d groups_vanished %d groups_disconnected_in %d "
+      "integrity_percent %.2f",
+      gi.groupsBefore, gi.groupsAfter, gi.groupsSplit, gi.groupsVanished, gi.groupsDisconnectedBefore,
+      100 * gi.intact());
   if (gi.groupsDisconnectedBefore)
     out.log("%d groups were already in several pieces in the input: each piece was kept as it was",
             gi.groupsDisconnectedBefore);
   if (coneSource)
     out.log("cones_over_threshold %d of %d groups (level %d threshold %.1f deg%s)", conesOver, gi.groupsAfter, level,
             coneLimitDeg, p.keepCones ? ", KeepCones" : "");
-  out.log("collapses %d; refused evaluations: topology %d, condition 1 %d, condition 2 %d, lock %d, fixed %d, "
-          "geometry %d, cone %d",
-          int(r.stats.collapses), int(r.stats.refusedTopology), int(r.stats.refusedCondition1),
-          int(r.stats.refusedCondition2), int(r.stats.refusedLock), int(r.stats.refusedFixed),
-          int(r.stats.refusedGeometry), int(r.stats.refusedCone));
+  out.log(
+      "collapses %d; refused evaluations: topology %d, condition 1 %d, condition 2 %d, lock %d, fixed %d, "
+      "geometry %d, cone %d",
+      int(r.stats.collapses), int(r.stats.refusedTopology), int(r.stats.refusedCondition1),
+      int(r.stats.refusedCondition2), int(r.stats.refusedLock), int(r.stats.refusedFixed), int(r.stats.refusedGeometry),
+      int(r.stats.refusedCone));
   out.figure("faces_out", double(r.mesh.faceCount()));
   out.figure("groups_before", gi.groupsBefore);
   out.figure("groups_after", gi.groupsAfter);
@@ -593,10 +606,11 @@ Status ApplyGroupIntegrity(FilterCall& c) {
     if (!s.ok()) return s;
     const conelod::GroupPieces pieces = conelod::CountGroupPieces(curMesh, ids[0]);
     const int inPieces = int(std::count_if(pieces.pieces.begin(), pieces.pieces.end(), [](int n) { return n > 1; }));
-    out.log("Group integrity: the reference mesh is '%s' itself, so there is nothing to compare (a mesh simplified "
-            "in place keeps no copy of itself before). To measure a simplification, duplicate the layer first "
-            "(Filters > Mesh Layer > Duplicate Current Layer), simplify one of the two and pick the other as %s.",
-            qUtf8Printable(cur->label()), qUtf8Printable(Label(c, "ReferenceMesh")));
+    out.log(
+        "Group integrity: the reference mesh is '%s' itself, so there is nothing to compare (a mesh simplified "
+        "in place keeps no copy of itself before). To measure a simplification, duplicate the layer first "
+        "(Filters > Mesh Layer > Duplicate Current Layer), simplify one of the two and pick the other as %s.",
+        qUtf8Printable(cur->label()), qUtf8Printable(Label(c, "ReferenceMesh")));
     out.log("groups %d groups_in_several_pieces %d", int(pieces.ids.size()), inPieces);
     out.figure("groups", double(pieces.ids.size()));
     out.figure("groups_in_several_pieces", inPieces);
@@ -612,10 +626,11 @@ Status ApplyGroupIntegrity(FilterCall& c) {
   if (!s.ok()) return s;
   out.log("Group integrity of '%s' against '%s' (group id = per-face quality):", qUtf8Printable(cur->label()),
           qUtf8Printable(ref->label()));
-  out.log("groups_before %d groups_after %d groups_split %d groups_vanished %d groups_disconnected_before %d "
-          "groups_disconnected_after %d groups_new %d integrity_percent %.2f",
-          gi.groupsBefore, gi.groupsAfter, gi.groupsSplit, gi.groupsVanished, gi.groupsDisconnectedBefore,
-          gi.groupsDisconnectedAfter, gi.groupsNew, 100 * gi.intact());
+  out.log(
+      "groups_before %d groups_after %d groups_split %d groups_vanished %d groups_disconnected_before %d "
+      "groups_disconnected_after %d groups_new %d integrity_percent %.2f",
+      gi.groupsBefore, gi.groupsAfter, gi.groupsSplit, gi.groupsVanished, gi.groupsDisconnectedBefore,
+      gi.groupsDisconnectedAfter, gi.groupsNew, 100 * gi.intact());
   auto list = [](const std::vector<int>& v) {
     QStringList l;
     for (int id : v) l << QString::number(id);
@@ -716,9 +731,10 @@ Status ApplyFeatureSimplify(FilterCall& c) {
     out.log("error bound at the end %g (%.4f %% of the diagonal)", r.finalErrorBound,
             100.0 * r.finalErrorBound / std::max(1e-30, conelod::BoundingBoxDiagonal(im)));
   if (mark)
-    out.log("feature vertices selected and coloured (red: on a feature line, blue: feature vertex); the other "
-            "edges are faux, so the layer's wireframe in Polygonal Modality (layer dialog, wireframe) draws the "
-            "feature lines only; the default wireframe draws every edge");
+    out.log(
+        "feature vertices selected and coloured (red: on a feature line, blue: feature vertex); the other "
+        "edges are faux, so the layer's wireframe in Polygonal Modality (layer dialog, wireframe) draws the "
+        "feature lines only; the default wireframe draws every edge");
   out.figure("faces_out", double(r.facesOut));
   out.figure("feature_edges", double(r.featureEdgesIn));
   return Status::Ok();
@@ -733,16 +749,22 @@ const char* const kBudgetSimplifiers[] = {"None (log the budget only)", "Feature
 std::vector<ParamSpec> PixelBudgetSpecs(const MeshDocument*, const MeshModel*) {
   const conelod::PixelBudgetParams d;
   std::vector<ParamSpec> p;
-  p.push_back(IntParam("Width", d.width, "Screen width (pixels)", "Width of the screen the model is shown on.",
-                       AtLeast(1)));
+  p.push_back(
+      IntParam("Width", d.width, "Screen width (pixels)", "Width of the screen the model is shown on.", AtLeast(1)));
   p.push_back(IntParam("Height", d.height, "Screen height (pixels)", "Height of the screen the model is shown on.",
                        AtLeast(1)));
   p.push_back(FloatParam("PixelFactor", d.pixelFactor, "Faces per covered pixel",
                          "The budget is this many faces per pixel the model covers (the paper's finding: 50).",
                          Above(0)));
   p.push_back(EnumParam("View", 0,
-                        QStringList() << "Worst of the six axis directions" << "+X" << "-X" << "+Y" << "-Y" << "+Z"
-                                      << "-Z" << "Direction below",
+                        QStringList() << "Worst of the six axis directions"
+                                      << "+X"
+                                      << "-X"
+                                      << "+Y"
+                                      << "-Y"
+                                      << "+Z"
+                                      << "-Z"
+                                      << "Direction below",
                         "View",
                         "Direction the model is looked at (orthographic, framed on its bounding sphere). The worst "
                         "case counts the most pixels."));
@@ -769,7 +791,8 @@ Status ApplyPixelBudget(FilterCall& c) {
 
   const conelod::IndexedMesh im = conelod::ToIndexedMesh(mm.cm);
   conelod::PixelBudgetResult r;
-  Status s = conelod::ComputePixelBudget(im, params, r, conelod::SubProgress(c.progress(), 0, simplifier == 0 ? 100 : 10));
+  Status s =
+      conelod::ComputePixelBudget(im, params, r, conelod::SubProgress(c.progress(), 0, simplifier == 0 ? 100 : 10));
   if (!s.ok()) return s;
   Report& out = c.report;
   out.log("Face budget at %d x %d, view %s: covered_pixels %d (%.1f %% of the screen)", params.width, params.height,
@@ -873,8 +896,7 @@ Status ApplyPcaPartition(FilterCall& c) {
           int(im.faceCount()), tree.componentCount, int(tree.nodes.size()), tree.maxDepth, seconds);
   out.log("pca_clusters %d", int(cut.size()));
   out.log("faces_per_cluster min %u  mean %.1f  max %u", smallest, double(im.faceCount()) / cut.size(), largest);
-  out.log("error_rms max %.6g  area_weighted_mean %.6g  (RMS distance of a cluster to its plane)", maxError,
-          meanError);
+  out.log("error_rms max %.6g  area_weighted_mean %.6g  (RMS distance of a cluster to its plane)", maxError, meanError);
   out.log("all_connected %d", connected ? 1 : 0);
   out.figure("pca_clusters", double(cut.size()));
   out.figure("all_connected", connected ? 1 : 0);
@@ -989,11 +1011,12 @@ Status ApplyLodExport(FilterCall& c) {
   if (!s.ok()) return Invalid(NameFile(fullPath, s.message));
 
   Report& out = c.report;
-  out.log("LOD file %s%s: %d faces, %d levels, %d nodes, %.1f KiB in %.3f s (grouping %.3f s, simplification "
-          "%.3f s, writing %.3f s)",
-          qUtf8Printable(fullPath), replaced ? " (replaced the file that was there)" : "", int(stats.inputFaces),
-          stats.levels, int(stats.nodes), stats.fileBytes / 1024.0, stats.seconds, stats.groupingSeconds,
-          stats.simplifySeconds, stats.writeSeconds);
+  out.log(
+      "LOD file %s%s: %d faces, %d levels, %d nodes, %.1f KiB in %.3f s (grouping %.3f s, simplification "
+      "%.3f s, writing %.3f s)",
+      qUtf8Printable(fullPath), replaced ? " (replaced the file that was there)" : "", int(stats.inputFaces),
+      stats.levels, int(stats.nodes), stats.fileBytes / 1024.0, stats.seconds, stats.groupingSeconds,
+      stats.simplifySeconds, stats.writeSeconds);
   for (size_t l = 0; l < stats.levelFaces.size(); ++l)
     out.log("lod level %d: faces %d nodes %d", int(l), int(stats.levelFaces[l]),
             l < stats.levelNodes.size() ? int(stats.levelNodes[l]) : 0);
@@ -1107,8 +1130,7 @@ Status ApplyLodExtract(FilterCall& c) {
   Report& out = c.report;
   const vcg::Point3d& e = view.eye;
   out.log("View-dependent LOD of %s (%s, budget %s%s%s): %d faces, %d vertices from %d nodes in %.3f s (new layer)",
-          qUtf8Printable(fullPath), kLodViewModes[mode],
-          budget == 0 ? "none" : qUtf8Printable(QString::number(budget)),
+          qUtf8Printable(fullPath), kLodViewModes[mode], budget == 0 ? "none" : qUtf8Printable(QString::number(budget)),
           cull ? ", back-facing groups refined last" : "", drop ? ", back-facing groups left out" : "",
           int(mesh.faceCount()), int(mesh.vertexCount()), int(cut.nodes.size()), seconds);
   if (mode == 2)
@@ -1240,8 +1262,7 @@ std::vector<FilterSpec> MakeFilters() {
                        "of the input are left as they are. The current mesh is not changed.<br>") +
                    kPaperTsuji,
                "the mesh was not changed and no layer was added", ProgressiveMeshSpecs, ApplyProgressiveMesh});
-  t.push_back({"Cone LOD: Export LOD File", Menu::Remeshing, Arity::SingleMesh, MeshModel::MM_NONE,
-               MeshModel::MM_NONE,
+  t.push_back({"Cone LOD: Export LOD File", Menu::Remeshing, Arity::SingleMesh, MeshModel::MM_NONE, MeshModel::MM_NONE,
                QString("Writes the current mesh as a streamable level-of-detail file (<tt>.clod</tt>, the paper's "
                        "sections 7-8) whose every cut is crack-free: clusters of about 128 faces within the "
                        "grouping's <i>cone threshold</i> are gathered eight at a time, each group is simplified "
@@ -1297,8 +1318,8 @@ Status CheckArgs(const std::vector<ParamSpec>& specs, const Args& args) {
           rule = "between " + num(b.min) + " and " + num(b.max);
         else
           rule = QString("in %1%2, %3%4").arg(b.minOpen ? "(" : "[", num(b.min), num(b.max), b.maxOpen ? ")" : "]");
-        return Invalid(Quoted(p) + " must be " + rule + (b.note ? QString(" (") + b.note + ")" : QString()) +
-                       ", not " + num(v));
+        return Invalid(Quoted(p) + " must be " + rule + (b.note ? QString(" (") + b.note + ")" : QString()) + ", not " +
+                       num(v));
       }
       case ParamKind::Enum: {
         const double v = args.number(name.constData());
@@ -1319,7 +1340,8 @@ Status CheckArgs(const std::vector<ParamSpec>& specs, const Args& args) {
         break;
       case ParamKind::Bool:
       case ParamKind::OpenFile:
-      case ParamKind::SaveFile: break;
+      case ParamKind::SaveFile:
+        break;
     }
   }
   return Status::Ok();

@@ -42,16 +42,16 @@ Bound AboveUpTo(double min, double max, const char* note = nullptr);  // (min, m
 
 struct ParamSpec {
   ParamKind kind = ParamKind::Float;
-  QString name;   // the key of scripts (.mlx) and PyMeshLab (lowercased): never changes
-  QString label;  // what the dialog shows: messages name it
-  QString help;   // the dialog's tooltip
-  double number = 0;               // default of Bool (0/1), Int, Float, AbsPerc (absolute), Enum
-  double absMax = 0;               // AbsPerc: the length that 100 % stands for in the dialog
-  vcg::Point3f point{0, 0, 0};     // default of Position, Direction
-  QString path;                    // default of OpenFile, SaveFile
-  QStringList choices;             // Enum: its entries; OpenFile/SaveFile: the file types
+  QString name;                     // the key of scripts (.mlx) and PyMeshLab (lowercased): never changes
+  QString label;                    // what the dialog shows: messages name it
+  QString help;                     // the dialog's tooltip
+  double number = 0;                // default of Bool (0/1), Int, Float, AbsPerc (absolute), Enum
+  double absMax = 0;                // AbsPerc: the length that 100 % stands for in the dialog
+  vcg::Point3f point{0, 0, 0};      // default of Position, Direction
+  QString path;                     // default of OpenFile, SaveFile
+  QStringList choices;              // Enum: its entries; OpenFile/SaveFile: the file types
   const MeshModel* mesh = nullptr;  // default of Mesh
-  Bound bound;                     // numbers: what the filter accepts
+  Bound bound;                      // numbers: what the filter accepts
 };
 
 ParamSpec BoolParam(const char* name, bool value, const char* label, const char* help);
@@ -128,9 +128,9 @@ struct FilterSpec {
   QString name;  // "Cone LOD: ...": scripts name filters by it, never changes
   Menu menu;
   Arity arity;
-  int requirements;    // MeshModel::MM_* the filter needs enabled before it runs
-  int postConditions;  // MeshModel::MM_* it changes
-  QString info;        // HTML help, ending with the paper
+  int requirements;       // MeshModel::MM_* the filter needs enabled before it runs
+  int postConditions;     // MeshModel::MM_* it changes
+  QString info;           // HTML help, ending with the paper
   const char* untouched;  // what a failure leaves as it was: "the mesh was not changed"
   // The parameters and their defaults, which may depend on the document (null when MeshLab
   // gives only a mesh) and its current mesh (null in an empty document).

@@ -57,8 +57,8 @@ const char* kUsage = "usage: meshopt_simplify IN.ply OUT.ply --target-faces N [-
 
 struct Run {
   std::vector<unsigned int> indices;
-  float error = 0;      // meshoptimizer's relative error
-  double ms = 0;        // wall time of the call
+  float error = 0;  // meshoptimizer's relative error
+  double ms = 0;    // wall time of the call
   size_t faces() const { return indices.size() / 3; }
 };
 
@@ -75,8 +75,10 @@ int main(int argc, char** argv) {
       const long long v = i + 1 < argc ? std::strtoll(argv[i + 1], &end, 10) : 0;
       if (i + 1 >= argc || !*argv[i + 1] || *end) return Fail(1, arg + " needs an integer\n" + kUsage);
       ++i;
-      if (arg == "--target-faces") target = v;
-      else maxProbes = v < 1 || v > 1000 ? 0 : int(v);
+      if (arg == "--target-faces")
+        target = v;
+      else
+        maxProbes = v < 1 || v > 1000 ? 0 : int(v);
     } else if (arg.size() > 1 && arg[0] == '-') {
       return Fail(1, "unknown option " + arg + "\n" + kUsage);
     } else {
@@ -164,11 +166,12 @@ int main(int argc, char** argv) {
   const float scale = meshopt_simplifyScale(positions, in.vertexCount(), sizeof(vcg::Point3f));
   const vcg::Box3d box = UsedVertexBox(in);
   const double diagonal = box.IsNull() ? 0 : box.Diag();
-  std::printf("{\"input\": \"%s\", \"faces_in\": %zu, \"target_faces\": %lld, \"faces\": %zu, \"exact\": %s, "
-              "\"time_ms\": %.3f, \"search_ms\": %.3f, \"calls\": %d, \"result_error\": %.9g, "
-              "\"result_error_diagonal\": %.9g, \"meshoptimizer_version\": %d}\n",
-              JsonEscaped(positional[0]).c_str(), in.faceCount(), target, best.faces(), exact ? "true" : "false", best.ms,
-              searchMs, calls, double(best.error), diagonal > 0 ? double(best.error) * scale / diagonal : 0.0,
-              MESHOPTIMIZER_VERSION);
+  std::printf(
+      "{\"input\": \"%s\", \"faces_in\": %zu, \"target_faces\": %lld, \"faces\": %zu, \"exact\": %s, "
+      "\"time_ms\": %.3f, \"search_ms\": %.3f, \"calls\": %d, \"result_error\": %.9g, "
+      "\"result_error_diagonal\": %.9g, \"meshoptimizer_version\": %d}\n",
+      JsonEscaped(positional[0]).c_str(), in.faceCount(), target, best.faces(), exact ? "true" : "false", best.ms,
+      searchMs, calls, double(best.error), diagonal > 0 ? double(best.error) * scale / diagonal : 0.0,
+      MESHOPTIMIZER_VERSION);
   return 0;
 }

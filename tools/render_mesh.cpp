@@ -110,20 +110,38 @@ int main(int argc, char** argv) {
   bool wire = false, features = true, colors = false, rotated = false;
   for (int i = 3; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--size" && i + 2 < argc) { W = std::atoi(argv[++i]); H = std::atoi(argv[++i]); }
-    else if (a == "--view" && i + 1 < argc) {
+    if (a == "--size" && i + 2 < argc) {
+      W = std::atoi(argv[++i]);
+      H = std::atoi(argv[++i]);
+    } else if (a == "--view" && i + 1 < argc) {
       double x, y, z;
-      if (std::sscanf(argv[++i], "%lf,%lf,%lf", &x, &y, &z) != 3) { std::fprintf(stderr, "bad --view\n"); return 1; }
+      if (std::sscanf(argv[++i], "%lf,%lf,%lf", &x, &y, &z) != 3) {
+        std::fprintf(stderr, "bad --view\n");
+        return 1;
+      }
       dir = P3(x, y, z);
-    } else if (a == "--angle" && i + 1 < argc) angle = std::atof(argv[++i]);
-    else if (a == "--zoom" && i + 1 < argc) zoom = std::atof(argv[++i]);
-    else if (a == "--supersample" && i + 1 < argc) ss = std::max(1, std::atoi(argv[++i]));
-    else if (a == "--azimuth" && i + 1 < argc) { azimuth = std::atof(argv[++i]); rotated = true; }
-    else if (a == "--elevation" && i + 1 < argc) { elevation = std::atof(argv[++i]); rotated = true; }
-    else if (a == "--colors") colors = true;
-    else if (a == "--wire") wire = true;
-    else if (a == "--no-features") features = false;
-    else { std::fprintf(stderr, "unknown option %s\n", a.c_str()); return 1; }
+    } else if (a == "--angle" && i + 1 < argc)
+      angle = std::atof(argv[++i]);
+    else if (a == "--zoom" && i + 1 < argc)
+      zoom = std::atof(argv[++i]);
+    else if (a == "--supersample" && i + 1 < argc)
+      ss = std::max(1, std::atoi(argv[++i]));
+    else if (a == "--azimuth" && i + 1 < argc) {
+      azimuth = std::atof(argv[++i]);
+      rotated = true;
+    } else if (a == "--elevation" && i + 1 < argc) {
+      elevation = std::atof(argv[++i]);
+      rotated = true;
+    } else if (a == "--colors")
+      colors = true;
+    else if (a == "--wire")
+      wire = true;
+    else if (a == "--no-features")
+      features = false;
+    else {
+      std::fprintf(stderr, "unknown option %s\n", a.c_str());
+      return 1;
+    }
   }
   if (rotated) {  // -Z of the rotated model, in model coordinates: Ry(-az) Rx(-el) (0, 0, -1)
     const double az = azimuth * M_PI / 180, el = elevation * M_PI / 180;
@@ -133,7 +151,10 @@ int main(int argc, char** argv) {
   CMesh mesh;
   int mask = 0;
   const std::string err = LoadPly(mesh, argv[1], &mask);
-  if (!err.empty()) { std::fprintf(stderr, "%s\n", err.c_str()); return 2; }
+  if (!err.empty()) {
+    std::fprintf(stderr, "%s\n", err.c_str());
+    return 2;
+  }
   const IndexedMesh im = ToIndexedMesh(mesh);
   std::vector<vcg::Color4b> faceColor;
   if (colors && (mask & vcg::tri::io::Mask::IOM_FACECOLOR))
@@ -230,7 +251,10 @@ int main(int argc, char** argv) {
               std::fwrite(rgb.data(), 1, rgb.size(), out) == rgb.size();
     written = out && std::fclose(out) == 0 && written;
   }
-  if (!written) { std::fprintf(stderr, "cannot write %s\n", argv[2]); return 3; }
+  if (!written) {
+    std::fprintf(stderr, "cannot write %s\n", argv[2]);
+    return 3;
+  }
   std::printf("%s: %zu faces, %zu feature edges drawn\n", argv[1], im.faceCount(), featureCount);
   return 0;
 }

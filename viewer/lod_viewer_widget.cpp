@@ -300,8 +300,10 @@ void LodViewerWidget::renderScene() {
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
-  if (options_.cullBackFacing) glEnable(GL_CULL_FACE);  // what the group test leaves, the GPU culls
-  else glDisable(GL_CULL_FACE);
+  if (options_.cullBackFacing)
+    glEnable(GL_CULL_FACE);  // what the group test leaves, the GPU culls
+  else
+    glDisable(GL_CULL_FACE);
 
   FrameStats s;
   const LodCut& cut = refiner_->cut();
@@ -321,7 +323,7 @@ void LodViewerWidget::renderScene() {
   const vcg::Point3d eye(e.x(), e.y(), e.z());
   const QVector3D plain(0.82f, 0.80f, 0.74f);
   const int colourUniform = program_.uniformLocation("uColour");  // looked up once, not per draw
-  int colourLevel = -1;                                            // the level uColour holds now
+  int colourLevel = -1;                                           // the level uColour holds now
   if (!options_.colourLevels) program_.setUniformValue(colourUniform, plain);
 
   for (uint32_t id : cut.nodes) {
@@ -389,8 +391,11 @@ void LodViewerWidget::drawHud() {
                .arg(stats_.minLevel)
                .arg(stats_.maxLevel)
                .arg(info.levels - 1)
-               .arg(refining_ ? "refining..." : dragging_ ? "coarse while moving" : "still");
-  lines << QString("memory: reader %1, GPU buffers %2, process %3").arg(MiB(readerBytes), MiB(double(gpuBytes_)), MiB(rss));
+               .arg(refining_   ? "refining..."
+                    : dragging_ ? "coarse while moving"
+                                : "still");
+  lines << QString("memory: reader %1, GPU buffers %2, process %3")
+               .arg(MiB(readerBytes), MiB(double(gpuBytes_)), MiB(rss));
   if (!error_.empty()) lines << QString("error: %1").arg(QString::fromStdString(error_));
 
   QPainter p(this);
@@ -480,14 +485,30 @@ void LodViewerWidget::wheelEvent(QWheelEvent* e) {
 
 void LodViewerWidget::keyPressEvent(QKeyEvent* e) {
   switch (e->key()) {
-    case Qt::Key_C: options_.colourLevels = !options_.colourLevels; break;
-    case Qt::Key_H: options_.hud = !options_.hud; break;
-    case Qt::Key_B: options_.cullBackFacing = !options_.cullBackFacing; viewStill(); break;
-    case Qt::Key_R: frameModel(); interactionStarted(); break;
-    case Qt::Key_Space: viewStill(); break;
+    case Qt::Key_C:
+      options_.colourLevels = !options_.colourLevels;
+      break;
+    case Qt::Key_H:
+      options_.hud = !options_.hud;
+      break;
+    case Qt::Key_B:
+      options_.cullBackFacing = !options_.cullBackFacing;
+      viewStill();
+      break;
+    case Qt::Key_R:
+      frameModel();
+      interactionStarted();
+      break;
+    case Qt::Key_Space:
+      viewStill();
+      break;
     case Qt::Key_Q:
-    case Qt::Key_Escape: close(); return;
-    default: QOpenGLWidget::keyPressEvent(e); return;
+    case Qt::Key_Escape:
+      close();
+      return;
+    default:
+      QOpenGLWidget::keyPressEvent(e);
+      return;
   }
   update();
 }

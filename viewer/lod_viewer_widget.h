@@ -40,7 +40,7 @@ struct ViewerOptions {
   // What the refinement expands first: the screen-space error (refined while a group's error
   // projects to more than pixelError pixels, within the budget), or the paper's f(g).
   conelod::LodPriority priority = conelod::LodPriority::ScreenError;
-  double pixelError = 1.0;     // 0: no pixel threshold (refine to the budget)
+  double pixelError = 1.0;  // 0: no pixel threshold (refine to the budget)
 };
 
 // What the last frame drew.
@@ -131,6 +131,6 @@ class LodViewerWidget : public QOpenGLWidget, protected QOpenGLFunctions {
   FrameStats stats_;
   QElapsedTimer startClock_;
   double firstFrameMsecs_ = -1;
-  double fps_ = 0;         // 1000 / the last frame's drawing time, or the benchmark's mean
-  int benchmarked_ = 0;    // frames of benchmarkFrames behind fps_ (0: fps_ is the last frame's)
+  double fps_ = 0;       // 1000 / the last frame's drawing time, or the benchmark's mean
+  int benchmarked_ = 0;  // frames of benchmarkFrames behind fps_ (0: fps_ is the last frame's)
 };

@@ -83,8 +83,8 @@ int main(int argc, char** argv) {
                                       "with --priority screen: refine while a group's error projects to more "
                                       "than this many pixels (default 1; 0: refine to the budget)",
                                       "PX", "1");
-  parser.addOptions({budget, flat, colours, noCull, noHud, screenshot, size, eye, refine, frames, json, priority,
-                     pixelError});
+  parser.addOptions(
+      {budget, flat, colours, noCull, noHud, screenshot, size, eye, refine, frames, json, priority, pixelError});
   if (!parser.parse(QApplication::arguments())) return Fail(1, parser.errorText());
   if (parser.isSet("help")) parser.showHelp(0);
   if (parser.positionalArguments().size() != 1) return Fail(1, "give one .clod file (--help for usage)");
@@ -100,10 +100,14 @@ int main(int argc, char** argv) {
   options.colourLevels = parser.isSet(colours);
   options.cullBackFacing = !parser.isSet(noCull);
   const QString pr = parser.value(priority);
-  if (pr == "screen") options.priority = conelod::LodPriority::ScreenError;
-  else if (pr == "error") options.priority = conelod::LodPriority::ObjectError;
-  else if (pr == "fg") options.priority = conelod::LodPriority::ConeFg;
-  else return Fail(1, "--priority needs screen, error or fg");
+  if (pr == "screen")
+    options.priority = conelod::LodPriority::ScreenError;
+  else if (pr == "error")
+    options.priority = conelod::LodPriority::ObjectError;
+  else if (pr == "fg")
+    options.priority = conelod::LodPriority::ConeFg;
+  else
+    return Fail(1, "--priority needs screen, error or fg");
   options.pixelError = parser.value(pixelError).toDouble(&ok);
   if (!ok || !(options.pixelError >= 0) || !std::isfinite(options.pixelError))
     return Fail(1, "--pixel-error needs a number of pixels >= 0");
@@ -184,13 +188,14 @@ int main(int argc, char** argv) {
     std::printf("%s\n", QJsonDocument(o).toJson(QJsonDocument::Compact).constData());
   } else {
     std::printf("%s: %dx%d, first frame after %.0f ms (open %.1f ms): %zu faces drawn, %zu groups drawn, %zu culled\n",
-                qUtf8Printable(out), image.width(), image.height(), widget.firstFrameMsecs(), openMs,
-                coarse.facesDrawn, coarse.groupsDrawn, coarse.groupsCulled);
+                qUtf8Printable(out), image.width(), image.height(), widget.firstFrameMsecs(), openMs, coarse.facesDrawn,
+                coarse.groupsDrawn, coarse.groupsCulled);
     if (parser.isSet(refine))
       std::printf("refined in %.0f ms: %zu faces drawn, %zu groups drawn, %zu culled, levels %d-%d\n",
                   refineSeconds * 1e3, last.facesDrawn, last.groupsDrawn, last.groupsCulled, last.minLevel,
                   last.maxLevel);
-    if (benchFrames > 0) std::printf("%.2f ms per frame (%.1f fps) over %d frames\n", frameMs, 1000.0 / frameMs, benchFrames);
+    if (benchFrames > 0)
+      std::printf("%.2f ms per frame (%.1f fps) over %d frames\n", frameMs, 1000.0 / frameMs, benchFrames);
   }
   return 0;
 }

@@ -15,17 +15,31 @@ const FilterSpec* Spec(int id) {
 void AddParams(const std::vector<ParamSpec>& specs, MeshDocument* md, RichParameterList& par) {
   for (const ParamSpec& p : specs) {
     switch (p.kind) {
-      case ParamKind::Bool: par.addParam(RichBool(p.name, p.number != 0, p.label, p.help)); break;
-      case ParamKind::Int: par.addParam(RichInt(p.name, int(p.number), p.label, p.help)); break;
-      case ParamKind::Float: par.addParam(RichFloat(p.name, float(p.number), p.label, p.help)); break;
+      case ParamKind::Bool:
+        par.addParam(RichBool(p.name, p.number != 0, p.label, p.help));
+        break;
+      case ParamKind::Int:
+        par.addParam(RichInt(p.name, int(p.number), p.label, p.help));
+        break;
+      case ParamKind::Float:
+        par.addParam(RichFloat(p.name, float(p.number), p.label, p.help));
+        break;
       case ParamKind::AbsPerc:
         par.addParam(RichAbsPerc(p.name, float(p.number), 0.0f, float(p.absMax), p.label, p.help));
         break;
-      case ParamKind::Enum: par.addParam(RichEnum(p.name, int(p.number), p.choices, p.label, p.help)); break;
+      case ParamKind::Enum:
+        par.addParam(RichEnum(p.name, int(p.number), p.choices, p.label, p.help));
+        break;
       case ParamKind::Position:
-      case ParamKind::Direction: par.addParam(RichPoint3f(p.name, p.point, p.label, p.help)); break;
-      case ParamKind::OpenFile: par.addParam(RichOpenFile(p.name, p.path, p.choices, p.label, p.help)); break;
-      case ParamKind::SaveFile: par.addParam(RichSaveFile(p.name, p.path, p.choices.value(0), p.label, p.help)); break;
+      case ParamKind::Direction:
+        par.addParam(RichPoint3f(p.name, p.point, p.label, p.help));
+        break;
+      case ParamKind::OpenFile:
+        par.addParam(RichOpenFile(p.name, p.path, p.choices, p.label, p.help));
+        break;
+      case ParamKind::SaveFile:
+        par.addParam(RichSaveFile(p.name, p.path, p.choices.value(0), p.label, p.help));
+        break;
       case ParamKind::Mesh:  // without a layer, the form that does not assert on an empty document
         if (p.mesh)
           par.addParam(RichMesh(p.name, const_cast<MeshModel*>(p.mesh), md, p.label, p.help));
@@ -43,16 +57,34 @@ Args ReadArgs(const std::vector<ParamSpec>& specs, const RichParameterList& par)
     const QString& n = p.name;
     const bool given = par.hasParameter(n);
     switch (p.kind) {
-      case ParamKind::Bool: a.set(n, given ? double(par.getBool(n)) : p.number); break;
-      case ParamKind::Int: a.set(n, given ? double(par.getInt(n)) : p.number); break;
-      case ParamKind::Float: a.set(n, given ? double(par.getFloat(n)) : p.number); break;
-      case ParamKind::AbsPerc: a.set(n, given ? double(par.getAbsPerc(n)) : p.number); break;
-      case ParamKind::Enum: a.set(n, given ? double(par.getEnum(n)) : p.number); break;
+      case ParamKind::Bool:
+        a.set(n, given ? double(par.getBool(n)) : p.number);
+        break;
+      case ParamKind::Int:
+        a.set(n, given ? double(par.getInt(n)) : p.number);
+        break;
+      case ParamKind::Float:
+        a.set(n, given ? double(par.getFloat(n)) : p.number);
+        break;
+      case ParamKind::AbsPerc:
+        a.set(n, given ? double(par.getAbsPerc(n)) : p.number);
+        break;
+      case ParamKind::Enum:
+        a.set(n, given ? double(par.getEnum(n)) : p.number);
+        break;
       case ParamKind::Position:
-      case ParamKind::Direction: a.set(n, given ? par.getPoint3f(n) : p.point); break;
-      case ParamKind::OpenFile: a.set(n, given ? par.getOpenFileName(n) : p.path); break;
-      case ParamKind::SaveFile: a.set(n, given ? par.getSaveFileName(n) : p.path); break;
-      case ParamKind::Mesh: a.set(n, given ? par.getMesh(n) : const_cast<MeshModel*>(p.mesh)); break;
+      case ParamKind::Direction:
+        a.set(n, given ? par.getPoint3f(n) : p.point);
+        break;
+      case ParamKind::OpenFile:
+        a.set(n, given ? par.getOpenFileName(n) : p.path);
+        break;
+      case ParamKind::SaveFile:
+        a.set(n, given ? par.getSaveFileName(n) : p.path);
+        break;
+      case ParamKind::Mesh:
+        a.set(n, given ? par.getMesh(n) : const_cast<MeshModel*>(p.mesh));
+        break;
     }
   }
   return a;
@@ -80,10 +112,14 @@ QString FilterConeLodPlugin::filterInfo(FilterIDType filter) const {
 MeshFilterInterface::FilterClass FilterConeLodPlugin::getClass(QAction* a) {
   const FilterSpec* f = Spec(ID(a));
   switch (f ? f->menu : Menu::Measure) {
-    case Menu::FaceColoring: return MeshFilterInterface::FaceColoring;
-    case Menu::Measure: return MeshFilterInterface::Measure;
-    case Menu::Remeshing: return MeshFilterInterface::Remeshing;
-    case Menu::MeshCreation: return MeshFilterInterface::MeshCreation;
+    case Menu::FaceColoring:
+      return MeshFilterInterface::FaceColoring;
+    case Menu::Measure:
+      return MeshFilterInterface::Measure;
+    case Menu::Remeshing:
+      return MeshFilterInterface::Remeshing;
+    case Menu::MeshCreation:
+      return MeshFilterInterface::MeshCreation;
   }
   return MeshFilterInterface::Measure;
 }

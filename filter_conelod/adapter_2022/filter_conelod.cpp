@@ -19,16 +19,30 @@ RichParameterList MakeParams(const std::vector<ParamSpec>& specs, const MeshDocu
   RichParameterList par;
   for (const ParamSpec& p : specs) {
     switch (p.kind) {
-      case ParamKind::Bool: par.addParam(RichBool(p.name, p.number != 0, p.label, p.help)); break;
-      case ParamKind::Int: par.addParam(RichInt(p.name, int(p.number), p.label, p.help)); break;
-      case ParamKind::Float: par.addParam(RichFloat(p.name, Scalarm(p.number), p.label, p.help)); break;
+      case ParamKind::Bool:
+        par.addParam(RichBool(p.name, p.number != 0, p.label, p.help));
+        break;
+      case ParamKind::Int:
+        par.addParam(RichInt(p.name, int(p.number), p.label, p.help));
+        break;
+      case ParamKind::Float:
+        par.addParam(RichFloat(p.name, Scalarm(p.number), p.label, p.help));
+        break;
       case ParamKind::AbsPerc:
         par.addParam(RichAbsPercParameter(p.name, Scalarm(p.number), 0, Scalarm(p.absMax), p.label, p.help));
         break;
-      case ParamKind::Enum: par.addParam(RichEnum(p.name, int(p.number), p.choices, p.label, p.help)); break;
-      case ParamKind::Position: par.addParam(RichPosition(p.name, Point3m::Construct(p.point), p.label, p.help)); break;
-      case ParamKind::Direction: par.addParam(RichDirection(p.name, Point3m::Construct(p.point), p.label, p.help)); break;
-      case ParamKind::OpenFile: par.addParam(RichOpenFileParameter(p.name, p.path, p.choices, p.label, p.help)); break;
+      case ParamKind::Enum:
+        par.addParam(RichEnum(p.name, int(p.number), p.choices, p.label, p.help));
+        break;
+      case ParamKind::Position:
+        par.addParam(RichPosition(p.name, Point3m::Construct(p.point), p.label, p.help));
+        break;
+      case ParamKind::Direction:
+        par.addParam(RichDirection(p.name, Point3m::Construct(p.point), p.label, p.help));
+        break;
+      case ParamKind::OpenFile:
+        par.addParam(RichOpenFileParameter(p.name, p.path, p.choices, p.label, p.help));
+        break;
       case ParamKind::SaveFile:
         par.addParam(RichSaveFileParameter(p.name, p.path, p.choices.value(0), p.label, p.help));
         break;
@@ -48,16 +62,34 @@ Args ReadArgs(const std::vector<ParamSpec>& specs, const RichParameterList& par,
     const QString& n = p.name;
     const bool given = par.hasParameter(n);
     switch (p.kind) {
-      case ParamKind::Bool: a.set(n, given ? double(par.getBool(n)) : p.number); break;
-      case ParamKind::Int: a.set(n, given ? double(par.getInt(n)) : p.number); break;
-      case ParamKind::Float: a.set(n, given ? double(par.getFloat(n)) : p.number); break;
-      case ParamKind::AbsPerc: a.set(n, given ? double(par.getAbsPerc(n)) : p.number); break;
-      case ParamKind::Enum: a.set(n, given ? double(par.getEnum(n)) : p.number); break;
+      case ParamKind::Bool:
+        a.set(n, given ? double(par.getBool(n)) : p.number);
+        break;
+      case ParamKind::Int:
+        a.set(n, given ? double(par.getInt(n)) : p.number);
+        break;
+      case ParamKind::Float:
+        a.set(n, given ? double(par.getFloat(n)) : p.number);
+        break;
+      case ParamKind::AbsPerc:
+        a.set(n, given ? double(par.getAbsPerc(n)) : p.number);
+        break;
+      case ParamKind::Enum:
+        a.set(n, given ? double(par.getEnum(n)) : p.number);
+        break;
       case ParamKind::Position:
-      case ParamKind::Direction: a.set(n, given ? vcg::Point3f::Construct(par.getPoint3m(n)) : p.point); break;
-      case ParamKind::OpenFile: a.set(n, given ? par.getOpenFileName(n) : p.path); break;
-      case ParamKind::SaveFile: a.set(n, given ? par.getSaveFileName(n) : p.path); break;
-      case ParamKind::Mesh: a.set(n, given ? md.getMesh(par.getMeshId(n)) : const_cast<MeshModel*>(p.mesh)); break;
+      case ParamKind::Direction:
+        a.set(n, given ? vcg::Point3f::Construct(par.getPoint3m(n)) : p.point);
+        break;
+      case ParamKind::OpenFile:
+        a.set(n, given ? par.getOpenFileName(n) : p.path);
+        break;
+      case ParamKind::SaveFile:
+        a.set(n, given ? par.getSaveFileName(n) : p.path);
+        break;
+      case ParamKind::Mesh:
+        a.set(n, given ? md.getMesh(par.getMeshId(n)) : const_cast<MeshModel*>(p.mesh));
+        break;
     }
   }
   return a;
@@ -87,10 +119,14 @@ QString FilterConeLodPlugin::filterInfo(ActionIDType filter) const {
 FilterPlugin::FilterClass FilterConeLodPlugin::getClass(const QAction* a) const {
   const FilterSpec* f = Spec(ID(a));
   switch (f ? f->menu : Menu::Measure) {
-    case Menu::FaceColoring: return FilterPlugin::FaceColoring;
-    case Menu::Measure: return FilterPlugin::Measure;
-    case Menu::Remeshing: return FilterPlugin::Remeshing;
-    case Menu::MeshCreation: return FilterPlugin::MeshCreation;
+    case Menu::FaceColoring:
+      return FilterPlugin::FaceColoring;
+    case Menu::Measure:
+      return FilterPlugin::Measure;
+    case Menu::Remeshing:
+      return FilterPlugin::Remeshing;
+    case Menu::MeshCreation:
+      return FilterPlugin::MeshCreation;
   }
   return FilterPlugin::Measure;
 }

@@ -126,7 +126,9 @@ class Plugin {
     }
 #else
     (void)figures;
-    return filter_->applyFilter(a, md, par, cb) ? QString() : (filter_->errorMsg().isEmpty() ? QString("(no message)") : filter_->errorMsg());
+    return filter_->applyFilter(a, md, par, cb)
+               ? QString()
+               : (filter_->errorMsg().isEmpty() ? QString("(no message)") : filter_->errorMsg());
 #endif
   }
 
@@ -152,7 +154,8 @@ class Plugin {
       try {
         unsigned int postConditions = MeshModel::MM_UNKNOWN;
         f->applyFilter(a, pair.second, md, postConditions, cb);
-        for (MeshModel* m = md.nextMesh(); m; m = md.nextMesh(m)) vcg::tri::Allocator<CMeshO>::CompactEveryVector(m->cm);
+        for (MeshModel* m = md.nextMesh(); m; m = md.nextMesh(m))
+          vcg::tri::Allocator<CMeshO>::CompactEveryVector(m->cm);
         const int classes = int(f->getClass(a));
         if (md.mm() && (classes & FilterPlugin::FaceColoring)) md.mm()->updateDataMask(MeshModel::MM_FACECOLOR);
       } catch (const MLException& e) {

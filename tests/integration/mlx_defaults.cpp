@@ -23,11 +23,17 @@ static QString Slug(QString name) {
 
 int main(int argc, char** argv) {
   QApplication app(argc, argv);
-  if (argc != 3) { std::fprintf(stderr, "usage: mlx_defaults PLUGIN.so OUT_DIR\n"); return 1; }
+  if (argc != 3) {
+    std::fprintf(stderr, "usage: mlx_defaults PLUGIN.so OUT_DIR\n");
+    return 1;
+  }
   QPluginLoader loader(argv[1]);
   QObject* obj = loader.instance();
   auto* plugin = qobject_cast<MeshFilterInterface*>(obj);
-  if (!plugin) { std::fprintf(stderr, "cannot load %s: %s\n", argv[1], qPrintable(loader.errorString())); return 1; }
+  if (!plugin) {
+    std::fprintf(stderr, "cannot load %s: %s\n", argv[1], qPrintable(loader.errorString()));
+    return 1;
+  }
   QDir().mkpath(argv[2]);
   MeshDocument md;
   md.addNewMesh("", "empty");  // the current mesh of every filter's defaults
@@ -40,7 +46,10 @@ int main(int argc, char** argv) {
     pair.second = par;
     script.append(pair);
     const QString path = QDir(argv[2]).filePath(Slug(plugin->filterName(a)) + ".mlx");
-    if (!script.save(path)) { std::fprintf(stderr, "cannot write %s\n", qPrintable(path)); return 1; }
+    if (!script.save(path)) {
+      std::fprintf(stderr, "cannot write %s\n", qPrintable(path));
+      return 1;
+    }
     std::printf("%s\n", qPrintable(path));
   }
   return 0;

@@ -51,8 +51,8 @@ const char* const kPca = "Cone LOD: PCA Recursive Face Partition";
 const char* const kProgressive = "Cone LOD: Progressive Cluster Mesh";
 const char* const kExport = "Cone LOD: Export LOD File";
 const char* const kExtract = "Cone LOD: Extract View-Dependent LOD";
-const char* const kAll[] = {kGrouping, kCulling, kGroupQem, kIntegrity, kFeature,
-                            kBudget,   kPca,     kProgressive, kExport, kExtract};
+const char* const kAll[] = {kGrouping, kCulling, kGroupQem,    kIntegrity, kFeature,
+                            kBudget,   kPca,     kProgressive, kExport,    kExtract};
 
 // What a filter could change: faces, positions, the data mask, per-face quality and colour, attributes.
 struct Snapshot {
@@ -160,7 +160,7 @@ struct Run {
 
   // A failing run: a message naming `expect`, none of `mustNotName`, the mesh and document unchanged.
   QString refused(const char* name, MeshDocument& md, const RichParameterList& par, const QString& expect,
-               const QString& why, vcg::CallBackPos* cb = nullptr, const QString& mustNotName = QString()) {
+                  const QString& why, vcg::CallBackPos* cb = nullptr, const QString& mustNotName = QString()) {
     MeshModel* mm = md.mm();
     if (mm) mm->updateDataMask(plugin.filter()->getRequirements(action(name)));  // MeshLab does this first
     const Snapshot before = mm ? Take(*mm) : Snapshot();
@@ -228,7 +228,8 @@ void ApplyEveryFilter(Run& r) {
     r.digest[kGroupQem] = Digest(md, log, {"faces_out", "groups_after"});
     RichParameterList par = r.params(kIntegrity, md);
 #if CONELOD_MESHLAB_API >= 2022
-    Check(par.getMeshId("ReferenceMesh") == unsigned(before->id()), "  Group Integrity's default reference: the other layer");
+    Check(par.getMeshId("ReferenceMesh") == unsigned(before->id()),
+          "  Group Integrity's default reference: the other layer");
 #else
     Check(par.getMesh("ReferenceMesh") == before, "  Group Integrity's default reference: the other layer");
 #endif
@@ -479,7 +480,8 @@ QString ValueXml(const RichParameter& p) {
 
 void Scripts(Run& r, const QString& dirPath) {
   const QStringList files = QDir(dirPath).entryList(QStringList() << "*.mlx", QDir::Files, QDir::Name);
-  Check(files.size() == int(sizeof(kAll) / sizeof(kAll[0])), QString("%1 scripts in %2").arg(files.size()).arg(dirPath));
+  Check(files.size() == int(sizeof(kAll) / sizeof(kAll[0])),
+        QString("%1 scripts in %2").arg(files.size()).arg(dirPath));
   for (const QString& file : files) {
     const QString path = QDir(dirPath).filePath(file);
     FilterScript script;
@@ -516,7 +518,8 @@ void Scripts(Run& r, const QString& dirPath) {
         MeshModel* copy = md.addNewMesh("", "copy", true);
         copy->updateDataMask(mm);
         vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(copy->cm, mm->cm, false, true);
-        Check(r.plugin.runScript(QDir(dirPath).filePath("group_preserving_quadric_edge_collapse.mlx"), md, nullptr).isEmpty(),
+        Check(r.plugin.runScript(QDir(dirPath).filePath("group_preserving_quadric_edge_collapse.mlx"), md, nullptr)
+                  .isEmpty(),
               "  the copy simplified first");
       }
     }
@@ -555,7 +558,8 @@ int main(int argc, char** argv) {
     const QString opt = argv[i];
     (opt == "--scripts" ? scripts : opt == "--digest" ? digestOut : compare) = QString::fromLocal8Bit(argv[i + 1]);
   }
-  std::printf("MeshLab plugin API %d (built against MeshLab %s)\n", CONELOD_MESHLAB_API, HARNESS_STRING(MESHLAB_VERSION));
+  std::printf("MeshLab plugin API %d (built against MeshLab %s)\n", CONELOD_MESHLAB_API,
+              HARNESS_STRING(MESHLAB_VERSION));
   harness::Plugin plugin;
   QString why;
   const bool loaded = plugin.load(argv[1], why);
@@ -568,7 +572,8 @@ int main(int argc, char** argv) {
 #if CONELOD_MESHLAB_API >= 2022
   if (!scripts.isEmpty()) Scripts(r, scripts);
 #else
-  if (!scripts.isEmpty()) Check(false, "--scripts: MeshLab 2020.09's scripts run through meshlabserver (tests/integration/cases.py)");
+  if (!scripts.isEmpty())
+    Check(false, "--scripts: MeshLab 2020.09's scripts run through meshlabserver (tests/integration/cases.py)");
 #endif
 
   QString text;
@@ -576,7 +581,8 @@ int main(int argc, char** argv) {
   std::printf("digest:\n%s", qUtf8Printable(text));
   if (!digestOut.isEmpty()) {
     QFile f(digestOut);
-    Check(f.open(QIODevice::WriteOnly) && f.write(text.toUtf8()) == text.toUtf8().size(), "digest written to " + digestOut);
+    Check(f.open(QIODevice::WriteOnly) && f.write(text.toUtf8()) == text.toUtf8().size(),
+          "digest written to " + digestOut);
   }
   if (!compare.isEmpty()) {
     QFile f(compare);

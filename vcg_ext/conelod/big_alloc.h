@@ -44,7 +44,8 @@ class BigRecycler {
   void* take(size_t size, bool huge) {
     size_t best = kept_.size();
     for (size_t i = 0; i < kept_.size(); ++i)
-      if (kept_[i].size >= size && (kept_[i].huge || !huge) && (best == kept_.size() || kept_[i].size < kept_[best].size))
+      if (kept_[i].size >= size && (kept_[i].huge || !huge) &&
+          (best == kept_.size() || kept_[i].size < kept_[best].size))
         best = i;
     if (best == kept_.size()) return nullptr;
     const Block b = kept_[best];
@@ -80,7 +81,7 @@ struct BigAlloc {
   BigAlloc(const BigAlloc<U>&) {}
   static constexpr size_t kPage = 4096;
   static constexpr size_t kHugePage = size_t(2) << 20;
-  static constexpr size_t kMapped = 64 * kPage;  // mapped from this size on
+  static constexpr size_t kMapped = 64 * kPage;   // mapped from this size on
   static constexpr size_t kHuge = 4 * kHugePage;  // huge pages from this size on: below, the
                                                   // TLB's reach suffices and rounding costs
   static size_t MappedSize(size_t bytes) {
@@ -118,15 +119,21 @@ struct BigAlloc {
   // std::allocator value-initialises: every user of a BigVector writes what it sizes, and zeroing it
   // first cost a pass over fresh memory. Values given are copied as usual (assign(n, x)).
   template <class U>
-  void construct(U* p) { ::new (static_cast<void*>(p)) U; }
+  void construct(U* p) {
+    ::new (static_cast<void*>(p)) U;
+  }
   template <class U, class... Args>
-  void construct(U* p, Args&&... args) { ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...); }
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
   void deallocate(T* p, size_t n) {
 #ifdef __linux__
     if (n * sizeof(T) >= kMapped) {
       const size_t size = MappedSize(n * sizeof(T));
-      if (BigRecycler* r = BigRecycler::Current()) r->keep(p, size, n * sizeof(T) >= kHuge);
-      else munmap(p, size);
+      if (BigRecycler* r = BigRecycler::Current())
+        r->keep(p, size, n * sizeof(T) >= kHuge);
+      else
+        munmap(p, size);
       return;
     }
 #endif
@@ -134,9 +141,13 @@ struct BigAlloc {
   }
 };
 template <class T, class U>
-bool operator==(const BigAlloc<T>&, const BigAlloc<U>&) { return true; }
+bool operator==(const BigAlloc<T>&, const BigAlloc<U>&) {
+  return true;
+}
 template <class T, class U>
-bool operator!=(const BigAlloc<T>&, const BigAlloc<U>&) { return false; }
+bool operator!=(const BigAlloc<T>&, const BigAlloc<U>&) {
+  return false;
+}
 template <class T>
 using BigVector = std::vector<T, BigAlloc<T>>;
 

@@ -64,7 +64,8 @@ void RunThreads(unsigned threads, const Work& work, bool waitOnCaller, const Wai
 // thread count. An exception from a work function is rethrown here, after every thread stopped.
 template <class Work>
 void RunThreads(unsigned threads, const Work& work) {
-  detail::RunThreads(threads, work, false, [] {}, 0);
+  detail::RunThreads(
+      threads, work, false, [] {}, 0);
 }
 
 // The same on new threads only, while the calling thread calls whileWaiting() every `waitMs`

@@ -66,8 +66,10 @@ void WriteSimplifiedMesh(MeshType& m, const std::vector<size_t>& faceOfIndex, co
     for (auto& v : m.vert) {
       if (v.IsD()) continue;
       const int c = cls[v];
-      if (c == int(VertexClass::FeatureLine) || c == int(VertexClass::Feature)) v.SetS();
-      else v.ClearS();
+      if (c == int(VertexClass::FeatureLine) || c == int(VertexClass::Feature))
+        v.SetS();
+      else
+        v.ClearS();
       if (colour)
         v.C() = c == int(VertexClass::FeatureLine) ? vcg::Color4b(220, 40, 40, 255)
                 : c == int(VertexClass::Feature)   ? vcg::Color4b(40, 80, 230, 255)

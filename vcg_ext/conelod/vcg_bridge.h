@@ -33,7 +33,10 @@ IndexedMesh ToIndexedMesh(const MeshType& m, std::vector<size_t>* faceOfIndex = 
     out.positions.emplace_back(float(p[0]), float(p[1]), float(p[2]));
   }
   out.faces.reserve(size_t(m.fn));
-  if (faceOfIndex) { faceOfIndex->clear(); faceOfIndex->reserve(size_t(m.fn)); }
+  if (faceOfIndex) {
+    faceOfIndex->clear();
+    faceOfIndex->reserve(size_t(m.fn));
+  }
   for (size_t i = 0; i < m.face.size(); ++i) {
     const auto& f = m.face[i];
     if (f.IsD()) continue;
@@ -53,8 +56,7 @@ IndexedMesh ToIndexedMesh(const MeshType& m, std::vector<size_t>* faceOfIndex = 
 // group id at `displayLevel` and a distinct colour per group. Only call on success: the mesh is
 // changed here and nowhere else.
 template <class MeshType>
-void WriteGroupResults(MeshType& m, const std::vector<size_t>& faceOfIndex, const GroupHierarchy& h,
-                       int displayLevel) {
+void WriteGroupResults(MeshType& m, const std::vector<size_t>& faceOfIndex, const GroupHierarchy& h, int displayLevel) {
   vcg::tri::RequirePerFaceQuality(m);
   vcg::tri::RequirePerFaceColor(m);
   for (int level = 1; level <= h.levelCount(); ++level) {

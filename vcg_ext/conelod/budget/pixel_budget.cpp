@@ -21,8 +21,8 @@ constexpr long long kMaxPixels = 1LL << 28;  // 16384 x 16384
 }  // namespace
 
 const std::array<P3, 6>& AxisDirections() {
-  static const std::array<P3, 6> dirs = {P3(1, 0, 0), P3(-1, 0, 0), P3(0, 1, 0),
-                                         P3(0, -1, 0), P3(0, 0, 1), P3(0, 0, -1)};
+  static const std::array<P3, 6> dirs = {P3(1, 0, 0),  P3(-1, 0, 0), P3(0, 1, 0),
+                                         P3(0, -1, 0), P3(0, 0, 1),  P3(0, 0, -1)};
   return dirs;
 }
 
@@ -150,7 +150,10 @@ Status ComputePixelBudget(const IndexedMesh& mesh, const PixelBudgetParams& p, P
 bool ParseBudgetView(const std::string& text, BudgetView& view, P3& direction) {
   static const char* names[] = {"worst", "+x", "-x", "+y", "-y", "+z", "-z"};
   for (int i = 0; i < 7; ++i)
-    if (text == names[i]) { view = BudgetView(i); return true; }
+    if (text == names[i]) {
+      view = BudgetView(i);
+      return true;
+    }
   double d[3];
   const char* c = text.c_str();
   for (int k = 0; k < 3; ++k) {
@@ -158,7 +161,10 @@ bool ParseBudgetView(const std::string& text, BudgetView& view, P3& direction) {
     d[k] = std::strtod(c, &end);
     if (end == c) return false;
     c = end;
-    if (k < 2) { if (*c != ',') return false; ++c; }
+    if (k < 2) {
+      if (*c != ',') return false;
+      ++c;
+    }
   }
   if (*c != '\0') return false;
   direction = P3(d[0], d[1], d[2]);

@@ -29,12 +29,12 @@ namespace conelod {
 enum class BudgetView { WorstAxis, PlusX, MinusX, PlusY, MinusY, PlusZ, MinusZ, Direction };
 
 struct PixelBudgetParams {
-  int width = 1920;                          // viewport, pixels
+  int width = 1920;  // viewport, pixels
   int height = 1080;
-  double pixelFactor = 50.0;                 // faces per covered pixel (the paper's finding: 50)
+  double pixelFactor = 50.0;  // faces per covered pixel (the paper's finding: 50)
   BudgetView view = BudgetView::WorstAxis;
-  vcg::Point3d direction = {0.0, 0.0, -1.0}; // view direction (eye -> model) for BudgetView::Direction
-  double fill = 1.0;                         // the bounding sphere spans fill x min(width, height) pixels
+  vcg::Point3d direction = {0.0, 0.0, -1.0};  // view direction (eye -> model) for BudgetView::Direction
+  double fill = 1.0;                          // the bounding sphere spans fill x min(width, height) pixels
 };
 
 // Checks the parameters; Ok or a message naming the bad one.
@@ -57,12 +57,12 @@ OrthoView FramedView(const IndexedMesh& mesh, const vcg::Point3d& direction, int
 size_t CountCoveredPixels(const IndexedMesh& mesh, const OrthoView& view, std::vector<uint8_t>* mask = nullptr);
 
 struct PixelBudgetResult {
-  size_t coveredPixels = 0;      // for the view used
-  size_t targetFaces = 0;        // round(pixelFactor x coveredPixels)
+  size_t coveredPixels = 0;  // for the view used
+  size_t targetFaces = 0;    // round(pixelFactor x coveredPixels)
   size_t currentFaces = 0;
-  bool aboveCurrent = false;     // targetFaces >= currentFaces: no reduction needed
+  bool aboveCurrent = false;                     // targetFaces >= currentFaces: no reduction needed
   vcg::Point3d viewDirection = {0.0, 0.0, 0.0};  // the direction used (the worst one for WorstAxis)
-  std::array<size_t, 6> axisPixels{};  // +X, -X, +Y, -Y, +Z, -Z (WorstAxis only)
+  std::array<size_t, 6> axisPixels{};            // +X, -X, +Y, -Y, +Z, -Z (WorstAxis only)
   double pixelsPerUnit = 0;
 };
 

@@ -23,9 +23,7 @@ using P3 = vcg::Point3d;
 constexpr uint32_t kNone = UINT32_MAX;
 constexpr size_t kNoTri = SIZE_MAX;  // no triangle to try first
 
-inline uint64_t EdgeKey(uint32_t a, uint32_t b) {
-  return a < b ? (uint64_t(a) << 32) | b : (uint64_t(b) << 32) | a;
-}
+inline uint64_t EdgeKey(uint32_t a, uint32_t b) { return a < b ? (uint64_t(a) << 32) | b : (uint64_t(b) << 32) | a; }
 
 inline double Clamp1(double x) { return std::max(-1.0, std::min(1.0, x)); }
 
@@ -206,12 +204,18 @@ class Work {
     return false;
   }
   void AddFeature(uint32_t a, uint32_t b) {
-    if (!IsFeature(a, b)) { feat[a].push_back(b); feat[b].push_back(a); }
+    if (!IsFeature(a, b)) {
+      feat[a].push_back(b);
+      feat[b].push_back(a);
+    }
   }
   void RemoveFeature(uint32_t a, uint32_t b) {
     auto drop = [](std::vector<uint32_t>& v, uint32_t x) {
       auto it = std::find(v.begin(), v.end(), x);
-      if (it != v.end()) { *it = v.back(); v.pop_back(); }
+      if (it != v.end()) {
+        *it = v.back();
+        v.pop_back();
+      }
     };
     drop(feat[a], b);
     drop(feat[b], a);
@@ -227,7 +231,10 @@ class Work {
   int EdgeFaces(uint32_t a, uint32_t b, uint32_t* out, int cap) const {
     int n = 0;
     for (uint32_t f : VF[a])
-      if (Contains(f, b)) { if (n < cap) out[n] = f; ++n; }
+      if (Contains(f, b)) {
+        if (n < cap) out[n] = f;
+        ++n;
+      }
     return n;
   }
   uint32_t Third(uint32_t f, uint32_t a, uint32_t b) const {
@@ -243,7 +250,10 @@ class Work {
   void RemoveFaceFrom(uint32_t v, uint32_t f) {
     auto& l = VF[v];
     auto it = std::find(l.begin(), l.end(), f);
-    if (it != l.end()) { *it = l.back(); l.pop_back(); }
+    if (it != l.end()) {
+      *it = l.back();
+      l.pop_back();
+    }
   }
 
   double CurvatureK(uint32_t v) const;
@@ -366,7 +376,11 @@ Status Work::Build(const IndexedMesh& in, const FeatureSimplifyParams& p) {
   // Undirected edges with their faces: (key, face, directed-forward) records sorted by key, then
   // face. Bucketed by the smaller vertex first (in face order), then each small bucket is sorted:
   // the same order as one global sort, at a fraction of its cost (setup 163 -> 133 M instructions on the bunny).
-  struct HalfEdge { uint64_t key; uint32_t face; uint32_t forward; };
+  struct HalfEdge {
+    uint64_t key;
+    uint32_t face;
+    uint32_t forward;
+  };
   std::vector<uint32_t> start(nv + 1, 0);
   for (const auto& t : F)
     for (int k = 0; k < 3; ++k) {
@@ -488,8 +502,13 @@ void Work::ExtendFeatureLines(double featureAngleDeg) {
       const double cosN = (n1 * n2) / (n1.Norm() * n2.Norm());
       if (cosN > cosLimit) continue;  // the new edge is not sharp enough
       if (turn > bestTurn || (turn == bestTurn && cosN < bestCos)) {
-        bestTurn = turn; bestCos = cosN;
-        bestF1 = f1; bestF2 = f2; bestA = a; bestB = b; bestD = d;
+        bestTurn = turn;
+        bestCos = cosN;
+        bestF1 = f1;
+        bestF2 = f2;
+        bestA = a;
+        bestB = b;
+        bestD = d;
       }
     }
     if (bestF1 == kNone) continue;
@@ -532,7 +551,7 @@ void Work::Classify(const FeatureSimplifyParams& p, unsigned threads) {
       } else {
         K[v] = CurvatureK(v);
         cls[v] = (p.featureCurvature > 0 && std::abs(K[v]) * d2 >= p.featureCurvature) ? VertexClass::Feature
-                                                                                          : VertexClass::Smooth;
+                                                                                       : VertexClass::Smooth;
       }
     }
   });
@@ -632,7 +651,10 @@ class Evaluator {
   std::vector<Tri> oldFan_;          // the faces around `from` before it, as triangles
   std::vector<uint32_t> link_;       // link_[x] == linkStamp_: x is a neighbour of linkFrom_
   uint32_t linkStamp_ = 0, linkFrom_ = kNone;
-  struct Candidate { double d, q; uint32_t to; };
+  struct Candidate {
+    double d, q;
+    uint32_t to;
+  };
   std::vector<Candidate> cands_;
   std::vector<uint32_t> nbrs_;
 };
@@ -645,15 +667,15 @@ bool SpansParts(const std::vector<uint8_t>& part, const std::array<uint32_t, 3>&
 // The per-vertex state of the queues and of the tracking, shared by the lanes below: while the
 // mesh is simplified in parts, each lane writes the entries of its own vertices only.
 struct QueueState : TrackingStore {
-  std::vector<uint32_t> stamp;       // the vertex's current queue entry
-  std::vector<uint32_t> visit;       // == a lane's mark: seen in its current collapse
-  std::vector<char> queued;          // v has a valid entry in its queue
-  std::vector<char> fanChanged;      // v's fan changed while it was deferred
-  std::vector<uint32_t> retry;       // readmitted with an unchanged fan: its ranking of edges (d, flips,
-                                     // shapes: all from its own fan) is unchanged, so its edge is known
-  std::vector<char> deferredMark;    // v waits in a deferred queue for a larger bound (its stored error
-                                     // may be stale once its neighbourhood changes: it is re-evaluated
-                                     // when the bound reaches it)
+  std::vector<uint32_t> stamp;     // the vertex's current queue entry
+  std::vector<uint32_t> visit;     // == a lane's mark: seen in its current collapse
+  std::vector<char> queued;        // v has a valid entry in its queue
+  std::vector<char> fanChanged;    // v's fan changed while it was deferred
+  std::vector<uint32_t> retry;     // readmitted with an unchanged fan: its ranking of edges (d, flips,
+                                   // shapes: all from its own fan) is unchanged, so its edge is known
+  std::vector<char> deferredMark;  // v waits in a deferred queue for a larger bound (its stored error
+                                   // may be stale once its neighbourhood changes: it is re-evaluated
+                                   // when the bound reaches it)
   // The first pass evaluated ahead (FirstPassAhead): every vertex's first evaluation, under the
   // first bound, depends on the input around it only. aheadStamp[v]: the queue entry it is for
   // (kNone: none, or no longer valid); a collapse invalidates those within two rings of it.
@@ -675,8 +697,16 @@ struct QueueState : TrackingStore {
 class FeatureSimplifier : public Evaluator {
  public:
   FeatureSimplifier(Work& w, const FeatureSimplifyParams& p, QueueState& q)
-      : Evaluator(w, p, q), q_(q), stamp_(q.stamp), visit_(q.visit), queued_(q.queued), fanChanged_(q.fanChanged),
-        retry_(q.retry), deferredMark_(q.deferredMark), ahead_(q.ahead), aheadStamp_(q.aheadStamp) {}
+      : Evaluator(w, p, q),
+        q_(q),
+        stamp_(q.stamp),
+        visit_(q.visit),
+        queued_(q.queued),
+        fanChanged_(q.fanChanged),
+        retry_(q.retry),
+        deferredMark_(q.deferredMark),
+        ahead_(q.ahead),
+        aheadStamp_(q.aheadStamp) {}
 
   void Collapse(uint32_t from, uint32_t to, double outErr);
   void Push(uint32_t v, bool recompute);
@@ -684,8 +714,8 @@ class FeatureSimplifier : public Evaluator {
   // (false). progress (may be null) is called every 1024 pops with the percentage done, assuming
   // every lane of the round `lanes` removes as many faces as this one; cancelled is set when it
   // returns false, and ends the round of every lane.
-  bool RunRound(size_t quota, const Progress* progress, size_t facesIn, size_t target, size_t facesBefore,
-                size_t lanes, std::atomic<bool>& cancelled);
+  bool RunRound(size_t quota, const Progress* progress, size_t facesIn, size_t target, size_t facesBefore, size_t lanes,
+                std::atomic<bool>& cancelled);
   // The error of the deferred vertex with the smallest error (false: none is deferred).
   bool SmallestDeferred(double& error);
   // Puts the deferred vertices under bound_ back in their queues.
@@ -712,7 +742,7 @@ class FeatureSimplifier : public Evaluator {
   size_t nK_ = 0, nM_ = 0;  // V_K and V_M vertices queued at the start (the queues' interleaving)
   size_t removed_ = 0;      // faces removed by this lane's collapses
   size_t collapses_ = 0;
-  size_t faces_ = 0;        // faces of this lane's part at the start
+  size_t faces_ = 0;  // faces of this lane's part at the start
   size_t aheadLeft_ = 0;
   uint32_t mark_ = 0;
   double maxD_ = 0, maxTracked_ = 0;
@@ -728,7 +758,7 @@ class FeatureSimplifier : public Evaluator {
     double error;  // the smallest error bound under which one of v's collapses fits
     uint32_t v;
     uint32_t stamp;
-    uint32_t to;   // the edge v -> to that was tried (the smallest d the topology allowed)
+    uint32_t to;  // the edge v -> to that was tried (the smallest d the topology allowed)
     bool operator<(const Deferred& o) const { return error > o.error; }  // min-heap
   };
   // CurvatureThreshold (§3.3): v (V_K or V_M) may be removed, |K| D^2 or |M| D under the threshold.
@@ -759,16 +789,18 @@ class FeatureSimplifier : public Evaluator {
   std::vector<Deferred> admitted_;  // Admit's vertices to put back in their queues
   size_t popsK_ = 0, popsM_ = 0, iter_ = 0;
   // The lane whose first pass ahead covers v (its aheadLeft_), and whose deferred queue takes v.
-  FeatureSimplifier& Owner(uint32_t v) { return part_ && !(seamLane_ && (*seam_)[v]) ? *(*lanes_)[(*part_)[v]] : *this; }
+  FeatureSimplifier& Owner(uint32_t v) {
+    return part_ && !(seamLane_ && (*seam_)[v]) ? *(*lanes_)[(*part_)[v]] : *this;
+  }
   const std::vector<uint8_t>* part_ = nullptr;
   std::vector<char>* seam_ = nullptr;
   uint32_t markStep_ = 1;
   const std::vector<FeatureSimplifier*>* lanes_ = nullptr;
   bool seamLane_ = false;
   std::vector<std::pair<uint32_t, bool>> pending_;  // seam vertices to push (recompute K / M)
-  std::vector<Tri> newFan_;           // the faces around `to` after a collapse, as triangles
-  std::vector<P3> scratchPts_;        // original vertices to re-assign after a collapse
-  std::vector<size_t> scratchFirst_;  // for each, the triangle of newFan_ to try first
+  std::vector<Tri> newFan_;                         // the faces around `to` after a collapse, as triangles
+  std::vector<P3> scratchPts_;                      // original vertices to re-assign after a collapse
+  std::vector<size_t> scratchFirst_;                // for each, the triangle of newFan_ to try first
   std::vector<uint32_t> scratchRing_;
 };
 
@@ -786,8 +818,7 @@ void Evaluator::BuildFan(uint32_t from) {
   }
 }
 
-CollapseRefusal Evaluator::Check(uint32_t from, uint32_t to, double* dOut, double* qOut, bool topology,
-                                 double cutoff) {
+CollapseRefusal Evaluator::Check(uint32_t from, uint32_t to, double* dOut, double* qOut, bool topology, double cutoff) {
   Work& w = w_;
   if (from == to) return CollapseRefusal::NotAnEdge;
   if (w.frozen && ((*w.frozen)[from] | (*w.frozen)[to])) return CollapseRefusal::LockedVertex;
@@ -1044,9 +1075,19 @@ Evaluation Evaluator::Evaluate(uint32_t v, uint32_t retryTo, double bound, bool 
     double outErr = 0;
     if (track) {
       const double err = CollapseError(v, cd.to, cd.d, bound);
-      if (err > bound) { ev.kind = Evaluation::Defer; ev.to = cd.to; ev.error = err; return ev; }
+      if (err > bound) {
+        ev.kind = Evaluation::Defer;
+        ev.to = cd.to;
+        ev.error = err;
+        return ev;
+      }
       outErr = OutwardError(v, cd.to, bound);
-      if (outErr > bound) { ev.kind = Evaluation::Defer; ev.to = cd.to; ev.error = outErr; return ev; }
+      if (outErr > bound) {
+        ev.kind = Evaluation::Defer;
+        ev.to = cd.to;
+        ev.error = outErr;
+        return ev;
+      }
     }
     ev.kind = Evaluation::Collapse;
     ev.to = cd.to;
@@ -1150,13 +1191,17 @@ void FeatureSimplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
       }
     }
   }
-  if (deferredMark_[to]) fanChanged_[to] = 1;
-  else Push(to, true);
+  if (deferredMark_[to])
+    fanChanged_[to] = 1;
+  else
+    Push(to, true);
   visit_[to] = mark_;
   for (uint32_t x : scratchRing_) {
     visit_[x] = mark_;
-    if (!deferredMark_[x]) Push(x, true);
-    else fanChanged_[x] = 1;  // its curvature is recomputed when the bound admits it again
+    if (!deferredMark_[x])
+      Push(x, true);
+    else
+      fanChanged_[x] = 1;  // its curvature is recomputed when the bound admits it again
   }
   for (uint32_t f : w.VF[to])
     for (uint32_t x : w.F[f])
@@ -1169,7 +1214,8 @@ void FeatureSimplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
 bool FeatureSimplifier::Admitted(uint32_t v) const {
   if (p_.curvatureThreshold <= 0) return true;
   const Work& w = w_;
-  const double curv = w.cls[v] == VertexClass::Smooth ? std::abs(w.K[v]) * (w.diag * w.diag) : std::abs(w.M[v]) * w.diag;
+  const double curv =
+      w.cls[v] == VertexClass::Smooth ? std::abs(w.K[v]) * (w.diag * w.diag) : std::abs(w.M[v]) * w.diag;
   return curv < p_.curvatureThreshold;
 }
 
@@ -1292,8 +1338,8 @@ void FeatureSimplifier::InvalidateAhead(uint32_t from, uint32_t to) {
         for (uint32_t z : w_.F[g]) DropAhead(z);
 }
 
-bool FeatureSimplifier::RunRound(size_t quota, const Progress* progress, size_t facesIn, size_t target, size_t facesBefore,
-                          size_t lanes, std::atomic<bool>& cancelled) {
+bool FeatureSimplifier::RunRound(size_t quota, const Progress* progress, size_t facesIn, size_t target,
+                                 size_t facesBefore, size_t lanes, std::atomic<bool>& cancelled) {
   Work& w = w_;
   const size_t start = removed_;
   while (removed_ - start < quota) {
@@ -1420,8 +1466,8 @@ std::vector<uint8_t> CutIntoParts(const Work& w, unsigned parts) {
 // A round that reaches the target is shared between the parts' lanes still busy in proportion to
 // their faces, so that the result depends neither on which lane runs first nor on the number of
 // threads. Progress is reported on this thread only. False: cancelled.
-bool RunLanes(Work& w, const std::vector<FeatureSimplifier*>& lanes, FeatureSimplifier* seamLane, const FeatureSimplifyParams& p,
-              size_t facesIn, unsigned threads, const Progress& progress) {
+bool RunLanes(Work& w, const std::vector<FeatureSimplifier*>& lanes, FeatureSimplifier* seamLane,
+              const FeatureSimplifyParams& p, size_t facesIn, unsigned threads, const Progress& progress) {
   const size_t target = p.targetFaceCount;
   const std::vector<char>* seam = w.frozen;  // lifted while the seam lane runs
   std::atomic<bool> cancelled(false);
@@ -1478,8 +1524,8 @@ bool RunLanes(Work& w, const std::vector<FeatureSimplifier*>& lanes, FeatureSimp
       w.frozen = nullptr;  // the seams are free while the seam lane runs alone
       for (FeatureSimplifier* l : lanes) l->HandPendingTo(*seamLane);
       if (seamAdmit) seamLane->Admit();
-      seamLane->RunRound(target > 0 ? faces - target : std::numeric_limits<size_t>::max(), &progress, facesIn,
-                         target, faces, 1, cancelled);
+      seamLane->RunRound(target > 0 ? faces - target : std::numeric_limits<size_t>::max(), &progress, facesIn, target,
+                         faces, 1, cancelled);
       w.frozen = seam;
       seamAdmit = false;
       seamDone = true;
@@ -1493,7 +1539,10 @@ bool RunLanes(Work& w, const std::vector<FeatureSimplifier*>& lanes, FeatureSimp
     bool any = false;
     auto consider = [&](FeatureSimplifier* l) {
       double e = 0;
-      if (l->SmallestDeferred(e)) { any = true; smallest = std::min(smallest, e); }
+      if (l->SmallestDeferred(e)) {
+        any = true;
+        smallest = std::min(smallest, e);
+      }
     };
     for (FeatureSimplifier* l : lanes) consider(l);
     if (seamLane) consider(seamLane);
@@ -1530,8 +1579,8 @@ Status Simplify(Work& w, const FeatureSimplifyParams& p, FeatureSimplifyResult& 
   // if given). Without either, the paper's pure curvature order runs untracked.
   const bool grow = target > 0 && p.growErrorBound;
   const bool track = grow || p.maxErrorDistance > 0;
-  double bound = grow ? 1e-6 * w.diag : (p.maxErrorDistance > 0 ? p.maxErrorDistance
-                                                               : std::numeric_limits<double>::infinity());
+  double bound =
+      grow ? 1e-6 * w.diag : (p.maxErrorDistance > 0 ? p.maxErrorDistance : std::numeric_limits<double>::infinity());
   if (grow && p.maxErrorDistance > 0) bound = std::min(bound, p.maxErrorDistance);
   if (track) {
     q.ownedStore.assign(w.F.size(), {});
@@ -1651,9 +1700,7 @@ double BoundingBoxDiagonal(const IndexedMesh& mesh) {
   return box.IsNull() ? 0.0 : box.Diag();
 }
 
-size_t FeatureInfo::count(VertexClass c) const {
-  return size_t(std::count(vertexClass.begin(), vertexClass.end(), c));
-}
+size_t FeatureInfo::count(VertexClass c) const { return size_t(std::count(vertexClass.begin(), vertexClass.end(), c)); }
 
 Status ValidateParams(const FeatureSimplifyParams& p) {
   if (!(p.featureAngleDeg >= 0 && p.featureAngleDeg <= 180))
@@ -1686,8 +1733,9 @@ Status FeatureSimplify(const IndexedMesh& mesh, const FeatureSimplifyParams& par
   Status s = ValidateAndCheckInput(mesh, params);
   if (!s.ok()) return s;
   if (params.targetFaceCount == 0 && params.maxErrorDistance == 0)
-    return Status::Invalid("give a stop criterion: a target face count (TargetFaceNum) or an error distance "
-                           "(MaxErrorDistance)");
+    return Status::Invalid(
+        "give a stop criterion: a target face count (TargetFaceNum) or an error distance "
+        "(MaxErrorDistance)");
   if (progress && !progress(0, "feature detection")) return Status::Cancelled();
   Work w;
   s = w.Build(mesh, params);

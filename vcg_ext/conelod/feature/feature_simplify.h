@@ -59,30 +59,30 @@
 namespace conelod {
 
 struct FeatureSimplifyParams {
-  double featureAngleDeg = 135.0;  // A_t, degrees: an edge with dihedral angle A <= A_t is a feature edge
-  bool extendFeatureLines = true;  // §3.1 edge swaps that close broken feature lines
-  double featureCurvature = 0.0;   // K_t as |K| D^2: a vertex without feature edges and |K| D^2 >= K_t is a
-                                   // feature vertex (V_C); 0 = off
-  double curvatureThreshold = 0.0; // vertices with |K| D^2 (V_K) or |M| D (V_M) >= this are not removed;
-                                   // 0 = no limit
-  double maxErrorDistance = 0.0;   // stop criterion 1, model units: every removed original vertex stays
-                                   // within this distance of the output; 0 = off
-  size_t targetFaceCount = 0;      // stop criterion 2: stop at this many faces (or fewer); 0 = off
-  bool growErrorBound = true;      // with a target face count: simplify under an error bound on the
-                                   // original vertices that starts tiny and grows x1.25 only when no
-                                   // collapse fits (BEYOND the paper); false = the paper's pure
-                                   // curvature order up to the target
-  unsigned threads = 0;            // threads for the set-up (feature detection, classification) and
-                                   // the first pass of the growing bound (every vertex's first
-                                   // evaluation, which depends on the input only, made ahead in
-                                   // memory order); 0 = one per core, at most 8. The output is the
-                                   // same for any count.
-  size_t facesPerPart = 32768;     // with the growing bound, a mesh of at least 2 x this many faces is
-                                   // simplified in 2, 4 or 8 parts at the same time (on `threads`
-                                   // threads), then along the seams between them; 0 = in one piece.
-                                   // The parts depend on the mesh only, not on the threads.
-  bool firstPassAhead = true;      // false: the first pass too is evaluated in the queue's order (the
-                                   // same output, slower; for checking)
+  double featureAngleDeg = 135.0;   // A_t, degrees: an edge with dihedral angle A <= A_t is a feature edge
+  bool extendFeatureLines = true;   // §3.1 edge swaps that close broken feature lines
+  double featureCurvature = 0.0;    // K_t as |K| D^2: a vertex without feature edges and |K| D^2 >= K_t is a
+                                    // feature vertex (V_C); 0 = off
+  double curvatureThreshold = 0.0;  // vertices with |K| D^2 (V_K) or |M| D (V_M) >= this are not removed;
+                                    // 0 = no limit
+  double maxErrorDistance = 0.0;    // stop criterion 1, model units: every removed original vertex stays
+                                    // within this distance of the output; 0 = off
+  size_t targetFaceCount = 0;       // stop criterion 2: stop at this many faces (or fewer); 0 = off
+  bool growErrorBound = true;       // with a target face count: simplify under an error bound on the
+                                    // original vertices that starts tiny and grows x1.25 only when no
+                                    // collapse fits (BEYOND the paper); false = the paper's pure
+                                    // curvature order up to the target
+  unsigned threads = 0;             // threads for the set-up (feature detection, classification) and
+                                    // the first pass of the growing bound (every vertex's first
+                                    // evaluation, which depends on the input only, made ahead in
+                                    // memory order); 0 = one per core, at most 8. The output is the
+                                    // same for any count.
+  size_t facesPerPart = 32768;      // with the growing bound, a mesh of at least 2 x this many faces is
+                                    // simplified in 2, 4 or 8 parts at the same time (on `threads`
+                                    // threads), then along the seams between them; 0 = in one piece.
+                                    // The parts depend on the mesh only, not on the threads.
+  bool firstPassAhead = true;       // false: the first pass too is evaluated in the queue's order (the
+                                    // same output, slower; for checking)
 };
 
 // Checks the parameters (at least one stop criterion); Ok or a message naming the bad one.
@@ -103,9 +103,9 @@ double DihedralAngleDeg(const vcg::Point3d& n0, const vcg::Point3d& n1);
 struct FeatureInfo {
   IndexedMesh mesh;  // the input after the extension swaps (same vertices; swapped faces changed)
   std::vector<std::array<uint32_t, 2>> featureEdges;  // (a < b): dihedral, swap-made, border, non-manifold
-  size_t dihedralEdges = 0;     // edges with A <= A_t before the extension
-  size_t swapEdges = 0;         // feature edges created by extension swaps
-  size_t removedBySwaps = 0;    // dihedral feature edges removed by those swaps (the folds they repair)
+  size_t dihedralEdges = 0;                           // edges with A <= A_t before the extension
+  size_t swapEdges = 0;                               // feature edges created by extension swaps
+  size_t removedBySwaps = 0;  // dihedral feature edges removed by those swaps (the folds they repair)
   size_t borderEdges = 0;
   size_t nonManifoldEdges = 0;
   std::vector<VertexClass> vertexClass;  // per vertex
@@ -116,23 +116,23 @@ struct FeatureInfo {
 Status DetectFeatures(const IndexedMesh& mesh, const FeatureSimplifyParams& params, FeatureInfo& out);
 
 struct FeatureSimplifyResult {
-  IndexedMesh mesh;                    // the simplified mesh (referenced vertices only)
-  std::vector<uint32_t> inputVertex;   // output vertex -> input vertex (vertices never move)
-  std::vector<uint32_t> inputFace;     // output face -> input face it descends from
-  std::vector<VertexClass> vertexClass;                // per output vertex
-  std::vector<std::array<uint32_t, 2>> featureEdges;   // output feature edges (output indices, a < b)
+  IndexedMesh mesh;                                   // the simplified mesh (referenced vertices only)
+  std::vector<uint32_t> inputVertex;                  // output vertex -> input vertex (vertices never move)
+  std::vector<uint32_t> inputFace;                    // output face -> input face it descends from
+  std::vector<VertexClass> vertexClass;               // per output vertex
+  std::vector<std::array<uint32_t, 2>> featureEdges;  // output feature edges (output indices, a < b)
   size_t facesIn = 0, facesOut = 0;
-  size_t featureEdgesIn = 0;           // after the extension, incl. border and non-manifold edges
+  size_t featureEdgesIn = 0;  // after the extension, incl. border and non-manifold edges
   size_t swapEdges = 0;
-  size_t featureVertices = 0;          // V_C (kept)
+  size_t featureVertices = 0;  // V_C (kept)
   size_t lineVerticesIn = 0, smoothVerticesIn = 0;
   size_t collapses = 0;
-  double maxCollapseDistance = 0;      // largest d of an applied collapse
-  double maxTrackedError = 0;          // largest distance of a removed original vertex to its output
-                                       // face when last re-assigned (tracked under an error bound)
-  double finalErrorBound = 0;          // the error bound in force at the end (0: none)
-  unsigned parts = 1;                  // parts simplified at the same time (FeatureSimplifyParams::facesPerPart)
-  bool targetReached = false;          // false: stopped because no allowed collapse was left
+  double maxCollapseDistance = 0;  // largest d of an applied collapse
+  double maxTrackedError = 0;      // largest distance of a removed original vertex to its output
+                                   // face when last re-assigned (tracked under an error bound)
+  double finalErrorBound = 0;      // the error bound in force at the end (0: none)
+  unsigned parts = 1;              // parts simplified at the same time (FeatureSimplifyParams::facesPerPart)
+  bool targetReached = false;      // false: stopped because no allowed collapse was left
 };
 
 // Simplifies `mesh`. The mesh must pass RequireValidForFaces (checked here). On failure or
@@ -142,7 +142,7 @@ Status FeatureSimplify(const IndexedMesh& mesh, const FeatureSimplifyParams& par
 
 // Why a half-edge collapse (from -> to) is refused, for tests and diagnostics.
 enum class CollapseRefusal {
-  None,            // allowed
+  None,  // allowed
   NotAnEdge,
   LockedVertex,    // `from` is a feature vertex (V_C) or locked
   OffFeatureLine,  // `from` is on a feature line and `to` is not its neighbour along the line

@@ -26,7 +26,10 @@ ClusterShape MeasureClusterShape(const IndexedMesh& m, const std::vector<int>& f
     totalArea += areas[f];
   }
   // Undirected edges with their faces, sorted: each edge is seen once with all its faces.
-  struct Half { uint32_t lo, hi; int cluster; };
+  struct Half {
+    uint32_t lo, hi;
+    int cluster;
+  };
   std::vector<Half> halves;
   halves.reserve(m.faces.size() * 3);
   for (size_t f = 0; f < m.faces.size(); ++f) {

@@ -75,12 +75,24 @@ Sphere TriangleSphere(const vcg::Point3d& a, const vcg::Point3d& b, const vcg::P
     s.c = (p + q) * 0.5;
     s.r = 0.5 * std::sqrt(l2);
   };
-  if (ab * ac <= 0) { edgeSphere(b, c, lbc); return s; }           // obtuse or right at a
-  if ((a - b) * bc <= 0) { edgeSphere(a, c, lac); return s; }      // at b
-  if ((a - c) * (b - c) <= 0) { edgeSphere(a, b, lab); return s; } // at c
+  if (ab * ac <= 0) {
+    edgeSphere(b, c, lbc);
+    return s;
+  }  // obtuse or right at a
+  if ((a - b) * bc <= 0) {
+    edgeSphere(a, c, lac);
+    return s;
+  }  // at b
+  if ((a - c) * (b - c) <= 0) {
+    edgeSphere(a, b, lab);
+    return s;
+  }  // at c
   const vcg::Point3d n = ab ^ ac;
   const double n2 = n.SquaredNorm();
-  if (n2 <= 0) { edgeSphere(b, c, lbc); return s; }
+  if (n2 <= 0) {
+    edgeSphere(b, c, lbc);
+    return s;
+  }
   const vcg::Point3d off = ((n ^ ab) * lac + (ac ^ n) * lab) / (2 * n2);
   s.c = a + off;
   // max(sqrt x, sqrt y) == sqrt(max(x, y)) (a correctly rounded sqrt is monotone): one root.
@@ -91,17 +103,28 @@ Sphere TriangleSphere(const vcg::Point3d& a, const vcg::Point3d& b, const vcg::P
 // One unit of the greedy merge (a face at level 1, a group above): the data every candidate
 // evaluation reads, packed in one cache line.
 struct alignas(64) Unit {
-  vcg::Point3d axis;     // cone axis (unit)
-  double half;           // cone half-angle: < 0 empty, >= pi/2 cannot be culled
-  float vecArea[3];      // sum of area * unit normal
-  float center[3];       // bounding sphere
+  vcg::Point3d axis;  // cone axis (unit)
+  double half;        // cone half-angle: < 0 empty, >= pi/2 cannot be culled
+  float vecArea[3];   // sum of area * unit normal
+  float center[3];    // bounding sphere
   float radius;
   int faceCount;
 
-  NormalCone cone() const { NormalCone c; c.axis = axis; c.halfAngle = half; return c; }
-  void setCone(const NormalCone& c) { axis = c.axis; half = c.halfAngle; }
+  NormalCone cone() const {
+    NormalCone c;
+    c.axis = axis;
+    c.halfAngle = half;
+    return c;
+  }
+  void setCone(const NormalCone& c) {
+    axis = c.axis;
+    half = c.halfAngle;
+  }
   Sphere sphere() const {
-    Sphere s; s.c = vcg::Point3d(center[0], center[1], center[2]); s.r = radius; return s;
+    Sphere s;
+    s.c = vcg::Point3d(center[0], center[1], center[2]);
+    s.r = radius;
+    return s;
   }
   void setSphere(const Sphere& s) {
     double magnitude = 0;
@@ -121,7 +144,7 @@ struct Link {
   int bestPartner;    // -1: no mergeable pair
   uint32_t nbOffset;  // the neighbour list is arena_[nbOffset, nbOffset + nbCount)
   int nbCount;
-  uint32_t stamp;     // deduplicates neighbours while two lists are joined
+  uint32_t stamp;  // deduplicates neighbours while two lists are joined
 };
 
 // The state of a unit touched only when the unit itself merges.
@@ -150,7 +173,11 @@ class Arena {
   size_t size() const { return size_; }
   size_t capacity() const { return capacity_; }
   // Appends n entries (capacity permitting) and returns the offset of the first.
-  size_t grow(size_t n) { const size_t at = size_; size_ += n; return at; }
+  size_t grow(size_t n) {
+    const size_t at = size_;
+    size_ += n;
+    return at;
+  }
   void shrink(size_t n) { size_ = n; }
   void reserve(size_t n) {
     if (n <= capacity_) return;
@@ -218,7 +245,10 @@ class BestTree {
       const size_t count = below / kArity;
       levelBegin_.push_back(total);
       levelCount_.push_back(count);
-      if (count == 1) { total += 1; break; }
+      if (count == 1) {
+        total += 1;
+        break;
+      }
       below = RoundUp(count);
       total += below;
     }
@@ -275,9 +305,7 @@ class BestTree {
     std::memcpy(&bits, &k, sizeof bits);
     return (bits & 0x80000000u) ? ~bits : (bits | 0x80000000u);
   }
-  static uint64_t Entry(float k, int u) {
-    return (uint64_t(OrderedKey(k)) << 32) | (0xFFFFFFFFu - uint32_t(u));
-  }
+  static uint64_t Entry(float k, int u) { return (uint64_t(OrderedKey(k)) << 32) | (0xFFFFFFFFu - uint32_t(u)); }
   static int UnitOf(uint64_t e) { return int(0xFFFFFFFFu - uint32_t(e)); }
   uint64_t& node(size_t level, size_t i) { return nodes_[levelBegin_[level - 1] + i]; }
   // The best of the children of node i at `level`.
@@ -334,7 +362,10 @@ class HierarchyBuilder {
   // u's list entry for w takes the score of the pair (w's entry for u was scored: lists are symmetric).
   void setEntryScore(int u, int w, float score) {
     for (Neighbour* e = nbBegin(u); e != nbEnd(u); ++e)
-      if (e->id == w) { e->score = score; return; }
+      if (e->id == w) {
+        e->score = score;
+        return;
+      }
   }
   void CompactArena(size_t room);
 
@@ -557,7 +588,10 @@ bool HierarchyBuilder::seededCone(int u) {
   double lowest = 2;
   eachNormal([&](const vcg::Point3d& n) {
     // The cheap test first: the zero normals of degenerate faces (dot 0) are rarely the lowest.
-    if (n * axis < lowest && n.SquaredNorm() >= 0.5) { lowest = n * axis; first = &n; }
+    if (n * axis < lowest && n.SquaredNorm() >= 0.5) {
+      lowest = n * axis;
+      first = &n;
+    }
     return true;
   });
   if (!first) return false;
@@ -565,7 +599,10 @@ bool HierarchyBuilder::seededCone(int u) {
   const vcg::Point3d* second = first;
   lowest = 2;
   eachNormal([&](const vcg::Point3d& n) {
-    if (n * far1 < lowest && n.SquaredNorm() >= 0.5) { lowest = n * far1; second = &n; }
+    if (n * far1 < lowest && n.SquaredNorm() >= 0.5) {
+      lowest = n * far1;
+      second = &n;
+    }
     return true;
   });
   const vcg::Point3d far2 = *second;
@@ -694,8 +731,10 @@ void HierarchyBuilder::MergeUnits(int u, int p) {
     scratchSupport_.insert(scratchSupport_.end(), sb.normal, sb.normal + sb.count);
     MinimalCone(scratchSupport_, sa);
   }
-  if (stillExact) ac.exactSize = a.faceCount;
-  else if (a.faceCount >= int64_t(exactGrowth_) * ac.exactSize) MakeConeExact(u);  // amortized: each face O(log N) times
+  if (stillExact)
+    ac.exactSize = a.faceCount;
+  else if (a.faceCount >= int64_t(exactGrowth_) * ac.exactSize)
+    MakeConeExact(u);  // amortized: each face O(log N) times
 
   // The merged unit's list: both lists without u and p, deduplicated, each pair re-scored. It
   // goes back into u's slot when it fits (a unit absorbing a small neighbour rarely gains
@@ -782,8 +821,10 @@ void HierarchyBuilder::CompactArena(size_t room) {
     l.nbOffset = uint32_t(write);
     chains_[size_t(u)].capacity = l.nbCount;
     write += size_t(l.nbCount);
-    if (kept < arenaOrder_.size()) arenaOrder_[kept] = u;
-    else arenaOrder_.push_back(u);
+    if (kept < arenaOrder_.size())
+      arenaOrder_[kept] = u;
+    else
+      arenaOrder_.push_back(u);
     ++kept;
   };
   auto inPrefix = [&](int u) { return alive(u) && links_[size_t(u)].nbOffset < prefixEnd_; };
@@ -822,7 +863,7 @@ bool HierarchyBuilder::RunLevel(double thresholdDeg, bool localMaximaFirst, long
   // bit); else once, from its lower unit, which writes the score into the higher unit's entry
   // too (kUnscored marks the entries still to score).
   const bool scoreOnce = !params_.strictGreedy;
-  constexpr size_t kAhead = 16;  // units ahead whose neighbours' data is asked for (then lists at half)
+  constexpr size_t kAhead = 16;       // units ahead whose neighbours' data is asked for (then lists at half)
   const bool prefetch = !prescored_;  // nothing to evaluate when run() scored the pairs already
   for (size_t u = 0; u < n; ++u) {
     if (prefetch && u + kAhead < n)
@@ -952,7 +993,10 @@ void HierarchyBuilder::EmitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     }
     for (int& g : faceGroup) {
       int& id = idOfUnit_[size_t(g)];
-      if (id < 0) { id = int(rootOfGroup_.size()); rootOfGroup_.push_back(g); }
+      if (id < 0) {
+        id = int(rootOfGroup_.size());
+        rootOfGroup_.push_back(g);
+      }
       g = id;
     }
   } else {
@@ -969,7 +1013,10 @@ void HierarchyBuilder::EmitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     for (int& g : l1Group_) {  // the previous level's group -> this level's
       const int u = absorbedBy_[size_t(g)];
       int& id = idOfUnit_[size_t(u)];
-      if (id < 0) { id = int(rootOfGroup_.size()); rootOfGroup_.push_back(u); }
+      if (id < 0) {
+        id = int(rootOfGroup_.size());
+        rootOfGroup_.push_back(u);
+      }
       childGroupAbove[size_t(g)] = id;
       g = id;
     }
@@ -1067,8 +1114,8 @@ void HierarchyBuilder::EmitLevel(double thresholdDeg, GroupHierarchy& out, bool 
     const double r = std::sqrt(r2[g]) * scale_;
     if (r < unit.radius) unit.setSphere(Sphere{boxCenter[g] * scale_, r});
     const double inv = 1 / scale_;
-    level.groups[g].center = vcg::Point3f(float(unit.center[0] * inv), float(unit.center[1] * inv),
-                                          float(unit.center[2] * inv));
+    level.groups[g].center =
+        vcg::Point3f(float(unit.center[0] * inv), float(unit.center[1] * inv), float(unit.center[2] * inv));
     level.groups[g].radius = float(unit.radius * inv);
   }
   out.levels.push_back(std::move(level));
@@ -1243,7 +1290,10 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     const bool merged = RunLevel(std::min(threshold, 180.0), level == 1 && !params_.strictGreedy, merges);
     prescored_ = false;
     BigVector<vcg::Point3f>().swap(l1Normal_);  // before the level's output grows
-    if (cancelled_) { out = GroupHierarchy(); return Status::Cancelled(); }
+    if (cancelled_) {
+      out = GroupHierarchy();
+      return Status::Cancelled();
+    }
     if (!merged && level > 1) break;  // nothing changed: the previous level is the top
     EmitLevel(std::min(threshold, 180.0), out, level == 1);
     if (int(out.levels.back().groups.size()) <= std::max(1, params_.minTopGroups)) break;
@@ -1259,7 +1309,10 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     for (size_t f = 0; f < size_t(nf); ++f) groups[faceGroup[f]].area += faceArea_[f];
   }
   out.faceCount = nf;
-  if (progress_ && !progress_(100, "grouping done")) { out = GroupHierarchy(); return Status::Cancelled(); }
+  if (progress_ && !progress_(100, "grouping done")) {
+    out = GroupHierarchy();
+    return Status::Cancelled();
+  }
   return Status::Ok();
 }
 

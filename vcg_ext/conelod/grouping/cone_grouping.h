@@ -58,8 +58,8 @@ Status ValidateParams(const ConeGroupingParams& p);
 
 // Builds the hierarchy. The mesh must pass RequireValidForFaces (checked here too). On failure or
 // cancellation `out` is left empty.
-Status BuildConeHierarchy(const IndexedMesh& mesh, const ConeGroupingParams& params,
-                          GroupHierarchy& out, const Progress& progress = Progress());
+Status BuildConeHierarchy(const IndexedMesh& mesh, const ConeGroupingParams& params, GroupHierarchy& out,
+                          const Progress& progress = Progress());
 
 // The automatic group level for a simplification to `targetFaces`: the finest level of `h` whose
 // groups leave at least kAutoFacesPerGroup faces per group at the target (groups x 8 <= target),

@@ -48,11 +48,16 @@ class Traversal {
     ++c.tests2;
     ++c.groupTests;
     if (counting3) ++c.tests3;
-    const Facing f = perspective_
-                         ? ClassifyPerspective(grp.cone, vcg::Point3d::Construct(grp.center), grp.radius, eye_)
-                         : ClassifyOrtho(grp.cone, viewDir_);
-    if (f == Facing::Back) { c.rejected += grp.faceCount; return; }
-    if (f == Facing::Front && counting3) { c.frontAccepted += grp.faceCount; counting3 = false; }
+    const Facing f = perspective_ ? ClassifyPerspective(grp.cone, vcg::Point3d::Construct(grp.center), grp.radius, eye_)
+                                  : ClassifyOrtho(grp.cone, viewDir_);
+    if (f == Facing::Back) {
+      c.rejected += grp.faceCount;
+      return;
+    }
+    if (f == Facing::Front && counting3) {
+      c.frontAccepted += grp.faceCount;
+      counting3 = false;
+    }
     if (level == 1) {
       c.tests2 += grp.childCount;
       if (counting3) c.tests3 += grp.childCount;
@@ -67,7 +72,9 @@ class Traversal {
 };
 
 void Accumulate(CostStats& s, double x, int i) {
-  if (i == 0) { s.min = s.max = x; }
+  if (i == 0) {
+    s.min = s.max = x;
+  }
   s.min = std::min(s.min, x);
   s.max = std::max(s.max, x);
   s.mean += x;

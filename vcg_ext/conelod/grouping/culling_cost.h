@@ -36,8 +36,8 @@ struct CullingCostResult {
   int views = 0;
   bool perspective = false;
   double cameraDistance = 0;
-  CostStats twoState;         // tests / N
-  CostStats threeState;       // tests / N
+  CostStats twoState;                // tests / N
+  CostStats threeState;              // tests / N
   double rejectedFraction = 0;       // mean over views: faces culled by group tests / N
   double idealFraction = 0;          // mean over views: faces that draw nothing / N
   double frontAcceptedFraction = 0;  // mean: faces accepted by a fully-front group test / N
@@ -47,8 +47,7 @@ struct CullingCostResult {
 // Unit view directions (from the eye towards the model), uniform on the sphere.
 std::vector<vcg::Point3d> ViewDirections(int count);
 
-Status EvaluateCullingCost(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
-                           const CullingCostParams& params, CullingCostResult& out,
-                           const Progress& progress = Progress());
+Status EvaluateCullingCost(const IndexedMesh& mesh, const GroupHierarchy& hierarchy, const CullingCostParams& params,
+                           CullingCostResult& out, const Progress& progress = Progress());
 
 }  // namespace conelod

@@ -18,15 +18,39 @@ inline vcg::Color4b GroupColor(int id) {
   const double f = h - i, p = v * (1 - s), q = v * (1 - s * f), t = v * (1 - s * (1 - f));
   double r, g, b;
   switch (i % 6) {
-    case 0: r = v; g = t; b = p; break;
-    case 1: r = q; g = v; b = p; break;
-    case 2: r = p; g = v; b = t; break;
-    case 3: r = p; g = q; b = v; break;
-    case 4: r = t; g = p; b = v; break;
-    default: r = v; g = p; b = q; break;
+    case 0:
+      r = v;
+      g = t;
+      b = p;
+      break;
+    case 1:
+      r = q;
+      g = v;
+      b = p;
+      break;
+    case 2:
+      r = p;
+      g = v;
+      b = t;
+      break;
+    case 3:
+      r = p;
+      g = q;
+      b = v;
+      break;
+    case 4:
+      r = t;
+      g = p;
+      b = v;
+      break;
+    default:
+      r = v;
+      g = p;
+      b = q;
+      break;
   }
-  return vcg::Color4b((unsigned char)(r * 255 + 0.5), (unsigned char)(g * 255 + 0.5),
-                      (unsigned char)(b * 255 + 0.5), 255);
+  return vcg::Color4b((unsigned char)(r * 255 + 0.5), (unsigned char)(g * 255 + 0.5), (unsigned char)(b * 255 + 0.5),
+                      255);
 }
 
 }  // namespace conelod

@@ -15,19 +15,19 @@
 namespace conelod {
 
 struct Group {
-  NormalCone cone;           // exact minimal cone of the group's face normals
-  vcg::Point3f center;       // bounding sphere (encloses every vertex of the group)
+  NormalCone cone;      // exact minimal cone of the group's face normals
+  vcg::Point3f center;  // bounding sphere (encloses every vertex of the group)
   float radius = 0;
-  vcg::Box3f box;            // bounding box of the group's vertices
+  vcg::Box3f box;  // bounding box of the group's vertices
   int faceCount = 0;
   double area = 0;
-  int parent = -1;           // group index in the level above; -1 at the top level
-  int firstChild = 0;        // children are Level::children[firstChild .. firstChild+childCount)
+  int parent = -1;     // group index in the level above; -1 at the top level
+  int firstChild = 0;  // children are Level::children[firstChild .. firstChild+childCount)
   int childCount = 0;
 };
 
 struct GroupLevel {
-  double thresholdDeg = 0;     // the cone half-angle limit this level was built with
+  double thresholdDeg = 0;  // the cone half-angle limit this level was built with
   std::vector<Group> groups;
   std::vector<int> children;   // concatenated child lists (faces at level 1, groups above)
   std::vector<int> faceGroup;  // per face: its group at this level

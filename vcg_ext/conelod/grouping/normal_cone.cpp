@@ -98,13 +98,18 @@ Cap Cap3(const vcg::Point3d& a, const vcg::Point3d& b, const vcg::Point3d& c) {
   }
   n /= len;
   double d = n * a;  // signed distance of the circle's plane from the origin
-  if (d < 0) { n = -n; d = -d; }
+  if (d < 0) {
+    n = -n;
+    d = -d;
+  }
   if (d < 1e-12) return Cap{n, 0, true};  // a great circle: a full hemisphere, not cullable
   return Cap{n, std::min({n * a, n * b, n * c}), false};
 }
 
 uint64_t NextRandom(uint64_t& s) {  // xorshift64*
-  s ^= s >> 12; s ^= s << 25; s ^= s >> 27;
+  s ^= s >> 12;
+  s ^= s << 25;
+  s ^= s >> 27;
   return s * 0x2545F4914F6CDD1Dull;
 }
 
@@ -156,7 +161,11 @@ NormalCone FastUnionCone(const NormalCone& a, const NormalCone& b) {
   const double len = w.Norm();
   NormalCone r;
   r.halfAngle = half;
-  if (len < 1e-12) { r.axis = a.axis; r.halfAngle = std::max(a.halfAngle, b.halfAngle) + theta; return r; }
+  if (len < 1e-12) {
+    r.axis = a.axis;
+    r.halfAngle = std::max(a.halfAngle, b.halfAngle) + theta;
+    return r;
+  }
   const double t = half - a.halfAngle;  // rotate a's axis towards b by t
   r.axis = a.axis * std::cos(t) + w * (std::sin(t) / len);
   r.axis.Normalize();
@@ -231,7 +240,10 @@ NormalCone MinimalConeBruteForce(const std::vector<vcg::Point3d>& in) {
     if (c.uncullable) return;
     for (const auto& p : pts)
       if (!c.contains(p)) return;
-    if (!found || c.cosHalf > best.cosHalf) { best = c; found = true; }
+    if (!found || c.cosHalf > best.cosHalf) {
+      best = c;
+      found = true;
+    }
   };
   for (size_t i = 0; i < n; ++i) {
     consider(Cap1(pts[i]));
@@ -256,8 +268,7 @@ Facing ClassifyOrtho(const NormalCone& cone, const vcg::Point3d& viewDir) {
   return Facing::Partial;
 }
 
-Facing ClassifyPerspective(const NormalCone& cone, const vcg::Point3d& center, double radius,
-                           const vcg::Point3d& eye) {
+Facing ClassifyPerspective(const NormalCone& cone, const vcg::Point3d& center, double radius, const vcg::Point3d& eye) {
   if (cone.empty()) return Facing::Back;
   if (!cone.cullable()) return Facing::Partial;
   const vcg::Point3d toEye = eye - center;

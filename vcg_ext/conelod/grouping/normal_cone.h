@@ -30,8 +30,17 @@ struct NormalCone {
   double halfAngle = -1;       // radians; < 0: empty (no normal), >= pi/2: cannot be culled
 
   static NormalCone Empty() { return NormalCone(); }
-  static NormalCone Uncullable() { NormalCone c; c.halfAngle = kPi; return c; }
-  static NormalCone Of(const vcg::Point3d& unitNormal) { NormalCone c; c.axis = unitNormal; c.halfAngle = 0; return c; }
+  static NormalCone Uncullable() {
+    NormalCone c;
+    c.halfAngle = kPi;
+    return c;
+  }
+  static NormalCone Of(const vcg::Point3d& unitNormal) {
+    NormalCone c;
+    c.axis = unitNormal;
+    c.halfAngle = 0;
+    return c;
+  }
 
   bool empty() const { return halfAngle < 0; }
   bool cullable() const { return halfAngle < kPi / 2; }  // empty cones are (trivially) cullable
@@ -46,8 +55,13 @@ inline double FastAcos(double x) {
   const bool neg = x < 0;
   const double a = neg ? -x : x;
   const double t = a >= 1 ? 0.0 : std::sqrt(1.0 - a);
-  const double p = ((((((-0.0012624911 * a + 0.0066700901) * a - 0.0170881256) * a + 0.0308918810) * a -
-                      0.0501743046) * a + 0.0889789874) * a - 0.2145988016) * a + 1.5707963050;
+  const double p =
+      ((((((-0.0012624911 * a + 0.0066700901) * a - 0.0170881256) * a + 0.0308918810) * a - 0.0501743046) * a +
+        0.0889789874) *
+           a -
+       0.2145988016) *
+          a +
+      1.5707963050;
   const double r = t * p;
   return neg ? NormalCone::kPi - r : r;
 }
@@ -86,8 +100,7 @@ struct ConeSupport {
 };
 
 // MinimalCone, also giving the support of the cone it returns.
-NormalCone MinimalCone(std::vector<vcg::Point3d>& normals, ConeSupport& support,
-                       uint64_t seed = 0x9E3779B97F4A7C15ull);
+NormalCone MinimalCone(std::vector<vcg::Point3d>& normals, ConeSupport& support, uint64_t seed = 0x9E3779B97F4A7C15ull);
 
 // Reference implementation for tests: tries every cap defined by 1, 2 or 3 of the normals.
 // O(n^4): only for small sets.
@@ -101,7 +114,6 @@ Facing ClassifyOrtho(const NormalCone& cone, const vcg::Point3d& viewDir);
 
 // Perspective view from `eye`, for a group inside the sphere (center, radius): conservative, the
 // angle subtended by the sphere widens the cone. Partial whenever the eye is inside the sphere.
-Facing ClassifyPerspective(const NormalCone& cone, const vcg::Point3d& center, double radius,
-                           const vcg::Point3d& eye);
+Facing ClassifyPerspective(const NormalCone& cone, const vcg::Point3d& center, double radius, const vcg::Point3d& eye);
 
 }  // namespace conelod

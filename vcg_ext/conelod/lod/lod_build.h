@@ -47,9 +47,9 @@ struct LodDag {
     std::vector<std::array<uint32_t, 3>> faces;  // global vertex ids
     std::vector<uint32_t> faceCluster;           // per face: its cluster (index within the level)
     std::vector<int> clusterGroup;               // per cluster: its group at this level (-1: a root)
-    std::vector<int> clusterCreator;             // per cluster: the group of the level below it was made from (-1 at level 0)
-    std::vector<float> clusterError;             // per cluster: its error (the creator group's); 0 at level 0
-    std::vector<float> groupError;               // per group of this level: error of the clusters made from it
+    std::vector<int> clusterCreator;  // per cluster: the group of the level below it was made from (-1 at level 0)
+    std::vector<float> clusterError;  // per cluster: its error (the creator group's); 0 at level 0
+    std::vector<float> groupError;    // per group of this level: error of the clusters made from it
     size_t clusterCount() const { return clusterGroup.size(); }
   };
   std::vector<Level> levels;
@@ -63,19 +63,20 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
 
 struct LodBuildStats {
   size_t inputVertices = 0, inputFaces = 0;
-  int levels = 0;                   // node levels, level 0 (the input) included
-  std::vector<size_t> levelFaces;   // faces per node level, [0] = the input's
-  std::vector<size_t> levelNodes;   // nodes per node level
+  int levels = 0;                  // node levels, level 0 (the input) included
+  std::vector<size_t> levelFaces;  // faces per node level, [0] = the input's
+  std::vector<size_t> levelNodes;  // nodes per node level
   size_t nodes = 0;
   uint64_t fileBytes = 0;
-  double groupingSeconds = 0, simplifySeconds = 0, writeSeconds = 0, seconds = 0;  // grouping: the
-                                    // level-0 clusters; simplify: the DAG's other levels
+  double groupingSeconds = 0, simplifySeconds = 0, writeSeconds = 0,
+         seconds = 0;  // grouping: the
+                       // level-0 clusters; simplify: the DAG's other levels
 };
 
 // Writes the file of a DAG built by BuildLodDag from `mesh`. Streams chunk by chunk: the file is
 // never held in memory. On failure no file is left at `path`.
-Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::string& path,
-                    LodBuildStats* stats = nullptr, const Progress& progress = Progress());
+Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::string& path, LodBuildStats* stats = nullptr,
+                    const Progress& progress = Progress());
 
 // Builds the DAG and writes it. The mesh must pass the grouping's input checks.
 Status BuildLodFile(const IndexedMesh& mesh, const LodBuildParams& params, const std::string& path,

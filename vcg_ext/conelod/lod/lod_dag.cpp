@@ -36,7 +36,10 @@ using Face = std::array<uint32_t, 3>;
 
 // Faces sharing an edge (by vertex ids), CSR. Works on any id space (sorts the edges).
 void EdgeAdjacency(const std::vector<Face>& faces, std::vector<uint32_t>& offsets, std::vector<uint32_t>& list) {
-  struct E { uint64_t key; uint32_t face; };
+  struct E {
+    uint64_t key;
+    uint32_t face;
+  };
   std::vector<E> edges;
   edges.reserve(faces.size() * 3);
   for (uint32_t f = 0; f < faces.size(); ++f)
@@ -45,7 +48,8 @@ void EdgeAdjacency(const std::vector<Face>& faces, std::vector<uint32_t>& offset
       if (a > b) std::swap(a, b);
       edges.push_back({uint64_t(a) << 32 | b, f});
     }
-  std::sort(edges.begin(), edges.end(), [](const E& x, const E& y) { return x.key < y.key || (x.key == y.key && x.face < y.face); });
+  std::sort(edges.begin(), edges.end(),
+            [](const E& x, const E& y) { return x.key < y.key || (x.key == y.key && x.face < y.face); });
   std::vector<uint32_t> count(faces.size() + 1, 0);
   for (size_t i = 0; i < edges.size();) {
     size_t j = i;
@@ -176,7 +180,10 @@ uint32_t GrowClusters(const std::vector<Face>& faces, const std::vector<vcg::Poi
 int GroupClusters(const LodDag::Level& L, int per, size_t whole, std::vector<int>& group) {
   const uint32_t C = uint32_t(L.clusterCount());
   // Cluster adjacency weighted by shared edges.
-  struct E { uint64_t key; uint32_t cluster; };
+  struct E {
+    uint64_t key;
+    uint32_t cluster;
+  };
   std::vector<E> edges;
   edges.reserve(L.faces.size() * 3);
   for (uint32_t f = 0; f < L.faces.size(); ++f)
@@ -185,14 +192,16 @@ int GroupClusters(const LodDag::Level& L, int per, size_t whole, std::vector<int
       if (a > b) std::swap(a, b);
       edges.push_back({uint64_t(a) << 32 | b, L.faceCluster[f]});
     }
-  std::sort(edges.begin(), edges.end(), [](const E& x, const E& y) { return x.key < y.key || (x.key == y.key && x.cluster < y.cluster); });
+  std::sort(edges.begin(), edges.end(),
+            [](const E& x, const E& y) { return x.key < y.key || (x.key == y.key && x.cluster < y.cluster); });
   std::vector<std::pair<uint64_t, uint32_t>> pairs;  // (a << 32 | b, 1) per shared edge, a != b
   for (size_t i = 0; i < edges.size();) {
     size_t j = i;
     while (j < edges.size() && edges[j].key == edges[i].key) ++j;
     for (size_t a = i; a < j; ++a)
       for (size_t b = i; b < j; ++b)
-        if (edges[a].cluster != edges[b].cluster) pairs.push_back({uint64_t(edges[a].cluster) << 32 | edges[b].cluster, 1});
+        if (edges[a].cluster != edges[b].cluster)
+          pairs.push_back({uint64_t(edges[a].cluster) << 32 | edges[b].cluster, 1});
     i = j;
   }
   std::sort(pairs.begin(), pairs.end());
@@ -255,7 +264,8 @@ int GroupClusters(const LodDag::Level& L, int per, size_t whole, std::vector<int
 }
 
 // Squared distance from p to triangle abc (Ericson, Real-Time Collision Detection, 5.1.5).
-double PointTriangleDistance2(const vcg::Point3d& p, const vcg::Point3d& a, const vcg::Point3d& b, const vcg::Point3d& c) {
+double PointTriangleDistance2(const vcg::Point3d& p, const vcg::Point3d& a, const vcg::Point3d& b,
+                              const vcg::Point3d& c) {
   const vcg::Point3d ab = b - a, ac = c - a, ap = p - a;
   const double d1 = ab * ap, d2 = ac * ap;
   if (d1 <= 0 && d2 <= 0) return ap.SquaredNorm();
@@ -270,7 +280,8 @@ double PointTriangleDistance2(const vcg::Point3d& p, const vcg::Point3d& a, cons
   const double vb = d5 * d2 - d1 * d6;
   if (vb <= 0 && d2 >= 0 && d6 <= 0) return (p - (a + ac * (d2 / (d2 - d6)))).SquaredNorm();
   const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return (p - (b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))))).SquaredNorm();
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+    return (p - (b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))))).SquaredNorm();
   const double den = 1 / (va + vb + vc);
   return (p - (a + ab * (vb * den) + ac * (vc * den))).SquaredNorm();
 }
@@ -278,8 +289,8 @@ double PointTriangleDistance2(const vcg::Point3d& p, const vcg::Point3d& a, cons
 // One group simplified: its faces in the group's local vertex ids, the positions of the vertices
 // it made (local ids >= the group's input vertex count refer to them), its error.
 struct GroupResult {
-  std::vector<Face> faces;               // local vertex ids: < keptBase: input vertex; else newPositions
-  std::vector<uint32_t> localToGlobal;   // per input local vertex: its global id
+  std::vector<Face> faces;              // local vertex ids: < keptBase: input vertex; else newPositions
+  std::vector<uint32_t> localToGlobal;  // per input local vertex: its global id
   std::vector<vcg::Point3f> newPositions;
   double distance = 0;
   bool ok = false;
@@ -319,7 +330,8 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
   for (uint32_t v = 0; v < V; ++v) region.frozenVertex[v] = sharedVertex[out.localToGlobal[v]];
   region.diagonal = diagonal;
   GroupQemParams qem = params.simplification.qem;
-  qem.targetFaces = std::max<size_t>(1, size_t(std::floor(double(local.faces.size()) * params.simplification.levelRatio)));
+  qem.targetFaces =
+      std::max<size_t>(1, size_t(std::floor(double(local.faces.size()) * params.simplification.levelRatio)));
   qem.lockGroupBoundaries = false;
   if (maxError > 0) qem.maxError = qem.maxError > 0 ? std::min(qem.maxError, maxError) : maxError;
   const std::vector<int> oneGroup(local.faces.size(), 0);
@@ -339,8 +351,8 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
     const uint32_t src = res.sourceVertex[v];
     const vcg::Point3f& p = res.mesh.positions[v];
     const vcg::Point3f& q = local.positions[src];
-    if (region.frozenVertex[src] || (std::fabs(p[0] - q[0]) <= still && std::fabs(p[1] - q[1]) <= still &&
-                                     std::fabs(p[2] - q[2]) <= still)) {
+    if (region.frozenVertex[src] ||
+        (std::fabs(p[0] - q[0]) <= still && std::fabs(p[1] - q[1]) <= still && std::fabs(p[2] - q[2]) <= still)) {
       outId[v] = src;
     } else {
       outId[v] = V + uint32_t(out.newPositions.size());
@@ -368,7 +380,10 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
     }
     return code;
   };
-  struct Tri { uint32_t code; std::array<vcg::Point3d, 3> p; };
+  struct Tri {
+    uint32_t code;
+    std::array<vcg::Point3d, 3> p;
+  };
   std::vector<Tri> tri(out.faces.size());
   for (size_t f = 0; f < out.faces.size(); ++f) {
     tri[f].p = {P(out.faces[f][0]), P(out.faces[f][1]), P(out.faces[f][2])};
@@ -377,13 +392,16 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
   std::sort(tri.begin(), tri.end(), [](const Tri& a, const Tri& b) { return a.code < b.code; });
   std::vector<std::pair<uint32_t, uint32_t>> order;  // (code, vertex) of the vertices that can move
   for (uint32_t v = 0; v < V; ++v)
-    if (!region.frozenVertex[v]) order.push_back({morton(vcg::Point3d::Construct(local.positions[v])), v});  // frozen: on the surface
+    if (!region.frozenVertex[v])
+      order.push_back({morton(vcg::Point3d::Construct(local.positions[v])), v});  // frozen: on the surface
   std::sort(order.begin(), order.end());
   double worst2 = 0;
   const size_t T = tri.size();
   for (const auto& cv : order) {
     const vcg::Point3d p = vcg::Point3d::Construct(local.positions[cv.second]);
-    const size_t at = size_t(std::lower_bound(tri.begin(), tri.end(), cv.first, [](const Tri& t, uint32_t c) { return t.code < c; }) - tri.begin());
+    const size_t at =
+        size_t(std::lower_bound(tri.begin(), tri.end(), cv.first, [](const Tri& t, uint32_t c) { return t.code < c; }) -
+               tri.begin());
     double best = std::numeric_limits<double>::infinity();
     for (size_t d = 0; d <= T; ++d) {
       bool any = false;
@@ -418,8 +436,10 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
   if (!s.ok()) return s;
   if (!(params.simplification.levelRatio > 0 && params.simplification.levelRatio < 1))
     return Status::Invalid("the level ratio must lie in (0, 1)");
-  if (params.clusterFaces < 4 || params.clusterFaces > 65536) return Status::Invalid("cluster faces must lie in [4, 65536]");
-  if (params.groupClusters < 2 || params.groupClusters > 64) return Status::Invalid("group clusters must lie in [2, 64]");
+  if (params.clusterFaces < 4 || params.clusterFaces > 65536)
+    return Status::Invalid("cluster faces must lie in [4, 65536]");
+  if (params.groupClusters < 2 || params.groupClusters > 64)
+    return Status::Invalid("group clusters must lie in [2, 64]");
   if (!(params.maxGroupError > 0 && params.maxGroupError <= 1))
     return Status::Invalid("the largest group error must lie in (0, 1] (a fraction of the diagonal)");
   if (!(params.grouping.coneThresholdDeg > 0) || !(params.grouping.thresholdGrowth >= 1))
@@ -467,8 +487,10 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
     for (uint32_t f = 0; f < L.faces.size(); ++f) {
       const int g = group[L.faceCluster[f]];
       for (uint32_t v : L.faces[f]) {
-        if (owner[v] < 0) owner[v] = g;
-        else if (owner[v] != g) shared[v] = 1;
+        if (owner[v] < 0)
+          owner[v] = g;
+        else if (owner[v] != g)
+          shared[v] = 1;
       }
     }
     // A group that is a whole part (no shared vertex) and one cluster stays as it is at the top.
@@ -493,10 +515,14 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
     size_t newFaces = 0;
     for (const auto& r : results) newFaces += r.faces.size();
     if (double(newFaces) > (cap > params.maxGroupError ? 0.75 : 0.97) * double(L.faces.size())) {
-      if (!wholeParts) wholeParts = true;
-      else if (cap > 0 && cap < 2 * params.maxGroupError) cap *= 2;
-      else if (cap > 0 && 100 * L.faces.size() > mesh.faces.size()) cap = 0;
-      else break;  // no longer shrinks: L is the top
+      if (!wholeParts)
+        wholeParts = true;
+      else if (cap > 0 && cap < 2 * params.maxGroupError)
+        cap *= 2;
+      else if (cap > 0 && 100 * L.faces.size() > mesh.faces.size())
+        cap = 0;
+      else
+        break;  // no longer shrinks: L is the top
       --k;
       continue;
     }
@@ -506,7 +532,8 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
     std::vector<double> maxChild(static_cast<size_t>(G), 0.0);
     for (uint32_t c = 0; c < L.clusterCount(); ++c)
       maxChild[size_t(group[c])] = std::max(maxChild[size_t(group[c])], double(L.clusterError[c]));
-    const double angle = std::min(90.0, params.grouping.coneThresholdDeg * std::pow(params.grouping.thresholdGrowth, k + 1)) * kDeg;
+    const double angle =
+        std::min(90.0, params.grouping.coneThresholdDeg * std::pow(params.grouping.thresholdGrowth, k + 1)) * kDeg;
     std::vector<uint32_t> clusterOfFace;
     for (int g = 0; g < G; ++g) {
       GroupResult& r = results[size_t(g)];
@@ -517,7 +544,8 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
       faces.reserve(r.faces.size());
       for (const auto& t : r.faces) {
         Face u;
-        for (int i = 0; i < 3; ++i) u[size_t(i)] = t[size_t(i)] < V ? r.localToGlobal[t[size_t(i)]] : firstNew + (t[size_t(i)] - V);
+        for (int i = 0; i < 3; ++i)
+          u[size_t(i)] = t[size_t(i)] < V ? r.localToGlobal[t[size_t(i)]] : firstNew + (t[size_t(i)] - V);
         faces.push_back(u);
       }
       // Errors grow strictly up the DAG (a tiny relative step when the distance is 0), so that

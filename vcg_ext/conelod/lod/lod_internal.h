@@ -13,14 +13,14 @@ namespace lodfile {
 constexpr uint32_t FourCC(char a, char b, char c, char d) {
   return uint32_t(uint8_t(a)) | uint32_t(uint8_t(b)) << 8 | uint32_t(uint8_t(c)) << 16 | uint32_t(uint8_t(d)) << 24;
 }
-constexpr uint32_t kRoot = FourCC('C', 'L', 'O', 'D');     // the whole file; its data is the header
-constexpr uint32_t kHier = FourCC('H', 'I', 'E', 'R');     // container of the node records
-constexpr uint32_t kNode = FourCC('N', 'O', 'D', 'E');     // one node record
-constexpr uint32_t kLevel = FourCC('L', 'E', 'V', 'L');    // one node level: VERT, then GEOM per node
-constexpr uint32_t kVert = FourCC('V', 'E', 'R', 'T');     // a level's shared vertices, in VBLK blocks
+constexpr uint32_t kRoot = FourCC('C', 'L', 'O', 'D');   // the whole file; its data is the header
+constexpr uint32_t kHier = FourCC('H', 'I', 'E', 'R');   // container of the node records
+constexpr uint32_t kNode = FourCC('N', 'O', 'D', 'E');   // one node record
+constexpr uint32_t kLevel = FourCC('L', 'E', 'V', 'L');  // one node level: VERT, then GEOM per node
+constexpr uint32_t kVert = FourCC('V', 'E', 'R', 'T');   // a level's shared vertices, in VBLK blocks
 constexpr uint32_t kVBlock = FourCC('V', 'B', 'L', 'K');
-constexpr uint32_t kGeom = FourCC('G', 'E', 'O', 'M');     // one node's geometry
-constexpr uint32_t kIndex = FourCC('I', 'N', 'D', 'X');    // the offset index, in IBLK blocks
+constexpr uint32_t kGeom = FourCC('G', 'E', 'O', 'M');   // one node's geometry
+constexpr uint32_t kIndex = FourCC('I', 'N', 'D', 'X');  // the offset index, in IBLK blocks
 constexpr uint32_t kIBlock = FourCC('I', 'B', 'L', 'K');
 
 constexpr uint32_t kVersion = 2;  // 2: the cluster DAG (1: the tree of groups, refused)
@@ -40,15 +40,15 @@ struct ChunkHeader {
 
 // Fixed part of the root chunk's data (then kLevelEntryBytes per level).
 constexpr size_t kHeaderFixedBytes = 4 + 4 + 8 * 4 + 4 * 6 + 8 + 8 + 4 + 4;  // = 88
-constexpr size_t kLevelEntryBytes = 8 * 6 + 4 + 4;                            // = 56
+constexpr size_t kLevelEntryBytes = 8 * 6 + 4 + 4;                           // = 56
 constexpr size_t kLevelDataBytes = 4 + 4 + 8 * 3;                            // LEVL data = 32
 constexpr size_t kVertDataBytes = 4 + 4 + 8;                                 // VERT data = 16
 constexpr size_t kIndexDataBytes = 8 + 4 + 4;                                // INDX data = 16
-constexpr size_t kNodeFixedBytes = 4 * 6 + 8 * 4 + 4 * 4 + 4 * 4;             // NODE data = 88 + 4/listed id
+constexpr size_t kNodeFixedBytes = 4 * 6 + 8 * 4 + 4 * 4 + 4 * 4;            // NODE data = 88 + 4/listed id
 constexpr size_t kIndexEntryBytes = 8 + 8 + 4 + 4;                           // = 24
 constexpr size_t kGeomFixedBytes = 4 * 4;                                    // GEOM data = 16 + arrays
-constexpr uint32_t kGeomHasSourceIds = 1;     // GEOM flag: global vertex ids follow the level ids (always set)
-constexpr uint32_t kGeomShortIndices = 2;     // GEOM flag: triangle corners are u16 (vertexCount <= 65536)
+constexpr uint32_t kGeomHasSourceIds = 1;  // GEOM flag: global vertex ids follow the level ids (always set)
+constexpr uint32_t kGeomShortIndices = 2;  // GEOM flag: triangle corners are u16 (vertexCount <= 65536)
 constexpr uint32_t kVertexBlock = 256;     // vertices per VBLK (3 KiB)
 constexpr uint32_t kIndexBlock = 512;      // index entries per IBLK (12 KiB)
 
@@ -61,8 +61,16 @@ class Encoder {
   void u16(uint32_t v) { little(uint16_t(v)); }
   void u32(uint32_t v) { little(v); }
   void u64(uint64_t v) { little(v); }
-  void f32(float v) { uint32_t u; std::memcpy(&u, &v, 4); u32(u); }
-  void f64(double v) { uint64_t u; std::memcpy(&u, &v, 8); u64(u); }
+  void f32(float v) {
+    uint32_t u;
+    std::memcpy(&u, &v, 4);
+    u32(u);
+  }
+  void f64(double v) {
+    uint64_t u;
+    std::memcpy(&u, &v, 8);
+    u64(u);
+  }
   void clear() { bytes.clear(); }
 
  private:
@@ -84,8 +92,18 @@ class Decoder {
   uint32_t u16() { return uint32_t(little<uint16_t>()); }
   uint32_t u32() { return little<uint32_t>(); }
   uint64_t u64() { return little<uint64_t>(); }
-  float f32() { const uint32_t u = u32(); float v; std::memcpy(&v, &u, 4); return v; }
-  double f64() { const uint64_t u = u64(); double v; std::memcpy(&v, &u, 8); return v; }
+  float f32() {
+    const uint32_t u = u32();
+    float v;
+    std::memcpy(&v, &u, 4);
+    return v;
+  }
+  double f64() {
+    const uint64_t u = u64();
+    double v;
+    std::memcpy(&v, &u, 8);
+    return v;
+  }
 
  private:
   template <typename T>
@@ -97,7 +115,11 @@ class Decoder {
     return v;
   }
   bool need(size_t k) {
-    if (n_ - at_ < k) { overrun = true; at_ = n_; return false; }
+    if (n_ - at_ < k) {
+      overrun = true;
+      at_ = n_;
+      return false;
+    }
     return true;
   }
   const uint8_t* p_;

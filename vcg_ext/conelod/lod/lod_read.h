@@ -46,34 +46,34 @@ namespace conelod {
 
 struct LodNode {
   static constexpr uint32_t kNoGroup = 0xFFFFFFFFu;
-  int level = 0;                 // node level (0 = original geometry)
-  uint32_t group = kNoGroup;     // its group within its level; kNoGroup for a root
+  int level = 0;                   // node level (0 = original geometry)
+  uint32_t group = kNoGroup;       // its group within its level; kNoGroup for a root
   std::vector<uint32_t> children;  // node ids (level - 1): the clusters of the group it was made from
   std::vector<uint32_t> siblings;  // node ids (same level): every cluster made from that group, itself included
   std::vector<uint32_t> parents;   // node ids (level + 1): the clusters made from its own group
-  NormalCone cone;               // exact minimal cone of the normals of THIS node's faces
-  vcg::Point3f center;           // bounding sphere of this node's vertices
+  NormalCone cone;                 // exact minimal cone of the normals of THIS node's faces
+  vcg::Point3f center;             // bounding sphere of this node's vertices
   float radius = 0;
   uint32_t faceCount = 0;
   uint32_t vertexCount = 0;
-  float error = 0;               // upper estimate of this node's deviation from the input, model units
-                                 // (its creator group's; 0 at level 0; the same for all siblings)
-  float parentError = 0;         // its own group's error (>= error); +infinity for a root
+  float error = 0;        // upper estimate of this node's deviation from the input, model units
+                          // (its creator group's; 0 at level 0; the same for all siblings)
+  float parentError = 0;  // its own group's error (>= error); +infinity for a root
 };
 
 // A node's geometry as read from the file.
 struct LodGeometry {
-  std::vector<uint32_t> vertexIds;              // per local vertex: its global id (level 0: the input
-                                                //   vertex index), the same in every level using it
-  std::vector<vcg::Point3f> positions;          // per local vertex
-  std::vector<std::array<uint32_t, 3>> faces;   // local vertex indices
+  std::vector<uint32_t> vertexIds;             // per local vertex: its global id (level 0: the input
+                                               //   vertex index), the same in every level using it
+  std::vector<vcg::Point3f> positions;         // per local vertex
+  std::vector<std::array<uint32_t, 3>> faces;  // local vertex indices
   size_t bytes() const;
 };
 
 struct LodFileInfo {
   uint32_t version = 0;
-  vcg::Box3f box;                   // of the input's used vertices
-  int levels = 0;                   // node levels, level 0 included
+  vcg::Box3f box;  // of the input's used vertices
+  int levels = 0;  // node levels, level 0 included
   uint64_t inputVertices = 0, inputFaces = 0;
   uint64_t globalVertices = 0;       // global vertex ids are below this
   std::vector<uint64_t> levelFaces;  // faces per node level
@@ -99,13 +99,13 @@ class LodReader {
   // Node records are read on demand: a node's record is available once its parent's children
   // were loaded (roots: at Open).
   bool hasNode(uint32_t id) const;
-  const LodNode& node(uint32_t id) const;  // requires hasNode(id)
-  Status LoadChildren(uint32_t id);        // makes the records of id's children available (and
-                                           //   checks they belong to the group id was made from)
-  Status LoadNode(uint32_t id);            // makes one record available
+  const LodNode& node(uint32_t id) const;   // requires hasNode(id)
+  Status LoadChildren(uint32_t id);         // makes the records of id's children available (and
+                                            //   checks they belong to the group id was made from)
+  Status LoadNode(uint32_t id);             // makes one record available
   uint32_t levelOfNode(uint32_t id) const;  // from the id alone (ids are dense per level); id < nodeCount
 
-  Status LoadGeometry(uint32_t id);               // reads and keeps the node's geometry
+  Status LoadGeometry(uint32_t id);                // reads and keeps the node's geometry
   const LodGeometry* geometry(uint32_t id) const;  // null when not loaded
   void EvictGeometry(uint32_t id);
 
@@ -138,13 +138,13 @@ struct LodView {
                                    // whose clusters all face away are expanded only after every
                                    // other group; the selection stays a watertight cut either way
   LodPriority priority = LodPriority::ScreenError;
-  double projectionScale = 0;      // pixels per model unit at distance 1 (perspective: viewport
-                                   // height / (2 tan(fovy/2))) or per model unit (orthographic);
-                                   // 0: no screen (ScreenError then orders by error / distance)
-  double maxPixelError = 1.0;      // ScreenError with projectionScale > 0: a group is expanded
-                                   // only while its projected error exceeds this many pixels, and
-                                   // groups whose clusters all face away are not expanded; 0: no
-                                   // pixel threshold (refine to the budget)
+  double projectionScale = 0;  // pixels per model unit at distance 1 (perspective: viewport
+                               // height / (2 tan(fovy/2))) or per model unit (orthographic);
+                               // 0: no screen (ScreenError then orders by error / distance)
+  double maxPixelError = 1.0;  // ScreenError with projectionScale > 0: a group is expanded
+                               // only while its projected error exceeds this many pixels, and
+                               // groups whose clusters all face away are not expanded; 0: no
+                               // pixel threshold (refine to the budget)
 };
 
 // The paper's refinement priority f(g) in [0,1] (larger = refine first): with a = angle(e, n),
@@ -153,13 +153,13 @@ struct LodView {
 double RefinementPriority(const LodNode& node, const LodView& view);
 
 struct LodCut {
-  std::vector<uint32_t> nodes;   // covers every input face exactly once
-  std::vector<uint8_t> culled;   // per entry of `nodes`: 1 when the whole node faces away from the view
-  size_t faces = 0;              // faces of all nodes of the cut
-  size_t drawnFaces = 0;         // faces of the nodes not culled
+  std::vector<uint32_t> nodes;  // covers every input face exactly once
+  std::vector<uint8_t> culled;  // per entry of `nodes`: 1 when the whole node faces away from the view
+  size_t faces = 0;             // faces of all nodes of the cut
+  size_t drawnFaces = 0;        // faces of the nodes not culled
   size_t groupsDrawn = 0, groupsCulled = 0;
-  int maxLevelDifference = 0;    // over pairs of cut nodes sharing a vertex
-  size_t refinements = 0;        // nodes replaced by their children so far
+  int maxLevelDifference = 0;  // over pairs of cut nodes sharing a vertex
+  size_t refinements = 0;      // nodes replaced by their children so far
 };
 
 // Incremental refinement, for a viewer's idle time: Start() resets the cut to the roots, each

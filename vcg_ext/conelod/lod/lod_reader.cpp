@@ -141,8 +141,8 @@ struct LodReader::Impl {
     std::unique_ptr<LodGeometry> geometry;
   };
   std::unordered_map<uint32_t, Entry> nodes;
-  size_t geometryBytes = 0;       // of the loaded geometry
-  std::vector<uint8_t> buffer;    // reused for reads
+  size_t geometryBytes = 0;     // of the loaded geometry
+  std::vector<uint8_t> buffer;  // reused for reads
   // The last index block read (a node's children share one most of the time).
   uint64_t cachedIndexBlock = ~uint64_t(0);
   std::vector<IndexEntry> indexCache;
@@ -171,8 +171,8 @@ struct LodReader::Impl {
     if (avail < kChunkHeaderBytes) return Status::Invalid(std::string("truncated ") + what);
     h = DecodeChunkHeader(p);
     if (h.id != id)
-      return Status::Invalid(std::string("corrupt file: expected a ") + ChunkName(id) + " chunk (" + what + "), found " +
-                             ChunkName(h.id));
+      return Status::Invalid(std::string("corrupt file: expected a ") + ChunkName(id) + " chunk (" + what +
+                             "), found " + ChunkName(h.id));
     if (h.dataBytes > avail - kChunkHeaderBytes || h.childBytes > (uint64_t(1) << 62) ||
         (expectedTotal && h.totalBytes() != expectedTotal))
       return Status::Invalid(std::string("corrupt chunk size in ") + what);
@@ -237,8 +237,8 @@ struct LodReader::Impl {
     for (uint32_t i = 0; i < count; ++i) {
       const uint32_t id = first + i;
       ChunkHeader h;
-      s = CheckChunk(buffer.data() + at, entries[i].recordBytes, kNode, entries[i].recordBytes,
-                     "the record of a node", h);
+      s = CheckChunk(buffer.data() + at, entries[i].recordBytes, kNode, entries[i].recordBytes, "the record of a node",
+                     h);
       if (!s.ok()) return Status::Invalid(s.message + " " + Num(id));
       Decoder d(buffer.data() + at + kChunkHeaderBytes, size_t(h.dataBytes));
       at += entries[i].recordBytes;
@@ -270,8 +270,8 @@ struct LodReader::Impl {
           !(n.cone.halfAngle >= 0 || emptyCone) || !std::isfinite(n.cone.axis[0] + n.cone.axis[1] + n.cone.axis[2]) ||
           !std::isfinite(n.center[0] + n.center[1] + n.center[2]) || !(n.radius >= 0) || !std::isfinite(n.radius))
         return Status::Invalid(bad + "non-finite or negative cone or sphere");
-      if (!(n.error >= 0) || !std::isfinite(n.error) || (level == 0 && n.error != 0) ||
-          !(n.parentError >= n.error) || (top ? !std::isinf(n.parentError) : !std::isfinite(n.parentError)))
+      if (!(n.error >= 0) || !std::isfinite(n.error) || (level == 0 && n.error != 0) || !(n.parentError >= n.error) ||
+          (top ? !std::isinf(n.parentError) : !std::isfinite(n.parentError)))
         return Status::Invalid(bad + "bad error bounds");
       if (n.vertexCount > uint64_t(3) * n.faceCount || n.faceCount > levels[level].faces || n.faceCount == 0)
         return Status::Invalid(bad + "impossible face or vertex count");
@@ -279,12 +279,14 @@ struct LodReader::Impl {
         out.resize(count);
         for (auto& v : out) {
           v = d.u32();
-          if (lvl >= levels.size() || v < levels[lvl].firstId || v >= levels[lvl].firstId + levels[lvl].nodes) return false;
+          if (lvl >= levels.size() || v < levels[lvl].firstId || v >= levels[lvl].firstId + levels[lvl].nodes)
+            return false;
         }
         return true;
       };
       if (!readIds(children, level - 1, n.children)) return Status::Invalid(bad + "child out of range");
-      if (!readIds(siblings, level, n.siblings) || std::find(n.siblings.begin(), n.siblings.end(), id) == n.siblings.end())
+      if (!readIds(siblings, level, n.siblings) ||
+          std::find(n.siblings.begin(), n.siblings.end(), id) == n.siblings.end())
         return Status::Invalid(bad + "sibling out of range");
       if (!readIds(parents, level + 1, n.parents)) return Status::Invalid(bad + "parent out of range");
       e.geometryOffset = entries[i].geometry;
@@ -406,22 +408,27 @@ struct LodReader::Impl {
     if (!s.ok()) return s;
     const uint32_t version = Decoder(buffer.data(), 4).u32();
     if (version == 1)
-      return Status::Invalid("this is a .clod version 1 file (written by an older ConeLOD, whose cuts could have "
-                             "cracks): rebuild it with conelod lod build (this reader reads version " + Num(kVersion) + ")");
+      return Status::Invalid(
+          "this is a .clod version 1 file (written by an older ConeLOD, whose cuts could have "
+          "cracks): rebuild it with conelod lod build (this reader reads version " +
+          Num(kVersion) + ")");
     if (version != kVersion)
       return Status::Invalid("unsupported .clod version " + Num(version) + " (this reader reads version " +
                              Num(kVersion) + ")");
-    if (h.dataBytes < kHeaderFixedBytes + kLevelEntryBytes || h.dataBytes > kHeaderFixedBytes + kMaxLevels * kLevelEntryBytes ||
+    if (h.dataBytes < kHeaderFixedBytes + kLevelEntryBytes ||
+        h.dataBytes > kHeaderFixedBytes + kMaxLevels * kLevelEntryBytes ||
         (h.dataBytes - kHeaderFixedBytes) % kLevelEntryBytes != 0 || h.childBytes > (uint64_t(1) << 62))
       return Status::Invalid("corrupt chunk size in the file header");
     if (h.totalBytes() > src->size)
-      return Status::Invalid(trunc + "the file has " + Num(src->size) + " bytes, its header says " + Num(h.totalBytes()));
+      return Status::Invalid(trunc + "the file has " + Num(src->size) + " bytes, its header says " +
+                             Num(h.totalBytes()));
     if (h.totalBytes() < src->size)
       return Status::Invalid("corrupt chunk size in the file header: it says " + Num(h.totalBytes()) +
                              " bytes, the file has " + Num(src->size));
     s = ReadRange(kChunkHeaderBytes, h.dataBytes, "the file header");
     if (!s.ok()) return s;
-    if (kCheckCrc && Crc32(buffer.data(), size_t(h.dataBytes)) != h.crc) return Status::Invalid("checksum mismatch in the file header");
+    if (kCheckCrc && Crc32(buffer.data(), size_t(h.dataBytes)) != h.crc)
+      return Status::Invalid("checksum mismatch in the file header");
     Decoder d(buffer.data(), size_t(h.dataBytes));
     info.version = d.u32();
     const uint32_t levelCount = d.u32();
@@ -440,7 +447,8 @@ struct LodReader::Impl {
     vertexBlock = d.u32();
     indexBlock = d.u32();
     const std::string bad = "corrupt file header: ";
-    if (levelCount < 1 || levelCount > kMaxLevels || h.dataBytes != kHeaderFixedBytes + uint64_t(levelCount) * kLevelEntryBytes)
+    if (levelCount < 1 || levelCount > kMaxLevels ||
+        h.dataBytes != kHeaderFixedBytes + uint64_t(levelCount) * kLevelEntryBytes)
       return Status::Invalid(bad + "bad level count " + Num(levelCount));
     if (vertexBlock == 0 || vertexBlock > (1u << 20) || indexBlock == 0 || indexBlock > (1u << 20))
       return Status::Invalid(bad + "bad block size");
@@ -514,8 +522,8 @@ struct LodReader::Impl {
         Decoder dl(buffer.data() + kChunkHeaderBytes, kLevelDataBytes);
         const uint32_t lk = dl.u32(), lpad = dl.u32();
         const uint64_t ln = dl.u64(), lf = dl.u64(), lv = dl.u64();
-        if (lh.dataBytes != kLevelDataBytes || lk != k || lpad != 0 || ln != L.nodes || lf != L.faces || lv != L.vertices ||
-            L.vertOffset != L.levelOffset + lb || lh.totalBytes() > src->size - L.levelOffset)
+        if (lh.dataBytes != kLevelDataBytes || lk != k || lpad != 0 || ln != L.nodes || lf != L.faces ||
+            lv != L.vertices || L.vertOffset != L.levelOffset + lb || lh.totalBytes() > src->size - L.levelOffset)
           return Status::Invalid("corrupt level chunk of level " + Num(k) + ": it disagrees with the file header");
         const uint64_t vb = kChunkHeaderBytes + kVertDataBytes;
         s = ReadRange(L.vertOffset, vb, "a vertex chunk");
@@ -633,14 +641,15 @@ void LodReader::EvictGeometry(uint32_t id) {
 
 size_t LodReader::residentBytes() const {
   const Impl& m = *impl_;
-  size_t b = sizeof(LodReader) + sizeof(Impl) + m.levels.capacity() * sizeof(LevelEntry) +
-             m.roots.capacity() * 4 + m.buffer.capacity() + m.indexCache.capacity() * sizeof(IndexEntry) +
-             m.info.levelFaces.capacity() * 16 + m.src->heldBytes() + m.geometryBytes;
+  size_t b = sizeof(LodReader) + sizeof(Impl) + m.levels.capacity() * sizeof(LevelEntry) + m.roots.capacity() * 4 +
+             m.buffer.capacity() + m.indexCache.capacity() * sizeof(IndexEntry) + m.info.levelFaces.capacity() * 16 +
+             m.src->heldBytes() + m.geometryBytes;
   // Hash map: buckets plus one heap node per record (key, entry, next pointer, cached hash).
   b += m.nodes.bucket_count() * sizeof(void*);
   for (const auto& kv : m.nodes)
     b += sizeof(kv) + 2 * sizeof(void*) +
-         (kv.second.node.children.capacity() + kv.second.node.siblings.capacity() + kv.second.node.parents.capacity()) * 4;
+         (kv.second.node.children.capacity() + kv.second.node.siblings.capacity() + kv.second.node.parents.capacity()) *
+             4;
   return b;
 }
 

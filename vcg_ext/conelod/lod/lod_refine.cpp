@@ -38,9 +38,9 @@ namespace {
 enum : uint8_t { kBelow = 0, kInCut = 1, kRefined = 2 };
 
 struct QueueItem {
-  uint8_t culled;     // every cluster of the group faces away
+  uint8_t culled;  // every cluster of the group faces away
   double priority;
-  uint32_t key;       // the group: its clusters' smallest node id
+  uint32_t key;  // the group: its clusters' smallest node id
   // std::priority_queue pops the largest: visible before culled, larger priority first, lower
   // key first (deterministic ties).
   bool operator<(const QueueItem& o) const {
@@ -55,8 +55,8 @@ struct LodRefiner::Impl {
   explicit Impl(LodReader& r) : reader(r) {}
   LodReader& reader;
   LodView view;
-  std::vector<uint8_t> state;                     // per node id
-  std::unordered_map<uint32_t, uint32_t> cutPos;  // node id -> its entry in cut.nodes
+  std::vector<uint8_t> state;                      // per node id
+  std::unordered_map<uint32_t, uint32_t> cutPos;   // node id -> its entry in cut.nodes
   std::unordered_map<uint32_t, uint32_t> present;  // group key -> its clusters in the cut
   mutable LodCut cut;
   mutable bool statsDirty = true;
@@ -81,8 +81,12 @@ struct LodRefiner::Impl {
       const LodNode& n = reader.node(s);
       double q = 0;
       switch (view.priority) {
-        case LodPriority::ObjectError: q = n.error; break;
-        case LodPriority::ConeFg: q = RefinementPriority(n, view); break;
+        case LodPriority::ObjectError:
+          q = n.error;
+          break;
+        case LodPriority::ConeFg:
+          q = RefinementPriority(n, view);
+          break;
         case LodPriority::ScreenError: {
           double d;
           if (view.orthographic) {
@@ -141,7 +145,8 @@ struct LodRefiner::Impl {
         // Every cluster of the group is in the cut: it can be expanded.
         bool allCulled = view.cullBackFacing;
         for (uint32_t sib : n.siblings) {
-          if (state[sib] != kInCut) return Status::Invalid("corrupt file: node " + std::to_string(id) + "'s siblings disagree");
+          if (state[sib] != kInCut)
+            return Status::Invalid("corrupt file: node " + std::to_string(id) + "'s siblings disagree");
           if (!cut.culled[cutPos[sib]]) allCulled = false;
         }
         queue.push({uint8_t(allCulled), priorityOf(n.siblings), key});
@@ -180,14 +185,17 @@ struct LodRefiner::Impl {
     const std::vector<uint32_t> children = reader.node(key).children;
     if (children.empty()) return Status::Ok();
     for (uint32_t s : siblings)
-      if (s >= state.size() || state[s] != kInCut || reader.node(s).children != children || reader.node(s).siblings != siblings)
-        return Status::Invalid("corrupt file: the clusters made from one group disagree (node " + std::to_string(s) + ")");
+      if (s >= state.size() || state[s] != kInCut || reader.node(s).children != children ||
+          reader.node(s).siblings != siblings)
+        return Status::Invalid("corrupt file: the clusters made from one group disagree (node " + std::to_string(s) +
+                               ")");
     Status st = reader.LoadChildren(key);
     if (!st.ok()) return st;
     size_t removed = 0, added = 0;
     for (uint32_t s : siblings) removed += reader.node(s).faceCount;
     for (uint32_t c : children) {
-      if (c >= state.size() || state[c] != kBelow) return Status::Invalid("corrupt file: node " + std::to_string(c) + " is the child of two groups");
+      if (c >= state.size() || state[c] != kBelow)
+        return Status::Invalid("corrupt file: node " + std::to_string(c) + " is the child of two groups");
       added += reader.node(c).faceCount;
     }
     if (cut.faces - removed + added > view.faceBudget) {
@@ -255,9 +263,9 @@ Status LodRefiner::Step(size_t maxRefinements) {
   size_t done = 0;
   while (done < maxRefinements && !m.stopped && !m.queue.empty()) {
     const QueueItem top = m.queue.top();
-    const bool pixelStop = m.view.priority == LodPriority::ScreenError && m.view.projectionScale > 0 && m.view.maxPixelError > 0;
-    if (pixelStop && !top.culled &&
-        top.priority <= m.view.maxPixelError) {
+    const bool pixelStop =
+        m.view.priority == LodPriority::ScreenError && m.view.projectionScale > 0 && m.view.maxPixelError > 0;
+    if (pixelStop && !top.culled && top.priority <= m.view.maxPixelError) {
       // Every visible group left is below a pixel: only back-facing ones could follow, and they
       // are not drawn. Stop here.
       m.stopped = true;
@@ -300,7 +308,8 @@ Status ExtractCutMesh(LodReader& reader, const LodCut& cut, bool includeCulled, 
   out = IndexedMesh();
   if (faceLevel) faceLevel->clear();
   if (faceNode) faceNode->clear();
-  if (cut.culled.size() != cut.nodes.size()) return Status::Invalid("ExtractCutMesh: the cut's culled flags do not match its nodes");
+  if (cut.culled.size() != cut.nodes.size())
+    return Status::Invalid("ExtractCutMesh: the cut's culled flags do not match its nodes");
   size_t faces = 0, verts = 0;
   for (size_t i = 0; i < cut.nodes.size(); ++i) {
     const uint32_t id = cut.nodes[i];

@@ -60,8 +60,8 @@ class OutFile {
   }
   bool patch(uint64_t at, const Encoder& e) {
     if (!ok_) return false;
-    if (std::fseek(f_, long(at), SEEK_SET) != 0 || std::fwrite(e.bytes.data(), 1, e.bytes.size(), f_) != e.bytes.size() ||
-        std::fseek(f_, 0, SEEK_END) != 0)
+    if (std::fseek(f_, long(at), SEEK_SET) != 0 ||
+        std::fwrite(e.bytes.data(), 1, e.bytes.size(), f_) != e.bytes.size() || std::fseek(f_, 0, SEEK_END) != 0)
       failed();
     return ok_;
   }
@@ -162,7 +162,8 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
       if (k == 0 ? L.clusterCreator[c] != -1 : (L.clusterCreator[c] < 0 || size_t(L.clusterCreator[c]) >= groupsBelow))
         return Status::Invalid(bad + " (a bad creator group)");
       const int g = L.clusterGroup[c];
-      if (k + 1 == H ? g != -1 : (g < 0 || size_t(g) >= L.groupError.size())) return Status::Invalid(bad + " (a bad group)");
+      if (k + 1 == H ? g != -1 : (g < 0 || size_t(g) >= L.groupError.size()))
+        return Status::Invalid(bad + " (a bad group)");
     }
   }
   const uint32_t nodeLevels = uint32_t(H);
@@ -219,7 +220,9 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
       BucketFaces(L, nodeOfCluster[k], start, faces);
       levelFaces[k] = L.faces.size();
       ListBy(L.clusterCreator, k ? dag.levels[k - 1].groupError.size() : 0, idOfCluster[k], byCreatorStart, byCreator);
-      if (k > 0) ListBy(dag.levels[k - 1].clusterGroup, dag.levels[k - 1].groupError.size(), idOfCluster[k - 1], byGroupStart, byGroup);
+      if (k > 0)
+        ListBy(dag.levels[k - 1].clusterGroup, dag.levels[k - 1].groupError.size(), idOfCluster[k - 1], byGroupStart,
+               byGroup);
       if (k + 1 < nodeLevels)
         ListBy(dag.levels[k + 1].clusterCreator, L.groupError.size(), idOfCluster[k + 1], aboveStart, above);
       for (uint32_t i = 0; i < clusterOfNode[k].size(); ++i) {
@@ -247,7 +250,8 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
         uint32_t vc = 0;
         for (uint32_t j = start[i]; j < start[i + 1]; ++j) {
           const auto& t = L.faces[faces[j]];
-          const vcg::Point3d a = vcg::Point3d::Construct(dag.positions[t[0]]), b = vcg::Point3d::Construct(dag.positions[t[1]]),
+          const vcg::Point3d a = vcg::Point3d::Construct(dag.positions[t[0]]),
+                             b = vcg::Point3d::Construct(dag.positions[t[1]]),
                              cc = vcg::Point3d::Construct(dag.positions[t[2]]);
           const vcg::Point3d n = (b - a) ^ (cc - a);
           const double len = n.Norm();
@@ -327,7 +331,10 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
   out.chunk(kRoot, header);  // placeholder: rewritten at the end
 
   // Node records, coarsest level first (node id order).
-  struct IndexEntry { uint64_t record = 0, geometry = 0; uint32_t recordBytes = 0, geometryBytes = 0; };
+  struct IndexEntry {
+    uint64_t record = 0, geometry = 0;
+    uint32_t recordBytes = 0, geometryBytes = 0;
+  };
   std::vector<IndexEntry> index(nodeCount);
   hierOffset = out.offset();
   {
@@ -371,7 +378,8 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
 
   // Geometry, coarsest level first.
   {
-    std::vector<uint32_t> start, faces, levelId(dag.positions.size(), kNoParent), local(dag.positions.size(), kNoParent), order, verts;
+    std::vector<uint32_t> start, faces, levelId(dag.positions.size(), kNoParent),
+        local(dag.positions.size(), kNoParent), order, verts;
     std::vector<vcg::Point3f> block;
     Encoder e;
     for (int k = int(nodeLevels) - 1; k >= 0; --k) {

@@ -68,7 +68,10 @@ void BuildFaceAdjacencyInto(const IndexedMesh& m, std::vector<uint32_t, Alloc>& 
     for (uint32_t i = 0; i < ringSize; ++i) ringFace[i] = ring[i].corner / 3;
     for (uint32_t i = 0; i < ringSize; ++i) {
       const uint32_t f = ringFace[i], b = ring[i].other1;
-      if (a == b) { slot[ring[i].corner] = kNone; continue; }
+      if (a == b) {
+        slot[ring[i].corner] = kNone;
+        continue;
+      }
       // Skip f itself, and a face listed twice at a (a degenerate face: its corners are adjacent).
       uint32_t sharers = 1, lowest = f, other = kNone;
       uint32_t previous = f;
@@ -83,8 +86,10 @@ void BuildFaceAdjacencyInto(const IndexedMesh& m, std::vector<uint32_t, Alloc>& 
         other = g;
       }
       if (lowest == f) {  // count each undirected edge once, at its lowest face
-        if (sharers == 1) ++borderEdges;
-        else if (sharers > 2) ++nonManifoldEdges;
+        if (sharers == 1)
+          ++borderEdges;
+        else if (sharers > 2)
+          ++nonManifoldEdges;
       }
       slot[ring[i].corner] = sharers > 2 ? kMany : other;
     }
@@ -96,8 +101,8 @@ void BuildFaceAdjacencyInto(const IndexedMesh& m, std::vector<uint32_t, Alloc>& 
   offsets.assign(nf + 1, 0);
   std::vector<uint32_t, Alloc> aside;  // the slots of faces [asideFrom, nf), once moved
   uint32_t asideFrom = nf;
-  std::vector<uint32_t> many;          // the list of a face with an edge of 3+ faces
-  size_t size = 0;                     // the lists' entries so far
+  std::vector<uint32_t> many;  // the list of a face with an edge of 3+ faces
+  size_t size = 0;             // the lists' entries so far
   for (uint32_t f = 0; f < nf; ++f) {
     const uint32_t* s = f < asideFrom ? &neighbours[size_t(f) * 3] : &aside[size_t(f - asideFrom) * 3];
     const uint32_t s0 = s[0], s1 = s[1], s2 = s[2];

@@ -9,8 +9,7 @@
 
 namespace conelod {
 
-void ComputeFaceNormalsAndAreas(const IndexedMesh& m, std::vector<vcg::Point3d>& normals,
-                                std::vector<double>& areas) {
+void ComputeFaceNormalsAndAreas(const IndexedMesh& m, std::vector<vcg::Point3d>& normals, std::vector<double>& areas) {
   const size_t nf = m.faces.size();
   normals.resize(nf);
   areas.resize(nf);
@@ -47,7 +46,10 @@ FaceAdjacency BuildFaceAdjacency(const IndexedMesh& m) {
 
 namespace {
 uint32_t Find(std::vector<uint32_t>& parent, uint32_t x) {
-  while (parent[x] != x) { parent[x] = parent[parent[x]]; x = parent[x]; }
+  while (parent[x] != x) {
+    parent[x] = parent[parent[x]];
+    x = parent[x];
+  }
   return x;
 }
 }  // namespace
@@ -72,8 +74,7 @@ int ConnectedComponents(const FaceAdjacency& adj, std::vector<int>& comp) {
   return count;
 }
 
-bool GroupsAreEdgeConnected(const FaceAdjacency& adj, const std::vector<int>& faceGroup,
-                            std::vector<int>* broken) {
+bool GroupsAreEdgeConnected(const FaceAdjacency& adj, const std::vector<int>& faceGroup, std::vector<int>* broken) {
   const uint32_t nf = uint32_t(faceGroup.size());
   std::vector<uint32_t> parent(nf);
   std::iota(parent.begin(), parent.end(), 0u);
@@ -95,8 +96,10 @@ bool GroupsAreEdgeConnected(const FaceAdjacency& adj, const std::vector<int>& fa
     const int g = faceGroup[f];
     if (g < 0) continue;
     const int64_t r = Find(parent, f);
-    if (rootOfGroup[g] < 0) rootOfGroup[g] = r;
-    else if (rootOfGroup[g] != r) isBroken[g] = 1;
+    if (rootOfGroup[g] < 0)
+      rootOfGroup[g] = r;
+    else if (rootOfGroup[g] != r)
+      isBroken[g] = 1;
   }
   bool ok = true;
   for (int g = 0; g <= maxGroup; ++g)

@@ -46,8 +46,7 @@ inline void FaceNormalAndArea(const IndexedMesh& m, size_t f, vcg::Point3d& norm
 }
 
 // Per-face unit normal and area (FaceNormalAndArea) of every face.
-void ComputeFaceNormalsAndAreas(const IndexedMesh& m, std::vector<vcg::Point3d>& normals,
-                                std::vector<double>& areas);
+void ComputeFaceNormalsAndAreas(const IndexedMesh& m, std::vector<vcg::Point3d>& normals, std::vector<double>& areas);
 
 // Bounding box of the vertices that faces use (unreferenced vertices and out-of-range indices
 // ignored); null when there are none.

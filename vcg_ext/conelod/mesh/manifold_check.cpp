@@ -8,7 +8,10 @@
 namespace conelod {
 namespace {
 uint32_t Find(std::vector<uint32_t>& parent, uint32_t x) {
-  while (parent[x] != x) { parent[x] = parent[parent[x]]; x = parent[x]; }
+  while (parent[x] != x) {
+    parent[x] = parent[parent[x]];
+    x = parent[x];
+  }
   return x;
 }
 }  // namespace
@@ -20,12 +23,18 @@ ManifoldReport CheckManifold(const IndexedMesh& m) {
   std::vector<double> areas;
   ComputeFaceNormalsAndAreas(m, normals, areas);
   // Directed edges (a, b, face), sorted by undirected key.
-  struct Half { uint32_t lo, hi, face; bool forward; };
+  struct Half {
+    uint32_t lo, hi, face;
+    bool forward;
+  };
   std::vector<Half> halves;
   halves.reserve(size_t(nf) * 3);
   for (uint32_t f = 0; f < nf; ++f) {
     const auto& t = m.faces[f];
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) { ++r.degenerateFaces; continue; }
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
+      ++r.degenerateFaces;
+      continue;
+    }
     if (areas[f] == 0) ++r.degenerateFaces;
     for (int k = 0; k < 3; ++k) {
       const uint32_t a = t[size_t(k)], b = t[size_t((k + 1) % 3)];
@@ -63,9 +72,12 @@ ManifoldReport CheckManifold(const IndexedMesh& m) {
     size_t j = i;
     while (j < halves.size() && halves[j].lo == halves[i].lo && halves[j].hi == halves[i].hi) ++j;
     const size_t count = j - i;
-    if (count == 1) ++r.borderEdges;
-    else if (count > 2) { ++r.nonManifoldEdges; onBadEdge[halves[i].lo] = onBadEdge[halves[i].hi] = 1; }
-    else {
+    if (count == 1)
+      ++r.borderEdges;
+    else if (count > 2) {
+      ++r.nonManifoldEdges;
+      onBadEdge[halves[i].lo] = onBadEdge[halves[i].hi] = 1;
+    } else {
       if (halves[i].forward == halves[i + 1].forward) ++r.misorientedEdges;
       for (uint32_t v : {halves[i].lo, halves[i].hi}) {
         const uint32_t a = Find(parent, corner(v, halves[i].face)), b = Find(parent, corner(v, halves[i + 1].face));

@@ -17,13 +17,20 @@ MeshReport CheckFaces(const IndexedMesh& m, bool anyArea) {
     bool ok = true;
     for (uint32_t v : t)
       if (v >= m.positions.size()) ok = false;
-    if (!ok) { ++r.badIndexFaces; continue; }
+    if (!ok) {
+      ++r.badIndexFaces;
+      continue;
+    }
     for (uint32_t v : t) used[v] = 1;
   }
   for (size_t v = 0; v < m.positions.size(); ++v) {
-    if (!used[v]) { ++r.unreferencedVertices; continue; }
+    if (!used[v]) {
+      ++r.unreferencedVertices;
+      continue;
+    }
     const auto& p = m.positions[v];
-    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) ++r.nonFiniteVertices;
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+      ++r.nonFiniteVertices;
     else if (std::fabs(p[0]) > kMaxCoordinate || std::fabs(p[1]) > kMaxCoordinate || std::fabs(p[2]) > kMaxCoordinate)
       ++r.hugeVertices;
   }
@@ -32,8 +39,10 @@ MeshReport CheckFaces(const IndexedMesh& m, bool anyArea) {
     vcg::Point3d n;
     double a;
     FaceNormalAndArea(m, f, n, a);
-    if (a == 0) ++r.degenerateFaces;
-    else if (anyArea) break;
+    if (a == 0)
+      ++r.degenerateFaces;
+    else if (anyArea)
+      break;
   }
   return r;
 }

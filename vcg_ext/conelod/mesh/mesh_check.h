@@ -21,13 +21,13 @@ struct MeshReport {
   size_t vertices = 0;
   size_t faces = 0;
   size_t unreferencedVertices = 0;
-  size_t nonFiniteVertices = 0;   // referenced vertices with a NaN or infinite coordinate
-  size_t hugeVertices = 0;        // referenced vertices with a coordinate beyond +-kMaxCoordinate
-  size_t badIndexFaces = 0;       // faces that index past the vertex array
-  size_t degenerateFaces = 0;     // zero area (repeated vertex or collinear corners)
+  size_t nonFiniteVertices = 0;  // referenced vertices with a NaN or infinite coordinate
+  size_t hugeVertices = 0;       // referenced vertices with a coordinate beyond +-kMaxCoordinate
+  size_t badIndexFaces = 0;      // faces that index past the vertex array
+  size_t degenerateFaces = 0;    // zero area (repeated vertex or collinear corners)
   size_t borderEdges = 0;
   size_t nonManifoldEdges = 0;
-  int components = 0;             // edge-connected face components
+  int components = 0;  // edge-connected face components
 };
 
 // Counts everything above. Border/non-manifold edges and components are computed only with
@@ -35,8 +35,8 @@ struct MeshReport {
 MeshReport CheckMesh(const IndexedMesh& m, bool withTopology = true);
 
 // Ok, or the reason why a face-based algorithm cannot run: no faces, faces with out-of-range
-// indices, or referenced vertices with non-finite coordinates or coordinates beyond kMaxCoordinate. Zero-area faces, non-manifold
-// edges, unreferenced vertices and several components are accepted (documented behaviour).
+// indices, or referenced vertices with non-finite coordinates or coordinates beyond kMaxCoordinate. Zero-area faces,
+// non-manifold edges, unreferenced vertices and several components are accepted (documented behaviour).
 Status RequireValidForFaces(const MeshReport& r);
 
 // RequireValidForFaces(CheckMesh(m, false)), the same status, without counting every zero-area

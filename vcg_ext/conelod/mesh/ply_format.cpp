@@ -24,7 +24,7 @@ struct TypeInfo {
   const char* alias;
   int bytes;
 };
-const TypeInfo kTypes[] = {{"", "", 0},           {"char", "int8", 1},   {"uchar", "uint8", 1},
+const TypeInfo kTypes[] = {{"", "", 0},           {"char", "int8", 1},     {"uchar", "uint8", 1},
                            {"short", "int16", 2}, {"ushort", "uint16", 2}, {"int", "int32", 4},
                            {"uint", "uint32", 4}, {"float", "float32", 4}, {"double", "float64", 8}};
 enum { kInt8 = 1, kUint8, kInt16, kUint16, kInt32, kUint32, kFloat32, kFloat64 };
@@ -87,14 +87,51 @@ class Cursor {
     if (swap)
       for (int i = 0; i < n / 2; ++i) std::swap(b[i], b[n - 1 - i]);
     switch (type) {
-      case kInt8: { int8_t x; std::memcpy(&x, b, 1); v = x; break; }
-      case kUint8: v = b[0]; break;
-      case kInt16: { int16_t x; std::memcpy(&x, b, 2); v = x; break; }
-      case kUint16: { uint16_t x; std::memcpy(&x, b, 2); v = x; break; }
-      case kInt32: { int32_t x; std::memcpy(&x, b, 4); v = x; break; }
-      case kUint32: { uint32_t x; std::memcpy(&x, b, 4); v = x; break; }
-      case kFloat32: { float x; std::memcpy(&x, b, 4); v = x; break; }
-      default: { double x; std::memcpy(&x, b, 8); v = x; break; }
+      case kInt8: {
+        int8_t x;
+        std::memcpy(&x, b, 1);
+        v = x;
+        break;
+      }
+      case kUint8:
+        v = b[0];
+        break;
+      case kInt16: {
+        int16_t x;
+        std::memcpy(&x, b, 2);
+        v = x;
+        break;
+      }
+      case kUint16: {
+        uint16_t x;
+        std::memcpy(&x, b, 2);
+        v = x;
+        break;
+      }
+      case kInt32: {
+        int32_t x;
+        std::memcpy(&x, b, 4);
+        v = x;
+        break;
+      }
+      case kUint32: {
+        uint32_t x;
+        std::memcpy(&x, b, 4);
+        v = x;
+        break;
+      }
+      case kFloat32: {
+        float x;
+        std::memcpy(&x, b, 4);
+        v = x;
+        break;
+      }
+      default: {
+        double x;
+        std::memcpy(&x, b, 8);
+        v = x;
+        break;
+      }
     }
     return true;
   }
@@ -109,15 +146,25 @@ class Cursor {
     const size_t n = size_t(p_ - s);
     if (n == 0) return false;
     char buf[72];
-    if (n >= sizeof buf) { bad_.assign(s, 40); bad_ += "..."; return false; }
+    if (n >= sizeof buf) {
+      bad_.assign(s, 40);
+      bad_ += "...";
+      return false;
+    }
     std::memcpy(buf, s, n);
     buf[n] = '\0';
     char* e = nullptr;
     errno = 0;
-    if (type == kFloat32) v = std::strtof(buf, &e);  // as vcglib reads floats: no double rounding
-    else if (type == kFloat64) v = std::strtod(buf, &e);
-    else v = double(std::strtoll(buf, &e, 10));
-    if (e != buf + n || (type < kFloat32 && errno == ERANGE)) { bad_ = buf; return false; }
+    if (type == kFloat32)
+      v = std::strtof(buf, &e);  // as vcglib reads floats: no double rounding
+    else if (type == kFloat64)
+      v = std::strtod(buf, &e);
+    else
+      v = double(std::strtoll(buf, &e, 10));
+    if (e != buf + n || (type < kFloat32 && errno == ERANGE)) {
+      bad_ = buf;
+      return false;
+    }
     return true;
   }
 
@@ -127,7 +174,12 @@ class Cursor {
   PlyEncoding enc_;
   std::string bad_;
 };
-const bool Cursor::kBigEndianHost = [] { const uint16_t x = 1; unsigned char c; std::memcpy(&c, &x, 1); return c == 0; }();
+const bool Cursor::kBigEndianHost = [] {
+  const uint16_t x = 1;
+  unsigned char c;
+  std::memcpy(&c, &x, 1);
+  return c == 0;
+}();
 
 double Orient(const double a[2], const double b[2], const double c[2]) {
   return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
@@ -147,7 +199,9 @@ std::string ParsePlyHeader(const char* data, size_t size, PlyHeader& h, uint64_t
   while (!ended) {
     const size_t limit = std::min(size, kMaxHeaderBytes);
     const char* nl = static_cast<const char*>(std::memchr(data + pos, '\n', limit - pos));
-    if (!nl) return size > kMaxHeaderBytes ? "has a PLY header longer than 1 MiB" : "ends inside its PLY header (no end_header line)";
+    if (!nl)
+      return size > kMaxHeaderBytes ? "has a PLY header longer than 1 MiB"
+                                    : "ends inside its PLY header (no end_header line)";
     std::string line(data + pos, size_t(nl - (data + pos)));
     pos = size_t(nl - data) + 1;
     ++lineNo;
@@ -160,10 +214,14 @@ std::string ParsePlyHeader(const char* data, size_t size, PlyHeader& h, uint64_t
       ended = true;
     } else if (w[0] == "format") {
       if (w.size() < 2) return where + ": no format";
-      if (w[1] == "ascii") h.encoding = PlyEncoding::Ascii;
-      else if (w[1] == "binary_little_endian") h.encoding = PlyEncoding::BinaryLittleEndian;
-      else if (w[1] == "binary_big_endian") h.encoding = PlyEncoding::BinaryBigEndian;
-      else return where + ": unknown format '" + w[1] + "'";
+      if (w[1] == "ascii")
+        h.encoding = PlyEncoding::Ascii;
+      else if (w[1] == "binary_little_endian")
+        h.encoding = PlyEncoding::BinaryLittleEndian;
+      else if (w[1] == "binary_big_endian")
+        h.encoding = PlyEncoding::BinaryBigEndian;
+      else
+        return where + ": unknown format '" + w[1] + "'";
       haveFormat = true;
     } else if (w[0] == "element") {
       if (w.size() != 3) return where + ": expected 'element NAME COUNT'";
@@ -204,7 +262,8 @@ std::string ParsePlyHeader(const char* data, size_t size, PlyHeader& h, uint64_t
   const uint64_t body = std::max<uint64_t>(fileBytes, size) - pos;
   uint64_t needed = 0;
   for (const PlyElement& e : h.elements) {
-    if (e.count && e.properties.empty()) return "declares " + std::to_string(e.count) + " '" + e.name + "' records without properties";
+    if (e.count && e.properties.empty())
+      return "declares " + std::to_string(e.count) + " '" + e.name + "' records without properties";
     uint64_t record = 0;
     for (const PlyProperty& p : e.properties)
       record += h.encoding == PlyEncoding::Ascii ? 2 : uint64_t(kTypes[p.isList ? p.countType : p.type].bytes);
@@ -223,7 +282,8 @@ uint64_t PlyTriangleFileBytes(const PlyHeader& h) {
   for (const PlyElement& e : h.elements) {
     uint64_t record = 0;
     for (const PlyProperty& p : e.properties)
-      record += p.isList ? uint64_t(kTypes[p.countType].bytes + 3 * kTypes[p.type].bytes) : uint64_t(kTypes[p.type].bytes);
+      record +=
+          p.isList ? uint64_t(kTypes[p.countType].bytes + 3 * kTypes[p.type].bytes) : uint64_t(kTypes[p.type].bytes);
     bytes += e.count * record;
   }
   return bytes;
@@ -246,12 +306,19 @@ std::string TriangulatePolygon(const std::vector<std::array<float, 3>>& P, const
     // its largest corner triangle tells them apart below (the crossing test).
     double best = 0;
     for (size_t i = 2; i < n; ++i) {
-      const auto& a = P[corners[0]]; const auto& b = P[corners[1]]; const auto& c = P[corners[i]];
+      const auto& a = P[corners[0]];
+      const auto& b = P[corners[1]];
+      const auto& c = P[corners[i]];
       const double e[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
       const double f[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
       const double x[3] = {e[1] * f[2] - e[2] * f[1], e[2] * f[0] - e[0] * f[2], e[0] * f[1] - e[1] * f[0]};
       const double len = std::fabs(x[0]) + std::fabs(x[1]) + std::fabs(x[2]);
-      if (len > best) { best = len; N[0] = x[0]; N[1] = x[1]; N[2] = x[2]; }
+      if (len > best) {
+        best = len;
+        N[0] = x[0];
+        N[1] = x[1];
+        N[2] = x[2];
+      }
     }
   }
   const int drop = std::fabs(N[0]) > std::fabs(N[1]) ? (std::fabs(N[0]) > std::fabs(N[2]) ? 0 : 2)
@@ -268,17 +335,20 @@ std::string TriangulatePolygon(const std::vector<std::array<float, 3>>& P, const
   for (size_t i = 0; i < n; ++i)
     for (size_t j = i + 2; j < n; ++j) {
       if (i == 0 && j == n - 1) continue;  // adjacent through the closing edge
-      const double* a = q[i].data(); const double* b = q[(i + 1) % n].data();
-      const double* c = q[j].data(); const double* d = q[(j + 1) % n].data();
+      const double* a = q[i].data();
+      const double* b = q[(i + 1) % n].data();
+      const double* c = q[j].data();
+      const double* d = q[(j + 1) % n].data();
       if (Orient(a, b, c) * Orient(a, b, d) < 0 && Orient(c, d, a) * Orient(c, d, b) < 0)
-        return "is a polygon of " + std::to_string(n) + " corners whose edges cross (edges " + std::to_string(i) + " and " +
-               std::to_string(j) + "): it has no well-defined inside to triangulate";
+        return "is a polygon of " + std::to_string(n) + " corners whose edges cross (edges " + std::to_string(i) +
+               " and " + std::to_string(j) + "): it has no well-defined inside to triangulate";
     }
   std::vector<size_t> ring(n);
   for (size_t i = 0; i < n; ++i) ring[i] = i;
   auto isEar = [&](size_t k, bool allowFlat) {
     const size_t m = ring.size();
-    const double* a = q[ring[(k + m - 1) % m]].data(); const double* b = q[ring[k]].data();
+    const double* a = q[ring[(k + m - 1) % m]].data();
+    const double* b = q[ring[k]].data();
     const double* c = q[ring[(k + 1) % m]].data();
     const double o = Orient(a, b, c);
     if (o < 0 || (o == 0 && !allowFlat)) return false;
@@ -347,7 +417,8 @@ std::string ParsePly(const char* data, size_t size, const std::string& name, Ply
         double v = 0;
         if (!p.isList) {
           if (!in.scalar(p.type, v))
-            return file + (in.badToken().empty() ? "ends early, in " + rec : rec + ": '" + in.badToken() + "' is not a number");
+            return file + (in.badToken().empty() ? "ends early, in " + rec
+                                                 : rec + ": '" + in.badToken() + "' is not a number");
           for (int c = 0; c < 3; ++c)
             if (isVertex && int(i) == xyz[c]) {
               if (std::isfinite(v) && std::fabs(v) > FLT_MAX) {
@@ -362,10 +433,13 @@ std::string ParsePly(const char* data, size_t size, const std::string& name, Ply
         }
         double count = 0;
         if (!in.scalar(p.countType, count))
-          return file + (in.badToken().empty() ? "ends early, in " + rec : rec + ": '" + in.badToken() + "' is not a number");
-        if (count < 0 || count != std::floor(count)) return file + rec + ": a list of " + std::to_string(count) + " items";
+          return file +
+                 (in.badToken().empty() ? "ends early, in " + rec : rec + ": '" + in.badToken() + "' is not a number");
+        if (count < 0 || count != std::floor(count))
+          return file + rec + ": a list of " + std::to_string(count) + " items";
         const uint64_t items = uint64_t(count);
-        const uint64_t minBytes = h.encoding == PlyEncoding::Ascii ? 2 * items - (items ? 1 : 0) : items * uint64_t(kTypes[p.type].bytes);
+        const uint64_t minBytes =
+            h.encoding == PlyEncoding::Ascii ? 2 * items - (items ? 1 : 0) : items * uint64_t(kTypes[p.type].bytes);
         if (minBytes > in.left()) return file + "ends early: " + rec + " lists " + std::to_string(items) + " items";
         const bool isCorners = int(i) == indices;
         if (isCorners) {
@@ -379,11 +453,12 @@ std::string ParsePly(const char* data, size_t size, const std::string& name, Ply
         }
         for (uint64_t k = 0; k < items; ++k) {
           if (!in.scalar(p.type, v))
-            return file + (in.badToken().empty() ? "ends early, in " + rec : rec + ": '" + in.badToken() + "' is not a number");
+            return file + (in.badToken().empty() ? "ends early, in " + rec
+                                                 : rec + ": '" + in.badToken() + "' is not a number");
           if (!isCorners) continue;
           if (!(v >= 0 && v < double(mesh.positions.size())))
-            return file + "face " + std::to_string(r) + " uses vertex " + std::to_string((long long)v) + " but there are " +
-                   std::to_string(mesh.positions.size()) + " vertices";
+            return file + "face " + std::to_string(r) + " uses vertex " + std::to_string((long long)v) +
+                   " but there are " + std::to_string(mesh.positions.size()) + " vertices";
           corners.push_back(uint32_t(v));
         }
       }
@@ -415,9 +490,19 @@ std::string ReadPly(const std::string& path, PlyMesh& mesh, bool* ioError) {
   const int fd = ::open(path.c_str(), O_RDONLY);
   if (fd < 0) return fail(std::strerror(errno));
   struct stat st;
-  if (fstat(fd, &st) != 0) { const int e = errno; ::close(fd); return fail(std::strerror(e)); }
-  if (S_ISDIR(st.st_mode)) { ::close(fd); return fail("it is a folder"); }
-  if (!S_ISREG(st.st_mode)) { ::close(fd); return fail("not a regular file"); }
+  if (fstat(fd, &st) != 0) {
+    const int e = errno;
+    ::close(fd);
+    return fail(std::strerror(e));
+  }
+  if (S_ISDIR(st.st_mode)) {
+    ::close(fd);
+    return fail("it is a folder");
+  }
+  if (!S_ISREG(st.st_mode)) {
+    ::close(fd);
+    return fail("not a regular file");
+  }
   const size_t size = size_t(st.st_size);
   if (size == 0) {
     ::close(fd);

@@ -28,8 +28,8 @@ enum class PlyEncoding { Ascii, BinaryLittleEndian, BinaryBigEndian };
 
 struct PlyProperty {
   std::string name;
-  int type = 0;           // a scalar type code (see ply_format.cpp); for a list, of its items
-  int countType = 0;      // lists only: the type of the item count
+  int type = 0;       // a scalar type code (see ply_format.cpp); for a list, of its items
+  int countType = 0;  // lists only: the type of the item count
   bool isList = false;
 };
 
@@ -59,8 +59,8 @@ uint64_t PlyTriangleFileBytes(const PlyHeader& header);
 struct PlyMesh {
   std::vector<std::array<float, 3>> positions;
   std::vector<std::array<uint32_t, 3>> triangles;
-  std::vector<float> faceQuality;   // per triangle (a polygon's triangles share its value), or empty
-  size_t polygons = 0;              // faces with more than three corners (triangulated)
+  std::vector<float> faceQuality;  // per triangle (a polygon's triangles share its value), or empty
+  size_t polygons = 0;             // faces with more than three corners (triangulated)
 };
 
 // Reads `path`. "" or a message that names the file and what is wrong with it; `ioError` is set
@@ -71,7 +71,7 @@ std::string ParsePly(const char* data, size_t size, const std::string& name, Ply
 
 // Triangulates the polygon `corners` (indices into `positions`) by ear clipping in its plane,
 // appending triangles to `out`. "" or why it cannot (its edges cross).
-std::string TriangulatePolygon(const std::vector<std::array<float, 3>>& positions,
-                               const std::vector<uint32_t>& corners, std::vector<std::array<uint32_t, 3>>& out);
+std::string TriangulatePolygon(const std::vector<std::array<float, 3>>& positions, const std::vector<uint32_t>& corners,
+                               std::vector<std::array<uint32_t, 3>>& out);
 
 }  // namespace conelod

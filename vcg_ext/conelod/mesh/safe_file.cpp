@@ -50,8 +50,11 @@ std::string ResolveTarget(const std::string& path, std::string& target, unsigned
     if (stat(target.c_str(), &st) != 0) return "cannot write '" + path + "': " + Reason(errno);
   }
   if (!S_ISREG(st.st_mode)) {
-    const char* what = S_ISDIR(st.st_mode) ? "a folder" : S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode) ? "a device"
-                       : S_ISFIFO(st.st_mode) ? "a FIFO" : S_ISSOCK(st.st_mode) ? "a socket" : "not a regular file";
+    const char* what = S_ISDIR(st.st_mode)                          ? "a folder"
+                       : S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode) ? "a device"
+                       : S_ISFIFO(st.st_mode)                       ? "a FIFO"
+                       : S_ISSOCK(st.st_mode)                       ? "a socket"
+                                                                    : "not a regular file";
     return "'" + path + "' is " + what + (target != path ? " (through a symbolic link)" : "") +
            ": only a regular file is written";
   }
@@ -119,13 +122,16 @@ std::string SafeFile::commit() {
     error = "cannot write '" + shown_ + "': " + Reason(err) + " (" + step + ")";
   };
   if (file_) {
-    if (std::fflush(file_) != 0 || std::ferror(file_)) failed("write", errno ? errno : EIO);
-    else if (fsync(fileno(file_)) != 0) failed("fsync", errno);
+    if (std::fflush(file_) != 0 || std::ferror(file_))
+      failed("write", errno ? errno : EIO);
+    else if (fsync(fileno(file_)) != 0)
+      failed("fsync", errno);
     if (std::fclose(file_) != 0 && error.empty()) failed("close", errno);
     file_ = nullptr;
   } else {
     const int fd = ::open(temp_.c_str(), O_RDONLY);
-    if (fd < 0) failed("reopen", errno);
+    if (fd < 0)
+      failed("reopen", errno);
     else {
       if (fsync(fd) != 0) failed("fsync", errno);
       close(fd);

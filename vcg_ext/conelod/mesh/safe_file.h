@@ -42,8 +42,8 @@ class SafeFile {
   void discard();
 
  private:
-  std::string target_;   // the file that is replaced (a symbolic link resolved)
-  std::string shown_;    // the path as the user gave it, for messages
+  std::string target_;  // the file that is replaced (a symbolic link resolved)
+  std::string shown_;   // the path as the user gave it, for messages
   std::string temp_;
   std::FILE* file_ = nullptr;
   unsigned mode_ = 0644;

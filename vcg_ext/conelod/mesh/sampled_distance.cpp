@@ -20,8 +20,8 @@ class DVertex;
 class DFace;
 struct DUsedTypes : public vcg::UsedTypes<vcg::Use<DVertex>::AsVertexType, vcg::Use<DFace>::AsFaceType> {};
 class DVertex : public vcg::Vertex<DUsedTypes, vcg::vertex::Coord3f, vcg::vertex::BitFlags> {};
-class DFace : public vcg::Face<DUsedTypes, vcg::face::VertexRef, vcg::face::Normal3f, vcg::face::Mark,
-                               vcg::face::BitFlags> {};
+class DFace
+    : public vcg::Face<DUsedTypes, vcg::face::VertexRef, vcg::face::Normal3f, vcg::face::Mark, vcg::face::BitFlags> {};
 class DMesh : public vcg::tri::TriMesh<std::vector<DVertex>, std::vector<DFace>> {};
 using Grid = vcg::GridStaticPtr<DFace, float>;
 
@@ -50,7 +50,9 @@ void IndexFaces(DMesh& target, vcg::Box3f queries, Grid& grid) {
 }
 
 uint64_t Next(uint64_t& s) {  // xorshift64*
-  s ^= s >> 12; s ^= s << 25; s ^= s >> 27;
+  s ^= s >> 12;
+  s ^= s << 25;
+  s ^= s >> 27;
   return s * 0x2545F4914F6CDD1Dull;
 }
 double Unit(uint64_t& s) { return double(Next(s) >> 11) * (1.0 / 9007199254740992.0); }
@@ -58,7 +60,12 @@ double Unit(uint64_t& s) { return double(Next(s) >> 11) * (1.0 / 900719925474099
 struct Accumulator {
   double max = 0, sum = 0, sum2 = 0;
   size_t n = 0;
-  void add(double d) { max = std::max(max, d); sum += d; sum2 += d * d; ++n; }
+  void add(double d) {
+    max = std::max(max, d);
+    sum += d;
+    sum2 += d * d;
+    ++n;
+  }
 };
 
 }  // namespace

@@ -40,7 +40,9 @@ struct MomentSums {
     const Vec3 s = a + b + c;
     area += A;
     const double w = A / 3;
-    first[0] += w * s[0]; first[1] += w * s[1]; first[2] += w * s[2];
+    first[0] += w * s[0];
+    first[1] += w * s[1];
+    first[2] += w * s[2];
     // M = A/12 (a aᵀ + b bᵀ + c cᵀ + s sᵀ)
     const double k = A / 12;
     second[0] += k * (a[0] * a[0] + b[0] * b[0] + c[0] * c[0] + s[0] * s[0]);
@@ -104,7 +106,10 @@ void EigenvaluesAndMajorAxis(const Eigen::Matrix3d& z, Vec3& eigenvalues, Vec3& 
   if (kernel(ev[2], axisMax)) return;
   // λ_max is (nearly) double: any direction orthogonal to x_min is a major axis.
   Vec3 axisMin;
-  if (!kernel(ev[0], axisMin)) { axisMax = Vec3(1, 0, 0); return; }  // isotropic
+  if (!kernel(ev[0], axisMin)) {
+    axisMax = Vec3(1, 0, 0);
+    return;
+  }  // isotropic
   axisMax = axisMin.unitOrthogonal();
 }
 
@@ -143,7 +148,10 @@ PcaFrame FaceBasedPca(const IndexedMesh& m, const std::vector<uint32_t>* faces) 
   MomentSums s;
   ForFaces(m, faces, [&](uint32_t f) {
     const auto& t = m.faces[f];
-    if (first) { p = ToVec(m.positions[t[0]]); first = false; }
+    if (first) {
+      p = ToVec(m.positions[t[0]]);
+      first = false;
+    }
     const Vec3 a = ToVec(m.positions[t[0]]) - p, b = ToVec(m.positions[t[1]]) - p, c = ToVec(m.positions[t[2]]) - p;
     vcg::Point3d n;
     s.add(a, b, c, FaceNormalOf(m, f, n));
@@ -164,7 +172,10 @@ PcaFrame VertexBasedPca(const IndexedMesh& m, const std::vector<uint32_t>* faces
   std::vector<uint32_t> verts;
   ForFaces(m, faces, [&](uint32_t f) {
     for (uint32_t v : m.faces[f])
-      if (!used[v]) { used[v] = 1; verts.push_back(v); }
+      if (!used[v]) {
+        used[v] = 1;
+        verts.push_back(v);
+      }
   });
   if (verts.empty()) return fr;
   const Vec3 p = ToVec(m.positions[verts[0]]);
@@ -241,7 +252,10 @@ struct Moments {
   static Moments FromSums(const MomentSums& s, const Vec3& p) {
     Moments m;
     m.area = s.area;
-    if (!(s.area > 0)) { m.centroid = p; return m; }
+    if (!(s.area > 0)) {
+      m.centroid = p;
+      return m;
+    }
     Vec3 d;
     m.central = s.covariance(d) * s.area;
     m.centroid = p + d;
@@ -308,8 +322,8 @@ class TreeBuilder {
   // clusters are then compact in memory as well as in space, and the region growing, which
   // touches neighbours of neighbours, stays in cache. Positions are the input's floats.
   IndexedMesh local_;
-  std::vector<uint32_t> inputFace_;    // local face -> input face
-  Vec3 origin_{0, 0, 0};               // the bounding-box centre (times scale_)
+  std::vector<uint32_t> inputFace_;  // local face -> input face
+  Vec3 origin_{0, 0, 0};             // the bounding-box centre (times scale_)
   // While splitting, every length is in coordinates times scale_ (NormalizingScale): the faces'
   // float areas and second moments (lengths to the fourth) neither overflow nor vanish whatever
   // the model's size, so the splits do not depend on it. The nodes are given back in the mesh's
@@ -320,8 +334,8 @@ class TreeBuilder {
   struct FaceRecord {
     vcg::Point3f centroid;  // relative to origin_
     float area;
-    uint32_t mark;          // see kStateBits
-    uint32_t nbr[3];        // edge neighbours; the sentinel for none; kManyNeighbours: see adj_
+    uint32_t mark;    // see kStateBits
+    uint32_t nbr[3];  // edge neighbours; the sentinel for none; kManyNeighbours: see adj_
   };
   static constexpr uint32_t kManyNeighbours = 0xFFFFFFFEu;
   // Calls fn(g) for every neighbour g of f, and for the sentinel record (whose mark matches no
@@ -337,15 +351,15 @@ class TreeBuilder {
     fn(nb[1]);
     fn(nb[2]);
   }
-  std::vector<FaceRecord> rec_;        // per local face, then the sentinel
+  std::vector<FaceRecord> rec_;  // per local face, then the sentinel
   // Per local face: its second moment about its own centroid, (A/12) Σ (v−g)(v−g)ᵀ (xx xy xz yy
   // yz zz). With it M_i(p) = that + A (g−p)(g−p)ᵀ: summing a face needs no vertex, and the sums are
   // as accurate as the float centroids, i.e. as the input's own float coordinates.
   std::vector<std::array<float, 6>> ownMoment_;
-  std::vector<uint32_t> side2_;        // the second half while it grows
-  FaceAdjacency adj_;                  // kept only when some face has more than three neighbours
+  std::vector<uint32_t> side2_;  // the second half while it grows
+  FaceAdjacency adj_;            // kept only when some face has more than three neighbours
   uint32_t generation_ = 0;
-  std::vector<uint32_t> members_;      // the faces of the cluster being split
+  std::vector<uint32_t> members_;  // the faces of the cluster being split
 };
 
 void TreeBuilder::renumber() {
@@ -406,7 +420,12 @@ void TreeBuilder::renumber() {
     for (uint32_t v : t) {
       const double ux = (local_.positions[v][0] - c[0]) * scale_, uy = (local_.positions[v][1] - c[1]) * scale_,
                    uz = (local_.positions[v][2] - c[2]) * scale_;
-      o[0] += ux * ux; o[1] += ux * uy; o[2] += ux * uz; o[3] += uy * uy; o[4] += uy * uz; o[5] += uz * uz;
+      o[0] += ux * ux;
+      o[1] += ux * uy;
+      o[2] += ux * uz;
+      o[3] += uy * uy;
+      o[4] += uy * uz;
+      o[5] += uz * uz;
     }
     const double k = area / 12;
     for (int i = 0; i < 6; ++i) ownMoment_[f][size_t(i)] = float(k * o[i]);
@@ -430,15 +449,27 @@ Moments TreeBuilder::sum(uint32_t firstFace, uint32_t faceCount) const {
     const double ax = a * gx, ay = a * gy, az = a * gz;
     const std::array<float, 6>& o = own[f];
     area += a;
-    fx += ax; fy += ay; fz += az;
-    xx += o[0] + ax * gx; xy += o[1] + ax * gy; xz += o[2] + ax * gz;
-    yy += o[3] + ay * gy; yz += o[4] + ay * gz; zz += o[5] + az * gz;
+    fx += ax;
+    fy += ay;
+    fz += az;
+    xx += o[0] + ax * gx;
+    xy += o[1] + ax * gy;
+    xz += o[2] + ax * gz;
+    yy += o[3] + ay * gy;
+    yz += o[4] + ay * gz;
+    zz += o[5] + az * gz;
   }
   MomentSums s;
   s.area = area;
-  s.first[0] = fx; s.first[1] = fy; s.first[2] = fz;
-  s.second[0] = xx; s.second[1] = xy; s.second[2] = xz;
-  s.second[3] = yy; s.second[4] = yz; s.second[5] = zz;
+  s.first[0] = fx;
+  s.first[1] = fy;
+  s.first[2] = fz;
+  s.second[0] = xx;
+  s.second[1] = xy;
+  s.second[2] = xz;
+  s.second[3] = yy;
+  s.second[4] = yz;
+  s.second[5] = zz;
   const Vec3 pAbs = origin_ + Vec3(px, py, pz);
   Moments m = Moments::FromSums(s, pAbs);
   if (!(m.area > 0)) {  // zero-area faces only: the mean of the face centroids
@@ -514,7 +545,10 @@ void TreeBuilder::GrowBoth(uint32_t seed1, uint32_t seed2, uint32_t& left, uint3
       ForNeighbours(f, [&](uint32_t g) {
         if (rec_[g].mark != (base | kOnPlane)) return;
         rec_[g].mark = base | (first ? kSide1 : kSide2);
-        if (first) order[left++] = g; else order[--right] = g;
+        if (first)
+          order[left++] = g;
+        else
+          order[--right] = g;
       });
     }
   }
@@ -538,8 +572,10 @@ void TreeBuilder::AttachLeftovers(uint32_t begin, uint32_t end, uint32_t& left, 
         const uint32_t m = rec_[g].mark;
         if ((m >> kStateBits) != generation_) return;  // not in this cluster
         const uint32_t sg = m & kStateMask;
-        if (sg == kSide1) ++touch1;
-        else if (sg == kSide2) ++touch2;
+        if (sg == kSide1)
+          ++touch1;
+        else if (sg == kSide2)
+          ++touch2;
         else if (sg != kLeftover) {
           rec_[g].mark = base | kLeftover;
           order[tail++] = g;
@@ -588,8 +624,14 @@ void TreeBuilder::split(const Pending& p, Pending out[2], int& outCount) {
     FaceRecord& fr = rec[f];
     const float r = ax * fr.centroid[0] + ay * fr.centroid[1] + az * fr.centroid[2] - offset;
     fr.mark = base | uint32_t(r > 0) | (uint32_t(r < 0) << 1);  // kPositive, kNegative or kOnPlane
-    if (r > rMax) { rMax = r; seed1 = f; }
-    if (r < rMin) { rMin = r; seed2 = f; }
+    if (r > rMax) {
+      rMax = r;
+      seed1 = f;
+    }
+    if (r < rMin) {
+      rMin = r;
+      seed2 = f;
+    }
   }
 
   uint32_t left = begin, right = end;
@@ -636,8 +678,14 @@ void TreeBuilder::ComputeBounds() {
     for (uint32_t v : local_.faces[f]) b.Add(local_.positions[v]);
   };
   auto store = [](PcaBounds& b, const NormalCone& cone) {
-    if (cone.empty()) { b.coneHalfAngle = -1; return; }
-    if (!cone.cullable()) { b.coneHalfAngle = float(NormalCone::kPi); return; }
+    if (cone.empty()) {
+      b.coneHalfAngle = -1;
+      return;
+    }
+    if (!cone.cullable()) {
+      b.coneHalfAngle = float(NormalCone::kPi);
+      return;
+    }
     b.coneAxis = vcg::Point3f::Construct(cone.axis);
     // Rounding to float must not let a normal out: pad by a few float ulps.
     b.coneHalfAngle = float(cone.halfAngle + 1e-6);
@@ -724,7 +772,10 @@ Status TreeBuilder::run(const Progress& progress) {
     uint32_t* nb = rec_[f].nbr;
     const uint32_t degree = adj_.offsets[f + 1] - adj_.offsets[f];
     for (uint32_t k = 0; k < 3; ++k) nb[k] = k < degree ? adj_.neighbours[adj_.offsets[f] + k] : nf;
-    if (degree > 3) { nb[0] = kManyNeighbours; many = true; }
+    if (degree > 3) {
+      nb[0] = kManyNeighbours;
+      many = true;
+    }
   }
   if (!many) adj_ = FaceAdjacency();
 
@@ -818,8 +869,7 @@ Status TreeBuilder::run(const Progress& progress) {
 
 }  // namespace
 
-Status BuildPcaTree(const IndexedMesh& mesh, const PcaPartitionParams& params, PcaTree& out,
-                    const Progress& progress) {
+Status BuildPcaTree(const IndexedMesh& mesh, const PcaPartitionParams& params, PcaTree& out, const Progress& progress) {
   out = PcaTree();
   Status s = ValidateParams(params);
   if (!s.ok()) return s;
@@ -829,7 +879,10 @@ Status BuildPcaTree(const IndexedMesh& mesh, const PcaPartitionParams& params, P
   bool valid = !mesh.faces.empty();
   for (const auto& t : mesh.faces) {
     for (uint32_t v : t) {
-      if (v >= mesh.positions.size()) { valid = false; break; }
+      if (v >= mesh.positions.size()) {
+        valid = false;
+        break;
+      }
       const auto& p = mesh.positions[v];
       if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) valid = false;
       if (std::fabs(p[0]) > kMaxCoordinate || std::fabs(p[1]) > kMaxCoordinate || std::fabs(p[2]) > kMaxCoordinate)
@@ -861,7 +914,10 @@ template <class Visit>
 std::vector<PcaItem> WalkSplits(const PcaTree& tree, Visit&& visit) {
   std::vector<PcaItem> cut;
   if (tree.empty()) return cut;
-  struct Entry { PcaItem item; uint32_t position; };
+  struct Entry {
+    PcaItem item;
+    uint32_t position;
+  };
   std::vector<Entry> done;
   auto before = [&tree](int32_t a, int32_t b) {
     const PcaNode& x = tree.nodes[size_t(a)];
@@ -883,9 +939,12 @@ std::vector<PcaItem> WalkSplits(const PcaTree& tree, Visit&& visit) {
       pos += tree.itemFaceCount(c);
     }
   };
-  if (tree.componentCount > 1) addChildren(0);
-  else if (!tree.isLeaf(0)) heap.push_back(0);
-  else done.push_back({0, 0});
+  if (tree.componentCount > 1)
+    addChildren(0);
+  else if (!tree.isLeaf(0))
+    heap.push_back(0);
+  else
+    done.push_back({0, 0});
   while (!heap.empty()) {
     if (!visit(int32_t(heap.front()))) break;
     std::pop_heap(heap.begin(), heap.end(), before);
@@ -918,12 +977,16 @@ std::vector<PcaItem> CutByCount(const PcaTree& tree, int clusterCount) {
 std::vector<PcaItem> CutByError(const PcaTree& tree, double maxErrorRms) {
   // Every cluster above the threshold is split: the order does not matter, but the walk's order
   // (largest first) means that once the largest is below, all are.
-  return WalkSplits(tree, [&](int32_t id) { return std::sqrt(double(tree.nodes[size_t(id)].eigenvalues[0])) > maxErrorRms; });
+  return WalkSplits(tree,
+                    [&](int32_t id) { return std::sqrt(double(tree.nodes[size_t(id)].eigenvalues[0])) > maxErrorRms; });
 }
 
 std::vector<int32_t> SplitSequence(const PcaTree& tree) {
   std::vector<int32_t> seq;
-  WalkSplits(tree, [&](int32_t id) { seq.push_back(id); return true; });
+  WalkSplits(tree, [&](int32_t id) {
+    seq.push_back(id);
+    return true;
+  });
   return seq;
 }
 
@@ -990,8 +1053,8 @@ std::string VerifyPcaTree(const IndexedMesh& mesh, const FaceAdjacency& adj, con
       }
     }
     if (queue.size() != node.faceCount)
-      return where + "not edge-connected (" + std::to_string(queue.size()) + " of " +
-             std::to_string(node.faceCount) + " faces reached)";
+      return where + "not edge-connected (" + std::to_string(queue.size()) + " of " + std::to_string(node.faceCount) +
+             " faces reached)";
   }
   return "";
 }

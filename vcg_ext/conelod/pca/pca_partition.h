@@ -55,9 +55,9 @@ Eigen::Matrix3d TriangleSecondMoment(const Eigen::Vector3d& a, const Eigen::Vect
                                      double area);
 
 struct PcaFrame {
-  double area = 0;                 // A, total area (0 for vertex-based PCA)
+  double area = 0;  // A, total area (0 for vertex-based PCA)
   Eigen::Vector3d centroid{0, 0, 0};
-  Eigen::Vector3d eigenvalues{0, 0, 0};  // ascending: λ_min, λ_mid, λ_max
+  Eigen::Vector3d eigenvalues{0, 0, 0};                // ascending: λ_min, λ_mid, λ_max
   Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();  // columns: x_min, x_mid, x_max (unit)
   Eigen::Vector3d axisMax() const { return axes.col(2); }
   Eigen::Vector3d axisMin() const { return axes.col(0); }
@@ -86,13 +86,13 @@ inline PcaItem ItemOfFace(uint32_t f) { return ~PcaItem(f); }
 
 // What the split pass computes for a node (64 bytes).
 struct PcaNode {
-  int32_t parent = -1;       // node index; -1 at the root
+  int32_t parent = -1;                      // node index; -1 at the root
   PcaItem child[2] = {kNoChild, kNoChild};  // the two halves; kNoChild for a leaf cluster (a stop
-                             // criterion held) and for the root of a disconnected mesh, whose
-                             // children are PcaTree::components (use PcaTree::children())
-  uint32_t firstFace = 0;    // faces: PcaTree::faceOrder[firstFace .. firstFace + faceCount)
+                                            // criterion held) and for the root of a disconnected mesh, whose
+                                            // children are PcaTree::components (use PcaTree::children())
+  uint32_t firstFace = 0;                   // faces: PcaTree::faceOrder[firstFace .. firstFace + faceCount)
   uint32_t faceCount = 0;
-  int32_t depth = 0;         // the root is 0
+  int32_t depth = 0;  // the root is 0
   float area = 0;
   vcg::Point3f centroid;     // area centroid r̄
   vcg::Point3f eigenvalues;  // of Z_f, ascending (λ_min, λ_mid, λ_max), squared length units
@@ -124,8 +124,8 @@ struct PcaTree {
   std::vector<PcaItem> components;  // the root's children when the mesh has several components
   std::vector<uint32_t> faceOrder;  // a permutation of the faces: every cluster is a range of it
   int faceCount = 0;
-  int componentCount = 0;           // edge-connected components of the mesh
-  int maxDepth = 0;                 // of the tree, single-face leaves included
+  int componentCount = 0;  // edge-connected components of the mesh
+  int maxDepth = 0;        // of the tree, single-face leaves included
 
   bool empty() const { return nodes.empty(); }
   PcaItemRange children(int32_t node) const {
@@ -134,16 +134,16 @@ struct PcaTree {
     return {n.child, n.child[0] == kNoChild ? 0 : 2};
   }
   bool isLeaf(int32_t node) const { return children(node).count == 0; }
-  int leafClusterCount() const;     // clusters of the finest cut (single faces and leaf nodes)
+  int leafClusterCount() const;  // clusters of the finest cut (single faces and leaf nodes)
   uint32_t itemFaceCount(PcaItem item) const { return IsFaceItem(item) ? 1u : nodes[size_t(item)].faceCount; }
-  size_t memoryBytes() const;       // capacity of the arrays above
+  size_t memoryBytes() const;  // capacity of the arrays above
 };
 
 struct PcaPartitionParams {
-  int targetClusters = 0;    // stop at this many clusters, splitting the largest error first; 0: no limit
-  int maxDepth = 0;          // clusters at this depth are not split (the root is 0); 0: no limit
-  int minFaces = 1;          // clusters of this many faces or fewer are not split; 1: down to triangles
-  double maxErrorRms = 0;    // clusters with sqrt(λ_min) <= this length are not split; 0: no limit
+  int targetClusters = 0;  // stop at this many clusters, splitting the largest error first; 0: no limit
+  int maxDepth = 0;        // clusters at this depth are not split (the root is 0); 0: no limit
+  int minFaces = 1;        // clusters of this many faces or fewer are not split; 1: down to triangles
+  double maxErrorRms = 0;  // clusters with sqrt(λ_min) <= this length are not split; 0: no limit
 };
 
 Status ValidateParams(const PcaPartitionParams& p);

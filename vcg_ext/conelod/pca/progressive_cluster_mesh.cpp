@@ -28,7 +28,7 @@ struct Ring {
   std::vector<RingEdge> edges;
   bool manifold = true;  // one fan (closed, or open with two border edges), every edge on 1-2 faces
   bool border = false;
-  int clusters = 0;      // distinct clusters of the faces around, counted up to 3
+  int clusters = 0;  // distinct clusters of the faces around, counted up to 3
 };
 
 class ClusterMeshSimplifier {
@@ -51,7 +51,10 @@ class ClusterMeshSimplifier {
     for (uint32_t v = 0; v < nv; ++v) {
       if (vf_[v].empty()) continue;
       analyze(v, ring_);
-      if (!ring_.manifold) { locked_[v] = 1; ++lockedCount_; }
+      if (!ring_.manifold) {
+        locked_[v] = 1;
+        ++lockedCount_;
+      }
     }
   }
 
@@ -63,7 +66,10 @@ class ClusterMeshSimplifier {
     uint32_t smallest = UINT32_MAX;
     for (PcaItem c : tree_.children(node)) {
       alive += IsFaceItem(c) ? alive_[FaceOfItem(c)] : aliveInNode_[size_t(c)];
-      if (tree_.itemFaceCount(c) < smallest) { smallest = tree_.itemFaceCount(c); smaller = c; }
+      if (tree_.itemFaceCount(c) < smallest) {
+        smallest = tree_.itemFaceCount(c);
+        smaller = c;
+      }
     }
     aliveInNode_[size_t(node)] = alive;
     // Vertices that touched both children are vertices of the smaller child's faces.
@@ -143,7 +149,9 @@ class ClusterMeshSimplifier {
     }
   }
 
-  int32_t aliveIn(PcaItem item) const { return IsFaceItem(item) ? alive_[FaceOfItem(item)] : aliveInNode_[size_t(item)]; }
+  int32_t aliveIn(PcaItem item) const {
+    return IsFaceItem(item) ? alive_[FaceOfItem(item)] : aliveInNode_[size_t(item)];
+  }
 
   void analyze(uint32_t u, Ring& r) const {
     r.edges.clear();
@@ -164,14 +172,22 @@ class ClusterMeshSimplifier {
       const auto& t = tri_[f];
       const int k = t[0] == u ? 0 : (t[1] == u ? 1 : 2);
       const uint32_t a = t[(k + 1) % 3], b = t[(k + 2) % 3];
-      if (a == u || b == u || a == b) { r.manifold = false; continue; }  // a degenerate face
+      if (a == u || b == u || a == b) {
+        r.manifold = false;
+        continue;
+      }  // a degenerate face
       addEdge(a, label_[f]);
       addEdge(b, label_[f]);
       // Distinct clusters, counted up to 3 ("3 or more" is all that matters).
       const PcaItem l = label_[f];
-      if (r.clusters == 0) { labels[0] = l; r.clusters = 1; }
-      else if (l != labels[0] && r.clusters == 1) { labels[1] = l; r.clusters = 2; }
-      else if (l != labels[0] && l != labels[1]) r.clusters = 3;
+      if (r.clusters == 0) {
+        labels[0] = l;
+        r.clusters = 1;
+      } else if (l != labels[0] && r.clusters == 1) {
+        labels[1] = l;
+        r.clusters = 2;
+      } else if (l != labels[0] && l != labels[1])
+        r.clusters = 3;
     }
     int borderEdges = 0;
     for (const RingEdge& e : r.edges) {
@@ -184,12 +200,18 @@ class ClusterMeshSimplifier {
     // most two faces, a walk from one border edge (or any edge) must then pass every edge.
     if (!r.manifold) return;
     const size_t faces = vf_[u].size();
-    if (faces != r.edges.size() - (r.border ? 1 : 0)) { r.manifold = false; return; }
+    if (faces != r.edges.size() - (r.border ? 1 : 0)) {
+      r.manifold = false;
+      return;
+    }
     size_t walked = 0;
     uint32_t start = r.edges[0].other;
     if (r.border)
       for (const RingEdge& e : r.edges)
-        if (e.faces == 1) { start = e.other; break; }
+        if (e.faces == 1) {
+          start = e.other;
+          break;
+        }
     uint32_t x = start, prevFace = UINT32_MAX;
     for (size_t step = 0; step < faces; ++step) {
       // The face around u through edge (u, x) other than prevFace, and its other ring vertex.
@@ -264,7 +286,10 @@ class ClusterMeshSimplifier {
     size_t common = (ring_.border && ringV_.border) ? 1 : 0;
     for (const RingEdge& a : ring_.edges)
       for (const RingEdge& b : ringV_.edges)
-        if (a.other == b.other) { ++common; break; }
+        if (a.other == b.other) {
+          ++common;
+          break;
+        }
     if (common != size_t(onEdge) + (borderEdge ? 1 : 0)) return false;
     // No cluster loses its last face.
     for (int i = 0; i < onEdge; ++i) {
@@ -282,7 +307,7 @@ class ClusterMeshSimplifier {
       const vcg::Point3d nb = (b2 - a2) ^ (c2 - a2);
       const double la = na.Norm(), lb = nb.Norm();
       const double scale = std::max({(b2 - a2).SquaredNorm(), (c2 - a2).SquaredNorm(), (c2 - b2).SquaredNorm()});
-      if (!(lb > 1e-10 * scale)) return false;          // would become degenerate
+      if (!(lb > 1e-10 * scale)) return false;                    // would become degenerate
       if (la > 0 && na * nb <= cosTurn_ * la * lb) return false;  // would turn too far (or flip)
     }
     return true;
@@ -349,7 +374,8 @@ Status BuildProgressiveClusterMesh(const IndexedMesh& mesh, const PcaTree& tree,
     const int32_t node = splits[i];
     simplifier.merge(node);
     clusters -= tree.children(node).count - 1;
-    if (progress && (++done & 1023) == 0 && !progress(10 + 80 * done / std::max(1, merges), "progressive mesh: merging"))
+    if (progress && (++done & 1023) == 0 &&
+        !progress(10 + 80 * done / std::max(1, merges), "progressive mesh: merging"))
       return Status::Cancelled();
   }
   simplifier.sweep();

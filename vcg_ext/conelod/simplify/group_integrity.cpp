@@ -12,7 +12,10 @@ namespace conelod {
 namespace {
 
 uint32_t Find(std::vector<uint32_t>& parent, uint32_t x) {
-  while (parent[x] != x) { parent[x] = parent[parent[x]]; x = parent[x]; }
+  while (parent[x] != x) {
+    parent[x] = parent[parent[x]];
+    x = parent[x];
+  }
   return x;
 }
 
@@ -105,8 +108,8 @@ int CountConesOverLimit(const IndexedMesh& mesh, const std::vector<int>& faceGro
     for (; i < order.size() && faceGroup[order[i]] == id; ++i) {
       const auto& t = mesh.faces[order[i]];
       const vcg::Point3d p0 = vcg::Point3d::Construct(mesh.positions[t[0]]);
-      const vcg::Point3d n = (vcg::Point3d::Construct(mesh.positions[t[1]]) - p0) ^
-                             (vcg::Point3d::Construct(mesh.positions[t[2]]) - p0);
+      const vcg::Point3d n =
+          (vcg::Point3d::Construct(mesh.positions[t[1]]) - p0) ^ (vcg::Point3d::Construct(mesh.positions[t[2]]) - p0);
       const double len = n.Norm();
       if (len > 0) normals.push_back(n / len);
     }

@@ -17,20 +17,20 @@ namespace conelod {
 
 // Number of edge-connected pieces of every group: one {id, pieces} per distinct id, by id.
 struct GroupPieces {
-  std::vector<int> ids;     // distinct group ids, increasing
-  std::vector<int> pieces;  // pieces[i]: edge-connected pieces of group ids[i]
+  std::vector<int> ids;        // distinct group ids, increasing
+  std::vector<int> pieces;     // pieces[i]: edge-connected pieces of group ids[i]
   int piecesOf(int id) const;  // 0 when the id has no face
 };
 GroupPieces CountGroupPieces(const IndexedMesh& mesh, const std::vector<int>& faceGroup);
 
 struct GroupIntegrity {
-  int groupsBefore = 0;              // distinct ids before
-  int groupsAfter = 0;               // distinct ids after
-  int groupsVanished = 0;            // ids with faces before and none after
-  int groupsSplit = 0;               // ids with more edge-connected pieces after than before
-  int groupsDisconnectedBefore = 0;  // ids already in several pieces before
-  int groupsDisconnectedAfter = 0;   // ids in several pieces after
-  int groupsNew = 0;                 // ids after that did not exist before (should be 0)
+  int groupsBefore = 0;                    // distinct ids before
+  int groupsAfter = 0;                     // distinct ids after
+  int groupsVanished = 0;                  // ids with faces before and none after
+  int groupsSplit = 0;                     // ids with more edge-connected pieces after than before
+  int groupsDisconnectedBefore = 0;        // ids already in several pieces before
+  int groupsDisconnectedAfter = 0;         // ids in several pieces after
+  int groupsNew = 0;                       // ids after that did not exist before (should be 0)
   std::vector<int> vanishedIds, splitIds;  // the first few of each, for messages
   // Fraction of the groups before that still exist and are not split (1 = 100% intact).
   double intact() const {

@@ -32,15 +32,30 @@ struct Quadric {
 
   // Plane n.x + d = 0, n unit.
   void addPlane(const Point3d& n, double d, double weight) {
-    a00 += weight * n[0] * n[0]; a01 += weight * n[0] * n[1]; a02 += weight * n[0] * n[2];
-    a11 += weight * n[1] * n[1]; a12 += weight * n[1] * n[2]; a22 += weight * n[2] * n[2];
-    b0 += weight * d * n[0]; b1 += weight * d * n[1]; b2 += weight * d * n[2];
+    a00 += weight * n[0] * n[0];
+    a01 += weight * n[0] * n[1];
+    a02 += weight * n[0] * n[2];
+    a11 += weight * n[1] * n[1];
+    a12 += weight * n[1] * n[2];
+    a22 += weight * n[2] * n[2];
+    b0 += weight * d * n[0];
+    b1 += weight * d * n[1];
+    b2 += weight * d * n[2];
     c += weight * d * d;
     w += weight;
   }
   Quadric& operator+=(const Quadric& q) {
-    a00 += q.a00; a01 += q.a01; a02 += q.a02; a11 += q.a11; a12 += q.a12; a22 += q.a22;
-    b0 += q.b0; b1 += q.b1; b2 += q.b2; c += q.c; w += q.w;
+    a00 += q.a00;
+    a01 += q.a01;
+    a02 += q.a02;
+    a11 += q.a11;
+    a12 += q.a12;
+    a22 += q.a22;
+    b0 += q.b0;
+    b1 += q.b1;
+    b2 += q.b2;
+    c += q.c;
+    w += q.w;
     return *this;
   }
   // A x (no b).
@@ -199,7 +214,10 @@ int DenseIds(const std::vector<int>& ids, std::vector<int>& dense, std::vector<i
     std::vector<int> map(size_t(maxId) + 1, -1);
     for (size_t f = 0; f < ids.size(); ++f) {
       int& m = map[size_t(ids[f])];
-      if (m < 0) { m = n++; if (original) original->push_back(ids[f]); }
+      if (m < 0) {
+        m = n++;
+        if (original) original->push_back(ids[f]);
+      }
       dense[f] = m;
     }
     return n;
@@ -224,9 +242,12 @@ inline float ToFloat(double x) { return float(std::min(x, double(std::numeric_li
 class GroupQemSimplifier {
  public:
   GroupQemSimplifier(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
-             const std::vector<const std::vector<int>*>& coarser, const GroupQemParams& p,
-             const GroupQemRegion* region = nullptr)
-      : mesh_(mesh), group_(faceGroup), coarser_(coarser), p_(p),
+                     const std::vector<const std::vector<int>*>& coarser, const GroupQemParams& p,
+                     const GroupQemRegion* region = nullptr)
+      : mesh_(mesh),
+        group_(faceGroup),
+        coarser_(coarser),
+        p_(p),
         groupConstraints_((p.mode == GroupMode::Paper && p.condition1) || p.lockGroupBoundaries),
         integrity_(p.mode == GroupMode::Integrity && p.condition1),
         paperConditions_(p.mode == GroupMode::Paper),
@@ -290,8 +311,7 @@ class GroupQemSimplifier {
       const size_t g = size_t(l == 0 ? group_[f] : (*coarser_[l - 1])[f]);
       if (g >= coneAxis_[l].size() || !(coneCos_[l][g] > -2)) continue;
       const double dot = n * coneAxis_[l][g], c = coneCos_[l][g];
-      if (!(c >= 0 ? (dot >= 0 && dot * dot >= c * c * lenSq) : (dot >= 0 || dot * dot <= c * c * lenSq)))
-        return false;
+      if (!(c >= 0 ? (dot >= 0 && dot * dot >= c * c * lenSq) : (dot >= 0 || dot * dot <= c * c * lenSq))) return false;
     }
     return true;
   }
@@ -310,8 +330,8 @@ class GroupQemSimplifier {
   const bool groupConstraints_;  // contour-aware placement and quadrics (paper mode or the lock)
   const bool integrity_;         // the integrity test (integrity mode, condition1)
   const bool paperConditions_;   // conditions 1 and 2 as the paper (paper mode)
-  const uint8_t* frozen_;         // per vertex, or null: see GroupQemRegion
-  const double regionDiagonal_;   // > 0: the whole mesh's diagonal
+  const uint8_t* frozen_;        // per vertex, or null: see GroupQemRegion
+  const double regionDiagonal_;  // > 0: the whole mesh's diagonal
 
   Point3d center_;
   double diag_ = 1;
@@ -322,14 +342,14 @@ class GroupQemSimplifier {
   struct FaceRec : std::array<uint32_t, 3> {
     int group;
   };
-  std::vector<FaceRec> faces_;  // group: dense ids 0..n-1 (only equality and counts matter)
+  std::vector<FaceRec> faces_;                  // group: dense ids 0..n-1 (only equality and counts matter)
   std::vector<std::vector<int>> coarserDense_;  // integrity mode: the coarser groupings, dense ids
   std::vector<std::vector<int>> groupFaces_;    // integrity mode: live faces per group; [0] primary
   // keepCones, per grouping with bounds ([0] primary, then the coarser ones), per group id: the
   // bound's axis and the cosine of its half-angle (-3: no bound).
   std::vector<std::vector<Point3d>> coneAxis_;
   std::vector<std::vector<double>> coneCos_;
-  std::vector<uint32_t> faceMark_;              // integrity search marks (== faceStamp_)
+  std::vector<uint32_t> faceMark_;  // integrity search marks (== faceStamp_)
   uint32_t faceStamp_ = 0;
   std::vector<char> faceDead_;
   std::vector<uint32_t> start_, count_, refs_;
@@ -366,7 +386,11 @@ void GroupQemSimplifier::BuildFaceLists() {
     if (t[2] != t[0] && t[2] != t[1]) ++count_[t[2]];
   }
   uint32_t total = 0;
-  for (size_t v = 0; v < nv; ++v) { start_[v] = total; total += count_[v]; count_[v] = 0; }
+  for (size_t v = 0; v < nv; ++v) {
+    start_[v] = total;
+    total += count_[v];
+    count_[v] = 0;
+  }
   // Twice the room: a collapse appends the survivor's new list at the end; we rebuild when full.
   refs_.assign(std::max<size_t>(size_t(total) * 2, 64), 0);
   refs_.resize(total);
@@ -382,7 +406,11 @@ void GroupQemSimplifier::BuildFaceLists() {
 void GroupQemSimplifier::AnalyzeVertex(uint32_t v) {
   VertexInfo& vi = vs_[v].info;
   const uint32_t k = count_[v];
-  if (k == 0) { vi.flags = kIsolated; vi.groups = 0; return; }
+  if (k == 0) {
+    vi.flags = kIsolated;
+    vi.groups = 0;
+    return;
+  }
   const uint32_t* fl = facesBegin(v);
   // Distinct groups.
   groupScratch_.clear();
@@ -424,7 +452,10 @@ void GroupQemSimplifier::AnalyzeVertex(uint32_t v) {
       const uint32_t out = fanOther_[2 * cur] == in ? fanOther_[2 * cur + 1] : fanOther_[2 * cur];
       uint32_t next = kNone;
       for (uint32_t i = 0; i < k; ++i)
-        if (i != cur && (fanOther_[2 * i] == out || fanOther_[2 * i + 1] == out)) { next = i; break; }
+        if (i != cur && (fanOther_[2 * i] == out || fanOther_[2 * i + 1] == out)) {
+          next = i;
+          break;
+        }
       if (next == kNone || next == startFace || visited > k) {
         if (next == startFace && faces_[fl[cur]].group != faces_[fl[next]].group) ++changes;
         break;
@@ -435,9 +466,12 @@ void GroupQemSimplifier::AnalyzeVertex(uint32_t v) {
     }
     if (visited != k) nonManifold = true;
   }
-  if (nonManifold) vi.flags = kNonManifold;
-  else if (borderEnds == 0) vi.flags = kClosed | ((vi.groups == 2 && changes == 2) ? kSimpleContour : 0);
-  else vi.flags = kOpen;
+  if (nonManifold)
+    vi.flags = kNonManifold;
+  else if (borderEnds == 0)
+    vi.flags = kClosed | ((vi.groups == 2 && changes == 2) ? kSimpleContour : 0);
+  else
+    vi.flags = kOpen;
 }
 
 bool GroupQemSimplifier::interiorIn(uint32_t v, const std::vector<int>& layer) const {
@@ -518,8 +552,10 @@ void GroupQemSimplifier::init() {
       std::fill(coarserOf.begin(), coarserOf.end(), -1);
       for (size_t f = 0; f < nf && coarserNested_; ++f) {
         int& c = coarserOf[size_t(group_[f])];
-        if (c < 0) c = (*layer)[f];
-        else if (c != (*layer)[f]) coarserNested_ = false;
+        if (c < 0)
+          c = (*layer)[f];
+        else if (c != (*layer)[f])
+          coarserNested_ = false;
       }
     }
   }
@@ -541,7 +577,10 @@ void GroupQemSimplifier::init() {
       if (u == w) continue;
       uint32_t others = 0, other = kNone;
       for (const uint32_t* g = facesBegin(u); g != facesEnd(u); ++g)
-        if (*g != f && Contains(faces_[*g], w)) { ++others; other = *g; }
+        if (*g != f && Contains(faces_[*g], w)) {
+          ++others;
+          other = *g;
+        }
       const bool border = others == 0;
       const bool contour = groupConstraints_ && others == 1 && faces_[other].group != faces_[f].group;
       if (!border && !contour) continue;
@@ -559,7 +598,7 @@ void GroupQemSimplifier::init() {
 
 template <class GroupOf>
 bool GroupQemSimplifier::condition1(const GroupOf& g, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a,
-                            uint32_t n0b, uint32_t n1a, uint32_t n1b, const std::vector<int>* layer) const {
+                                    uint32_t n0b, uint32_t n1a, uint32_t n1b, const std::vector<int>* layer) const {
   // f1 (and f2) keep a face of their own group among their other neighbours...
   const int g0 = g(e0);
   if (!((n0a != kNone && g(n0a) == g0) || (n0b != kNone && g(n0b) == g0))) return false;
@@ -577,9 +616,13 @@ bool GroupQemSimplifier::place(uint32_t a, uint32_t b, bool contourEdge, Candida
   const bool contourA = contourVertex(a), contourB = contourVertex(b);
   Quadric q = quadric_[a];
   q += quadric_[b];
-  if (fixedA || (contourA && !contourB)) { c.keep = a; c.position = pos_[a]; }
-  else if (fixedB || (contourB && !contourA)) { c.keep = b; c.position = pos_[b]; }
-  else if (contourA && contourB) {
+  if (fixedA || (contourA && !contourB)) {
+    c.keep = a;
+    c.position = pos_[a];
+  } else if (fixedB || (contourB && !contourA)) {
+    c.keep = b;
+    c.position = pos_[b];
+  } else if (contourA && contourB) {
     // Two points of one contour (condition 1 allows no other case): stay on the old segment.
     if (!contourEdge) return false;
     c.keep = b;
@@ -589,8 +632,10 @@ bool GroupQemSimplifier::place(uint32_t a, uint32_t b, bool contourEdge, Candida
     c.keep = b;
     Point3d x;
     const double edgeSq = (pos_[b] - pos_[a]).SquaredNorm();
-    if (q.minimum(x) && (x - (pos_[a] + pos_[b]) * 0.5).SquaredNorm() <= 4 * edgeSq) c.position = x;
-    else c.position = q.segmentMinimum(pos_[a], pos_[b]);
+    if (q.minimum(x) && (x - (pos_[a] + pos_[b]) * 0.5).SquaredNorm() <= 4 * edgeSq)
+      c.position = x;
+    else
+      c.position = q.segmentMinimum(pos_[a], pos_[b]);
   } else {
     c.keep = b;
     c.position = pos_[b];
@@ -615,8 +660,10 @@ float GroupQemSimplifier::lowerBound(uint32_t a, uint32_t b) const {
   q += quadric_[b];
   Point3d x;
   double error;
-  if (p_.optimalPlacement && q.minimum(x)) error = q.error(x);
-  else error = std::min({q.error(pos_[a]), q.error(pos_[b]), q.error(q.segmentMinimum(pos_[a], pos_[b]))});
+  if (p_.optimalPlacement && q.minimum(x))
+    error = q.error(x);
+  else
+    error = std::min({q.error(pos_[a]), q.error(pos_[b]), q.error(q.segmentMinimum(pos_[a], pos_[b]))});
   return ToFloat(priorityOf(error, 1.0, a, b));
 }
 
@@ -624,14 +671,29 @@ Candidate GroupQemSimplifier::evaluate(uint32_t a, uint32_t b) {
   ++stats_.evaluations;
   Candidate c = judge(a, b);
   switch (c.verdict) {
-    case CollapseVerdict::Topology: ++stats_.refusedTopology; break;
-    case CollapseVerdict::LockedBoundary: ++stats_.refusedLock; break;
-    case CollapseVerdict::Condition1: ++stats_.refusedCondition1; break;
-    case CollapseVerdict::Condition2: ++stats_.refusedCondition2; break;
-    case CollapseVerdict::FixedEndpoints: ++stats_.refusedFixed; break;
-    case CollapseVerdict::Geometry: ++stats_.refusedGeometry; break;
-    case CollapseVerdict::Cone: ++stats_.refusedCone; break;
-    default: break;
+    case CollapseVerdict::Topology:
+      ++stats_.refusedTopology;
+      break;
+    case CollapseVerdict::LockedBoundary:
+      ++stats_.refusedLock;
+      break;
+    case CollapseVerdict::Condition1:
+      ++stats_.refusedCondition1;
+      break;
+    case CollapseVerdict::Condition2:
+      ++stats_.refusedCondition2;
+      break;
+    case CollapseVerdict::FixedEndpoints:
+      ++stats_.refusedFixed;
+      break;
+    case CollapseVerdict::Geometry:
+      ++stats_.refusedGeometry;
+      break;
+    case CollapseVerdict::Cone:
+      ++stats_.refusedCone;
+      break;
+    default:
+      break;
   }
   return c;
 }
@@ -643,7 +705,10 @@ Candidate GroupQemSimplifier::judge(uint32_t a, uint32_t b) {
   uint32_t e[2] = {kNone, kNone};
   uint32_t ne = 0;
   for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f)
-    if (Contains(faces_[*f], b)) { if (ne < 2) e[ne] = *f; ++ne; }
+    if (Contains(faces_[*f], b)) {
+      if (ne < 2) e[ne] = *f;
+      ++ne;
+    }
   if (ne == 0) return c;
   if (frozen(a) || frozen(b)) {  // shared with another part of the mesh
     c.verdict = CollapseVerdict::FixedEndpoints;
@@ -695,9 +760,9 @@ Candidate GroupQemSimplifier::judge(uint32_t a, uint32_t b) {
     const auto primaryGroup = [this](uint32_t f) { return faces_[f].group; };
     if (!condition1(primaryGroup, a, b, e[0], e[1], n0a, n0b, n1a, n1b, nullptr)) return c;
     for (const auto* layer : coarser_)
-      if (coarserNested_ ? !condition1Nested(*layer, a, b, e[0], e[1])
-                         : !condition1([layer](uint32_t f) { return (*layer)[f]; }, a, b, e[0], e[1], n0a, n0b,
-                                       n1a, n1b, layer))
+      if (coarserNested_
+              ? !condition1Nested(*layer, a, b, e[0], e[1])
+              : !condition1([layer](uint32_t f) { return (*layer)[f]; }, a, b, e[0], e[1], n0a, n0b, n1a, n1b, layer))
         return c;
   }
   if (paperConditions_ && p_.condition2 && ia.groups + ib.groups >= 3) {
@@ -764,7 +829,10 @@ bool GroupQemSimplifier::keepsGroupsWhole(uint32_t a, uint32_t b) {
   uint32_t e[2] = {kNone, kNone};
   uint32_t ne = 0;
   for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f)
-    if (Contains(faces_[*f], b)) { if (ne < 2) e[ne] = *f; ++ne; }
+    if (Contains(faces_[*f], b)) {
+      if (ne < 2) e[ne] = *f;
+      ++ne;
+    }
   if (ne == 0 || ne > 2) return false;
   const uint32_t opp0 = Third(faces_[e[0]], a, b), opp1 = ne == 2 ? Third(faces_[e[1]], a, b) : kNone;
   uint32_t n[4] = {kNone, kNone, kNone, kNone};  // n0a, n0b, n1a, n1b
@@ -780,7 +848,7 @@ bool GroupQemSimplifier::keepsGroupsWhole(uint32_t a, uint32_t b) {
 }
 
 bool GroupQemSimplifier::keepsGroupsWhole(uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a, uint32_t n0b,
-                                  uint32_t n1a, uint32_t n1b) {
+                                          uint32_t n1a, uint32_t n1b) {
   for (int layer = -1; layer < int(coarserDense_.size()); ++layer)
     if (!keepsGroupWhole(layer, a, b, e0, e1, n0a, n0b, n1a, n1b)) return false;
   return true;
@@ -793,7 +861,7 @@ bool GroupQemSimplifier::keepsGroupsWhole(uint32_t a, uint32_t b, uint32_t e0, u
 // connected when they are through the merged vertex's fan (two faces of the fan are adjacent when
 // they share a vertex other than a and b), and otherwise when a bounded search inside G joins them.
 bool GroupQemSimplifier::keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a,
-                                 uint32_t n0b, uint32_t n1a, uint32_t n1b) {
+                                         uint32_t n0b, uint32_t n1a, uint32_t n1b) {
   const std::vector<int>& count = groupFaces_[size_t(layer + 1)];
   const int g0 = groupIn(layer, e0), g1 = e1 != kNone ? groupIn(layer, e1) : -1;
   for (int pass = 0; pass < 2; ++pass) {
@@ -811,7 +879,10 @@ bool GroupQemSimplifier::keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint
     if (layer < 0 ? (interior(a) || interior(b))
                   : (interiorIn(a, coarserDense_[size_t(layer)]) || interiorIn(b, coarserDense_[size_t(layer)])))
       continue;
-    add(n0a); add(n0b); add(n1a); add(n1b);
+    add(n0a);
+    add(n0b);
+    add(n1a);
+    add(n1b);
     if (nn <= 1) continue;
     // The fan of the merged vertex: G's faces around a and b but e0, e1; union-find.
     fanScratch_.clear();
@@ -852,7 +923,10 @@ bool GroupQemSimplifier::keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint
     ++faceStamp_;
     queue_.clear();
     for (uint32_t i = 0; i < k; ++i)
-      if (root(i) == r0) { faceMark_[fanScratch_[i]] = faceStamp_; queue_.push_back(fanScratch_[i]); }
+      if (root(i) == r0) {
+        faceMark_[fanScratch_[i]] = faceStamp_;
+        queue_.push_back(fanScratch_[i]);
+      }
     faceMark_[e0] = faceStamp_;
     if (e1 != kNone) faceMark_[e1] = faceStamp_;
     const auto reached = [&]() {
@@ -878,7 +952,10 @@ bool GroupQemSimplifier::keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint
       if (f == n0b) visit(n0a);
       if (f == n1a) visit(n1b);
       if (f == n1b) visit(n1a);
-      if (reached()) { joined = true; break; }
+      if (reached()) {
+        joined = true;
+        break;
+      }
     }
     if (!joined && !reached()) return false;
   }
@@ -911,13 +988,17 @@ void GroupQemSimplifier::collapse(const Candidate& c) {
     opposite[no++] = o;
     uint32_t* ob = refs_.data() + start_[o];
     for (uint32_t i = 0; i < count_[o]; ++i)
-      if (ob[i] == *f) { ob[i] = ob[--count_[o]]; break; }
+      if (ob[i] == *f) {
+        ob[i] = ob[--count_[o]];
+        break;
+      }
   }
   // The survivor's new list goes at the end of refs_ (rebuilt from scratch when full).
   if (refs_.size() + count_[keep] + count_[gone] > refs_.capacity()) {
     for (const uint32_t* f = facesBegin(gone); f != facesEnd(gone); ++f)
       if (!faceDead_[*f])
-        for (auto& v : faces_[*f]) if (v == gone) v = keep;
+        for (auto& v : faces_[*f])
+          if (v == gone) v = keep;
     count_[gone] = 0;
     BuildFaceLists();
   } else {
@@ -928,7 +1009,8 @@ void GroupQemSimplifier::collapse(const Candidate& c) {
         const uint32_t f = refs_[s + i];
         if (faceDead_[f]) continue;
         if (v == gone)
-          for (auto& x : faces_[f]) if (x == gone) x = keep;
+          for (auto& x : faces_[f])
+            if (x == gone) x = keep;
         refs_.push_back(f);
       }
     }
@@ -1001,7 +1083,8 @@ Status GroupQemSimplifier::run(const Progress& progress, GroupQemStats& stats) {
     if (liveFaces_ <= target) break;
     const size_t done = stats.facesIn - liveFaces_;
     if (progress && done >= nextReport) {
-      if (!progress(5 + int(93.0 * std::min(1.0, double(done) / double(toRemove))), "Group-preserving QEM: collapsing")) {
+      if (!progress(5 + int(93.0 * std::min(1.0, double(done) / double(toRemove))),
+                    "Group-preserving QEM: collapsing")) {
         stats.stop = GroupQemStats::Stop::Cancelled;
         break;
       }
@@ -1050,7 +1133,8 @@ Status GroupQemSimplifier::run(const Progress& progress, GroupQemStats& stats) {
       compactFloor = 2 * heap_.size();
     }
   }
-  if (liveFaces_ <= target && stats.stop != GroupQemStats::Stop::Cancelled) stats.stop = GroupQemStats::Stop::TargetReached;
+  if (liveFaces_ <= target && stats.stop != GroupQemStats::Stop::Cancelled)
+    stats.stop = GroupQemStats::Stop::TargetReached;
   stats.facesOut = liveFaces_;
   stats.evaluations = stats_.evaluations;
   stats.refusedTopology = stats_.refusedTopology;
@@ -1110,7 +1194,8 @@ Status ValidateParams(const GroupQemParams& p) {
     return Status::Invalid("give a target: TargetFaceNum/TargetPerc (a face count) or a maximum error");
   if (!(p.maxError >= 0) || !std::isfinite(p.maxError)) return Status::Invalid("the maximum error must be >= 0");
   if (!(p.qualityThr >= 0 && p.qualityThr <= 1)) return Status::Invalid("QualityThr must be between 0 and 1");
-  if (!(p.boundaryWeight >= 0) || !std::isfinite(p.boundaryWeight)) return Status::Invalid("BoundaryWeight must be >= 0");
+  if (!(p.boundaryWeight >= 0) || !std::isfinite(p.boundaryWeight))
+    return Status::Invalid("BoundaryWeight must be >= 0");
   return Status::Ok();
 }
 
@@ -1118,24 +1203,36 @@ const char* ToString(GroupMode m) { return m == GroupMode::Paper ? "paper" : "in
 
 const char* ToString(GroupQemStats::Stop s) {
   switch (s) {
-    case GroupQemStats::Stop::TargetReached: return "target reached";
-    case GroupQemStats::Stop::NoMoreCollapses: return "no allowed collapse left";
-    case GroupQemStats::Stop::Cancelled: return "cancelled";
+    case GroupQemStats::Stop::TargetReached:
+      return "target reached";
+    case GroupQemStats::Stop::NoMoreCollapses:
+      return "no allowed collapse left";
+    case GroupQemStats::Stop::Cancelled:
+      return "cancelled";
   }
   return "?";
 }
 
 const char* ToString(CollapseVerdict v) {
   switch (v) {
-    case CollapseVerdict::Allowed: return "allowed";
-    case CollapseVerdict::NotAnEdge: return "not an edge";
-    case CollapseVerdict::Topology: return "topology";
-    case CollapseVerdict::LockedBoundary: return "locked group boundary";
-    case CollapseVerdict::Condition1: return "condition 1";
-    case CollapseVerdict::Condition2: return "condition 2";
-    case CollapseVerdict::FixedEndpoints: return "both endpoints fixed";
-    case CollapseVerdict::Geometry: return "geometry";
-    case CollapseVerdict::Cone: return "normal cone";
+    case CollapseVerdict::Allowed:
+      return "allowed";
+    case CollapseVerdict::NotAnEdge:
+      return "not an edge";
+    case CollapseVerdict::Topology:
+      return "topology";
+    case CollapseVerdict::LockedBoundary:
+      return "locked group boundary";
+    case CollapseVerdict::Condition1:
+      return "condition 1";
+    case CollapseVerdict::Condition2:
+      return "condition 2";
+    case CollapseVerdict::FixedEndpoints:
+      return "both endpoints fixed";
+    case CollapseVerdict::Geometry:
+      return "geometry";
+    case CollapseVerdict::Cone:
+      return "normal cone";
   }
   return "?";
 }

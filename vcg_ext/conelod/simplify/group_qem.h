@@ -77,27 +77,28 @@ enum class GroupMode { Integrity, Paper };
 const char* ToString(GroupMode m);  // "integrity", "paper"
 
 struct GroupQemParams {
-  size_t targetFaces = 0;          // stop at this many faces or fewer; 0: no face-count target
-  double maxError = 0;             // no collapse whose error (RMS distance of the merged quadric,
-                                   // as a FRACTION of the bounding-box diagonal) exceeds this; 0: none
+  size_t targetFaces = 0;  // stop at this many faces or fewer; 0: no face-count target
+  double maxError = 0;     // no collapse whose error (RMS distance of the merged quadric,
+                           // as a FRACTION of the bounding-box diagonal) exceeds this; 0: none
   GroupMode mode = GroupMode::Integrity;
-  bool condition1 = true;          // no group is split or destroyed (paper: condition 1; integrity:
-                                   // the exact integrity test; false in both: plain QEM)
-  bool condition2 = true;          // no vertex where 3 or more groups meet is created (paper mode only)
-  bool keepCones = false;          // refuse collapses that turn a face's normal out of its group's coneBound
+  bool condition1 = true;             // no group is split or destroyed (paper: condition 1; integrity:
+                                      // the exact integrity test; false in both: plain QEM)
+  bool condition2 = true;             // no vertex where 3 or more groups meet is created (paper mode only)
+  bool keepCones = false;             // refuse collapses that turn a face's normal out of its group's coneBound
   std::vector<NormalCone> coneBound;  // keepCones: per group id (primary grouping), the cone every
-                                   // changed face normal of the group must stay in (axis: the group's
-                                   // input cone axis, half-angle: its level's threshold); ids past
-                                   // the end or empty cones: no bound
+                                      // changed face normal of the group must stay in (axis: the group's
+                                      // input cone axis, half-angle: its level's threshold); ids past
+                                      // the end or empty cones: no bound
   std::vector<std::vector<NormalCone>> coarserConeBound;  // keepCones: the same per coarser grouping
-                                   // (SimplifyPreservingGroups' coarserGroups, in order), so that a
-                                   // hierarchy's later levels start inside their bounds
+                                                          // (SimplifyPreservingGroups' coarserGroups, in order), so
+                                                          // that a hierarchy's later levels start inside their bounds
+
   bool lockGroupBoundaries = false;  // no vertex on a group boundary moves
-  double qualityThr = 0.3;         // new faces below this quality are penalised (0: no penalty), as vcglib
-  bool optimalPlacement = true;    // quadric minimum; false: the better endpoint
-  bool preserveBoundary = false;   // mesh-border vertices never move
-  double boundaryWeight = 1.0;     // weight of the border (and group-contour) quadrics
-  bool preserveNormal = true;      // refuse collapses that flip a face (normal turning > ~78 degrees)
+  double qualityThr = 0.3;           // new faces below this quality are penalised (0: no penalty), as vcglib
+  bool optimalPlacement = true;      // quadric minimum; false: the better endpoint
+  bool preserveBoundary = false;     // mesh-border vertices never move
+  double boundaryWeight = 1.0;       // weight of the border (and group-contour) quadrics
+  bool preserveNormal = true;        // refuse collapses that flip a face (normal turning > ~78 degrees)
 };
 
 // Ok, or a message naming the bad parameter.
@@ -106,22 +107,22 @@ Status ValidateParams(const GroupQemParams& p);
 struct GroupQemStats {
   size_t facesIn = 0, facesOut = 0;
   size_t collapses = 0;
-  size_t evaluations = 0;           // candidate collapses evaluated (cost of the run)
+  size_t evaluations = 0;  // candidate collapses evaluated (cost of the run)
   // Evaluations refused, by the first reason found (one edge may be counted several times).
-  size_t refusedTopology = 0;       // non-manifold edge/vertex, link condition, pinch
+  size_t refusedTopology = 0;  // non-manifold edge/vertex, link condition, pinch
   size_t refusedCondition1 = 0;
   size_t refusedCondition2 = 0;
-  size_t refusedLock = 0;           // lock group boundaries
-  size_t refusedFixed = 0;          // both endpoints must stay where they are
-  size_t refusedGeometry = 0;       // face flip or zero-area face
-  size_t refusedCone = 0;           // keepCones: a normal would leave its group's cone
-  double maxCollapseError = 0;      // largest error of a collapse done, fraction of the bbox diagonal
+  size_t refusedLock = 0;       // lock group boundaries
+  size_t refusedFixed = 0;      // both endpoints must stay where they are
+  size_t refusedGeometry = 0;   // face flip or zero-area face
+  size_t refusedCone = 0;       // keepCones: a normal would leave its group's cone
+  double maxCollapseError = 0;  // largest error of a collapse done, fraction of the bbox diagonal
   enum class Stop { TargetReached, NoMoreCollapses, Cancelled } stop = Stop::NoMoreCollapses;
 };
 
 struct GroupQemResult {
-  IndexedMesh mesh;                  // the simplified mesh (vertices in input order, minus the removed)
-  std::vector<uint32_t> sourceFace;  // per output face: the input face it is (collapses only remove faces)
+  IndexedMesh mesh;                    // the simplified mesh (vertices in input order, minus the removed)
+  std::vector<uint32_t> sourceFace;    // per output face: the input face it is (collapses only remove faces)
   std::vector<uint32_t> sourceVertex;  // per output vertex: the input vertex kept at it (moved, possibly)
   GroupQemStats stats;
 };
@@ -155,7 +156,15 @@ Status SimplifyPreservingGroups(const IndexedMesh& mesh, const std::vector<int>&
 // integrity test), condition 2 (paper mode), placement (FixedEndpoints: both endpoints must stay
 // where they are), geometry, cone (keepCones).
 enum class CollapseVerdict {
-  Allowed, NotAnEdge, Topology, LockedBoundary, Condition1, Condition2, FixedEndpoints, Geometry, Cone
+  Allowed,
+  NotAnEdge,
+  Topology,
+  LockedBoundary,
+  Condition1,
+  Condition2,
+  FixedEndpoints,
+  Geometry,
+  Cone
 };
 const char* ToString(CollapseVerdict v);
 // Why the simplification stopped, as the CLI and the plugin print it: "target reached", ...

@@ -42,7 +42,10 @@ std::vector<uint8_t> CutIntoParts(const IndexedMesh& mesh, const std::vector<int
   groups.erase(std::remove_if(groups.begin(), groups.end(), [](const Group& g) { return g.faces == 0; }), groups.end());
   std::vector<uint8_t> partOfGroup(size_t(maxId) + 1, 0);
 
-  struct Cut { size_t begin, end; int parts, firstPart, depth; };
+  struct Cut {
+    size_t begin, end;
+    int parts, firstPart, depth;
+  };
   std::vector<Cut> todo{{0, groups.size(), parts, 0, 0}};
   while (!todo.empty()) {
     const Cut c = todo.back();
@@ -86,8 +89,8 @@ struct Part {
 };
 
 void SimplifyPart(const IndexedMesh& below, const std::vector<std::vector<int>>& groups,
-                  const std::vector<uint8_t>& partOfFace, const std::vector<uint8_t>& shared, int index,
-                  double ratio, double diagonal, const std::atomic<bool>& cancel, Part& part) {
+                  const std::vector<uint8_t>& partOfFace, const std::vector<uint8_t>& shared, int index, double ratio,
+                  double diagonal, const std::atomic<bool>& cancel, Part& part) {
   try {
     for (uint32_t f = 0; f < partOfFace.size(); ++f)
       if (partOfFace[f] == index) part.faces.push_back(f);
@@ -100,7 +103,10 @@ void SimplifyPart(const IndexedMesh& below, const std::vector<std::vector<int>>&
     for (uint32_t f : part.faces)
       for (uint32_t v : below.faces[f]) local[v] = 0;
     for (uint32_t v = 0; v < local.size(); ++v)
-      if (local[v] == 0) { local[v] = uint32_t(part.vertices.size()); part.vertices.push_back(v); }
+      if (local[v] == 0) {
+        local[v] = uint32_t(part.vertices.size());
+        part.vertices.push_back(v);
+      }
     IndexedMesh sub;
     sub.positions.reserve(part.vertices.size());
     for (uint32_t v : part.vertices) sub.positions.push_back(below.positions[v]);
@@ -158,8 +164,10 @@ Status SimplifyInParts(const IndexedMesh& below, const std::vector<std::vector<i
   std::vector<uint8_t> firstPart(below.positions.size(), 0xff), shared(below.positions.size(), 0);
   for (size_t f = 0; f < below.faces.size(); ++f)
     for (uint32_t v : below.faces[f]) {
-      if (firstPart[v] == 0xff) firstPart[v] = partOfFace[f];
-      else if (firstPart[v] != partOfFace[f]) shared[v] = 1;
+      if (firstPart[v] == 0xff)
+        firstPart[v] = partOfFace[f];
+      else if (firstPart[v] != partOfFace[f])
+        shared[v] = 1;
     }
   const double diagonal = UsedVertexBox(below).Diag();
 

@@ -34,16 +34,16 @@ struct HierarchicalSimplificationParams {
   // side by side, each to levelRatio of its faces; the vertices the parts share stay where they
   // are at that level (the next level cuts elsewhere). 0: never cut.
   size_t facesPerPart = 100000;
-  int threads = 0;          // threads that simplify the parts; 0: one per core. The result is the
-                            // same whatever the number.
+  int threads = 0;  // threads that simplify the parts; 0: one per core. The result is the
+                    // same whatever the number.
 };
 
 struct SimplifiedLevel {
-  int level = 0;                     // the hierarchy level (1-based) whose groups it preserves
+  int level = 0;  // the hierarchy level (1-based) whose groups it preserves
   IndexedMesh mesh;
-  std::vector<uint32_t> sourceFace;  // per face: the input face it is
+  std::vector<uint32_t> sourceFace;    // per face: the input face it is
   std::vector<uint32_t> sourceVertex;  // per vertex: the input vertex kept at it (moved, possibly)
-  std::vector<int> faceGroup;        // per face: its group at `level`
+  std::vector<int> faceGroup;          // per face: its group at `level`
   size_t targetFaces = 0;
   GroupQemStats stats;
 };
@@ -51,8 +51,8 @@ struct SimplifiedLevel {
 // The threads the parts of a level run on: params.threads, or one per core when it is 0.
 int SimplificationThreads(const HierarchicalSimplificationParams& params);
 
-// One SimplifiedLevel per hierarchy level, finest first. Progress is reported on the calling thread. A level's face count is at most the one
-// below it (equal when its groups allow no further collapse). On failure or cancellation `out`
+// One SimplifiedLevel per hierarchy level, finest first. Progress is reported on the calling thread. A level's face
+// count is at most the one below it (equal when its groups allow no further collapse). On failure or cancellation `out`
 // is left empty.
 Status BuildSimplifiedLevels(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
                              const HierarchicalSimplificationParams& params, std::vector<SimplifiedLevel>& out,

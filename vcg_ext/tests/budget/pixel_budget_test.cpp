@@ -122,9 +122,9 @@ TEST(ComputePixelBudget, RealMeshBelowItsBudgetAndAbove) {
   p.pixelFactor = 1;
   PixelBudgetResult r;
   ASSERT_TRUE(ComputePixelBudget(bunny, p, r).ok());
-  EXPECT_GT(r.coveredPixels, 5000u);       // the bunny fills a good part of its framed disc
+  EXPECT_GT(r.coveredPixels, 5000u);        // the bunny fills a good part of its framed disc
   EXPECT_LT(r.coveredPixels, 240u * 240u);  // but never more than the square around it
-  EXPECT_FALSE(r.aboveCurrent);              // 1 face per pixel: far below its 69451 faces
+  EXPECT_FALSE(r.aboveCurrent);             // 1 face per pixel: far below its 69451 faces
   p.pixelFactor = 50;
   ASSERT_TRUE(ComputePixelBudget(bunny, p, r).ok());
   EXPECT_TRUE(r.aboveCurrent);

@@ -93,9 +93,9 @@ Strip RidgeStrip(int n, double h, bool chipped) {
 }
 
 TEST(DihedralAngle, FlatCubeEdgeAndKnife) {
-  EXPECT_NEAR(DihedralAngleDeg(P3(0, 0, 1), P3(0, 0, 1)), 180.0, 1e-9);   // coplanar faces
-  EXPECT_NEAR(DihedralAngleDeg(P3(0, 0, 1), P3(1, 0, 0)), 90.0, 1e-9);    // cube edge
-  EXPECT_NEAR(DihedralAngleDeg(P3(0, 0, 1), P3(0, 0, -1)), 0.0, 1e-9);    // folded flat (knife)
+  EXPECT_NEAR(DihedralAngleDeg(P3(0, 0, 1), P3(0, 0, 1)), 180.0, 1e-9);  // coplanar faces
+  EXPECT_NEAR(DihedralAngleDeg(P3(0, 0, 1), P3(1, 0, 0)), 90.0, 1e-9);   // cube edge
+  EXPECT_NEAR(DihedralAngleDeg(P3(0, 0, 1), P3(0, 0, -1)), 0.0, 1e-9);   // folded flat (knife)
   EXPECT_NEAR(DihedralAngleDeg(P3(0, 0, 1), P3(0, std::sin(0.5), std::cos(0.5))), 180.0 - 0.5 * 180 / M_PI, 1e-9);
 }
 
@@ -150,7 +150,7 @@ TEST(DetectFeatures, RidgeStripClasses) {
   EXPECT_EQ(info.borderEdges, 14u);  // 5 + 5 along the rows, 2 + 2 across the ends
   for (int k = 1; k < 5; ++k) {
     EXPECT_EQ(info.vertexClass[s.R(k)], VertexClass::FeatureLine) << k;
-    EXPECT_NEAR(info.curvatureM[s.R(k)], 0.0, 1e-6);  // a straight line: b = 0
+    EXPECT_NEAR(info.curvatureM[s.R(k)], 0.0, 1e-6);                     // a straight line: b = 0
     EXPECT_EQ(info.vertexClass[s.T(k)], VertexClass::FeatureLine) << k;  // on the border
   }
   // Ridge ends meet the border: three feature edges.
@@ -190,8 +190,8 @@ TEST(ExtendFeatureLines, SwapClosesTheGap) {
   ComputeFaceNormalsAndAreas(info.mesh, normals, areas);
   for (size_t f = 0; f < info.mesh.faces.size(); ++f) {
     const auto& t = info.mesh.faces[f];
-    const bool onRidge = (t[0] == s.R(2) || t[1] == s.R(2) || t[2] == s.R(2)) &&
-                         (t[0] == s.R(3) || t[1] == s.R(3) || t[2] == s.R(3));
+    const bool onRidge =
+        (t[0] == s.R(2) || t[1] == s.R(2) || t[2] == s.R(2)) && (t[0] == s.R(3) || t[1] == s.R(3) || t[2] == s.R(3));
     if (onRidge) {
       EXPECT_NEAR(std::abs(normals[f][1]), std::sqrt(0.5), 1e-6);
     }
@@ -460,7 +460,8 @@ TEST(FeatureSimplify, FandiskKeepsItsFeatureLines) {
     for (uint32_t v : e) EXPECT_NE(in.vertexClass[r.inputVertex[v]], VertexClass::Smooth);
   // Detected afresh on the output, the feature lines cover the input's.
   FeatureLineAgreement agree;
-  ASSERT_TRUE(CompareFeatureLines(fandisk, r.mesh, p.featureAngleDeg, 0.005 * BoundingBoxDiagonal(fandisk), agree).ok());
+  ASSERT_TRUE(
+      CompareFeatureLines(fandisk, r.mesh, p.featureAngleDeg, 0.005 * BoundingBoxDiagonal(fandisk), agree).ok());
   EXPECT_GT(agree.referenceLengthCovered, 0.97 * agree.referenceLength);
   EXPECT_GT(agree.simplifiedOnReference, 0.95 * agree.simplifiedEdges);
 }

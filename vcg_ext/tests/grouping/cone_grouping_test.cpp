@@ -303,7 +303,10 @@ TEST(ConeGrouping, ZeroAreaFacesJoinGroupsWithoutWideningCones) {
 TEST(ConeGrouping, ProgressRisesAndCancellationLeavesNothing) {
   const IndexedMesh sphere = test::Sphere(6);  // 32768 faces: several progress calls
   std::vector<int> seen;
-  Progress record = [&](int p, const char*) { seen.push_back(p); return true; };
+  Progress record = [&](int p, const char*) {
+    seen.push_back(p);
+    return true;
+  };
   GroupHierarchy h;
   ASSERT_TRUE(BuildConeHierarchy(sphere, ConeGroupingParams(), h, record).ok());
   ASSERT_GE(seen.size(), 3u);

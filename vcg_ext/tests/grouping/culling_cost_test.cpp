@@ -60,13 +60,15 @@ TEST(CullingCost, InvariantsOnASphere) {
     cp.cameraDistance = distance;
     CullingCostResult r;
     ASSERT_TRUE(EvaluateCullingCost(sphere, h, cp, r).ok());
-    EXPECT_LE(r.rejectedFraction, r.idealFraction + 1e-12);     // never culls a visible face
-    EXPECT_LE(r.threeState.mean, r.twoState.mean);               // the third state only saves tests
+    EXPECT_LE(r.rejectedFraction, r.idealFraction + 1e-12);  // never culls a visible face
+    EXPECT_LE(r.threeState.mean, r.twoState.mean);           // the third state only saves tests
     EXPECT_LE(r.twoState.min, r.twoState.mean);
     EXPECT_GE(r.twoState.max, r.twoState.mean);
-    EXPECT_GT(r.rejectedFraction, 0.6 * r.idealFraction);       // groups do cull most of it
-    if (distance == 0) EXPECT_NEAR(r.idealFraction, 0.5, 0.01);  // half a sphere faces away
-    else EXPECT_GT(r.idealFraction, 0.5);                          // a near eye sees less than half
+    EXPECT_GT(r.rejectedFraction, 0.6 * r.idealFraction);  // groups do cull most of it
+    if (distance == 0)
+      EXPECT_NEAR(r.idealFraction, 0.5, 0.01);  // half a sphere faces away
+    else
+      EXPECT_GT(r.idealFraction, 0.5);  // a near eye sees less than half
   }
 }
 

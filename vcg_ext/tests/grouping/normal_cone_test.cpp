@@ -198,8 +198,10 @@ TEST(UnionCone, ContainsBothCones) {
 // the other, an uncullable one an uncullable union.
 TEST(UnionCone, BothUnionsKeepNestedEmptyAndUncullableCones) {
   NormalCone big, small;
-  big.axis = Dir(0, 0); big.halfAngle = 30 * kDeg;
-  small.axis = Dir(10, 0); small.halfAngle = 5 * kDeg;
+  big.axis = Dir(0, 0);
+  big.halfAngle = 30 * kDeg;
+  small.axis = Dir(10, 0);
+  small.halfAngle = 5 * kDeg;
   for (NormalCone (*unite)(const NormalCone&, const NormalCone&) : {&UnionCone, &FastUnionCone}) {
     const char* name = unite == &UnionCone ? "UnionCone" : "FastUnionCone";
     EXPECT_EQ(unite(big, small).halfAngle, big.halfAngle) << name;
@@ -238,8 +240,8 @@ TEST(FastUnionCone, ContainsBothConesAndStaysCloseToUnionCone) {
     ++checked;
     for (const NormalCone* c : {&a, &b})
       for (const vcg::Point3d& n : BoundaryNormals(*c))
-        ASSERT_TRUE(fast.contains(n, 1e-12)) << "trial " << trial << " angle " << Angle(fast.axis, n) << " > "
-                                             << fast.halfAngle;
+        ASSERT_TRUE(fast.contains(n, 1e-12))
+            << "trial " << trial << " angle " << Angle(fast.axis, n) << " > " << fast.halfAngle;
   }
   EXPECT_GT(checked, 2000);
 }
@@ -253,7 +255,7 @@ TEST(FastAcos, AccurateOverTheWholeRange) {
 
 TEST(ClassifyOrtho, PaperEquationOne) {
   NormalCone c;
-  c.axis = Dir(0, 0);        // normals around +z
+  c.axis = Dir(0, 0);  // normals around +z
   c.halfAngle = 20 * kDeg;
   // Eye on +z looking down (-z): the group faces the eye.
   EXPECT_EQ(ClassifyOrtho(c, vcg::Point3d(0, 0, -1)), Facing::Front);
@@ -295,8 +297,10 @@ TEST(ClassifyPerspective, IsConservativeForEveryPointOfTheSphere) {
       const double t = uni(rng) * c.halfAngle, phi = uni(rng) * 2 * kPi;
       const vcg::Point3d n = c.axis * std::cos(t) + (u * std::cos(phi) + v * std::sin(phi)) * std::sin(t);
       const double side = (p - eye) * n;  // > 0: back-facing
-      if (f == Facing::Back) EXPECT_GT(side, 0);
-      else EXPECT_LT(side, 0);
+      if (f == Facing::Back)
+        EXPECT_GT(side, 0);
+      else
+        EXPECT_LT(side, 0);
     }
   }
   EXPECT_GT(backs, 100);

@@ -405,9 +405,7 @@ void PutU32(std::vector<uint8_t>& bytes, size_t at, uint32_t v) {
 
 TEST_F(TinyLod, BadFilesAreRefusedWithTheirReason) {
   const std::vector<uint8_t>& good = tiny_->bytes;
-  auto has = [](const std::string& msg, const std::string& what) {
-    return msg.find(what) != std::string::npos;
-  };
+  auto has = [](const std::string& msg, const std::string& what) { return msg.find(what) != std::string::npos; };
   {  // truncated
     std::vector<uint8_t> b(good.begin(), good.end() - 100);
     EXPECT_TRUE(has(OpenError(b), "truncated")) << OpenError(b);
@@ -419,8 +417,8 @@ TEST_F(TinyLod, BadFilesAreRefusedWithTheirReason) {
     std::vector<uint8_t> b = good;
     b[0] = 'X';
     EXPECT_TRUE(has(OpenError(b), "wrong magic")) << OpenError(b);
-    std::vector<uint8_t> ply = {'p', 'l', 'y', '\n', 'f', 'o', 'r', 'm', 'a', 't', ' ', 'b', 'i', 'n', 'a', 'r', 'y',
-                                '_', 'l', 'i', 't', 't', 'l', 'e', '_', 'e'};
+    std::vector<uint8_t> ply = {'p', 'l', 'y', '\n', 'f', 'o', 'r', 'm', 'a', 't', ' ', 'b', 'i',
+                                'n', 'a', 'r', 'y',  '_', 'l', 'i', 't', 't', 'l', 'e', '_', 'e'};
     EXPECT_TRUE(has(OpenError(ply), "not a .clod file")) << OpenError(ply);
   }
   {  // wrong version (a valid checksum: a file from a future writer)
@@ -647,7 +645,8 @@ TEST_F(BunnyLod, CulledNodesFaceAwayFromTheEye) {
     const LodGeometry& g = *r->geometry(cut.nodes[i]);
     for (const auto& t : g.faces) {
       const vcg::Point3d a = vcg::Point3d::Construct(g.positions[t[0]]);
-      const vcg::Point3d n = (vcg::Point3d::Construct(g.positions[t[1]]) - a) ^ (vcg::Point3d::Construct(g.positions[t[2]]) - a);
+      const vcg::Point3d n =
+          (vcg::Point3d::Construct(g.positions[t[1]]) - a) ^ (vcg::Point3d::Construct(g.positions[t[2]]) - a);
       EXPECT_LE(n * (eye - a), 1e-12) << "a culled face looks at the eye";
       ++checked;
     }
@@ -735,9 +734,33 @@ TEST(Lod, WriterRefusesMismatchedInput) {
   std::ifstream in(path);
   EXPECT_FALSE(in.good()) << "no file is left behind";
   EXPECT_FALSE(WriteLodFile(m, dag, "/nonexistent-dir/x.clod").ok());
-  EXPECT_FALSE(BuildLodDag(m, [] { LodBuildParams q; q.clusterFaces = 1; return q; }(), dag).ok());
-  EXPECT_FALSE(BuildLodDag(m, [] { LodBuildParams q; q.simplification.levelRatio = 1; return q; }(), dag).ok());
-  EXPECT_FALSE(BuildLodDag(m, [] { LodBuildParams q; q.maxGroupError = 0; return q; }(), dag).ok());
+  EXPECT_FALSE(BuildLodDag(
+                   m,
+                   [] {
+                     LodBuildParams q;
+                     q.clusterFaces = 1;
+                     return q;
+                   }(),
+                   dag)
+                   .ok());
+  EXPECT_FALSE(BuildLodDag(
+                   m,
+                   [] {
+                     LodBuildParams q;
+                     q.simplification.levelRatio = 1;
+                     return q;
+                   }(),
+                   dag)
+                   .ok());
+  EXPECT_FALSE(BuildLodDag(
+                   m,
+                   [] {
+                     LodBuildParams q;
+                     q.maxGroupError = 0;
+                     return q;
+                   }(),
+                   dag)
+                   .ok());
 }
 
 TEST(Lod, CancellingLeavesNoFile) {
@@ -811,10 +834,13 @@ void ExpectCrackFree(Built& b, const std::string& name) {
   const vcg::Box3f box = r->info().box;
   const vcg::Point3d c = vcg::Point3d::Construct(box.Center());
   const double d = box.Diag();
-  const std::vector<vcg::Point3d> eyes = {c + vcg::Point3d(0, 0, 2 * d), c + vcg::Point3d(0, 0, -2 * d),
-                                          c + vcg::Point3d(1.5 * d, 0.3 * d, 0), c + vcg::Point3d(-0.2 * d, 1.2 * d, 0.4 * d),
-                                          c + vcg::Point3d(0.3 * d, 0.1 * d, 0.45 * d),  // close: strong screen-space falloff
-                                          c};                                          // inside the model
+  const std::vector<vcg::Point3d> eyes = {
+      c + vcg::Point3d(0, 0, 2 * d),
+      c + vcg::Point3d(0, 0, -2 * d),
+      c + vcg::Point3d(1.5 * d, 0.3 * d, 0),
+      c + vcg::Point3d(-0.2 * d, 1.2 * d, 0.4 * d),
+      c + vcg::Point3d(0.3 * d, 0.1 * d, 0.45 * d),  // close: strong screen-space falloff
+      c};                                            // inside the model
   const size_t F = b.mesh.faces.size();
   size_t cuts = 0, mixed = 0;
   for (const auto& eye : eyes)

@@ -64,9 +64,9 @@ TEST(GroupsAreEdgeConnected, DetectsAGroupInTwoPieces) {
 }
 
 TEST(CheckMesh, CountsTheProblemsOfAScan) {
-  IndexedMesh m = test::Grid(2);                     // 9 vertices, 8 faces
-  m.positions.emplace_back(5.f, 5.f, 5.f);          // unreferenced
-  m.faces.push_back({0, 1, 1});                      // zero area (repeated vertex)
+  IndexedMesh m = test::Grid(2);            // 9 vertices, 8 faces
+  m.positions.emplace_back(5.f, 5.f, 5.f);  // unreferenced
+  m.faces.push_back({0, 1, 1});             // zero area (repeated vertex)
   const MeshReport r = CheckMesh(m);
   EXPECT_EQ(r.vertices, 10u);
   EXPECT_EQ(r.faces, 9u);

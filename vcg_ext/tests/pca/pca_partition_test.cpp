@@ -54,10 +54,10 @@ TEST(FacePca, SecondMomentMatchesNumericalIntegration) {
   const double area = 0.5 * (b - a).cross(c - a).norm();
   const Eigen::Matrix3d exact = TriangleSecondMoment(a, b, c, area);
   // The paper's eq. (6), literally: weights 1/6 on v_i v_iᵀ and 1/12 on the six cross terms.
-  const Eigen::Matrix3d paper =
-      area * ((a * a.transpose() + b * b.transpose() + c * c.transpose()) / 6 +
-              (a * b.transpose() + b * c.transpose() + c * a.transpose() + b * a.transpose() + c * b.transpose() +
-               a * c.transpose()) / 12);
+  const Eigen::Matrix3d paper = area * ((a * a.transpose() + b * b.transpose() + c * c.transpose()) / 6 +
+                                        (a * b.transpose() + b * c.transpose() + c * a.transpose() + b * a.transpose() +
+                                         c * b.transpose() + a * c.transpose()) /
+                                            12);
   EXPECT_LT((exact - paper).norm(), 1e-12 * paper.norm());
   // The midpoint rule converges to it, and its error shrinks as 1/n².
   const double e64 = (IntegrateSecondMoment(a, b, c, 64) - exact).norm() / exact.norm();
@@ -121,7 +121,7 @@ TEST(FacePca, FaceBasedIgnoresVertexDensityVertexBasedDoesNot) {
   const PcaFrame fl = FaceBasedPca(left), vl = VertexBasedPca(left);
   EXPECT_NEAR(fl.centroid[0], 1.0, 1e-6);
   EXPECT_NEAR(fl.eigenvalues[2], 4.0 / 12, 1e-6);  // exact for the rectangle
-  EXPECT_LT(vl.centroid[0], 0.8);                   // pulled to the dense side
+  EXPECT_LT(vl.centroid[0], 0.8);                  // pulled to the dense side
   // (2) Dense strips along y = 0 and y = 1 of a 1.2 x 1 rectangle: the true principal axis is x
   // (1.2 > 1), but the vertices' spread is larger along y.
   const IndexedMesh strips = UnevenRectangle(1.2, 10, 6, [](double, double y) { return y < 0.15 || y > 0.85; });
@@ -202,7 +202,9 @@ TEST(PcaTree, FullTreeOnSmallMeshes) {
       for (uint32_t k = 0; k < node.faceCount; ++k) {
         const uint32_t f = tree.faceOrder[node.firstFace + k];
         for (uint32_t v : m.faces[f]) EXPECT_TRUE(tree.bounds[i].box.IsIn(m.positions[v]));
-        if (cone.cullable()) { EXPECT_TRUE(cone.contains(normals[f], 1e-6)); }
+        if (cone.cullable()) {
+          EXPECT_TRUE(cone.contains(normals[f], 1e-6));
+        }
       }
     }
   }
@@ -236,8 +238,8 @@ TEST(PcaTree, NodesCarryTheFaceBasedPcaOfTheirFaces) {
 
 TEST(PcaTree, RealScansEveryNodeConnectedAndExact) {
   // The bunny (one component), boeing (122 components), the non-manifold res4 bunny, blobby (3).
-  for (const char* name : {"stanford_bunny_bun_zipper.ply", "boeing.ply", "stanford_bunny_bun_zipper_res4.ply",
-                           "blobby_3cc.ply"}) {
+  for (const char* name :
+       {"stanford_bunny_bun_zipper.ply", "boeing.ply", "stanford_bunny_bun_zipper_res4.ply", "blobby_3cc.ply"}) {
     SCOPED_TRACE(name);
     const IndexedMesh m = LoadReal(name);
     PcaTree tree;
@@ -246,7 +248,9 @@ TEST(PcaTree, RealScansEveryNodeConnectedAndExact) {
     EXPECT_EQ(tree.leafClusterCount(), int(m.faces.size()));
     const MeshReport r = CheckMesh(m);
     EXPECT_EQ(tree.componentCount, r.components);
-    if (r.components > 1) { EXPECT_EQ(tree.children(0).count, r.components); }
+    if (r.components > 1) {
+      EXPECT_EQ(tree.children(0).count, r.components);
+    }
   }
 }
 
@@ -330,11 +334,15 @@ TEST(PcaCut, ByErrorSplitsEveryClusterAboveTheThreshold) {
   const std::vector<PcaItem> cut = CutByError(tree, threshold);
   EXPECT_GT(cut.size(), 8u);
   for (PcaItem c : cut)
-    if (!IsFaceItem(c)) { EXPECT_LE(std::sqrt(tree.nodes[size_t(c)].eigenvalues[0]), threshold); }
+    if (!IsFaceItem(c)) {
+      EXPECT_LE(std::sqrt(tree.nodes[size_t(c)].eigenvalues[0]), threshold);
+    }
   // ... and only those: every parent of a cut cluster was above it.
   for (PcaItem c : cut) {
     const int32_t parent = IsFaceItem(c) ? -1 : tree.nodes[size_t(c)].parent;
-    if (parent >= 0) { EXPECT_GT(std::sqrt(tree.nodes[size_t(parent)].eigenvalues[0]), threshold); }
+    if (parent >= 0) {
+      EXPECT_GT(std::sqrt(tree.nodes[size_t(parent)].eigenvalues[0]), threshold);
+    }
   }
 }
 
@@ -347,8 +355,11 @@ TEST(PcaTree, StopCriteria) {
     ASSERT_TRUE(BuildPcaTree(m, p, tree).ok());
     ExpectSoundTree(m, tree);
     for (int32_t i = 0; i < int32_t(tree.nodes.size()); ++i) {
-      if (tree.isLeaf(i)) { EXPECT_LE(tree.nodes[size_t(i)].faceCount, 20u); }
-      else { EXPECT_GT(tree.nodes[size_t(i)].faceCount, 20u); }
+      if (tree.isLeaf(i)) {
+        EXPECT_LE(tree.nodes[size_t(i)].faceCount, 20u);
+      } else {
+        EXPECT_GT(tree.nodes[size_t(i)].faceCount, 20u);
+      }
     }
   }
   {
@@ -365,7 +376,9 @@ TEST(PcaTree, StopCriteria) {
     PcaTree tree;
     ASSERT_TRUE(BuildPcaTree(m, p, tree).ok());
     for (int32_t i = 0; i < int32_t(tree.nodes.size()); ++i)
-      if (!tree.isLeaf(i)) { EXPECT_GT(std::sqrt(tree.nodes[size_t(i)].eigenvalues[0]), 0.02); }
+      if (!tree.isLeaf(i)) {
+        EXPECT_GT(std::sqrt(tree.nodes[size_t(i)].eigenvalues[0]), 0.02);
+      }
     // Leaf clusters have their exact cone: it holds every normal.
   }
   {
@@ -382,8 +395,8 @@ TEST(PcaTree, DegenerateAndAwkwardInput) {
   // Duplicate faces and zero-area faces have no split plane: they still split into connected
   // halves, down to single faces.
   IndexedMesh m = test::Grid(3);
-  m.faces.push_back(m.faces[0]);                        // a duplicate (non-manifold edges)
-  m.positions.emplace_back(0.5f, 0.f, 0.f);            // a zero-area sliver on the border
+  m.faces.push_back(m.faces[0]);             // a duplicate (non-manifold edges)
+  m.positions.emplace_back(0.5f, 0.f, 0.f);  // a zero-area sliver on the border
   m.faces.push_back({0, 1, uint32_t(m.positions.size() - 1)});
   PcaTree tree;
   ASSERT_TRUE(BuildPcaTree(m, PcaPartitionParams(), tree).ok());
@@ -503,7 +516,9 @@ TEST(PcaGroups, HierarchyFromNestedCutsFeedsTheCullingCost) {
     EXPECT_TRUE(GroupsAreEdgeConnected(adj, lv.faceGroup));
     for (size_t f = 0; f < normals.size(); ++f) {
       const Group& g = lv.groups[size_t(lv.faceGroup[f])];
-      if (g.cone.cullable()) { EXPECT_TRUE(g.cone.contains(normals[f], 1e-7)); }
+      if (g.cone.cullable()) {
+        EXPECT_TRUE(g.cone.contains(normals[f], 1e-7));
+      }
       for (uint32_t v : m.faces[f]) EXPECT_LE(vcg::Distance(m.positions[v], g.center), g.radius);
     }
     if (l > 1)  // children of level l are the level l-1 groups inside them

@@ -62,7 +62,10 @@ void ExpectSoundCoarseMesh(const IndexedMesh& in, const ProgressiveMeshResult& r
     for (const auto& t : r.mesh.faces)
       for (int k = 0; k < 3; ++k) ++edges[std::minmax(t[size_t(k)], t[size_t((k + 1) % 3)])];
     for (const auto& e : edges)
-      if (e.second == 1) { ++borderEdgesAt[e.first.first]; ++borderEdgesAt[e.first.second]; }
+      if (e.second == 1) {
+        ++borderEdgesAt[e.first.first];
+        ++borderEdgesAt[e.first.second];
+      }
   }
   size_t fewer = 0;
   for (size_t v = 0; v < around.size(); ++v)
@@ -134,7 +137,9 @@ TEST(ProgressiveMesh, BunnyAtOneHundredThousandAndTenThousandClusters) {
     ASSERT_TRUE(SampledHausdorff(bunny, r.mesh, 50000, h).ok());
     EXPECT_LT(h.hausdorff, (k == 100 ? 0.06 : 0.025) * h.diagonal);
     EXPECT_LT(r.blockedVertices, r.mesh.positions.size() / 10);  // almost every vertex is a corner
-    if (k >= 1000) { EXPECT_EQ(CountFacesAgainstSurface(r.mesh, bunny), 0u); }
+    if (k >= 1000) {
+      EXPECT_EQ(CountFacesAgainstSurface(r.mesh, bunny), 0u);
+    }
   }
 }
 

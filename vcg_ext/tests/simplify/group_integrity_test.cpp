@@ -21,9 +21,7 @@ std::vector<int> QuadGroups(const std::vector<int>& perQuad) {
 TEST(CountGroupPieces, CountsEdgeConnectedPiecesPerGroup) {
   const IndexedMesh m = test::Grid(3);
   // Group 5 in two opposite corners (touching nothing), group 2 a cross in the middle.
-  const auto g = QuadGroups({5, 2, 0,
-                             2, 2, 2,
-                             0, 2, 5});
+  const auto g = QuadGroups({5, 2, 0, 2, 2, 2, 0, 2, 5});
   const GroupPieces p = CountGroupPieces(m, g);
   EXPECT_EQ(p.ids, (std::vector<int>{0, 2, 5}));
   EXPECT_EQ(p.piecesOf(5), 2);
@@ -41,9 +39,7 @@ TEST(CountGroupPieces, FacesTouchingAtAVertexAreTwoPieces) {
 
 TEST(MeasureGroupIntegrity, ReportsVanishedSplitAndAlreadyDisconnectedGroups) {
   const IndexedMesh before = test::Grid(3);
-  const auto gb = QuadGroups({5, 1, 1,
-                              3, 3, 3,
-                              4, 4, 5});  // 5 already in two pieces
+  const auto gb = QuadGroups({5, 1, 1, 3, 3, 3, 4, 4, 5});  // 5 already in two pieces
   // After: group 4 gone (its faces deleted), group 3 cut in two by removing its middle quad.
   IndexedMesh after = before;
   std::vector<int> ga;

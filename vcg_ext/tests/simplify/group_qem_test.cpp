@@ -73,8 +73,7 @@ void ExpectValidOutput(const IndexedMesh& in, const GroupQemResult& r) {
   }
   for (size_t i = 1; i < r.sourceFace.size(); ++i) ASSERT_LT(r.sourceFace[i - 1], r.sourceFace[i]);
   for (size_t i = 1; i < r.sourceVertex.size(); ++i) ASSERT_LT(r.sourceVertex[i - 1], r.sourceVertex[i]);
-  for (const auto& p : r.mesh.positions)
-    ASSERT_TRUE(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]));
+  for (const auto& p : r.mesh.positions) ASSERT_TRUE(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]));
   EXPECT_EQ(r.stats.facesOut, r.mesh.faces.size());
   EXPECT_LE(BuildFaceAdjacency(r.mesh).nonManifoldEdges, BuildFaceAdjacency(in).nonManifoldEdges);
 }
@@ -105,7 +104,8 @@ TEST(Condition1, ThePinchSplitsTheGroupWhenAllowed) {
   std::vector<std::array<uint32_t, 3>> faces;
   for (size_t f = 0; f < m.faces.size(); ++f) {
     auto t = m.faces[f];
-    for (auto& v : t) if (v == V(2, 3)) v = V(2, 2);
+    for (auto& v : t)
+      if (v == V(2, 3)) v = V(2, 2);
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
     faces.push_back(t);
     ga.push_back(g[f]);
@@ -224,10 +224,16 @@ std::vector<int> GrownGroups(const IndexedMesh& m, int seeds, uint32_t seed) {
   std::vector<int> g(m.faces.size(), -1);
   std::vector<uint32_t> frontier;
   uint32_t r = seed;
-  const auto next = [&r]() { r = r * 1664525u + 1013904223u; return r >> 8; };
+  const auto next = [&r]() {
+    r = r * 1664525u + 1013904223u;
+    return r >> 8;
+  };
   for (int s = 0; s < seeds; ++s) {
     const uint32_t f = next() % uint32_t(m.faces.size());
-    if (g[f] < 0) { g[f] = s; frontier.push_back(f); }
+    if (g[f] < 0) {
+      g[f] = s;
+      frontier.push_back(f);
+    }
   }
   while (!frontier.empty()) {
     const size_t i = next() % frontier.size();
@@ -237,9 +243,16 @@ std::vector<int> GrownGroups(const IndexedMesh& m, int seeds, uint32_t seed) {
       const uint32_t n = adj.neighbours[k];
       if (g[n] >= 0) continue;
       free = true;
-      if (next() % 2) { g[n] = g[f]; frontier.push_back(n); break; }
+      if (next() % 2) {
+        g[n] = g[f];
+        frontier.push_back(n);
+        break;
+      }
     }
-    if (!free) { frontier[i] = frontier.back(); frontier.pop_back(); }
+    if (!free) {
+      frontier[i] = frontier.back();
+      frontier.pop_back();
+    }
   }
   return g;  // every face reached: the test meshes are connected
 }
@@ -253,7 +266,10 @@ TEST(Integrity, LocalTestAgreesWithAGlobalRecount) {
   GroupPieces before = CountGroupPieces(m, g);
   for (int pieces : before.pieces) ASSERT_EQ(pieces, 1);
   uint32_t r = 777;
-  const auto next = [&r]() { r = r * 1664525u + 1013904223u; return r >> 8; };
+  const auto next = [&r]() {
+    r = r * 1664525u + 1013904223u;
+    return r >> 8;
+  };
   GroupQemParams plain = Integrity();
   plain.condition1 = false;
   plain.preserveNormal = false;
@@ -271,7 +287,8 @@ TEST(Integrity, LocalTestAgreesWithAGlobalRecount) {
     after.faces.clear();
     for (size_t f = 0; f < m.faces.size(); ++f) {
       auto u = m.faces[f];
-      for (auto& v : u) if (v == b) v = a;
+      for (auto& v : u)
+        if (v == b) v = a;
       if (u[0] == u[1] || u[1] == u[2] || u[0] == u[2]) continue;
       after.faces.push_back(u);
       ga.push_back(g[f]);
@@ -280,10 +297,16 @@ TEST(Integrity, LocalTestAgreesWithAGlobalRecount) {
     ASSERT_TRUE(MeasureGroupIntegrity(m, g, after, ga, gi).ok());
     const bool whole = gi.groupsSplit == 0 && gi.groupsVanished == 0 && gi.groupsDisconnectedAfter == 0;
     const CollapseVerdict v = EvaluateCollapse(m, g, integrity, a, b);
-    ASSERT_EQ(v == CollapseVerdict::Allowed, whole) << "step " << step << ": edge " << a << "-" << b << ", "
-                                                   << ToString(v) << ", split " << gi.groupsSplit << ", vanished "
-                                                   << gi.groupsVanished;
-    if (whole) { ++allowed; m = after; g = ga; } else { ++refused; }
+    ASSERT_EQ(v == CollapseVerdict::Allowed, whole)
+        << "step " << step << ": edge " << a << "-" << b << ", " << ToString(v) << ", split " << gi.groupsSplit
+        << ", vanished " << gi.groupsVanished;
+    if (whole) {
+      ++allowed;
+      m = after;
+      g = ga;
+    } else {
+      ++refused;
+    }
   }
   EXPECT_GE(allowed, 300);
   EXPECT_GE(refused, 20) << "the random collapses should hit some that split or remove a group";
@@ -482,7 +505,10 @@ TEST(Simplify, CancellationStopsAtOnceAndLeavesAValidMesh) {
   EXPECT_EQ(gi.groupsSplit + gi.groupsVanished, 0);
   // A full run reports 100 at the end.
   last = -1;
-  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r, [&](int percent, const char*) { last = percent; return true; }).ok());
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r, [&](int percent, const char*) {
+                last = percent;
+                return true;
+              }).ok());
   EXPECT_EQ(last, 100);
 }
 

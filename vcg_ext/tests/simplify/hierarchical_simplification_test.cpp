@@ -171,7 +171,8 @@ TEST(BuildSimplifiedLevels, PartsOfAMeshWithFewGroups) {
   EXPECT_LE(levels.front().mesh.faces.size(), m.faces.size() / 2 + 8);
   // And every face in one group.
   GroupHierarchy one = h;
-  for (int k = 1; k <= one.levelCount(); ++k) std::fill(one.levels[size_t(k - 1)].faceGroup.begin(), one.levels[size_t(k - 1)].faceGroup.end(), 0);
+  for (int k = 1; k <= one.levelCount(); ++k)
+    std::fill(one.levels[size_t(k - 1)].faceGroup.begin(), one.levels[size_t(k - 1)].faceGroup.end(), 0);
   ASSERT_TRUE(BuildSimplifiedLevels(m, one, p, levels).ok());
   EXPECT_LE(levels.front().mesh.faces.size(), m.faces.size() / 2);
 }
