@@ -1,6 +1,10 @@
-// ConeLOD — the small things every part of the core uses: pi, and a prefetch hint for the loops
-// that are bound by memory latency (the grouping's merges, the feature simplification's queue).
+// ConeLOD — the small things every part of the core uses: pi, a prefetch hint for the loops that
+// are bound by memory latency (the grouping's merges, the feature simplification's queue), and the
+// root lookup of a union-find forest (connected pieces of faces, of corners, of a vertex's link).
 #pragma once
+
+#include <cstdint>
+#include <vector>
 
 namespace conelod {
 
@@ -13,6 +17,16 @@ inline void Prefetch(const void* p) {
 #else
   (void)p;
 #endif
+}
+
+// The root of x's set in a union-find forest (parent[r] == r at a root), halving the path on the
+// way up.
+inline uint32_t FindRoot(std::vector<uint32_t>& parent, uint32_t x) {
+  while (parent[x] != x) {
+    parent[x] = parent[parent[x]];
+    x = parent[x];
+  }
+  return x;
 }
 
 }  // namespace conelod

@@ -328,21 +328,17 @@ bool Work::IsManifoldVertex(uint32_t v, std::vector<uint32_t>& verts, std::vecto
     degree.push_back(0);
     return int(verts.size() - 1);
   };
-  auto find = [&](uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
   for (uint32_t f : fan) {
     const auto& t = F[f];
     const int i = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
     const int a = local(t[(i + 1) % 3]), b = local(t[(i + 2) % 3]);
     if (++degree[size_t(a)] > 2 || ++degree[size_t(b)] > 2) return false;
-    const uint32_t ra = find(uint32_t(a)), rb = find(uint32_t(b));
+    const uint32_t ra = FindRoot(parent, uint32_t(a)), rb = FindRoot(parent, uint32_t(b));
     if (ra != rb) parent[ra] = rb;
   }
-  const uint32_t root = find(0);
+  const uint32_t root = FindRoot(parent, 0);
   for (uint32_t i = 1; i < verts.size(); ++i)
-    if (find(i) != root) return false;
+    if (FindRoot(parent, i) != root) return false;
   return true;
 }
 

@@ -2,6 +2,7 @@
 #include "conelod/mesh/indexed_mesh.h"
 
 #include "conelod/mesh/face_adjacency.h"
+#include "conelod/common.h"
 
 #include <algorithm>
 #include <cmath>
@@ -44,30 +45,20 @@ FaceAdjacency BuildFaceAdjacency(const IndexedMesh& m) {
   return adj;
 }
 
-namespace {
-uint32_t Find(std::vector<uint32_t>& parent, uint32_t x) {
-  while (parent[x] != x) {
-    parent[x] = parent[parent[x]];
-    x = parent[x];
-  }
-  return x;
-}
-}  // namespace
-
 int ConnectedComponents(const FaceAdjacency& adj, std::vector<int>& comp) {
   const uint32_t nf = uint32_t(adj.offsets.size() - 1);
   std::vector<uint32_t> parent(nf);
   std::iota(parent.begin(), parent.end(), 0u);
   for (uint32_t f = 0; f < nf; ++f)
     for (uint32_t i = adj.offsets[f]; i < adj.offsets[f + 1]; ++i) {
-      uint32_t a = Find(parent, f), b = Find(parent, adj.neighbours[i]);
+      uint32_t a = FindRoot(parent, f), b = FindRoot(parent, adj.neighbours[i]);
       if (a != b) parent[std::max(a, b)] = std::min(a, b);
     }
   comp.assign(nf, -1);
   std::vector<int> idOfRoot(nf, -1);
   int count = 0;
   for (uint32_t f = 0; f < nf; ++f) {
-    uint32_t r = Find(parent, f);
+    uint32_t r = FindRoot(parent, f);
     if (idOfRoot[r] < 0) idOfRoot[r] = count++;
     comp[f] = idOfRoot[r];
   }
@@ -83,7 +74,7 @@ bool GroupsAreEdgeConnected(const FaceAdjacency& adj, const std::vector<int>& fa
     for (uint32_t i = adj.offsets[f]; i < adj.offsets[f + 1]; ++i) {
       const uint32_t g = adj.neighbours[i];
       if (faceGroup[g] != faceGroup[f]) continue;
-      uint32_t a = Find(parent, f), b = Find(parent, g);
+      uint32_t a = FindRoot(parent, f), b = FindRoot(parent, g);
       if (a != b) parent[std::max(a, b)] = std::min(a, b);
     }
   }
@@ -95,7 +86,7 @@ bool GroupsAreEdgeConnected(const FaceAdjacency& adj, const std::vector<int>& fa
   for (uint32_t f = 0; f < nf; ++f) {
     const int g = faceGroup[f];
     if (g < 0) continue;
-    const int64_t r = Find(parent, f);
+    const int64_t r = FindRoot(parent, f);
     if (rootOfGroup[g] < 0)
       rootOfGroup[g] = r;
     else if (rootOfGroup[g] != r)

@@ -1,21 +1,12 @@
 // ConeLOD — manifold check (see manifold_check.h).
 #include "conelod/mesh/manifold_check.h"
+#include "conelod/common.h"
 
 #include <algorithm>
 #include <numeric>
 #include <vector>
 
 namespace conelod {
-namespace {
-uint32_t Find(std::vector<uint32_t>& parent, uint32_t x) {
-  while (parent[x] != x) {
-    parent[x] = parent[parent[x]];
-    x = parent[x];
-  }
-  return x;
-}
-}  // namespace
-
 ManifoldReport CheckManifold(const IndexedMesh& m) {
   ManifoldReport r;
   const uint32_t nf = uint32_t(m.faces.size());
@@ -80,7 +71,8 @@ ManifoldReport CheckManifold(const IndexedMesh& m) {
     } else {
       if (halves[i].forward == halves[i + 1].forward) ++r.misorientedEdges;
       for (uint32_t v : {halves[i].lo, halves[i].hi}) {
-        const uint32_t a = Find(parent, corner(v, halves[i].face)), b = Find(parent, corner(v, halves[i + 1].face));
+        const uint32_t a = FindRoot(parent, corner(v, halves[i].face)),
+                       b = FindRoot(parent, corner(v, halves[i + 1].face));
         if (a != b) parent[std::max(a, b)] = std::min(a, b);
       }
     }
@@ -90,7 +82,7 @@ ManifoldReport CheckManifold(const IndexedMesh& m) {
     if (onBadEdge[v]) continue;
     bool one = true;
     for (uint32_t i = cornerStart[v]; i < cornerStart[v + 1]; ++i)
-      if (Find(parent, i) != Find(parent, cornerStart[v])) one = false;
+      if (FindRoot(parent, i) != FindRoot(parent, cornerStart[v])) one = false;
     if (!one) ++r.nonManifoldVertices;
   }
   return r;

@@ -2,6 +2,7 @@
 #include "conelod/simplify/group_integrity.h"
 
 #include "conelod/grouping/normal_cone.h"
+#include "conelod/common.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,14 +11,6 @@
 namespace conelod {
 
 namespace {
-
-uint32_t Find(std::vector<uint32_t>& parent, uint32_t x) {
-  while (parent[x] != x) {
-    parent[x] = parent[parent[x]];
-    x = parent[x];
-  }
-  return x;
-}
 
 Status CheckIds(const IndexedMesh& m, const std::vector<int>& ids, const char* which) {
   if (ids.size() != m.faces.size())
@@ -53,12 +46,12 @@ GroupPieces CountGroupPieces(const IndexedMesh& mesh, const std::vector<int>& fa
     for (uint32_t i = adj.offsets[f]; i < adj.offsets[f + 1]; ++i) {
       const uint32_t g = adj.neighbours[i];
       if (faceGroup[g] != faceGroup[f]) continue;
-      const uint32_t a = Find(parent, f), b = Find(parent, g);
+      const uint32_t a = FindRoot(parent, f), b = FindRoot(parent, g);
       if (a != b) parent[std::max(a, b)] = std::min(a, b);
     }
   // One root per piece.
   for (uint32_t f = 0; f < nf; ++f)
-    if (Find(parent, f) == f)
+    if (FindRoot(parent, f) == f)
       ++out.pieces[size_t(std::lower_bound(out.ids.begin(), out.ids.end(), faceGroup[f]) - out.ids.begin())];
   return out;
 }

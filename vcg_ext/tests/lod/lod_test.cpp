@@ -235,7 +235,9 @@ TEST_F(TinyLod, HeaderAndNodeStructure) {
   for (size_t k = 0; k < H; ++k) {
     EXPECT_EQ(i.levelNodes[k], b.dag.levels[k].clusterCount());
     EXPECT_EQ(i.levelFaces[k], b.dag.levels[k].faces.size());
-    if (k) EXPECT_LT(i.levelFaces[k], i.levelFaces[k - 1]);
+    if (k) {
+      EXPECT_LT(i.levelFaces[k], i.levelFaces[k - 1]);
+    }
   }
   EXPECT_NEAR(i.box.min[0], -1, 1e-6);
   EXPECT_NEAR(i.box.max[2], 1, 1e-6);
@@ -861,8 +863,12 @@ void ExpectCrackFree(Built& b, const std::string& name) {
           EXPECT_EQ(k.border, 0u);
           EXPECT_EQ(k.overused, 0u);
           EXPECT_EQ(k.drawnBorderNotCulled, 0u);
-          if (pct == 100) EXPECT_EQ(cut.faces, F);
-          if (pct > 0) EXPECT_LE(cut.faces, std::max(v.faceBudget, size_t(r->info().levelFaces.back())));
+          if (pct == 100) {
+            EXPECT_EQ(cut.faces, F);
+          }
+          if (pct > 0) {
+            EXPECT_LE(cut.faces, std::max(v.faceBudget, size_t(r->info().levelFaces.back())));
+          }
           ++cuts;
           mixed += cut.maxLevelDifference > 0;
         }
