@@ -33,37 +33,6 @@ inline double AngleBetween(const P3& a, const P3& b) {
   return std::acos(Clamp1((a * b) / (la * lb)));
 }
 
-// Squared distance from p to the triangle (a, b, c) (Ericson, Real-Time Collision Detection 5.1.5).
-double PointTriangleDistance2(const P3& p, const P3& a, const P3& b, const P3& c) {
-  const P3 ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab * ap, d2 = ac * ap;
-  if (d1 <= 0 && d2 <= 0) return ap.SquaredNorm();
-  const P3 bp = p - b;
-  const double d3 = ab * bp, d4 = ac * bp;
-  if (d3 >= 0 && d4 <= d3) return bp.SquaredNorm();
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
-    const double v = d1 / (d1 - d3);
-    return (ap - ab * v).SquaredNorm();
-  }
-  const P3 cp = p - c;
-  const double d5 = ab * cp, d6 = ac * cp;
-  if (d6 >= 0 && d5 <= d6) return cp.SquaredNorm();
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
-    const double w = d2 / (d2 - d6);
-    return (ap - ac * w).SquaredNorm();
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
-    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    return (bp - (c - b) * w).SquaredNorm();
-  }
-  const double denom = 1.0 / (va + vb + vc);
-  const double v = vb * denom, w = vc * denom;
-  return (ap - ab * v - ac * w).SquaredNorm();
-}
-
 double PointSegmentDistance2(const P3& p, const P3& a, const P3& b) {
   const P3 ab = b - a;
   const double len2 = ab.SquaredNorm();

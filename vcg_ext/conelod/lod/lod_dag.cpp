@@ -26,6 +26,7 @@
 #include <queue>
 #include <unordered_map>
 
+#include "conelod/common.h"
 #include "conelod/parallel.h"
 #include "conelod/mesh/mesh_check.h"
 
@@ -34,43 +35,51 @@ namespace {
 
 using Face = std::array<uint32_t, 3>;
 
-// Faces sharing an edge (by vertex ids), CSR. Works on any id space (sorts the edges).
-void EdgeAdjacency(const std::vector<Face>& faces, std::vector<uint32_t>& offsets, std::vector<uint32_t>& list) {
-  struct E {
-    uint64_t key;
-    uint32_t face;
-  };
-  std::vector<E> edges;
+// One record per edge of every face, carrying an id of that face (the face itself, or its cluster),
+// sorted by edge and then by id: the records of one edge stand together. Works on any vertex id
+// space (it sorts rather than indexing by vertex).
+struct EdgeRecord {
+  uint64_t key;
+  uint32_t id;
+};
+template <class IdOf>
+std::vector<EdgeRecord> SortedEdgeRecords(const std::vector<Face>& faces, IdOf idOf) {
+  std::vector<EdgeRecord> edges;
   edges.reserve(faces.size() * 3);
   for (uint32_t f = 0; f < faces.size(); ++f)
     for (int i = 0; i < 3; ++i) {
       uint32_t a = faces[f][size_t(i)], b = faces[f][size_t((i + 1) % 3)];
       if (a > b) std::swap(a, b);
-      edges.push_back({uint64_t(a) << 32 | b, f});
+      edges.push_back({uint64_t(a) << 32 | b, idOf(f)});
     }
   std::sort(edges.begin(), edges.end(),
-            [](const E& x, const E& y) { return x.key < y.key || (x.key == y.key && x.face < y.face); });
-  std::vector<uint32_t> count(faces.size() + 1, 0);
+            [](const EdgeRecord& x, const EdgeRecord& y) { return x.key < y.key || (x.key == y.key && x.id < y.id); });
+  return edges;
+}
+
+// Calls fn(x, y) for every ordered pair of records of one edge whose ids differ, edge by edge.
+template <class Fn>
+void ForPairsOnSharedEdges(const std::vector<EdgeRecord>& edges, Fn fn) {
   for (size_t i = 0; i < edges.size();) {
     size_t j = i;
     while (j < edges.size() && edges[j].key == edges[i].key) ++j;
     for (size_t a = i; a < j; ++a)
       for (size_t b = i; b < j; ++b)
-        if (a != b && edges[a].face != edges[b].face) ++count[edges[a].face + 1];
+        if (edges[a].id != edges[b].id) fn(edges[a].id, edges[b].id);
     i = j;
   }
+}
+
+// Faces sharing an edge (by vertex ids), CSR; a face appears once per edge it shares.
+void EdgeAdjacency(const std::vector<Face>& faces, std::vector<uint32_t>& offsets, std::vector<uint32_t>& list) {
+  const std::vector<EdgeRecord> edges = SortedEdgeRecords(faces, [](uint32_t f) { return f; });
+  std::vector<uint32_t> count(faces.size() + 1, 0);
+  ForPairsOnSharedEdges(edges, [&](uint32_t f, uint32_t) { ++count[f + 1]; });
   std::partial_sum(count.begin(), count.end(), count.begin());
   offsets = count;
   list.assign(offsets.back(), 0);
   std::vector<uint32_t> at(offsets.begin(), offsets.end() - 1);
-  for (size_t i = 0; i < edges.size();) {
-    size_t j = i;
-    while (j < edges.size() && edges[j].key == edges[i].key) ++j;
-    for (size_t a = i; a < j; ++a)
-      for (size_t b = i; b < j; ++b)
-        if (a != b && edges[a].face != edges[b].face) list[at[edges[a].face]++] = edges[b].face;
-    i = j;
-  }
+  ForPairsOnSharedEdges(edges, [&](uint32_t f, uint32_t g) { list[at[f]++] = g; });
 }
 
 vcg::Point3d Normal(const std::vector<vcg::Point3f>& pos, const Face& t) {
@@ -136,20 +145,16 @@ uint32_t GrowClusters(const std::vector<Face>& faces, const std::vector<vcg::Poi
   }
   std::vector<uint32_t> merged(C);
   std::iota(merged.begin(), merged.end(), 0u);
-  auto find = [&](uint32_t x) {
-    while (merged[x] != x) x = merged[x] = merged[merged[x]];
-    return x;
-  };
   std::vector<uint32_t> order(C);
   std::iota(order.begin(), order.end(), 0u);
   std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return size[a] < size[b]; });
   std::unordered_map<uint32_t, uint32_t> shared;
   for (uint32_t c : order) {
-    if (size[find(c)] * 4 >= cap || find(c) != c) continue;
+    if (size[FindRoot(merged, c)] * 4 >= cap || FindRoot(merged, c) != c) continue;
     shared.clear();
     for (uint32_t j = start[c]; j < start[c + 1]; ++j)
       for (uint32_t i = off[members[j]]; i < off[members[j] + 1]; ++i) {
-        const uint32_t o = find(cluster[adj[i]]);
+        const uint32_t o = FindRoot(merged, cluster[adj[i]]);
         if (o != c) ++shared[o];
       }
     uint32_t best = ~0u, bestCount = 0;
@@ -167,7 +172,7 @@ uint32_t GrowClusters(const std::vector<Face>& faces, const std::vector<vcg::Poi
   std::vector<uint32_t> dense(C, ~0u);
   uint32_t next = 0;
   for (uint32_t f = 0; f < F; ++f) {
-    const uint32_t r = find(cluster[f]);
+    const uint32_t r = FindRoot(merged, cluster[f]);
     if (dense[r] == ~0u) dense[r] = next++;
     cluster[f] = dense[r];
   }
@@ -180,30 +185,9 @@ uint32_t GrowClusters(const std::vector<Face>& faces, const std::vector<vcg::Poi
 int GroupClusters(const LodDag::Level& L, int per, size_t whole, std::vector<int>& group) {
   const uint32_t C = uint32_t(L.clusterCount());
   // Cluster adjacency weighted by shared edges.
-  struct E {
-    uint64_t key;
-    uint32_t cluster;
-  };
-  std::vector<E> edges;
-  edges.reserve(L.faces.size() * 3);
-  for (uint32_t f = 0; f < L.faces.size(); ++f)
-    for (int i = 0; i < 3; ++i) {
-      uint32_t a = L.faces[f][size_t(i)], b = L.faces[f][size_t((i + 1) % 3)];
-      if (a > b) std::swap(a, b);
-      edges.push_back({uint64_t(a) << 32 | b, L.faceCluster[f]});
-    }
-  std::sort(edges.begin(), edges.end(),
-            [](const E& x, const E& y) { return x.key < y.key || (x.key == y.key && x.cluster < y.cluster); });
+  const std::vector<EdgeRecord> edges = SortedEdgeRecords(L.faces, [&](uint32_t f) { return L.faceCluster[f]; });
   std::vector<std::pair<uint64_t, uint32_t>> pairs;  // (a << 32 | b, 1) per shared edge, a != b
-  for (size_t i = 0; i < edges.size();) {
-    size_t j = i;
-    while (j < edges.size() && edges[j].key == edges[i].key) ++j;
-    for (size_t a = i; a < j; ++a)
-      for (size_t b = i; b < j; ++b)
-        if (edges[a].cluster != edges[b].cluster)
-          pairs.push_back({uint64_t(edges[a].cluster) << 32 | edges[b].cluster, 1});
-    i = j;
-  }
+  ForPairsOnSharedEdges(edges, [&](uint32_t a, uint32_t b) { pairs.push_back({uint64_t(a) << 32 | b, 1}); });
   std::sort(pairs.begin(), pairs.end());
   std::vector<uint32_t> off(C + 1, 0), nb, w;
   for (size_t i = 0; i < pairs.size();) {
@@ -261,29 +245,6 @@ int GroupClusters(const LodDag::Level& L, int per, size_t whole, std::vector<int
     }
   }
   return groups;
-}
-
-// Squared distance from p to triangle abc (Ericson, Real-Time Collision Detection, 5.1.5).
-double PointTriangleDistance2(const vcg::Point3d& p, const vcg::Point3d& a, const vcg::Point3d& b,
-                              const vcg::Point3d& c) {
-  const vcg::Point3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab * ap, d2 = ac * ap;
-  if (d1 <= 0 && d2 <= 0) return ap.SquaredNorm();
-  const vcg::Point3d bp = p - b;
-  const double d3 = ab * bp, d4 = ac * bp;
-  if (d3 >= 0 && d4 <= d3) return bp.SquaredNorm();
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return (p - (a + ab * (d1 / (d1 - d3)))).SquaredNorm();
-  const vcg::Point3d cp = p - c;
-  const double d5 = ab * cp, d6 = ac * cp;
-  if (d6 >= 0 && d5 <= d6) return cp.SquaredNorm();
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return (p - (a + ac * (d2 / (d2 - d6)))).SquaredNorm();
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
-    return (p - (b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))))).SquaredNorm();
-  const double den = 1 / (va + vb + vc);
-  return (p - (a + ab * (vb * den) + ac * (vc * den))).SquaredNorm();
 }
 
 // One group simplified: its faces in the group's local vertex ids, the positions of the vertices
