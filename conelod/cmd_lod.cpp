@@ -36,12 +36,19 @@ bool ParsePoint(const std::string& text, vcg::Point3d& p) {
 
 int LodBuild(int argc, char** argv) {
   Args a(argc, argv,
-         With(kGroupingOptions,
-              {"-o", "--level-ratio", "--threads", "--faces-per-part", "--cluster-faces", "--group-clusters"}),
-         {"--json", "--strict-greedy"});
+         With(kGroupingOptions, {"-o", "--level-ratio", "--threads", "--faces-per-part", "--cluster-faces",
+                                 "--group-clusters", "--quality-thr", "--boundary-weight"}),
+         {"--json", "--strict-greedy", "--no-optimal-placement", "--preserve-boundary", "--no-preserve-normal"});
   LodBuildParams params;
   params.grouping = ReadGroupingParams(a);
   params.simplification.levelRatio = a.num("--level-ratio", params.simplification.levelRatio);
+  // The collapse options of every group (those of conelod simplify and of the Export LOD File filter).
+  GroupQemParams& qem = params.simplification.qem;
+  qem.qualityThr = a.num("--quality-thr", qem.qualityThr);
+  qem.boundaryWeight = a.num("--boundary-weight", qem.boundaryWeight);
+  qem.optimalPlacement = !a.has("--no-optimal-placement");
+  qem.preserveBoundary = a.has("--preserve-boundary");
+  qem.preserveNormal = !a.has("--no-preserve-normal");
   const double clusterFaces = a.num("--cluster-faces", double(params.clusterFaces));
   const double groupClusters = a.num("--group-clusters", double(params.groupClusters));
   if (!(clusterFaces >= 4 && clusterFaces <= 65536) || clusterFaces != std::floor(clusterFaces))
@@ -256,18 +263,20 @@ int LodInfo(int argc, char** argv) {
 }  // namespace
 
 const char* kLodUsage =
-    "conelod lod build IN.ply -o OUT.clod [grouping options] [--level-ratio R] [--cluster-faces C]\n"
-    "                  [--group-clusters G] [--threads N] [--faces-per-part P] [--json]\n"
+    "conelod lod build IN.ply -o OUT.clod [--threshold T] [--growth F] [--level-ratio R] [--cluster-faces C]\n"
+    "                  [--group-clusters G] [collapse options] [--threads N] [--json]\n"
     "conelod lod extract IN.clod --eye X,Y,Z --budget N|P% -o OUT.ply [--priority screen|error|fg]\n"
     "                  [--no-cull] [--drop-culled] [--json]\n"
     "conelod lod info IN.clod [--json]\n"
     "  build: writes the streamable .clod file (format: vcg_ext/conelod/lod/lod_format.md), a DAG of\n"
     "  clusters whose every cut is watertight: the input is cut into clusters of about C faces\n"
-    "  [128] whose normals stay within --cone-threshold degrees (the grouping option; x\n"
-    "  --threshold-growth per level), G [12] neighbouring clusters are gathered into a group, each\n"
+    "  [128] whose normals stay within --threshold T degrees [15] (x --growth F [1.6] per level,\n"
+    "  at most 90), G [12] neighbouring clusters are gathered into a group, each\n"
     "  group is simplified to R x its faces [0.5] with its border locked, on --threads N threads\n"
     "  [0: one per core], and re-cut into the next level's clusters; at the top each connected\n"
-    "  part is simplified as one group.\n"
+    "  part is simplified as one group. Collapse options (as conelod simplify's, defaults in\n"
+    "  brackets): --quality-thr Q [0.3] --no-optimal-placement --preserve-boundary\n"
+    "  --boundary-weight W [1] --no-preserve-normal.\n"
     "  The file does not depend on N. The other grouping options and --faces-per-part are\n"
     "  accepted for compatibility and not used.\n"
     "  extract: opens the file, refines for a perspective eye at X,Y,Z under a budget of N faces\n"

@@ -213,6 +213,17 @@ Status RequirePath(const FilterCall& c, const char* name, QString& path) {
                  "on a path typed into the box)");
 }
 
+// What the dialog's file box takes, in this MeshLab's words. MeshLab 2020.09's box
+// (IOFileWidget) passes on the file last chosen with its "..." button (whose file dialog takes a
+// typed name too) and never the text of the box itself: a path typed or edited there is ignored.
+const char* const kLodFileHow =
+    kDialogPassesTypedPaths ? "type a path into the box or choose one with '...'"
+                            : "choose the file with the '...' button beside the box (its file dialog also takes a "
+                              "typed name); MeshLab 2020.09 ignores a path typed or edited in the box itself";
+const QString kLodFileHelp = QString("Where to write the .clod file. No default: ") + kLodFileHow +
+                             ". A relative path is relative to MeshLab's current directory (meshlabserver: where it "
+                             "was started); the log gives the full path.";
+
 // A message about a file that names it ("PATH: why"), once.
 QString NameFile(const QString& path, const std::string& why) {
   const QString message = QString::fromStdString(why);
@@ -329,8 +340,8 @@ Status ApplyConeGrouping(FilterCall& c) {
   if (!s.ok()) return s;
   const double seconds = timer.elapsed() / 1000.0;
   if (displayLevel > h.levelCount()) {
-    c.report.log("DisplayLevel %d is above the %d levels built: showing level %d", displayLevel, h.levelCount(),
-                 h.levelCount());
+    c.report.log("%s %d is above the %d levels built: showing level %d", qUtf8Printable(Label(c, "DisplayLevel")),
+                 displayLevel, h.levelCount(), h.levelCount());
     displayLevel = h.levelCount();
   }
 
@@ -405,13 +416,15 @@ std::vector<ParamSpec> GroupQemSpecs(const MeshDocument*, const MeshModel*) {
                          "If non zero, no collapse whose quadric error (RMS distance) exceeds this percentage of "
                          "the bounding-box diagonal is done. 0: no limit.",
                          AtLeast(0, "0: no limit")));
-  p.push_back(EnumParam("GroupSource", 0,
+  // The default is the normal cone groups (conelod simplify --groups cone:auto): a freshly loaded
+  // mesh has no group ids, and a per-face quality it came with (a scan's confidence) is no grouping.
+  p.push_back(EnumParam("GroupSource", 1,
                         QStringList() << "Per-face quality"
                                       << "Normal cone groups",
                         "Groups",
-                        "Per-face quality: the ids already on the mesh (e.g. from Cone LOD: Normal Cone Face "
-                        "Grouping). Normal cone groups: computed now at the normal cone level below with the "
-                        "default grouping parameters."));
+                        "Normal cone groups (the default): computed now with the default grouping parameters, "
+                        "at the normal cone level below. Per-face quality: the group ids already on the mesh "
+                        "(e.g. from Cone LOD: Normal Cone Face Grouping; equal values = one group)."));
   p.push_back(IntParam("GroupLevel", 0, "Normal cone level (0 = automatic)",
                        "Hierarchy level of the normal cone groups (1 = finest); used when Groups is Normal cone "
                        "groups. 0: automatic, the finest level whose groups leave at least 8 faces per group at "
@@ -477,8 +490,8 @@ Status ApplyGroupQem(FilterCall& c) {
     if (automatic) {
       level = conelod::AutoGroupLevel(h, p.targetFaces);
     } else if (level > h.levelCount()) {
-      c.report.log("GroupLevel %d is outside the %d levels built: using level %d", level, h.levelCount(),
-                   h.levelCount());
+      c.report.log("%s %d is above the %d levels built: using level %d", qUtf8Printable(Label(c, "GroupLevel")), level,
+                   h.levelCount(), h.levelCount());
       level = h.levelCount();
     }
     groups = h.level(level).faceGroup;
@@ -526,13 +539,15 @@ Status ApplyGroupQem(FilterCall& c) {
   const double coneLimitDeg = coneSource ? std::min(h.level(level).thresholdDeg, 180.0) : 0;
   const int conesOver = coneSource ? conelod::CountConesOverLimit(r.mesh, groupsAfter, coneLimitDeg) : 0;
 
+  // The groups' colours are shown after the filter (FilterSpec::showFaceColour): normal cone groups
+  // get a colour each, as do per-face quality groups on a mesh without face colours.
+  const bool hadFaceColour = mm.hasDataMask(MeshModel::MM_FACECOLOR);
   mm.updateDataMask(MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR);
   conelod::ApplySimplifiedMesh(mm.cm, faceOf, r.mesh, r.sourceFace, r.sourceVertex);
-  if (coneSource)  // faces are in the same order as the groups after compaction
-    for (size_t f = 0; f < groupsAfter.size(); ++f) {
-      mm.cm.face[f].Q() = CMeshO::FaceType::QualityType(groupsAfter[f]);
-      mm.cm.face[f].C() = conelod::GroupColor(groupsAfter[f]);
-    }
+  for (size_t f = 0; f < groupsAfter.size(); ++f) {  // faces are in the same order as the groups after compaction
+    if (coneSource) mm.cm.face[f].Q() = CMeshO::FaceType::QualityType(groupsAfter[f]);
+    if (coneSource || !hadFaceColour) mm.cm.face[f].C() = conelod::GroupColor(groupsAfter[f]);
+  }
   if (mm.hasDataMask(MeshModel::MM_FACEFACETOPO)) vcg::tri::UpdateTopology<CMeshO>::FaceFace(mm.cm);
   if (mm.hasDataMask(MeshModel::MM_VERTFACETOPO)) vcg::tri::UpdateTopology<CMeshO>::VertexFace(mm.cm);
   UpdateBoxAndNormals(mm);
@@ -554,7 +569,7 @@ Status ApplyGroupQem(FilterCall& c) {
             gi.groupsDisconnectedBefore);
   if (coneSource)
     out.log("cones_over_threshold %d of %d groups (level %d threshold %.1f deg%s)", conesOver, gi.groupsAfter, level,
-            coneLimitDeg, p.keepCones ? ", KeepCones" : "");
+            coneLimitDeg, p.keepCones ? qUtf8Printable(", " + Label(c, "KeepCones")) : "");
   out.log(
       "collapses %d; refused evaluations: topology %d, condition 1 %d, condition 2 %d, lock %d, fixed %d, "
       "geometry %d, cone %d",
@@ -970,22 +985,35 @@ Status ApplyProgressiveMesh(FilterCall& c) {
 // ---------------------------------------------------------------------------------------------
 // Cone LOD: Export LOD File
 
+// The parameters of the DAG build, those of conelod lod build (lod_build.h): the cone threshold and
+// its growth (the other grouping parameters play no part in the DAG), cluster and group sizes,
+// the level ratio and the collapse options of every group.
 std::vector<ParamSpec> LodExportSpecs(const MeshDocument*, const MeshModel*) {
-  const conelod::HierarchicalSimplificationParams d;
+  const conelod::LodBuildParams d;
   std::vector<ParamSpec> p;
-  p.push_back(SaveFileParam("FileName", "ConeLOD file (*.clod)", "LOD file",
-                            "Where to write the .clod file (no default: type a path or choose it with '...'). A "
-                            "relative path is relative to MeshLab's current directory (meshlabserver: where it "
-                            "was started); the log gives the full path."));
-  AddGroupingParams(p);
-  p.push_back(FloatParam("LevelRatio", d.levelRatio, "Faces kept per level (0..1]",
-                         "Each LOD level targets this fraction of the faces of the level below (level 1: of the "
-                         "mesh); a level stops earlier when its groups allow no further collapse.",
-                         AboveUpTo(0, 1)));
-  p.push_back(BoolParam("LockGroupBoundaries", d.qem.lockGroupBoundaries, "Lock group boundaries",
-                        "Not used: every cut of the file is crack-free without it. Kept so that saved "
-                        "scripts still run."));
-  AddCollapseOptionParams(p, d.qem, "Weight of the quadrics that keep mesh borders (and group contours) in place.");
+  p.push_back(SaveFileParam("FileName", "ConeLOD file (*.clod)", "LOD file", ""));
+  p.back().help = kLodFileHelp;
+  p.push_back(FloatParam("ConeThresholdDeg", d.grouping.coneThresholdDeg, "Cone threshold (deg)",
+                         "Level-0 clusters: the normals of a cluster stay within a cone of this half-angle, in "
+                         "degrees (at most 90 is used).",
+                         Above(0)));
+  p.push_back(FloatParam("ThresholdGrowth", d.grouping.thresholdGrowth, "Threshold growth per level",
+                         "The clusters of each level above 0 take the cone threshold times this factor per level "
+                         "(>= 1; at most 90 degrees).",
+                         AtLeast(1)));
+  p.push_back(IntParam("ClusterFaces", int(d.clusterFaces), "Faces per cluster",
+                       "Target faces of a cluster (a node of the file), at every level.", Between(4, 65536)));
+  p.push_back(IntParam("GroupClusters", d.groupClusters, "Clusters per group",
+                       "Neighbouring clusters gathered into one group, simplified together with its outer "
+                       "border locked and re-cut into the next level's clusters.",
+                       Between(2, 64)));
+  p.push_back(FloatParam("LevelRatio", d.simplification.levelRatio, "Faces kept per level (0..1)",
+                         "Each group is simplified to this fraction of its faces (so each level has about this "
+                         "fraction of the faces of the level below); a group stops earlier when its locked "
+                         "border leaves no cheap collapse.",
+                         Inside(0, 1)));
+  AddCollapseOptionParams(p, d.simplification.qem,
+                          "Weight of the quadrics that keep mesh borders in place (Preserve Boundary).");
   return p;
 }
 
@@ -997,9 +1025,11 @@ Status ApplyLodExport(FilterCall& c) {
   const std::string pathError = conelod::CheckOutputPath(path.toStdString());  // before the work, not after
   if (!pathError.empty()) return Status::Invalid(pathError);
   conelod::LodBuildParams params;
-  params.grouping = ReadGroupingParams(c.args);
+  params.grouping.coneThresholdDeg = c.args.number("ConeThresholdDeg");
+  params.grouping.thresholdGrowth = c.args.number("ThresholdGrowth");
+  params.clusterFaces = size_t(c.args.integer("ClusterFaces"));
+  params.groupClusters = c.args.integer("GroupClusters");
   params.simplification.levelRatio = c.args.number("LevelRatio");
-  params.simplification.qem.lockGroupBoundaries = c.args.flag("LockGroupBoundaries");
   ReadCollapseOptions(c.args, params.simplification.qem);
 
   const conelod::IndexedMesh im = conelod::ToIndexedMesh(c.mesh->cm);
@@ -1032,23 +1062,25 @@ Status ApplyLodExport(FilterCall& c) {
 // ---------------------------------------------------------------------------------------------
 // Cone LOD: Extract View-Dependent LOD
 
-const char* const kLodViewModes[] = {"Perspective, framed from ViewDirection", "Perspective from Eye",
-                                     "Orthographic along ViewDirection"};
+const char* const kLodViewModes[] = {"Perspective, framed from the view direction", "Perspective from the eye position",
+                                     "Orthographic along the view direction"};
 
 // Independent of the current mesh: the extract reads everything from the file.
 std::vector<ParamSpec> LodExtractSpecs(const MeshDocument*, const MeshModel*) {
   const conelod::LodView d;
+  ParamSpec file = OpenFileParam("FileName", QStringList() << "ConeLOD file (*.clod)", "LOD file", "");
+  file.help = QString("The .clod file to read (Cone LOD: Export LOD File or conelod lod build). No default: ") +
+              kLodFileHow + ". A relative path is relative to MeshLab's current directory.";
   return {
-      OpenFileParam("FileName", QStringList() << "ConeLOD file (*.clod)", "LOD file",
-                    "The .clod file to read (Cone LOD: Export LOD File or conelod lod build); no default: type a "
-                    "path or choose it with '...'. A relative path is relative to MeshLab's current directory."),
+      file,
       EnumParam("ViewMode", 0, QStringList() << kLodViewModes[0] << kLodViewModes[1] << kLodViewModes[2], "View",
-                "Framed: a perspective eye on the line through the model's centre along ViewDirection, "
-                "CameraDistance bounding-sphere radii away. Eye: a perspective eye at Eye. Orthographic: parallel "
-                "projection along ViewDirection."),
-      PositionParam("Eye", vcg::Point3f(0, 0, 0), "Eye position",
-                    "Used when View is 'Perspective from Eye': the eye in model coordinates (Get / View Pos. "
-                    "takes the current camera)."),
+                "Framed: a perspective eye on the line through the model's centre along the view direction, "
+                "Camera distance bounding-sphere radii away. Eye: a perspective eye at the eye position. "
+                "Orthographic: parallel projection along the view direction."),
+      PositionParam(
+          "Eye", vcg::Point3f(0, 0, 0), "Eye position",
+          "Used when View is 'Perspective from the eye position': the eye in model coordinates (Get / View Pos. "
+          "takes the current camera)."),
       DirectionParam("ViewDirection", vcg::Point3f(0, 0, -1), "View direction",
                      "Direction from the eye into the scene (the default looks down -Z, from the +Z side)."),
       FloatParam("CameraDistance", 3.0, "Camera distance",
@@ -1190,12 +1222,16 @@ std::vector<FilterSpec> MakeFilters() {
                        "vertex where it is (crack-free refinement between groups, less reduction).<br>"
                        "Target: <i>Target number of faces</i>, or when it is 0 <i>Target fraction</i> of the "
                        "faces, and/or <i>Max error</i>.<br>"
-                       "Groups: the per-face quality (e.g. from <i>Cone LOD: Normal Cone Face Grouping</i>; equal "
-                       "values = one group), or the normal-cone groups of a hierarchy level computed here (then "
-                       "written to per-face quality and colour). Faces keep their quality, colour and attributes. "
+                       "Groups: by default the normal-cone groups computed here, at the finest hierarchy level "
+                       "that leaves at least 8 faces per group at the target (<i>Normal cone level</i> 0; "
+                       "<tt>conelod simplify --groups cone:auto</tt>), written to per-face quality and colour and "
+                       "shown in face colour; or, with <i>Groups</i> = Per-face quality, the group ids already on "
+                       "the mesh (e.g. from <i>Cone LOD: Normal Cone Face Grouping</i>; equal values = one group), "
+                       "whose faces keep their quality and colour. Faces keep their attributes. "
                        "The log lists faces, groups before/after, groups split or vanished, and the time.<br>") +
                    kPaperKamiya,
                kUnchanged, GroupQemSpecs, ApplyGroupQem});
+  t.back().showFaceColour = true;
   t.push_back({"Cone LOD: Group Integrity", Menu::Measure, Arity::SingleMesh, MeshModel::MM_NONE, MeshModel::MM_NONE,
                QString("Measures whether the face groups of the current mesh are those of <i>Reference mesh</i> "
                        "(the mesh before a simplification, kept as another layer), group ids being the per-face "
@@ -1264,32 +1300,38 @@ std::vector<FilterSpec> MakeFilters() {
                "the mesh was not changed and no layer was added", ProgressiveMeshSpecs, ApplyProgressiveMesh});
   t.push_back({"Cone LOD: Export LOD File", Menu::Remeshing, Arity::SingleMesh, MeshModel::MM_NONE, MeshModel::MM_NONE,
                QString("Writes the current mesh as a streamable level-of-detail file (<tt>.clod</tt>, the paper's "
-                       "sections 7-8) whose every cut is crack-free: clusters of about 128 faces within the "
-                       "grouping's <i>cone threshold</i> are gathered eight at a time, each group is simplified "
-                       "with its border locked (<i>Faces kept per level</i>, with the options of <i>Cone LOD: "
-                       "Group-Preserving Quadric Edge Collapse</i>) and re-cut into the next level's clusters. Every "
-                       "cluster is a node with its normal cone, bounding sphere, error and geometry. A viewer "
-                       "(<tt>conelod-viewer</tt>) or <i>Cone LOD: Extract View-Dependent LOD</i> reads only the "
-                       "nodes it needs. <i>LOD file</i> has no default: type a path or choose one with '...' (a "
-                       "relative path is relative to MeshLab's current directory; the log gives the full path). "
-                       "The mesh is not changed; on failure no file is left.<br>") +
+                       "sections 7-8) whose every cut is crack-free, as <tt>conelod lod build</tt> does: the mesh "
+                       "is cut into clusters of about <i>Faces per cluster</i> faces whose normals stay within the "
+                       "<i>Cone threshold</i>; <i>Clusters per group</i> neighbouring clusters (12 by default) "
+                       "are gathered into a group, each group is simplified to <i>Faces kept per level</i> of its "
+                       "faces with its border locked (with the collapse options of <i>Cone LOD: Group-Preserving "
+                       "Quadric Edge Collapse</i>) and re-cut into the next level's clusters, level after level "
+                       "until the mesh no longer shrinks. Every cluster is a node with its normal cone, bounding "
+                       "sphere, error and geometry. A viewer (<tt>conelod-viewer</tt>) or <i>Cone LOD: Extract "
+                       "View-Dependent LOD</i> reads only the nodes it needs. <i>LOD file</i> has no default: ") +
+                   kLodFileHow +
+                   QString(" (a relative path is relative to MeshLab's current directory; the log gives the full "
+                           "path). The mesh is not changed; on failure no file is left.<br>") +
                    kPaperKamiya,
                "no file was written", LodExportSpecs, ApplyLodExport});
   t.push_back({"Cone LOD: Extract View-Dependent LOD", Menu::MeshCreation, Arity::None, MeshModel::MM_NONE,
                MeshModel::MM_NONE,
                QString("Reads a <tt>.clod</tt> file (<i>Cone LOD: Export LOD File</i>, <tt>conelod lod build</tt>) "
                        "and adds a new layer with the view-dependent mesh for one view: starting from the coarsest "
-                       "level, groups are refined breadth-first in the order of the paper's priority f(g) = (1 - "
-                       "cos(angle(e, n) + c)) / 2 (e: towards the eye, n: cone axis, c: cone half-angle), adjacent "
-                       "groups never more than one level apart, until <i>Face budget</i> faces. The view: framed "
-                       "from <i>View direction</i> at <i>Camera distance</i> bounding-sphere radii, the eye "
-                       "position <i>Eye</i> (the dialog's Get / View Pos. fills in the current camera position), "
+                       "clusters, a group is refined (its clusters replaced by the finer clusters it was simplified "
+                       "from) while the layer stays within <i>Face budget</i> faces, the group whose error seen from "
+                       "the eye (error / distance; orthographic: the error) is largest first. Each group was "
+                       "simplified with its border locked, so the layer is a watertight cut of the file: it covers "
+                       "the mesh exactly once and clusters of different levels meet at the very same vertices, "
+                       "without cracks, whatever the levels side by side (neighbours may be several levels apart: "
+                       "the log's <tt>lod_max_level_difference</tt>). The view: framed "
+                       "from <i>View direction</i> at <i>Camera distance</i> bounding-sphere radii, "
+                       "the <i>Eye position</i> (the dialog's Get / View Pos. fills in the current camera position), "
                        "or orthographic along <i>View direction</i>. With <i>Refine back-facing groups last</i>, "
                        "back-facing groups are refined last; with <i>Leave back-facing groups out</i> they are left "
                        "out of the layer. Per-face quality = LOD level of the face (0 = the input's own faces), a "
-                       "distinct colour per level (those of conelod lod extract). <i>LOD file</i> has no default. "
-                       "The current mesh is not changed.<br>") +
-                   kPaperKamiya,
+                       "distinct colour per level (those of conelod lod extract). <i>LOD file</i> has no default: ") +
+                   kLodFileHow + QString(". The current mesh is not changed.<br>") + kPaperKamiya,
                "no layer was added", LodExtractSpecs, ApplyLodExtract});
   return t;
 }

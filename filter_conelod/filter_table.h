@@ -136,6 +136,11 @@ struct FilterSpec {
   // gives only a mesh) and its current mesh (null in an empty document).
   std::vector<ParamSpec> (*params)(const MeshDocument* doc, const MeshModel* current);
   conelod::Status (*apply)(FilterCall& call);
+  // After a success the GUI shows the current mesh in face colour (the groups' colours). The
+  // FaceColoring menus do that by themselves as long as the faces stay (MeshLab refreshes what
+  // the post-conditions name); a filter that changes the faces needs the adapter's help, since
+  // MeshLab then refreshes every attribute and keeps the vertex colour shown.
+  bool showFaceColour = false;
 };
 
 // Every filter, in the order of the menu; a filter's index is its action id.

@@ -29,6 +29,13 @@ int Fail(int code, const QString& message) {
   return code;
 }
 
+// A failure about the file at `path`: the message names it once ("PATH: why"; the reader's own
+// messages already name it).
+int FailFile(const QString& path, const std::string& why) {
+  const QString message = QString::fromStdString(why);
+  return Fail(2, message.contains(path) ? message : path + ": " + message);
+}
+
 QJsonObject ToJson(const FrameStats& s) {
   QJsonObject o;
   o["faces_drawn"] = double(s.facesDrawn);
@@ -132,7 +139,7 @@ int main(int argc, char** argv) {
   QElapsedTimer openTimer;
   openTimer.start();
   const conelod::Status opened = conelod::LodReader::Open(path.toStdString(), reader);
-  if (!opened.ok()) return Fail(2, QString("%1: %2").arg(path, QString::fromStdString(opened.message)));
+  if (!opened.ok()) return FailFile(path, opened.message);
   const double openMs = openTimer.nsecsElapsed() * 1e-6;
 
   LodViewerWidget widget(*reader, QFileInfo(path).fileName().toStdString(), options);
@@ -148,15 +155,14 @@ int main(int argc, char** argv) {
   while (widget.firstFrameMsecs() < 0 && waited.elapsed() < 20000) app.processEvents(QEventLoop::AllEvents, 20);
   if (!widget.isValid() || widget.firstFrameMsecs() < 0)
     return Fail(4, "no OpenGL context: run with an X server that has GLX (e.g. xvfb-run -a conelod-viewer ...)");
-  if (!widget.error().empty()) return Fail(2, QString("%1: %2").arg(path, QString::fromStdString(widget.error())));
+  if (!widget.error().empty()) return FailFile(path, widget.error());
   const FrameStats coarse = widget.lastFrame();
   double refineSeconds = 0;
-  if (parser.isSet(refine) && !widget.refineToDone(&refineSeconds))
-    return Fail(2, QString("%1: %2").arg(path, QString::fromStdString(widget.error())));
+  if (parser.isSet(refine) && !widget.refineToDone(&refineSeconds)) return FailFile(path, widget.error());
   const double frameMs = widget.benchmarkFrames(benchFrames);
   const QImage image = widget.grabFramebuffer();
   const FrameStats last = widget.lastFrame();
-  if (!widget.error().empty()) return Fail(2, QString("%1: %2").arg(path, QString::fromStdString(widget.error())));
+  if (!widget.error().empty()) return FailFile(path, widget.error());
   const QString out = parser.value(screenshot);
   if (image.isNull() || !image.save(out)) return Fail(3, "cannot write " + out);
 

@@ -1,6 +1,8 @@
 // ConeLOD MeshLab plugin for MeshLab 2020.09 (see filter_conelod.h).
 #include "filter_conelod.h"
 
+#include <common/ml_shared_data_context.h>
+
 #include "../filter_table.h"
 
 using namespace conelod_plugin;
@@ -90,6 +92,31 @@ Args ReadArgs(const std::vector<ParamSpec>& specs, const RichParameterList& par)
   return a;
 }
 
+// After a filter that changed the current mesh's faces and whose face colours must show
+// (FilterSpec::showFaceColour). MeshLab's GUI then compares each mesh with its state before the
+// filter (MeshDocument::meshDocStateData, MainWindow::updateSharedContextDataAfterFilterExecution):
+// a new vertex or face count, or post-conditions naming them, make it refresh every attribute,
+// and with the vertex colour refreshed the face colour is switched off. So the plugin refreshes
+// the mesh's GL buffers itself, as the GUI would (connectivity included), records the new counts
+// as the state before, and returns the post-conditions that remain (positions, normals, face
+// colour and quality): the GUI then switches the face colour on, as after a FaceColoring filter
+// that keeps the faces. Only with a GL view (glContext) whose state was recorded (the GUI);
+// otherwise returns -1 (keep the filter's post-conditions).
+int ShowFaceColour(MeshDocument& md, MLPluginGLContext* gl) {
+  MeshModel* mm = md.mm();
+  if (!gl || !mm) return -1;
+  const auto before = md.meshDocStateData().find(mm->id());
+  if (before == md.meshDocStateData().end()) return -1;
+  const int maskBefore = before->_mask;
+  MLRenderingData::RendAtts all;
+  MLPoliciesStandAloneFunctions::fromMeshModelMaskToMLRenderingAtts(MeshModel::MM_ALL, all);
+  gl->meshAttributesUpdated(mm->id(), true, all);
+  md.meshDocStateData().insert(
+      mm->id(), MeshModelStateData(maskBefore, size_t(mm->cm.VN()), size_t(mm->cm.FN()), size_t(mm->cm.EN())));
+  return MeshModel::MM_VERTCOORD | MeshModel::MM_VERTNORMAL | MeshModel::MM_FACENORMAL | MeshModel::MM_FACECOLOR |
+         MeshModel::MM_FACEQUALITY;
+}
+
 }  // namespace
 
 FilterConeLodPlugin::FilterConeLodPlugin() {
@@ -134,22 +161,29 @@ int FilterConeLodPlugin::getRequirements(QAction* a) {
   return f ? f->requirements : int(MeshModel::MM_NONE);
 }
 
+// The post-conditions of the run that just ended when it returned some (ShowFaceColour: the GUI
+// asks right after applyFilter); otherwise, e.g. when a dialog opens and decides on its preview,
+// the filter's own.
 int FilterConeLodPlugin::postCondition(QAction* a) const {
   const FilterSpec* f = Spec(ID(a));
+  if (f && ID(a) == lastRun_ && lastPostConditions_ != -1) return lastPostConditions_;
   return f ? f->postConditions : int(MeshModel::MM_NONE);
 }
 
 void FilterConeLodPlugin::initParameterSet(QAction* a, MeshModel& m, RichParameterList& par) {
+  lastRun_ = -1;
   if (const FilterSpec* f = Spec(ID(a))) AddParams(f->params(nullptr, &m), nullptr, par);
 }
 
 void FilterConeLodPlugin::initParameterSet(QAction* a, MeshDocument& md, RichParameterList& par) {
+  lastRun_ = -1;
   if (const FilterSpec* f = Spec(ID(a))) AddParams(f->params(&md, md.mm()), &md, par);
 }
 
 bool FilterConeLodPlugin::applyFilter(QAction* a, MeshDocument& md, const RichParameterList& par,
                                       vcg::CallBackPos* cb) {
   errorMessage.clear();
+  lastRun_ = -1;
   const FilterSpec* f = Spec(ID(a));
   if (!f) {
     errorMessage = "unknown filter";
@@ -159,7 +193,12 @@ bool FilterConeLodPlugin::applyFilter(QAction* a, MeshDocument& md, const RichPa
     Log(isError ? GLLogStream::SYSTEM : GLLogStream::FILTER, line);
   });
   errorMessage = RunFilter(*f, md, ReadArgs(f->params(&md, md.mm()), par), cb, report);
-  return errorMessage.isEmpty();
+  if (!errorMessage.isEmpty()) return false;
+  if (f->showFaceColour) {
+    lastRun_ = ID(a);
+    lastPostConditions_ = ShowFaceColour(md, glContext);
+  }
+  return true;
 }
 
 MESHLAB_PLUGIN_NAME_EXPORTER(FilterConeLodPlugin)

@@ -22,4 +22,10 @@ class FilterConeLodPlugin : public QObject, public MeshFilterInterface {
   void initParameterSet(QAction* a, MeshModel& m, RichParameterList& par) override;
   void initParameterSet(QAction* a, MeshDocument& md, RichParameterList& par) override;
   bool applyFilter(QAction* a, MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb) override;
+
+ private:
+  // The filter (action id) that ran last and the post-conditions it returned (-1: its own), until
+  // a dialog opens or the next run starts.
+  int lastRun_ = -1;
+  int lastPostConditions_ = -1;
 };

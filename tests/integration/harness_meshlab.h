@@ -50,6 +50,12 @@ inline void SetEnum(RichParameterList& par, const QString& name, int value) {
 #endif
 }
 
+// The choices an enum parameter shows (empty when `name` is not an enum).
+inline QStringList EnumChoices(const RichParameterList& par, const QString& name) {
+  const RichEnum* e = par.hasParameter(name) ? dynamic_cast<const RichEnum*>(&par.getParameterByName(name)) : nullptr;
+  return e ? e->enumvalues : QStringList();
+}
+
 inline void SetPath(RichParameterList& par, const QString& name, const QString& path) {
   std::unique_ptr<Value> v(PathValue(path));
   par.setValue(name, *v);

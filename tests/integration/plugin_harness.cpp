@@ -22,6 +22,7 @@
 #include <cstdio>
 #include <cstring>
 #include <map>
+#include <set>
 #include <vector>
 
 #include "harness_meshlab.h"
@@ -117,9 +118,11 @@ QString Figure(GLLogStream& log, const QString& key) {
   return "missing";
 }
 
-bool LogHas(GLLogStream& log, const QString& text) {
-  for (const auto& l : log.logStringList())
-    if (l.second.contains(text)) return true;
+// Whether a log line from the `from`-th on contains `text`.
+bool LogHas(GLLogStream& log, const QString& text, int from = 0) {
+  const auto& lines = log.logStringList();
+  for (int i = from; i < lines.size(); ++i)
+    if (lines[i].second.contains(text)) return true;
   return false;
 }
 
@@ -222,11 +225,13 @@ void ApplyEveryFilter(Run& r) {
     before->updateDataMask(mm);
     vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(before->cm, mm->cm, false, true);
     md.setCurrentMesh(mm->id());
-    Check(r.apply(kGroupQem, md).isEmpty(), "group-preserving collapse succeeds at its defaults");
+    RichParameterList par = r.params(kGroupQem, md);
+    harness::SetEnum(par, "GroupSource", 0);  // the groups of the grouping (per-face quality)
+    Check(r.apply(kGroupQem, md, par).isEmpty(), "group-preserving collapse of the grouping's groups succeeds");
     Check(mm->cm.fn <= 69451 / 2 + 1 && mm->cm.fn > 30000, QString("  %1 faces (target: half)").arg(mm->cm.fn));
     Check(Figure(log, "integrity_percent") == "100.00", "  every group intact");
     r.digest[kGroupQem] = Digest(md, log, {"faces_out", "groups_after"});
-    RichParameterList par = r.params(kIntegrity, md);
+    par = r.params(kIntegrity, md);
 #if CONELOD_MESHLAB_API >= 2022
     Check(par.getMeshId("ReferenceMesh") == unsigned(before->id()),
           "  Group Integrity's default reference: the other layer");
@@ -363,8 +368,9 @@ void Failures(Run& r) {
   {  // Group ids from per-face quality, on a mesh without it.
     MeshDocument md;
     Load(md, r.bunny);
-    r.refused(kGroupQem, md, r.params(kGroupQem, md), "no per-face quality", "a mesh without group ids", nullptr,
-              "GroupSource");
+    RichParameterList par = r.params(kGroupQem, md);
+    harness::SetEnum(par, "GroupSource", 0);
+    r.refused(kGroupQem, md, par, "no per-face quality", "a mesh without group ids", nullptr, "GroupSource");
   }
   {  // Cancellation through MeshLab's callback.
     MeshDocument md;
@@ -462,6 +468,162 @@ void Failures(Run& r) {
     harness::SetPath(par, "FileName", clod);
     r.refused(kExport, md, par, "has no faces", "an empty mesh");
     Check(!QFileInfo::exists(clod), "  no file is left");
+  }
+}
+
+// What the dialogs say and offer (issue 24, items 11-16).
+void Dialogs(Run& r) {
+  GLLogStream& log = r.plugin.log();
+  {  // Export LOD File offers what the DAG build uses (conelod lod build's options), and each of
+     // its parameters changes the file: Max levels, the three weights, Min top-level groups and
+     // Lock group boundaries gave byte-identical files.
+    MeshDocument md;
+    Load(md, r.bunny);
+    QStringList names;
+    for (const RichParameter& p : r.params(kExport, md)) names << p.name();
+    for (const char* gone :
+         {"ConeWeight", "ShapeWeight", "SizeWeight", "MaxLevels", "MinTopGroups", "LockGroupBoundaries"})
+      Check(!names.contains(gone),
+            QString("Export LOD File has no parameter %1 (the DAG build has no use for it)").arg(gone));
+    const QString info = r.plugin.filter()->filterInfo(r.action(kExport));
+    Check(!info.contains("eight at a time") && info.contains("12 by default"),
+          "  its help says 12 clusters are gathered into a group, as the build does");
+    auto exportBytes = [&](RichParameterList par, const QString& file) {
+      harness::SetPath(par, "FileName", r.dir.filePath(file));
+      const QString m = r.apply(kExport, md, par);
+      QFile f(r.dir.filePath(file));
+      const QByteArray bytes = m.isEmpty() && f.open(QIODevice::ReadOnly) ? f.readAll() : QByteArray();
+      if (!m.isEmpty()) std::printf("   export failed: %s\n", qUtf8Printable(m));
+      return bytes;
+    };
+    const RichParameterList defaults = r.params(kExport, md);
+    const QByteArray base = exportBytes(defaults, "base.clod");
+    RichParameterList boundary = defaults;  // Boundary Preserving Weight acts with Preserve Boundary
+    boundary.setValue("PreserveBoundary", BoolValue(true));
+    const QByteArray boundaryBase = exportBytes(boundary, "boundary.clod");
+    Check(!base.isEmpty() && !boundaryBase.isEmpty(), "  export at the defaults (and with Preserve Boundary) succeeds");
+    struct Change {
+      const char* name;
+      double value;
+      bool boundary;
+    };
+    const Change changes[] = {{"ConeThresholdDeg", 30, false}, {"ThresholdGrowth", 1.2, false},
+                              {"ClusterFaces", 64, false},     {"GroupClusters", 6, false},
+                              {"LevelRatio", 0.6, false},      {"QualityThr", 0.6, false},
+                              {"OptimalPlacement", 0, false},  {"PreserveBoundary", 1, false},
+                              {"BoundaryWeight", 8, true},     {"PreserveNormal", 0, false}};
+    Check(names.size() == int(sizeof(changes) / sizeof(changes[0])) + 1,
+          QString("  %1 parameters: the file name and the %2 below")
+              .arg(names.size())
+              .arg(sizeof(changes) / sizeof(changes[0])));
+    for (const Change& ch : changes) {
+      RichParameterList par = ch.boundary ? boundary : defaults;
+      Check(par.hasParameter(ch.name), QString("  it has %1").arg(ch.name));
+      if (!par.hasParameter(ch.name)) continue;
+      const QString type = par.getParameterByName(ch.name).stringType();
+      if (type == "RichBool")
+        par.setValue(ch.name, BoolValue(ch.value != 0));
+      else if (type == "RichInt")
+        par.setValue(ch.name, IntValue(int(ch.value)));
+      else
+        par.setValue(ch.name, FloatValue(float(ch.value)));
+      const QByteArray bytes = exportBytes(par, QString(ch.name) + ".clod");
+      Check(!bytes.isEmpty() && bytes != (ch.boundary ? boundaryBase : base),
+            QString("  %1 = %2 changes the file").arg(ch.name).arg(ch.value));
+    }
+    RichParameterList par = defaults;
+    par.setValue("LevelRatio", FloatValue(1.0f));
+    harness::SetPath(par, "FileName", r.dir.filePath("ratio1.clod"));
+    r.refused(kExport, md, par, "'Faces kept per level (0..1)' must be in (0, 1)", "a level ratio of 1");
+  }
+  {  // Extract View-Dependent LOD describes the cut it makes: watertight, levels side by side.
+    const QString info = r.plugin.filter()->filterInfo(r.action(kExtract));
+    Check(!info.contains("one level apart") && info.contains("watertight") && info.contains("lod_max_level_difference"),
+          "Extract View-Dependent LOD's help promises a watertight cut, not neighbours one level apart");
+    MeshDocument md;
+    Load(md, r.bunny);
+    RichParameterList par = r.params(kExport, md);
+    const QString clod = r.dir.filePath("levels.clod");
+    harness::SetPath(par, "FileName", clod);
+    r.apply(kExport, md, par);
+    par = r.params(kExtract, md);
+    harness::SetPath(par, "FileName", clod);
+    par.setValue("FaceBudget", IntValue(8000));
+    Check(r.apply(kExtract, md, par).isEmpty(), "  a cut of 8000 faces");
+    std::printf("   lod_max_level_difference %s\n", qUtf8Printable(Figure(log, "lod_max_level_difference")));
+    const QStringList choices = harness::EnumChoices(r.params(kExtract, md), "ViewMode");
+    Check(choices.size() == 3, "  its View has 3 choices");
+    for (const QString& choice : choices)
+      Check(!choice.contains("ViewDirection") && !choice.contains("Eye"), "  a View choice names no key: " + choice);
+  }
+  {  // Group-Preserving Quadric Edge Collapse at its defaults on a freshly loaded mesh: the
+     // automatic normal cone groups (conelod simplify --groups cone:auto), shown in colour.
+    MeshDocument md;
+    MeshModel* mm = Load(md, r.bunny);
+    const int from = log.logStringList().size();
+    const QString m = r.apply(kGroupQem, md);
+    Check(m.isEmpty(), "Group-Preserving QEM at its defaults on a freshly loaded mesh succeeds " + m);
+    Check(LogHas(log, "normal cone groups, level", from) && LogHas(log, "(automatic)", from),
+          "  with the automatic normal cone groups");
+    Check(LogHas(log, "integrity_percent 100.00", from), "  every group intact");
+    std::map<unsigned, std::set<float>> qualitiesOfColour;
+    std::map<float, std::set<unsigned>> coloursOfQuality;
+    const bool coloured = m.isEmpty() && mm->hasDataMask(MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR);
+    for (const auto& f : mm->cm.face) {
+      if (!coloured) break;
+      const auto& c = f.cC();
+      const unsigned colour = unsigned(c[0]) << 16 | unsigned(c[1]) << 8 | c[2];
+      qualitiesOfColour[colour].insert(f.cQ());
+      coloursOfQuality[f.cQ()].insert(colour);
+    }
+    bool onePerGroup = coloursOfQuality.size() > 1;
+    for (const auto& kv : coloursOfQuality) onePerGroup = onePerGroup && kv.second.size() == 1;
+    Check(onePerGroup && qualitiesOfColour.size() > 8, QString("  one colour per group (%1 groups, %2 colours)")
+                                                           .arg(coloursOfQuality.size())
+                                                           .arg(qualitiesOfColour.size()));
+    // The ids already on the mesh remain a choice: the groups of Normal Cone Face Grouping.
+    MeshDocument md2;
+    Load(md2, r.bunny);
+    RichParameterList par = r.params(kGroupQem, md2);
+    harness::SetEnum(par, "GroupSource", 0);
+    r.refused(kGroupQem, md2, par, "no per-face quality", "per-face quality groups on a mesh without them");
+    Check(r.apply(kGrouping, md2).isEmpty() && r.apply(kGroupQem, md2, par).isEmpty() &&
+              LogHas(log, "per-face quality groups"),
+          "  per-face quality groups after Normal Cone Face Grouping");
+  }
+  {  // Messages name parameters by the dialog's labels.
+    MeshDocument md;
+    Load(md, r.bunny);
+    RichParameterList par = r.params(kGrouping, md);
+    par.setValue("DisplayLevel", IntValue(99999));
+    int from = log.logStringList().size();
+    Check(r.apply(kGrouping, md, par).isEmpty(), "grouping with Display level 99999");
+    Check(LogHas(log, "'Display level' 99999 is above", from) && !LogHas(log, "DisplayLevel 99999", from),
+          "  the log says 'Display level', not DisplayLevel");
+    par = r.params(kGroupQem, md);
+    harness::SetEnum(par, "GroupSource", 1);
+    par.setValue("GroupLevel", IntValue(99));
+    from = log.logStringList().size();
+    Check(r.apply(kGroupQem, md, par).isEmpty(), "collapse with Normal cone level 99");
+    Check(LogHas(log, "'Normal cone level (0 = automatic)' 99 is above", from) && !LogHas(log, "GroupLevel 99", from),
+          "  the log says 'Normal cone level (0 = automatic)', not GroupLevel");
+  }
+  {  // The file box: what this MeshLab's dialog takes (2020.09 ignores a path typed into the box).
+    MeshDocument md;
+    Load(md, r.bunny);
+    for (const char* name : {kExport, kExtract}) {
+      const QString info = r.plugin.filter()->filterInfo(r.action(name));
+      const QString tip = r.params(name, md).getParameterByName("FileName").toolTip();
+      for (const QString& text : {info, tip}) {
+        if (CONELOD_MESHLAB_API >= 2022)
+          Check(text.contains("type a path into the box"),
+                QString("%1 says a path can be typed into the box").arg(name));
+        else
+          Check(!text.contains("type a path") && text.contains("ignores a path typed or edited in the box itself") &&
+                    text.contains("'...'"),
+                QString("%1 says MeshLab 2020.09 takes a file chosen with '...' only").arg(name));
+      }
+    }
   }
 }
 
@@ -569,6 +731,7 @@ int main(int argc, char** argv) {
   ListFilters(r);
   ApplyEveryFilter(r);
   Failures(r);
+  Dialogs(r);
 #if CONELOD_MESHLAB_API >= 2022
   if (!scripts.isEmpty()) Scripts(r, scripts);
 #else
