@@ -14,6 +14,11 @@
 // and their ratio. Also the wall seconds of each build (one thread per core). --max-faces N: only
 // the levels of at most N faces are compared (the coarse ones; MeshLab's QEM on a large input is slow).
 // --max-group-error 1: the DAG without the cap on a group's collapse error (as before it had one).
+// --file [--precision E]: instead, the DAG's levels against the same levels read back from the .clod
+// file written from it (positions quantized with precision E, default kDefaultLodPrecision): per level
+// the RMS of both and their relative change (quantization and the codecs' round trip).
+#include <unistd.h>
+
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -27,6 +32,7 @@
 #include "conelod/grouping/cone_grouping.h"
 #include "conelod/simplify/hierarchical_simplification.h"
 #include "conelod/lod/lod_build.h"
+#include "conelod/lod/lod_read.h"
 #include "conelod/mesh/sampled_distance.h"
 #include "conelod/vcg_bridge.h"
 #include "meshlab_qem.h"
@@ -59,10 +65,11 @@ int main(int argc, char** argv) {
   }
   int samples = 200000;
   size_t maxFaces = 0;  // 0: every level
-  bool tree = true;
+  bool tree = true, file = false;
   conelod::LodBuildParams dagParams;
   for (int i = 2; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--dag-only")) tree = false;
+    if (!std::strcmp(argv[i], "--file")) file = true;
     if (i + 1 >= argc) break;
     if (!std::strcmp(argv[i], "--samples")) samples = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--cluster-faces")) dagParams.clusterFaces = size_t(std::atoi(argv[i + 1]));
@@ -70,6 +77,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--max-group-error")) dagParams.maxGroupError = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--max-faces")) maxFaces = size_t(std::atoll(argv[i + 1]));
     if (!std::strcmp(argv[i], "--cone")) dagParams.grouping.coneThresholdDeg = std::atof(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--precision")) dagParams.precision = std::atof(argv[i + 1]);
   }
   QMesh qm;
   if (vcg::tri::io::ImporterPLY<QMesh>::Open(qm, argv[1]) != 0) {
@@ -82,6 +90,44 @@ int main(int argc, char** argv) {
   const vcg::Box3d box = conelod::UsedVertexBox(input);
   const double diag = box.Diag();
 
+  if (file) {
+    conelod::LodDag dag;
+    if (!conelod::BuildLodDag(input, dagParams, dag).ok()) return 1;
+    const std::string path = std::string(std::getenv("TMPDIR") ? std::getenv("TMPDIR") : "/tmp") + "/lod_fidelity_" +
+                             std::to_string(::getpid()) + ".clod";
+    conelod::LodBuildStats stats;
+    conelod::Status st = conelod::WriteLodFile(input, dag, path, &stats, conelod::Progress(), dagParams.precision);
+    std::unique_ptr<conelod::LodReader> reader;
+    if (st.ok()) st = conelod::LodReader::Open(path, reader);
+    std::remove(path.c_str());
+    if (!st.ok()) {
+      std::fprintf(stderr, "lod_fidelity: %s\n", st.message.c_str());
+      return 1;
+    }
+    const conelod::LodFileInfo& info = reader->info();
+    std::printf("%s (%zu faces): %llu bytes (%.2f per input face), precision %g (bound %.3g of the diagonal)\n",
+                argv[1], input.faces.size(), (unsigned long long)stats.fileBytes,
+                double(stats.fileBytes) / double(input.faces.size()), dagParams.precision,
+                info.quantizationError / diag);
+    std::printf("| level | faces | RMS (DAG) | RMS (file) | change |\n|---|---|---|---|---|\n");
+    uint64_t first = info.nodeCount;
+    for (int k = 0; k < info.levels; ++k) {
+      first -= info.levelNodes[size_t(k)];
+      conelod::LodCut cut;
+      for (uint64_t id = first; id < first + info.levelNodes[size_t(k)]; ++id) cut.nodes.push_back(uint32_t(id));
+      cut.culled.assign(cut.nodes.size(), 0);
+      conelod::IndexedMesh fromFile, fromDag;
+      if (!conelod::ExtractCutMesh(*reader, cut, true, fromFile).ok()) return 1;
+      fromDag.positions = dag.positions;
+      fromDag.faces = dag.levels[size_t(k)].faces;
+      if (maxFaces > 0 && fromDag.faces.size() > maxFaces) continue;
+      const double a = Rms(fromDag, input, samples, diag), b = Rms(fromFile, input, samples, diag);
+      std::printf("| %d | %zu | %.5f | %.5f | %s |\n", k, fromFile.faces.size(), 100 * a, 100 * b,
+                  k > 0 ? (std::to_string(100 * (b - a) / a).substr(0, 5) + " %").c_str() : "- (the input)");
+      std::fflush(stdout);
+    }
+    return 0;
+  }
   std::vector<std::pair<std::string, std::vector<conelod::IndexedMesh>>> runs;
   if (tree) {
     double w = Wall();

@@ -84,6 +84,18 @@ Json& Json::key(const std::string& k) {
   return *this;
 }
 
+Json& Json::precise(double v) {
+  separator();
+  if (!std::isfinite(v)) {
+    out_ += "null";
+    return *this;
+  }
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  out_ += buf;
+  return *this;
+}
+
 Json& Json::value(double v) {
   separator();
   if (!std::isfinite(v)) {

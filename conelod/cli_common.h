@@ -46,6 +46,7 @@ class Json {
  public:
   Json& key(const std::string& k);
   Json& value(double v);
+  Json& precise(double v);  // all 17 digits (a value a reader must reproduce bit for bit)
   Json& value(long long v);
   Json& value(int v) { return value((long long)v); }
   Json& value(size_t v) { return value((long long)v); }

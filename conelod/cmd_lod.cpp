@@ -37,7 +37,7 @@ bool ParsePoint(const std::string& text, vcg::Point3d& p) {
 int LodBuild(int argc, char** argv) {
   Args a(argc, argv,
          With(kGroupingOptions, {"-o", "--level-ratio", "--threads", "--faces-per-part", "--cluster-faces",
-                                 "--group-clusters", "--quality-thr", "--boundary-weight"}),
+                                 "--group-clusters", "--quality-thr", "--boundary-weight", "--precision"}),
          {"--json", "--strict-greedy", "--no-optimal-placement", "--preserve-boundary", "--no-preserve-normal"});
   LodBuildParams params;
   params.grouping = ReadGroupingParams(a);
@@ -55,6 +55,9 @@ int LodBuild(int argc, char** argv) {
     return Fail(kUsage, "--cluster-faces must be a whole number in [4, 65536]");
   if (!(groupClusters >= 2 && groupClusters <= 64) || groupClusters != std::floor(groupClusters))
     return Fail(kUsage, "--group-clusters must be a whole number in [2, 64]");
+  params.precision = a.num("--precision", params.precision);
+  if (!(params.precision >= kMinLodPrecision && params.precision <= kMaxLodPrecision))
+    return Fail(kUsage, "--precision must be in [1e-9, 0.01] (a fraction of the diagonal)");
   params.clusterFaces = size_t(clusterFaces);
   params.groupClusters = int(groupClusters);
   const std::string partsError = ReadPartsOptions(a, params.simplification);
@@ -91,6 +94,11 @@ int LodBuild(int argc, char** argv) {
         .field("levels", st.levels)
         .field("nodes", st.nodes)
         .field("file_bytes", size_t(st.fileBytes))
+        .field("record_bytes", size_t(st.recordBytes))
+        .field("position_bytes", size_t(st.positionBytes))
+        .field("triangle_bytes", size_t(st.triangleBytes))
+        .field("vertex_id_bytes", size_t(st.vertexIdBytes))
+        .field("quantization_error", st.quantizationError)
         .field("load_seconds", loadSeconds)
         .field("grouping_seconds", st.groupingSeconds)
         .field("simplify_seconds", st.simplifySeconds)
@@ -108,6 +116,12 @@ int LodBuild(int argc, char** argv) {
         "(grouping %.3f s, simplification %.3f s, writing %.3f s)\n",
         input.c_str(), st.inputFaces, output.c_str(), st.levels, st.nodes, (unsigned long long)st.fileBytes, st.seconds,
         st.groupingSeconds, st.simplifySeconds, st.writeSeconds);
+    std::printf(
+        "%.2f bytes per input face: records %llu, positions %llu, triangles %llu, vertex ids %llu bytes; "
+        "positions within %.3g of the input (%.3g of the diagonal)\n",
+        double(st.fileBytes) / double(st.inputFaces), (unsigned long long)st.recordBytes,
+        (unsigned long long)st.positionBytes, (unsigned long long)st.triangleBytes,
+        (unsigned long long)st.vertexIdBytes, st.quantizationError, params.precision);
     std::printf("%5s %8s %10s\n", "level", "nodes", "faces");
     for (int k = st.levels - 1; k >= 0; --k)
       std::printf("%5d %8zu %10zu\n", k, st.levelNodes[size_t(k)], st.levelFaces[size_t(k)]);
@@ -238,8 +252,14 @@ int LodInfo(int argc, char** argv) {
         .field("nodes", size_t(i.nodeCount))
         .field("file_bytes", size_t(i.fileBytes))
         .field("roots", reader->roots().size())
-        .field("resident_bytes", reader->residentBytes())
-        .field("open_seconds", seconds);
+        .field("grid_bits", int(i.grid.bits))
+        .field("quantization_error", i.quantizationError);
+    // The grid exactly: a script can round positions as the file does (lod_read.h, LodGrid).
+    j.key("grid_step").precise(i.grid.step);
+    j.key("grid_origin").BeginArray();
+    for (double o : i.grid.origin) j.precise(o);
+    j.endArray();
+    j.field("resident_bytes", reader->residentBytes()).field("open_seconds", seconds);
     j.key("level_faces").BeginArray();
     for (auto f : i.levelFaces) j.value(size_t(f));
     j.endArray().key("level_nodes").BeginArray();
@@ -251,6 +271,8 @@ int LodInfo(int argc, char** argv) {
                 a.positional()[0].c_str(), i.version, (unsigned long long)i.inputVertices,
                 (unsigned long long)i.inputFaces, i.levels, (unsigned long long)i.nodeCount,
                 (unsigned long long)i.fileBytes);
+    std::printf("positions on a %u-bit grid of step %.6g: within %.6g of the DAG's\n", i.grid.bits, i.grid.step,
+                i.quantizationError);
     std::printf("opened in %.4f s, %zu bytes resident (roots and their geometry)\n", seconds, reader->residentBytes());
     std::printf("%5s %8s %10s\n", "level", "nodes", "faces");
     for (int k = i.levels - 1; k >= 0; --k)
@@ -264,7 +286,7 @@ int LodInfo(int argc, char** argv) {
 
 const char* kLodUsage =
     "conelod lod build IN.ply -o OUT.clod [--threshold T] [--growth F] [--level-ratio R] [--cluster-faces C]\n"
-    "                  [--group-clusters G] [collapse options] [--threads N] [--json]\n"
+    "                  [--group-clusters G] [collapse options] [--threads N] [--precision E] [--json]\n"
     "conelod lod extract IN.clod --eye X,Y,Z --budget N|P% -o OUT.ply [--priority screen|error|fg]\n"
     "                  [--no-cull] [--drop-culled] [--json]\n"
     "conelod lod info IN.clod [--json]\n"
@@ -277,6 +299,8 @@ const char* kLodUsage =
     "  part is simplified as one group. Collapse options (as conelod simplify's, defaults in\n"
     "  brackets): --quality-thr Q [0.3] --no-optimal-placement --preserve-boundary\n"
     "  --boundary-weight W [1] --no-preserve-normal.\n"
+    "  Positions are quantized on one grid: none moves by more than E x the diagonal [2e-5];\n"
+    "  the nodes' vertices and triangles are compressed (meshoptimizer's codecs).\n"
     "  The file does not depend on N. The other grouping options and --faces-per-part are\n"
     "  accepted for compatibility and not used.\n"
     "  extract: opens the file, refines for a perspective eye at X,Y,Z under a budget of N faces\n"

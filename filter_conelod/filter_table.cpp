@@ -1014,6 +1014,11 @@ std::vector<ParamSpec> LodExportSpecs(const MeshDocument*, const MeshModel*) {
                          Inside(0, 1)));
   AddCollapseOptionParams(p, d.simplification.qem,
                           "Weight of the quadrics that keep mesh borders in place (Preserve Boundary).");
+  p.push_back(FloatParam("Precision", conelod::kDefaultLodPrecision, "Position precision (fraction of the diagonal)",
+                         "Positions are quantized on one grid so that the file stays small: no vertex moves by "
+                         "more than this fraction of the bounding box diagonal (the default, 2e-5, is far below "
+                         "the error of the first simplified level).",
+                         Between(conelod::kMinLodPrecision, conelod::kMaxLodPrecision)));
   return p;
 }
 
@@ -1031,6 +1036,7 @@ Status ApplyLodExport(FilterCall& c) {
   params.groupClusters = c.args.integer("GroupClusters");
   params.simplification.levelRatio = c.args.number("LevelRatio");
   ReadCollapseOptions(c.args, params.simplification.qem);
+  params.precision = c.args.number("Precision");
 
   const conelod::IndexedMesh im = conelod::ToIndexedMesh(c.mesh->cm);
   s = conelod::RequireValidForFaces(im);
@@ -1053,6 +1059,7 @@ Status ApplyLodExport(FilterCall& c) {
   out.log("lod_levels %d", stats.levels);
   out.log("lod_nodes %d", int(stats.nodes));
   out.log("lod_file_bytes %lld", (long long)stats.fileBytes);
+  out.log("lod_quantization_error %g", stats.quantizationError);
   out.figure("lod_levels", stats.levels);
   out.figure("lod_nodes", double(stats.nodes));
   out.figure("lod_file_bytes", double(stats.fileBytes));

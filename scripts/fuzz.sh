@@ -29,7 +29,7 @@ mkdir -p "$OUT/corpus" "$OUT/seeds" "$OUT/crashes" "$OUT/ply_corpus" "$OUT/ply_c
 build_fuzzer() {
   local name="$1"; shift
   "$CXX_FUZZ" -std=c++14 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
-    -I"$ROOT/vcg_ext" -isystem "$MESHLAB_SRC/vcglib" -isystem /usr/include/eigen3 "$@" -lz \
+    -I"$ROOT/vcg_ext" -isystem "$MESHLAB_SRC/vcglib" -isystem /usr/include/eigen3 "$@" -lz -lmeshoptimizer \
     -o "$OUT/$name"
 }
 

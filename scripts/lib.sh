@@ -77,10 +77,11 @@ apt_get_in() {
 
 CONELOD_ROOTS="${CONELOD_ROOTS:-/var/cache/conelod/roots}"
 CONELOD_MIRROR="${CONELOD_MIRROR:-http://deb.debian.org/debian}"
-# What every root holds besides MeshLab: the plugin's build, and Xvfb + xdotool + ImageMagick for
-# the GUI screenshot.
-ROOT_PKGS=(meshlab cmake g++ make qtbase5-dev libqt5opengl5-dev libeigen3-dev libglew-dev zlib1g-dev xz-utils
-           ca-certificates xvfb xauth xdotool imagemagick fonts-dejavu-core)
+# What every root holds besides MeshLab: the plugin's build (the core needs zlib and meshoptimizer:
+# libmeshoptimizer-dev is 0.22 in trixie and sid; the .clod writer asks for codec versions 0.18
+# decodes), and Xvfb + xdotool + ImageMagick for the GUI screenshot.
+ROOT_PKGS=(meshlab cmake g++ make qtbase5-dev libqt5opengl5-dev libeigen3-dev libglew-dev zlib1g-dev
+           libmeshoptimizer-dev xz-utils ca-certificates xvfb xauth xdotool imagemagick fonts-dejavu-core)
 
 # meshlab_suite VERSION: the Debian suite that ships MeshLab VERSION.
 meshlab_suite() {

@@ -2,17 +2,20 @@
 """Crack edges of .clod cuts per budget (issue 17's table): for each mesh, `conelod lod build` with
 the defaults, then `conelod lod extract` from an eye 2 diagonals in front of the box (+Z) at each
 budget, vertices welded at identical positions, edges used by one face that the input does not
-have counted (cracks, T-junctions), and edges used by 3+ faces (overlaps).
+have counted (cracks, T-junctions), and edges used by 3+ faces (overlaps). The input's border
+edges are taken at its positions rounded on the file's grid (`conelod lod info --json`), as the
+file stores them.
 
   scripts/lod_cracks.py CONELOD MESH.ply... [--budgets 5,20,50,80,100] [--no-cull] [--tmp DIR]
 """
+import json
 import os
 import subprocess
 import sys
 import tempfile
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests", "integration"))
-from cases import read_ply  # noqa: E402
+from cases import on_grid, read_ply  # noqa: E402
 
 
 def edges(ply):
@@ -49,7 +52,6 @@ def main(argv):
     print("|---|---|" + "---|" * len(budgets))
     for mesh in meshes:
         src = read_ply(mesh)
-        inborder = {k for k, n in edges(src).items() if n == 1}
         pos = src["positions"]
         lo = [min(p[k] for p in pos) for k in range(3)]
         hi = [max(p[k] for p in pos) for k in range(3)]
@@ -57,6 +59,9 @@ def main(argv):
         eye = "%g,%g,%g" % ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2 + 2 * diag)
         clod = os.path.join(tmp, os.path.basename(mesh) + ".clod")
         subprocess.run([conelod, "lod", "build", mesh, "-o", clod], check=True, stdout=subprocess.DEVNULL)
+        info = json.loads(subprocess.run([conelod, "lod", "info", clod, "--json"], check=True,
+                                         stdout=subprocess.PIPE).stdout)
+        inborder = {k for k, n in edges(dict(src, positions=on_grid(pos, info))).items() if n == 1}
         cells = []
         for b in budgets:
             out = os.path.join(tmp, "cut.ply")

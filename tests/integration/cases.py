@@ -1109,6 +1109,19 @@ def meshlab_lod_bad_inputs(c):
         assert not os.path.exists(out), out + " was left behind"
 
 
+def on_grid(positions, info):
+    """Positions rounded as the .clod writer does (lod_read.h, LodGrid::Round), with the grid of
+    `conelod lod info --json`."""
+    step, origin, top = info["grid_step"], info["grid_origin"], (1 << info["grid_bits"]) - 1
+
+    def one(x, k):
+        x = struct.unpack("<f", struct.pack("<f", x))[0]  # the mesh as read: float32
+        q = min(max(round((x - origin[k]) / step), 0), top)  # round half to even, as nearbyint
+        return struct.unpack("<f", struct.pack("<f", origin[k] + q * step))[0]
+
+    return [tuple(one(p[k], k) for k in range(3)) for p in positions]
+
+
 def canonical_faces(ply):
     """Each face as its corner positions (float32), rotated to start at the smallest corner (the
     orientation is kept); the faces sorted: equal for equal triangle sets whatever the vertex order."""
@@ -1131,7 +1144,9 @@ def cli_lod_round_trip(c):
     assert b["file_bytes"] == os.path.getsize(clod), b
     assert all(b["level_faces"][k] <= b["level_faces"][k - 1] for k in range(1, b["levels"])), b
     info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
-    assert info["faces"] == 69451 and info["nodes"] == b["nodes"] and info["version"] == 2, info
+    assert info["faces"] == 69451 and info["nodes"] == b["nodes"] and info["version"] == 3, info
+    # Positions on one grid, within the bound asked for (--precision, default 2e-5 of the diagonal).
+    assert 0 < b["quantization_error"] == info["quantization_error"] <= 2e-5 * 0.27, (b, info)
     human = c.conelod("lod", "info", clod).stdout.decode()
     assert "node levels" in human, human
 
@@ -1144,10 +1159,12 @@ def cli_lod_round_trip(c):
     assert r["faces"] == 69451 and r["max_level_difference"] == 0, r
     out, src = read_ply(full), read_ply(bunny)
     assert len(out["faces"]) == 69451 and set(out["quality"]) == {0.0}, len(out["faces"])
-    a, e = canonical_faces(out), canonical_faces(src)
-    assert len(a) == len(e)
-    worst = max(abs(x - y) for fa, fe in zip(a, e) for pa, pe in zip(fa, fe) for x, y in zip(pa, pe))
-    assert worst <= 1e-6, "the round trip moved a vertex by %g" % worst
+    # The input's faces exactly, up to the quantization: its positions rounded on the file's grid.
+    used = sorted({i for f in src["faces"] for i in f})
+    rounded = on_grid(src["positions"], info)
+    assert canonical_faces(out) == canonical_faces(dict(src, positions=rounded)), "the round trip differs"
+    worst = max(sum((a - b) ** 2 for a, b in zip(rounded[i], src["positions"][i])) ** 0.5 for i in used)
+    assert 0 < worst <= info["quantization_error"], (worst, info["quantization_error"])
 
     ten = c.out("ten.ply")
     r = json.loads(c.conelod("lod", "extract", clod, "--eye", "0,0.1,0.6", "--budget", "6945", "-o", ten,
@@ -1240,7 +1257,9 @@ def cli_lod_bad_files(c):
     version = bytearray(data)
     version[24] = 9  # the version field (the header's checksum is checked after it)
     bad("version.clod", bytes(version), "unsupported .clod version 9")
-    version[24] = 1  # a file of the previous format: named, with what to do
+    version[24] = 2  # files of the previous formats: named, with what to do
+    bad("version2.clod", bytes(version), ".clod version 2 file (uncompressed")
+    version[24] = 1
     bad("version1.clod", bytes(version), "rebuild it with conelod lod build")
     size = bytearray(data)
     struct.pack_into("<Q", size, 16, struct.unpack_from("<Q", data, 16)[0] - 8)  # the root chunk's child size
@@ -1249,7 +1268,7 @@ def cli_lod_bad_files(c):
     crc[24 + 12] ^= 1  # a byte of the header's data: its CRC no longer matches
     bad("crc.clod", bytes(crc), "checksum mismatch")
     offset = bytearray(data)
-    struct.pack_into("<Q", offset, 24 + 64, len(data) + 1000)  # the index offset, past the end
+    struct.pack_into("<Q", offset, 24 + 80, len(data) + 1000)  # the index offset, past the end
     header_bytes = struct.unpack_from("<Q", data, 8)[0]
     struct.pack_into("<I", offset, 4, zlib.crc32(bytes(offset[24:24 + header_bytes])))  # a valid CRC-32 (zlib's)
     bad("offset.clod", bytes(offset), "past the end of the file")
@@ -1264,7 +1283,9 @@ def cli_lod_bad_files(c):
                  ["build", sphere, "-o", c.out("r.clod"), "--threshold", "-1"],
                  ["build", sphere, "-o", c.out("r.clod"), "--threads", "-2"],
                  ["build", sphere, "-o", c.out("r.clod"), "--threads", "1.5"],
-                 ["build", sphere, "-o", c.out("r.clod"), "--faces-per-part", "-1"]):
+                 ["build", sphere, "-o", c.out("r.clod"), "--faces-per-part", "-1"],
+                 ["build", sphere, "-o", c.out("r.clod"), "--precision", "0.5"],
+                 ["build", sphere, "-o", c.out("r.clod"), "--precision", "0"]):
         c.conelod("lod", *args, expect=1)
     # Bad meshes are refused by `lod build`.
     for mesh, message in [("no_faces.ply", "has no faces"), ("nan_vertex.ply", "NaN or infinite")]:

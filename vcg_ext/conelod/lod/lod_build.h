@@ -10,6 +10,7 @@
 #include <vcg/space/point3.h>
 
 #include "conelod/grouping/cone_grouping.h"
+#include "conelod/lod/lod_read.h"
 #include "conelod/simplify/hierarchical_simplification.h"
 #include "conelod/mesh/indexed_mesh.h"
 #include "conelod/status.h"
@@ -37,6 +38,9 @@ struct LodBuildParams {
   // on without it (lod_dag.cpp). The dragon's levels under 16,000 faces: 0.39-0.47x MeshLab's QEM
   // at the same face count with 0.002, 0.41-0.70x with 0.004, 0.8-4.7x without a cap.
   double maxGroupError = 0.002;
+  // The positions' quantization (lod_read.h, LodGrid): no vertex moves by more than this fraction
+  // of the diagonal of the box of the DAG's positions (kMinLodPrecision..kMaxLodPrecision).
+  double precision = kDefaultLodPrecision;
 };
 
 // The cluster DAG before it is written (BuildLodDag), level 0 = the input.
@@ -68,15 +72,20 @@ struct LodBuildStats {
   std::vector<size_t> levelNodes;  // nodes per node level
   size_t nodes = 0;
   uint64_t fileBytes = 0;
+  // Of fileBytes: the node records (HIER), and the compressed positions, triangles and global
+  // vertex ids of the geometry (GEOS); quantizationError: the grid's bound, model units.
+  uint64_t recordBytes = 0, positionBytes = 0, triangleBytes = 0, vertexIdBytes = 0;
+  double quantizationError = 0;
   double groupingSeconds = 0, simplifySeconds = 0, writeSeconds = 0,
          seconds = 0;  // grouping: the
                        // level-0 clusters; simplify: the DAG's other levels
 };
 
-// Writes the file of a DAG built by BuildLodDag from `mesh`. Streams chunk by chunk: the file is
-// never held in memory. On failure no file is left at `path`.
+// Writes the file of a DAG built by BuildLodDag from `mesh`, positions quantized with `precision`
+// (LodBuildParams::precision). Streams node by node: the file is never held in memory. On failure
+// no file is left at `path`.
 Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::string& path, LodBuildStats* stats = nullptr,
-                    const Progress& progress = Progress());
+                    const Progress& progress = Progress(), double precision = kDefaultLodPrecision);
 
 // Builds the DAG and writes it. The mesh must pass the grouping's input checks.
 Status BuildLodFile(const IndexedMesh& mesh, const LodBuildParams& params, const std::string& path,

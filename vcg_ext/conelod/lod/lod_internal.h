@@ -2,6 +2,8 @@
 // CRC-32, little-endian encoding. The layout is documented in lod_format.md; keep the two in step.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <string>
@@ -14,18 +16,17 @@ constexpr uint32_t FourCC(char a, char b, char c, char d) {
   return uint32_t(uint8_t(a)) | uint32_t(uint8_t(b)) << 8 | uint32_t(uint8_t(c)) << 16 | uint32_t(uint8_t(d)) << 24;
 }
 constexpr uint32_t kRoot = FourCC('C', 'L', 'O', 'D');   // the whole file; its data is the header
-constexpr uint32_t kHier = FourCC('H', 'I', 'E', 'R');   // container of the node records
-constexpr uint32_t kNode = FourCC('N', 'O', 'D', 'E');   // one node record
-constexpr uint32_t kLevel = FourCC('L', 'E', 'V', 'L');  // one node level: VERT, then GEOM per node
-constexpr uint32_t kVert = FourCC('V', 'E', 'R', 'T');   // a level's shared vertices, in VBLK blocks
-constexpr uint32_t kVBlock = FourCC('V', 'B', 'L', 'K');
-constexpr uint32_t kGeom = FourCC('G', 'E', 'O', 'M');   // one node's geometry
+constexpr uint32_t kHier = FourCC('H', 'I', 'E', 'R');   // the node records, packed (each with its CRC)
+constexpr uint32_t kGeos = FourCC('G', 'E', 'O', 'S');   // the nodes' compressed geometry, packed
 constexpr uint32_t kIndex = FourCC('I', 'N', 'D', 'X');  // the offset index, in IBLK blocks
 constexpr uint32_t kIBlock = FourCC('I', 'B', 'L', 'K');
 
-constexpr uint32_t kVersion = 2;  // 2: the cluster DAG (1: the tree of groups, refused)
+// 3: quantized, compressed nodes (2: float positions per level, refused by name; 1: the tree of
+// groups, refused).
+constexpr uint32_t kVersion = 3;
 constexpr uint32_t kMaxLevels = 64;
 constexpr uint32_t kNoParent = 0xFFFFFFFFu;
+constexpr uint32_t kMaxGridBits = 30;  // grid coordinates below 2^30 (the u32 vertex stream)
 
 // Chunk header: id, CRC-32 of the chunk's own data, size of that data, total size of the
 // sub-chunks that follow it (headers included).
@@ -39,20 +40,50 @@ struct ChunkHeader {
 };
 
 // Fixed part of the root chunk's data (then kLevelEntryBytes per level).
-constexpr size_t kHeaderFixedBytes = 4 + 4 + 8 * 4 + 4 * 6 + 8 + 8 + 4 + 4;  // = 88
-constexpr size_t kLevelEntryBytes = 8 * 6 + 4 + 4;                           // = 56
-constexpr size_t kLevelDataBytes = 4 + 4 + 8 * 3;                            // LEVL data = 32
-constexpr size_t kVertDataBytes = 4 + 4 + 8;                                 // VERT data = 16
-constexpr size_t kIndexDataBytes = 8 + 4 + 4;                                // INDX data = 16
-constexpr size_t kNodeFixedBytes = 4 * 6 + 8 * 4 + 4 * 4 + 4 * 4;            // NODE data = 88 + 4/listed id
-constexpr size_t kIndexEntryBytes = 8 + 8 + 4 + 4;                           // = 24
-constexpr size_t kGeomFixedBytes = 4 * 4;                                    // GEOM data = 16 + arrays
-constexpr uint32_t kGeomHasSourceIds = 1;  // GEOM flag: global vertex ids follow the level ids (always set)
-constexpr uint32_t kGeomShortIndices = 2;  // GEOM flag: triangle corners are u16 (vertexCount <= 65536)
-constexpr uint32_t kVertexBlock = 256;     // vertices per VBLK (3 KiB)
-constexpr uint32_t kIndexBlock = 512;      // index entries per IBLK (12 KiB)
+constexpr size_t kHeaderFixedBytes = 4 + 4 + 8 * 4 + 4 * 6 + 8 * 3 + 8 * 4 + 4 + 4;  // = 128
+constexpr size_t kLevelEntryBytes = 8 * 3 + 4 + 4;                                   // = 32
+constexpr size_t kIndexDataBytes = 8 + 4 + 4;                                        // INDX data = 16
+constexpr size_t kIndexBlockBaseBytes = 8 + 8;                                       // IBLK: two bases ...
+constexpr size_t kIndexEntryBytes = 4 + 4;                                           // ... then ends
+constexpr size_t kRecordFixedBytes = 4 + 2 * 3 + 4 * 6;  // a record: CRC, cone, 6 floats, then varints
+constexpr uint16_t kEmptyConeAngle = 0xFFFF;             // a record's cone angle: no face normal
+constexpr size_t kGeomMinBytes = 4 + 1;                  // a geometry blob: CRC, flags, then varints and codecs
+constexpr uint8_t kGeomWidePositions = 1;                // geometry flag: positions are u32 x 3 (else u16 x 4)
+constexpr uint32_t kIndexBlock = 512;                    // index entries per IBLK (4 KiB)
+// meshoptimizer's codec versions written: vertex 0 (every version decodes it), index 1 (0.14+).
+constexpr int kVertexCodecVersion = 0;
+constexpr int kIndexCodecVersion = 1;
 
 uint32_t Crc32(const void* data, size_t bytes, uint32_t crc = 0);
+
+// A record's cone axis: octahedral coordinates in two u16 (the writer widens the angle by the
+// axis's rounding, so the cone still holds every normal).
+inline void EncodeConeAxis(const double a[3], uint16_t out[2]) {
+  const double l1 = std::fabs(a[0]) + std::fabs(a[1]) + std::fabs(a[2]);
+  double u = l1 > 0 ? a[0] / l1 : 0, v = l1 > 0 ? a[1] / l1 : 0;
+  if (l1 > 0 && a[2] < 0) {
+    const double pu = u, pv = v;
+    u = (1 - std::fabs(pv)) * (pu >= 0 ? 1 : -1);
+    v = (1 - std::fabs(pu)) * (pv >= 0 ? 1 : -1);
+  }
+  out[0] = uint16_t(std::lround((std::max(-1.0, std::min(1.0, u)) + 1) / 2 * 65535));
+  out[1] = uint16_t(std::lround((std::max(-1.0, std::min(1.0, v)) + 1) / 2 * 65535));
+}
+inline void DecodeConeAxis(const uint16_t in[2], double a[3]) {
+  double u = in[0] / 65535.0 * 2 - 1, v = in[1] / 65535.0 * 2 - 1;
+  const double z = 1 - std::fabs(u) - std::fabs(v);
+  if (z < 0) {
+    const double pu = u, pv = v;
+    u = (1 - std::fabs(pv)) * (pu >= 0 ? 1 : -1);
+    v = (1 - std::fabs(pu)) * (pv >= 0 ? 1 : -1);
+  }
+  const double n = std::sqrt(u * u + v * v + z * z);
+  a[0] = u / n;
+  a[1] = v / n;
+  a[2] = z / n;
+}
+// A record's cone half-angle: units of pi / 65534, rounded up (kEmptyConeAngle: the empty cone).
+constexpr double kConeAngleUnit = 3.14159265358979323846 / 65534;
 
 // Appends little-endian fixed-width fields.
 class Encoder {
@@ -70,6 +101,18 @@ class Encoder {
     uint64_t u;
     std::memcpy(&u, &v, 8);
     u64(u);
+  }
+  // LEB128: 7 bits a byte, least significant first.
+  void uv(uint64_t v) {
+    while (v >= 0x80) {
+      bytes.push_back(uint8_t(v | 0x80));
+      v >>= 7;
+    }
+    bytes.push_back(uint8_t(v));
+  }
+  void raw(const void* p, size_t n) {
+    const uint8_t* b = static_cast<const uint8_t*>(p);
+    bytes.insert(bytes.end(), b, b + n);
   }
   void clear() { bytes.clear(); }
 
@@ -103,6 +146,27 @@ class Decoder {
     double v;
     std::memcpy(&v, &u, 8);
     return v;
+  }
+  // LEB128 (Encoder::uv); more than 10 bytes, or a value past 64 bits, sets `overrun`.
+  uint64_t uv() {
+    uint64_t v = 0;
+    for (int shift = 0; shift < 64; shift += 7) {
+      if (!need(1)) return 0;
+      const uint8_t b = p_[at_++];
+      if (shift == 63 && b > 1) break;
+      v |= uint64_t(b & 0x7F) << shift;
+      if (!(b & 0x80)) return v;
+    }
+    overrun = true;
+    at_ = n_;
+    return 0;
+  }
+  // The next n bytes (null and `overrun` when fewer are left).
+  const uint8_t* take(size_t n) {
+    if (!need(n)) return nullptr;
+    const uint8_t* p = p_ + at_;
+    at_ += n;
+    return p;
   }
 
  private:

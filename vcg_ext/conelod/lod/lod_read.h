@@ -61,19 +61,45 @@ struct LodNode {
   float parentError = 0;  // its own group's error (>= error); +infinity for a root
 };
 
+// The one grid every position of a file is quantized on (version 3): coordinate c of a vertex is
+// stored as the integer q = round((c - origin[c]) / step), 0 <= q < 2^bits, and read back as
+// float(origin[c] + q * step). One grid for the whole file, so a vertex that several nodes (of
+// any levels) share decodes to the very same floats in each of them: cuts stay watertight.
+struct LodGrid {
+  double origin[3] = {0, 0, 0};
+  double step = 1;
+  uint32_t bits = 0;
+  uint32_t Quantize(double c, int axis) const;  // clamped to [0, 2^bits)
+  float Dequantize(uint32_t q, int axis) const { return float(origin[axis] + double(q) * step); }
+  vcg::Point3f Round(const vcg::Point3f& p) const;  // Dequantize(Quantize(p))
+  // Largest distance between a position inside the grid and its Round(): half a cell's diagonal
+  // plus the float rounding of the decoded coordinates.
+  double ErrorBound() const;
+};
+
+// The grid for positions spanning `box`: its cell is chosen so that no position moves by more than
+// `precision` times the box's diagonal (ErrorBound), its bits from the box's size. precision must
+// be in [1e-9, 0.01] (kMinLodPrecision, kMaxLodPrecision).
+LodGrid ChooseLodGrid(const vcg::Box3f& box, double precision);
+constexpr double kMinLodPrecision = 1e-9, kMaxLodPrecision = 0.01;
+constexpr double kDefaultLodPrecision = 2e-5;  // of the diagonal (the dragon's level 1: 2.5e-3)
+
 // A node's geometry as read from the file.
 struct LodGeometry {
-  std::vector<uint32_t> vertexIds;             // per local vertex: its global id (level 0: the input
-                                               //   vertex index), the same in every level using it
-  std::vector<vcg::Point3f> positions;         // per local vertex
+  std::vector<uint32_t> vertexIds;             // per local vertex: its global id, the same in every
+                                               //   level and node using it (the file's numbering,
+                                               //   by first use, coarsest level first)
+  std::vector<vcg::Point3f> positions;         // per local vertex, on the file's grid
   std::vector<std::array<uint32_t, 3>> faces;  // local vertex indices
   size_t bytes() const;
 };
 
 struct LodFileInfo {
   uint32_t version = 0;
-  vcg::Box3f box;  // of the input's used vertices
-  int levels = 0;  // node levels, level 0 included
+  vcg::Box3f box;                // of the input's used vertices
+  LodGrid grid;                  // the positions' quantization grid
+  double quantizationError = 0;  // grid.ErrorBound(): no position is further from the DAG's
+  int levels = 0;                // node levels, level 0 included
   uint64_t inputVertices = 0, inputFaces = 0;
   uint64_t globalVertices = 0;       // global vertex ids are below this
   std::vector<uint64_t> levelFaces;  // faces per node level

@@ -20,6 +20,8 @@
 #include <cstring>
 #include <unordered_map>
 
+#include <meshoptimizer.h>
+
 #include "conelod/lod/lod_internal.h"
 
 namespace conelod {
@@ -79,13 +81,14 @@ class MemorySource : public ByteSource {
 };
 
 struct LevelEntry {
-  uint64_t faces = 0, nodes = 0, vertices = 0, firstId = 0, levelOffset = 0, vertOffset = 0;
+  uint64_t faces = 0, nodes = 0, firstId = 0;
   float error = 0;
 };
 
+// Where a node's record and geometry blobs lie (absolute offsets, sizes).
 struct IndexEntry {
   uint64_t record = 0, geometry = 0;
-  uint32_t recordBytes = 0, geometryBytes = 0;
+  uint64_t recordBytes = 0, geometryBytes = 0;
 };
 
 std::string Num(uint64_t v) { return std::to_string(v); }
@@ -127,22 +130,79 @@ std::string lodfile::ChunkName(uint32_t id) {
   return s;
 }
 
+uint32_t LodGrid::Quantize(double c, int axis) const {
+  const double t = std::nearbyint((c - origin[axis]) / step);
+  const double top = double((uint64_t(1) << bits) - 1);
+  return uint32_t(t < 0 ? 0 : t > top ? top : t);
+}
+
+vcg::Point3f LodGrid::Round(const vcg::Point3f& p) const {
+  vcg::Point3f r;
+  for (int c = 0; c < 3; ++c) r[c] = Dequantize(Quantize(p[c], c), c);
+  return r;
+}
+
+double LodGrid::ErrorBound() const {
+  // Half a cell's diagonal, and half a float's unit in the last place at the largest coordinate
+  // (at most |x| 2^-23) per coordinate for the decoded float.
+  double largest = 0;
+  for (int c = 0; c < 3; ++c)
+    largest =
+        std::max({largest, std::fabs(origin[c]), std::fabs(origin[c] + double((uint64_t(1) << bits) - 1) * step)});
+  return std::sqrt(3.0) / 2 * (step + largest * std::ldexp(1.0, -23));
+}
+
+LodGrid ChooseLodGrid(const vcg::Box3f& box, double precision) {
+  LodGrid g;
+  vcg::Box3f b = box;
+  if (b.IsNull()) b = vcg::Box3f(vcg::Point3f(0, 0, 0), vcg::Point3f(0, 0, 0));
+  const double diag = std::max(double(b.Diag()), 1e-30);
+  double extent = 0;
+  for (int c = 0; c < 3; ++c) {
+    g.origin[c] = double(b.min[c]);
+    extent = std::max(extent, double(b.max[c]) - double(b.min[c]));
+  }
+  // The cell's half diagonal is 0.99 of the bound: the rest covers the float rounding.
+  g.step = 0.99 * 2 * std::max(precision, kMinLodPrecision) * diag / std::sqrt(3.0);
+  g.step = std::max(g.step, extent / double((uint64_t(1) << kMaxGridBits) - 2));
+  const double cells = std::nearbyint(extent / g.step) + 1;  // the largest coordinate, plus a margin
+  g.bits = 1;
+  while (g.bits < kMaxGridBits && double((uint64_t(1) << g.bits) - 1) < cells) ++g.bits;
+  return g;
+}
+
 struct LodReader::Impl {
   std::unique_ptr<ByteSource> src;
   LodFileInfo info;
   std::vector<LevelEntry> levels;
-  uint64_t hierOffset = 0, indexOffset = 0;
-  uint32_t vertexBlock = 0, indexBlock = 0;
+  uint64_t hierOffset = 0, geosOffset = 0, indexOffset = 0;
+  uint64_t hierBegin = 0, hierEnd = 0, geosBegin = 0, geosEnd = 0;  // the blobs' data
+  uint32_t indexBlock = 0;
   std::vector<uint32_t> roots;
   struct Entry {
     LodNode node;
     uint64_t geometryOffset = 0;
-    uint32_t geometryBytes = 0;
+    uint64_t geometryBytes = 0;
     std::unique_ptr<LodGeometry> geometry;
   };
   std::unordered_map<uint32_t, Entry> nodes;
   size_t geometryBytes = 0;     // of the loaded geometry
   std::vector<uint8_t> buffer;  // reused for reads
+  // The last unit decoded (the clusters of one group, or the roots: one geometry blob), kept
+  // while its nodes are read one by one.
+  struct Unit {
+    uint64_t offset = ~uint64_t(0);         // of its blob; ~0: none
+    uint64_t firstNode = 0, nodeCount = 0;  // its nodes' ids
+    std::vector<uint64_t> faceStart;        // per node, into corners / 3; nodeCount + 1 entries
+    std::vector<vcg::Point3f> positions;    // per unit vertex
+    std::vector<uint32_t> corners, vertexIds;
+    size_t bytes() const {
+      return faceStart.capacity() * 8 + positions.capacity() * sizeof(vcg::Point3f) +
+             (corners.capacity() + vertexIds.capacity()) * 4;
+    }
+  } unit;
+  std::vector<uint8_t> positionScratch;  // reused for decoding
+  std::vector<uint32_t> idScratch, localScratch;
   // The last index block read (a node's children share one most of the time).
   uint64_t cachedIndexBlock = ~uint64_t(0);
   std::vector<IndexEntry> indexCache;
@@ -181,36 +241,53 @@ struct LodReader::Impl {
     return Status::Ok();
   }
 
+  // A blob (a record or a node's geometry): its first 4 bytes are the CRC-32 of the rest.
+  static bool BlobCrcOk(const uint8_t* p, uint64_t bytes) {
+    return !kCheckCrc || (bytes >= 4 && Crc32(p + 4, size_t(bytes - 4)) == Decoder(p, 4).u32());
+  }
+
   // Index entries of nodes [first, first+count).
   Status ReadIndex(uint32_t first, uint32_t count, std::vector<IndexEntry>& out) {
     out.clear();
     const uint64_t blocksData = kChunkHeaderBytes + kIndexDataBytes;
-    const uint64_t blockBytes = kChunkHeaderBytes + uint64_t(indexBlock) * kIndexEntryBytes;
+    const uint64_t blockBytes = kChunkHeaderBytes + kIndexBlockBaseBytes + uint64_t(indexBlock) * kIndexEntryBytes;
     for (uint64_t i = first; i < uint64_t(first) + count;) {
       const uint64_t b = i / indexBlock;
       if (b != cachedIndexBlock) {
         const uint64_t entries = std::min<uint64_t>(indexBlock, info.nodeCount - b * indexBlock);
-        const uint64_t bytes = kChunkHeaderBytes + entries * kIndexEntryBytes;
+        const uint64_t bytes = kChunkHeaderBytes + kIndexBlockBaseBytes + entries * kIndexEntryBytes;
         Status s = ReadRange(indexOffset + blocksData + b * blockBytes, bytes, "index block");
         if (!s.ok()) return s;
         ChunkHeader h;
         s = CheckChunk(buffer.data(), bytes, kIBlock, bytes, "index block", h);
         if (!s.ok()) return s;
         indexCache.resize(size_t(entries));
-        Decoder d(buffer.data() + kChunkHeaderBytes, size_t(entries * kIndexEntryBytes));
+        Decoder d(buffer.data() + kChunkHeaderBytes, size_t(bytes - kChunkHeaderBytes));
+        uint64_t record = d.u64(), geometry = d.u64();
+        const std::string bad = "corrupt index block " + Num(b) + ": ";
+        if (record < hierBegin || record > hierEnd || geometry < geosBegin || geometry > geosEnd)
+          return Status::Invalid(bad + "it points outside the records or the geometry");
+        // Nodes of one unit share its geometry blob: an entry ending where the previous one
+        // ended has the previous one's blob.
+        const uint64_t recordBase = record, geometryBase = geometry;
+        uint64_t lastEnd = ~uint64_t(0);
         for (auto& e : indexCache) {
-          e.record = d.u64();
-          e.geometry = d.u64();
-          e.recordBytes = d.u32();
-          e.geometryBytes = d.u32();
+          const uint64_t recordEnd = recordBase + d.u32(), geometryEnd = geometryBase + d.u32();
+          if (geometryEnd != lastEnd && lastEnd != ~uint64_t(0)) geometry = lastEnd;
+          if (recordEnd < record || recordEnd > hierEnd || geometryEnd <= geometry || geometryEnd > geosEnd)
+            return Status::Invalid(bad + "an entry points outside the records or the geometry");
+          e.record = record;
+          e.recordBytes = recordEnd - record;
+          e.geometry = geometry;
+          e.geometryBytes = geometryEnd - geometry;
+          record = recordEnd;
+          lastEnd = geometryEnd;
         }
         cachedIndexBlock = b;
       }
       const IndexEntry& e = indexCache[size_t(i - b * indexBlock)];
-      if (e.record < hierOffset || e.record > src->size || e.recordBytes > src->size - e.record ||
-          e.geometry > src->size || e.geometryBytes > src->size - e.geometry || e.recordBytes < kChunkHeaderBytes ||
-          e.geometryBytes < kChunkHeaderBytes)
-        return Status::Invalid("corrupt index: the entry of node " + Num(i) + " points past the end of the file");
+      if (e.recordBytes < kRecordFixedBytes || e.geometryBytes < kGeomMinBytes)
+        return Status::Invalid("corrupt index: the entry of node " + Num(i) + " is too small");
       out.push_back(e);
       ++i;
     }
@@ -236,162 +313,235 @@ struct LodReader::Impl {
     uint64_t at = 0;
     for (uint32_t i = 0; i < count; ++i) {
       const uint32_t id = first + i;
-      ChunkHeader h;
-      s = CheckChunk(buffer.data() + at, entries[i].recordBytes, kNode, entries[i].recordBytes, "the record of a node",
-                     h);
-      if (!s.ok()) return Status::Invalid(s.message + " " + Num(id));
-      Decoder d(buffer.data() + at + kChunkHeaderBytes, size_t(h.dataBytes));
-      at += entries[i].recordBytes;
+      const std::string bad = "corrupt record of node " + Num(id) + ": ";
+      const uint8_t* p = buffer.data() + at;
+      const uint64_t bytes = entries[i].recordBytes;
+      at += bytes;
+      if (!BlobCrcOk(p, bytes)) return Status::Invalid("checksum mismatch in the record of a node " + Num(id));
+      Decoder d(p + 4, size_t(bytes - 4));
       Entry e;
       LodNode& n = e.node;
-      const uint32_t fileId = d.u32();
-      n.level = int(d.u32());
-      n.group = d.u32();
-      const uint32_t children = d.u32(), siblings = d.u32(), parents = d.u32();
-      for (int j = 0; j < 3; ++j) n.cone.axis[j] = d.f64();
-      n.cone.halfAngle = d.f64();
+      n.level = int(level);
+      uint16_t oct[2];
+      oct[0] = uint16_t(d.u16());
+      oct[1] = uint16_t(d.u16());
+      const uint32_t angle = d.u16();
+      if (angle == kEmptyConeAngle) {
+        n.cone = NormalCone::Empty();
+      } else {
+        double axis[3];
+        DecodeConeAxis(oct, axis);
+        for (int j = 0; j < 3; ++j) n.cone.axis[j] = axis[j];
+        n.cone.halfAngle = std::min(NormalCone::kPi, angle * kConeAngleUnit);
+      }
       for (int j = 0; j < 3; ++j) n.center[j] = d.f32();
       n.radius = d.f32();
-      n.faceCount = d.u32();
-      n.vertexCount = d.u32();
       n.error = d.f32();
       n.parentError = d.f32();
-      const std::string bad = "corrupt record of node " + Num(id) + ": ";
-      if (d.overrun || h.dataBytes != kNodeFixedBytes + (uint64_t(children) + siblings + parents) * 4)
-        return Status::Invalid(bad + "its size does not match its list lengths");
-      if (fileId != id || n.level != int(level)) return Status::Invalid(bad + "wrong id or level");
+      const uint64_t group = d.uv(), faces = d.uv(), vertices = d.uv(), children = d.uv();
       const bool top = level + 1 == levels.size();
-      if (top != (n.group == LodNode::kNoGroup) || top != (parents == 0))
-        return Status::Invalid(bad + (top ? "a root with a group or parents" : "no group or no parents"));
-      if (level == 0 ? (children != 0 || siblings != 1) : (children == 0 || siblings == 0))
+      if (d.overrun || group > 0xFFFFFFFFull || faces > 0xFFFFFFFFull || vertices > 0xFFFFFFFFull)
+        return Status::Invalid(bad + "a count out of range");
+      n.group = group ? uint32_t(group - 1) : LodNode::kNoGroup;
+      n.faceCount = uint32_t(faces);
+      n.vertexCount = uint32_t(vertices);
+      if (top != (group == 0)) return Status::Invalid(bad + (top ? "a root with a group" : "no group"));
+      if (level == 0 ? children != 0 : (children == 0 || children > levels[level - 1].nodes))
         return Status::Invalid(bad + "children out of range");
+      if (children) {
+        const uint64_t firstChild = d.uv();
+        if (d.overrun || firstChild > levels[level - 1].nodes - children)
+          return Status::Invalid(bad + "child out of range");
+        n.children.resize(size_t(children));
+        for (uint64_t c = 0; c < children; ++c)
+          n.children[size_t(c)] = uint32_t(levels[level - 1].firstId + firstChild + c);
+      }
+      // Sorted distinct ids of one level: the first as an offset into the level, then gaps - 1.
+      auto readIds = [&](uint32_t lvl, std::vector<uint32_t>& out) {
+        const uint64_t count = d.uv();
+        if (d.overrun || count > d.left() || (count && lvl >= levels.size())) return false;
+        out.resize(size_t(count));
+        if (!count) return true;
+        const uint64_t end = levels[lvl].firstId + levels[lvl].nodes;
+        uint64_t next = levels[lvl].firstId;
+        for (auto& v : out) {
+          const uint64_t gap = d.uv();
+          if (d.overrun || gap >= end - next) return false;
+          v = uint32_t(next + gap);
+          next = uint64_t(v) + 1;
+        }
+        return true;
+      };
+      if (!readIds(level, n.siblings) || std::find(n.siblings.begin(), n.siblings.end(), id) == n.siblings.end())
+        return Status::Invalid(bad + "sibling out of range");
+      if (level == 0 && n.siblings.size() != 1) return Status::Invalid(bad + "siblings at level 0");
+      if (!readIds(level + 1, n.parents)) return Status::Invalid(bad + "parent out of range");
+      if (top != n.parents.empty()) return Status::Invalid(bad + (top ? "a root with parents" : "no parents"));
+      if (d.left() != 0) return Status::Invalid(bad + "its size does not match its contents");
       const bool emptyCone = n.cone.halfAngle == NormalCone::Empty().halfAngle;
-      if (!(std::isfinite(n.cone.halfAngle) && n.cone.halfAngle <= NormalCone::kPi + 1e-9) ||
+      if (!(std::isfinite(n.cone.halfAngle) && n.cone.halfAngle <= NormalCone::kPi) ||
           !(n.cone.halfAngle >= 0 || emptyCone) || !std::isfinite(n.cone.axis[0] + n.cone.axis[1] + n.cone.axis[2]) ||
           !std::isfinite(n.center[0] + n.center[1] + n.center[2]) || !(n.radius >= 0) || !std::isfinite(n.radius))
         return Status::Invalid(bad + "non-finite or negative cone or sphere");
       if (!(n.error >= 0) || !std::isfinite(n.error) || (level == 0 && n.error != 0) || !(n.parentError >= n.error) ||
           (top ? !std::isinf(n.parentError) : !std::isfinite(n.parentError)))
         return Status::Invalid(bad + "bad error bounds");
-      if (n.vertexCount > uint64_t(3) * n.faceCount || n.faceCount > levels[level].faces || n.faceCount == 0)
+      if (n.vertexCount > uint64_t(3) * n.faceCount || n.faceCount > levels[level].faces || n.faceCount == 0 ||
+          n.vertexCount == 0)
         return Status::Invalid(bad + "impossible face or vertex count");
-      auto readIds = [&](uint32_t count, uint32_t lvl, std::vector<uint32_t>& out) {
-        out.resize(count);
-        for (auto& v : out) {
-          v = d.u32();
-          if (lvl >= levels.size() || v < levels[lvl].firstId || v >= levels[lvl].firstId + levels[lvl].nodes)
-            return false;
-        }
-        return true;
-      };
-      if (!readIds(children, level - 1, n.children)) return Status::Invalid(bad + "child out of range");
-      if (!readIds(siblings, level, n.siblings) ||
-          std::find(n.siblings.begin(), n.siblings.end(), id) == n.siblings.end())
-        return Status::Invalid(bad + "sibling out of range");
-      if (!readIds(parents, level + 1, n.parents)) return Status::Invalid(bad + "parent out of range");
       e.geometryOffset = entries[i].geometry;
       e.geometryBytes = entries[i].geometryBytes;
-      if (uint64_t(e.geometryBytes) < kChunkHeaderBytes + kGeomFixedBytes + uint64_t(n.faceCount) * 6)
-        return Status::Invalid(bad + "its geometry chunk is too small for its face count");
+      // The index codec spends at least a byte a triangle and 17 more (meshopt_decodeIndexBuffer).
+      if (e.geometryBytes < kGeomMinBytes + 17 + uint64_t(n.faceCount))
+        return Status::Invalid(bad + "its geometry is too small for its face count");
       auto it = nodes.find(id);
       if (it == nodes.end()) nodes.emplace(id, std::move(e));
     }
     return Status::Ok();
   }
 
+  // Decodes the geometry blob at [offset, offset + bytes) (node id's) into `unit`.
+  Status DecodeUnit(uint64_t offset, uint64_t bytes, uint32_t id) {
+    unit.offset = ~uint64_t(0);
+    const std::string bad = "corrupt geometry of node " + Num(id) + ": ";
+    Status s = ReadRange(offset, bytes, "node geometry");
+    if (!s.ok()) return s;
+    if (!BlobCrcOk(buffer.data(), bytes))
+      return Status::Invalid("checksum mismatch in the geometry of a node " + Num(id));
+    Decoder d(buffer.data() + 4, size_t(bytes - 4));
+    const uint8_t* flags = d.take(1);
+    if (!flags || (*flags & ~kGeomWidePositions)) return Status::Invalid(bad + "unknown flags");
+    const bool wide = *flags & kGeomWidePositions;
+    // Its nodes: consecutive ids of one level, each with its face count (the index codec spends
+    // at least a byte a face, so the counts are bounded by the blob's size).
+    const uint64_t first = d.uv(), count = d.uv();
+    const LevelEntry& L = levels[levelOf(id)];
+    if (d.overrun || first < L.firstId || count == 0 || count > L.nodes || first - L.firstId > L.nodes - count ||
+        count > d.left())
+      return Status::Invalid(bad + "its geometry blob names other nodes");
+    unit.firstNode = first;
+    unit.nodeCount = count;
+    unit.faceStart.assign(size_t(count) + 1, 0);
+    for (uint64_t i = 0; i < count; ++i) {
+      const uint64_t fc = d.uv();
+      if (d.overrun || fc == 0 || fc > bytes) return Status::Invalid(bad + "a face count out of range");
+      unit.faceStart[size_t(i) + 1] = unit.faceStart[size_t(i)] + fc;
+      if (unit.faceStart[size_t(i) + 1] > bytes) return Status::Invalid(bad + "more faces than its blob can hold");
+    }
+    const size_t fc = size_t(unit.faceStart.back());
+    const uint64_t vc64 = d.uv();
+    if (d.overrun || vc64 == 0 || vc64 > uint64_t(3) * fc) return Status::Invalid(bad + "impossible vertex count");
+    const size_t vc = size_t(vc64);
+    const uint64_t cells = uint64_t(1) << info.grid.bits;
+    uint64_t qmin[3];
+    for (auto& q : qmin) q = d.uv();
+    const uint64_t firstNew = d.uv();
+    if (d.overrun || qmin[0] >= cells || qmin[1] >= cells || qmin[2] >= cells || firstNew > info.globalVertices)
+      return Status::Invalid(bad + "its grid corner or first vertex id is out of range");
+    // Positions.
+    const size_t stride = wide ? 12 : 8;
+    uint64_t n = d.uv();
+    const uint8_t* p = d.overrun || n > d.left() ? nullptr : d.take(size_t(n));
+    positionScratch.resize(vc * stride);
+    if (!p || meshopt_decodeVertexBuffer(positionScratch.data(), vc, stride, p, size_t(n)) != 0)
+      return Status::Invalid(bad + "its positions do not decode");
+    unit.positions.resize(vc);
+    for (size_t v = 0; v < vc; ++v)
+      for (int c = 0; c < 3; ++c) {
+        const uint8_t* q = positionScratch.data() + v * stride + (wide ? 4 : 2) * size_t(c);
+        const uint64_t off = wide ? Decoder(q, 4).u32() : Decoder(q, 2).u16();
+        if (off >= cells - qmin[c]) return Status::Invalid(bad + "a position off the grid");
+        unit.positions[v][c] = info.grid.Dequantize(uint32_t(qmin[c] + off), c);
+      }
+    // Triangles.
+    n = d.uv();
+    p = d.overrun || n > d.left() ? nullptr : d.take(size_t(n));
+    unit.corners.resize(fc * 3);
+    if (!p || meshopt_decodeIndexBuffer(unit.corners.data(), fc * 3, 4, p, size_t(n)) != 0)
+      return Status::Invalid(bad + "its triangles do not decode");
+    for (uint32_t v : unit.corners)
+      if (v >= vc) return Status::Invalid(bad + "face index out of range");
+    // Global ids: the vertices new to the file in order from firstNew, the others listed.
+    const uint8_t* mask = d.take((vc + 7) / 8);
+    if (!mask) return Status::Invalid(bad + "truncated vertex id mask");
+    if (vc % 8 && (mask[vc / 8] >> (vc % 8))) return Status::Invalid(bad + "stray bits in the vertex id mask");
+    size_t fresh = 0;
+    for (size_t v = 0; v < vc; ++v) fresh += (mask[v / 8] >> (v % 8)) & 1;
+    if (fresh > info.globalVertices - firstNew) return Status::Invalid(bad + "vertex id out of range");
+    idScratch.resize(vc - fresh);
+    if (vc > fresh) {
+      n = d.uv();
+      p = d.overrun || n > d.left() ? nullptr : d.take(size_t(n));
+      if (!p || meshopt_decodeIndexSequence(idScratch.data(), idScratch.size(), 4, p, size_t(n)) != 0)
+        return Status::Invalid(bad + "its vertex ids do not decode");
+    }
+    if (d.left() != 0) return Status::Invalid(bad + "its size does not match its contents");
+    unit.vertexIds.resize(vc);
+    for (size_t v = 0, nextNew = 0, nextOld = 0; v < vc; ++v) {
+      if ((mask[v / 8] >> (v % 8)) & 1) {
+        unit.vertexIds[v] = uint32_t(firstNew + nextNew++);
+      } else {
+        const uint32_t old = idScratch[nextOld++];
+        if (old >= firstNew) return Status::Invalid(bad + "global vertex id out of range");
+        unit.vertexIds[v] = old;
+      }
+    }
+    localScratch.assign(vc, kNoParent);
+    unit.offset = offset;
+    return Status::Ok();
+  }
+
+  // A node's geometry: its unit's blob decoded (once for all the unit's nodes, read one after the
+  // other when their parent is refined), its faces taken out with their vertices.
   Status LoadGeometry(uint32_t id) {
     auto it = nodes.find(id);
     Entry& e = it->second;
     if (e.geometry) return Status::Ok();
     const LodNode& n = e.node;
     const std::string bad = "corrupt geometry of node " + Num(id) + ": ";
-    Status s = ReadRange(e.geometryOffset, e.geometryBytes, "node geometry");
-    if (!s.ok()) return s;
-    ChunkHeader h;
-    s = CheckChunk(buffer.data(), e.geometryBytes, kGeom, e.geometryBytes, "the geometry of a node", h);
-    if (!s.ok()) return Status::Invalid(s.message + " " + Num(id));
-    Decoder d(buffer.data() + kChunkHeaderBytes, size_t(h.dataBytes));
-    const uint32_t fileId = d.u32(), vc = d.u32(), fc = d.u32(), flags = d.u32();
-    if (fileId != id || vc != n.vertexCount || fc != n.faceCount ||
-        (flags & ~(kGeomHasSourceIds | kGeomShortIndices)) || !(flags & kGeomHasSourceIds) ||
-        ((flags & kGeomShortIndices) && vc > 65536))
-      return Status::Invalid(bad + "does not match its record");
-    const uint64_t idArrays = 2;
-    const bool shortIndices = flags & kGeomShortIndices;
-    if (h.dataBytes != kGeomFixedBytes + idArrays * 4 * uint64_t(vc) + (shortIndices ? 6 : 12) * uint64_t(fc))
-      return Status::Invalid(bad + "its size does not match its counts");
+    if (unit.offset != e.geometryOffset) {
+      Status s = DecodeUnit(e.geometryOffset, e.geometryBytes, id);
+      if (!s.ok()) return s;
+    }
+    if (id < unit.firstNode || id - unit.firstNode >= unit.nodeCount)
+      return Status::Invalid(bad + "its geometry blob names other nodes");
+    const size_t m = size_t(id - unit.firstNode);
+    const size_t f0 = size_t(unit.faceStart[m]), f1 = size_t(unit.faceStart[m + 1]);
+    if (f1 - f0 != n.faceCount) return Status::Invalid(bad + "its face count does not match its record");
     std::unique_ptr<LodGeometry> g(new LodGeometry);
-    std::vector<uint32_t> levelIds(vc);
-    const uint64_t levelVertices = levels[size_t(n.level)].vertices;
-    for (auto& v : levelIds) {
-      v = d.u32();
-      if (v >= levelVertices) return Status::Invalid(bad + "vertex id out of range");
-    }
-    g->vertexIds.resize(vc);
-    const uint64_t idLimit = n.level == 0 ? info.inputVertices : info.globalVertices;
-    for (auto& v : g->vertexIds) {
-      v = d.u32();
-      if (v >= idLimit) return Status::Invalid(bad + "global vertex id out of range");
-    }
-    g->faces.resize(fc);
-    for (auto& t : g->faces)
-      for (auto& v : t) {
-        v = shortIndices ? d.u16() : d.u32();
-        if (v >= vc) return Status::Invalid(bad + "face index out of range");
+    g->faces.resize(n.faceCount);
+    g->positions.reserve(n.vertexCount);
+    g->vertexIds.reserve(n.vertexCount);
+    for (size_t f = f0; f < f1; ++f)
+      for (size_t c = 0; c < 3; ++c) {
+        const uint32_t u = unit.corners[f * 3 + c];
+        if (localScratch[u] == kNoParent) {
+          localScratch[u] = uint32_t(g->positions.size());
+          g->positions.push_back(unit.positions[u]);
+          g->vertexIds.push_back(unit.vertexIds[u]);
+        }
+        g->faces[f - f0][c] = localScratch[u];
       }
-    s = ReadPositions(uint32_t(n.level), levelIds, g->positions);
-    if (!s.ok()) return Status::Invalid(bad + s.message);
+    for (size_t f = f0 * 3; f < f1 * 3; ++f) localScratch[unit.corners[f]] = kNoParent;
+    if (g->positions.size() != n.vertexCount)
+      return Status::Invalid(bad + "its vertex count does not match its record");
     geometryBytes += g->bytes();
     e.geometry = std::move(g);
     return Status::Ok();
   }
 
-  // Positions of the given level vertices: reads the VBLK blocks they lie in, runs of consecutive
-  // blocks in one read.
-  Status ReadPositions(uint32_t level, const std::vector<uint32_t>& ids, std::vector<vcg::Point3f>& out) {
-    out.resize(ids.size());
-    if (ids.empty()) return Status::Ok();
-    // Local vertices sorted by level id (id << 32 | local index), swept block by block.
-    std::vector<uint64_t> byId(ids.size());
-    for (size_t k = 0; k < ids.size(); ++k) byId[k] = uint64_t(ids[k]) << 32 | k;
-    std::sort(byId.begin(), byId.end());
-    std::vector<uint32_t> blocks;
-    for (uint64_t e : byId) {
-      const uint32_t b = uint32_t(e >> 32) / vertexBlock;
-      if (blocks.empty() || blocks.back() != b) blocks.push_back(b);
-    }
-    const LevelEntry& L = levels[level];
-    const uint64_t fullBlockBytes = kChunkHeaderBytes + uint64_t(vertexBlock) * 12;
-    const uint64_t base = L.vertOffset + kChunkHeaderBytes + kVertDataBytes;
-    size_t next = 0;  // into byId
-    for (size_t i = 0; i < blocks.size();) {
-      // A run of consecutive blocks (at most 64: 192 KiB) in one read.
-      size_t j = i + 1;
-      while (j < blocks.size() && blocks[j] == blocks[j - 1] + 1 && j - i < 64) ++j;
-      const uint64_t firstVertex = uint64_t(blocks[i]) * vertexBlock;
-      const uint64_t lastEnd = std::min<uint64_t>(L.vertices, uint64_t(blocks[j - 1] + 1) * vertexBlock);
-      const uint64_t runBytes = uint64_t(j - i) * kChunkHeaderBytes + (lastEnd - firstVertex) * 12;
-      Status s = ReadRange(base + uint64_t(blocks[i]) * fullBlockBytes, runBytes, "vertex blocks");
-      if (!s.ok()) return s;
-      uint64_t at = 0;
-      for (size_t b = i; b < j; ++b) {
-        const uint64_t v0 = uint64_t(blocks[b]) * vertexBlock;
-        const uint64_t v1 = std::min<uint64_t>(L.vertices, v0 + vertexBlock);
-        const uint64_t bytes = kChunkHeaderBytes + (v1 - v0) * 12;
-        ChunkHeader h;
-        s = CheckChunk(buffer.data() + at, bytes, kVBlock, bytes, "a vertex block", h);
-        if (!s.ok()) return s;
-        const uint8_t* p = buffer.data() + at + kChunkHeaderBytes;
-        for (; next < byId.size() && (byId[next] >> 32) < v1; ++next) {
-          const size_t k = size_t(byId[next] & 0xFFFFFFFFu);
-          Decoder d(p + ((byId[next] >> 32) - v0) * 12, 12);
-          for (int c = 0; c < 3; ++c) out[k][c] = d.f32();  // (not one expression: argument order is unspecified)
-          if (!std::isfinite(out[k][0] + out[k][1] + out[k][2])) return Status::Invalid("non-finite vertex position");
-        }
-        at += bytes;
-      }
-      i = j;
-    }
+  // A container of blobs (HIER, GEOS) at `offset`: its header, its data inside the file.
+  Status CheckContainer(uint64_t offset, uint32_t id, const char* what, uint64_t& begin, uint64_t& end) {
+    Status s = ReadRange(offset, kChunkHeaderBytes, what);
+    if (!s.ok()) return s;
+    const ChunkHeader h = DecodeChunkHeader(buffer.data());
+    if (h.id != id)
+      return Status::Invalid(std::string("corrupt file: expected a ") + ChunkName(id) + " chunk (" + what +
+                             "), found " + ChunkName(h.id));
+    if (h.crc != 0 || h.childBytes != 0 || h.dataBytes > src->size - offset - kChunkHeaderBytes)
+      return Status::Invalid(std::string("corrupt chunk size in ") + what);
+    begin = offset + kChunkHeaderBytes;
+    end = begin + h.dataBytes;
     return Status::Ok();
   }
 
@@ -411,6 +561,11 @@ struct LodReader::Impl {
       return Status::Invalid(
           "this is a .clod version 1 file (written by an older ConeLOD, whose cuts could have "
           "cracks): rebuild it with conelod lod build (this reader reads version " +
+          Num(kVersion) + ")");
+    if (version == 2)
+      return Status::Invalid(
+          "this is a .clod version 2 file (uncompressed, written by an older ConeLOD): rebuild it "
+          "with conelod lod build (this reader reads version " +
           Num(kVersion) + ")");
     if (version != kVersion)
       return Status::Invalid("unsupported .clod version " + Num(version) + " (this reader reads version " +
@@ -443,44 +598,49 @@ struct LodReader::Impl {
       if (!std::isfinite(b[j]) || !std::isfinite(b[j + 3]) || b[j] > b[j + 3])
         return Status::Invalid("corrupt file header: its bounding box is not finite or is inverted");
     hierOffset = d.u64();
+    geosOffset = d.u64();
     indexOffset = d.u64();
-    vertexBlock = d.u32();
+    LodGrid& grid = info.grid;
+    for (double& o : grid.origin) o = d.f64();
+    grid.step = d.f64();
+    grid.bits = d.u32();
     indexBlock = d.u32();
     const std::string bad = "corrupt file header: ";
+    if (grid.bits < 1 || grid.bits > kMaxGridBits || !(grid.step > 0) || !std::isfinite(grid.step))
+      return Status::Invalid(bad + "bad quantization grid");
+    for (int c = 0; c < 3; ++c) {
+      const double top = grid.origin[c] + double((uint64_t(1) << grid.bits) - 1) * grid.step;
+      if (!std::isfinite(grid.origin[c]) || !std::isfinite(float(grid.origin[c])) || !std::isfinite(float(top)))
+        return Status::Invalid(bad + "bad quantization grid");
+    }
+    info.quantizationError = grid.ErrorBound();
     if (levelCount < 1 || levelCount > kMaxLevels ||
         h.dataBytes != kHeaderFixedBytes + uint64_t(levelCount) * kLevelEntryBytes)
       return Status::Invalid(bad + "bad level count " + Num(levelCount));
-    if (vertexBlock == 0 || vertexBlock > (1u << 20) || indexBlock == 0 || indexBlock > (1u << 20))
-      return Status::Invalid(bad + "bad block size");
+    if (indexBlock == 0 || indexBlock > (1u << 20)) return Status::Invalid(bad + "bad block size");
     levels.resize(levelCount);
     uint64_t id = 0;
     for (uint32_t k = 0; k < levelCount; ++k) {
       LevelEntry& L = levels[k];
       L.faces = d.u64();
       L.nodes = d.u64();
-      L.vertices = d.u64();
       L.firstId = d.u64();
-      L.levelOffset = d.u64();
-      L.vertOffset = d.u64();
       L.error = d.f32();
       d.u32();
     }
     for (int k = int(levelCount) - 1; k >= 0; --k) {
       LevelEntry& L = levels[size_t(k)];
-      if (L.firstId != id || L.nodes == 0 || L.nodes > src->size / kChunkHeaderBytes)
+      if (L.firstId != id || L.nodes == 0 || L.nodes > src->size / kRecordFixedBytes)
         return Status::Invalid(bad + "bad node count of level " + Num(uint64_t(k)));
       id += L.nodes;
-      // Each face takes at least 6 bytes in the file, each vertex 12.
-      if (L.faces > src->size / 6 || L.vertices > src->size / 12)
+      // Each face takes at least a byte in the file (the index codec's).
+      if (L.faces > src->size)
         return Status::Invalid(bad + "counts of level " + Num(uint64_t(k)) + " larger than the file");
-      if (L.levelOffset >= src->size || L.vertOffset >= src->size)
-        return Status::Invalid(bad + "an offset points past the end of the file");
     }
     if (id != info.nodeCount || info.nodeCount >= kNoParent) return Status::Invalid(bad + "node counts do not add up");
-    if (levels[0].faces != info.inputFaces || info.globalVertices < info.inputVertices ||
-        info.globalVertices >= kNoParent || info.globalVertices > src->size / 12)
+    if (levels[0].faces != info.inputFaces || info.globalVertices >= kNoParent)
       return Status::Invalid(bad + "level 0 does not match the input");
-    if (hierOffset >= src->size || indexOffset >= src->size)
+    if (hierOffset >= src->size || geosOffset >= src->size || indexOffset >= src->size)
       return Status::Invalid(bad + "an offset points past the end of the file");
     info.levels = int(levelCount);
     info.fileBytes = src->size;
@@ -489,13 +649,11 @@ struct LodReader::Impl {
       info.levelNodes.push_back(L.nodes);
     }
     // The containers the header points to.
+    s = CheckContainer(hierOffset, kHier, "the hierarchy chunk", hierBegin, hierEnd);
+    if (!s.ok()) return s;
+    s = CheckContainer(geosOffset, kGeos, "the geometry chunk", geosBegin, geosEnd);
+    if (!s.ok()) return s;
     {
-      s = ReadRange(hierOffset, kChunkHeaderBytes, "the hierarchy chunk");
-      if (!s.ok()) return s;
-      ChunkHeader hh;
-      s = CheckChunk(buffer.data(), kChunkHeaderBytes, kHier, 0, "the hierarchy chunk", hh);
-      if (!s.ok()) return s;
-      if (hh.childBytes > src->size - hierOffset) return Status::Invalid("corrupt chunk size in the hierarchy chunk");
       const uint64_t indexBytes = kChunkHeaderBytes + kIndexDataBytes;
       s = ReadRange(indexOffset, indexBytes, "the index chunk");
       if (!s.ok()) return s;
@@ -507,38 +665,9 @@ struct LodReader::Impl {
       const uint32_t block = di.u32();
       const uint64_t blocks = (info.nodeCount + indexBlock - 1) / indexBlock;
       if (ih.dataBytes != kIndexDataBytes || entries != info.nodeCount || block != indexBlock ||
-          ih.childBytes != blocks * kChunkHeaderBytes + info.nodeCount * kIndexEntryBytes ||
+          ih.childBytes != blocks * (kChunkHeaderBytes + kIndexBlockBaseBytes) + info.nodeCount * kIndexEntryBytes ||
           ih.totalBytes() > src->size - indexOffset)
         return Status::Invalid("corrupt chunk size in the index chunk");
-      for (uint32_t k = 0; k < levelCount; ++k) {
-        LevelEntry& L = levels[k];
-        // The level's container: its data must repeat the header's counts, its VERT follow it.
-        const uint64_t lb = kChunkHeaderBytes + kLevelDataBytes;
-        s = ReadRange(L.levelOffset, lb, "a level chunk");
-        if (!s.ok()) return s;
-        ChunkHeader lh;
-        s = CheckChunk(buffer.data(), lb, kLevel, 0, "a level chunk", lh);
-        if (!s.ok()) return s;
-        Decoder dl(buffer.data() + kChunkHeaderBytes, kLevelDataBytes);
-        const uint32_t lk = dl.u32(), lpad = dl.u32();
-        const uint64_t ln = dl.u64(), lf = dl.u64(), lv = dl.u64();
-        if (lh.dataBytes != kLevelDataBytes || lk != k || lpad != 0 || ln != L.nodes || lf != L.faces ||
-            lv != L.vertices || L.vertOffset != L.levelOffset + lb || lh.totalBytes() > src->size - L.levelOffset)
-          return Status::Invalid("corrupt level chunk of level " + Num(k) + ": it disagrees with the file header");
-        const uint64_t vb = kChunkHeaderBytes + kVertDataBytes;
-        s = ReadRange(L.vertOffset, vb, "a vertex chunk");
-        if (!s.ok()) return s;
-        ChunkHeader vh;
-        s = CheckChunk(buffer.data(), vb, kVert, 0, "a vertex chunk", vh);
-        if (!s.ok()) return s;
-        Decoder dv(buffer.data() + kChunkHeaderBytes, kVertDataBytes);
-        const uint32_t level = dv.u32(), block = dv.u32();
-        const uint64_t count = dv.u64();
-        const uint64_t nb = (L.vertices + vertexBlock - 1) / vertexBlock;
-        if (vh.dataBytes != kVertDataBytes || level != k || block != vertexBlock || count != L.vertices ||
-            vh.childBytes != nb * kChunkHeaderBytes + L.vertices * 12 || vh.totalBytes() > src->size - L.vertOffset)
-          return Status::Invalid("corrupt chunk size in the vertex chunk of level " + Num(k));
-      }
     }
     // The roots: records and geometry.
     const uint32_t top = levelCount - 1;
@@ -642,8 +771,10 @@ void LodReader::EvictGeometry(uint32_t id) {
 size_t LodReader::residentBytes() const {
   const Impl& m = *impl_;
   size_t b = sizeof(LodReader) + sizeof(Impl) + m.levels.capacity() * sizeof(LevelEntry) + m.roots.capacity() * 4 +
-             m.buffer.capacity() + m.indexCache.capacity() * sizeof(IndexEntry) + m.info.levelFaces.capacity() * 16 +
-             m.src->heldBytes() + m.geometryBytes;
+             m.buffer.capacity() + m.positionScratch.capacity() +
+             (m.idScratch.capacity() + m.localScratch.capacity()) * 4 + m.unit.bytes() +
+             m.indexCache.capacity() * sizeof(IndexEntry) + m.info.levelFaces.capacity() * 16 + m.src->heldBytes() +
+             m.geometryBytes;
   // Hash map: buckets plus one heap node per record (key, entry, next pointer, cached hash).
   b += m.nodes.bucket_count() * sizeof(void*);
   for (const auto& kv : m.nodes)

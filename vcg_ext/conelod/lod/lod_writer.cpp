@@ -18,6 +18,8 @@
 #include <limits>
 #include <numeric>
 
+#include <meshoptimizer.h>
+
 #include "conelod/lod/lod_internal.h"
 #include "conelod/mesh/safe_file.h"
 
@@ -137,7 +139,7 @@ void ListBy(const std::vector<int>& key, size_t keys, const std::vector<uint32_t
 }  // namespace
 
 Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::string& path, LodBuildStats* stats,
-                    const Progress& progress) {
+                    const Progress& progress, double precision) {
   const auto t0 = std::chrono::steady_clock::now();
   const size_t H = dag.levels.size();
   if (H < 1) return Status::Invalid("the LOD DAG has no level");
@@ -206,16 +208,32 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
   for (size_t k = 0; k < H; ++k)
     for (float e : dag.levels[k].clusterError) levelError[k] = std::max(levelError[k], e);
 
+  // The grid: over every position a level uses (a collapse may place a vertex outside the input's
+  // box). Records (spheres, cones) are computed from the positions as they will be read.
+  LodGrid grid;
+  std::vector<vcg::Point3f> rounded(dag.positions.size());
+  {
+    vcg::Box3f span;
+    for (const auto& L : dag.levels)
+      for (const auto& t : L.faces)
+        for (uint32_t v : t) span.Add(dag.positions[v]);
+    for (const auto& p : dag.positions)
+      if (!std::isfinite(p[0] + p[1] + p[2])) return Status::Invalid("the LOD DAG has a non-finite position");
+    if (!(precision >= kMinLodPrecision && precision <= kMaxLodPrecision))
+      return Status::Invalid("the LOD precision must be between 1e-9 and 0.01 of the diagonal");
+    grid = ChooseLodGrid(span, precision);
+    for (size_t v = 0; v < rounded.size(); ++v) rounded[v] = grid.Round(dag.positions[v]);
+  }
+
   // Pass 1: node records (and the per-level counts).
   std::vector<NodeRecord> records(nodeCount);
-  std::vector<uint64_t> levelVertices(nodeLevels, 0), levelFaces(nodeLevels, 0);
+  std::vector<uint64_t> levelFaces(nodeLevels, 0);
   {
     std::vector<uint32_t> start, faces, stamp(dag.positions.size(), kNoParent);
-    std::vector<uint8_t> used(dag.positions.size(), 0);
     std::vector<vcg::Point3d> normals;
     std::vector<uint32_t> byGroupStart, byGroup, byCreatorStart, byCreator, aboveStart, above;
     for (uint32_t k = 0; k < nodeLevels; ++k) {
-      if (progress && !progress(int(40 * k / nodeLevels), "LOD file: node records")) return Status::Cancelled();
+      if (progress && !progress(int(30 * k / nodeLevels), "LOD file: node records")) return Status::Cancelled();
       const LodDag::Level& L = dag.levels[k];
       BucketFaces(L, nodeOfCluster[k], start, faces);
       levelFaces[k] = L.faces.size();
@@ -236,6 +254,9 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
           const size_t cr = size_t(L.clusterCreator[c]);
           R.children.assign(byGroup.begin() + byGroupStart[cr], byGroup.begin() + byGroupStart[cr + 1]);
           R.siblings.assign(byCreator.begin() + byCreatorStart[cr], byCreator.begin() + byCreatorStart[cr + 1]);
+          // A group's clusters have consecutive ids (the node order): the file stores the range.
+          if (R.children.empty() || R.children.back() - R.children.front() + 1 != R.children.size())
+            return Status::Invalid("internal error: the children of a LOD node are not consecutive");
         }
         if (L.clusterGroup[c] >= 0) {
           const size_t g = size_t(L.clusterGroup[c]);
@@ -250,16 +271,14 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
         uint32_t vc = 0;
         for (uint32_t j = start[i]; j < start[i + 1]; ++j) {
           const auto& t = L.faces[faces[j]];
-          const vcg::Point3d a = vcg::Point3d::Construct(dag.positions[t[0]]),
-                             b = vcg::Point3d::Construct(dag.positions[t[1]]),
-                             cc = vcg::Point3d::Construct(dag.positions[t[2]]);
+          const vcg::Point3d a = vcg::Point3d::Construct(rounded[t[0]]), b = vcg::Point3d::Construct(rounded[t[1]]),
+                             cc = vcg::Point3d::Construct(rounded[t[2]]);
           const vcg::Point3d n = (b - a) ^ (cc - a);
           const double len = n.Norm();
           const double scale = std::max({(b - a).SquaredNorm(), (cc - a).SquaredNorm(), (cc - b).SquaredNorm()});
           if (len > 1e-12 * scale && len > 0) normals.push_back(n / len);
           for (uint32_t v : t) {
-            nb.Add(dag.positions[v]);
-            used[v] = 1;
+            nb.Add(rounded[v]);
             if (stamp[v] != i) {
               stamp[v] = i;
               ++vc;
@@ -272,20 +291,10 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
         R.center = nb.IsNull() ? vcg::Point3f(0, 0, 0) : nb.Center();
         float r2 = 0;
         for (uint32_t j = start[i]; j < start[i + 1]; ++j)
-          for (uint32_t v : L.faces[faces[j]]) r2 = std::max(r2, (dag.positions[v] - R.center).SquaredNorm());
+          for (uint32_t v : L.faces[faces[j]]) r2 = std::max(r2, (rounded[v] - R.center).SquaredNorm());
         R.radius = std::sqrt(r2) * (1 + 1e-6f);
       }
-      uint64_t usedVertices = 0;
-      for (const auto& t : L.faces)
-        for (uint32_t v : t)
-          if (used[v] == 1) {
-            used[v] = 2;
-            ++usedVertices;
-          }
-      for (const auto& t : L.faces)
-        for (uint32_t v : t) used[v] = 0;
       std::fill(stamp.begin(), stamp.end(), kNoParent);
-      levelVertices[k] = usedVertices;
     }
   }
 
@@ -298,8 +307,8 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
   };
 
   // The root chunk's header and data, rewritten at the end with the final offsets.
-  std::vector<uint64_t> levelOffset(nodeLevels, 0), vertOffset(nodeLevels, 0);
-  uint64_t hierOffset = 0, indexOffset = 0;
+  uint64_t hierOffset = 0, geosOffset = 0, indexOffset = 0, globalVertices = 0;
+  uint64_t positionBytes = 0, indexBytes = 0, idBytes = 0;  // the codecs' output, for the stats
   auto encodeHeader = [&]() {
     Encoder e;
     e.u32(kVersion);
@@ -307,20 +316,20 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
     e.u64(mesh.positions.size());
     e.u64(mesh.faces.size());
     e.u64(nodeCount);
-    e.u64(dag.positions.size());
+    e.u64(globalVertices);
     for (int i = 0; i < 3; ++i) e.f32(box.IsNull() ? 0.f : float(box.min[i]));
     for (int i = 0; i < 3; ++i) e.f32(box.IsNull() ? 0.f : float(box.max[i]));
     e.u64(hierOffset);
+    e.u64(geosOffset);
     e.u64(indexOffset);
-    e.u32(kVertexBlock);
+    for (int i = 0; i < 3; ++i) e.f64(grid.origin[i]);
+    e.f64(grid.step);
+    e.u32(grid.bits);
     e.u32(kIndexBlock);
     for (uint32_t k = 0; k < nodeLevels; ++k) {
       e.u64(levelFaces[k]);
       e.u64(clusterOfNode[k].size());
-      e.u64(levelVertices[k]);
       e.u64(firstId[k]);
-      e.u64(levelOffset[k]);
-      e.u64(vertOffset[k]);
       e.f32(levelError[k]);
       e.u32(0);
     }
@@ -330,142 +339,210 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
   const uint64_t headerBytes = header.bytes.size();
   out.chunk(kRoot, header);  // placeholder: rewritten at the end
 
-  // Node records, coarsest level first (node id order).
-  struct IndexEntry {
-    uint64_t record = 0, geometry = 0;
-    uint32_t recordBytes = 0, geometryBytes = 0;
+  // A container of packed blobs (HIER, GEOS): its CRC field is 0, each blob carries its own.
+  auto patchContainer = [&](uint32_t id, uint64_t at) {
+    ChunkHeader h;
+    h.id = id;
+    h.dataBytes = out.offset() - at - kChunkHeaderBytes;
+    Encoder he;
+    EncodeChunkHeader(he, h);
+    out.patch(at, he);
   };
-  std::vector<IndexEntry> index(nodeCount);
+  // Appends a blob: the CRC of `e`, then `e`.
+  auto blob = [&](const Encoder& e) {
+    Encoder c;
+    c.u32(Crc32(e.bytes.data(), e.bytes.size()));
+    return out.write(c) && out.write(e);
+  };
+
+  // Node records, coarsest level first (node id order).
+  std::vector<uint64_t> recordEnd(nodeCount), geometryEnd(nodeCount);  // offsets past each blob
   hierOffset = out.offset();
   {
     Encoder none;
-    out.chunk(kHier, none);  // placeholder for the child size
+    out.chunk(kHier, none);  // placeholder for the size
     Encoder e;
+    auto idList = [&](const std::vector<uint32_t>& ids, uint64_t levelFirst) {
+      e.uv(ids.size());
+      uint64_t last = levelFirst;
+      for (uint32_t n : ids) {  // sorted, distinct: first as an offset into its level, then gaps - 1
+        e.uv(n - last);
+        last = uint64_t(n) + 1;
+      }
+    };
     for (uint32_t id = 0; id < nodeCount; ++id) {
       const NodeRecord& R = records[id];
       e.clear();
-      e.u32(id);
-      e.u32(R.level);
-      e.u32(R.group);
-      e.u32(uint32_t(R.children.size()));
-      e.u32(uint32_t(R.siblings.size()));
-      e.u32(uint32_t(R.parents.size()));
-      for (int i = 0; i < 3; ++i) e.f64(R.cone.axis[i]);
-      e.f64(R.cone.halfAngle);
+      // The cone: its axis in octahedral u16, its angle widened by the axis's rounding (so that it
+      // still holds every normal of the node's faces) and rounded up.
+      uint16_t oct[2] = {0, 0};
+      uint16_t angle = kEmptyConeAngle;
+      if (R.cone.halfAngle >= 0) {
+        const double axis[3] = {R.cone.axis[0], R.cone.axis[1], R.cone.axis[2]};
+        double back[3];
+        EncodeConeAxis(axis, oct);
+        DecodeConeAxis(oct, back);
+        const double an = std::sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+        const double dot = an > 0 ? (axis[0] * back[0] + axis[1] * back[1] + axis[2] * back[2]) / an : -1;
+        const double half = R.cone.halfAngle + std::acos(std::max(-1.0, std::min(1.0, dot))) + 1e-6;
+        angle = uint16_t(std::min(65534.0, std::ceil(half / kConeAngleUnit)));
+      }
+      e.u16(oct[0]);
+      e.u16(oct[1]);
+      e.u16(angle);
       for (int i = 0; i < 3; ++i) e.f32(R.center[i]);
       e.f32(R.radius);
-      e.u32(R.faceCount);
-      e.u32(R.vertexCount);
       e.f32(R.error);
       e.f32(R.parentError);
-      for (uint32_t n : R.children) e.u32(n);
-      for (uint32_t n : R.siblings) e.u32(n);
-      for (uint32_t n : R.parents) e.u32(n);
-      index[id].record = out.offset();
-      index[id].recordBytes = uint32_t(kChunkHeaderBytes + e.bytes.size());
-      out.chunk(kNode, e);
+      e.uv(R.group == LodNode::kNoGroup ? 0 : uint64_t(R.group) + 1);
+      e.uv(R.faceCount);
+      e.uv(R.vertexCount);
+      e.uv(R.children.size());
+      if (!R.children.empty()) e.uv(R.children.front() - firstId[R.level - 1]);
+      idList(R.siblings, firstId[R.level]);
+      idList(R.parents, R.level + 1 < nodeLevels ? firstId[R.level + 1] : 0);
+      blob(e);
+      recordEnd[id] = out.offset();
     }
-    ChunkHeader h;
-    h.id = kHier;
-    h.crc = Crc32(nullptr, 0);
-    h.childBytes = out.offset() - hierOffset - kChunkHeaderBytes;
-    Encoder he;
-    EncodeChunkHeader(he, h);
-    out.patch(hierOffset, he);
+    patchContainer(kHier, hierOffset);
   }
   records.clear();
   records.shrink_to_fit();
 
-  // Geometry, coarsest level first.
+  // Geometry, coarsest level first (node id order), one blob per *unit*: the clusters of one group
+  // (a node's children, read together when it is refined; consecutive ids) or, at the top, all
+  // the roots. A unit's vertices are stored once (in the order its faces first use them, the faces
+  // ordered node by node for the vertex cache), quantized on the grid relative to the unit's
+  // smallest corner; then its faces; then which vertices are new to the file (their global ids
+  // follow on) and the global ids of the others.
+  geosOffset = out.offset();
+  std::vector<uint64_t> geometryStart(nodeCount);
   {
-    std::vector<uint32_t> start, faces, levelId(dag.positions.size(), kNoParent),
-        local(dag.positions.size(), kNoParent), order, verts;
-    std::vector<vcg::Point3f> block;
+    Encoder none;
+    out.chunk(kGeos, none);  // placeholder for the size
+    std::vector<uint32_t> start, faces, local(dag.positions.size(), kNoParent), verts, idx, tmp, remap, old;
+    std::vector<uint32_t> fileId(dag.positions.size(), kNoParent);
+    std::vector<uint8_t> buf, mask;
+    std::vector<uint16_t> q16;
+    std::vector<uint32_t> q32;
     Encoder e;
+    meshopt_encodeVertexVersion(kVertexCodecVersion);
+    meshopt_encodeIndexVersion(kIndexCodecVersion);
     for (int k = int(nodeLevels) - 1; k >= 0; --k) {
-      if (progress && !progress(40 + int(55 * (int(nodeLevels) - 1 - k) / int(nodeLevels)), "LOD file: geometry")) {
+      if (progress && !progress(30 + int(65 * (int(nodeLevels) - 1 - k) / int(nodeLevels)), "LOD file: geometry")) {
         fail("cancelled");  // removes the partial file
         return Status::Cancelled();
       }
       const LodDag::Level& L = dag.levels[size_t(k)];
-      const size_t nodes = clusterOfNode[size_t(k)].size();
+      const auto& order = clusterOfNode[size_t(k)];
+      const size_t nodes = order.size();
       BucketFaces(L, nodeOfCluster[size_t(k)], start, faces);
-      // Level vertex ids by first use in node order.
-      order.clear();
-      for (uint32_t f : faces)
-        for (uint32_t v : L.faces[f])
-          if (levelId[v] == kNoParent) {
-            levelId[v] = uint32_t(order.size());
-            order.push_back(v);
-          }
-      levelOffset[size_t(k)] = out.offset();
-      e.clear();
-      e.u32(uint32_t(k));
-      e.u32(0);
-      e.u64(nodes);
-      e.u64(L.faces.size());
-      e.u64(order.size());
-      out.chunk(kLevel, e);  // child size patched below
-      vertOffset[size_t(k)] = out.offset();
-      const uint64_t blocks = (order.size() + kVertexBlock - 1) / kVertexBlock;
-      e.clear();
-      e.u32(uint32_t(k));
-      e.u32(kVertexBlock);
-      e.u64(order.size());
-      out.chunk(kVert, e, blocks * kChunkHeaderBytes + order.size() * 12);
-      for (uint64_t b = 0; b < blocks; ++b) {
-        e.clear();
-        const size_t end = std::min<size_t>(order.size(), size_t((b + 1) * kVertexBlock));
-        for (size_t v = size_t(b * kVertexBlock); v < end; ++v)
-          for (int i = 0; i < 3; ++i) e.f32(dag.positions[order[v]][i]);
-        out.chunk(kVBlock, e);
-      }
-      for (uint32_t i = 0; i < nodes; ++i) {
-        const uint32_t id = uint32_t(firstId[size_t(k)] + i);
-        // Local vertices by first use within the node.
+      for (uint32_t u0 = 0; u0 < nodes;) {
+        uint32_t u1 = u0 + 1;
+        while (u1 < nodes && L.clusterGroup[order[u1]] == L.clusterGroup[order[u0]]) ++u1;
         verts.clear();
-        for (uint32_t j = start[i]; j < start[i + 1]; ++j)
-          for (uint32_t v : L.faces[faces[j]])
+        idx.clear();
+        for (uint32_t j = start[u0]; j < start[u1]; ++j)
+          for (uint32_t v : L.faces[faces[j]]) {
             if (local[v] == kNoParent) {
               local[v] = uint32_t(verts.size());
               verts.push_back(v);
             }
-        e.clear();
-        e.u32(id);
-        e.u32(uint32_t(verts.size()));
-        e.u32(start[i + 1] - start[i]);
-        const bool shortIndices = verts.size() <= 65536;
-        e.u32(kGeomHasSourceIds | (shortIndices ? kGeomShortIndices : 0));
-        for (uint32_t v : verts) e.u32(levelId[v]);
-        for (uint32_t v : verts) e.u32(v);
-        for (uint32_t j = start[i]; j < start[i + 1]; ++j)
-          for (uint32_t v : L.faces[faces[j]]) shortIndices ? e.u16(local[v]) : e.u32(local[v]);
+            idx.push_back(local[v]);
+          }
         for (uint32_t v : verts) local[v] = kNoParent;
-        index[id].geometry = out.offset();
-        index[id].geometryBytes = uint32_t(kChunkHeaderBytes + e.bytes.size());
-        out.chunk(kGeom, e);
+        const size_t vc = verts.size();
+        tmp.resize(idx.size());
+        for (uint32_t i = u0; i < u1; ++i) {  // each node's faces for the vertex cache, in place
+          const size_t a = size_t(start[i] - start[u0]) * 3, n = size_t(start[i + 1] - start[i]) * 3;
+          meshopt_optimizeVertexCache(tmp.data() + a, idx.data() + a, n, vc);
+        }
+        remap.resize(vc);
+        meshopt_optimizeVertexFetchRemap(remap.data(), tmp.data(), tmp.size(), vc);
+        for (size_t j = 0; j < idx.size(); ++j) idx[j] = remap[tmp[j]];
+        tmp.assign(vc, 0);
+        for (size_t v = 0; v < vc; ++v) tmp[remap[v]] = verts[v];
+        verts.swap(tmp);
+        // Quantized positions relative to the unit's smallest corner.
+        uint32_t qmin[3] = {~0u, ~0u, ~0u}, qmax[3] = {0, 0, 0};
+        q32.resize(vc * 3);
+        for (size_t v = 0; v < vc; ++v)
+          for (int c = 0; c < 3; ++c) {
+            const uint32_t q = grid.Quantize(dag.positions[verts[v]][c], c);
+            q32[v * 3 + size_t(c)] = q;
+            qmin[c] = std::min(qmin[c], q);
+            qmax[c] = std::max(qmax[c], q);
+          }
+        const bool wide = std::max({qmax[0] - qmin[0], qmax[1] - qmin[1], qmax[2] - qmin[2]}) > 0xFFFFu;
+        e.clear();
+        const uint8_t flags = wide ? kGeomWidePositions : 0;
+        e.raw(&flags, 1);
+        e.uv(firstId[size_t(k)] + u0);  // the unit's nodes
+        e.uv(u1 - u0);
+        for (uint32_t i = u0; i < u1; ++i) e.uv(start[i + 1] - start[i]);
+        e.uv(vc);
+        for (int c = 0; c < 3; ++c) e.uv(qmin[c]);
+        e.uv(globalVertices);  // the first new global id
+        if (wide) {
+          for (size_t v = 0; v < vc; ++v)
+            for (int c = 0; c < 3; ++c) q32[v * 3 + size_t(c)] -= qmin[c];
+          buf.resize(meshopt_encodeVertexBufferBound(vc, 12));
+          buf.resize(meshopt_encodeVertexBuffer(buf.data(), buf.size(), q32.data(), vc, 12));
+        } else {
+          q16.assign(vc * 4, 0);
+          for (size_t v = 0; v < vc; ++v)
+            for (int c = 0; c < 3; ++c) q16[v * 4 + size_t(c)] = uint16_t(q32[v * 3 + size_t(c)] - qmin[c]);
+          buf.resize(meshopt_encodeVertexBufferBound(vc, 8));
+          buf.resize(meshopt_encodeVertexBuffer(buf.data(), buf.size(), q16.data(), vc, 8));
+        }
+        if (buf.empty()) return fail("internal error: the vertex codec failed");
+        e.uv(buf.size());
+        e.raw(buf.data(), buf.size());
+        positionBytes += buf.size();
+        buf.resize(meshopt_encodeIndexBufferBound(idx.size(), vc));
+        buf.resize(meshopt_encodeIndexBuffer(buf.data(), buf.size(), idx.data(), idx.size()));
+        if (buf.empty()) return fail("internal error: the index codec failed");
+        e.uv(buf.size());
+        e.raw(buf.data(), buf.size());
+        indexBytes += buf.size();
+        mask.assign((vc + 7) / 8, 0);
+        old.clear();
+        for (size_t v = 0; v < vc; ++v) {
+          uint32_t& f = fileId[verts[v]];
+          if (f == kNoParent) {
+            f = uint32_t(globalVertices++);
+            mask[v / 8] = uint8_t(mask[v / 8] | 1u << (v % 8));
+          } else {
+            old.push_back(f);
+          }
+        }
+        e.raw(mask.data(), mask.size());
+        idBytes += mask.size();
+        if (!old.empty()) {
+          buf.resize(meshopt_encodeIndexSequenceBound(old.size(), size_t(globalVertices)));
+          buf.resize(meshopt_encodeIndexSequence(buf.data(), buf.size(), old.data(), old.size()));
+          if (buf.empty()) return fail("internal error: the index sequence codec failed");
+          e.uv(buf.size());
+          e.raw(buf.data(), buf.size());
+          idBytes += buf.size();
+        }
+        const uint64_t at = out.offset();
+        blob(e);
+        for (uint32_t i = u0; i < u1; ++i) {
+          geometryStart[firstId[size_t(k)] + i] = at;
+          geometryEnd[firstId[size_t(k)] + i] = out.offset();
+        }
+        if (globalVertices >= kNoParent) return fail("too many vertices for the file format");
+        u0 = u1;
       }
-      for (uint32_t v : order) levelId[v] = kNoParent;
-      // Patch the LEVL chunk's child size.
-      ChunkHeader h;
-      h.id = kLevel;
-      Encoder d;
-      d.u32(uint32_t(k));
-      d.u32(0);
-      d.u64(nodes);
-      d.u64(L.faces.size());
-      d.u64(order.size());
-      h.dataBytes = d.bytes.size();
-      h.crc = Crc32(d.bytes.data(), d.bytes.size());
-      h.childBytes = out.offset() - levelOffset[size_t(k)] - kChunkHeaderBytes - h.dataBytes;
-      Encoder he;
-      EncodeChunkHeader(he, h);
-      out.patch(levelOffset[size_t(k)], he);
       if (!out.ok()) return fail(out.error());
     }
+    patchContainer(kGeos, geosOffset);
   }
 
-  // The offset index, in blocks.
+  // The offset index, in blocks: each block gives the offsets of its first record and its first
+  // node's geometry blob, then per entry where its record and its geometry blob end (relative to
+  // those).
   indexOffset = out.offset();
   {
     const uint64_t blocks = (nodeCount + kIndexBlock - 1) / kIndexBlock;
@@ -473,15 +550,20 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
     e.u64(nodeCount);
     e.u32(kIndexBlock);
     e.u32(0);
-    out.chunk(kIndex, e, blocks * kChunkHeaderBytes + nodeCount * kIndexEntryBytes);
+    out.chunk(kIndex, e, blocks * (kChunkHeaderBytes + kIndexBlockBaseBytes) + nodeCount * kIndexEntryBytes);
+    const uint64_t hierData = hierOffset + kChunkHeaderBytes;
     for (uint64_t b = 0; b < blocks; ++b) {
       e.clear();
-      const uint64_t end = std::min<uint64_t>(nodeCount, (b + 1) * kIndexBlock);
-      for (uint64_t i = b * kIndexBlock; i < end; ++i) {
-        e.u64(index[i].record);
-        e.u64(index[i].geometry);
-        e.u32(index[i].recordBytes);
-        e.u32(index[i].geometryBytes);
+      const uint64_t first = b * kIndexBlock, end = std::min<uint64_t>(nodeCount, (b + 1) * kIndexBlock);
+      // (Nodes of one unit share its blob: their entries end at the same offset.)
+      const uint64_t rb = first ? recordEnd[first - 1] : hierData, gb = geometryStart[first];
+      e.u64(rb);
+      e.u64(gb);
+      for (uint64_t i = first; i < end; ++i) {
+        if (recordEnd[i] - rb > 0xFFFFFFFFu || geometryEnd[i] - gb > 0xFFFFFFFFu)
+          return fail("too much geometry in one index block for the file format");
+        e.u32(uint32_t(recordEnd[i] - rb));
+        e.u32(uint32_t(geometryEnd[i] - gb));
       }
       out.chunk(kIBlock, e);
     }
@@ -512,6 +594,11 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
     for (uint32_t k = 0; k < nodeLevels; ++k) stats->levelNodes.push_back(clusterOfNode[k].size());
     stats->nodes = size_t(nodeCount);
     stats->fileBytes = fileBytes;
+    stats->recordBytes = geosOffset - hierOffset;
+    stats->positionBytes = positionBytes;
+    stats->triangleBytes = indexBytes;
+    stats->vertexIdBytes = idBytes;
+    stats->quantizationError = grid.ErrorBound();
     stats->writeSeconds = Seconds(t0);
   }
   return Status::Ok();
@@ -524,7 +611,7 @@ Status BuildLodFile(const IndexedMesh& mesh, const LodBuildParams& params, const
   Status s = BuildLodDag(mesh, params, dag, SubProgress(progress, 0, 90));
   if (!s.ok()) return s;
   const double dagSeconds = Seconds(t0);
-  s = WriteLodFile(mesh, dag, path, stats, SubProgress(progress, 90, 100));
+  s = WriteLodFile(mesh, dag, path, stats, SubProgress(progress, 90, 100), params.precision);
   if (!s.ok()) return s;
   if (stats) {
     stats->groupingSeconds = 0;

@@ -93,6 +93,13 @@ EdgeMap EdgesByPosition(const IndexedMesh& m) {
   return edges;
 }
 
+// The mesh with its positions rounded on a file's grid: what a full-budget cut must give back.
+IndexedMesh OnGrid(const IndexedMesh& m, const LodGrid& grid) {
+  IndexedMesh q = m;
+  for (auto& p : q.positions) p = grid.Round(p);
+  return q;
+}
+
 struct CrackCount {
   size_t border = 0, overused = 0, drawnBorderNotCulled = 0;
 };
@@ -115,7 +122,7 @@ CrackCount CheckCut(const Built& b, LodReader& r, const LodCut& cut) {
   EXPECT_TRUE(ExtractCutMesh(r, cut, false, drawn).ok());
   EXPECT_EQ(all.faces.size(), cut.faces);
   EXPECT_EQ(drawn.faces.size(), cut.drawnFaces);
-  const auto input = EdgesByPosition(b.mesh);
+  const auto input = EdgesByPosition(OnGrid(b.mesh, r.info().grid));
   for (const auto& e : EdgesByPosition(all)) {
     if (e.second == 1 && !(input.count(e.first) && input.at(e.first) == 1)) ++c.border;
     if (e.second > 2) ++c.overused;
@@ -226,11 +233,17 @@ TEST_F(TinyLod, HeaderAndNodeStructure) {
   const LodFileInfo& i = r->info();
   const size_t H = b.dag.levels.size();
   ASSERT_GE(H, 3u) << "the tiny sphere should give a DAG of several levels";
-  EXPECT_EQ(i.version, 2u);
+  EXPECT_EQ(i.version, 3u);
   EXPECT_EQ(i.levels, int(H));
   EXPECT_EQ(i.inputFaces, 128u);
   EXPECT_EQ(i.inputVertices, 66u);
-  EXPECT_EQ(i.globalVertices, b.dag.positions.size());
+  {  // global ids: one per vertex some level uses
+    std::vector<uint8_t> used(b.dag.positions.size(), 0);
+    for (const auto& L : b.dag.levels)
+      for (const auto& t : L.faces)
+        for (uint32_t v : t) used[v] = 1;
+    EXPECT_EQ(i.globalVertices, size_t(std::count(used.begin(), used.end(), 1)));
+  }
   EXPECT_EQ(i.fileBytes, b.bytes.size());
   for (size_t k = 0; k < H; ++k) {
     EXPECT_EQ(i.levelNodes[k], b.dag.levels[k].clusterCount());
@@ -259,6 +272,7 @@ TEST_F(TinyLod, HeaderAndNodeStructure) {
   // group (its children's vertices also used outside it) is kept by the clusters made from it.
   std::vector<uint32_t> todo = r->roots();
   std::vector<uint8_t> seen(size_t(i.nodeCount), 0);
+  std::unordered_map<uint32_t, vcg::Point3f> positionOfId;  // the same in every node using it
   size_t count = 0;
   while (!todo.empty()) {
     const uint32_t id = todo.back();
@@ -299,7 +313,12 @@ TEST_F(TinyLod, HeaderAndNodeStructure) {
     const LodGeometry& g = *r->geometry(id);
     EXPECT_EQ(g.faces.size(), n.faceCount);
     EXPECT_EQ(g.positions.size(), n.vertexCount);
-    for (size_t v = 0; v < g.vertexIds.size(); ++v) EXPECT_EQ(g.positions[v], b.dag.positions[g.vertexIds[v]]);
+    for (size_t v = 0; v < g.vertexIds.size(); ++v) {
+      EXPECT_LT(g.vertexIds[v], i.globalVertices);
+      EXPECT_EQ(g.positions[v], i.grid.Round(g.positions[v])) << "a position off the grid";
+      const auto ins = positionOfId.emplace(g.vertexIds[v], g.positions[v]);
+      EXPECT_EQ(ins.first->second, g.positions[v]) << "vertex " << g.vertexIds[v] << " differs between nodes";
+    }
     for (const auto& t : g.faces) {
       IndexedMesh one;
       one.positions = {g.positions[t[0]], g.positions[t[1]], g.positions[t[2]]};
@@ -314,6 +333,7 @@ TEST_F(TinyLod, HeaderAndNodeStructure) {
     }
   }
   EXPECT_EQ(count, i.nodeCount);
+  EXPECT_EQ(positionOfId.size(), i.globalVertices);
 }
 
 TEST_F(TinyLod, FullBudgetGivesTheInputBack) {
@@ -332,13 +352,8 @@ TEST_F(TinyLod, FullBudgetGivesTheInputBack) {
   ASSERT_TRUE(ExtractCutMesh(*r, cut, true, out, &level).ok());
   EXPECT_EQ(out.faces.size(), 128u);
   EXPECT_EQ(out.positions.size(), 66u);  // welded: the input's shared vertices
-  EXPECT_EQ(SortedFacePositions(out), SortedFacePositions(b.mesh));
+  EXPECT_EQ(SortedFacePositions(out), SortedFacePositions(OnGrid(b.mesh, r->info().grid)));
   EXPECT_TRUE(std::all_of(level.begin(), level.end(), [](int l) { return l == 0; }));
-  // The level-0 vertex ids are the input's vertex indices.
-  for (uint32_t id : cut.nodes) {
-    const LodGeometry& g = *r->geometry(id);
-    for (size_t v = 0; v < g.vertexIds.size(); ++v) EXPECT_EQ(g.positions[v], b.mesh.positions[g.vertexIds[v]]);
-  }
 }
 
 TEST_F(TinyLod, ZeroBudgetKeepsTheRoots) {
@@ -404,6 +419,15 @@ void PutU64(std::vector<uint8_t>& bytes, size_t at, uint64_t v) {
 void PutU32(std::vector<uint8_t>& bytes, size_t at, uint32_t v) {
   for (int i = 0; i < 4; ++i) bytes[at + size_t(i)] = uint8_t(v >> (8 * i));
 }
+void PutF32(std::vector<uint8_t>& bytes, size_t at, float v) {
+  uint32_t u;
+  std::memcpy(&u, &v, 4);
+  PutU32(bytes, at, u);
+}
+// The same for a record or a node's geometry (a blob: its CRC, then what it covers).
+void RechecksumBlob(std::vector<uint8_t>& bytes, size_t at, size_t size) {
+  PutU32(bytes, at, Crc32(bytes.data() + at + 4, size - 4));
+}
 
 TEST_F(TinyLod, BadFilesAreRefusedWithTheirReason) {
   const std::vector<uint8_t>& good = tiny_->bytes;
@@ -428,7 +452,11 @@ TEST_F(TinyLod, BadFilesAreRefusedWithTheirReason) {
     b[kChunkHeaderBytes] = 7;
     Rechecksum(b, 0);
     EXPECT_TRUE(has(OpenError(b), "unsupported .clod version 7")) << OpenError(b);
-    // A file of the previous version (the tree of groups): named, with what to do.
+    // Files of the previous versions: named, with what to do.
+    b[kChunkHeaderBytes] = 2;
+    Rechecksum(b, 0);
+    EXPECT_TRUE(has(OpenError(b), ".clod version 2 file (uncompressed")) << OpenError(b);
+    EXPECT_TRUE(has(OpenError(b), "rebuild it with conelod lod build")) << OpenError(b);
     b[kChunkHeaderBytes] = 1;
     Rechecksum(b, 0);
     EXPECT_TRUE(has(OpenError(b), ".clod version 1 file (written by an older ConeLOD")) << OpenError(b);
@@ -443,27 +471,26 @@ TEST_F(TinyLod, BadFilesAreRefusedWithTheirReason) {
     Rechecksum(b, 0);
     EXPECT_TRUE(has(OpenError(b), "bounding box")) << OpenError(b);
   }
-  {  // a root's record with a negative cone angle, then a negative error, checksum redone
-    const size_t hier = size_t(Decoder(good.data() + kChunkHeaderBytes + 64, 8).u64());
-    const size_t rec = hier + kChunkHeaderBytes;  // node 0's record
+  // Where node 0's record and the last node's geometry are (the index's first and last entries).
+  const size_t hier = size_t(Decoder(good.data() + kChunkHeaderBytes + 64, 8).u64());
+  const size_t index = size_t(Decoder(good.data() + kChunkHeaderBytes + 80, 8).u64());
+  const size_t rec = hier + kChunkHeaderBytes;  // node 0's record
+  const size_t block0 = index + kChunkHeaderBytes + kIndexDataBytes + kChunkHeaderBytes;
+  const size_t recBytes = size_t(Decoder(good.data() + block0 + kIndexBlockBaseBytes, 4).u32());
+  {  // a root's record with a negative radius, then a negative error, then a group: checksum redone
     std::vector<uint8_t> b = good;
-    const double neg = -0.5;
-    uint64_t u;
-    std::memcpy(&u, &neg, 8);
-    PutU64(b, rec + kChunkHeaderBytes + 48, u);
-    Rechecksum(b, rec);
-    EXPECT_TRUE(has(OpenError(b), "negative cone")) << OpenError(b);
+    PutF32(b, rec + 4 + 6 + 12, -0.5f);
+    RechecksumBlob(b, rec, recBytes);
+    EXPECT_TRUE(has(OpenError(b), "negative cone or sphere")) << OpenError(b);
     b = good;
-    const float negf = -1.f;
-    uint32_t w;
-    std::memcpy(&w, &negf, 4);
-    for (int k = 0; k < 4; ++k) b[rec + kChunkHeaderBytes + 80 + size_t(k)] = uint8_t(w >> (8 * k));
-    Rechecksum(b, rec);
+    PutF32(b, rec + 4 + 6 + 16, -1.f);
+    RechecksumBlob(b, rec, recBytes);
     EXPECT_TRUE(has(OpenError(b), "bad error bounds")) << OpenError(b);
     b = good;
-    PutU32(b, rec + kChunkHeaderBytes + 12, 1000);  // child count: the size no longer matches
-    Rechecksum(b, rec);
-    EXPECT_TRUE(has(OpenError(b), "list lengths")) << OpenError(b);
+    ASSERT_EQ(b[rec + kRecordFixedBytes], 0);  // a root's group: none
+    b[rec + kRecordFixedBytes] = 1;
+    RechecksumBlob(b, rec, recBytes);
+    EXPECT_TRUE(has(OpenError(b), "a root with a group")) << OpenError(b);
   }
   {  // corrupted chunk size: the root's child size
     std::vector<uint8_t> b = good;
@@ -475,14 +502,12 @@ TEST_F(TinyLod, BadFilesAreRefusedWithTheirReason) {
     PutU64(b, 8, uint64_t(1) << 60);  // the header's data size
     EXPECT_TRUE(has(OpenError(b), "corrupt chunk size")) << OpenError(b);
   }
-  {  // corrupted chunk size: a node record's (found through the index)
+  {  // corrupted chunk size: the records' container
     std::vector<uint8_t> b = good;
-    const size_t hier = size_t(Decoder(b.data() + kChunkHeaderBytes + 64, 8).u64());  // hierarchy offset
-    const size_t firstRecord = hier + kChunkHeaderBytes;
-    PutU64(b, firstRecord + 8, 1000000);
-    EXPECT_TRUE(has(OpenError(b), "corrupt chunk size")) << OpenError(b);
+    PutU64(b, hier + 8, 1000000000);
+    EXPECT_TRUE(has(OpenError(b), "corrupt chunk size in the hierarchy chunk")) << OpenError(b);
   }
-  {  // corrupted checksum: one byte of the header's data, then one of a root's geometry
+  {  // corrupted checksum: one byte of the header's data, then one of a root's record
     std::vector<uint8_t> b = good;
     const ChunkHeader h0 = DecodeChunkHeader(good.data());
     b[kChunkHeaderBytes + 20] ^= 1;
@@ -490,30 +515,75 @@ TEST_F(TinyLod, BadFilesAreRefusedWithTheirReason) {
     b = good;
     b[kChunkHeaderBytes + h0.dataBytes - 1] ^= 1;  // the last level entry's padding is covered too
     EXPECT_TRUE(has(OpenError(b), "checksum mismatch")) << OpenError(b);
+    b = good;
+    b[rec + 10] ^= 1;
+    EXPECT_TRUE(has(OpenError(b), "checksum mismatch in the record of a node 0")) << OpenError(b);
     // The last bytes of the file are the last index block's entries: only read on demand.
     b = good;
-    b[b.size() - 30] ^= 0x40;
+    b[b.size() - 6] ^= 0x40;
     const std::string e = FullReadError(b);
     EXPECT_TRUE(has(e, "checksum mismatch in index block")) << e;
   }
-  {  // a vertex block's checksum: found when the geometry using it is read
+  // The last node's geometry (level 0, read on demand) ends where the index chunk begins.
+  const size_t lastBlock = (size_t(OpenOk(good)->info().nodeCount) - 1) / kIndexBlock;
+  const size_t lastBlockAt =
+      block0 + lastBlock * (kChunkHeaderBytes + kIndexBlockBaseBytes + kIndexBlock * kIndexEntryBytes);
+  const size_t lastEntries = size_t(OpenOk(good)->info().nodeCount) - lastBlock * kIndexBlock;
+  const size_t geomBase = size_t(Decoder(good.data() + lastBlockAt + 8, 8).u64());
+  auto geometryEndOf = [&](size_t entry) {
+    return geomBase + Decoder(good.data() + lastBlockAt + 16 + entry * 8 + 4, 4).u32();
+  };
+  // The last blob (a unit: its nodes' entries end at the same offset) starts where an earlier
+  // entry ends.
+  const size_t geomEnd = geometryEndOf(lastEntries - 1);
+  size_t geomStart = geomBase;
+  for (size_t j = lastEntries - 1; j-- > 0;)
+    if (geometryEndOf(j) != geomEnd) {
+      geomStart = geometryEndOf(j);
+      break;
+    }
+  ASSERT_EQ(geomEnd, index);
+  {  // a node's geometry: its checksum is checked when it is read
     std::vector<uint8_t> b = good;
-    const size_t level0 = kChunkHeaderBytes + kHeaderFixedBytes;  // level 0's entry
-    const size_t vert = size_t(Decoder(b.data() + level0 + 40, 8).u64());
-    b[vert + kChunkHeaderBytes + kVertDataBytes + kChunkHeaderBytes + 5] ^= 0x10;
+    b[(geomStart + geomEnd) / 2] ^= 0x10;
     EXPECT_EQ(OpenError(b), "");
     const std::string e = FullReadError(b);
-    EXPECT_TRUE(has(e, "checksum mismatch in a vertex block")) << e;
+    EXPECT_TRUE(has(e, "checksum mismatch in the geometry of a node")) << e;
+  }
+  {  // hostile geometry with a valid checksum: every byte of it changed in turn, the codecs' output
+     // checked (a clean read or an error naming the node, never a crash: ASan runs this too)
+    size_t refused = 0;
+    for (size_t at = geomStart + 4; at < geomEnd; ++at) {
+      std::vector<uint8_t> b = good;
+      b[at] ^= 0xA5;
+      RechecksumBlob(b, geomStart, geomEnd - geomStart);
+      const std::string e = FullReadError(b);
+      if (!e.empty()) {
+        ++refused;
+        EXPECT_TRUE(has(e, "corrupt geometry of node")) << e;
+      }
+    }
+    EXPECT_GT(refused, (geomEnd - geomStart) / 4);
   }
   {  // offsets past the end: the index offset, the hierarchy offset (valid header checksum)
     std::vector<uint8_t> b = good;
-    PutU64(b, kChunkHeaderBytes + 72, b.size() + 4096);  // index offset
+    PutU64(b, kChunkHeaderBytes + 80, b.size() + 4096);  // index offset
     Rechecksum(b, 0);
     EXPECT_TRUE(has(OpenError(b), "past the end")) << OpenError(b);
     b = good;
     PutU64(b, kChunkHeaderBytes + 64, uint64_t(1) << 62);  // hierarchy offset
     Rechecksum(b, 0);
     EXPECT_TRUE(has(OpenError(b), "past the end")) << OpenError(b);
+  }
+  {  // a quantization grid of 0 bits, or a NaN step
+    std::vector<uint8_t> b = good;
+    PutU32(b, kChunkHeaderBytes + 120, 0);
+    Rechecksum(b, 0);
+    EXPECT_TRUE(has(OpenError(b), "bad quantization grid")) << OpenError(b);
+    b = good;
+    PutU64(b, kChunkHeaderBytes + 112, 0x7FF8000000000000ull);
+    Rechecksum(b, 0);
+    EXPECT_TRUE(has(OpenError(b), "bad quantization grid")) << OpenError(b);
   }
   {  // huge counts: refused before anything is allocated
     std::vector<uint8_t> b = good;
@@ -567,12 +637,50 @@ TEST_F(BunnyLod, FullBudgetRoundTripIsExact) {
   IndexedMesh out;
   ASSERT_TRUE(ExtractCutMesh(*r, cut, true, out).ok());
   EXPECT_EQ(out.faces.size(), 69451u);
-  EXPECT_EQ(SortedFacePositions(out), SortedFacePositions(bunny_->mesh));
+  EXPECT_EQ(SortedFacePositions(out), SortedFacePositions(OnGrid(bunny_->mesh, r->info().grid)));
   // Welded: the input's used vertices (the bunny has unreferenced ones).
   std::vector<uint8_t> used(bunny_->mesh.positions.size(), 0);
   for (const auto& t : bunny_->mesh.faces)
     for (uint32_t v : t) used[v] = 1;
   EXPECT_EQ(out.positions.size(), size_t(std::count(used.begin(), used.end(), 1)));
+}
+
+// Positions are quantized on one grid: no vertex of any level moves by more than the stated bound,
+// itself within the precision asked for; a coarser precision gives a smaller file; a precision out
+// of range is refused.
+TEST_F(BunnyLod, QuantizationStaysWithinItsBound) {
+  auto r = Open();
+  ASSERT_TRUE(r);
+  const LodFileInfo& info = r->info();
+  vcg::Box3f span;
+  for (const auto& L : bunny_->dag.levels)
+    for (const auto& t : L.faces)
+      for (uint32_t v : t) span.Add(bunny_->dag.positions[v]);
+  EXPECT_LE(info.quantizationError, kDefaultLodPrecision * span.Diag() * (1 + 1e-9));
+  EXPECT_GT(info.quantizationError, 0.0);
+  double worst = 0;
+  for (const auto& L : bunny_->dag.levels)
+    for (const auto& t : L.faces)
+      for (uint32_t v : t) {
+        const vcg::Point3f& p = bunny_->dag.positions[v];
+        worst = std::max(worst, double((info.grid.Round(p) - p).Norm()));
+      }
+  EXPECT_LE(worst, info.quantizationError);
+  EXPECT_GT(worst, info.quantizationError / 4) << "the bound should not be loose";
+  // The file's positions are those rounded ones: level 0 (the round trip test) and every level
+  // (HeaderAndNodeStructure) lie on the grid. A coarser grid: a smaller file, a larger bound.
+  const std::string coarse = TempPath("bunny_coarse.clod");
+  LodBuildStats st;
+  ASSERT_TRUE(WriteLodFile(bunny_->mesh, bunny_->dag, coarse, &st, Progress(), 1e-3).ok());
+  EXPECT_LT(st.fileBytes, bunny_->stats.fileBytes * 9 / 10);
+  EXPECT_NEAR(st.quantizationError, 1e-3 * span.Diag(), 0.05e-3 * span.Diag());
+  std::remove(coarse.c_str());
+  for (double bad : {0.0, 0.5, -1.0, std::numeric_limits<double>::quiet_NaN()}) {
+    const Status s = WriteLodFile(bunny_->mesh, bunny_->dag, coarse, &st, Progress(), bad);
+    EXPECT_FALSE(s.ok());
+    EXPECT_NE(s.message.find("precision"), std::string::npos) << s.message;
+    EXPECT_NE(access(coarse.c_str(), F_OK), 0) << "no file is left";
+  }
 }
 
 TEST_F(BunnyLod, SmallBudgetsRefineWhereTheEyeLooks) {
