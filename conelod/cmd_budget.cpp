@@ -47,16 +47,17 @@ int CmdBudget(int argc, char** argv) {
   const double seconds = timer.seconds();
   if (!s.ok()) return Fail(kBadInput, a.positional()[0] + ": " + s.message);
 
+  // Both outputs are written and synced before either replaces its target: both or neither.
+  SafeFile maskOut, meshOut;
   if (a.has("--mask")) {
     std::vector<uint8_t> mask;
     CountCoveredPixels(im, FramedView(im, r.viewDirection, p.width, p.height, p.fill), &mask);
-    SafeFile out;
-    std::string err = out.open(a.str("--mask"));
+    std::string err = maskOut.open(a.str("--mask"));
     if (!err.empty()) return Fail(kIoError, err);
-    std::fprintf(out.file(), "P5\n%d %d\n255\n", p.width, p.height);
+    std::fprintf(maskOut.file(), "P5\n%d %d\n255\n", p.width, p.height);
     for (uint8_t& m : mask) m = m ? 0 : 255;
-    std::fwrite(mask.data(), 1, mask.size(), out.file());
-    err = out.commit();  // checks every write above
+    std::fwrite(mask.data(), 1, mask.size(), maskOut.file());
+    err = maskOut.sync();  // checks every write above
     if (!err.empty()) return Fail(kIoError, err);
   }
 
@@ -71,7 +72,15 @@ int CmdBudget(int argc, char** argv) {
       WriteSimplifiedMesh(mesh, faceOf, fr, false);
       simplified = true;
     }
-    err = SavePly(mesh, a.str("-o"));
+    err = SavePlyUncommitted(mesh, a.str("-o"), meshOut);
+    if (!err.empty()) return Fail(kIoError, err);
+  }
+  if (a.has("--mask")) {
+    err = maskOut.commit();
+    if (!err.empty()) return Fail(kIoError, err);
+  }
+  if (a.has("-o")) {
+    err = meshOut.commit();
     if (!err.empty()) return Fail(kIoError, err);
   }
 

@@ -11,6 +11,7 @@
 #include "conelod/lod/lod_build.h"
 #include "conelod/lod/lod_read.h"
 #include "conelod/mesh/mesh_check.h"
+#include "conelod/mesh/safe_file.h"
 
 namespace conelod {
 namespace cli {
@@ -157,6 +158,8 @@ int LodExtract(int argc, char** argv) {
   const bool drop = a.has("--drop-culled");
   const std::string input = a.positional()[0];
 
+  const std::string notRegular = CheckInputPath(input, true);  // a FIFO would block the open
+  if (!notRegular.empty()) return Fail(kIoError, notRegular);
   Timer timer;
   std::unique_ptr<LodReader> reader;
   Status s = LodReader::Open(input, reader);
@@ -235,6 +238,8 @@ int LodInfo(int argc, char** argv) {
   Args a(argc, argv, {}, {"--json"});
   if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kLodUsage);
   if (a.positional().size() != 1) return Fail(kUsage, std::string("expected one .clod file\n") + kLodUsage);
+  const std::string notRegular = CheckInputPath(a.positional()[0], true);  // a FIFO would block the open
+  if (!notRegular.empty()) return Fail(kIoError, notRegular);
   Timer timer;
   std::unique_ptr<LodReader> reader;
   Status s = LodReader::Open(a.positional()[0], reader);

@@ -166,12 +166,9 @@ int CmdProgressive(int argc, char** argv) {
   if (!err.empty()) return FailLoad(err);
 
   Timer timer;
-  PcaTree tree;
-  Status s = BuildPcaTree(im, PcaPartitionParams(), tree);
-  if (!s.ok()) return Fail(kBadInput, a.positional()[0] + ": " + s.message);
-  const double treeSeconds = timer.seconds();
+  double treeSeconds = 0;
   ProgressiveMeshResult r;
-  s = BuildProgressiveClusterMesh(im, tree, params, r);
+  Status s = BuildProgressiveClusterMeshOf(im, params, r, Progress(), &treeSeconds);
   if (!s.ok()) return Fail(kBadInput, a.positional()[0] + ": " + s.message);
   const double seconds = timer.seconds();
 

@@ -942,11 +942,8 @@ Status ApplyProgressiveMesh(FilterCall& c) {
   const conelod::IndexedMesh im = conelod::ToIndexedMesh(mm.cm);
   QElapsedTimer timer;
   timer.start();
-  conelod::PcaTree tree;
-  Status s = conelod::BuildPcaTree(im, conelod::PcaPartitionParams(), tree, conelod::SubProgress(c.progress(), 0, 40));
-  if (!s.ok()) return s;
-  conelod::ProgressiveMeshResult r;
-  s = conelod::BuildProgressiveClusterMesh(im, tree, params, r, conelod::SubProgress(c.progress(), 40, 90));
+  conelod::ProgressiveMeshResult r;  // its PCA tree and all, independent of the model's scale
+  Status s = conelod::BuildProgressiveClusterMeshOf(im, params, r, conelod::SubProgress(c.progress(), 0, 90));
   if (!s.ok()) return s;
   const double seconds = timer.elapsed() / 1000.0;
   conelod::HausdorffResult h;
@@ -1126,6 +1123,8 @@ Status ApplyLodExtract(FilterCall& c) {
   if (c.cb) c.cb(0, "reading the LOD file");
   std::unique_ptr<conelod::LodReader> reader;
   auto failed = [&](const Status& st) { return Invalid(NameFile(fullPath, st.message)); };
+  const std::string notRegular = conelod::CheckInputPath(path.toStdString(), true);  // a FIFO blocks open()
+  if (!notRegular.empty()) return Invalid(QString::fromStdString(notRegular));
   s = conelod::LodReader::Open(path.toStdString(), reader);
   if (!s.ok()) return failed(s);
   const conelod::LodFileInfo& info = reader->info();

@@ -51,9 +51,10 @@ run_fuzzer() {
 build_fuzzer lod_reader_fuzz -DFUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION \
   "$ROOT/vcg_ext/fuzz/lod_reader_fuzz.cpp" "$ROOT/vcg_ext/conelod/lod/lod_reader.cpp" \
   "$ROOT/vcg_ext/conelod/lod/lod_refine.cpp" "$ROOT/vcg_ext/conelod/grouping/normal_cone.cpp"
-# The PLY input path: the checked reader, the input check and the grouping.
+# The PLY input path: the checked reader (and its file checks), the input check and the grouping.
 build_fuzzer ply_reader_fuzz \
   "$ROOT/vcg_ext/fuzz/ply_reader_fuzz.cpp" "$ROOT/vcg_ext/conelod/mesh/ply_format.cpp" \
+  "$ROOT/vcg_ext/conelod/mesh/safe_file.cpp" \
   "$ROOT/vcg_ext/conelod/mesh/mesh_check.cpp" "$ROOT/vcg_ext/conelod/mesh/indexed_mesh.cpp" \
   "$ROOT/vcg_ext/conelod/grouping/cone_grouping.cpp" "$ROOT/vcg_ext/conelod/grouping/normal_cone.cpp"
 
@@ -100,7 +101,7 @@ import sys
 sys.path.insert(0, sys.argv[2])
 import bad_inputs
 for name, data, _ in bad_inputs.corpus():
-    if len(data) < 200000:  # the 1 MiB header case only slows the fuzzer down
+    if isinstance(data, bytes) and len(data) < 200000:  # not the FIFO; the 1 MiB header slows it
         open("%s/%s.ply" % (sys.argv[1], name), "wb").write(data)
 PY
 # Inputs that once crashed run first, each on its own.

@@ -20,6 +20,7 @@
 #include <cstdlib>
 
 #include "lod_viewer_widget.h"
+#include "conelod/mesh/safe_file.h"
 #include "conelod/process_memory.h"
 
 namespace {
@@ -135,6 +136,9 @@ int main(int argc, char** argv) {
   const int benchFrames = parser.value(frames).toInt(&ok);
   if (!ok || benchFrames < 0) return Fail(1, "--frames needs a count >= 0");
 
+  // A FIFO (or a device) would block the open below for ever: refused before it is opened.
+  const std::string notRegular = conelod::CheckInputPath(path.toStdString(), true);
+  if (!notRegular.empty()) return Fail(2, QString::fromStdString(notRegular));
   std::unique_ptr<conelod::LodReader> reader;
   QElapsedTimer openTimer;
   openTimer.start();

@@ -3,7 +3,7 @@
 
 corpus() returns (name, bytes, expected) triples; `expected` is what reading the file must give:
 "ok" (read, maybe refused later by a command for what the mesh is) or a substring of the error
-message. Nothing here is a hand-edited file: each input is built from a small valid mesh.
+message. The bytes "fifo" stand for a named pipe (the runner makes one with os.mkfifo). Nothing here is a hand-edited file: each input is built from a small valid mesh.
 """
 import gzip
 import struct
@@ -38,6 +38,39 @@ def binary_ply(verts=V, faces=F, endian="<", coord="f", nv=None, nf=None, index=
     body = b"".join(struct.pack(endian + coord * 3, *v) for v in verts)
     body += b"".join(struct.pack(endian + count + index * len(f), len(f), *f) for f in faces)
     return header(fmt, len(verts) if nv is None else nv, len(faces) if nf is None else nf, **kw) + body
+
+
+def icosphere(subdivisions=4):
+    """A unit icosphere: 20 * 4^s faces (5,120 for s = 4), vertices rounded to single precision."""
+    t = (1 + 5 ** 0.5) / 2
+    verts = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
+             (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+    faces = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2),
+             (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5), (2, 4, 11),
+             (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+    for _ in range(subdivisions):
+        mid, out = {}, []
+
+        def middle(a, b):
+            key = (min(a, b), max(a, b))
+            if key not in mid:
+                verts.append(tuple((x + y) / 2 for x, y in zip(verts[a], verts[b])))
+                mid[key] = len(verts) - 1
+            return mid[key]
+        for a, b, c in faces:
+            ab, bc, ca = middle(a, b), middle(b, c), middle(c, a)
+            out += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+        faces = out
+    unit = []
+    for v in verts:
+        n = sum(x * x for x in v) ** 0.5
+        unit.append(tuple(struct.unpack("<f", struct.pack("<f", x / n))[0] for x in v))
+    return unit, faces
+
+
+def scaled(verts, k):
+    """The vertices times 2^k: exact while the coordinates stay in single precision's range."""
+    return [tuple(x * 2.0 ** k for x in v) for v in verts]
 
 
 def corpus():
@@ -97,11 +130,23 @@ def corpus():
     add("bowtie_quad", ascii_ply(verts=[(0, 0, 0), (1, 1, 0), (1, 0, 0), (0, 1, 0)], faces=[(0, 1, 2, 3)]),
         "edges cross")
     add("double_1e300", binary_ply(verts=[(1e300, 0, 0)] + V[1:], coord="d"), "beyond single precision")
+    # Ambiguous files (issue 24): refused rather than guessed.
+    add("fractional_indices", ascii_ply(faces=F[:-1] + [(0.5, 2.7, 4.2)], fprops=("list uchar float vertex_indices",)),
+        "not a whole number")
+    add("duplicate_property", ascii_ply(verts=[v + (9,) for v in V], vprops=("float x", "float y", "float z", "float x")),
+        "twice")
+    add("both_index_lists", ascii_ply(fprops=("list uchar int vertex_indices", "list uchar int vertex_index")).replace(
+        b"\n".join(b"3 %d %d %d" % f for f in F), b"\n".join(b"3 %d %d %d 3 0 1 2" % f for f in F)),
+        "both a vertex_indices and a vertex_index")
+    add("fifo", "fifo", "is a FIFO")  # a named pipe: refused before it is opened (open() blocks)
     # Read, then refused by what the mesh is (exit 2 in every command that needs faces).
     add("nan_coordinates", ascii_ply(verts=[("nan", 0, 0)] + V[1:]), "ok")
     add("inf_coordinates", ascii_ply(verts=[("inf", 0, 0)] + V[1:]), "ok")
     add("coordinates_1e19", ascii_ply(verts=[tuple(x * 1e19 for x in v) for v in V]), "ok")
     add("no_faces", ascii_ply(faces=[]), "ok")
+    add("unreferenced_vertex_1e20", binary_ply(verts=V + [(1e20, 0, 0)]), "ok")  # crashed the sampled distance
+    add("scaled_2pow-100", binary_ply(verts=scaled(V, -100)), "ok")  # the progressive mesh took 100x as long
+    add("scaled_1e-40", binary_ply(verts=[tuple(x * 1e-40 for x in v) for v in V]), "ok")  # denormal coordinates
     add("all_zero_area", ascii_ply(verts=[(0, 0, 0), (1, 0, 0), (2, 0, 0)], faces=[(0, 1, 2)]), "ok")
     # Awkward but valid: read exactly.
     add("big_endian_double", binary_ply(endian=">", coord="d"), "ok")
@@ -113,6 +158,8 @@ def corpus():
     add("crlf_header", ascii_ply().replace(b"\n", b"\r\n"), "ok")
     add("quads", ascii_ply(verts=[(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1)],
                            faces=[(0, 3, 2, 1), (0, 1, 5, 4)]), "ok")
+    add("corner_on_diagonal_7gon", ascii_ply(verts=[(1, 0, 0), (2, 0, 0), (3, 1, 0), (3, 3, 0), (1, 4, 0), (0, 4, 0),
+                                                    (1, 2, 0)], faces=[tuple(range(7))]), "ok")
     add("nonconvex_7gon", ascii_ply(verts=[(0, 0, 0), (4, 0, 0), (4, 3, 0), (3, 1, 0), (2, 3, 0), (1, 1, 0), (0, 3, 0)],
                                     faces=[tuple(range(7))]), "ok")
     add("face_quality_nan", ascii_ply(fprops=("list uchar int vertex_indices", "float quality")).replace(

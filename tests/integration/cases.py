@@ -1375,6 +1375,207 @@ def cli_write_refuses_special_files(c):
     assert p.returncode == 3 and not p.stdout and "No such file or directory" in p.stderr.decode(), p
 
 
+# --- Input and files (issue 24) ----------------------------------------------------------------
+
+def corpus_module():
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import bad_inputs
+    return bad_inputs
+
+
+def sphere_ply(c, name, k=0, extra_vertices=()):
+    """The 5,120-face unit icosphere times 2^k (binary PLY), with unreferenced vertices appended."""
+    b = corpus_module()
+    verts, faces = b.icosphere(4)
+    path = c.out(name)
+    open(path, "wb").write(b.binary_ply(b.scaled(verts, k) + list(extra_vertices), faces))
+    return path
+
+
+def without(r, *keys):
+    return {k: v for k, v in r.items() if k not in keys}
+
+
+@case
+def cli_unreferenced_far_vertex(c):
+    """An unreferenced vertex at 1e20 (1e19 was fine) crashed the sampled-distance grid (SIGSEGV) in
+    progressive and simplify --hierarchy --samples: it no longer enters the grid or its box, and the
+    figures are those of the mesh without it."""
+    plain = sphere_ply(c, "plain.ply")
+    for far in (1e20, -3e38):
+        mesh = sphere_ply(c, "far.ply", extra_vertices=[(far, 0, 0)])
+        r0 = json.loads(c.conelod("progressive", plain, "--clusters", "50", "--samples", "20000", "-o", c.out("p0.ply"),
+                                  "--json").stdout)
+        r1 = json.loads(c.conelod("progressive", mesh, "--clusters", "50", "--samples", "20000", "-o", c.out("p1.ply"),
+                                  "--json").stdout)
+        keep = ("seconds", "tree_seconds", "input", "output")
+        assert without(r0, *keep) == without(r1, *keep), (r0, r1)
+        h0 = c.conelod("simplify", plain, "--hierarchy", "--samples", "20000", "-o", c.out("h0")).stdout.decode()
+        h1 = c.conelod("simplify", mesh, "--hierarchy", "--samples", "20000", "-o", c.out("h1")).stdout.decode()
+        strip = lambda t: [re.sub(r" in [0-9.]+ s", "", l) for l in t.splitlines()[1:]]
+        assert strip(h0) == strip(h1), (h0, h1)
+
+
+@case
+def meshlab_progressive_unreferenced_far_vertex(c):
+    """Progressive Cluster Mesh on a mesh with an unreferenced vertex at 1e20: meshlabserver was killed
+    (SIGSEGV in the sampled distance); now the filter runs and reports a finite Hausdorff distance."""
+    mesh = sphere_ply(c, "far.ply", extra_vertices=[(1e20, 0, 0)])
+    rc, log = c.meshlab([mesh], c.mlx("progressive_cluster_mesh.mlx"), c.out("far_out.ply"), expect_ok=False)
+    assert rc == 0, "meshlabserver exit %d\n%s" % (rc, log[-2000:])
+    assert last_float(log, "progressive_faces") > 0 and 0 < last_float(log, "hausdorff_percent") < 10, log[-1500:]
+
+
+@case
+def cli_progressive_scale_independent(c):
+    """The 5,120-face sphere times 2^k: the same progressive mesh (positions times 2^k, the same faces
+    and clusters, distances times 2^k) for every k the tool reads (k <= 59: beyond +-1e18 coordinates
+    are refused), in at most twice the time of k = 0 (times 1e-30 took 100x before, with another mesh)."""
+    import math
+    runs = {}
+    for k in (0, -100, -64, -30, 30, 59):
+        path = sphere_ply(c, "s%d.ply" % k, k)
+        out = c.out("o%d.ply" % k)
+        start = os.times()
+        r = json.loads(c.conelod("progressive", path, "--clusters", "50", "--samples", "20000", "-o", out,
+                                 "--json").stdout)
+        end = os.times()
+        runs[k] = (r, read_ply(out), (end.children_user + end.children_system) - (start.children_user +
+                                                                                   start.children_system))
+    r0, ply0, cpu0 = runs[0]
+    for k, (r, ply, cpu) in runs.items():
+        assert ply["faces"] == ply0["faces"] and ply["quality"] == ply0["quality"], k
+        assert ply["positions"] == [tuple(x * 2.0 ** k for x in p) for p in ply0["positions"]], k
+        for key in ("hausdorff", "mean_distance_to_input", "rms_distance_from_input"):
+            assert math.isclose(r[key], r0[key] * 2.0 ** k, rel_tol=1e-5), (k, key, r[key], r0[key])
+        assert r["hausdorff_percent"] == r0["hausdorff_percent"] and r["faces"] == r0["faces"], (k, r, r0)
+        assert cpu <= 2 * cpu0 + 0.3, "2^%d: %.2f s CPU against %.2f s at 2^0" % (k, cpu, cpu0)
+    p = c.conelod("progressive", sphere_ply(c, "s60.ply", 60), "--clusters", "50", "-o", c.out("o60.ply"), expect=2)
+    assert "1e18" in p.stderr.decode(), p.stderr.decode()
+
+
+@case
+def cli_fifo_input_refused(c):
+    """A FIFO as input blocked every command for ever (open() waits for a writer): refused at once,
+    exit 3, naming it."""
+    fifo = c.out("in.ply")
+    os.mkfifo(fifo)
+    commands = [["info"], ["group", "-o", c.out("x.ply")], ["progressive", "--clusters", "4", "-o", c.out("x.ply")],
+                ["simplify", "--groups", "cone:auto", "--target-ratio", "0.5", "-o", c.out("x.ply")], ["lod", "build", "-o", c.out("x.clod")],
+                ["lod", "info"], ["lod", "extract", "--eye", "0,0,5", "--budget", "10", "-o", c.out("x.ply")]]
+    for cmd in commands:
+        args = cmd[:2] + [fifo] + cmd[2:] if cmd[0] == "lod" else cmd[:1] + [fifo] + cmd[1:]
+        try:
+            p = subprocess.run([c.cli] + args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=20)
+        except subprocess.TimeoutExpired:
+            raise AssertionError("conelod %s blocked on a FIFO" % " ".join(cmd))
+        err = p.stderr.decode()
+        assert p.returncode == 3 and "is a FIFO" in err and fifo in err, (cmd, p.returncode, err)
+    assert not os.path.exists(c.out("x.ply")) and not os.path.exists(c.out("x.clod"))
+
+
+@case
+def viewer_fifo_input_refused(c):
+    """conelod-viewer on a FIFO blocked for ever: refused at once with exit 2, naming it."""
+    fifo = c.out("in.clod")
+    os.mkfifo(fifo)
+    viewer = os.path.join(c.build, "viewer", "conelod-viewer")
+    try:
+        p = subprocess.run(["xvfb-run", "-a", viewer, fifo, "--screenshot", c.out("x.png")], stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, timeout=60, cwd=c.tmp)
+    except subprocess.TimeoutExpired:
+        raise AssertionError("conelod-viewer blocked on a FIFO")
+    err = p.stderr.decode()
+    assert p.returncode == 2 and "is a FIFO" in err and fifo in err, (p.returncode, err)
+    assert not os.path.exists(c.out("x.png"))
+
+
+def run_on_tiny_tmpfs(c, shell, size="64k"):
+    """Runs `shell` (sh -c, $D the mount point) in a private mount namespace with a tmpfs of `size` at
+    $D; returns the CompletedProcess, or None when mounting is not allowed here."""
+    folder = c.out("tmpfs")
+    os.makedirs(folder, exist_ok=True)
+    script = 'mount -t tmpfs -o size=%s tmpfs "$D" || exit 99\n%s' % (size, shell)
+    try:
+        p = subprocess.run(["unshare", "-m", "sh", "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           timeout=120, env=dict(os.environ, D=folder, CLI=c.cli))
+    except OSError:
+        return None
+    return None if p.returncode == 99 or b"unshare failed" in p.stderr else p
+
+
+@case
+def cli_write_error_names_the_reason(c):
+    """A PLY write that fails says the system's reason: "File too large" under a file-size limit,
+    "No space left on device" on a full file system (a 64 KiB tmpfs, where mounting is allowed), not
+    vcglib's "Output Stream Error"; the target is untouched and no temporary file is left."""
+    mesh = c.mesh("fandisk.ply")
+    p = run_limited(c, ["group", mesh, "-o", c.out("g.ply")], 50 * 1024)
+    err = p.stderr.decode()
+    assert p.returncode == 3 and "File too large" in err and "Output Stream Error" not in err, (p.returncode, err)
+    assert not os.path.exists(c.out("g.ply"))
+    assert_no_temporaries(c.tmp)
+    p = run_on_tiny_tmpfs(c, 'printf old > "$D/g.ply"; "$CLI" group %s -o "$D/g.ply"; echo "rc=$?"; cat "$D/g.ply"; '
+                             'echo; ls -A "$D"' % mesh)
+    if p is None:
+        print("no tmpfs here (mount not allowed): the file-size limit alone")
+        return
+    out, err = p.stdout.decode(), p.stderr.decode()
+    assert "rc=3" in out and "No space left on device" in err and "Output Stream Error" not in err, (out, err)
+    assert out.splitlines()[1:] == ["old", "g.ply"], out  # the target as it was, no temporary file
+
+
+@case
+def cli_budget_writes_both_or_neither(c):
+    """budget -o X --mask M when X cannot be written: M keeps its old content (it was replaced, then X
+    failed); when both can be, both are written."""
+    mesh, mask, out = c.mesh("fandisk.ply"), c.out("m.pgm"), c.out("x.ply")
+    open(mask, "wb").write(b"old mask")
+    args = ["budget", mesh, "--width", "64", "--height", "64", "-o", out, "--mask", mask]
+    p = run_limited(c, args, 50 * 1024)  # the mask (4 KiB) fits, the mesh (300 KiB) does not
+    assert p.returncode == 3 and "File too large" in p.stderr.decode(), (p.returncode, p.stderr.decode())
+    assert open(mask, "rb").read() == b"old mask", "the mask was replaced although the mesh failed"
+    assert not os.path.exists(out)
+    assert_no_temporaries(c.tmp)
+    c.conelod(*args)
+    assert open(mask, "rb").read(2) == b"P5" and len(read_ply(out)["faces"]) > 0
+
+
+@case
+def cli_stale_temporaries_removed(c):
+    """A write killed with SIGKILL leaves its hidden temporary file; the next write of the same target
+    removes it once it is 10 minutes old and its writer is gone, and nothing else: not a younger one,
+    not another target's, not a file of another program."""
+    import signal
+    import time
+    folder = c.out("kills")
+    os.mkdir(folder)
+    target = os.path.join(folder, "d.clod")
+    left = []
+    for attempt in range(3):
+        proc = subprocess.Popen([c.cli, "lod", "build", c.mesh("stanford_dragon_vrip_binary.ply"), "-o", target],
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        deadline = time.time() + 120
+        temps = []
+        while time.time() < deadline and not temps:
+            temps = [n for n in os.listdir(folder) if n.startswith(".d.clod.") and n not in left]
+            time.sleep(0.05)
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+        assert temps, "no temporary file appeared"
+        left += temps
+    assert len(left) == 3 and not os.path.exists(target), left
+    old = time.time() - 11 * 60
+    for n in left[:2]:
+        os.utime(os.path.join(folder, n), (old, old))  # two of them left 11 minutes ago, one just now
+    others = [".other.clod" + left[0][len(".d.clod"):], ".d.clod.AbCdEf"]  # another target; not ours
+    for n in others:
+        open(os.path.join(folder, n), "wb").write(b"x")
+        os.utime(os.path.join(folder, n), (old, old))
+    c.conelod("lod", "build", c.mesh("fandisk.ply"), "-o", target)
+    assert sorted(os.listdir(folder)) == sorted(["d.clod", left[2]] + others), os.listdir(folder)
+
+
 # --- Bad inputs: a generated corpus (bad_inputs.py) x every command ---
 
 CORPUS_COMMANDS = [
@@ -1401,6 +1602,8 @@ def corpus_table(c):
         path = os.path.join(folder, name + ".ply")
         if data == "dir":
             os.mkdir(path)
+        elif data == "fifo":
+            os.mkfifo(path)
         elif data is not None:
             open(path, "wb").write(data)
         codes, message = [], ""

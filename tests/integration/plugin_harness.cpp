@@ -30,6 +30,11 @@
 #include <wrap/io_trimesh/import_ply.h>
 
 #include <sys/stat.h>
+#include <fcntl.h>
+#include <unistd.h>
+#include <chrono>
+#include <thread>
+#include <QElapsedTimer>
 
 #define HARNESS_TEXT(x) #x
 #define HARNESS_STRING(x) HARNESS_TEXT(x)
@@ -296,6 +301,14 @@ void ApplyEveryFilter(Run& r) {
     Check(QString::number(md.mm()->cm.fn) == Figure(log, "progressive_faces"), "  the layer has the logged faces");
     r.digest[kProgressive] = Digest(md, log, {"progressive_faces", "progressive_vertices"});
   }
+  {  // An unreferenced vertex at 1e20 stretched the sampled distance's grid: meshlabserver was killed
+     // (SIGSEGV). It is left out of the grid and its box: the filter runs.
+    MeshDocument md;
+    MeshModel* mm = Load(md, r.bunny);
+    vcg::tri::Allocator<CMeshO>::AddVertices(mm->cm, 1)->P() = CMeshO::CoordType(1e20f, 0, 0);
+    Check(r.apply(kProgressive, md).isEmpty(), "progressive cluster mesh with an unreferenced vertex at 1e20");
+    Check(Figure(log, "progressive_faces").toInt() > 0, "  it makes a coarse mesh");
+  }
   {
     MeshDocument md;
     MeshModel* mm = Load(md, r.bunny);
@@ -453,6 +466,25 @@ void Failures(Run& r) {
     cut.open(QIODevice::WriteOnly);
     cut.write(bytes.left(bytes.size() / 2));
     cut.close();
+    {  // A FIFO as the LOD file to read: open() blocked MeshLab for ever; refused before opening it.
+       // (Should it block, a writer comes after 3 s: the test then fails instead of hanging.)
+      const QString inFifo = r.dir.filePath("in_fifo.clod");
+      Check(mkfifo(qUtf8Printable(inFifo), 0644) == 0, "a FIFO to read is made");
+      std::thread writer([&] {
+        std::this_thread::sleep_for(std::chrono::seconds(3));
+        const int fd = ::open(qUtf8Printable(inFifo), O_WRONLY | O_NONBLOCK);
+        if (fd >= 0) ::close(fd);
+      });
+      par = r.params(kExtract, md);
+      harness::SetPath(par, "FileName", inFifo);
+      QElapsedTimer timer;
+      timer.start();
+      r.refused(kExtract, md, par, "is a FIFO", "a FIFO as the LOD file to read");
+      Check(timer.elapsed() < 2000, "  at once");
+      const int reader = ::open(qUtf8Printable(inFifo), O_RDONLY | O_NONBLOCK);  // frees a waiting writer
+      writer.join();
+      if (reader >= 0) ::close(reader);
+    }
     for (const QString& bad : {r.dir.filePath("missing.clod"), truncated}) {
       par = r.params(kExtract, md);
       harness::SetPath(par, "FileName", bad);

@@ -3,7 +3,9 @@
 // it replaces the target.
 #pragma once
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -43,18 +45,25 @@ std::string LoadPlyChecked(MeshType& m, const std::string& path, int* loadMask =
   return "";
 }
 
-// Writes `m` as binary PLY (vcglib's exporter, `mask` as for ExporterPLY::Save) to a temporary file
-// that replaces `path` only once it is complete: vcglib does not check its writes, so the
-// temporary file's size is checked against its own header. "" or the error; `path` is untouched
-// on error.
+// Writes `m` as binary PLY (vcglib's exporter, `mask` as for ExporterPLY::Save) into `out`'s
+// temporary file for `path`, checks it and syncs it (SafeFile::sync): `out.commit()` then puts it
+// in place. vcglib does not check its writes, so the temporary file's size is checked against its
+// own header; when vcglib reports a write error the system's reason is given ("No space left on
+// device", "File too large"). "" or the error; `path` is untouched on error.
 template <class MeshType>
-std::string SavePlySafely(MeshType& m, const std::string& path, int mask) {
-  SafeFile out;
+std::string WritePlyUncommitted(MeshType& m, const std::string& path, int mask, SafeFile& out) {
   std::string err = out.open(path);
   if (!err.empty()) return err;
   const std::string& temp = out.ReleaseForWriter();
+  errno = 0;
   const int e = vcg::tri::io::ExporterPLY<MeshType>::Save(m, temp.c_str(), mask, true);
-  if (e != 0) return "cannot write '" + path + "': " + vcg::tri::io::ExporterPLY<MeshType>::ErrorMsg(e);
+  const int writeErrno = errno;
+  if (e != 0) {
+    out.discard();
+    const bool streamError = e == vcg::ply::E_STREAMERROR && writeErrno != 0;
+    return "cannot write '" + path + "': " +
+           (streamError ? std::string(std::strerror(writeErrno)) : vcg::tri::io::ExporterPLY<MeshType>::ErrorMsg(e));
+  }
   std::FILE* f = std::fopen(temp.c_str(), "rb");
   if (!f) return "cannot write '" + path + "': the written file cannot be read back";
   std::vector<char> head(1 << 16);
@@ -66,7 +75,15 @@ std::string SavePlySafely(MeshType& m, const std::string& path, int mask) {
   if (size < 0 || !ParsePlyHeader(head.data(), n, h, uint64_t(size)).empty() || PlyTriangleFileBytes(h) == 0 ||
       uint64_t(size) < PlyTriangleFileBytes(h))
     return "cannot write '" + path + "': the file came out incomplete (disk full or file size limit?)";
-  return out.commit();
+  return out.sync();
+}
+
+// WritePlyUncommitted, then the temporary file replaces `path`. "" or the error.
+template <class MeshType>
+std::string SavePlySafely(MeshType& m, const std::string& path, int mask) {
+  SafeFile out;
+  const std::string err = WritePlyUncommitted(m, path, mask, out);
+  return err.empty() ? out.commit() : err;
 }
 
 }  // namespace conelod

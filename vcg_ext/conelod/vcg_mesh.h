@@ -35,4 +35,11 @@ inline std::string SavePly(CMesh& m, const std::string& path, int extraMask = 0)
   return SavePlySafely(m, path, vcg::tri::io::Mask::IOM_FACEQUALITY | vcg::tri::io::Mask::IOM_FACECOLOR | extraMask);
 }
 
+// The same, written and synced into `out` but not yet in place: `out.commit()` does that (for
+// commands that write two files, both or neither).
+inline std::string SavePlyUncommitted(CMesh& m, const std::string& path, SafeFile& out, int extraMask = 0) {
+  return WritePlyUncommitted(m, path,
+                             vcg::tri::io::Mask::IOM_FACEQUALITY | vcg::tri::io::Mask::IOM_FACECOLOR | extraMask, out);
+}
+
 }  // namespace conelod

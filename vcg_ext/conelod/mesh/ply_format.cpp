@@ -1,6 +1,8 @@
 // ConeLOD — the checked PLY reader (ply_format.h).
 #include "conelod/mesh/ply_format.h"
 
+#include "conelod/mesh/safe_file.h"
+
 #include <algorithm>
 #include <cerrno>
 #include <cfloat>
@@ -251,6 +253,10 @@ std::string ParsePlyHeader(const char* data, size_t size, PlyHeader& h, uint64_t
       } else {
         return where + ": expected 'property TYPE NAME' or 'property list COUNTTYPE TYPE NAME'";
       }
+      for (const PlyProperty& q : current->properties)
+        if (q.name == p.name)
+          return where + ": the element '" + current->name + "' declares a property '" + p.name +
+                 "' twice (which one holds the values is ambiguous)";
       current->properties.push_back(p);
     } else {
       return where + ": unknown keyword '" + w[0] + "'";
@@ -345,34 +351,54 @@ std::string TriangulatePolygon(const std::vector<std::array<float, 3>>& P, const
     }
   std::vector<size_t> ring(n);
   for (size_t i = 0; i < n; ++i) ring[i] = i;
-  auto isEar = [&](size_t k, bool allowFlat) {
+  // Whether the corner at ring position k can be clipped. Levels, tried in order until a corner
+  // passes, back to 0 after each clip: 0 and 1 refuse a triangle with another corner inside it or
+  // on its boundary (a corner on the diagonal a-c pinches what remains, whose later "ears" can
+  // then come out reversed and outside the polygon); 2 and 3 only one strictly inside (for a
+  // polygon that touches itself, which has no ear by the first test). 1 and 3 also clip a flat
+  // corner (a zero-area triangle; the rest keeps its shape).
+  auto isEar = [&](size_t k, int level) {
     const size_t m = ring.size();
     const double* a = q[ring[(k + m - 1) % m]].data();
     const double* b = q[ring[k]].data();
     const double* c = q[ring[(k + 1) % m]].data();
     const double o = Orient(a, b, c);
+    const bool allowFlat = (level & 1) != 0;
     if (o < 0 || (o == 0 && !allowFlat)) return false;
     if (o == 0) return true;  // a flat corner: clipping it adds a zero-area triangle and keeps the rest
+    auto same = [](const double* x, const double* y) { return x[0] == y[0] && x[1] == y[1]; };
     for (size_t j = 0; j < m; ++j) {
-      const double* p = q[ring[j]].data();
       if (j == k || j == (k + 1) % m || j == (k + m - 1) % m) continue;
-      if (Orient(a, b, p) > 0 && Orient(b, c, p) > 0 && Orient(c, a, p) > 0) return false;
+      const double* p = q[ring[j]].data();
+      const double oab = Orient(a, b, p), obc = Orient(b, c, p), oca = Orient(c, a, p);
+      if (oab > 0 && obc > 0 && oca > 0) return false;
+      if (level >= 2 || oab < 0 || obc < 0 || oca < 0) continue;
+      // p is on the triangle's boundary.
+      if (same(p, a) || same(p, b) || same(p, c)) continue;  // a repeated position: nothing is inside
+      if (oca == 0) {
+        // On the diagonal with both its edges along it (a flat run, as in a convex polygon with
+        // a corner on an edge): what remains is flat there, not pinched.
+        const double* before = q[ring[(j + m - 1) % m]].data();
+        const double* after = q[ring[(j + 1) % m]].data();
+        if (Orient(c, a, before) == 0 && Orient(c, a, after) == 0) continue;
+      }
+      return false;
     }
     return true;
   };
   size_t k = 1, misses = 0;
-  bool allowFlat = false;
+  int level = 0;
   while (ring.size() > 3) {
     const size_t m = ring.size();
     k %= m;
-    if (isEar(k, allowFlat)) {
+    if (isEar(k, level)) {
       out.push_back({corners[ring[(k + m - 1) % m]], corners[ring[k]], corners[ring[(k + 1) % m]]});
       ring.erase(ring.begin() + long(k));
       misses = 0;
-      allowFlat = false;
+      level = 0;
     } else if (++misses > m) {
-      if (allowFlat) return "is a polygon of " + std::to_string(n) + " corners that ear clipping cannot triangulate";
-      allowFlat = true;
+      if (level == 3) return "is a polygon of " + std::to_string(n) + " corners that ear clipping cannot triangulate";
+      ++level;
       misses = 0;
     } else {
       ++k;
@@ -399,7 +425,13 @@ std::string ParsePly(const char* data, size_t size, const std::string& name, Ply
       const PlyProperty& p = e.properties[i];
       if (isVertex && !p.isList && (p.name == "x" || p.name == "y" || p.name == "z")) xyz[p.name[0] - 'x'] = int(i);
       if (isFace && !p.isList && p.name == "quality") quality = int(i);
-      if (isFace && p.isList && (p.name == "vertex_indices" || p.name == "vertex_index")) indices = int(i);
+      if (isFace && p.isList && (p.name == "vertex_indices" || p.name == "vertex_index")) {
+        if (indices >= 0)
+          return file +
+                 "its face element has both a vertex_indices and a vertex_index list (which one holds the "
+                 "corners is ambiguous)";
+        indices = int(i);
+      }
     }
     if (isVertex && (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0))
       return file + "its vertex element lacks one of the x, y, z properties (non-list)";
@@ -456,6 +488,12 @@ std::string ParsePly(const char* data, size_t size, const std::string& name, Ply
             return file + (in.badToken().empty() ? "ends early, in " + rec
                                                  : rec + ": '" + in.badToken() + "' is not a number");
           if (!isCorners) continue;
+          if (!std::isfinite(v) || v != std::floor(v)) {  // a float index list: 2.7 is no vertex
+            char text[32];
+            std::snprintf(text, sizeof text, "%g", v);
+            return file + "face " + std::to_string(r) + " has the vertex index " + text +
+                   ", which is not a whole number";
+          }
           if (!(v >= 0 && v < double(mesh.positions.size())))
             return file + "face " + std::to_string(r) + " uses vertex " + std::to_string((long long)v) +
                    " but there are " + std::to_string(mesh.positions.size()) + " vertices";
@@ -487,7 +525,13 @@ std::string ReadPly(const std::string& path, PlyMesh& mesh, bool* ioError) {
     if (ioError) *ioError = true;
     return "cannot read '" + path + "': " + what;
   };
-  const int fd = ::open(path.c_str(), O_RDONLY);
+  const std::string notRegular = CheckInputPath(path);  // before open(): opening a FIFO blocks
+  if (!notRegular.empty()) {
+    if (ioError) *ioError = true;
+    return notRegular;
+  }
+  // O_NONBLOCK: should the path have become a FIFO since, open() returns and fstat() refuses it.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0) return fail(std::strerror(errno));
   struct stat st;
   if (fstat(fd, &st) != 0) {

@@ -13,8 +13,11 @@
 // and element is skipped. Faces with more than three corners are triangulated by ear clipping in
 // their own plane (a convex polygon gives the fan from its first corner, as vcglib does); a
 // polygon whose edges cross is refused by name, as is a face with fewer than three corners or an
-// index outside the vertex array. OBJ, OFF, STL and gzip files are recognised and refused with
-// "only PLY is read".
+// index outside the vertex array. What would have to be guessed is refused too: a property
+// declared twice in one element, a face element with both vertex_indices and vertex_index, a
+// fractional index in a float index list. OBJ, OFF, STL and gzip files are recognised and refused
+// with "only PLY is read". ReadPly refuses a path that is not a regular file (a FIFO, a device)
+// before opening it (CheckInputPath, safe_file.h).
 #pragma once
 
 #include <array>
@@ -70,7 +73,8 @@ std::string ReadPly(const std::string& path, PlyMesh& mesh, bool* ioError = null
 std::string ParsePly(const char* data, size_t size, const std::string& name, PlyMesh& mesh);
 
 // Triangulates the polygon `corners` (indices into `positions`) by ear clipping in its plane,
-// appending triangles to `out`. "" or why it cannot (its edges cross).
+// appending triangles to `out`: for a simple polygon every triangle lies inside it with its
+// orientation (or has no area). "" or why it cannot (its edges cross).
 std::string TriangulatePolygon(const std::vector<std::array<float, 3>>& positions, const std::vector<uint32_t>& corners,
                                std::vector<std::array<uint32_t, 3>>& out);
 

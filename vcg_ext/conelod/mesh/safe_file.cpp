@@ -3,11 +3,16 @@
 
 #include <cerrno>
 #include <climits>
+#include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <vector>
 
+#include <dirent.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -63,9 +68,24 @@ std::string ResolveTarget(const std::string& path, std::string& target, unsigned
   return "";
 }
 
+// 8 hex digits of a hash of the host name (FNV-1a): whose process ids a temporary file names.
+std::string HostTag() {
+  char host[256] = {0};
+  if (gethostname(host, sizeof host - 1) != 0) host[0] = '\0';
+  uint32_t h = 2166136261u;
+  for (const char* c = host; *c; ++c) h = (h ^ uint32_t((unsigned char)*c)) * 16777619u;
+  char tag[16];
+  std::snprintf(tag, sizeof tag, "%08x", h);
+  return tag;
+}
+
+// ".NAME.conelod-" : the start of the names of every temporary file of `target`.
+std::string TempPrefix(const std::string& target) { return "." + BaseOf(target) + ".conelod-"; }
+
 // Creates a temporary file beside `target`; returns its descriptor (or -1 with `error` set).
 int MakeTemp(const std::string& target, const std::string& shown, std::string& temp, std::string& error) {
-  std::string name = FolderOf(target) + "/." + BaseOf(target) + ".XXXXXX";
+  std::string name =
+      FolderOf(target) + "/" + TempPrefix(target) + std::to_string(long(getpid())) + "-" + HostTag() + ".XXXXXX";
   std::vector<char> buf(name.begin(), name.end());
   buf.push_back('\0');
   const int fd = mkstemp(buf.data());
@@ -78,6 +98,53 @@ int MakeTemp(const std::string& target, const std::string& shown, std::string& t
 }
 
 }  // namespace
+
+int RemoveStaleTemporaries(const std::string& target, long minAgeSeconds) {
+  const std::string folder = FolderOf(target), prefix = TempPrefix(target), host = HostTag();
+  DIR* dir = opendir(folder.c_str());
+  if (!dir) return 0;
+  std::vector<std::string> stale;
+  const time_t now = time(nullptr);
+  while (const dirent* e = readdir(dir)) {
+    const std::string name = e->d_name;
+    if (name.compare(0, prefix.size(), prefix) != 0) continue;
+    // The rest must be exactly PID-HOST.XXXXXX.
+    const std::string rest = name.substr(prefix.size());
+    const size_t dash = rest.find('-');
+    if (dash == 0 || dash == std::string::npos || dash > 9) continue;
+    const std::string pid = rest.substr(0, dash);
+    if (pid.find_first_not_of("0123456789") != std::string::npos) continue;
+    if (rest.size() != dash + 1 + 8 + 1 + 6 || rest.compare(dash + 1, 8, host) != 0 || rest[dash + 9] != '.') continue;
+    const std::string random = rest.substr(dash + 10);
+    if (random.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789") != std::string::npos)
+      continue;
+    const long id = std::strtol(pid.c_str(), nullptr, 10);
+    if (id <= 0 || id == long(getpid())) continue;
+    if (kill(pid_t(id), 0) == 0 || errno != ESRCH) continue;  // running (or not ours to ask): kept
+    const std::string path = folder + "/" + name;
+    struct stat st;
+    if (lstat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode) || st.st_uid != geteuid()) continue;
+    if (now - st.st_mtime < minAgeSeconds) continue;
+    stale.push_back(path);
+  }
+  closedir(dir);
+  int removed = 0;
+  for (const std::string& path : stale) removed += unlink(path.c_str()) == 0 ? 1 : 0;
+  return removed;
+}
+
+std::string CheckInputPath(const std::string& path, bool existingOnly) {
+  const std::string prefix = "cannot read '" + path + "': ";
+  struct stat st;
+  if (stat(path.c_str(), &st) != 0) return existingOnly ? "" : prefix + Reason(errno);
+  if (S_ISREG(st.st_mode)) return "";
+  if (S_ISDIR(st.st_mode)) return prefix + "it is a folder";
+  const char* what = S_ISFIFO(st.st_mode)                         ? "a FIFO (named pipe)"
+                     : S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode) ? "a device"
+                     : S_ISSOCK(st.st_mode)                       ? "a socket"
+                                                                  : "not a regular file";
+  return prefix + "it is " + what + ": only a regular file is read";
+}
 
 std::string CheckOutputPath(const std::string& path) {
   std::string target, temp, error;
@@ -96,6 +163,7 @@ std::string SafeFile::open(const std::string& path) {
   shown_ = path;
   std::string error = ResolveTarget(path, target_, mode_);
   if (!error.empty()) return error;
+  RemoveStaleTemporaries(target_);
   const int fd = MakeTemp(target_, path, temp_, error);
   if (fd < 0) return error;
   file_ = fdopen(fd, "wb");
@@ -115,8 +183,9 @@ const std::string& SafeFile::ReleaseForWriter() {
   return temp_;
 }
 
-std::string SafeFile::commit() {
+std::string SafeFile::sync() {
   if (temp_.empty()) return "cannot write '" + shown_ + "': not opened";
+  if (synced_) return "";
   std::string error;
   auto failed = [&](const char* step, int err) {
     error = "cannot write '" + shown_ + "': " + Reason(err) + " (" + step + ")";
@@ -138,12 +207,24 @@ std::string SafeFile::commit() {
     }
   }
   if (error.empty() && chmod(temp_.c_str(), mode_t(mode_)) != 0) failed("chmod", errno);
-  if (error.empty() && rename(temp_.c_str(), target_.c_str()) != 0) failed("rename", errno);
   if (!error.empty()) {
     discard();
     return error;
   }
+  synced_ = true;
+  return "";
+}
+
+std::string SafeFile::commit() {
+  std::string error = sync();
+  if (!error.empty()) return error;
+  if (rename(temp_.c_str(), target_.c_str()) != 0) {
+    error = "cannot write '" + shown_ + "': " + Reason(errno) + " (rename)";
+    discard();
+    return error;
+  }
   temp_.clear();
+  synced_ = false;
   const int dir = ::open(FolderOf(target_).c_str(), O_RDONLY);  // makes the rename itself durable
   if (dir >= 0) {
     fsync(dir);
@@ -157,6 +238,7 @@ void SafeFile::discard() {
   file_ = nullptr;
   if (!temp_.empty()) unlink(temp_.c_str());
   temp_.clear();
+  synced_ = false;
 }
 
 }  // namespace conelod

@@ -32,7 +32,11 @@ void Fill(const IndexedMesh& in, DMesh& m) {
   for (size_t f = 0; f < in.faces.size(); ++f, ++fi)
     for (int k = 0; k < 3; ++k) fi->V(k) = &m.vert[in.faces[f][size_t(k)]];
   vcg::tri::UpdateNormal<DMesh>::PerFaceNormalized(m);
-  vcg::tri::UpdateBounding<DMesh>::Box(m);
+  // The box of the vertices that faces use: an unreferenced vertex far away (at 1e20, say) would
+  // stretch the grid over a box whose cells float cannot tell apart (a crash in the grid search).
+  m.bbox.SetNull();
+  for (const auto& t : in.faces)
+    for (uint32_t v : t) m.bbox.Add(in.positions[v]);
 }
 
 // Indexes the faces of `target` for closest-face queries at points inside `queries`. vcglib's
@@ -68,6 +72,31 @@ struct Accumulator {
   }
 };
 
+// The power of two that makes the used vertices of `a` and `b` together span about 1 (as
+// NormalizingScale): the grid search runs in single precision, where the squared distances of a
+// model 2^-64 times too small vanish into denormal numbers (a hundred times slower, and zero).
+double JointNormalizingScale(const IndexedMesh& a, const IndexedMesh& b) {
+  vcg::Box3d box = UsedVertexBox(a);
+  box.Add(UsedVertexBox(b));
+  if (box.IsNull()) return 1;
+  const double d = box.Diag();
+  if (!(d > 0) || !std::isfinite(d)) return 1;
+  const int e = std::max(-120, std::min(120, int(std::lround(std::log2(d)))));
+  return std::ldexp(1.0, -e);
+}
+
+// `m` times `scale` (a power of two: exact), or `m` itself when the scale is 1.
+const IndexedMesh& Scaled(const IndexedMesh& m, double scale, IndexedMesh& storage) {
+  if (scale == 1) return m;
+  storage.faces = m.faces;
+  storage.positions.resize(m.positions.size());
+  const float s = float(scale);
+  for (size_t v = 0; v < m.positions.size(); ++v) storage.positions[v] = m.positions[v] * s;
+  return storage;
+}
+
+Status SampledDistanceScaled(const IndexedMesh& from, const IndexedMesh& to, int faceSamples, SurfaceDistance& out);
+
 }  // namespace
 
 Status SampledDistance(const IndexedMesh& from, const IndexedMesh& to, int faceSamples, SurfaceDistance& out) {
@@ -77,6 +106,19 @@ Status SampledDistance(const IndexedMesh& from, const IndexedMesh& to, int faceS
   if (!s.ok()) return s;
   if (faceSamples < 0 || faceSamples > kMaxFaceSamples)
     return Status::Invalid("the number of samples must be from 0 to " + std::to_string(kMaxFaceSamples));
+  // Computed on both meshes times a power of two and scaled back: the same digits at any scale.
+  const double scale = JointNormalizingScale(from, to);
+  IndexedMesh fromStorage, toStorage;
+  s = SampledDistanceScaled(Scaled(from, scale, fromStorage), Scaled(to, scale, toStorage), faceSamples, out);
+  out.max /= scale;
+  out.mean /= scale;
+  out.rms /= scale;
+  return s;
+}
+
+namespace {
+
+Status SampledDistanceScaled(const IndexedMesh& from, const IndexedMesh& to, int faceSamples, SurfaceDistance& out) {
   DMesh target;
   Fill(to, target);
   vcg::Box3f box = target.bbox;
@@ -123,6 +165,8 @@ Status SampledDistance(const IndexedMesh& from, const IndexedMesh& to, int faceS
   return Status::Ok();
 }
 
+}  // namespace
+
 Status SampledHausdorff(const IndexedMesh& a, const IndexedMesh& b, int faceSamples, HausdorffResult& out) {
   out = HausdorffResult();
   Status s = SampledDistance(a, b, faceSamples, out.ab);
@@ -136,8 +180,12 @@ Status SampledHausdorff(const IndexedMesh& a, const IndexedMesh& b, int faceSamp
   return Status::Ok();
 }
 
-size_t CountFacesAgainstSurface(const IndexedMesh& coarse, const IndexedMesh& reference) {
-  if (reference.faces.empty()) return 0;
+size_t CountFacesAgainstSurface(const IndexedMesh& coarseIn, const IndexedMesh& referenceIn) {
+  if (referenceIn.faces.empty()) return 0;
+  const double scale = JointNormalizingScale(coarseIn, referenceIn);  // as in SampledDistance
+  IndexedMesh coarseStorage, referenceStorage;
+  const IndexedMesh& coarse = Scaled(coarseIn, scale, coarseStorage);
+  const IndexedMesh& reference = Scaled(referenceIn, scale, referenceStorage);
   DMesh target;
   Fill(reference, target);
   vcg::Box3f box;

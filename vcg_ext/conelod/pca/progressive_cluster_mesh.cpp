@@ -2,6 +2,7 @@
 #include "conelod/pca/progressive_cluster_mesh.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 #include "conelod/mesh/mesh_check.h"
@@ -387,6 +388,32 @@ Status BuildProgressiveClusterMesh(const IndexedMesh& mesh, const PcaTree& tree,
   result.clusters = target;
   if (progress && !progress(100, "progressive mesh: done")) return Status::Cancelled();
   out = std::move(result);
+  return Status::Ok();
+}
+
+Status BuildProgressiveClusterMeshOf(const IndexedMesh& mesh, const ProgressiveMeshParams& params,
+                                     ProgressiveMeshResult& out, const Progress& progress, double* treeSeconds) {
+  out = ProgressiveMeshResult();
+  Status s = ValidateParams(params);
+  if (!s.ok()) return s;
+  s = RequireValidForFaces(mesh);
+  if (!s.ok()) return s;
+  const auto start = std::chrono::steady_clock::now();
+  const float scale = float(NormalizingScale(mesh));
+  IndexedMesh scaled;
+  scaled.faces = mesh.faces;
+  scaled.positions.reserve(mesh.positions.size());
+  for (const auto& p : mesh.positions) scaled.positions.push_back(p * scale);
+  PcaTree tree;
+  s = BuildPcaTree(scaled, PcaPartitionParams(), tree, SubProgress(progress, 0, 40));
+  if (!s.ok()) return s;
+  if (treeSeconds) *treeSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ProgressiveMeshResult r;
+  s = BuildProgressiveClusterMesh(scaled, tree, params, r, SubProgress(progress, 40, 100));
+  if (!s.ok()) return s;
+  // Every coarse vertex is an input vertex (half-edge collapses move none): its position as given.
+  for (size_t v = 0; v < r.mesh.positions.size(); ++v) r.mesh.positions[v] = mesh.positions[r.vertexOrigin[v]];
+  out = std::move(r);
   return Status::Ok();
 }
 

@@ -59,4 +59,14 @@ struct ProgressiveMeshResult {
 Status BuildProgressiveClusterMesh(const IndexedMesh& mesh, const PcaTree& tree, const ProgressiveMeshParams& params,
                                    ProgressiveMeshResult& out, const Progress& progress = Progress());
 
+// The same from the mesh alone: its PCA tree (PcaPartitionParams() defaults) and the coarse mesh,
+// both computed on the mesh times NormalizingScale(mesh) (a power of two, so exact) and the
+// result's positions scaled back. The tree keeps its errors and areas in single precision in the
+// model's units, where a model 2^-60 times too small has them all zero (the merge order lost) and
+// the PCA's sums in denormal numbers (a hundred times slower); scaled, the result of a mesh times
+// 2^k is that of the mesh times 2^k, bit for bit. `treeSeconds` (optional): the tree's time.
+Status BuildProgressiveClusterMeshOf(const IndexedMesh& mesh, const ProgressiveMeshParams& params,
+                                     ProgressiveMeshResult& out, const Progress& progress = Progress(),
+                                     double* treeSeconds = nullptr);
+
 }  // namespace conelod

@@ -1,9 +1,19 @@
 // Tests of the checked PLY reader (ply_format.h): small inline files with exact expectations.
 #include "conelod/mesh/ply_format.h"
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <random>
 #include <string>
+#include <thread>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 
@@ -89,6 +99,197 @@ TEST(PlyFormat, EarClipsNonConvexPolygon) {
     one.triangles = {t};
     EXPECT_GT(SignedAreaZ(one), 0);
   }
+}
+
+namespace {
+
+double Orient2(const std::array<float, 3>& a, const std::array<float, 3>& b, const std::array<float, 3>& c) {
+  return (double(b[0]) - a[0]) * (double(c[1]) - a[1]) - (double(b[1]) - a[1]) * (double(c[0]) - a[0]);
+}
+
+// Whether p is strictly inside the polygon `ring` (z = 0; crossing number).
+bool InsidePolygon(const std::vector<std::array<float, 3>>& ring, double x, double y) {
+  bool inside = false;
+  for (size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
+    const double xi = ring[i][0], yi = ring[i][1], xj = ring[j][0], yj = ring[j][1];
+    if ((yi > y) != (yj > y) && x < (xj - xi) * (y - yi) / (yj - yi) + xi) inside = !inside;
+  }
+  return inside;
+}
+
+// Checks the triangulation of the simple polygon `ring` (z = 0, corners 0..n-1 in order):
+// every triangle has the polygon's orientation (or no area), lies inside it (its centroid does),
+// and together they cover exactly its area. "" or what is wrong.
+std::string CheckTriangulation(const std::vector<std::array<float, 3>>& ring,
+                               const std::vector<std::array<uint32_t, 3>>& tris) {
+  double area = 0;
+  for (size_t i = 0; i < ring.size(); ++i) {
+    const auto& p = ring[i];
+    const auto& q = ring[(i + 1) % ring.size()];
+    area += 0.5 * (double(p[0]) * q[1] - double(q[0]) * p[1]);
+  }
+  const double sign = area > 0 ? 1 : -1;
+  if (tris.size() != ring.size() - 2) return "not n - 2 triangles";
+  double sum = 0;
+  for (const auto& t : tris) {
+    const double a = 0.5 * sign * Orient2(ring[t[0]], ring[t[1]], ring[t[2]]);
+    if (a < 0)
+      return "a reversed triangle " + std::to_string(t[0]) + " " + std::to_string(t[1]) + " " + std::to_string(t[2]);
+    if (a > 0) {
+      const double cx = (double(ring[t[0]][0]) + ring[t[1]][0] + ring[t[2]][0]) / 3;
+      const double cy = (double(ring[t[0]][1]) + ring[t[1]][1] + ring[t[2]][1]) / 3;
+      if (!InsidePolygon(ring, cx, cy)) return "a triangle outside the polygon";
+    }
+    sum += a;
+  }
+  if (std::fabs(sum - std::fabs(area)) > 1e-9 * std::max(1.0, std::fabs(area)))
+    return "the triangles cover " + std::to_string(sum) + ", the polygon " + std::to_string(std::fabs(area));
+  return "";
+}
+
+bool Cross(const std::array<float, 3>& a, const std::array<float, 3>& b, const std::array<float, 3>& c,
+           const std::array<float, 3>& d) {
+  return Orient2(a, b, c) * Orient2(a, b, d) < 0 && Orient2(c, d, a) * Orient2(c, d, b) < 0;
+}
+
+// A random simple polygon with corners on a small integer grid (many corners on others'
+// diagonals): random points, edges that cross uncrossed by reversing the run between them (2-opt),
+// kept only when simple (no crossing, no corner on another edge, no repeated corner).
+bool RandomSimplePolygon(std::mt19937& rng, std::vector<std::array<float, 3>>& ring) {
+  const int n = std::uniform_int_distribution<int>(4, 12)(rng);
+  const int grid = std::uniform_int_distribution<int>(3, 8)(rng);
+  std::uniform_int_distribution<int> coord(0, grid);
+  ring.clear();
+  for (int i = 0; i < n; ++i) ring.push_back({float(coord(rng)), float(coord(rng)), 0.f});
+  for (int i = 0; i < n; ++i)
+    for (int j = i + 1; j < n; ++j)
+      if (ring[size_t(i)] == ring[size_t(j)]) return false;
+  for (int round = 0; round < 200; ++round) {
+    bool changed = false;
+    for (int i = 0; i < n; ++i)
+      for (int j = i + 2; j < n; ++j) {
+        if (i == 0 && j == n - 1) continue;
+        if (Cross(ring[size_t(i)], ring[size_t(i + 1)], ring[size_t(j)], ring[size_t((j + 1) % n)])) {
+          std::reverse(ring.begin() + i + 1, ring.begin() + j + 1);
+          changed = true;
+        }
+      }
+    if (!changed) break;
+  }
+  for (int i = 0; i < n; ++i) {
+    const auto& a = ring[size_t(i)];
+    const auto& b = ring[size_t((i + 1) % n)];
+    for (int j = 0; j < n; ++j) {
+      if (j == i || j == (i + 1) % n) continue;
+      const auto& p = ring[size_t(j)];
+      if (Orient2(a, b, p) == 0 && std::min(a[0], b[0]) <= p[0] && p[0] <= std::max(a[0], b[0]) &&
+          std::min(a[1], b[1]) <= p[1] && p[1] <= std::max(a[1], b[1]))
+        return false;
+      if (j > i + 1 && !(i == 0 && j == n - 1) && Cross(a, b, p, ring[size_t((j + 1) % n)])) return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+// A 7-gon with a corner (6) on the diagonal 0-4: the ear 0-4-5 was clipped past it, and what was
+// left, pinched at corner 6, gave the triangle 0-5-6, reversed and outside the polygon.
+TEST(PlyFormat, EarClipsPolygonWithACornerOnADiagonal) {
+  const std::string f =
+      "ply\nformat ascii 1.0\nelement vertex 7\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+      "1 0 0\n2 0 0\n3 1 0\n3 3 0\n1 4 0\n0 4 0\n1 2 0\n7 0 1 2 3 4 5 6\n";
+  PlyMesh m;
+  ASSERT_EQ(Read(f, m), "");
+  EXPECT_EQ(CheckTriangulation(m.positions, m.triangles), "");
+}
+
+// Every triangle of a simple polygon lies inside it with its orientation, both orientations, for
+// random polygons on small grids (on the reader before, 5 % of them failed).
+TEST(PlyFormat, EarClipsRandomSimplePolygons) {
+  std::mt19937 rng(24);
+  int tested = 0, failed = 0;
+  std::string first;
+  while (tested < 3000) {
+    std::vector<std::array<float, 3>> ring;
+    if (!RandomSimplePolygon(rng, ring)) continue;
+    if (tested % 2) std::reverse(ring.begin(), ring.end());  // both orientations
+    ++tested;
+    std::vector<uint32_t> corners(ring.size());
+    for (size_t i = 0; i < ring.size(); ++i) corners[i] = uint32_t(i);
+    std::vector<std::array<uint32_t, 3>> tris;
+    std::string err = TriangulatePolygon(ring, corners, tris);
+    if (err.empty()) err = CheckTriangulation(ring, tris);
+    if (!err.empty() && failed++ == 0) {
+      first = err + " in";
+      for (const auto& p : ring) first += " (" + std::to_string(int(p[0])) + "," + std::to_string(int(p[1])) + ")";
+    }
+  }
+  EXPECT_EQ(failed, 0) << "first: " << first;
+}
+
+// A convex polygon with corners on its edges (on the diagonals of the fan, with their edges along
+// them) is triangulated as before.
+TEST(PlyFormat, ConvexPolygonWithFlatCornersAsBefore) {
+  const std::vector<std::array<float, 3>> ring = {{0, 0, 0}, {2, 0, 0}, {4, 0, 0}, {4, 4, 0}, {0, 4, 0}, {0, 2, 0}};
+  std::vector<std::array<uint32_t, 3>> tris;
+  ASSERT_EQ(TriangulatePolygon(ring, {0, 1, 2, 3, 4, 5}, tris), "");
+  const std::vector<std::array<uint32_t, 3>> fan = {{1, 2, 3}, {1, 3, 4}, {1, 4, 5}, {0, 1, 5}};
+  EXPECT_EQ(tris, fan);
+}
+
+// Float index lists with fractions (truncated to 0 2 4 before), a property declared twice (the
+// last one won), a face with both index lists (the second won): refused by name.
+TEST(PlyFormat, RefusesAmbiguousIndicesAndProperties) {
+  PlyMesh m;
+  const std::string v = "0 0 0\n1 0 0\n0 1 0\n2 2 0\n0 2 0\n";
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n";
+  std::string err =
+      Read(head + "element face 1\nproperty list uchar float vertex_indices\nend_header\n" + v + "3 0.5 2.7 4.2\n", m);
+  EXPECT_NE(err.find("face 0 has the vertex index 0.5, which is not a whole number"), std::string::npos) << err;
+  EXPECT_EQ(Read(head + "element face 1\nproperty list uchar float vertex_indices\nend_header\n" + v + "3 0 2 4\n", m),
+            "");  // whole numbers in a float list are fine
+  err = Read(
+      "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+      "property float x\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n",
+      m);
+  EXPECT_NE(err.find("declares a property 'x' twice"), std::string::npos) << err;
+  err = Read(head +
+                 "element face 1\nproperty list uchar int vertex_indices\nproperty list uchar int vertex_index\n"
+                 "end_header\n" +
+                 v + "3 0 1 2 3 2 3 4\n",
+             m);
+  EXPECT_NE(err.find("both a vertex_indices and a vertex_index list"), std::string::npos) << err;
+}
+
+// A FIFO as input is refused at once, without opening it (open() blocked until a writer came).
+TEST(PlyFormat, RefusesAFifoWithoutOpeningIt) {
+  char folder[] = "/tmp/conelod_fifo_XXXXXX";
+  ASSERT_NE(mkdtemp(folder), nullptr);
+  const std::string fifo = std::string(folder) + "/in.ply";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  // Should the reader block in open(), a writer comes after 2 s so that the test ends (and fails).
+  std::thread writer([&] {
+    std::this_thread::sleep_for(std::chrono::seconds(2));
+    const int fd = ::open(fifo.c_str(), O_WRONLY | O_NONBLOCK);
+    if (fd >= 0) ::close(fd);
+  });
+  const auto start = std::chrono::steady_clock::now();
+  PlyMesh m;
+  bool ioError = false;
+  const std::string err = ReadPly(fifo, m, &ioError);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_LT(seconds, 1.0);
+  EXPECT_NE(err.find("is a FIFO"), std::string::npos) << err;
+  EXPECT_TRUE(ioError);
+  // Unblock a writer still waiting: a reader opening without blocking.
+  const int fd = ::open(fifo.c_str(), O_RDONLY | O_NONBLOCK);
+  writer.join();
+  if (fd >= 0) ::close(fd);
+  unlink(fifo.c_str());
+  rmdir(folder);
 }
 
 TEST(PlyFormat, ConvexQuadGivesTheFanFromItsFirstCorner) {
