@@ -539,11 +539,11 @@ void Dialogs(Run& r) {
       double value;
       bool boundary;
     };
-    const Change changes[] = {{"ConeThresholdDeg", 30, false}, {"ThresholdGrowth", 1.2, false},
-                              {"ClusterFaces", 64, false},     {"GroupClusters", 6, false},
-                              {"LevelRatio", 0.6, false},      {"QualityThr", 0.6, false},
-                              {"OptimalPlacement", 0, false},  {"PreserveBoundary", 1, false},
-                              {"BoundaryWeight", 8, true},     {"PreserveNormal", 0, false}};
+    const Change changes[] = {
+        {"ConeThresholdDeg", 30, false}, {"ThresholdGrowth", 1.2, false}, {"ClusterFaces", 64, false},
+        {"GroupClusters", 6, false},     {"LevelRatio", 0.6, false},      {"QualityThr", 0.6, false},
+        {"OptimalPlacement", 0, false},  {"PreserveBoundary", 1, false},  {"BoundaryWeight", 8, true},
+        {"PreserveNormal", 0, false},    {"Precision", 1e-4, false}};
     Check(names.size() == int(sizeof(changes) / sizeof(changes[0])) + 1,
           QString("  %1 parameters: the file name and the %2 below")
               .arg(names.size())

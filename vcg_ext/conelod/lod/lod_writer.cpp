@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <numeric>
@@ -221,7 +222,11 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
       if (!std::isfinite(p[0] + p[1] + p[2])) return Status::Invalid("the LOD DAG has a non-finite position");
     if (!(precision >= kMinLodPrecision && precision <= kMaxLodPrecision))
       return Status::Invalid("the LOD precision must be between 1e-9 and 0.01 of the diagonal");
-    grid = ChooseLodGrid(span, precision);
+    // Six significant digits: MeshLab's dialog holds the precision as a float (2e-5 arrives as
+    // 1.99999999e-5), and the filter must write the CLI's file byte for byte.
+    char digits[32];
+    std::snprintf(digits, sizeof digits, "%.6g", precision);
+    grid = ChooseLodGrid(span, std::strtod(digits, nullptr));
     for (size_t v = 0; v < rounded.size(); ++v) rounded[v] = grid.Round(dag.positions[v]);
   }
 
