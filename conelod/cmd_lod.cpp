@@ -79,7 +79,9 @@ int LodBuild(int argc, char** argv) {
     j.BeginObject()
         .field("input", input)
         .field("output", output)
-        .field("vertices", st.inputVertices)
+        .field("vertices", im.vertexCount())
+        .field("welded_vertices", st.mergedVertices)         // merged into another at the same position
+        .field("unreferenced_vertices", st.droppedVertices)  // left out
         .field("faces", st.inputFaces)
         .field("levels", st.levels)
         .field("nodes", st.nodes)
@@ -101,6 +103,9 @@ int LodBuild(int argc, char** argv) {
         "(grouping %.3f s, simplification %.3f s, writing %.3f s)\n",
         input.c_str(), st.inputFaces, output.c_str(), st.levels, st.nodes, (unsigned long long)st.fileBytes, st.seconds,
         st.groupingSeconds, st.simplifySeconds, st.writeSeconds);
+    if (st.mergedVertices || st.droppedVertices)
+      std::printf("vertices at one position welded: %zu; unreferenced vertices left out: %zu\n", st.mergedVertices,
+                  st.droppedVertices);
     std::printf("%5s %8s %10s\n", "level", "nodes", "faces");
     for (int k = st.levels - 1; k >= 0; --k)
       std::printf("%5d %8zu %10zu\n", k, st.levelNodes[size_t(k)], st.levelFaces[size_t(k)]);

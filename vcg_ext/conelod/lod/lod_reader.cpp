@@ -477,8 +477,10 @@ struct LodReader::Impl {
         return Status::Invalid(bad + "an offset points past the end of the file");
     }
     if (id != info.nodeCount || info.nodeCount >= kNoParent) return Status::Invalid(bad + "node counts do not add up");
+    // The input's vertices may be unreferenced (not stored); every vertex made by the
+    // simplification is stored, in 12 bytes at least.
     if (levels[0].faces != info.inputFaces || info.globalVertices < info.inputVertices ||
-        info.globalVertices >= kNoParent || info.globalVertices > src->size / 12)
+        info.globalVertices >= kNoParent || info.globalVertices - info.inputVertices > src->size / 12)
       return Status::Invalid(bad + "level 0 does not match the input");
     if (hierOffset >= src->size || indexOffset >= src->size)
       return Status::Invalid(bad + "an offset points past the end of the file");
