@@ -8,8 +8,11 @@
 // default the group's error projected on the screen (Karis et al., "Nanite: a deep dive"; refined
 // while it exceeds about a pixel), or its error in model units, or the paper's f(g) (Kamiya,
 // Suzuki, Kawachi §7). Groups whose clusters all face away from the eye (three-state cone test,
-// normal_cone.h) come after every other group, so a full budget still ends at level 0. The
-// refinement stops at the first group whose expansion does not fit the face budget. Culling only
+// normal_cone.h) come after every other group, so a full budget still ends at level 0. A drawn
+// node above the pixel error whose group waits on other groups (some of its clusters not in the
+// cut yet) has those expanded first (Impl::Demand), so that a still cut meets the pixel error
+// wherever it is drawn. The refinement stops at the first group whose expansion does not fit the
+// face budget. Culling only
 // flags cut nodes as not drawn: it never changes the selection, so the drawn set is a subset of
 // a watertight cut whose other nodes face away.
 #include "conelod/lod/lod_read.h"

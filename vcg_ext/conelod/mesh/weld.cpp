@@ -21,10 +21,16 @@ uint32_t Bits(float x) {
 WeldResult WeldByPosition(const IndexedMesh& in) {
   WeldResult r;
   const size_t V = in.positions.size();
+  if (in.faces.empty()) {  // nothing to weld: as it is, so that the checks' messages count its vertices
+    r.mesh = in;
+    r.representative.resize(V);
+    for (uint32_t i = 0; i < V; ++i) r.representative[i] = i;
+    return r;
+  }
   std::vector<uint8_t> used(V, 0);
   for (const auto& t : in.faces)
     for (uint32_t v : t) {
-      if (v >= V) {  // not a mesh to weld: as it is, for RequireValidForFaces to refuse
+      if (v >= V) {  // not a mesh to weld: as it is, for RequireValidForFaces to refuse it
         r.mesh = in;
         r.representative.resize(V);
         for (uint32_t i = 0; i < V; ++i) r.representative[i] = i;

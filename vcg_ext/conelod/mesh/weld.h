@@ -32,8 +32,8 @@ struct WeldResult {
 };
 
 // Welds `in`'s used vertices by exact position (see above); non-finite coordinates are compared
-// by their bits. A mesh with a face index out of range comes back as it is (for
-// RequireValidForFaces to refuse).
+// by their bits. A mesh without faces, or with a face index out of range, comes back as it is
+// (for RequireValidForFaces to refuse it, counting its vertices).
 WeldResult WeldByPosition(const IndexedMesh& in);
 
 }  // namespace conelod

@@ -65,6 +65,19 @@ TEST(Weld, UnreferencedVerticesAreDropped) {
   EXPECT_EQ(w.mesh.faces, cube.faces);
 }
 
+TEST(Weld, MeshesToRefuseComeBackAsTheyAre) {
+  // No faces: the input checks' message still counts the vertices ("no faces (3 vertices)").
+  IndexedMesh m;
+  m.positions = {{0, 0, 0}, {0, 0, 0}, {1, 0, 0}};
+  EXPECT_EQ(WeldByPosition(m).mesh.positions.size(), 3u);
+  // An index out of range: left for RequireValidForFaces to refuse.
+  m.faces = {{0, 1, 7}};
+  const WeldResult w = WeldByPosition(m);
+  EXPECT_EQ(w.mesh.positions.size(), 3u);
+  EXPECT_EQ(w.mesh.faces, m.faces);
+  EXPECT_FALSE(w.changed());
+}
+
 TEST(Weld, AMeshWithoutRepeatsIsUnchanged) {
   const IndexedMesh m = test::Sphere(3);
   const WeldResult w = WeldByPosition(m);
