@@ -4,6 +4,7 @@
 
 #include "cli_common.h"
 #include "commands.h"
+#include "conelod/mesh/weld.h"
 #include "conelod/grouping/cone_grouping.h"
 #include "conelod/grouping/culling_cost.h"
 #include "conelod/pca/pca_partition.h"
@@ -63,6 +64,7 @@ int CmdGroup(int argc, char** argv) {
   std::vector<size_t> faceOf;
   std::string err = LoadInput(a.positional()[0], mesh, im, faceOf);
   if (!err.empty()) return FailLoad(err);
+  im = WeldByPosition(im).mesh;  // a seam the file repeats is no border to the groups (faces keep their order)
 
   GroupHierarchy h;
   Timer timer;
@@ -144,6 +146,7 @@ int CmdCullCost(int argc, char** argv) {
   std::vector<size_t> faceOf;
   const std::string err = LoadInput(a.positional()[0], mesh, im, faceOf);
   if (!err.empty()) return FailLoad(err);
+  im = WeldByPosition(im).mesh;  // as `conelod group`: the groups see no false border
 
   GroupHierarchy h;
   Timer timer;

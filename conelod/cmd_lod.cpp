@@ -90,7 +90,9 @@ int LodBuild(int argc, char** argv) {
     j.BeginObject()
         .field("input", input)
         .field("output", output)
-        .field("vertices", st.inputVertices)
+        .field("vertices", im.vertexCount())
+        .field("welded_vertices", st.mergedVertices)         // merged into another at the same position
+        .field("unreferenced_vertices", st.droppedVertices)  // left out
         .field("faces", st.inputFaces)
         .field("levels", st.levels)
         .field("nodes", st.nodes)
@@ -123,6 +125,9 @@ int LodBuild(int argc, char** argv) {
         double(st.fileBytes) / double(st.inputFaces), (unsigned long long)st.recordBytes,
         (unsigned long long)st.positionBytes, (unsigned long long)st.triangleBytes,
         (unsigned long long)st.vertexIdBytes, st.quantizationError, params.precision);
+    if (st.mergedVertices || st.droppedVertices)
+      std::printf("vertices at one position welded: %zu; unreferenced vertices left out: %zu\n", st.mergedVertices,
+                  st.droppedVertices);
     std::printf("%5s %8s %10s\n", "level", "nodes", "faces");
     for (int k = st.levels - 1; k >= 0; --k)
       std::printf("%5d %8zu %10zu\n", k, st.levelNodes[size_t(k)], st.levelFaces[size_t(k)]);

@@ -147,7 +147,10 @@ int CmdSimplify(int argc, char** argv) {
   std::string err = LoadPly(mesh, input, &loadMask);
   if (!err.empty()) return FailLoad(err);
   std::vector<size_t> faceOf;
-  const IndexedMesh im = ToIndexedMesh(mesh, &faceOf);
+  std::vector<uint32_t> representative;
+  // Welded by position (weld.h): a seam the file repeats is no border to the groups nor to the
+  // collapse; the output has one vertex per position.
+  const IndexedMesh im = ToWeldedIndexedMesh(mesh, &faceOf, &representative);
   Status s = RequireValidForFaces(im);
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
 
@@ -243,7 +246,9 @@ int CmdSimplify(int argc, char** argv) {
       if (a.has("-o")) {
         CMesh copy;
         vcg::tri::Append<CMesh, CMesh>::MeshCopy(copy, mesh);
-        ApplySimplifiedMesh(copy, faceOf, L.mesh, L.sourceFace, L.sourceVertex);
+        std::vector<uint32_t> sourceVertex = L.sourceVertex;
+        MapToRepresentatives(representative, sourceVertex);
+        ApplySimplifiedMesh(copy, faceOf, L.mesh, L.sourceFace, sourceVertex);
         WriteGroupsToFaces(copy, L.faceGroup, true);
         const std::string path = a.str("-o") + "_L" + std::to_string(L.level) + ".ply";
         err = SavePly(copy, path);
@@ -286,6 +291,7 @@ int CmdSimplify(int argc, char** argv) {
   }
 
   if (a.has("-o")) {
+    MapToRepresentatives(representative, r.sourceVertex);
     ApplySimplifiedMesh(mesh, faceOf, r.mesh, r.sourceFace, r.sourceVertex);
     WriteGroupsToFaces(mesh, groupsAfter, coneLevel > 0 || pcaClusters > 0);  // quality source: faces keep theirs
     err = SavePly(mesh, a.str("-o"));

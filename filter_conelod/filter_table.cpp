@@ -332,7 +332,8 @@ Status ApplyConeGrouping(FilterCall& c) {
   MeshModel& mm = *c.mesh;
   int displayLevel = c.args.integer("DisplayLevel");
   std::vector<size_t> faceOf;
-  const conelod::IndexedMesh im = conelod::ToIndexedMesh(mm.cm, &faceOf);
+  // Welded by position: a seam the mesh repeats is no border to the groups (the layer keeps its vertices).
+  const conelod::IndexedMesh im = conelod::ToWeldedIndexedMesh(mm.cm, &faceOf);
   conelod::GroupHierarchy h;
   QElapsedTimer timer;
   timer.start();
@@ -381,7 +382,7 @@ Status ApplyCullingCost(FilterCall& c) {
   if (!(cp.cameraDistance == 0 || (cp.cameraDistance > 1 && std::isfinite(cp.cameraDistance))))
     return Invalid(Label(c, "CameraDistance") + " must be 0 (orthographic views) or > 1 (bounding-sphere radii)");
 
-  const conelod::IndexedMesh im = conelod::ToIndexedMesh(c.mesh->cm);
+  const conelod::IndexedMesh im = conelod::ToWeldedIndexedMesh(c.mesh->cm);
   conelod::GroupHierarchy h;
   Status s = conelod::BuildConeHierarchy(im, ReadGroupingParams(c.args), h, conelod::SubProgress(c.progress(), 0, 50));
   if (!s.ok()) return s;
@@ -475,7 +476,10 @@ Status ApplyGroupQem(FilterCall& c) {
                    " to Normal cone groups");
 
   std::vector<size_t> faceOf;
-  const conelod::IndexedMesh im = conelod::ToIndexedMesh(mm.cm, &faceOf);
+  std::vector<uint32_t> representative;
+  // Welded by position (weld.h): a seam the mesh repeats is no border to the groups nor to the
+  // collapse; the layer gets the simplified mesh with one vertex per position.
+  const conelod::IndexedMesh im = conelod::ToWeldedIndexedMesh(mm.cm, &faceOf, &representative);
   Status s = conelod::RequireValidForFaces(im);
   if (!s.ok()) return s;
   QElapsedTimer timer;
@@ -543,6 +547,7 @@ Status ApplyGroupQem(FilterCall& c) {
   // get a colour each, as do per-face quality groups on a mesh without face colours.
   const bool hadFaceColour = mm.hasDataMask(MeshModel::MM_FACECOLOR);
   mm.updateDataMask(MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR);
+  conelod::MapToRepresentatives(representative, r.sourceVertex);
   conelod::ApplySimplifiedMesh(mm.cm, faceOf, r.mesh, r.sourceFace, r.sourceVertex);
   for (size_t f = 0; f < groupsAfter.size(); ++f) {  // faces are in the same order as the groups after compaction
     if (coneSource) mm.cm.face[f].Q() = CMeshO::FaceType::QualityType(groupsAfter[f]);
@@ -1053,6 +1058,9 @@ Status ApplyLodExport(FilterCall& c) {
   for (size_t l = 0; l < stats.levelFaces.size(); ++l)
     out.log("lod level %d: faces %d nodes %d", int(l), int(stats.levelFaces[l]),
             l < stats.levelNodes.size() ? int(stats.levelNodes[l]) : 0);
+  if (stats.mergedVertices || stats.droppedVertices)
+    out.log("vertices at one position welded: %d; unreferenced vertices left out: %d", int(stats.mergedVertices),
+            int(stats.droppedVertices));
   out.log("lod_levels %d", stats.levels);
   out.log("lod_nodes %d", int(stats.nodes));
   out.log("lod_file_bytes %lld", (long long)stats.fileBytes);

@@ -321,6 +321,8 @@ void LodViewerWidget::renderScene() {
   program_.enableAttributeArray(normal);
   const QVector3D e = eyeInModel();
   const vcg::Point3d eye(e.x(), e.y(), e.z());
+  const LodView lodView = currentView();
+  s.budgetReached = cut.budgetReached;
   const QVector3D plain(0.82f, 0.80f, 0.74f);
   const int colourUniform = program_.uniformLocation("uColour");  // looked up once, not per draw
   int colourLevel = -1;                                           // the level uColour holds now
@@ -357,6 +359,7 @@ void LodViewerWidget::renderScene() {
     }
     ++s.groupsDrawn;
     s.facesDrawn += node.faceCount;
+    s.maxPixelError = std::max(s.maxPixelError, ProjectedError(node, lodView));
     s.minLevel = std::min(s.minLevel, node.level);
     s.maxLevel = std::max(s.maxLevel, node.level);
   }
@@ -391,9 +394,11 @@ void LodViewerWidget::drawHud() {
                .arg(stats_.minLevel)
                .arg(stats_.maxLevel)
                .arg(info.levels - 1)
-               .arg(refining_   ? "refining..."
-                    : dragging_ ? "coarse while moving"
-                                : "still");
+               .arg(refining_   ? QString("refining...")
+                    : dragging_ ? QString("coarse while moving")
+                                : QString("still, error <= %1 px%2")
+                                      .arg(stats_.maxPixelError, 0, 'f', 2)
+                                      .arg(stats_.budgetReached ? " (face budget reached)" : ""));
   lines << QString("memory: reader %1, GPU buffers %2, process %3")
                .arg(MiB(readerBytes), MiB(double(gpuBytes_)), MiB(rss));
   if (!error_.empty()) lines << QString("error: %1").arg(QString::fromStdString(error_));

@@ -49,6 +49,8 @@ struct FrameStats {
   size_t facesDrawn = 0, groupsDrawn = 0, groupsCulled = 0;
   size_t groupsFront = 0;          // drawn groups whose every face faces the eye (three-state test)
   int minLevel = 0, maxLevel = 0;  // over the drawn nodes
+  double maxPixelError = 0;        // the largest projected error of a drawn node, pixels (ProjectedError)
+  bool budgetReached = false;      // the refinement stopped at the face budget
   double renderMs = 0;             // drawing time of the frame, glFinish included (HUD excluded)
 };
 

@@ -47,6 +47,8 @@ QJsonObject ToJson(const FrameStats& s) {
   o["cut_nodes"] = double(s.cutNodes);
   o["min_level"] = s.minLevel;
   o["max_level"] = s.maxLevel;
+  o["max_pixel_error"] = s.maxPixelError;
+  o["budget_reached"] = s.budgetReached;
   return o;
 }
 

@@ -978,6 +978,40 @@ def viewer_no_cracks_armadillo(c):
             len(holes), figures["cut_faces"], holes[:5])
 
 
+
+@case
+def viewer_still_cuts_meet_the_pixel_error(c):
+    """Issue 24, item 17: a cut the viewer calls still meets the pixel error wherever it is drawn,
+    or has spent its face budget. The bunny from three sides, framed and zoomed in 4x (the eye
+    inside the bounding sphere): after refinement, no drawn node's error projects to more than one
+    pixel (the refinement once stopped with near groups 20-40 pixels off, waiting on far or
+    back-facing groups); with a small budget the budget is what stopped it."""
+    import math
+    clod = build_clod(c, "stanford_bunny_bun_zipper.ply", "bunny.clod")
+    pos = read_ply(c.mesh("stanford_bunny_bun_zipper.ply"))["positions"]
+    lo = [min(p[k] for p in pos) for k in range(3)]
+    hi = [max(p[k] for p in pos) for k in range(3)]
+    centre = [(a + b) / 2 for a, b in zip(lo, hi)]
+    framed = 0.5 * math.dist(lo, hi) / math.sin(math.radians(17.5)) * 1.05  # the viewer's frameModel()
+    worst = []
+    for d in ((0, 0, 1), (1, 0, 0), (-1, 0.3, 0.6)):
+        n = math.sqrt(sum(x * x for x in d))
+        for zoom in (1, 4):
+            eye = ",".join("%.6g" % (centre[k] + d[k] / n * framed / zoom) for k in range(3))
+            rc, out, err = run_viewer(c, clod, "--screenshot", c.out("still.png"), "--size", "320x240", "--refine",
+                                      "--frames", "0", "--json", "--eye", eye)
+            assert rc == 0, (rc, out, err)
+            r = json.loads(out.strip().splitlines()[-1])["refined"]
+            assert not r["budget_reached"] and r["max_pixel_error"] <= 1.0, (eye, zoom, r)
+            worst.append(r["max_pixel_error"])
+    assert max(worst) > 0.5, worst  # the cuts are refined to the pixel, not beyond it everywhere
+    rc, out, err = run_viewer(c, clod, "--screenshot", c.out("budget.png"), "--size", "320x240", "--refine",
+                              "--frames", "0", "--json", "--budget", "3000", "--eye", eye)
+    assert rc == 0, (rc, out, err)
+    r = json.loads(out.strip().splitlines()[-1])["refined"]
+    assert r["budget_reached"] and r["max_pixel_error"] > 1.0 and r["cut_faces"] <= 3000, r
+
+
 @case
 def viewer_bad_files(c):
     """Missing, truncated and garbage files: a message naming the file once ("X: X: not a .clod
@@ -1225,6 +1259,135 @@ def cli_lod_watertight_cuts(c):
                 border = sum(1 for n in edges.values() if n == 1)
                 over = sum(1 for n in edges.values() if n > 2)
                 assert border == 0 and over == 0, (eye, budget, cull, border, over, r["faces"])
+
+
+
+def write_ply(path, positions, faces):
+    """A binary little-endian PLY (float32 x y z, uchar/int vertex_indices)."""
+    with open(path, "wb") as f:
+        f.write(("ply\nformat binary_little_endian 1.0\nelement vertex %d\nproperty float x\nproperty float y\n"
+                 "property float z\nelement face %d\nproperty list uchar int vertex_indices\nend_header\n"
+                 % (len(positions), len(faces))).encode())
+        for p in positions:
+            f.write(struct.pack("<3f", *p))
+        for t in faces:
+            f.write(struct.pack("<B3i", 3, *t))
+
+
+@case
+def cli_lod_unreferenced_vertices(c):
+    """Issue 24, item 2: an 8-face mesh with 58 unreferenced vertices. `lod build` once wrote a
+    file that `lod info` and `lod extract` refused ("level 0 does not match the input"): the reader
+    compared the input's vertex count, unreferenced ones included, with the file's size."""
+    positions = [(1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1)]
+    positions += [(float(i), 7.0, 7.0) for i in range(58)]
+    faces = [(0, 2, 4), (2, 1, 4), (1, 3, 4), (3, 0, 4), (2, 0, 5), (1, 2, 5), (3, 1, 5), (0, 3, 5)]
+    mesh = c.out("octahedron_unreferenced.ply")
+    write_ply(mesh, positions, faces)
+    clod = c.out("octahedron.clod")
+    b = json.loads(c.conelod("lod", "build", mesh, "-o", clod, "--json").stdout)
+    info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
+    assert info["faces"] == 8, info
+    out = c.out("octahedron_cut.ply")
+    r = json.loads(c.conelod("lod", "extract", clod, "--eye", "0,0,5", "--budget", "100%", "-o", out,
+                             "--json").stdout)
+    assert r["faces"] == 8, r
+    ply = read_ply(out)
+    assert canonical_faces(ply) == canonical_faces({"positions": positions, "faces": faces}), ply
+    assert b["faces"] == 8 and b["vertices"] == 64 and b["unreferenced_vertices"] == 58, b
+
+
+def seam_split_sphere(c):
+    """A closed sphere (1,280 faces) and the same sphere whose upper half has its own copies of the
+    equator's vertices (appended after the others): the same surface, cut open along a seam by
+    index only. Returns the two paths."""
+    t = (1 + 5 ** 0.5) / 2
+    pos = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
+           (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+    faces = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2),
+             (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5), (2, 4, 11),
+             (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+    # A tilt, so that no face's centroid lies on the cutting plane.
+    pos = [(x, y * 0.96 + z * 0.28, -y * 0.28 + z * 0.96) for x, y, z in pos]
+    for _ in range(3):
+        mid, out = {}, []
+
+        def m(a, b):
+            key = (min(a, b), max(a, b))
+            if key not in mid:
+                p = [(pos[a][k] + pos[b][k]) / 2 for k in range(3)]
+                mid[key] = len(pos)
+                pos.append(tuple(p))
+            return mid[key]
+        for a, b, cc in faces:
+            ab, bc, ca = m(a, b), m(b, cc), m(cc, a)
+            out += [(a, ab, ca), (b, bc, ab), (cc, ca, bc), (ab, bc, ca)]
+        faces = out
+    pos = [tuple(v / sum(x * x for x in p) ** 0.5 for v in p) for p in pos]
+    pos = [struct.unpack("<3f", struct.pack("<3f", *p)) for p in pos]
+    upper = [sum(pos[v][2] for v in f) > 0 for f in faces]
+    lower_uses = {v for f, up in zip(faces, upper) if not up for v in f}
+    split_pos, copy = list(pos), {}
+    split_faces = []
+    for f, up in zip(faces, upper):
+        if up:
+            g = []
+            for v in f:
+                if v in lower_uses:
+                    if v not in copy:
+                        copy[v] = len(split_pos)
+                        split_pos.append(pos[v])
+                    v = copy[v]
+                g.append(v)
+            f = tuple(g)
+        split_faces.append(f)
+    assert len(copy) > 10
+    whole, split = c.out("sphere.ply"), c.out("sphere_split.ply")
+    write_ply(whole, pos, faces)
+    write_ply(split, split_pos, split_faces)
+    return whole, split
+
+
+def index_border_edges(ply):
+    count = {}
+    for f in ply["faces"]:
+        for i in range(3):
+            a, b = f[i], f[(i + 1) % 3]
+            key = (min(a, b), max(a, b))
+            count[key] = count.get(key, 0) + 1
+    return sum(1 for n in count.values() if n == 1)
+
+
+@case
+def cli_seams_are_welded(c):
+    """Issue 24, item 18: vertices a file repeats along a seam are one vertex for the grouping, the
+    group-preserving collapse and the LOD build: a sphere cut open along its equator by index only
+    gives the groups, the simplified mesh and the .clod of the closed sphere."""
+    whole, split = seam_split_sphere(c)
+    assert index_border_edges(read_ply(split)) > 0 and index_border_edges(read_ply(whole)) == 0
+    q = []
+    for mesh in (whole, split):
+        out = c.out("grouped.ply")
+        c.conelod("group", mesh, "-o", out)
+        q.append(read_ply(out)["quality"])
+    assert q[0] == q[1], "the seam changed the groups"
+    simplified = []
+    for mesh in (whole, split):
+        out = c.out("simplified.ply")
+        c.conelod("simplify", mesh, "--groups", "cone:auto", "--target-ratio", "0.3", "-o", out)
+        ply = read_ply(out)
+        assert index_border_edges(ply) == 0, "the collapse kept the seam open"
+        simplified.append(canonical_faces(ply))
+    assert simplified[0] == simplified[1], "the seam changed the collapse"
+    cuts = []
+    for mesh in (whole, split):
+        clod = c.out("sphere.clod")
+        c.conelod("lod", "build", mesh, "-o", clod)
+        for budget in ("10%", "40%"):
+            out = c.out("cut.ply")
+            c.conelod("lod", "extract", clod, "--eye", "0.4,0.3,2.5", "--budget", budget, "-o", out)
+            cuts.append(canonical_faces(read_ply(out)))
+    assert cuts[:2] == cuts[2:], "the seam changed the LOD cuts"
 
 
 @case

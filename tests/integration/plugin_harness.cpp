@@ -18,6 +18,7 @@
 #include <QRegularExpression>
 #include <QTemporaryDir>
 #include <QTextStream>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -332,6 +333,99 @@ void ApplyEveryFilter(Run& r) {
     Check(r.apply(kExtract, md, par).isEmpty(), "extract with a budget of 8000 faces");
     Check(md.mm()->cm.fn <= 8000 && md.mm()->cm.fn > 0, QString("  %1 faces").arg(md.mm()->cm.fn));
     r.digest[kExtract] = Digest(md, log, {"lod_faces", "lod_max_level_difference"});
+  }
+}
+
+// Issue 24, items 2 and 18: what the LOD export, the grouping and the collapse do with vertices a
+// mesh repeats or does not use.
+MeshModel* AddMesh(MeshDocument& md, const QString& name, const std::vector<vcg::Point3f>& positions,
+                   const std::vector<std::array<int, 3>>& faces) {
+  MeshModel* mm = md.addNewMesh("", name);
+  auto v = vcg::tri::Allocator<CMeshO>::AddVertices(mm->cm, positions.size());
+  for (size_t i = 0; i < positions.size(); ++i, ++v)
+    v->P() = CMeshO::CoordType(positions[i][0], positions[i][1], positions[i][2]);
+  auto f = vcg::tri::Allocator<CMeshO>::AddFaces(mm->cm, faces.size());
+  for (size_t i = 0; i < faces.size(); ++i, ++f)
+    for (int k = 0; k < 3; ++k) f->V(k) = &mm->cm.vert[size_t(faces[i][size_t(k)])];
+  vcg::tri::UpdateBounding<CMeshO>::Box(mm->cm);
+  vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFaceNormalized(mm->cm);
+  return mm;
+}
+
+void RepeatedAndUnusedVertices(Run& r) {
+  GLLogStream& log = r.plugin.log();
+  {  // An 8-face mesh with 58 unreferenced vertices: the file written is one the reader takes.
+    std::vector<vcg::Point3f> pos = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (int i = 0; i < 58; ++i) pos.push_back({float(i), 7, 7});
+    MeshDocument md;
+    MeshModel* mm = AddMesh(md, "octahedron", pos,
+                            {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}});
+    const Snapshot before = Take(*mm);
+    const QString clod = r.dir.filePath("unreferenced.clod");
+    RichParameterList par = r.params(kExport, md);
+    harness::SetPath(par, "FileName", clod);
+    Check(r.apply(kExport, md, par).isEmpty(), "export of a mesh with 58 unreferenced vertices succeeds");
+    Check(Take(*mm) == before, "  and leaves the mesh unchanged");
+    par = r.params(kExtract, md);
+    harness::SetPath(par, "FileName", clod);
+    par.setValue("FaceBudget", IntValue(0));
+    const QString m = r.apply(kExtract, md, par);
+    Check(m.isEmpty(), "  its file is read back " + m);
+    Check(Layers(md) == 2 && md.mm()->cm.fn == 8 && md.mm()->cm.vn == 6, "  a layer with the 8 faces and 6 vertices");
+  }
+  {  // The bunny with the vertices its upper half shares with the lower half repeated (a seam by
+     // index only): the grouping gives the bunny's groups, the collapse the bunny's result.
+    MeshDocument md;
+    MeshModel* whole = Load(md, r.bunny);
+    vcg::tri::Allocator<CMeshO>::CompactEveryVector(whole->cm);
+    std::vector<vcg::Point3f> pos;
+    for (const auto& v : whole->cm.vert) pos.push_back(vcg::Point3f(v.cP()[0], v.cP()[1], v.cP()[2]));
+    const float mid = whole->cm.bbox.Center()[1];
+    std::vector<std::array<int, 3>> faces;
+    std::vector<char> upper, lowerUses(pos.size(), 0);
+    for (const auto& f : whole->cm.face) {
+      std::array<int, 3> t;
+      for (int k = 0; k < 3; ++k) t[size_t(k)] = int(f.cV(k) - &whole->cm.vert[0]);
+      faces.push_back(t);
+      upper.push_back((f.cP(0)[1] + f.cP(1)[1] + f.cP(2)[1]) / 3 > mid);
+      if (!upper.back())
+        for (int v : t) lowerUses[size_t(v)] = 1;
+    }
+    std::map<int, int> copy;
+    for (size_t i = 0; i < faces.size(); ++i)
+      if (upper[i])
+        for (int& v : faces[i])
+          if (lowerUses[size_t(v)]) {
+            auto ins = copy.emplace(v, int(pos.size()));
+            if (ins.second) pos.push_back(pos[size_t(v)]);
+            v = ins.first->second;
+          }
+    MeshModel* split = AddMesh(md, "split bunny", pos, faces);
+    Check(copy.size() > 100, QString("the split bunny repeats %1 vertices").arg(copy.size()));
+    std::vector<std::vector<float>> quality;
+    for (MeshModel* mm : {whole, split}) {
+      md.setCurrentMesh(mm->id());
+      Check(r.apply(kGrouping, md).isEmpty(),
+            QString("grouping succeeds on the %1 bunny").arg(mm == whole ? "whole" : "split"));
+      std::vector<float> q;
+      for (const auto& f : mm->cm.face) q.push_back(f.cQ());
+      quality.push_back(q);
+    }
+    Check(quality[0] == quality[1], "  the seam does not change the groups");
+    Check(split->cm.vn == int(pos.size()), "  the grouping leaves the layer's vertices as they are");
+    std::vector<QString> results;
+    for (MeshModel* mm : {whole, split}) {
+      md.setCurrentMesh(mm->id());
+      RichParameterList par = r.params(kGroupQem, md);
+      harness::SetEnum(par, "GroupSource", 1);
+      Check(r.apply(kGroupQem, md, par).isEmpty(),
+            QString("group-preserving collapse succeeds on the %1 bunny").arg(mm == whole ? "whole" : "split"));
+      results.push_back(QString("faces %1 vertices %2 integrity %3")
+                            .arg(mm->cm.fn)
+                            .arg(mm->cm.vn)
+                            .arg(Figure(log, "integrity_percent")));
+    }
+    Check(results[0] == results[1], "  the seam does not change the collapse: " + results[0] + " / " + results[1]);
   }
 }
 
@@ -762,6 +856,7 @@ int main(int argc, char** argv) {
   Run r{plugin, argv[2], argv[3], {}, {}};
   ListFilters(r);
   ApplyEveryFilter(r);
+  RepeatedAndUnusedVertices(r);
   Failures(r);
   Dialogs(r);
 #if CONELOD_MESHLAB_API >= 2022

@@ -13,6 +13,7 @@
 #include "conelod/grouping/group_colors.h"
 #include "conelod/grouping/group_hierarchy.h"
 #include "conelod/mesh/indexed_mesh.h"
+#include "conelod/mesh/weld.h"
 
 namespace conelod {
 
@@ -50,6 +51,25 @@ IndexedMesh ToIndexedMesh(const MeshType& m, std::vector<size_t>* faceOfIndex = 
     if (faceOfIndex) faceOfIndex->push_back(i);
   }
   return out;
+}
+
+// The working copy the grouping, the group-preserving collapse and the LOD build run on:
+// ToIndexedMesh(m) with its vertices welded by exact position and its unreferenced vertices left
+// out (weld.h), so that a seam the mesh repeats is no border to them. Faces keep ToIndexedMesh's
+// order (faceOfIndex as there), so per-face results map back as they are; `representative`
+// (optional): per welded vertex, the ToIndexedMesh vertex it stands for (for ApplySimplifiedMesh,
+// MapToRepresentatives). `m` itself is not changed.
+template <class MeshType>
+IndexedMesh ToWeldedIndexedMesh(const MeshType& m, std::vector<size_t>* faceOfIndex = nullptr,
+                                std::vector<uint32_t>* representative = nullptr) {
+  WeldResult w = WeldByPosition(ToIndexedMesh(m, faceOfIndex));
+  if (representative) *representative = std::move(w.representative);
+  return std::move(w.mesh);
+}
+
+// Replaces each vertex index of `sourceVertex` (into a welded mesh) by its representative.
+inline void MapToRepresentatives(const std::vector<uint32_t>& representative, std::vector<uint32_t>& sourceVertex) {
+  for (uint32_t& v : sourceVertex) v = representative[v];
 }
 
 // Writes, for every level k, the per-face int attribute GroupAttributeName(k); per-face quality =

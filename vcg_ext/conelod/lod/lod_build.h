@@ -13,6 +13,7 @@
 #include "conelod/lod/lod_read.h"
 #include "conelod/simplify/hierarchical_simplification.h"
 #include "conelod/mesh/indexed_mesh.h"
+#include "conelod/mesh/weld.h"
 #include "conelod/status.h"
 
 namespace conelod {
@@ -66,10 +67,12 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
                    const Progress& progress = Progress());
 
 struct LodBuildStats {
-  size_t inputVertices = 0, inputFaces = 0;
-  int levels = 0;                  // node levels, level 0 (the input) included
-  std::vector<size_t> levelFaces;  // faces per node level, [0] = the input's
-  std::vector<size_t> levelNodes;  // nodes per node level
+  size_t inputVertices = 0, inputFaces = 0;  // of the mesh the DAG was built on (BuildLodFile: welded)
+  size_t mergedVertices = 0;                 // BuildLodFile: input vertices welded into another (weld.h)
+  size_t droppedVertices = 0;                // BuildLodFile: unreferenced input vertices left out
+  int levels = 0;                            // node levels, level 0 (the input) included
+  std::vector<size_t> levelFaces;            // faces per node level, [0] = the input's
+  std::vector<size_t> levelNodes;            // nodes per node level
   size_t nodes = 0;
   uint64_t fileBytes = 0;
   // Of fileBytes: the node records (HIER), and the compressed positions, triangles and global
@@ -87,7 +90,10 @@ struct LodBuildStats {
 Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::string& path, LodBuildStats* stats = nullptr,
                     const Progress& progress = Progress(), double precision = kDefaultLodPrecision);
 
-// Builds the DAG and writes it. The mesh must pass the grouping's input checks.
+// Welds the mesh's vertices by position (WeldByPosition, weld.h: coincident vertices become one,
+// unreferenced ones are left out), builds the DAG of the welded mesh and writes it: level 0 of the
+// file is the welded mesh. BuildLodDag and WriteLodFile take their mesh as it is. The mesh must
+// pass RequireValidForFaces.
 Status BuildLodFile(const IndexedMesh& mesh, const LodBuildParams& params, const std::string& path,
                     LodBuildStats* stats = nullptr, const Progress& progress = Progress());
 

@@ -173,6 +173,12 @@ struct LodView {
                                // pixel threshold (refine to the budget)
 };
 
+// A node's error projected on the screen at the nearest point of its bounding sphere: error /
+// (distance from the eye to the sphere) x projectionScale (pixels; without a projection scale,
+// error / distance); orthographic: error x projectionScale. An eye inside the sphere gives a huge
+// value. The screen-space refinement expands a drawn node's group while this exceeds maxPixelError.
+double ProjectedError(const LodNode& node, const LodView& view);
+
 // The paper's refinement priority f(g) in [0,1] (larger = refine first): with a = angle(e, n),
 // e from the node's centre to the eye (orthographic: -viewDir), n the cone axis, c the cone
 // half-angle: (1 - cos(a + c)) / 2 when a + c < pi, else 1.
@@ -186,11 +192,15 @@ struct LodCut {
   size_t groupsDrawn = 0, groupsCulled = 0;
   int maxLevelDifference = 0;  // over pairs of cut nodes sharing a vertex
   size_t refinements = 0;      // nodes replaced by their children so far
+  bool budgetReached = false;  // the refinement stopped because an expansion did not fit faceBudget
 };
 
 // Incremental refinement, for a viewer's idle time: Start() resets the cut to the roots, each
 // Step() refines a few more nodes (reading their geometry), Done() tells when the budget or the
 // finest level is reached. Geometry of nodes that left the cut is evicted.
+// Screen-space error with a pixel threshold (ScreenError, projectionScale > 0, maxPixelError > 0):
+// once Done(), either cut().budgetReached or every node of the cut that is not culled has a
+// ProjectedError of at most maxPixelError, whatever the eye.
 class LodRefiner {
  public:
   explicit LodRefiner(LodReader& reader);

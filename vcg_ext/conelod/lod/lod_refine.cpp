@@ -8,8 +8,11 @@
 // default the group's error projected on the screen (Karis et al., "Nanite: a deep dive"; refined
 // while it exceeds about a pixel), or its error in model units, or the paper's f(g) (Kamiya,
 // Suzuki, Kawachi §7). Groups whose clusters all face away from the eye (three-state cone test,
-// normal_cone.h) come after every other group, so a full budget still ends at level 0. The
-// refinement stops at the first group whose expansion does not fit the face budget. Culling only
+// normal_cone.h) come after every other group, so a full budget still ends at level 0. A drawn
+// node above the pixel error whose group waits on other groups (some of its clusters not in the
+// cut yet) has those expanded first (Impl::Demand), so that a still cut meets the pixel error
+// wherever it is drawn. The refinement stops at the first group whose expansion does not fit the
+// face budget. Culling only
 // flags cut nodes as not drawn: it never changes the selection, so the drawn set is a subset of
 // a watertight cut whose other nodes face away.
 #include "conelod/lod/lod_read.h"
@@ -20,6 +23,15 @@
 #include <unordered_map>
 
 namespace conelod {
+
+double ProjectedError(const LodNode& node, const LodView& view) {
+  double d = 1;
+  if (!view.orthographic) {
+    const vcg::Point3d c = vcg::Point3d::Construct(node.center);
+    d = std::max((view.eye - c).Norm() - double(node.radius), 1e-9 * (1 + c.Norm()));
+  }
+  return double(node.error) / d * (view.projectionScale > 0 ? view.projectionScale : 1.0);
+}
 
 double RefinementPriority(const LodNode& node, const LodView& view) {
   if (node.cone.empty()) return 0;
@@ -38,8 +50,9 @@ namespace {
 enum : uint8_t { kBelow = 0, kInCut = 1, kRefined = 2 };
 
 struct QueueItem {
-  uint8_t culled;  // every cluster of the group faces away
+  uint8_t culled;  // every cluster of the group faces away (and no visible node waits for it)
   double priority;
+  double need;   // the largest ProjectedError of its clusters, or of a visible node waiting for it
   uint32_t key;  // the group: its clusters' smallest node id
   // std::priority_queue pops the largest: visible before culled, larger priority first, lower
   // key first (deterministic ties).
@@ -58,6 +71,9 @@ struct LodRefiner::Impl {
   std::vector<uint8_t> state;                      // per node id
   std::unordered_map<uint32_t, uint32_t> cutPos;   // node id -> its entry in cut.nodes
   std::unordered_map<uint32_t, uint32_t> present;  // group key -> its clusters in the cut
+  // group key -> the largest ProjectedError of a visible cut node that waits for the group's
+  // expansion (Demand); such a group is expanded at least with that need.
+  std::unordered_map<uint32_t, double> demand;
   mutable LodCut cut;
   mutable bool statsDirty = true;
   std::priority_queue<QueueItem> queue;
@@ -87,17 +103,9 @@ struct LodRefiner::Impl {
         case LodPriority::ConeFg:
           q = RefinementPriority(n, view);
           break;
-        case LodPriority::ScreenError: {
-          double d;
-          if (view.orthographic) {
-            d = 1;
-          } else {
-            const vcg::Point3d c = vcg::Point3d::Construct(n.center);
-            d = std::max((view.eye - c).Norm() - double(n.radius), 1e-9 * (1 + c.Norm()));
-          }
-          q = double(n.error) / d * (view.projectionScale > 0 ? view.projectionScale : 1.0);
+        case LodPriority::ScreenError:
+          q = ProjectedError(n, view);
           break;
-        }
       }
       p = std::max(p, q);
     }
@@ -120,6 +128,50 @@ struct LodRefiner::Impl {
       p *= 0.25 + 0.75 * facing;
     }
     return p;
+  }
+
+  bool pixelStop() const {
+    return view.priority == LodPriority::ScreenError && view.projectionScale > 0 && view.maxPixelError > 0;
+  }
+
+  // The largest ProjectedError of the clusters `siblings` (all in the cut) that are not culled.
+  double needOf(const std::vector<uint32_t>& siblings) const {
+    double need = 0;
+    for (uint32_t s : siblings)
+      if (!cut.culled[cutPos.at(s)]) need = std::max(need, ProjectedError(reader.node(s), view));
+    return need;
+  }
+
+  // A visible cut node whose projected error is `need` waits for the expansion of the group made
+  // of `clusters` (its siblings), which is possible only once all of them are in the cut. The
+  // missing ones lie below the cut: each is in the cut once the group of its parents is expanded,
+  // and so on up to groups whose clusters are all in the cut. Those are queued with this need,
+  // and every group on the way records it, so that it is queued with it once complete. Without
+  // this a near group waits on far or back-facing groups whose own error projects to less than a
+  // pixel, and the refinement stops with it unrefined (the dragon's head zoomed in: levels 6-7
+  // beside a body at level 3).
+  Status Demand(const std::vector<uint32_t>& clusters, double need) {
+    const uint32_t key = *std::min_element(clusters.begin(), clusters.end());
+    auto ins = demand.emplace(key, need);
+    if (!ins.second) {
+      if (ins.first->second >= need) return Status::Ok();  // already asked for at least as much
+      ins.first->second = need;
+    }
+    bool complete = true;
+    for (uint32_t s : clusters) {
+      if (s >= state.size()) return Status::Invalid("corrupt file: no node " + std::to_string(s));
+      if (state[s] == kInCut) continue;
+      complete = false;
+      if (state[s] != kBelow) return Status::Ok();  // its group was expanded: nothing to wait for
+      Status st = reader.LoadNode(s);
+      if (!st.ok()) return st;
+      const std::vector<uint32_t> parents = reader.node(s).parents;  // copied: loading records may rehash
+      if (parents.empty()) continue;  // a root, not added yet (Start): the group's entry carries the need
+      st = Demand(parents, need);
+      if (!st.ok()) return st;
+    }
+    if (complete) queue.push({0, need, need, key});
+    return Status::Ok();
   }
 
   Status AddToCut(uint32_t id) {
@@ -149,7 +201,21 @@ struct LodRefiner::Impl {
             return Status::Invalid("corrupt file: node " + std::to_string(id) + "'s siblings disagree");
           if (!cut.culled[cutPos[sib]]) allCulled = false;
         }
-        queue.push({uint8_t(allCulled), priorityOf(n.siblings), key});
+        double priority = priorityOf(n.siblings), need = needOf(n.siblings);
+        const auto d = demand.find(key);
+        if (d != demand.end()) {
+          allCulled = false;  // a visible node waits for it
+          need = std::max(need, d->second);
+          if (view.priority == LodPriority::ScreenError) priority = std::max(priority, d->second);
+        }
+        queue.push({uint8_t(allCulled), priority, need, key});
+      } else if (!culled && view.priority == LodPriority::ScreenError) {
+        // Visible, its group not complete yet: make way for its expansion when it matters.
+        const double need = ProjectedError(n, view);
+        if (need > (pixelStop() ? view.maxPixelError : 0.0)) {
+          const std::vector<uint32_t> siblings = n.siblings;  // copied: loading records may rehash
+          return Demand(siblings, need);
+        }
       }
     }
     return Status::Ok();
@@ -200,6 +266,7 @@ struct LodRefiner::Impl {
     }
     if (cut.faces - removed + added > view.faceBudget) {
       stopped = true;
+      cut.budgetReached = true;
       return Status::Ok();
     }
     for (uint32_t s : siblings) RemoveFromCut(s);
@@ -246,6 +313,7 @@ Status LodRefiner::Start(const LodView& view) {
   m.state.assign(size_t(m.reader.info().nodeCount), kBelow);
   m.cutPos.clear();
   m.present.clear();
+  m.demand.clear();
   m.cut = LodCut();
   m.queue = std::priority_queue<QueueItem>();
   m.stopped = false;
@@ -261,18 +329,15 @@ Status LodRefiner::Step(size_t maxRefinements) {
   Impl& m = *impl_;
   if (!m.started) return Status::Invalid("LodRefiner::Step before Start");
   size_t done = 0;
+  const bool pixelStop = m.pixelStop();
   while (done < maxRefinements && !m.stopped && !m.queue.empty()) {
     const QueueItem top = m.queue.top();
-    const bool pixelStop =
-        m.view.priority == LodPriority::ScreenError && m.view.projectionScale > 0 && m.view.maxPixelError > 0;
-    if (pixelStop && !top.culled && top.priority <= m.view.maxPixelError) {
-      // Every visible group left is below a pixel: only back-facing ones could follow, and they
-      // are not drawn. Stop here.
-      m.stopped = true;
-      break;
-    }
     m.queue.pop();
-    if (top.culled && pixelStop) continue;  // not drawn: no pixel to gain
+    // With a pixel threshold, a group is expanded only when one of its visible clusters (or a
+    // visible node waiting for it) projects its error to more than the threshold; the order is
+    // the priority's, so the loop ends when the queue is empty, not at the first small priority
+    // (a group seen edge-on weighs less in the order but still shows its error at the silhouette).
+    if (pixelStop && (top.culled || top.need <= m.view.maxPixelError)) continue;  // no pixel to gain
     const size_t before = m.cut.refinements;
     Status s = m.expand(top.key);
     if (!s.ok()) {

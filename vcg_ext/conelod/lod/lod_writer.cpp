@@ -22,6 +22,7 @@
 #include <meshoptimizer.h>
 
 #include "conelod/lod/lod_internal.h"
+#include "conelod/mesh/mesh_check.h"
 #include "conelod/mesh/safe_file.h"
 
 namespace conelod {
@@ -612,13 +613,21 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
 Status BuildLodFile(const IndexedMesh& mesh, const LodBuildParams& params, const std::string& path,
                     LodBuildStats* stats, const Progress& progress) {
   const auto t0 = std::chrono::steady_clock::now();
+  Status s = RequireValidForFaces(mesh);
+  if (!s.ok()) return s;
+  // Vertices at one position are one vertex of the DAG (a seam the file repeats would otherwise be
+  // simplified from each side on its own, and the cuts would open along it); unreferenced vertices
+  // are not written.
+  const WeldResult welded = WeldByPosition(mesh);
   LodDag dag;
-  Status s = BuildLodDag(mesh, params, dag, SubProgress(progress, 0, 90));
+  s = BuildLodDag(welded.mesh, params, dag, SubProgress(progress, 0, 90));
   if (!s.ok()) return s;
   const double dagSeconds = Seconds(t0);
-  s = WriteLodFile(mesh, dag, path, stats, SubProgress(progress, 90, 100), params.precision);
+  s = WriteLodFile(welded.mesh, dag, path, stats, SubProgress(progress, 90, 100), params.precision);
   if (!s.ok()) return s;
   if (stats) {
+    stats->mergedVertices = welded.mergedVertices;
+    stats->droppedVertices = welded.droppedVertices;
     stats->groupingSeconds = 0;
     stats->simplifySeconds = dagSeconds;
     stats->seconds = Seconds(t0);

@@ -1,0 +1,75 @@
+// ConeLOD — welding vertices at identical positions (weld.h).
+#include "conelod/mesh/weld.h"
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+
+namespace conelod {
+namespace {
+
+// The bits of a coordinate, -0 as +0 (they are the same position).
+uint32_t Bits(float x) {
+  if (x == 0) x = 0;
+  uint32_t u;
+  std::memcpy(&u, &x, 4);
+  return u;
+}
+
+}  // namespace
+
+WeldResult WeldByPosition(const IndexedMesh& in) {
+  WeldResult r;
+  const size_t V = in.positions.size();
+  if (in.faces.empty()) {  // nothing to weld: as it is, so that the checks' messages count its vertices
+    r.mesh = in;
+    r.representative.resize(V);
+    for (uint32_t i = 0; i < V; ++i) r.representative[i] = i;
+    return r;
+  }
+  std::vector<uint8_t> used(V, 0);
+  for (const auto& t : in.faces)
+    for (uint32_t v : t) {
+      if (v >= V) {  // not a mesh to weld: as it is, for RequireValidForFaces to refuse it
+        r.mesh = in;
+        r.representative.resize(V);
+        for (uint32_t i = 0; i < V; ++i) r.representative[i] = i;
+        return r;
+      }
+      used[v] = 1;
+    }
+  // Used vertices sorted by (position bits, index): equal positions stand together, lowest index
+  // first.
+  std::vector<std::array<uint32_t, 4>> keys;
+  keys.reserve(V);
+  for (uint32_t v = 0; v < V; ++v)
+    if (used[v]) {
+      const vcg::Point3f& p = in.positions[v];
+      keys.push_back({{Bits(p[0]), Bits(p[1]), Bits(p[2]), v}});
+    }
+  r.droppedVertices = V - keys.size();
+  std::sort(keys.begin(), keys.end());
+  // Each input vertex -> its representative; representatives numbered in input order.
+  std::vector<uint32_t> repOf(V, UINT32_MAX);
+  for (size_t i = 0; i < keys.size();) {
+    size_t j = i;
+    while (j < keys.size() && keys[j][0] == keys[i][0] && keys[j][1] == keys[i][1] && keys[j][2] == keys[i][2]) {
+      repOf[keys[j][3]] = keys[i][3];
+      ++j;
+    }
+    r.mergedVertices += j - i - 1;
+    i = j;
+  }
+  std::vector<uint32_t> newId(V, UINT32_MAX);
+  for (uint32_t v = 0; v < V; ++v)
+    if (used[v] && repOf[v] == v) {
+      newId[v] = uint32_t(r.representative.size());
+      r.representative.push_back(v);
+      r.mesh.positions.push_back(in.positions[v]);
+    }
+  r.mesh.faces.reserve(in.faces.size());
+  for (const auto& t : in.faces) r.mesh.faces.push_back({newId[repOf[t[0]]], newId[repOf[t[1]]], newId[repOf[t[2]]]});
+  return r;
+}
+
+}  // namespace conelod
