@@ -42,6 +42,18 @@
 // new vertex goes to the quadric's minimum (optimalPlacement), falling back to the best point of
 // the edge when the quadric is singular or its minimum lies far from the edge.
 //
+// Non-manifold input (both modes), as meshoptimizer's vertex kinds: an edge with 3+ faces is a
+// feature line (border-like quadrics); a vertex on such edges, or with several fans, never moves,
+// but may be removed into a neighbour that stays: a manifold vertex into a non-manifold one, a
+// point of a non-manifold line (1 or 2 such edges) only along the line, a vertex with several
+// fans but no such edge along any edge; a junction of 3+ lines never goes. A general link
+// condition refuses what would make an edge non-manifold (an edge may keep, never gain, more than
+// two faces) or one face twice; the group test there is a search on the adjacency after the
+// collapse (keepsGroupsWholeAcross). In paper mode these collapses keep the groups whole the same
+// way (the paper's local clauses assume a manifold fan), and group boundaries never go.
+// Whole components: with removeComponents, a run that has no allowed collapse left above the
+// target removes components made of whole groups, smallest first (GroupQemParams).
+//
 // Error and priority follow vcglib's TriEdgeCollapseQuadric (what MeshLab's "Quadric Edge Collapse
 // Decimation" runs): face-plane quadrics (area-weighted) plus border-edge quadrics weighted by
 // boundaryWeight (and, in paper mode with condition 1 or with the lock, the same on group
