@@ -33,6 +33,7 @@
 #include <wrap/io_trimesh/import_ply.h>
 
 #include "conelod/grouping/cone_grouping.h"
+#include "conelod/process_memory.h"
 #include "conelod/simplify/group_qem.h"
 #include "conelod/simplify/hierarchical_simplification.h"
 #include "conelod/vcg_bridge.h"
@@ -50,6 +51,15 @@ int g_level = 4;
 std::string g_path;
 std::map<std::string, double> g_cpu;    // benchmark name -> CPU seconds per iteration
 std::map<std::string, size_t> g_faces;  // benchmark name -> faces reached
+std::map<std::string, size_t> g_peak;   // benchmark name -> peak resident bytes above the run's start
+
+// Resets the process's peak resident size (VmHWM) to the current one; false where Linux does not.
+bool ResetPeakMemory() {
+  std::FILE* f = std::fopen("/proc/self/clear_refs", "w");
+  if (!f) return false;
+  const bool ok = std::fputs("5", f) >= 0;
+  return std::fclose(f) == 0 && ok;
+}
 
 // MeshLab 2020.09's filter: QuadricSimplification() with the filter's default parameters.
 size_t RunVcg(QMesh& m, int targetFaces) { return conelod_bench::RunMeshLabQem(m, size_t(targetFaces)); }
@@ -93,11 +103,15 @@ void BM_Simplify(benchmark::State& state, int kind, double ratio, const std::str
     state.PauseTiming();
     QMesh m;
     vcg::tri::Append<QMesh, QMesh>::MeshCopy(m, g_mesh);
+    const bool peakKnown = ResetPeakMemory();
+    const size_t rss0 = conelod::ProcessStatusBytes("VmRSS");
     state.ResumeTiming();
     const std::clock_t c0 = std::clock();
     faces = kind == 0 ? RunVcg(m, target) : kind == 3 ? RunMeshopt(m, target) : RunOurs(m, target, kind == 1);
     cpu += double(std::clock() - c0) / CLOCKS_PER_SEC;
     state.PauseTiming();
+    const size_t hwm = conelod::ProcessStatusBytes("VmHWM");
+    g_peak[name] = peakKnown && hwm > rss0 ? hwm - rss0 : 0;
     m.Clear();
     state.ResumeTiming();
   }
@@ -188,6 +202,21 @@ int main(int argc, char** argv) {
       if (g_cpu.count(l[0] + pct))
         std::printf(", %s %.3f s = %.2fx (%zu faces)", l[1], g_cpu[l[0] + pct], g_cpu[l[0] + pct] / v,
                     g_faces[l[0] + pct]);
+    std::printf("\n");
+  }
+  // Peak memory: the resident size a run added above what the process held when it started (the
+  // loaded mesh and its copy are not counted), per input face; and ours against meshopt.
+  std::printf("\npeak memory above the start of each run (bytes per input face), time ours / meshopt:\n");
+  for (double r : ratios) {
+    const std::string pct = std::to_string(int(r * 100 + 0.5)) + "%";
+    std::printf("  target %4s:", pct.c_str());
+    for (const char* k : {"vcglib_quadric/", "ours_integrity/", "meshopt_simplify/"})
+      if (g_peak.count(k + pct))
+        std::printf(" %s %.1f MB (%.0f B/face)", k, double(g_peak[k + pct]) / 1e6,
+                    double(g_peak[k + pct]) / double(g_mesh.fn));
+    const std::string ours = "ours_integrity/" + pct, mo = "meshopt_simplify/" + pct;
+    if (g_cpu.count(ours) && g_cpu.count(mo) && g_cpu[mo] > 0)
+      std::printf("; time ours / meshopt %.2fx", g_cpu[ours] / g_cpu[mo]);
     std::printf("\n");
   }
   if (g_cpu.count("ours_hierarchy"))

@@ -62,6 +62,9 @@ const char* kSimplifyUsage =
     "  --groups pca:K      the K clusters of the recursive PCA face partition\n"
     "  --keep-cones        (cone groups) refuse collapses that widen a group's normal cone past its\n"
     "                      level's threshold; the count of cones over it is always reported\n"
+    "  --keep-components   never remove a component; by default, when no allowed collapse is left\n"
+    "                      above the target, whole components made of whole groups are removed,\n"
+    "                      smallest first (JSON components_removed, groups_removed)\n"
     "  --target-ratio F    target = F x faces (0 < F <= 1)     --max-error E  fraction of bbox diag\n"
     "  A cone level L that cannot reach the target (no lock, --max-error or --keep-cones) exits 2 naming\n"
     "  the faces reached and the level that would (the JSON is still printed, OUT.ply written).\n"
@@ -78,7 +81,7 @@ int CmdSimplify(int argc, char** argv) {
          {"-o", "--target-faces", "--target-ratio", "--max-error", "--groups", "--quality-thr", "--boundary-weight",
           "--level-ratio", "--threads", "--faces-per-part", "--samples", "--mode"},
          {"--json", "--no-condition1", "--no-condition2", "--lock-boundaries", "--no-optimal-placement",
-          "--preserve-boundary", "--no-preserve-normal", "--hierarchy", "--keep-cones"});
+          "--preserve-boundary", "--no-preserve-normal", "--hierarchy", "--keep-cones", "--keep-components"});
   GroupQemParams p;
   const int targetFaces = a.integer("--target-faces", 0);
   const double targetRatio = a.num("--target-ratio", 0);
@@ -96,6 +99,7 @@ int CmdSimplify(int argc, char** argv) {
   p.preserveBoundary = a.has("--preserve-boundary");
   p.preserveNormal = !a.has("--no-preserve-normal");
   p.keepCones = a.has("--keep-cones");
+  p.removeComponents = !a.has("--keep-components");
   const std::string mode = a.str("--mode", "integrity");
   if (mode == "paper")
     p.mode = GroupMode::Paper;
@@ -109,6 +113,8 @@ int CmdSimplify(int argc, char** argv) {
   if (!partsError.empty()) return Fail(kUsage, partsError);
   if (samples < 0 || samples > kMaxFaceSamples)
     return Fail(kUsage, "--samples must be from 0 to " + std::to_string(kMaxFaceSamples));
+  if (hierarchy && a.has("--keep-components"))
+    return Fail(kUsage, "--hierarchy never removes components: --keep-components goes with one target");
   if (!hierarchy && (a.has("--threads") || a.has("--faces-per-part") || a.has("--samples")))
     return Fail(kUsage, "--threads, --faces-per-part and --samples go with --hierarchy");
   if (a.has("--target-ratio") && !(targetRatio > 0 && targetRatio <= 1))
@@ -194,6 +200,7 @@ int CmdSimplify(int argc, char** argv) {
 
   if (hierarchy) {
     hp.qem = p;
+    hp.qem.removeComponents = false;  // each level must keep every group of the level below
     hp.levelRatio = levelRatio;
     std::vector<SimplifiedLevel> levels;
     Timer timer;
@@ -270,6 +277,8 @@ int CmdSimplify(int argc, char** argv) {
   for (size_t f = 0; f < r.sourceFace.size(); ++f) groupsAfter[f] = groups[r.sourceFace[f]];
   GroupIntegrity gi;
   MeasureGroupIntegrity(im, groups, r.mesh, groupsAfter, gi);
+  gi.groupsRemoved = int(r.stats.groupsRemoved);
+  const std::string floorReason = DescribeFloor(r.stats, p);
   // Cone groups: the cones now wider than their level's threshold; and, when the target was
   // missed, the level that would reach it.
   const double coneLimitDeg = coneLevel > 0 ? std::min(h.level(coneLevel).thresholdDeg, 180.0) : 0;
@@ -318,7 +327,12 @@ int CmdSimplify(int argc, char** argv) {
         .field("lock_boundaries", p.lockGroupBoundaries)
         .field("mode", ToString(p.mode))
         .field("keep_cones", p.keepCones)
-        .field("target_reached", targetReached);
+        .field("target_reached", targetReached)
+        .field("components_removed", r.stats.componentsRemoved)
+        .field("groups_removed", r.stats.groupsRemoved)
+        .field("faces_removed_with_components", r.stats.facesRemovedWithComponents)
+        .field("keep_components", !p.removeComponents);
+    if (!floorReason.empty()) j.field("floor", r.mesh.faceCount()).field("floor_reason", floorReason);
     if (coneLevel > 0)
       j.field("group_level", coneLevel)
           .field("group_level_automatic", autoLevel)
@@ -337,6 +351,13 @@ int CmdSimplify(int argc, char** argv) {
     if (gi.groupsDisconnectedBefore)
       std::printf("note: %d groups were already in several pieces in the input; each piece is kept as it is\n",
                   gi.groupsDisconnectedBefore);
+    if (r.stats.componentsRemoved > 0)
+      std::printf(
+          "removed %zu whole component(s), %zu faces, with their %zu group(s), smallest first, to reach the "
+          "target (--keep-components refuses it)\n",
+          r.stats.componentsRemoved, r.stats.facesRemovedWithComponents, r.stats.groupsRemoved);
+    if (!floorReason.empty())
+      std::printf("target not reached (floor %zu): %s\n", r.mesh.faceCount(), floorReason.c_str());
     if (coneLevel > 0)
       std::printf("normal cones: %d of %d groups over the level-%d threshold of %.1f deg%s%s\n", conesOver,
                   gi.groupsAfter, coneLevel, coneLimitDeg, autoLevel ? " (level chosen for the target)" : "",

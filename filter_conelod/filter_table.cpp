@@ -448,6 +448,11 @@ std::vector<ParamSpec> GroupQemSpecs(const MeshDocument*, const MeshModel*) {
                         "level's threshold (the groups stay as cullable as they were built)."));
   p.push_back(BoolParam("LockGroupBoundaries", d.lockGroupBoundaries, "Lock group boundaries",
                         "No vertex on a group boundary moves: group contours stay exactly as they are."));
+  p.push_back(BoolParam("KeepComponents", false, "Keep every component",
+                        "Off (default): when no allowed collapse is left above the target, whole connected "
+                        "components made of whole groups are removed, smallest first, until the target is reached "
+                        "(as the built-in filter drops small pieces); no group is ever split. On: no component is "
+                        "removed, and the run stops at the floor it reached."));
   AddCollapseOptionParams(p, d, "Weight of the quadrics that keep mesh borders (and group contours) in place.");
   return p;
 }
@@ -462,6 +467,7 @@ Status ApplyGroupQem(FilterCall& c) {
   p.lockGroupBoundaries = c.args.flag("LockGroupBoundaries");
   p.mode = c.args.integer("Mode") == 1 ? conelod::GroupMode::Paper : conelod::GroupMode::Integrity;
   p.keepCones = c.args.flag("KeepCones");
+  p.removeComponents = !c.args.flag("KeepComponents");
   ReadCollapseOptions(c.args, p);
   if (p.targetFaces == 0 && p.maxError == 0)
     return Invalid("give a target: " + Label(c, "TargetFaceNum") + ", " + Label(c, "TargetPerc") + " or " +
@@ -522,6 +528,7 @@ Status ApplyGroupQem(FilterCall& c) {
   for (size_t f = 0; f < r.sourceFace.size(); ++f) groupsAfter[f] = groups[r.sourceFace[f]];
   conelod::GroupIntegrity gi;
   conelod::MeasureGroupIntegrity(im, groups, r.mesh, groupsAfter, gi);
+  gi.groupsRemoved = int(r.stats.groupsRemoved);
   // A normal cone level that cannot reach the target: the mesh stays as it was, and the message
   // says what was reached and which level would reach it.
   // (Not with the automatic level, whose stop is logged as any other, nor without condition 1
@@ -572,6 +579,13 @@ Status ApplyGroupQem(FilterCall& c) {
   if (gi.groupsDisconnectedBefore)
     out.log("%d groups were already in several pieces in the input: each piece was kept as it was",
             gi.groupsDisconnectedBefore);
+  out.log("components_removed %d groups_removed %d faces_removed_with_components %d%s", int(r.stats.componentsRemoved),
+          int(r.stats.groupsRemoved), int(r.stats.facesRemovedWithComponents),
+          r.stats.componentsRemoved > 0
+              ? " (whole components of whole groups, smallest first; KeepComponents refuses it)"
+              : "");
+  const std::string floorReason = conelod::DescribeFloor(r.stats, p);
+  if (!floorReason.empty()) out.log("target_reached false floor %d: %s", int(r.mesh.faceCount()), floorReason.c_str());
   if (coneSource)
     out.log("cones_over_threshold %d of %d groups (level %d threshold %.1f deg%s)", conesOver, gi.groupsAfter, level,
             coneLimitDeg, p.keepCones ? qUtf8Printable(", " + Label(c, "KeepCones")) : "");
@@ -585,6 +599,8 @@ Status ApplyGroupQem(FilterCall& c) {
   out.figure("groups_before", gi.groupsBefore);
   out.figure("groups_after", gi.groupsAfter);
   out.figure("integrity_percent", 100 * gi.intact());
+  out.figure("components_removed", double(r.stats.componentsRemoved));
+  out.figure("groups_removed", double(r.stats.groupsRemoved));
   if (coneSource) {
     out.figure("group_level", level);
     out.figure("cones_over_threshold", conesOver);

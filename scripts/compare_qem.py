@@ -534,6 +534,30 @@ def default_meshes(source):
     return sorted(os.path.join(folder, f) for f in os.listdir(folder) if f.endswith(".ply")), folder
 
 
+def holes_mesh(source_mesh, out_dir, holes=120, radius=0.012):
+    """A mesh with many holes, made deterministically from `source_mesh` (the closed armadillo):
+    the faces with a vertex within `radius` x the bounding-box diagonal of every (n / holes)-th
+    vertex are removed. Written once to OUT_DIR/<name>_holes.ply; returns its path."""
+    from meshdata import read_ply_elements, write_binary_ply
+    name = os.path.splitext(os.path.basename(source_mesh))[0] + "_holes"
+    path = os.path.join(out_dir, name + ".ply")
+    if os.path.isfile(path):
+        return path
+    els = dict(read_ply_elements(source_mesh))
+    verts = [(r["x"], r["y"], r["z"]) for r in els["vertex"]]
+    faces = [r["vertex_indices"] for r in els["face"]]
+    lo = [min(v[i] for v in verts) for i in range(3)]
+    hi = [max(v[i] for v in verts) for i in range(3)]
+    r2 = (radius * math.dist(lo, hi)) ** 2
+    centres = [verts[i] for i in range(0, len(verts), max(1, len(verts) // holes))][:holes]
+    cut = [any(sum((p[i] - c[i]) ** 2 for i in range(3)) < r2 for c in centres) for p in verts]
+    kept = [f for f in faces if not any(cut[v] for v in f)]
+    os.makedirs(out_dir, exist_ok=True)
+    write_binary_ply(path, verts, kept, ["%d holes cut from %s by scripts/compare_qem.py"
+                                         % (holes, os.path.basename(source_mesh))])
+    return path
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("meshes_pos", nargs="*", metavar="MESH", help="meshes (paths); same as --meshes")
@@ -575,12 +599,20 @@ def main():
             if pool is None:
                 pool, _ = default_meshes(a.source)
             hits = [p for p in pool if w in os.path.basename(p)]
+            if not hits and w.endswith("_holes"):  # the generated mesh with many holes
+                base = [p for p in pool if w[:-len("_holes")] in os.path.basename(p)]
+                hits = [holes_mesh(base[0], os.path.join(os.path.abspath(a.out), "derived"))] if base else []
             if not hits:
                 sys.exit("--meshes: no mesh file or test mesh named like %r" % w)
             meshes += hits
         meshes = list(dict.fromkeys(meshes))
     elif not a.report_from:
         meshes, _ = default_meshes(a.source)
+        # Many holes (borders everywhere): generated from the closed armadillo. (Non-manifold
+        # edges: the test meshes' stanford_dragon_vrip_res2 and stanford_bunny_bun_zipper_res4.)
+        armadillo = [m for m in meshes if "armadillo" in os.path.basename(m)]
+        if armadillo:
+            meshes.append(holes_mesh(armadillo[0], os.path.join(os.path.abspath(a.out), "derived")))
     tools = {"conelod": os.path.join(a.build, "conelod", "conelod"),
              "server": os.path.join(a.build, "meshlab", "bin", "meshlabserver"),
              "meshopt": os.path.join(a.build, "tools", "meshopt_simplify")}

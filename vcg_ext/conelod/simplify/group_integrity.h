@@ -32,9 +32,14 @@ struct GroupIntegrity {
   int groupsDisconnectedAfter = 0;         // ids in several pieces after
   int groupsNew = 0;                       // ids after that did not exist before (should be 0)
   std::vector<int> vanishedIds, splitIds;  // the first few of each, for messages
-  // Fraction of the groups before that still exist and are not split (1 = 100% intact).
+  // Set by the caller: groups removed on purpose with whole components (GroupQemStats::
+  // groupsRemoved), counted in groupsVanished but not against integrity.
+  int groupsRemoved = 0;
+  // Fraction of the groups before, but those removed on purpose, that still exist and are not
+  // split (1 = 100% intact): every remaining group is one piece.
   double intact() const {
-    return groupsBefore > 0 ? double(groupsBefore - groupsVanished - groupsSplit) / groupsBefore : 1.0;
+    const int kept = groupsBefore - groupsRemoved;
+    return kept > 0 ? double(kept - (groupsVanished - groupsRemoved) - groupsSplit) / kept : 1.0;
   }
 };
 

@@ -98,6 +98,9 @@ enum VertexFlag : uint8_t {
   kNonManifold = 4,    // several fans, an edge with 3+ faces, or a face using the vertex twice
   kSimpleContour = 8,  // closed fan, 2 groups, 2 sectors: a plain point of one group contour
   kIsolated = 16,      // no face
+  kBorderEdge = 32,    // has an edge with one face (any fan structure)
+  kNmEdge = 64,        // has an edge with 3+ faces: a point of a non-manifold line
+  kNmJunction = 128,   // has 3+ such edges: where non-manifold lines meet (never removed)
 };
 struct VertexInfo {
   uint8_t flags = kIsolated;
@@ -250,6 +253,7 @@ class GroupQemSimplifier {
         p_(p),
         groupConstraints_((p.mode == GroupMode::Paper && p.condition1) || p.lockGroupBoundaries),
         integrity_(p.mode == GroupMode::Integrity && p.condition1),
+        countGroups_(p.condition1),
         paperConditions_(p.mode == GroupMode::Paper),
         frozen_(region && !region->frozenVertex.empty() ? region->frozenVertex.data() : nullptr),
         regionDiagonal_(region ? region->diagonal : 0) {}
@@ -294,12 +298,23 @@ class GroupQemSimplifier {
     if (!frozen(a) && !frozen(b)) heap_.push({lowerBound(a, b), a, b, epoch_ | kLazy});
   }
   void PushEdgesOf(uint32_t v);  // lazy entries for every edge of v, heap order restored
+  // Stopped above `target`: removes whole components of whole groups (p_.removeComponents) and
+  // counts those it may remove.
+  void RemoveComponents(size_t target, GroupQemStats& stats);
+  // Stopped above the target: every edge left judged once more (stats.edgesLeftBy).
+  void TallyFloor(double maxErrorSq, GroupQemStats& stats);
   // Integrity mode: after collapsing (a, b) (faces e0, e1 on the edge; n0a, n0b, n1a, n1b: the
   // faces across (a, opp0), (b, opp0), (a, opp1), (b, opp1), kNone where there is none), every
   // group of every grouping is still one piece, as many pieces as before, and not empty.
   bool keepsGroupsWhole(uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a, uint32_t n0b, uint32_t n1a,
                         uint32_t n1b);
   bool keepsGroupsWhole(uint32_t a, uint32_t b);  // finds the faces itself
+  // The same for any collapse, also along an edge with 3+ faces: a search inside each group of
+  // the removed faces, on the adjacency after the collapse (bounded as keepsGroupWhole's).
+  bool keepsGroupsWholeAcross(uint32_t a, uint32_t b);
+  // The topology and placement of a collapse in a non-manifold neighbourhood (c.keep, c.remove,
+  // c.position, c.error); false: refused (see the top of group_qem.h).
+  bool nonManifoldCollapse(uint32_t a, uint32_t b, uint32_t ne, Candidate& c);
   // One grouping: layer < 0 the primary one, else coarserDense_[layer].
   bool keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a, uint32_t n0b,
                        uint32_t n1a, uint32_t n1b);
@@ -329,6 +344,8 @@ class GroupQemSimplifier {
   GroupQemParams p_;
   const bool groupConstraints_;  // contour-aware placement and quadrics (paper mode or the lock)
   const bool integrity_;         // the integrity test (integrity mode, condition1)
+  const bool countGroups_;       // live faces per group are counted (condition1, either mode)
+  int primaryGroups_ = 0;        // dense group ids are 0 .. primaryGroups_ - 1
   const bool paperConditions_;   // conditions 1 and 2 as the paper (paper mode)
   const uint8_t* frozen_;        // per vertex, or null: see GroupQemRegion
   const double regionDiagonal_;  // > 0: the whole mesh's diagonal
@@ -370,7 +387,8 @@ class GroupQemSimplifier {
   size_t liveFaces_ = 0;
   GroupQemStats stats_;  // evaluations and refusals counted by evaluate()
   // Scratch (no allocation in the loop).
-  std::vector<uint32_t> fanOther_, ring_, fanScratch_, fanParent_, queue_;
+  std::vector<uint32_t> fanOther_, ring_, fanScratch_, fanParent_, queue_, edgeFaces_, opposite_, nbScratch_,
+      ringScratch_;
   std::vector<int> groupScratch_;
 };
 
@@ -430,11 +448,19 @@ void GroupQemSimplifier::AnalyzeVertex(uint32_t v) {
     fanOther_[2 * i + 1] = t[size_t((j + 2) % 3)];
   }
   // How many faces use each edge (v, u): 1 = border, 2 = manifold, 3+ = non-manifold.
-  uint32_t borderEnds = 0, startFace = 0, startVertex = fanOther_[0];
-  for (uint32_t s = 0; s < 2 * k && !nonManifold; ++s) {
+  uint32_t borderEnds = 0, startFace = 0, startVertex = fanOther_[0], nmEdges = 0;
+  for (uint32_t s = 0; s < 2 * k; ++s) {
     uint32_t uses = 0;
-    for (uint32_t r = 0; r < 2 * k; ++r) uses += fanOther_[r] == fanOther_[s];
-    if (uses > 2) nonManifold = true;
+    bool first = true;
+    for (uint32_t r = 0; r < 2 * k; ++r)
+      if (fanOther_[r] == fanOther_[s]) {
+        ++uses;
+        first &= r >= s;
+      }
+    if (uses > 2) {
+      nonManifold = true;
+      nmEdges += first;
+    }
     if (uses == 1) {
       ++borderEnds;
       startFace = s / 2;
@@ -467,11 +493,12 @@ void GroupQemSimplifier::AnalyzeVertex(uint32_t v) {
     if (visited != k) nonManifold = true;
   }
   if (nonManifold)
-    vi.flags = kNonManifold;
+    vi.flags = kNonManifold | (nmEdges > 0 ? kNmEdge : 0) | (nmEdges > 2 ? kNmJunction : 0);
   else if (borderEnds == 0)
     vi.flags = kClosed | ((vi.groups == 2 && changes == 2) ? kSimpleContour : 0);
   else
     vi.flags = kOpen;
+  if (borderEnds > 0) vi.flags |= kBorderEdge;
 }
 
 bool GroupQemSimplifier::interiorIn(uint32_t v, const std::vector<int>& layer) const {
@@ -508,11 +535,12 @@ void GroupQemSimplifier::init() {
   faces_.resize(nf);
   std::vector<int> dense;
   const int groups = DenseIds(group_, dense);
+  primaryGroups_ = groups;
   for (size_t f = 0; f < nf; ++f) {
     static_cast<std::array<uint32_t, 3>&>(faces_[f]) = mesh_.faces[f];
     faces_[f].group = dense[f];
   }
-  if (integrity_) {
+  if (countGroups_) {
     groupFaces_.assign(1 + coarser_.size(), std::vector<int>());
     groupFaces_[0].assign(size_t(groups), 0);
     for (size_t f = 0; f < nf; ++f) ++groupFaces_[0][size_t(dense[f])];
@@ -581,7 +609,9 @@ void GroupQemSimplifier::init() {
           ++others;
           other = *g;
         }
-      const bool border = others == 0;
+      // A non-manifold edge (3+ faces) is a feature line like a border: each of its faces adds
+      // the plane through the edge orthogonal to it, so that the line keeps its shape.
+      const bool border = others == 0 || others >= 2;
       const bool contour = groupConstraints_ && others == 1 && faces_[other].group != faces_[f].group;
       if (!border && !contour) continue;
       const Point3d edge = pos_[w] - pos_[u];
@@ -716,34 +746,40 @@ Candidate GroupQemSimplifier::judge(uint32_t a, uint32_t b) {
   }
   c.verdict = CollapseVerdict::Topology;
   const VertexInfo ia = vs_[a].info, ib = vs_[b].info;
-  if (ne > 2 || ((ia.flags | ib.flags) & kNonManifold)) return c;
-  if (ne == 2 && (ia.flags & kOpen) && (ib.flags & kOpen)) return c;  // would pinch the surface
-  const uint32_t opp0 = Third(faces_[e[0]], a, b), opp1 = ne == 2 ? Third(faces_[e[1]], a, b) : kNone;
-  if (opp0 == opp1) return c;
-  // Link condition: a and b have no common neighbour but the opposite vertices, and faces
-  // (a, opp0, opp1) and (b, opp0, opp1) do not both exist (a tetrahedron: they would merge).
-  // On the way, the faces across the edges (a, opp) and (b, opp), for condition 1.
-  ++stamp_;
   uint32_t n0a = kNone, n1a = kNone, n0b = kNone, n1b = kNone;
-  bool oppFaceA = false;
-  for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f) {
-    if (*f == e[0] || *f == e[1]) continue;
-    const auto& t = faces_[*f];
-    for (uint32_t u : t) vs_[u].mark = stamp_;
-    const bool has0 = Contains(t, opp0), has1 = opp1 != kNone && Contains(t, opp1);
-    if (has0) n0a = *f;
-    if (has1) n1a = *f;
-    oppFaceA |= has0 && has1;
-  }
-  for (const uint32_t* f = facesBegin(b); f != facesEnd(b); ++f) {
-    if (*f == e[0] || *f == e[1]) continue;
-    const auto& t = faces_[*f];
-    for (uint32_t u : t)
-      if (u != b && u != opp0 && u != opp1 && vs_[u].mark == stamp_) return c;
-    const bool has0 = Contains(t, opp0), has1 = opp1 != kNone && Contains(t, opp1);
-    if (has0) n0b = *f;
-    if (has1) n1b = *f;
-    if (has0 && has1 && oppFaceA) return c;
+  // A non-manifold neighbourhood (an edge with 3+ faces, several fans, a border through an
+  // edge's interior) takes the general path: one end goes into the other, which stays.
+  const bool nonManifold = ne > 2 || ((ia.flags | ib.flags) & kNonManifold);
+  if (nonManifold) {
+    if (!nonManifoldCollapse(a, b, ne, c)) return c;
+  } else {
+    if (ne == 2 && (ia.flags & kOpen) && (ib.flags & kOpen)) return c;  // would pinch the surface
+    const uint32_t opp0 = Third(faces_[e[0]], a, b), opp1 = ne == 2 ? Third(faces_[e[1]], a, b) : kNone;
+    if (opp0 == opp1) return c;
+    // Link condition: a and b have no common neighbour but the opposite vertices, and faces
+    // (a, opp0, opp1) and (b, opp0, opp1) do not both exist (a tetrahedron: they would merge).
+    // On the way, the faces across the edges (a, opp) and (b, opp), for condition 1.
+    ++stamp_;
+    bool oppFaceA = false;
+    for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f) {
+      if (*f == e[0] || *f == e[1]) continue;
+      const auto& t = faces_[*f];
+      for (uint32_t u : t) vs_[u].mark = stamp_;
+      const bool has0 = Contains(t, opp0), has1 = opp1 != kNone && Contains(t, opp1);
+      if (has0) n0a = *f;
+      if (has1) n1a = *f;
+      oppFaceA |= has0 && has1;
+    }
+    for (const uint32_t* f = facesBegin(b); f != facesEnd(b); ++f) {
+      if (*f == e[0] || *f == e[1]) continue;
+      const auto& t = faces_[*f];
+      for (uint32_t u : t)
+        if (u != b && u != opp0 && u != opp1 && vs_[u].mark == stamp_) return c;
+      const bool has0 = Contains(t, opp0), has1 = opp1 != kNone && Contains(t, opp1);
+      if (has0) n0b = *f;
+      if (has1) n1b = *f;
+      if (has0 && has1 && oppFaceA) return c;
+    }
   }
 
   // Group conditions.
@@ -751,11 +787,17 @@ Candidate GroupQemSimplifier::judge(uint32_t a, uint32_t b) {
     c.verdict = CollapseVerdict::LockedBoundary;
     return c;
   }
-  if (integrity_ && !keepsGroupsWhole(a, b, e[0], e[1], n0a, n0b, n1a, n1b)) {
+  if (integrity_ &&
+      !(nonManifold ? keepsGroupsWholeAcross(a, b) : keepsGroupsWhole(a, b, e[0], e[1], n0a, n0b, n1a, n1b))) {
     c.verdict = CollapseVerdict::Condition1;
     return c;
   }
-  if (paperConditions_ && p_.condition1) {
+  if (paperConditions_ && p_.condition1 && nonManifold) {
+    // In a non-manifold neighbourhood the paper's local clauses do not apply (an edge may have
+    // more than two faces, and more than one face across it): ask what they guarantee.
+    c.verdict = CollapseVerdict::Condition1;
+    if (!keepsGroupsWholeAcross(a, b)) return c;
+  } else if (paperConditions_ && p_.condition1) {
     c.verdict = CollapseVerdict::Condition1;
     const auto primaryGroup = [this](uint32_t f) { return faces_[f].group; };
     if (!condition1(primaryGroup, a, b, e[0], e[1], n0a, n0b, n1a, n1b, nullptr)) return c;
@@ -773,7 +815,7 @@ Candidate GroupQemSimplifier::judge(uint32_t a, uint32_t b) {
     const size_t limit = std::max<size_t>({2, ia.groups, ib.groups});
     for (uint32_t v : {a, b})
       for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f) {
-        if (*f == e[0] || *f == e[1]) continue;
+        if (Contains(faces_[*f], v == a ? b : a)) continue;  // on the edge
         const int g = faces_[*f].group;
         if (std::find(groupScratch_.begin(), groupScratch_.end(), g) == groupScratch_.end()) {
           groupScratch_.push_back(g);
@@ -783,7 +825,7 @@ Candidate GroupQemSimplifier::judge(uint32_t a, uint32_t b) {
   }
 
   c.verdict = CollapseVerdict::FixedEndpoints;
-  if (!place(a, b, ne == 2 && faces_[e[0]].group != faces_[e[1]].group, c)) return c;
+  if (!nonManifold && !place(a, b, ne == 2 && faces_[e[0]].group != faces_[e[1]].group, c)) return c;
 
   // Geometry of the faces that survive: no flip, no zero-area face; their worst quality
   // (2 area / longest edge^2, compared squared: no square root per face).
@@ -792,8 +834,8 @@ Candidate GroupQemSimplifier::judge(uint32_t a, uint32_t b) {
   const double minCosSq = kMinNormalCos * kMinNormalCos, degenerateSq = kDegenerateQuality * kDegenerateQuality;
   for (uint32_t v : {a, b})
     for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f) {
-      if (*f == e[0] || *f == e[1]) continue;
       const auto& t = faces_[*f];
+      if (Contains(t, v == a ? b : a)) continue;  // on the edge: removed
       // Rotate so that the moving vertex comes first.
       const int j = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
       const Point3d& p1 = pos_[t[size_t((j + 1) % 3)]];
@@ -823,6 +865,131 @@ Candidate GroupQemSimplifier::judge(uint32_t a, uint32_t b) {
   c.verdict = CollapseVerdict::Allowed;
   c.priority = priorityOf(c.error, std::sqrt(minQualitySq), a, b);
   return c;
+}
+
+bool GroupQemSimplifier::nonManifoldCollapse(uint32_t a, uint32_t b, uint32_t ne, Candidate& c) {
+  edgeFaces_.clear();
+  opposite_.clear();
+  for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f) {
+    const auto& t = faces_[*f];
+    if (!Contains(t, b)) continue;
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) return false;  // a degenerate face on the edge
+    edgeFaces_.push_back(*f);
+    const uint32_t o = Third(t, a, b);
+    if (std::find(opposite_.begin(), opposite_.end(), o) == opposite_.end()) opposite_.push_back(o);
+  }
+  if (ne == 2 && opposite_.size() == 1) return false;  // two copies of one face, alone on the edge
+  const auto isOpposite = [&](uint32_t u) {
+    return std::find(opposite_.begin(), opposite_.end(), u) != opposite_.end();
+  };
+  // Which end may go into the other (as meshoptimizer's vertex kinds: a manifold vertex into
+  // anything, a point of a non-manifold line only along the line, a junction of lines never).
+  const auto removable = [&](const VertexInfo& vi) {
+    if (p_.preserveBoundary && (vi.flags & kBorderEdge)) return false;
+    if (groupConstraints_ && vi.groups > 1) return false;  // paper mode / lock: group boundaries stay
+    if (!(vi.flags & kNonManifold)) return true;
+    if (vi.flags & kNmJunction) return false;
+    if (vi.flags & kNmEdge) return ne > 2;
+    return ne <= 2;  // several fans but no non-manifold edge: along any edge
+  };
+  const VertexInfo& ia = vs_[a].info;
+  const VertexInfo& ib = vs_[b].info;
+  // A manifold end goes into a non-manifold one (which keeps its kind), never the reverse.
+  const bool nmA = ia.flags & kNonManifold, nmB = ib.flags & kNonManifold;
+  const bool goA = removable(ia) && (nmA || nmB ? nmA == nmB || !nmA : true);
+  const bool goB = removable(ib) && (nmA || nmB ? nmA == nmB || !nmB : true);
+  if (!goA && !goB) return false;
+  // Link condition: the common neighbours of a and b are the opposite vertices only.
+  ++stamp_;
+  for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f)
+    if (!Contains(faces_[*f], b))
+      for (uint32_t u : faces_[*f]) vs_[u].mark = stamp_;
+  for (const uint32_t* f = facesBegin(b); f != facesEnd(b); ++f) {
+    const auto& t = faces_[*f];
+    if (Contains(t, a)) continue;
+    for (uint32_t u : t)
+      if (u != b && vs_[u].mark == stamp_ && !isOpposite(u)) return false;
+    // Faces (b, x, y) and (a, x, y) would become one face twice.
+    const uint32_t x = t[0] == b ? t[1] : t[0], y = t[2] == b ? t[1] : t[2];
+    if (isOpposite(x) && isOpposite(y))
+      for (const uint32_t* g = facesBegin(a); g != facesEnd(a); ++g)
+        if (Contains(faces_[*g], x) && Contains(faces_[*g], y)) return false;
+  }
+  // No edge becomes non-manifold: the merged edge (m, x) has the faces of (a, x) and (b, x) but
+  // those on (a, b); it may have more than 2 only where (a, x) or (b, x) had as many.
+  for (uint32_t x : opposite_) {
+    uint32_t k1 = 0, k2 = 0, tx = 0;
+    for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f) k1 += Contains(faces_[*f], x);
+    for (const uint32_t* f = facesBegin(b); f != facesEnd(b); ++f) k2 += Contains(faces_[*f], x);
+    for (uint32_t f : edgeFaces_) tx += Third(faces_[f], a, b) == x;
+    const uint32_t merged = k1 + k2 - 2 * tx;
+    if (merged > 2 && merged > std::max(k1, k2)) return false;
+  }
+  // The merged vertex stays at the end that does not go (meshoptimizer's placement: no new
+  // position on a feature); of two that may go, the cheaper.
+  Quadric q = quadric_[a];
+  q += quadric_[b];
+  c.keep = goA && goB ? (q.error(pos_[a]) <= q.error(pos_[b]) ? a : b) : (goA ? b : a);
+  c.remove = c.keep == a ? b : a;
+  c.position = pos_[c.keep];
+  c.error = q.error(c.position);
+  return true;
+}
+
+bool GroupQemSimplifier::keepsGroupsWholeAcross(uint32_t a, uint32_t b) {
+  edgeFaces_.clear();
+  for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f)
+    if (Contains(faces_[*f], b)) edgeFaces_.push_back(*f);
+  // After the collapse b is a: faces are adjacent when they share two vertices with b read as a.
+  const auto has = [&](const FaceRec& t, uint32_t v) { return Contains(t, v) || (v == a && Contains(t, b)); };
+  for (int layer = -1; layer < int(coarserDense_.size()); ++layer) {
+    const std::vector<int>& count = groupFaces_[size_t(layer + 1)];
+    for (size_t i = 0; i < edgeFaces_.size(); ++i) {
+      const int G = groupIn(layer, edgeFaces_[i]);
+      bool seen = false;
+      for (size_t j = 0; j < i; ++j) seen |= groupIn(layer, edgeFaces_[j]) == G;
+      if (seen) continue;
+      int removed = 0;
+      for (uint32_t f : edgeFaces_) removed += groupIn(layer, f) == G;
+      if (count[size_t(G)] <= removed) return false;  // its last faces
+      // G's faces next to its removed ones.
+      ++faceStamp_;
+      for (uint32_t f : edgeFaces_) faceMark_[f] = faceStamp_;
+      nbScratch_.clear();
+      for (uint32_t f : edgeFaces_) {
+        if (groupIn(layer, f) != G) continue;
+        const uint32_t x = Third(faces_[f], a, b);
+        for (uint32_t v : {a, b})
+          for (const uint32_t* g = facesBegin(v); g != facesEnd(v); ++g)
+            if (faceMark_[*g] != faceStamp_ && groupIn(layer, *g) == G && Contains(faces_[*g], x) &&
+                std::find(nbScratch_.begin(), nbScratch_.end(), *g) == nbScratch_.end())
+              nbScratch_.push_back(*g);
+      }
+      if (nbScratch_.size() <= 1) continue;
+      queue_.assign(1, nbScratch_[0]);
+      faceMark_[nbScratch_[0]] = faceStamp_;
+      size_t found = 1;
+      for (size_t head = 0; head < queue_.size() && found < nbScratch_.size(); ++head) {
+        if (queue_.size() > kIntegritySearchFaces) return false;
+        const auto& t = faces_[queue_[head]];
+        for (int j = 0; j < 3; ++j) {
+          uint32_t u = t[size_t(j)], w = t[size_t((j + 1) % 3)];
+          if (u == b) u = a;
+          if (w == b) w = a;
+          if (u == w) continue;
+          for (int pass = 0; pass < (u == a ? 2 : 1); ++pass)
+            for (const uint32_t* g = facesBegin(pass ? b : u); g != facesEnd(pass ? b : u); ++g) {
+              if (faceMark_[*g] == faceStamp_ || groupIn(layer, *g) != G || !has(faces_[*g], w)) continue;
+              faceMark_[*g] = faceStamp_;
+              queue_.push_back(*g);
+              found += std::find(nbScratch_.begin(), nbScratch_.end(), *g) != nbScratch_.end();
+            }
+        }
+      }
+      if (found < nbScratch_.size()) return false;
+    }
+  }
+  return true;
 }
 
 bool GroupQemSimplifier::keepsGroupsWhole(uint32_t a, uint32_t b) {
@@ -976,16 +1143,15 @@ void GroupQemSimplifier::PushEdgesOf(uint32_t v) {
 void GroupQemSimplifier::collapse(const Candidate& c) {
   const uint32_t keep = c.keep, gone = c.remove;
   // The faces on the edge die and leave the lists of their opposite vertices.
-  uint32_t opposite[2] = {kNone, kNone};
-  int no = 0;
+  opposite_.clear();
   for (const uint32_t* f = facesBegin(gone); f != facesEnd(gone); ++f) {
     if (!Contains(faces_[*f], keep)) continue;
     faceDead_[*f] = 1;
     --liveFaces_;
-    if (integrity_)
+    if (countGroups_)
       for (size_t l = 0; l < groupFaces_.size(); ++l) --groupFaces_[l][size_t(groupIn(int(l) - 1, *f))];
     const uint32_t o = Third(faces_[*f], keep, gone);
-    opposite[no++] = o;
+    opposite_.push_back(o);
     uint32_t* ob = refs_.data() + start_[o];
     for (uint32_t i = 0; i < count_[o]; ++i)
       if (ob[i] == *f) {
@@ -1025,8 +1191,7 @@ void GroupQemSimplifier::collapse(const Candidate& c) {
   vs_[keep].lastSurvive = vs_[keep].touched = epoch_;
   AnalyzeVertex(keep);
   // An opposite vertex lost a face: its groups may have changed, and with them what its edges may do.
-  for (int i = 0; i < no; ++i) {
-    const uint32_t o = opposite[i];
+  for (const uint32_t o : opposite_) {
     const VertexInfo before = vs_[o].info;
     AnalyzeVertex(o);
     if (vs_[o].info.flags != before.flags || vs_[o].info.groups != before.groups) vs_[o].dropped = 1;
@@ -1095,7 +1260,8 @@ Status GroupQemSimplifier::run(const Progress& progress, GroupQemStats& stats) {
     if (vs_[a].dead || vs_[b].dead || ep < vs_[a].lastSurvive || ep < vs_[b].lastSurvive) continue;  // superseded
     const bool fresh = ep >= vs_[a].touched && ep >= vs_[b].touched;
     Candidate c;
-    if (fresh && kind == kJudged) {  // nothing changed since it was judged: only place it again
+    if (fresh && kind == kJudged && !((vs_[a].info.flags | vs_[b].info.flags) & kNonManifold)) {
+      // nothing changed since it was judged: only place it again
       // (and, in integrity mode, search again: a path found around the edge inside its group
       // may have been cut since by a collapse elsewhere that this edge's faces kept whole)
       if (integrity_ && !keepsGroupsWhole(a, b)) {
@@ -1133,6 +1299,10 @@ Status GroupQemSimplifier::run(const Progress& progress, GroupQemStats& stats) {
       compactFloor = 2 * heap_.size();
     }
   }
+  if (stats.stop != GroupQemStats::Stop::Cancelled && liveFaces_ > target && target > 0) {
+    RemoveComponents(target, stats);
+    if (liveFaces_ > target) TallyFloor(maxErrorSq, stats);
+  }
   if (liveFaces_ <= target && stats.stop != GroupQemStats::Stop::Cancelled)
     stats.stop = GroupQemStats::Stop::TargetReached;
   stats.facesOut = liveFaces_;
@@ -1145,6 +1315,145 @@ Status GroupQemSimplifier::run(const Progress& progress, GroupQemStats& stats) {
   stats.refusedGeometry = stats_.refusedGeometry;
   stats.refusedCone = stats_.refusedCone;
   return stats.stop == GroupQemStats::Stop::Cancelled ? Status::Cancelled() : Status::Ok();
+}
+
+void GroupQemSimplifier::RemoveComponents(size_t target, GroupQemStats& stats) {
+  // Components (faces joined through vertices) of the live faces: union-find on vertices.
+  const uint32_t nv = uint32_t(pos_.size()), nf = uint32_t(faces_.size());
+  std::vector<uint32_t> parent(nv);
+  for (uint32_t v = 0; v < nv; ++v) parent[v] = v;
+  const auto root = [&](uint32_t v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  };
+  for (uint32_t f = 0; f < nf; ++f) {
+    if (faceDead_[f]) continue;
+    for (int j = 1; j < 3; ++j) {
+      const uint32_t r0 = root(faces_[f][0]), r = root(faces_[f][size_t(j)]);
+      if (r != r0) parent[std::max(r, r0)] = std::min(r, r0);
+    }
+  }
+  struct Component {
+    uint32_t faces = 0;
+    bool removable = true;
+    vcg::Box3<double> box;
+  };
+  std::vector<uint32_t> compOf(nv, kNone);
+  std::vector<Component> comps;
+  for (uint32_t v = 0; v < nv; ++v) {
+    if (vs_[v].dead || count_[v] == 0) continue;
+    const uint32_t r = root(v);
+    if (compOf[r] == kNone) {
+      compOf[r] = uint32_t(comps.size());
+      comps.emplace_back();
+    }
+    compOf[v] = compOf[r];
+    Component& c = comps[compOf[v]];
+    c.box.Add(pos_[v]);
+    if (frozen(v)) c.removable = false;  // joined to another part of the mesh
+  }
+  if (comps.size() <= 1) return;  // never remove the whole mesh
+  // A component may go when every group of every grouping that it touches lies inside it.
+  std::vector<uint32_t> compOfGroup;
+  for (size_t l = 0; l < groupFaces_.size(); ++l) {
+    compOfGroup.assign(groupFaces_[l].size(), kNone);
+    for (uint32_t f = 0; f < nf; ++f) {
+      if (faceDead_[f]) continue;
+      const uint32_t c = compOf[faces_[f][0]];
+      uint32_t& owner = compOfGroup[size_t(groupIn(int(l) - 1, f))];
+      if (owner == kNone)
+        owner = c;
+      else if (owner != c)
+        owner = kNone - 1;  // in two components
+    }
+    for (uint32_t f = 0; f < nf; ++f)
+      if (!faceDead_[f] && compOfGroup[size_t(groupIn(int(l) - 1, f))] != compOf[faces_[f][0]])
+        comps[compOf[faces_[f][0]]].removable = false;
+  }
+  for (uint32_t f = 0; f < nf; ++f)
+    if (!faceDead_[f]) ++comps[compOf[faces_[f][0]]].faces;
+  std::vector<uint32_t> order;
+  for (uint32_t c = 0; c < comps.size(); ++c)
+    if (comps[c].removable) order.push_back(c);
+  // Smallest first: by extent, then by faces; and never all of them.
+  std::sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) {
+    const double dx = comps[x].box.Diag(), dy = comps[y].box.Diag();
+    return dx != dy ? dx < dy : (comps[x].faces != comps[y].faces ? comps[x].faces < comps[y].faces : x < y);
+  });
+  if (order.size() == comps.size()) order.pop_back();
+  stats.componentsRemovable = order.size();
+  if (!p_.removeComponents) return;
+  // Smallest first, passing over one that would land below the target while others may still
+  // land on it; if none does, the one that lands closest.
+  std::vector<char> removeComp(comps.size(), 0);
+  size_t excess = liveFaces_ - target;
+  uint32_t closest = kNone;
+  for (uint32_t c : order) {
+    if (excess == 0) break;
+    if (comps[c].faces > excess) {
+      if (closest == kNone || comps[c].faces < comps[closest].faces) closest = c;
+      continue;
+    }
+    removeComp[c] = 1;
+    excess -= comps[c].faces;
+  }
+  if (excess > 0 && closest != kNone) {
+    // Below the target by `over`: take back removed ones that fit in it, largest first.
+    removeComp[closest] = 1;
+    size_t over = comps[closest].faces - excess;
+    for (size_t i = order.size(); i-- > 0 && over > 0;) {
+      const uint32_t c = order[i];
+      if (c != closest && removeComp[c] && comps[c].faces <= over) {
+        removeComp[c] = 0;
+        over -= comps[c].faces;
+      }
+    }
+  }
+  for (uint32_t c : order)
+    if (removeComp[c]) {
+      ++stats.componentsRemoved;
+      --stats.componentsRemovable;
+    }
+  std::vector<char> groupGone(size_t(primaryGroups_), 0);
+  for (uint32_t f = 0; f < nf; ++f) {
+    if (faceDead_[f] || !removeComp[compOf[faces_[f][0]]]) continue;
+    faceDead_[f] = 1;
+    --liveFaces_;
+    ++stats.facesRemovedWithComponents;
+    for (size_t l = 0; l < groupFaces_.size(); ++l) --groupFaces_[l][size_t(groupIn(int(l) - 1, f))];
+    if (!groupGone[size_t(faces_[f].group)]) {
+      groupGone[size_t(faces_[f].group)] = 1;
+      ++stats.groupsRemoved;
+    }
+  }
+  for (uint32_t v = 0; v < nv; ++v)
+    if (compOf[v] != kNone && removeComp[compOf[v]]) {
+      vs_[v].dead = 1;
+      count_[v] = 0;
+    }
+}
+
+void GroupQemSimplifier::TallyFloor(double maxErrorSq, GroupQemStats& stats) {
+  const uint32_t nv = uint32_t(pos_.size());
+  for (uint32_t v = 0; v < nv; ++v) {
+    if (vs_[v].dead) continue;
+    ++stamp_;
+    ringScratch_.clear();
+    for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f)
+      for (uint32_t u : faces_[*f])
+        if (u > v && vs_[u].mark != stamp_) {
+          vs_[u].mark = stamp_;
+          ringScratch_.push_back(u);
+        }
+    for (uint32_t u : ringScratch_) {  // (judge() uses the marks too)
+      const Candidate c = judge(v, u);
+      ++stats.edgesLeft;
+      if (c.verdict == CollapseVerdict::Allowed && maxErrorSq >= 0 && c.error > maxErrorSq)
+        ++stats.edgesOverMaxError;
+      else
+        ++stats.edgesLeftBy[int(c.verdict)];
+    }
+  }
 }
 
 void GroupQemSimplifier::output(GroupQemResult& out) const {
@@ -1200,6 +1509,42 @@ Status ValidateParams(const GroupQemParams& p) {
 }
 
 const char* ToString(GroupMode m) { return m == GroupMode::Paper ? "paper" : "integrity"; }
+
+std::string DescribeFloor(const GroupQemStats& s, const GroupQemParams& p) {
+  if (s.stop != GroupQemStats::Stop::NoMoreCollapses || p.targetFaces == 0 || s.facesOut <= p.targetFaces) return "";
+  std::string why = "stopped at " + std::to_string(s.facesOut) + " faces for a target of " +
+                    std::to_string(p.targetFaces) + ": no allowed collapse left; of the " +
+                    std::to_string(s.edgesLeft) + " edges left, ";
+  const auto n = [&](CollapseVerdict v) { return s.edgesLeftBy[int(v)]; };
+  struct Reason {
+    size_t count;
+    const char* text;
+  };
+  const Reason reasons[] = {
+      {n(CollapseVerdict::Topology),
+       "would make an edge non-manifold, pinch the surface or move a non-manifold "
+       "junction (topology)"},
+      {n(CollapseVerdict::Condition1), p.mode == GroupMode::Paper ? "would break condition 1 (split or remove a group)"
+                                                                  : "would split or remove a group"},
+      {n(CollapseVerdict::Condition2), "would break condition 2 (a new vertex where 3+ groups meet)"},
+      {n(CollapseVerdict::LockedBoundary), "would move a locked group boundary"},
+      {n(CollapseVerdict::FixedEndpoints), "join two vertices that must both stay"},
+      {n(CollapseVerdict::Geometry), "would flip a face or make one of zero area"},
+      {n(CollapseVerdict::Cone), "would widen a normal cone past its bound (keep cones)"},
+      {s.edgesOverMaxError, "exceed the maximum error"},
+  };
+  bool first = true;
+  for (const Reason& r : reasons) {
+    if (r.count == 0) continue;
+    why += (first ? "" : ", ") + std::to_string(r.count) + " " + r.text;
+    first = false;
+  }
+  if (first) why += "none is left";
+  if (s.componentsRemovable > 0)
+    why += "; " + std::to_string(s.componentsRemovable) + " component(s) made of whole groups could be removed" +
+           (p.removeComponents ? "" : " (component removal is off: keep components)");
+  return why;
+}
 
 const char* ToString(GroupQemStats::Stop s) {
   switch (s) {

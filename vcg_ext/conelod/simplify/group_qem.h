@@ -42,6 +42,18 @@
 // new vertex goes to the quadric's minimum (optimalPlacement), falling back to the best point of
 // the edge when the quadric is singular or its minimum lies far from the edge.
 //
+// Non-manifold input (both modes), as meshoptimizer's vertex kinds: an edge with 3+ faces is a
+// feature line (border-like quadrics); a vertex on such edges, or with several fans, never moves,
+// but may be removed into a neighbour that stays: a manifold vertex into a non-manifold one, a
+// point of a non-manifold line (1 or 2 such edges) only along the line, a vertex with several
+// fans but no such edge along any edge; a junction of 3+ lines never goes. A general link
+// condition refuses what would make an edge non-manifold (an edge may keep, never gain, more than
+// two faces) or one face twice; the group test there is a search on the adjacency after the
+// collapse (keepsGroupsWholeAcross). In paper mode these collapses keep the groups whole the same
+// way (the paper's local clauses assume a manifold fan), and group boundaries never go.
+// Whole components: with removeComponents, a run that has no allowed collapse left above the
+// target removes components made of whole groups, smallest first (GroupQemParams).
+//
 // Error and priority follow vcglib's TriEdgeCollapseQuadric (what MeshLab's "Quadric Edge Collapse
 // Decimation" runs): face-plane quadrics (area-weighted) plus border-edge quadrics weighted by
 // boundaryWeight (and, in paper mode with condition 1 or with the lock, the same on group
@@ -59,6 +71,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "conelod/mesh/indexed_mesh.h"
@@ -99,6 +112,12 @@ struct GroupQemParams {
   bool preserveBoundary = false;     // mesh-border vertices never move
   double boundaryWeight = 1.0;       // weight of the border (and group-contour) quadrics
   bool preserveNormal = true;        // refuse collapses that flip a face (normal turning > ~78 degrees)
+  // When no allowed collapse is left above targetFaces: remove whole connected components whose
+  // every group (in every grouping) lies inside them, smallest (bounding-box diagonal) first,
+  // until the target is reached (passing over one that would land below the target while smaller
+  // ones may still land on it). No group is split; the removed groups vanish whole. The CLI and
+  // the filter turn it on (--keep-components / KeepComponents refuse it); the LOD builders do not.
+  bool removeComponents = false;
 };
 
 // Ok, or a message naming the bad parameter.
@@ -118,7 +137,18 @@ struct GroupQemStats {
   size_t refusedCone = 0;       // keepCones: a normal would leave its group's cone
   double maxCollapseError = 0;  // largest error of a collapse done, fraction of the bbox diagonal
   enum class Stop { TargetReached, NoMoreCollapses, Cancelled } stop = Stop::NoMoreCollapses;
+  // removeComponents: what was removed (groups of the primary grouping).
+  size_t componentsRemoved = 0, groupsRemoved = 0, facesRemovedWithComponents = 0;
+  // Components that removeComponents could have removed but did not (it is off, or the target
+  // was reached first).
+  size_t componentsRemovable = 0;
+  // Stopped above targetFaces (the floor: facesOut): every edge left, judged once more, by
+  // verdict (index: int(CollapseVerdict)); edgesOverMaxError: allowed but over maxError.
+  size_t edgesLeft = 0, edgesLeftBy[9] = {}, edgesOverMaxError = 0;
 };
+// Why a run stopped above its target, in one line ("every remaining collapse would split or
+// remove a group (12 edges), ..."): the CLI's message and the filter's log. Empty when it did not.
+std::string DescribeFloor(const GroupQemStats& s, const GroupQemParams& p);
 
 struct GroupQemResult {
   IndexedMesh mesh;                    // the simplified mesh (vertices in input order, minus the removed)

@@ -327,6 +327,192 @@ TEST(Topology, RefusesPinchesAndNonEdges) {
   EXPECT_EQ(EvaluateCollapse(tet, std::vector<int>(4, 0), Conditions(false, false), 0, 1), CollapseVerdict::Topology);
 }
 
+// --- Non-manifold input ------------------------------------------------------------------------
+
+// A "book": kPages pages of 4 x 2 quads around one straight spine S_0..S_4 on the x axis (row 0
+// of every page). Every spine edge has kPages faces (non-manifold); S_0 and S_4 end the line,
+// S_1..S_3 are points of it; the page vertices are manifold.
+constexpr int kPages = 3;
+uint32_t Spine(int i) { return uint32_t(i); }
+uint32_t Page(int k, int i, int j) { return uint32_t(5 + (k * 2 + (j - 1)) * 5 + i); }  // j = 1, 2
+IndexedMesh Book() {
+  IndexedMesh m;
+  for (int i = 0; i < 5; ++i) m.positions.emplace_back(float(i), 0.f, 0.f);
+  for (int k = 0; k < kPages; ++k) {
+    const double angle = 2 * 3.14159265358979 * k / kPages;
+    for (int j = 1; j <= 2; ++j)
+      for (int i = 0; i < 5; ++i)
+        m.positions.emplace_back(float(i), float(j * std::cos(angle)), float(j * std::sin(angle)));
+  }
+  for (int k = 0; k < kPages; ++k)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 4; ++i) {
+        const auto at = [&](int ii, int jj) { return jj == 0 ? Spine(ii) : Page(k, ii, jj); };
+        m.faces.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+        m.faces.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+      }
+  return m;
+}
+
+TEST(NonManifold, VerticesCollapseAlongTheLineAndIntoIt) {
+  const IndexedMesh m = Book();
+  ASSERT_EQ(BuildFaceAdjacency(m).nonManifoldEdges, 4u);
+  for (const GroupQemParams& p : {Integrity(), Conditions(true, true)}) {
+    const std::vector<int> one(m.faces.size(), 0);
+    vcg::Point3f pos;
+    // Along the line: a point of it goes into its neighbour on the line, which stays put.
+    ASSERT_EQ(EvaluateCollapse(m, one, p, Spine(2), Spine(1), &pos), CollapseVerdict::Allowed);
+    EXPECT_TRUE(pos == m.positions[Spine(1)] || pos == m.positions[Spine(2)]);
+    // A page vertex goes into the line vertex, which stays put (from either side).
+    ASSERT_EQ(EvaluateCollapse(m, one, p, Spine(2), Page(1, 2, 1), &pos), CollapseVerdict::Allowed);
+    EXPECT_EQ(pos, m.positions[Spine(2)]);
+    ASSERT_EQ(EvaluateCollapse(m, one, p, Page(0, 3, 1), Spine(2), &pos), CollapseVerdict::Allowed);
+    EXPECT_EQ(pos, m.positions[Spine(2)]);
+    // The end of the line may go into its neighbour on the line.
+    ASSERT_EQ(EvaluateCollapse(m, one, p, Spine(0), Spine(1), &pos), CollapseVerdict::Allowed);
+    // A manifold collapse next to the line is unaffected.
+    EXPECT_EQ(EvaluateCollapse(m, one, p, Page(0, 2, 1), Page(0, 2, 2)), CollapseVerdict::Allowed);
+  }
+  // Integrity: a page whose first row is a group of its own would be cut from... nothing; but a
+  // spine collapse that removes the last faces of a group is refused.
+  std::vector<int> g(m.faces.size(), 0);
+  g[0] = 1;  // page 0, face {S_0, S_1, P(0,1,1)} alone in group 1
+  EXPECT_EQ(EvaluateCollapse(m, g, Integrity(), Spine(0), Spine(1)), CollapseVerdict::Condition1);
+  EXPECT_EQ(EvaluateCollapse(m, g, Integrity(), Spine(1), Spine(2)), CollapseVerdict::Allowed);
+}
+
+// A vertex where three or more non-manifold lines meet never goes; its neighbours come to it.
+TEST(NonManifold, JunctionsStay) {
+  // A second line T_0 - S_2 - T_1 through the book's S_2, with three fins (T_0, S_2, tip) and
+  // (S_2, T_1, tip) on it: S_2 has 4 non-manifold edges.
+  IndexedMesh m = Book();
+  const uint32_t t0 = uint32_t(m.positions.size()), t1 = t0 + 1, tip0 = t0 + 2;
+  m.positions.emplace_back(2.f, 0.f, 3.f);
+  m.positions.emplace_back(2.f, 1.f, -3.f);
+  for (int k = 0; k < 3; ++k) {
+    const double angle = 2 * 3.14159265358979 * (k + 0.5) / 3;
+    m.positions.emplace_back(float(2 + std::cos(angle)), float(std::sin(angle)), 0.f);
+    m.faces.push_back({t0, Spine(2), tip0 + uint32_t(k)});
+    m.faces.push_back({Spine(2), t1, tip0 + uint32_t(k)});
+  }
+  ASSERT_EQ(BuildFaceAdjacency(m).nonManifoldEdges, 6u);
+  const std::vector<int> one(m.faces.size(), 0);
+  GroupQemParams p = Integrity();
+  p.preserveNormal = false;  // (the fins cross the pages: only the topology is under test)
+  vcg::Point3f pos;
+  for (const auto& ends : {std::make_pair(Spine(2), Spine(1)), std::make_pair(Spine(1), Spine(2))}) {
+    ASSERT_EQ(EvaluateCollapse(m, one, p, ends.first, ends.second, &pos), CollapseVerdict::Allowed);
+    EXPECT_EQ(pos, m.positions[Spine(2)]) << "the junction stays, its neighbour on the line comes";
+  }
+  // A manifold fin tip goes into the end of the line T_0 - S_2 - T_1.
+  ASSERT_EQ(EvaluateCollapse(m, one, p, tip0, t0, &pos), CollapseVerdict::Allowed);
+  EXPECT_EQ(pos, m.positions[t0]);
+}
+
+TEST(NonManifold, TheBookSimplifiesWithoutNewNonManifoldEdges) {
+  const IndexedMesh m = Book();
+  for (bool integrity : {true, false}) {
+    GroupQemParams p = integrity ? Integrity() : Conditions(true, true);
+    p.targetFaces = 1;
+    GroupQemResult r;
+    ASSERT_TRUE(SimplifyPreservingGroups(m, std::vector<int>(m.faces.size(), 0), p, r).ok());
+    ExpectValidOutput(m, r);
+    // The spine shrinks along itself, the pages fold into it, fins fold into the spine edge
+    // until it has two faces, and the last triangle remains (the group's last face). A simplifier
+    // that leaves non-manifold vertices alone keeps every face at the spine (24).
+    EXPECT_EQ(r.mesh.faces.size(), 1u) << (integrity ? "integrity" : "paper");
+    EXPECT_EQ(r.stats.stop, GroupQemStats::Stop::TargetReached);
+  }
+}
+
+// --- Whole components ---------------------------------------------------------------------------
+
+// Tetrahedra (no collapse keeps the link condition) of sizes 1, 2, 3, 4 at x = 0, 10, 20, 30.
+IndexedMesh Tetrahedra(int n) {
+  IndexedMesh m;
+  for (int i = 0; i < n; ++i) {
+    const float s = float(i + 1), x = 10.f * float(i);
+    const uint32_t b = uint32_t(m.positions.size());
+    m.positions.insert(m.positions.end(), {{x, 0, 0}, {x + s, 0, 0}, {x, s, 0}, {x, 0, s}});
+    m.faces.insert(m.faces.end(), {{b, b + 2, b + 1}, {b, b + 1, b + 3}, {b + 1, b + 2, b + 3}, {b, b + 3, b + 2}});
+  }
+  return m;
+}
+
+TEST(Components, WholeComponentsGoSmallestFirstOnlyWhenAllowed) {
+  const IndexedMesh m = Tetrahedra(4);
+  std::vector<int> g;
+  for (int i = 0; i < 4; ++i) g.insert(g.end(), 4, i);
+  GroupQemParams p = Integrity();
+  p.targetFaces = 9;
+  GroupQemResult r;
+  // Off (the core's default): the floor, and why.
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+  EXPECT_EQ(r.mesh.faces.size(), 16u);
+  EXPECT_EQ(r.stats.stop, GroupQemStats::Stop::NoMoreCollapses);
+  EXPECT_EQ(r.stats.componentsRemoved, 0u);
+  EXPECT_EQ(r.stats.componentsRemovable, 3u) << "never all of them";
+  EXPECT_EQ(r.stats.edgesLeft, 24u);
+  EXPECT_EQ(r.stats.edgesLeftBy[int(CollapseVerdict::Topology)], 24u);
+  const std::string why = DescribeFloor(r.stats, p);
+  EXPECT_NE(why.find("stopped at 16 faces for a target of 9"), std::string::npos) << why;
+  EXPECT_NE(why.find("24 would make an edge non-manifold"), std::string::npos) << why;
+  EXPECT_NE(why.find("3 component(s)"), std::string::npos) << why;
+  // On: the two smallest go, whole, with their groups.
+  p.removeComponents = true;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+  ExpectValidOutput(m, r);
+  EXPECT_EQ(r.mesh.faces.size(), 8u);
+  EXPECT_EQ(r.stats.stop, GroupQemStats::Stop::TargetReached);
+  EXPECT_EQ(r.stats.componentsRemoved, 2u);
+  EXPECT_EQ(r.stats.groupsRemoved, 2u);
+  EXPECT_EQ(r.stats.facesRemovedWithComponents, 8u);
+  const std::vector<int> kept = GroupsAfter(r, g);
+  EXPECT_EQ(std::set<int>({2, 3}), std::set<int>(kept.begin(), kept.end()));
+  EXPECT_EQ(DescribeFloor(r.stats, p), "");
+  // Never the last one: a target of 1 keeps the largest.
+  p.targetFaces = 1;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+  EXPECT_EQ(r.mesh.faces.size(), 4u);
+  EXPECT_EQ(r.stats.componentsRemoved, 3u);
+  EXPECT_EQ(GroupsAfter(r, g), std::vector<int>(4, 3));
+  // A group in two components keeps both: only the others may go.
+  std::fill(g.begin(), g.begin() + 8, 0);  // tetrahedra 0 and 1 share group 0
+  p.targetFaces = 9;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+  EXPECT_EQ(r.mesh.faces.size(), 8u);
+  EXPECT_EQ(GroupsAfter(r, g), std::vector<int>(8, 0));
+  GroupIntegrity gi;
+  ASSERT_TRUE(MeasureGroupIntegrity(m, g, r.mesh, GroupsAfter(r, g), gi).ok());
+  gi.groupsRemoved = int(r.stats.groupsRemoved);
+  EXPECT_EQ(gi.groupsSplit, 0);
+  EXPECT_DOUBLE_EQ(gi.intact(), 1.0) << "every remaining group is one piece";
+}
+
+// boeing (122 open components, 142 top-level groups) cannot reach 2 % with every group: with
+// component removal it lands on the target, every remaining group whole, indices valid.
+TEST(Components, BoeingReachesTwoPercentByDroppingWholeComponents) {
+  const IndexedMesh m = LoadReal("boeing.ply");
+  GroupHierarchy h;
+  ASSERT_TRUE(BuildConeHierarchy(m, ConeGroupingParams(), h).ok());
+  const std::vector<int>& g = h.level(h.levelCount()).faceGroup;
+  GroupQemParams p;
+  p.targetFaces = 51;
+  GroupQemResult r;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+  EXPECT_GT(r.mesh.faces.size(), 100u) << "without removal the groups keep more faces";
+  EXPECT_GT(r.stats.componentsRemovable, 0u);
+  p.removeComponents = true;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+  ExpectValidOutput(m, r);
+  EXPECT_EQ(r.mesh.faces.size(), 51u);
+  EXPECT_GT(r.stats.componentsRemoved, 0u);
+  GroupIntegrity gi;
+  ASSERT_TRUE(MeasureGroupIntegrity(m, g, r.mesh, GroupsAfter(r, g), gi).ok());
+  EXPECT_EQ(gi.groupsSplit, 0);
+  EXPECT_EQ(size_t(gi.groupsVanished), r.stats.groupsRemoved);
+}
+
 TEST(PreserveBoundary, BorderVerticesStay) {
   const IndexedMesh m = test::Grid(kN);
   const std::vector<int> g(m.faces.size(), 0);
