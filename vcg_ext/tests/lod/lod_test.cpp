@@ -633,6 +633,24 @@ TEST_F(BunnyLod, SmallBudgetsRefineWhereTheEyeLooks) {
   }
 }
 
+// By the error in model units a group too large for what is left of the budget is passed over
+// and smaller ones fill the rest (issue 29: the cut stopped at the first that did not fit, 82 %
+// of a 5 % budget), and the cut stays watertight.
+TEST_F(BunnyLod, ObjectErrorCutsFillTheirBudget) {
+  auto r = Open();
+  ASSERT_TRUE(r);
+  for (double fraction : {0.05, 0.1, 0.25}) {
+    SCOPED_TRACE(fraction);
+    LodView v = Eye(0, 0.1, 100, size_t(fraction * 69451), false);
+    v.priority = LodPriority::ObjectError;
+    LodCut cut;
+    ASSERT_TRUE(RefineLod(*r, v, cut).ok());
+    EXPECT_LE(cut.faces, v.faceBudget);
+    EXPECT_GE(cut.faces, v.faceBudget * 98 / 100);
+    EXPECT_EQ(CheckCut(*bunny_, *r, cut).overused, 0u);
+  }
+}
+
 TEST_F(BunnyLod, CulledNodesFaceAwayFromTheEye) {
   auto r = Open();
   ASSERT_TRUE(r);
