@@ -18,6 +18,7 @@
 #include <iterator>
 #include <limits>
 #include <map>
+#include <set>
 #include <unordered_map>
 
 #include <unistd.h>
@@ -781,6 +782,41 @@ TEST(Lod, WriterRefusesMismatchedInput) {
                    }(),
                    dag)
                    .ok());
+}
+
+// fineGroupClusters: larger groups on the levels above 1/8 of the input's faces only, the cuts
+// still watertight; out of range it is refused.
+TEST(Lod, FineGroupClustersGatherLargerGroupsOnTheFineLevels) {
+  Built plain, fine;
+  plain.mesh = fine.mesh = test::Sphere(5);  // 8192 faces, 64 clusters
+  LodBuildParams p;
+  p.fineGroupClusters = 24;
+  Build(plain, "sphere_plain");
+  Build(fine, "sphere_fine", p);
+  auto groups = [](const LodDag::Level& L) {
+    return std::set<int>(L.clusterGroup.begin(), L.clusterGroup.end()).size();
+  };
+  ASSERT_GE(plain.dag.levels.size(), 3u);
+  ASSERT_GE(fine.dag.levels.size(), 3u);
+  EXPECT_LT(groups(fine.dag.levels[0]), groups(plain.dag.levels[0]));
+  std::unique_ptr<LodReader> r;
+  ASSERT_TRUE(LodReader::Open(fine.path, r).ok());
+  for (double pct : {5.0, 20.0, 50.0}) {
+    LodView v;
+    v.eye = vcg::Point3d(0, 0, 5);
+    v.faceBudget = size_t(8192 * pct / 100);
+    v.priority = LodPriority::ObjectError;
+    LodCut cut;
+    ASSERT_TRUE(RefineLod(*r, v, cut).ok());
+    const CrackCount k = CheckCut(fine, *r, cut);
+    EXPECT_EQ(k.border, 0u) << pct;
+    EXPECT_EQ(k.overused, 0u) << pct;
+  }
+  std::remove(plain.path.c_str());
+  std::remove(fine.path.c_str());
+  p.fineGroupClusters = 1;
+  LodDag dag;
+  EXPECT_FALSE(BuildLodDag(fine.mesh, p, dag).ok());
 }
 
 TEST(Lod, CancellingLeavesNoFile) {
