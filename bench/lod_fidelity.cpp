@@ -3,7 +3,7 @@
 // filter's defaults) at the same face count.
 //
 //   lod_fidelity MESH.ply [--samples N] [--dag-only] [--cluster-faces N] [--group-clusters N] [--cone DEG]
-//                [--max-faces N] [--max-group-error F]
+//                [--max-faces N] [--max-group-error F] [--fine-group-clusters N] [--cuts P,P,...]
 //
 // "tree": the previous .clod levels (BuildConeHierarchy + BuildSimplifiedLevels with the defaults
 // `conelod lod build` used: every level keeps the normal-cone groups of its hierarchy level).
@@ -17,12 +17,18 @@
 // --file [--precision E]: instead, the DAG's levels against the same levels read back from the .clod
 // file written from it (positions quantized with precision E, default kDefaultLodPrecision): per level
 // the RMS of both and their relative change (quantization and the codecs' round trip).
+// Each level is also compared with our static collapse at its count (`conelod simplify --groups
+// cone:auto`): where a level as a whole loses against it. --cuts P,...: instead of the levels,
+// cuts of the file at these budgets (% of the input's faces; far eye, error in model units, no
+// culling: scripts/lod_fidelity.py's cuts, measured here in-process) beside both, with the faces
+// the cut takes from each level: where the cut loses against its levels.
 #include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -48,6 +54,16 @@ conelod::IndexedMesh Vcg(QMesh& input, size_t targetFaces) {
   return conelod::ToIndexedMesh(m);
 }
 
+// `conelod simplify --groups cone:auto --target-faces N` (the CLI's defaults): our static collapse.
+conelod::IndexedMesh Ours(const conelod::IndexedMesh& input, const conelod::GroupHierarchy& h, size_t targetFaces) {
+  conelod::GroupQemParams p;
+  p.targetFaces = targetFaces;
+  conelod::GroupQemResult r;
+  if (!conelod::SimplifyPreservingGroups(input, h.level(conelod::AutoGroupLevel(h, targetFaces)).faceGroup, p, r).ok())
+    return conelod::IndexedMesh();
+  return r.mesh;
+}
+
 double Rms(const conelod::IndexedMesh& a, const conelod::IndexedMesh& input, int samples, double diag) {
   conelod::HausdorffResult h;
   if (!conelod::SampledHausdorff(a, input, samples, h).ok()) return -1;
@@ -67,6 +83,7 @@ int main(int argc, char** argv) {
   size_t maxFaces = 0;  // 0: every level
   bool tree = true, file = false;
   conelod::LodBuildParams dagParams;
+  std::vector<double> cuts;  // --cuts P,...: cuts at these budgets (% of the input's faces) instead of levels
   for (int i = 2; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--dag-only")) tree = false;
     if (!std::strcmp(argv[i], "--file")) file = true;
@@ -74,8 +91,17 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--samples")) samples = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--cluster-faces")) dagParams.clusterFaces = size_t(std::atoi(argv[i + 1]));
     if (!std::strcmp(argv[i], "--group-clusters")) dagParams.groupClusters = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--fine-group-clusters")) dagParams.fineGroupClusters = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--max-group-error")) dagParams.maxGroupError = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--max-faces")) maxFaces = size_t(std::atoll(argv[i + 1]));
+    if (!std::strcmp(argv[i], "--cuts")) {
+      tree = false;
+      for (const char* c = argv[i + 1]; *c;) {
+        char* end = nullptr;
+        cuts.push_back(std::strtod(c, &end));
+        c = *end ? end + 1 : end;
+      }
+    }
     if (!std::strcmp(argv[i], "--cone")) dagParams.grouping.coneThresholdDeg = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--precision")) dagParams.precision = std::atof(argv[i + 1]);
   }
@@ -146,6 +172,48 @@ int main(int argc, char** argv) {
     conelod::LodDag dag;
     if (!conelod::BuildLodDag(input, dagParams, dag).ok()) return 1;
     std::printf("dag: cluster DAG %.2f s wall\n", Wall() - w);
+    if (!cuts.empty()) {
+      // Cuts of the file: far eye, by error alone, no culling (scripts/lod_fidelity.py's cuts).
+      const std::string path = "/tmp/lod_fidelity_bench_" + std::to_string(long(Wall() * 1000)) + ".clod";
+      conelod::LodBuildStats st;
+      if (!conelod::WriteLodFile(input, dag, path, &st).ok()) return 1;
+      std::unique_ptr<conelod::LodReader> reader;
+      if (!conelod::LodReader::Open(path, reader).ok()) return 1;
+      std::remove(path.c_str());
+      conelod::GroupHierarchy h;
+      if (!conelod::BuildConeHierarchy(input, conelod::ConeGroupingParams(), h).ok()) return 1;
+      std::printf(
+          "%s: %zu bytes, %zu levels\n| budget | cut faces | fill | RMS cut | static | MeshLab | cut/static | "
+          "cut/MeshLab | faces per level |\n|---|---|---|---|---|---|---|---|---|\n",
+          argv[1], size_t(st.fileBytes), dag.levels.size());
+      for (double pct : cuts) {
+        conelod::LodView v;
+        v.eye = box.Center() + vcg::Point3d(0, 0, 100 * diag);
+        v.cullBackFacing = false;
+        v.priority = conelod::LodPriority::ObjectError;
+        v.faceBudget = size_t(std::llround(pct / 100 * double(input.faces.size())));
+        conelod::LodCut cut;
+        conelod::IndexedMesh m;
+        std::vector<int> faceLevel;
+        if (!conelod::RefineLod(*reader, v, cut).ok() ||
+            !conelod::ExtractCutMesh(*reader, cut, true, m, &faceLevel).ok())
+          return 1;
+        std::vector<size_t> perLevel(dag.levels.size(), 0);
+        for (int l : faceLevel) ++perLevel[size_t(l)];
+        std::string levels;
+        for (size_t l = 0; l < perLevel.size(); ++l)
+          if (perLevel[l])
+            levels += (levels.empty() ? "" : " ") + std::to_string(l) + ":" + std::to_string(perLevel[l]);
+        const double ours = Rms(m, input, samples, diag);
+        const double stat = Rms(Ours(input, h, m.faces.size()), input, samples, diag);
+        const double ref = Rms(Vcg(qm, m.faces.size()), input, samples, diag);
+        std::printf("| %g %% | %zu | %.1f %% | %.4f | %.4f | %.4f | %.2f | %.2f | %s |\n", pct, m.faces.size(),
+                    100.0 * double(m.faces.size()) / double(v.faceBudget), 100 * ours, 100 * stat, 100 * ref,
+                    ours / stat, ours / ref, levels.c_str());
+        std::fflush(stdout);
+      }
+      return 0;
+    }
     std::vector<conelod::IndexedMesh> meshes;
     for (size_t k = 1; k < dag.levels.size(); ++k) {
       conelod::IndexedMesh m;
@@ -155,10 +223,15 @@ int main(int argc, char** argv) {
     }
     runs.emplace_back("dag", std::move(meshes));
   }
+  conelod::GroupHierarchy hierarchy;
+  if (!conelod::BuildConeHierarchy(input, conelod::ConeGroupingParams(), hierarchy).ok()) return 1;
   for (const auto& run : runs) {
     std::printf("\n%s, %s (%zu faces): RMS distance to the input, %% of the diagonal\n", run.first.c_str(), argv[1],
                 input.faces.size());
-    std::printf("| level | faces | RMS (%s) | RMS (MeshLab QEM) | ratio |\n|---|---|---|---|---|\n", run.first.c_str());
+    std::printf(
+        "| level | faces | RMS (%s) | RMS (MeshLab QEM) | ratio | RMS (ours static, cone:auto) | ratio |\n"
+        "|---|---|---|---|---|---|---|\n",
+        run.first.c_str());
     for (size_t k = 0; k < run.second.size(); ++k) {
       const conelod::IndexedMesh& m = run.second[k];
       if (maxFaces > 0 && m.faces.size() > maxFaces) {
@@ -167,7 +240,9 @@ int main(int argc, char** argv) {
       }
       const double ours = Rms(m, input, samples, diag);
       const double ref = Rms(Vcg(qm, m.faces.size()), input, samples, diag);
-      std::printf("| %zu | %zu | %.4f | %.4f | %.2f |\n", k + 1, m.faces.size(), 100 * ours, 100 * ref, ours / ref);
+      const double stat = Rms(Ours(input, hierarchy, m.faces.size()), input, samples, diag);
+      std::printf("| %zu | %zu | %.4f | %.4f | %.2f | %.4f | %.2f |\n", k + 1, m.faces.size(), 100 * ours, 100 * ref,
+                  ours / ref, 100 * stat, ours / stat);
       std::fflush(stdout);
     }
   }

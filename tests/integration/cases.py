@@ -1853,6 +1853,36 @@ COMPARE_COLUMNS = ["mesh", "faces_in", "target_pct", "asked", "level", "group_le
 
 
 @case
+def lod_fidelity_smoke(c):
+    """scripts/lod_fidelity.py on one small mesh and one budget: the cut within its budget, our
+    static collapse and MeshLab's QEM at exactly the cut's face count, the RMS of each, the table."""
+    out = c.out("fid")
+    mesh = c.mesh("couplingdown.ply")
+    env = dict(os.environ, CONELOD_BUILD_DIR=c.build)
+    env.pop("NXSBUILD", None)
+    env.pop("NXSEDIT", None)
+    p = subprocess.run([sys.executable, os.path.join(c.source, "scripts", "lod_fidelity.py"), mesh, "--budgets", "25",
+                        "--samples", "20000", "--out", out], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env,
+                       timeout=300)
+    log = p.stdout.decode(errors="replace")
+    assert p.returncode == 0, log
+    lines = open(os.path.join(out, "results.tsv")).read().splitlines()
+    rows = [dict(zip(lines[0].split("\t"), l.split("\t"))) for l in lines[1:]]
+    assert len(rows) == 1, rows
+    r = rows[0]
+    assert r["error"] == "" and r["mesh"] == "couplingdown" and r["budget"] == "928", r  # 25 % of 3714
+    n = int(r["cut_faces"])
+    assert 0 < n <= 928, r
+    assert int(r["static_faces"]) == n and int(r["meshlab_faces"]) == n, r
+    for col in ("cut_rms", "static_rms", "meshlab_rms"):
+        assert float(r[col]) > 0, (col, r)
+    assert abs(float(r["cut_vs_meshlab"]) - float(r["cut_rms"]) / float(r["meshlab_rms"])) < 1e-6, r
+    assert r["nexus_rms"] == "" and float(r["file_bytes"]) > 0, r
+    summary = open(os.path.join(out, "summary.md")).read()
+    assert "### couplingdown (3,714 faces)" in summary and "| 25 % (928) |" in summary, summary
+
+
+@case
 def compare_qem_smoke(c):
     """scripts/compare_qem.sh on one small mesh, one target, one level: every column, both peers at
     exactly our face count, figures in the table and a plot."""

@@ -31,6 +31,12 @@ struct LodBuildParams {
   HierarchicalSimplificationParams simplification;
   size_t clusterFaces = 128;  // target faces of a cluster (a node), at every level
   int groupClusters = 12;     // clusters gathered into one group before simplification
+  // Clusters per group on the fine levels (above 1/8 of the input's faces); 0: groupClusters.
+  // Larger groups lock a smaller share of their faces (the armadillo's cuts at 10 / 25 % of its
+  // faces: 1.17 / 1.16x our static collapse at their count with 12, 1.06 / 1.04x with 24) but
+  // refine in larger steps (fewer choices of where the eye looks: BunnyLod's view-dependent
+  // 30 % cut fails with 24), so it is off by default (docs/lod_viewer.md).
+  int fineGroupClusters = 0;
   // No collapse in a group costs more than this (RMS distance of its quadric, fraction of the
   // diagonal; the smaller of this and simplification.qem.maxError when that is set): a group
   // whose locked border leaves no cheap collapse stops short of levelRatio rather than fold.

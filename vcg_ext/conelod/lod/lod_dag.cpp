@@ -401,6 +401,8 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
     return Status::Invalid("cluster faces must lie in [4, 65536]");
   if (params.groupClusters < 2 || params.groupClusters > 64)
     return Status::Invalid("group clusters must lie in [2, 64]");
+  if (params.fineGroupClusters != 0 && (params.fineGroupClusters < 2 || params.fineGroupClusters > 64))
+    return Status::Invalid("fine group clusters must be 0 or lie in [2, 64]");
   if (!(params.maxGroupError > 0 && params.maxGroupError <= 1))
     return Status::Invalid("the largest group error must lie in (0, 1] (a fraction of the diagonal)");
   if (!(params.grouping.coneThresholdDeg > 0) || !(params.grouping.thresholdGrowth >= 1))
@@ -439,7 +441,10 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
     LodDag::Level& L = dag.levels[size_t(k)];
     if (L.clusterCount() <= 1) break;
     std::vector<int> group;
-    const int G = GroupClusters(L, params.groupClusters, wholeParts ? wholeUpTo : 0, group);
+    // Groups of fineGroupClusters on the fine levels (above 1/8 of the input's faces).
+    const int per = params.fineGroupClusters > 0 && 8 * L.faces.size() > mesh.faces.size() ? params.fineGroupClusters
+                                                                                           : params.groupClusters;
+    const int G = GroupClusters(L, per, wholeParts ? wholeUpTo : 0, group);
     // Faces per group; vertices shared by two groups stay frozen.
     std::vector<std::vector<uint32_t>> groupFaces(static_cast<size_t>(G));
     for (uint32_t f = 0; f < L.faces.size(); ++f) groupFaces[size_t(group[L.faceCluster[f]])].push_back(f);

@@ -151,7 +151,8 @@ class LodReader {
 enum class LodPriority {
   ScreenError,  // the group's error projected at its nearest point (in pixels with projectionScale;
                 //   without, error / distance), largest first; stops below maxPixelError
-  ObjectError,  // the group's error in model units, largest first (the same cut wherever the eye is)
+  ObjectError,  // the group's error in model units, largest first (the same cut wherever the eye is);
+                //   a group that does not fit the budget is passed over for smaller ones that do
   ConeFg        // the paper's f(g) (RefinementPriority) of the group's clusters, largest first
 };
 

@@ -12,7 +12,8 @@
 // node above the pixel error whose group waits on other groups (some of its clusters not in the
 // cut yet) has those expanded first (Impl::Demand), so that a still cut meets the pixel error
 // wherever it is drawn. The refinement stops at the first group whose expansion does not fit the
-// face budget. Culling only
+// face budget; by the error in model units (ObjectError) that group is passed over instead, and
+// the smaller groups further down the queue that fit fill what is left of the budget. Culling only
 // flags cut nodes as not drawn: it never changes the selection, so the drawn set is a subset of
 // a watertight cut whose other nodes face away.
 #include "conelod/lod/lod_read.h"
@@ -265,8 +266,12 @@ struct LodRefiner::Impl {
       added += reader.node(c).faceCount;
     }
     if (cut.faces - removed + added > view.faceBudget) {
-      stopped = true;
       cut.budgetReached = true;
+      // It does not fit. By the error in model units, its clusters stay and the groups after it
+      // that fit are still expanded (a smaller one fills what is left), so the cut ends near its
+      // budget. The view-dependent orders stop here: filling would spend the rest of the budget
+      // on what the view needs least (the far side of the model), not where it looks.
+      if (view.priority != LodPriority::ObjectError || cut.faces >= view.faceBudget) stopped = true;
       return Status::Ok();
     }
     for (uint32_t s : siblings) RemoveFromCut(s);

@@ -18,6 +18,7 @@
 #include <iterator>
 #include <limits>
 #include <map>
+#include <set>
 #include <unordered_map>
 
 #include <unistd.h>
@@ -743,6 +744,24 @@ TEST_F(BunnyLod, SmallBudgetsRefineWhereTheEyeLooks) {
   }
 }
 
+// By the error in model units a group too large for what is left of the budget is passed over
+// and smaller ones fill the rest (issue 29: the cut stopped at the first that did not fit, 82 %
+// of a 5 % budget), and the cut stays watertight.
+TEST_F(BunnyLod, ObjectErrorCutsFillTheirBudget) {
+  auto r = Open();
+  ASSERT_TRUE(r);
+  for (double fraction : {0.05, 0.1, 0.25}) {
+    SCOPED_TRACE(fraction);
+    LodView v = Eye(0, 0.1, 100, size_t(fraction * 69451), false);
+    v.priority = LodPriority::ObjectError;
+    LodCut cut;
+    ASSERT_TRUE(RefineLod(*r, v, cut).ok());
+    EXPECT_LE(cut.faces, v.faceBudget);
+    EXPECT_GE(cut.faces, v.faceBudget * 98 / 100);
+    EXPECT_EQ(CheckCut(*bunny_, *r, cut).overused, 0u);
+  }
+}
+
 TEST_F(BunnyLod, CulledNodesFaceAwayFromTheEye) {
   auto r = Open();
   ASSERT_TRUE(r);
@@ -873,6 +892,41 @@ TEST(Lod, WriterRefusesMismatchedInput) {
                    }(),
                    dag)
                    .ok());
+}
+
+// fineGroupClusters: larger groups on the levels above 1/8 of the input's faces only, the cuts
+// still watertight; out of range it is refused.
+TEST(Lod, FineGroupClustersGatherLargerGroupsOnTheFineLevels) {
+  Built plain, fine;
+  plain.mesh = fine.mesh = test::Sphere(5);  // 8192 faces, 64 clusters
+  LodBuildParams p;
+  p.fineGroupClusters = 24;
+  Build(plain, "sphere_plain");
+  Build(fine, "sphere_fine", p);
+  auto groups = [](const LodDag::Level& L) {
+    return std::set<int>(L.clusterGroup.begin(), L.clusterGroup.end()).size();
+  };
+  ASSERT_GE(plain.dag.levels.size(), 3u);
+  ASSERT_GE(fine.dag.levels.size(), 3u);
+  EXPECT_LT(groups(fine.dag.levels[0]), groups(plain.dag.levels[0]));
+  std::unique_ptr<LodReader> r;
+  ASSERT_TRUE(LodReader::Open(fine.path, r).ok());
+  for (double pct : {5.0, 20.0, 50.0}) {
+    LodView v;
+    v.eye = vcg::Point3d(0, 0, 5);
+    v.faceBudget = size_t(8192 * pct / 100);
+    v.priority = LodPriority::ObjectError;
+    LodCut cut;
+    ASSERT_TRUE(RefineLod(*r, v, cut).ok());
+    const CrackCount k = CheckCut(fine, *r, cut);
+    EXPECT_EQ(k.border, 0u) << pct;
+    EXPECT_EQ(k.overused, 0u) << pct;
+  }
+  std::remove(plain.path.c_str());
+  std::remove(fine.path.c_str());
+  p.fineGroupClusters = 1;
+  LodDag dag;
+  EXPECT_FALSE(BuildLodDag(fine.mesh, p, dag).ok());
 }
 
 TEST(Lod, CancellingLeavesNoFile) {
