@@ -1032,7 +1032,7 @@ std::vector<ParamSpec> LodExportSpecs(const MeshDocument*, const MeshModel*) {
                          Inside(0, 1)));
   AddCollapseOptionParams(p, d.simplification.qem,
                           "Weight of the quadrics that keep mesh borders in place (Preserve Boundary).");
-  p.push_back(FloatParam("Precision", conelod::kDefaultLodPrecision, "Position precision (fraction of the diagonal)",
+  p.push_back(FloatParam("Precision", conelod::kDefaultLodPrecision, "Position precision",
                          "Positions are quantized on one grid so that the file stays small: no vertex moves by "
                          "more than this fraction of the bounding box diagonal (the default, 2e-5, is far below "
                          "the error of the first simplified level).",

@@ -80,10 +80,14 @@ struct EdgeKeyHash {
   }
 };
 using EdgeMap = std::unordered_map<EdgeKey, int, EdgeKeyHash>;
+// Faces with two corners at one position (the grid can round a sliver's corners together) have
+// no area: they neither open nor overlap anything and are left out.
 EdgeMap EdgesByPosition(const IndexedMesh& m) {
   EdgeMap edges;
   edges.reserve(m.faces.size() * 2);
-  for (const auto& t : m.faces)
+  for (const auto& t : m.faces) {
+    const vcg::Point3f &p0 = m.positions[t[0]], &p1 = m.positions[t[1]], &p2 = m.positions[t[2]];
+    if (p0 == p1 || p1 == p2 || p2 == p0) continue;
     for (int i = 0; i < 3; ++i) {
       const vcg::Point3f& a = m.positions[t[size_t(i)]];
       const vcg::Point3f& b = m.positions[t[size_t((i + 1) % 3)]];
@@ -91,6 +95,7 @@ EdgeMap EdgesByPosition(const IndexedMesh& m) {
       if (kb < ka) std::swap(ka, kb);
       ++edges[{ka, kb}];
     }
+  }
   return edges;
 }
 
@@ -995,7 +1000,7 @@ TEST(Lod, UnreferencedVerticesGiveAReadableFile) {
     ASSERT_TRUE(ExtractCutMesh(*r, cut, true, out).ok());
     EXPECT_EQ(out.faces.size(), 8u);
     EXPECT_EQ(out.positions.size(), 6u);
-    EXPECT_EQ(SortedFacePositions(out), SortedFacePositions(m));
+    EXPECT_EQ(SortedFacePositions(out), SortedFacePositions(OnGrid(m, r->info().grid)));
   }
   std::remove(path.c_str());
 }
