@@ -60,6 +60,9 @@ if [ "${1:-}" = --inside ]; then
            awk -F'[,:]' '!found && /#FFFFFF/ { y = $2 + 0; if (y == last + 1) run++; else { run = 1; start = y }
                                                last = y; if (run == 10) { print start + 8; found = 1 } }')"
   [ -n "$box_y" ] || { echo "gui_file_box.sh: no file box in the dialog" >&2; exit 1; }
+  # A dialog taller than the room below the menu starts above the screen (2025.07: y = -32); the
+  # picture has only its visible part, the clicks are in the window's own coordinates.
+  [ "$Y" -ge 0 ] || box_y=$((box_y - Y))
   BOX=("${BOX[0]}" "$box_y") APPLY=($((WIDTH - 127)) $((HEIGHT - 23))) BROWSE=($((WIDTH - 60)) "$box_y")
   xdotool mousemove --window "$dialog" "${BOX[0]}" "${BOX[1]}" click 1; xdotool type "$typed"; sleep 0.5
   xdotool mousemove --window "$dialog" "${APPLY[0]}" "${APPLY[1]}" click 1
