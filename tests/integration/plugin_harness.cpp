@@ -502,11 +502,18 @@ void Failures(Run& r) {
     Check(!QFileInfo::exists(clod), "  no file is left");
   }
   {  // Coordinates around 1e19 (their squares overflow floats; the sampled distance crashed on
-     // them): every filter that reads the mesh refuses them and leaves it unchanged.
+     // them): every filter that reads the mesh refuses them and leaves it unchanged, except the
+     // progressive cluster mesh, which works on the mesh scaled by a power of two.
     MeshDocument md;
     MeshModel* mm = Load(md, r.bunny);
     for (auto& v : mm->cm.vert) v.P() *= 1e20f;
-    for (const char* name : {kGrouping, kCulling, kFeature, kBudget, kPca, kProgressive}) {
+    {
+      const int layers = Layers(md);
+      Check(r.apply(kProgressive, md).isEmpty() && Layers(md) == layers + 1,
+            "Progressive Cluster Mesh takes coordinates around 1e19 (a new layer)");
+      md.setCurrentMesh(mm->id());
+    }
+    for (const char* name : {kGrouping, kCulling, kFeature, kBudget, kPca}) {
       RichParameterList par = r.params(name, md);
       r.refused(name, md, par, "beyond +-1e18", "coordinates around 1e19");
     }

@@ -101,15 +101,19 @@ Status SampledDistanceScaled(const IndexedMesh& from, const IndexedMesh& to, int
 
 Status SampledDistance(const IndexedMesh& from, const IndexedMesh& to, int faceSamples, SurfaceDistance& out) {
   out = SurfaceDistance();
-  Status s = RequireValidForFaces(from);
-  if (s.ok()) s = RequireValidForFaces(to);
-  if (!s.ok()) return s;
   if (faceSamples < 0 || faceSamples > kMaxFaceSamples)
     return Status::Invalid("the number of samples must be from 0 to " + std::to_string(kMaxFaceSamples));
-  // Computed on both meshes times a power of two and scaled back: the same digits at any scale.
+  // Computed on both meshes times a power of two and scaled back: the same digits at any scale. The
+  // meshes are checked once scaled, so that coordinates beyond kMaxCoordinate (whose squares
+  // overflow floats) are measured too.
   const double scale = JointNormalizingScale(from, to);
   IndexedMesh fromStorage, toStorage;
-  s = SampledDistanceScaled(Scaled(from, scale, fromStorage), Scaled(to, scale, toStorage), faceSamples, out);
+  const IndexedMesh& a = Scaled(from, scale, fromStorage);
+  const IndexedMesh& b = Scaled(to, scale, toStorage);
+  Status s = RequireValidForFaces(a);
+  if (s.ok()) s = RequireValidForFaces(b);
+  if (!s.ok()) return s;
+  s = SampledDistanceScaled(a, b, faceSamples, out);
   out.max /= scale;
   out.mean /= scale;
   out.rms /= scale;

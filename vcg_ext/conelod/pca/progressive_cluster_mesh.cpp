@@ -396,14 +396,16 @@ Status BuildProgressiveClusterMeshOf(const IndexedMesh& mesh, const ProgressiveM
   out = ProgressiveMeshResult();
   Status s = ValidateParams(params);
   if (!s.ok()) return s;
-  s = RequireValidForFaces(mesh);
-  if (!s.ok()) return s;
   const auto start = std::chrono::steady_clock::now();
   const float scale = float(NormalizingScale(mesh));
   IndexedMesh scaled;
   scaled.faces = mesh.faces;
   scaled.positions.reserve(mesh.positions.size());
   for (const auto& p : mesh.positions) scaled.positions.push_back(p * scale);
+  // Checked once scaled (indices and finiteness are the input's): a mesh far beyond kMaxCoordinate,
+  // 2^100 across, is about 1 across here, and its output is its input's vertices as given.
+  s = RequireValidForFaces(scaled);
+  if (!s.ok()) return s;
   PcaTree tree;
   s = BuildPcaTree(scaled, PcaPartitionParams(), tree, SubProgress(progress, 0, 40));
   if (!s.ok()) return s;
