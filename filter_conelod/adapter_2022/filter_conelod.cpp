@@ -5,6 +5,7 @@
 #include <common/mlexception.h>
 
 #include "../filter_table.h"
+#include "../show_face_colour.h"
 #include "compat.h"
 
 using namespace conelod_plugin;
@@ -96,31 +97,6 @@ Args ReadArgs(const std::vector<ParamSpec>& specs, const RichParameterList& par,
   return a;
 }
 
-// After a filter that changed the current mesh's faces and whose face colours must show
-// (FilterSpec::showFaceColour). MeshLab's GUI then compares each mesh with its state before the
-// filter (MeshDocument::meshDocStateData, MainWindow::updateSharedContextDataAfterFilterExecution):
-// a new vertex or face count, or post-conditions naming them, make it refresh every attribute,
-// and with the vertex colour refreshed the face colour is switched off. So the plugin refreshes
-// the mesh's GL buffers itself, as the GUI would (connectivity included), records the new counts
-// as the state before, and returns the post-conditions that remain (positions, normals, face
-// colour and quality): the GUI then switches the face colour on, as after a FaceColoring filter
-// that keeps the faces. Only with a GL view (glContext) whose state was recorded (the GUI; not
-// PyMeshLab); otherwise returns -1 (keep the filter's post-conditions).
-int ShowFaceColour(MeshDocument& md, MLPluginGLContext* gl) {
-  MeshModel* mm = md.mm();
-  if (!gl || !mm) return -1;
-  const auto before = md.meshDocStateData().find(mm->id());
-  if (before == md.meshDocStateData().end()) return -1;
-  const int maskBefore = before->_mask;
-  MLRenderingData::RendAtts all;
-  MLPoliciesStandAloneFunctions::fromMeshModelMaskToMLRenderingAtts(MeshModel::MM_ALL, all);
-  gl->meshAttributesUpdated(mm->id(), true, all);
-  md.meshDocStateData().insert(
-      mm->id(), MeshModelStateData(maskBefore, size_t(mm->cm.VN()), size_t(mm->cm.FN()), size_t(mm->cm.EN())));
-  return MeshModel::MM_VERTCOORD | MeshModel::MM_VERTNORMAL | MeshModel::MM_FACENORMAL | MeshModel::MM_FACECOLOR |
-         MeshModel::MM_FACEQUALITY;
-}
-
 }  // namespace
 
 FilterConeLodPlugin::FilterConeLodPlugin() {
@@ -194,7 +170,7 @@ std::map<std::string, QVariant> FilterConeLodPlugin::applyFilter(const QAction* 
   const QString message = RunFilter(*f, md, ReadArgs(f->params(&md, md.mm()), par, md), cb, report);
   if (!message.isEmpty()) throw MLException(message);
   if (f->showFaceColour) {
-    const int shown = ShowFaceColour(md, glContext);
+    const int shown = conelod_plugin::ShowFaceColour(md, glContext);
     if (shown != -1) postConditionMask = unsigned(shown);
   }
   std::map<std::string, QVariant> figures;
