@@ -219,11 +219,13 @@ async function main() {
       render();
       await nextFrame();
       if (status.state !== 'done') {
-        status.state = 'done';
         status.doneMs = performance.now() - t0;
         status.doneBytes = reader.src.bytesFetched;
         if (fpsFrames > 0 && status.fps === undefined) await measureFps(fpsFrames);
+        status.state = 'done';
         showHud();
+        render();
+        await nextFrame();
         document.title = 'ConeLOD web viewer [done]';
       }
       await new Promise((r) => (wake = r));  // until the view changes
