@@ -22,6 +22,7 @@ const MAX_GRID_BITS = 30;
 const EMPTY_CONE = 0xffff;
 const CONE_UNIT = Math.PI / 65534;
 const FLAG_WIDE = 1;
+const HIER_PAGE = 8192;  // the records are read and kept in pages of this size
 // Optional per-vertex streams after the ids, announced by geometry flag bits (lod_format.md,
 // "Attributes to come"), in this order: a reader that meets a bit it does not know refuses the
 // file by name. Each entry: { bit, name, stride } decoded by meshopt_decodeVertexBuffer into
@@ -187,6 +188,7 @@ export class ClodReader {
     this.nodes = new Map();        // id -> record
     this.indexBlocks = new Map();  // block number -> Promise of its entries
     this.recordReads = new Map();  // 'first:count' -> Promise of a read of records in flight
+    this.hierPages = new Map();    // page of the records -> Promise of its bytes
     this.units = new Map();        // blob offset -> Promise of the decoded unit
     this.unitSizes = new Map();  // blob offset -> bytes of the decoded unit (once decoded)
     this.unitBytes = 0;          // their sum
@@ -376,6 +378,45 @@ export class ClodReader {
   hasNode(id) { return this.nodes.has(id); }
   node(id) { return this.nodes.get(id); }
 
+  // Bytes [offset, offset + n) of the records (HIER), read in pages of HIER_PAGE bytes that are
+  // kept: a level's records are consecutive in id order, and a group's clusters, their children
+  // and their parents have neighbouring ids, so one page serves many expansions (the demand for
+  // a group's missing clusters reads records one by one).
+  async _hier(offset, n) {
+    if (offset < this.hierBegin || n > this.hierEnd - offset)
+      throw new ClodError(`corrupt file: node records at offset ${offset} (${n} bytes) lie outside the hierarchy chunk`);
+    const first = Math.floor((offset - this.hierBegin) / HIER_PAGE);
+    const last = Math.floor((offset + n - 1 - this.hierBegin) / HIER_PAGE);
+    const pending = [];
+    for (let p = first; p <= last;) {
+      if (this.hierPages.has(p)) {
+        ++p;
+        continue;
+      }
+      let q = p;  // a run of missing pages: one range
+      while (q + 1 <= last && !this.hierPages.has(q + 1)) ++q;
+      const begin = this.hierBegin + p * HIER_PAGE, end = Math.min(this.hierEnd, this.hierBegin + (q + 1) * HIER_PAGE);
+      const read = this.src.read(begin, end - begin, 'node records'), runStart = p;
+      for (let k = p; k <= q; ++k) {
+        const at = (k - runStart) * HIER_PAGE;
+        const page = read.then((b) => b.subarray(at, Math.min(b.length, at + HIER_PAGE)));
+        this.hierPages.set(k, page);
+        page.catch(() => this.hierPages.delete(k));
+      }
+      p = q + 1;
+    }
+    for (let p = first; p <= last; ++p) pending.push(this.hierPages.get(p));
+    const pages = await Promise.all(pending);
+    const out = new Uint8Array(n);
+    for (let p = first, at = 0; p <= last; ++p) {
+      const pageBegin = this.hierBegin + p * HIER_PAGE;
+      const from = Math.max(offset, pageBegin) - pageBegin, to = Math.min(offset + n, pageBegin + pages[p - first].length) - pageBegin;
+      out.set(pages[p - first].subarray(from, to), at);
+      at += to - from;
+    }
+    return out;
+  }
+
   // Records of nodes [first, first + count) (consecutive in the file): one range, read once
   // however many callers ask for it meanwhile.
   loadRecords(first, count) {
@@ -398,7 +439,7 @@ export class ClodReader {
         throw new ClodError(`corrupt index: node records ${first}..${first + count - 1} are not consecutive`);
       span += entries[i].recordBytes;
     }
-    const buf = await this.src.read(entries[0].record, span, 'node records');
+    const buf = await this._hier(entries[0].record, span);
     const level = this.levelOf(first), levels = this.levels, top = level + 1 === levels.length;
     let at = 0;
     for (let i = 0; i < count; ++i) {

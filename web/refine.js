@@ -12,6 +12,7 @@
 // the next groups in the queue are read ahead while it waits.
 
 const IN_CUT = 1, REFINED = 2;
+const READ_AHEAD = 16;  // groups near the top of the queue read while an expansion waits
 
 function sub(a, b) { return [a[0] - b[0], a[1] - b[1], a[2] - b[2]]; }
 function dot(a, b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
@@ -233,7 +234,7 @@ export class Refiner {
       const top = this.queue.pop();
       if (pixelStop && (top.culled || top.need <= this.view.maxPixelError)) continue;
       // Read ahead: the groups near the top of the queue, while this one is read.
-      for (let i = 0; i < Math.min(8, this.queue.size); ++i) {
+      for (let i = 0; i < Math.min(READ_AHEAD, this.queue.size); ++i) {
         const q = this.queue.a[i];
         if (!(pixelStop && (q.culled || q.need <= this.view.maxPixelError))) this.fetchGroup(q.key).catch(() => {});
       }

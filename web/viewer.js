@@ -9,7 +9,8 @@
 // in front, +Z, framing the box), color=none|level|node, hud=0, cull=0 (no back-face culling),
 // refine=0 (draw the roots only), fps=N (after refinement, time N frames).
 // For scripts (web/shoot.mjs): window.conelod holds the state ('loading', 'refining', 'done',
-// 'error') and the figures; the title ends in "[done]" or "[error]".
+// 'error'), the views refined so far, the eye and the figures; the title ends in "[done]" or
+// "[error]".
 import * as THREE from 'three';
 import { OrbitControls } from './node_modules/three/examples/jsm/controls/OrbitControls.js';
 import { ClodReader } from './clod.js';
@@ -203,16 +204,21 @@ async function main() {
   status.firstImageRequests = reader.src.requests;
   status.firstImageMs = performance.now() - t0;
   status.state = 'refining';
+  status.views = 1;  // + 1 each time the view changes
+  status.eye = camera.position.toArray();
   showHud();
   if (params.get('refine') === '0') {
     refiner.stopped = true;
   }
   const fpsFrames = numberParam('fps', 0);
+  let shown = performance.now();
   for (;;) {
     if (restart) {
       restart = false;
-      await refiner.start(view());
       status.state = 'refining';
+      status.views++;
+      status.eye = camera.position.toArray();
+      await refiner.start(view());
     }
     if (refiner.done()) {
       await updateScene();
@@ -232,11 +238,14 @@ async function main() {
       wake = null;
       continue;
     }
-    await refiner.step(32);
-    if (!restart) {
+    // Expansions in slices; the picture is updated every 150 ms at most (drawing a frame costs
+    // tens of ms in a software renderer: every slice would double the refinement's time).
+    await refiner.step(16);
+    if (!restart && performance.now() - shown > 150) {
       await updateScene();
       render();
       await nextFrame();
+      shown = performance.now();
     }
   }
 

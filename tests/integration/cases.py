@@ -2070,13 +2070,14 @@ def web_serve_http(c):
     assert "from %s/share/conelod/web" % prefix in log, log
 
 
-def shoot(c, *pages, size="360x360"):
-    """web/shoot.mjs: each (url, png) in one headless chromium; returns the pages' window.conelod."""
+def shoot(c, *pages, size="360x360", expect=0):
+    """web/shoot.mjs: each (url, png[, "DX,DY" to drag]) in one headless chromium; returns the pages'
+    window.conelod."""
     args = ["node", os.path.join(c.source, "web", "shoot.mjs"), "--size", size]
-    for url, png in pages:
-        args += [url, png]
+    for page in pages:
+        args += list(page[:2]) + (["--drag", page[2]] if len(page) > 2 else [])
     p = subprocess.run(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=300)
-    assert p.returncode == 0, "shoot.mjs: exit %d\n%s" % (p.returncode, p.stderr.decode(errors="replace")[-3000:])
+    assert p.returncode == expect, "shoot.mjs: exit %d\n%s" % (p.returncode, p.stderr.decode(errors="replace")[-3000:])
     return [json.loads(l) for l in p.stdout.decode().splitlines() if l.startswith("{")]
 
 
@@ -2099,7 +2100,8 @@ def web_viewer_armadillo(c):
     screen-space error) no background pixel shows inside the full-budget silhouette shrunk by 2
     pixels (a crack would show the background through the culled far side), with a real mix of
     levels; and the refinement gives the very cut `conelod lod extract` gives for the same eye and
-    budget (the same rules and order as lod_refine.cpp)."""
+    budget (the same rules and order as lod_refine.cpp), also after the view is turned with the
+    mouse; a unit whose bytes were changed stops the page with the desktop reader's message."""
     clod = build_clod(c, "stanford_armadillo_cgal.ply", "arma.clod")
     info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
     faces = info["faces"]
@@ -2107,20 +2109,40 @@ def web_viewer_armadillo(c):
     eye = "20,30,-250"
     ref = json.loads(c.conelod("lod", "extract", clod, "--eye", eye, "--budget", "30%", "-o", c.out("cut.ply"),
                                "--json").stdout)
-    s = Serve(c, clod)
+    # A byte flipped in the unit after the roots' (the first group below them, read early): the
+    # server's check at start (header and roots) passes; the page finds the blob's CRC wrong.
+    bad = bytearray(open(clod, "rb").read())
+    index_offset = struct.unpack_from("<Q", bad, 24 + 80)[0]
+    block = index_offset + 24 + 16  # the first IBLK: header, recordBase, geometryBase, entries
+    roots_end = struct.unpack_from("<Q", bad, block + 24 + 8)[0] + struct.unpack_from("<I", bad, block + 24 + 16 + 4)[0]
+    bad[roots_end + 20] ^= 0x10
+    corrupt = c.out("corrupt.clod")
+    open(corrupt, "wb").write(bad)
+    s, s2 = Serve(c, clod), Serve(c, corrupt)
     try:
-        pngs = [c.out("web%d.png" % i) for i in range(4)]
-        first, full, mid, same = shoot(c, (s.url + "&refine=0&hud=0", pngs[0]),
-                                       (s.url + "&budget=%d&pixel=0&hud=0" % faces, pngs[1]),
-                                       (s.url + "&budget=%d&hud=0" % (faces // 2), pngs[2]),
-                                       (s.url + "&budget=%d&pixel=0&hud=0&eye=%s" % (ref["budget"], eye), pngs[3]))
+        pngs = [c.out("web%d.png" % i) for i in range(6)]
+        first, full, mid, same, dragged, broken = shoot(
+            c, (s.url + "&refine=0&hud=0", pngs[0]), (s.url + "&budget=%d&pixel=0&hud=0" % faces, pngs[1]),
+            (s.url + "&budget=%d&hud=0" % (faces // 2), pngs[2]),
+            (s.url + "&budget=%d&pixel=0&hud=0&eye=%s" % (ref["budget"], eye), pngs[3]),
+            (s.url + "&budget=%d&pixel=0&hud=0" % ref["budget"], pngs[4], "120,-60"),
+            (s2.url + "&pixel=0", pngs[5]), expect=2)
     finally:
         log = s.stop()
-    for st in (first, full, mid, same):
+        s2.stop()
+    assert broken["state"] == "error" and re.match(r"checksum mismatch in the geometry of a node \d+$", broken["error"]), broken
+    for st in (first, full, mid, same, dragged):
         assert st["state"] == "done" and st["fileBytes"] == size, st
+    # Orbiting (a mouse drag, OrbitControls) refines again for the new eye: the CLI's cut there.
+    assert dragged["views"] > 1, dragged
+    moved = json.loads(c.conelod("lod", "extract", clod, "--eye", ",".join(repr(x) for x in dragged["eye"]), "--budget",
+                                 str(ref["budget"]), "-o", c.out("cut2.ply"), "--json").stdout)
+    assert (dragged["cutFaces"], dragged["cutFaces"] - dragged["drawnFaces"], dragged["refinements"]) == (
+        moved["cut_faces"], moved["culled_faces"], moved["refinements"]), (dragged, moved)
+    assert moved["culled_faces"] != ref["culled_faces"], (moved, ref)  # another view indeed
     # Bytes for the first image: the page's count is the server's, and small.
     served = clod_bytes_per_page(log, "arma.clod")
-    assert len(served) == 4, served
+    assert len(served) == 5, served
     assert first["firstImageBytes"] == first["bytesFetched"] == served[0], (first, served)
     assert first["firstImageBytes"] <= 0.05 * size, (first["firstImageBytes"], size)
     assert first["refinements"] == 0 and first["minLevel"] == first["maxLevel"] == first["levels"] - 1, first
@@ -2154,8 +2176,8 @@ def web_viewer_armadillo(c):
 @case
 def web_screenshot_script(c):
     """scripts/web_screenshot.sh FILE.clod OUT.png --budget F: a PNG of the page once refined,
-    the page's figures (frames per second too) on stdout; a bad file: exit 2 and the server's
-    message."""
+    the page's figures (frames per second too) on stdout; a file that is not a .clod: exit 2 and
+    the server's message."""
     clod = build_clod(c, "stanford_bunny_bun_zipper.ply", "bunny.clod")
     script = os.path.join(c.source, "scripts", "web_screenshot.sh")
     env = dict(os.environ, CONELOD=c.cli)
