@@ -315,7 +315,9 @@ class Server {
     if (status == 206)
       r += "Content-Range: bytes " + std::to_string(first) + "-" + std::to_string(last) + "/" + std::to_string(size) +
            "\r\n";
-    const bool keepAlive = h.count("connection") == 0 || h["connection"] != "close";
+    std::string connection = h.count("connection") ? h["connection"] : "";
+    for (char& ch : connection) ch = char(tolower(uint8_t(ch)));
+    const bool keepAlive = version == "HTTP/1.0" ? connection == "keep-alive" : connection != "close";
     r += keepAlive ? "Connection: keep-alive\r\n\r\n" : "Connection: close\r\n\r\n";
     if (!SendAll(fd, r.data(), r.size())) return false;
     uint64_t sent = 0;

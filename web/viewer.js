@@ -2,11 +2,11 @@
 // the coarsest cut (the roots) at once, then refines by screen-space error within a face budget
 // (refine.js) while the view is still, and again from the roots (its reads cached) whenever the
 // view changes. Orbit/zoom: three.js's OrbitControls. Keys: c cycles the colours (shaded,
-// one per level, one per node), h hides the text.
+// one per level, one per group of its level, one per node), h hides the text.
 //
 // Page parameters: file (URL of the .clod, relative to the page), budget (faces, default
 // 500000), pixel (screen-space error in pixels, default 1), eye=X,Y,Z (model coordinates; default:
-// in front, +Z, framing the box), color=none|level|node, hud=0, cull=0 (no back-face culling),
+// in front, +Z, framing the box), color=none|level|group|node, hud=0, cull=0 (no back-face culling),
 // refine=0 (draw the roots only), fps=N (after refinement, time N frames).
 // For scripts (web/shoot.mjs): window.conelod holds the state ('loading', 'refining', 'done',
 // 'error'), the views refined so far, the eye and the figures; the title ends in "[done]" or
@@ -86,7 +86,8 @@ async function main() {
     level: palette(info.levels, 0.55, 0.6),
     node: palette(24, 0.6, 0.6),
   };
-  const modes = ['none', 'level', 'node'];
+  materials.group = materials.node;
+  const modes = ['none', 'level', 'group', 'node'];
   let colorMode = params.get('color') || 'none';
   if (!modes.includes(colorMode)) throw new Error(`page parameter color must be one of ${modes.join(', ')}`);
 
@@ -139,7 +140,10 @@ async function main() {
       nodes.sort((a, b) => a - b);
       for (const id of nodes) {
         const m = id - unit.firstNode, f0 = unit.faceStart[m], f1 = unit.faceStart[m + 1];
-        const mat = colorMode === 'level' ? reader.node(id).level : colorMode === 'node' ? id % materials.node.length : 0;
+        const n = reader.node(id), k = materials.node.length;
+        // group: the node's group within its level (roots: their own colour).
+        const mat = colorMode === 'level' ? n.level : colorMode === 'node' ? id % k
+          : colorMode === 'group' ? (n.group < 0 ? id : n.level * 7919 + n.group) % k : 0;
         d.mesh.geometry.addGroup(f0 * 3, (f1 - f0) * 3, mat);
       }
     }
