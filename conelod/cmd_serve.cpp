@@ -31,6 +31,7 @@
 #include <mutex>
 #include <sstream>
 #include <string>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -355,9 +356,12 @@ int CmdServe(int argc, char** argv) {
   if (port < 0 || port > 65535) return Fail(kUsage, "--port must be in 0..65535");
   const std::string host = a.str("--host", "127.0.0.1");
 
-  // The file: a readable, regular .clod file whose header and roots read (LodReader::Open).
+  // The file: a readable, regular .clod file whose header and roots read (LodReader::Open), named
+  // *.clod (so that its name never shadows one of the page's).
   const std::string inputError = CheckInputPath(path);
   if (!inputError.empty()) return Fail(kBadInput, inputError);
+  if (path.size() < 6 || path.compare(path.size() - 5, 5, ".clod") != 0 || path[path.size() - 6] == '/')
+    return Fail(kBadInput, "'" + path + "' is not named NAME.clod (conelod serve serves a .clod file)");
   {
     std::unique_ptr<LodReader> reader;
     const Status s = LodReader::Open(path, reader);
@@ -411,7 +415,11 @@ int CmdServe(int argc, char** argv) {
       if (errno == EINTR || errno == ECONNABORTED || errno == EMFILE || errno == ENFILE) continue;
       return Fail(kIoError, std::string("accept failed: ") + std::strerror(errno));
     }
-    std::thread([&server, fd] { server.Connection(fd); }).detach();
+    try {
+      std::thread([&server, fd] { server.Connection(fd); }).detach();
+    } catch (const std::system_error&) {  // no thread to be had now: drop this connection
+      ::close(fd);
+    }
   }
 }
 

@@ -2000,11 +2000,20 @@ def web_serve_http(c):
     data = open(clod, "rb").read()
     size = len(data)
     # Refusals: exit 2 with a message, nothing served.
-    for bad, message in ((c.out("missing.clod"), "cannot read"), (c.mesh("fandisk.ply"), "not a .clod file"),
-                         (c.tmp, "")):
-        p = c.conelod("serve", bad, "--port", "0", expect=2)
-        assert message in p.stderr.decode(), p.stderr.decode()
-    c.conelod("serve", clod, "--port", "70000", expect=1)
+    ply_named_clod = c.out("fandisk.clod")
+    with open(ply_named_clod, "wb") as f:
+        f.write(open(c.mesh("fandisk.ply"), "rb").read())
+    clod_named_ply = c.out("bunny.ply")
+    with open(clod_named_ply, "wb") as f:
+        f.write(data)
+    for bad, message in ((c.out("missing.clod"), "cannot read"), (ply_named_clod, "not a .clod file (wrong magic"),
+                         (clod_named_ply, "is not named NAME.clod"), (c.tmp, ""), (clod, "--port must be")):
+        try:  # a server that does not refuse would run until killed
+            p = subprocess.run([c.cli, "serve", bad, "--port", "70000" if bad == clod else "0"], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, timeout=30)
+        except subprocess.TimeoutExpired:
+            raise AssertionError("conelod serve %s did not refuse it" % bad)
+        assert p.returncode == (1 if bad == clod else 2) and message in p.stderr.decode(), (bad, p.returncode, p.stderr)
     s = Serve(c, clod)
     try:
         assert s.url.endswith("?file=bun%20ny.clod"), s.url
@@ -2190,9 +2199,12 @@ def web_screenshot_script(c):
     w, h, px = read_png(png)
     assert (w, h) == (320, 240), (w, h)
     assert sum(1 for row in px for q in row if max(abs(a - b) for a, b in zip(q, px[0][0])) > 2) > 0.05 * w * h
-    p = subprocess.run(["bash", script, c.mesh("fandisk.ply"), c.out("bad.png")], stdout=subprocess.PIPE,
-                       stderr=subprocess.PIPE, env=env, timeout=60)
-    assert p.returncode == 2 and b"not a .clod file" in p.stderr and not os.path.exists(c.out("bad.png")), (
+    fake = c.out("fandisk.clod")
+    with open(fake, "wb") as f:
+        f.write(open(c.mesh("fandisk.ply"), "rb").read())
+    p = subprocess.run(["bash", script, fake, c.out("bad.png")], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env,
+                       timeout=60)
+    assert p.returncode == 2 and b"not a .clod file (wrong magic" in p.stderr and not os.path.exists(c.out("bad.png")), (
         p.returncode, p.stderr)
 
 
