@@ -105,7 +105,10 @@ async function main() {
   // One mesh per unit on the GPU; its geometry groups are the unit's drawn nodes.
   const drawn = new Map();  // unit offset -> { mesh, unit }
   const refiner = new Refiner(reader);
-  async function updateScene() {
+  // The scene follows the cut; one update at a time (the refinement and the c key both ask).
+  let updating = Promise.resolve();
+  const updateScene = () => (updating = updating.then(updateSceneNow));
+  async function updateSceneNow() {
     const byUnit = new Map();
     let minLevel = Infinity, maxLevel = -Infinity, worst = 0;
     for (const [id, culled] of refiner.cut) {
@@ -163,7 +166,7 @@ async function main() {
   function showHud() {
     const kb = (b) => (b / 1024).toFixed(0) + ' KiB';
     hud.textContent =
-      `${decodeURIComponent(file)}: ${info.inputFaces.toLocaleString()} faces, ${info.levels} levels, ${kb(info.fileBytes)}\n` +
+      `${file}: ${info.inputFaces.toLocaleString()} faces, ${info.levels} levels, ${kb(info.fileBytes)}\n` +
       `cut: ${refiner.faces.toLocaleString()} faces (${refiner.drawnFaces.toLocaleString()} drawn), ` +
       `${refiner.cut.size} nodes, levels ${status.minLevel}-${status.maxLevel}, budget ${budget.toLocaleString()}\n` +
       `fetched: ${kb(reader.src.bytesFetched)} (${((100 * reader.src.bytesFetched) / info.fileBytes).toFixed(1)} %) ` +
