@@ -28,6 +28,8 @@ extern const char* kProgressiveUsage;
 extern const char* kClusterShapeUsage;
 int CmdLod(int argc, char** argv);
 extern const char* kLodUsage;
+int CmdServe(int argc, char** argv);
+extern const char* kServeUsage;
 
 }  // namespace cli
 }  // namespace conelod

@@ -27,6 +27,7 @@ const Command kCommands[] = {
     {"progressive", conelod::cli::CmdProgressive, &conelod::cli::kProgressiveUsage},
     {"cluster-shape", conelod::cli::CmdClusterShape, &conelod::cli::kClusterShapeUsage},
     {"lod", conelod::cli::CmdLod, &conelod::cli::kLodUsage},
+    {"serve", conelod::cli::CmdServe, &conelod::cli::kServeUsage},
 };
 
 void PrintUsage(FILE* out) {

@@ -4,8 +4,10 @@
 #  1. installs the Debian packages the build, the tests and the screenshots need;
 #  2. fetches MeshLab 2020.09's plugin headers and vcglib from Debian's own `meshlab`
 #     source package (the ABI of the installed /usr/bin/meshlab) into deps/meshlab-src;
-#  3. builds ConeLOD in Release (build/), installs the plugin into MeshLab's plugin folder
-#     and `conelod` and `conelod-viewer` into /usr/local/bin.
+#  3. installs the web viewer's npm packages (web/, `npm ci`: three.js, meshoptimizer's decoder,
+#     playwright-core for the headless-Chromium tests);
+#  4. builds ConeLOD in Release (build/), installs the plugin into MeshLab's plugin folder,
+#     `conelod` and `conelod-viewer` into /usr/local/bin, the web viewer into /usr/local/share/conelod/web.
 #   scripts/setup.sh --meshlab 2022.02    the plugin for MeshLab 2022.02 (Debian 13) or 2025.07
 #   scripts/setup.sh --meshlab 2025.07    (Debian unstable), which do not install on Debian 12:
 #  1. makes (once; cached under /var/cache/conelod/roots, CONELOD_ROOTS) a debootstrap root of the
@@ -78,11 +80,18 @@ grep -q bookworm /etc/os-release || echo "setup.sh: warning: written for Debian 
 
 PKGS=(meshlab qtbase5-dev libqt5opengl5-dev libeigen3-dev libglew-dev xvfb xauth dpkg-dev
       xz-utils cmake g++ make libgtest-dev libgmock-dev libbenchmark-dev imagemagick xdotool
-      python3 gnuplot-nox clang libclang-rt-14-dev clang-format fonts-dejavu-core libmeshoptimizer-dev)
+      python3 gnuplot-nox clang libclang-rt-14-dev clang-format fonts-dejavu-core libmeshoptimizer-dev
+      chromium nodejs)
 
 step "Debian packages"
 apt_install_missing "${PKGS[@]}" || fail "Debian packages"
 echo "all ${#PKGS[@]} packages present"
+
+step "The web viewer's npm packages (web/package-lock.json: three, meshoptimizer, playwright-core)"
+# Debian's nodejs comes without npm (a separate package); other builds of nodejs bring their own.
+command -v npm >/dev/null || apt_install_missing npm || fail "Debian package npm"
+(cd "$ROOT/web" && npm ci --no-audit --no-fund >/dev/null) || fail "npm ci in web/"
+echo "web/node_modules: $(ls "$ROOT/web/node_modules" | tr '\n' ' ')"
 
 step "MeshLab 2020.09 source (headers + vcglib) from Debian's source package"
 if [ ! -f "$SRC/src/common/interfaces.h" ] || [ ! -f "$SRC/vcglib/vcg/complex/complex.h" ]; then
@@ -110,4 +119,6 @@ command -v conelod-viewer >/dev/null || fail "conelod-viewer not on PATH (Qt5 Wi
 echo "plugin: $PLUGDIR/libfilter_conelod.so"
 echo "cli:    $(command -v conelod)"
 echo "viewer: $(command -v conelod-viewer)"
+[ -f /usr/local/share/conelod/web/node_modules/three/build/three.module.js ] || fail "web viewer not installed"
+echo "web:    /usr/local/share/conelod/web (conelod serve FILE.clod)"
 echo "setup.sh: done"

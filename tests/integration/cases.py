@@ -24,14 +24,15 @@ CASES = {}
 
 def case(fn):
     """Registers a test case; ctest runs it as it_NAME (tests/CMakeLists.txt asks `--list`). The
-    name's prefix says what it needs: cli_ the conelod tool, viewer_ conelod-viewer, anything else
+    name's prefix says what it needs: cli_ the conelod tool, viewer_ conelod-viewer, web_ the tool
+    with node and chromium (the web viewer), anything else
     (meshlab_, mlx_) the real meshlabserver of MeshLab 2020.09."""
     CASES[fn.__name__] = fn
     return fn
 
 
 def needs(name):
-    for prefix in ("cli", "viewer"):
+    for prefix in ("cli", "viewer", "web"):
         if name.startswith(prefix + "_"):
             return prefix
     return "meshlabserver"
@@ -1929,6 +1930,282 @@ def compare_qem_smoke(c):
     assert p.returncode == 0, p.stdout.decode(errors="replace")
     text = open(os.path.join(c.out("cmp2"), "summary.md")).read()
     assert "failed: conelod group failed" in text, text
+
+
+# ---------------------------------------------------------------------------------------------
+# The web viewer (web/, conelod serve, headless Debian chromium through web/shoot.mjs).
+
+class Serve:
+    """`conelod serve FILE --port 0` in the background: its URL, its request log (stdout)."""
+
+    def __init__(self, c, clod, cli=None, extra=()):
+        self.log = c.out("serve_%d.log" % len(os.listdir(c.tmp)))
+        self.out = open(self.log, "w")
+        self.p = subprocess.Popen([cli or c.cli, "serve", clod, "--port", "0"] + list(extra), stdout=self.out,
+                                  stderr=subprocess.STDOUT)
+        import time
+        for _ in range(200):
+            m = re.search(r"open (http://127\.0\.0\.1:(\d+)/\?file=\S+)", open(self.log).read())
+            if m:
+                break
+            assert self.p.poll() is None, "conelod serve exited: " + open(self.log).read()
+            time.sleep(0.05)
+        assert m, "conelod serve printed no URL: " + open(self.log).read()
+        self.url, self.port = m.group(1), int(m.group(2))
+        self.base = self.url[:self.url.index("?")]
+
+    def stop(self):
+        self.p.terminate()
+        self.p.wait(timeout=10)
+        self.out.close()
+        return open(self.log).read()
+
+
+def http(port, request):
+    """Sends raw request bytes to 127.0.0.1:port; returns (status, headers dict, body) of the reply."""
+    import socket
+    s = socket.create_connection(("127.0.0.1", port), timeout=10)
+    s.sendall(request)
+    data = b""
+    while True:
+        chunk = s.recv(65536)
+        if not chunk:
+            break
+        data += chunk
+        head, sep, rest = data.partition(b"\r\n\r\n")
+        if sep:
+            lines = head.decode().split("\r\n")
+            headers = {k.lower(): v.strip() for k, _, v in (l.partition(":") for l in lines[1:])}
+            n = int(headers.get("content-length", 0))
+            if request.startswith(b"HEAD") or len(rest) >= n:
+                break
+    s.close()
+    head, _, body = data.partition(b"\r\n\r\n")
+    lines = head.decode().split("\r\n")
+    headers = {k.lower(): v.strip() for k, _, v in (l.partition(":") for l in lines[1:])}
+    return int(lines[0].split()[1]), headers, body
+
+
+def get(port, path, *headers, method="GET"):
+    req = "%s %s HTTP/1.1\r\nHost: x\r\nConnection: close\r\n%s\r\n" % (method, path, "".join(h + "\r\n" for h in headers))
+    return http(port, req.encode())
+
+
+@case
+def web_serve_http(c):
+    """conelod serve: the page and the file on 127.0.0.1 only, Range (206, 416), HEAD, no path
+    traversal, a clear refusal of a missing or non-.clod file, and the page found where cmake
+    installs it."""
+    clod = build_clod(c, "stanford_bunny_bun_zipper.ply", "bun ny.clod")
+    data = open(clod, "rb").read()
+    size = len(data)
+    # Refusals: exit 2 with a message, nothing served.
+    ply_named_clod = c.out("fandisk.clod")
+    with open(ply_named_clod, "wb") as f:
+        f.write(open(c.mesh("fandisk.ply"), "rb").read())
+    clod_named_ply = c.out("bunny.ply")
+    with open(clod_named_ply, "wb") as f:
+        f.write(data)
+    for bad, message in ((c.out("missing.clod"), "cannot read"), (ply_named_clod, "not a .clod file (wrong magic"),
+                         (clod_named_ply, "is not named NAME.clod"), (c.tmp, ""), (clod, "--port must be")):
+        try:  # a server that does not refuse would run until killed
+            p = subprocess.run([c.cli, "serve", bad, "--port", "70000" if bad == clod else "0"], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, timeout=30)
+        except subprocess.TimeoutExpired:
+            raise AssertionError("conelod serve %s did not refuse it" % bad)
+        assert p.returncode == (1 if bad == clod else 2) and message in p.stderr.decode(), (bad, p.returncode, p.stderr)
+    s = Serve(c, clod)
+    try:
+        assert s.url.endswith("?file=bun%20ny.clod"), s.url
+        # Bound to the loopback address only (/proc/net/tcp: local address 0100007F:PORT, LISTEN 0A).
+        listening = [l.split() for l in open("/proc/net/tcp").read().splitlines()[1:]]
+        mine = [l for l in listening if l[1].endswith(":%04X" % s.port) and l[3] == "0A"]
+        assert mine and all(l[1].startswith("0100007F") for l in mine), mine
+        path = "/bun%20ny.clod"
+        st, h, body = get(s.port, path, method="HEAD")
+        assert st == 200 and h["content-length"] == str(size) and h["accept-ranges"] == "bytes" and body == b"", (st, h)
+        st, h, body = get(s.port, path)
+        assert st == 200 and body == data, (st, h, len(body))
+        for rng, first, last in (("0-23", 0, 23), ("100-", 100, size - 1), ("-100", size - 100, size - 1),
+                                 ("%d-%d" % (size - 10, size + 1000), size - 10, size - 1), ("-%d" % (size * 2), 0, size - 1)):
+            st, h, body = get(s.port, path, "Range: bytes=" + rng)
+            assert st == 206 and h["content-range"] == "bytes %d-%d/%d" % (first, last, size), (rng, st, h)
+            assert body == data[first:last + 1] and h["content-length"] == str(last - first + 1), rng
+        st, h, body = get(s.port, path, "Range: bytes=0-3", method="HEAD")
+        assert st == 206 and h["content-length"] == "4" and body == b"", (st, h)
+        for rng in ("bytes=%d-" % size, "bytes=5-2", "bytes=x-y", "bytes=-0", "items=0-3", "bytes=%d-%d" % (size, size + 5)):
+            st, h, _ = get(s.port, path, "Range: " + rng)
+            assert st == 416 and h["content-range"] == "bytes */%d" % size, (rng, st, h)
+        st, h, body = get(s.port, path, "Range: bytes=0-1,5-6")  # several ranges: the whole file
+        assert st == 200 and body == data, st
+        # The page and its libraries.
+        st, h, body = get(s.port, "/")
+        assert st == 200 and h["content-type"].startswith("text/html") and b"viewer.js" in body, (st, h)
+        st, h, body = get(s.port, "/node_modules/three/build/three.module.js")
+        assert st == 200 and h["content-type"].startswith("text/javascript") and len(body) > 100000, (st, h)
+        # Nothing outside the table: traversal, encoded or not, other files of the folders served.
+        secret = "/etc/passwd"
+        for target in ("/../../../../etc/passwd", "/%2e%2e/%2e%2e/%2e%2e/etc/passwd", "/..%2f..%2f..%2fetc%2fpasswd",
+                       "//etc/passwd", "/bun%20ny.clod/../../../../etc/passwd", "/node_modules/../../../../../etc/passwd",
+                       "/node_modules/three/package.json", "/shoot.mjs", "/package.json", "/" + clod.replace(" ", "%20"), "/%00",
+                       "/node_modules/three/build/../../../../" + os.path.relpath(secret, "/")):
+            st, _, body = get(s.port, target)
+            assert st == 404 and b"root:" not in body, (target, st)
+        st, _, _ = get(s.port, "/", method="POST")
+        assert st == 405, st
+        st, _, _ = http(s.port, b"garbage\r\n\r\n")
+        assert st == 400, st
+        # Keep-alive: two requests on one connection.
+        st, _, _ = http(s.port, b"HEAD / HTTP/1.1\r\nHost: x\r\n\r\nGET /clod.js HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n")
+        assert st == 200, st
+    finally:
+        log = s.stop()
+    assert "GET /bun%20ny.clod 206 0-23 24" not in log and "GET /bun ny.clod 206 0-23 24" in log, log[-2000:]
+    # Installed: conelod's own install rules into a prefix; it serves the page from there.
+    prefix = c.out("prefix")
+    p = subprocess.run(["cmake", "-DCMAKE_INSTALL_PREFIX=" + prefix, "-P",
+                        os.path.join(c.build, "conelod", "cmake_install.cmake")], stdout=subprocess.PIPE,
+                       stderr=subprocess.STDOUT)
+    assert p.returncode == 0, p.stdout.decode()
+    env_web = os.environ.pop("CONELOD_WEB_DIR", None)
+    s = Serve(c, clod, cli=os.path.join(prefix, "bin", "conelod"))
+    try:
+        st, _, body = get(s.port, "/node_modules/meshoptimizer/meshopt_decoder.mjs")
+        assert st == 200 and b"MeshoptDecoder" in body, st
+    finally:
+        log = s.stop()
+    if env_web is not None:
+        os.environ["CONELOD_WEB_DIR"] = env_web
+    assert "from %s/share/conelod/web" % prefix in log, log
+
+
+def shoot(c, *pages, size="360x360", expect=0):
+    """web/shoot.mjs: each (url, png[, "DX,DY" to drag]) in one headless chromium; returns the pages'
+    window.conelod."""
+    args = ["node", os.path.join(c.source, "web", "shoot.mjs"), "--size", size]
+    for page in pages:
+        args += list(page[:2]) + (["--drag", page[2]] if len(page) > 2 else [])
+    p = subprocess.run(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=300)
+    assert p.returncode == expect, "shoot.mjs: exit %d\n%s" % (p.returncode, p.stderr.decode(errors="replace")[-3000:])
+    return [json.loads(l) for l in p.stdout.decode().splitlines() if l.startswith("{")]
+
+
+def clod_bytes_per_page(log, name):
+    """Bytes of the .clod the server sent, per page load (a page starts with GET /index.html)."""
+    pages = []
+    for line in log.splitlines():
+        parts = line.split()
+        if parts[:2] == ["GET", "/index.html"]:
+            pages.append(0)
+        elif len(parts) == 5 and parts[1] == "/" + name and pages:
+            pages[-1] += int(parts[4])
+    return pages
+
+
+@case
+def web_viewer_armadillo(c):
+    """The web viewer in headless chromium on the watertight armadillo: the first image (the roots)
+    costs at most 5 % of the file, as the server counts it; at half the budget (one-pixel
+    screen-space error) no background pixel shows inside the full-budget silhouette shrunk by 2
+    pixels (a crack would show the background through the culled far side), with a real mix of
+    levels; and the refinement gives the very cut `conelod lod extract` gives for the same eye and
+    budget (the same rules and order as lod_refine.cpp), also after the view is turned with the
+    mouse; a unit whose bytes were changed stops the page with the desktop reader's message."""
+    clod = build_clod(c, "stanford_armadillo_cgal.ply", "arma.clod")
+    info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
+    faces = info["faces"]
+    size = os.path.getsize(clod)
+    eye = "20,30,-250"
+    ref = json.loads(c.conelod("lod", "extract", clod, "--eye", eye, "--budget", "30%", "-o", c.out("cut.ply"),
+                               "--json").stdout)
+    # A byte flipped in the unit after the roots' (the first group below them, read early): the
+    # server's check at start (header and roots) passes; the page finds the blob's CRC wrong.
+    bad = bytearray(open(clod, "rb").read())
+    index_offset = struct.unpack_from("<Q", bad, 24 + 80)[0]
+    block = index_offset + 24 + 16  # the first IBLK: header, recordBase, geometryBase, entries
+    roots_end = struct.unpack_from("<Q", bad, block + 24 + 8)[0] + struct.unpack_from("<I", bad, block + 24 + 16 + 4)[0]
+    bad[roots_end + 20] ^= 0x10
+    corrupt = c.out("corrupt.clod")
+    open(corrupt, "wb").write(bad)
+    s, s2 = Serve(c, clod), Serve(c, corrupt)
+    try:
+        pngs = [c.out("web%d.png" % i) for i in range(6)]
+        first, full, mid, same, dragged, broken = shoot(
+            c, (s.url + "&refine=0&hud=0", pngs[0]), (s.url + "&budget=%d&pixel=0&hud=0" % faces, pngs[1]),
+            (s.url + "&budget=%d&hud=0" % (faces // 2), pngs[2]),
+            (s.url + "&budget=%d&pixel=0&hud=0&eye=%s" % (ref["budget"], eye), pngs[3]),
+            (s.url + "&budget=%d&pixel=0&hud=0" % ref["budget"], pngs[4], "120,-60"),
+            (s2.url + "&pixel=0", pngs[5]), expect=2)
+    finally:
+        log = s.stop()
+        s2.stop()
+    assert broken["state"] == "error" and re.match(r"checksum mismatch in the geometry of a node \d+$", broken["error"]), broken
+    for st in (first, full, mid, same, dragged):
+        assert st["state"] == "done" and st["fileBytes"] == size, st
+    # Orbiting (a mouse drag, OrbitControls) refines again for the new eye: the CLI's cut there.
+    assert dragged["views"] > 1, dragged
+    moved = json.loads(c.conelod("lod", "extract", clod, "--eye", ",".join(repr(x) for x in dragged["eye"]), "--budget",
+                                 str(ref["budget"]), "-o", c.out("cut2.ply"), "--json").stdout)
+    assert (dragged["cutFaces"], dragged["cutFaces"] - dragged["drawnFaces"], dragged["refinements"]) == (
+        moved["cut_faces"], moved["culled_faces"], moved["refinements"]), (dragged, moved)
+    assert moved["culled_faces"] != ref["culled_faces"], (moved, ref)  # another view indeed
+    # Bytes for the first image: the page's count is the server's, and small.
+    served = clod_bytes_per_page(log, "arma.clod")
+    assert len(served) == 5, served
+    assert first["firstImageBytes"] == first["bytesFetched"] == served[0], (first, served)
+    assert first["firstImageBytes"] <= 0.05 * size, (first["firstImageBytes"], size)
+    assert first["refinements"] == 0 and first["minLevel"] == first["maxLevel"] == first["levels"] - 1, first
+    assert full["cutFaces"] == faces and full["maxLevel"] == 0, full
+    assert mid["cutFaces"] <= faces // 2 and mid["maxLevel"] > mid["minLevel"], mid
+    assert served[1] > served[2] > served[0], served
+    # The same cut as the CLI's.
+    assert (same["cutFaces"], same["cutFaces"] - same["drawnFaces"], same["refinements"]) == (
+        ref["cut_faces"], ref["culled_faces"], ref["refinements"]), (same, ref)
+    # No background inside the silhouette.
+    w, h, fullpx = read_png(pngs[1])
+    _, _, midpx = read_png(pngs[2])
+    _, _, firstpx = read_png(pngs[0])
+    background = fullpx[0][0]
+
+    def is_bg(px):
+        return max(abs(a - b) for a, b in zip(px, background)) <= 2
+    inside = [[not is_bg(fullpx[y][x]) for x in range(w)] for y in range(h)]
+    for _ in range(2):
+        inside = [[inside[y][x] and all(inside[y + dy][x + dx] for dy, dx in ((1, 0), (-1, 0), (0, 1), (0, -1)))
+                   if 0 < x < w - 1 and 0 < y < h - 1 else False for x in range(w)] for y in range(h)]
+    area = sum(sum(row) for row in inside)
+    assert area > 0.05 * w * h, "the model covers only %d pixels" % area
+    holes = [(x, y) for y in range(h) for x in range(w) if inside[y][x] and is_bg(midpx[y][x])]
+    assert not holes, "%d background pixels inside the silhouette at %d faces, e.g. %s" % (len(holes), mid["cutFaces"],
+                                                                                          holes[:5])
+    drawn = sum(1 for y in range(h) for x in range(w) if not is_bg(firstpx[y][x]))
+    assert drawn > 0.05 * w * h, "the first image shows %d pixels of the model" % drawn
+
+
+@case
+def web_screenshot_script(c):
+    """scripts/web_screenshot.sh FILE.clod OUT.png --budget F: a PNG of the page once refined,
+    the page's figures (frames per second too) on stdout; a file that is not a .clod: exit 2 and
+    the server's message."""
+    clod = build_clod(c, "stanford_bunny_bun_zipper.ply", "bunny.clod")
+    script = os.path.join(c.source, "scripts", "web_screenshot.sh")
+    env = dict(os.environ, CONELOD=c.cli)
+    png = c.out("shot.png")
+    p = subprocess.run(["bash", script, clod, png, "--budget", "20000", "--size", "320x240", "--fps", "10"],
+                       stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, timeout=300)
+    assert p.returncode == 0, p.stderr.decode(errors="replace")
+    st = json.loads(p.stdout.decode().strip().splitlines()[-1])
+    assert st["state"] == "done" and 0 < st["cutFaces"] <= 20000 and st["fps"] > 0 and st["frameMs"] > 0, st
+    w, h, px = read_png(png)
+    assert (w, h) == (320, 240), (w, h)
+    assert sum(1 for row in px for q in row if max(abs(a - b) for a, b in zip(q, px[0][0])) > 2) > 0.05 * w * h
+    fake = c.out("fandisk.clod")
+    with open(fake, "wb") as f:
+        f.write(open(c.mesh("fandisk.ply"), "rb").read())
+    p = subprocess.run(["bash", script, fake, c.out("bad.png")], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env,
+                       timeout=60)
+    assert p.returncode == 2 and b"not a .clod file (wrong magic" in p.stderr and not os.path.exists(c.out("bad.png")), (
+        p.returncode, p.stderr)
 
 
 def main():

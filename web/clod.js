@@ -1,0 +1,668 @@
+// ConeLOD web viewer — the .clod (version 3) reader over HTTP Range requests.
+//
+// The JavaScript twin of vcg_ext/conelod/lod/lod_reader.cpp; the byte layout is
+// vcg_ext/conelod/lod/lod_format.md. It reads only the byte ranges it needs: the header, the three
+// container headers, the index blocks of the nodes it reaches, their records and their units'
+// geometry blobs. Every chunk's and blob's CRC-32 is checked before its data is used, every count
+// against the bytes that hold it, and what meshoptimizer's decoders return against the file's
+// ranges. Errors name the problem as the desktop reader's do.
+import { MeshoptDecoder } from './node_modules/meshoptimizer/meshopt_decoder.mjs';
+
+export const VERSION = 3;
+const CHUNK = 24;
+const HEADER_FIXED = 128;
+const LEVEL_ENTRY = 32;
+const INDEX_DATA = 16;
+const IBLOCK_BASE = 16;
+const INDEX_ENTRY = 8;
+const RECORD_FIXED = 34;
+const GEOM_MIN = 5;
+const MAX_LEVELS = 64;
+const MAX_GRID_BITS = 30;
+const EMPTY_CONE = 0xffff;
+const CONE_UNIT = Math.PI / 65534;
+const FLAG_WIDE = 1;
+const HIER_PAGE = 8192;  // the records are read and kept in pages of this size
+// Optional per-vertex streams after the ids, announced by geometry flag bits (lod_format.md,
+// "Attributes to come"), in this order: a reader that meets a bit it does not know refuses the
+// file by name. Each entry: { bit, name, stride } decoded by meshopt_decodeVertexBuffer into
+// unit.attributes[name] (vertexCount x stride bytes); none is written by this version's writer.
+export const OPTIONAL_STREAMS = [];
+const KNOWN_FLAGS = OPTIONAL_STREAMS.reduce((m, s) => m | s.bit, FLAG_WIDE);
+
+const fourcc = (s) => s.charCodeAt(0) | (s.charCodeAt(1) << 8) | (s.charCodeAt(2) << 16) | (s.charCodeAt(3) << 24);
+const ID = { CLOD: fourcc('CLOD') >>> 0, HIER: fourcc('HIER') >>> 0, GEOS: fourcc('GEOS') >>> 0,
+  INDX: fourcc('INDX') >>> 0, IBLK: fourcc('IBLK') >>> 0 };
+
+function chunkName(id) {
+  let s = '';
+  for (let i = 0; i < 4; ++i) {
+    const c = (id >>> (8 * i)) & 0xff;
+    if (c < 32 || c > 126) return '0x' + (id >>> 0).toString(16).padStart(8, '0');
+    s += String.fromCharCode(c);
+  }
+  return s;
+}
+
+const CRC_TABLE = (() => {
+  const t = new Uint32Array(256);
+  for (let n = 0; n < 256; ++n) {
+    let c = n;
+    for (let k = 0; k < 8; ++k) c = c & 1 ? 0xedb88320 ^ (c >>> 1) : c >>> 1;
+    t[n] = c >>> 0;
+  }
+  return t;
+})();
+
+// CRC-32 (IEEE 802.3, zlib's crc32) of bytes[begin, end).
+export function crc32(bytes, begin = 0, end = bytes.length) {
+  let c = 0xffffffff;
+  for (let i = begin; i < end; ++i) c = CRC_TABLE[(c ^ bytes[i]) & 0xff] ^ (c >>> 8);
+  return (c ^ 0xffffffff) >>> 0;
+}
+
+export class ClodError extends Error {}
+
+// Little-endian fields and LEB128 varints of a byte array; `overrun` once a read passes the end.
+class Decoder {
+  constructor(bytes, begin = 0, end = bytes.length) {
+    this.b = bytes;
+    this.v = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
+    this.p = begin;
+    this.end = end;
+    this.overrun = false;
+  }
+  need(n) {
+    if (this.overrun || n > this.end - this.p) {
+      this.overrun = true;
+      return false;
+    }
+    return true;
+  }
+  left() { return this.overrun ? 0 : this.end - this.p; }
+  u8() { if (!this.need(1)) return 0; return this.b[this.p++]; }
+  u16() { if (!this.need(2)) return 0; const x = this.v.getUint16(this.p, true); this.p += 2; return x; }
+  u32() { if (!this.need(4)) return 0; const x = this.v.getUint32(this.p, true); this.p += 4; return x; }
+  // u64 as a Number; values beyond 2^53 (never valid in a file this reader can fetch) give Infinity.
+  u64() {
+    if (!this.need(8)) return 0;
+    const lo = this.v.getUint32(this.p, true), hi = this.v.getUint32(this.p + 4, true);
+    this.p += 8;
+    return hi >= 0x200000 ? Infinity : hi * 4294967296 + lo;
+  }
+  f32() { if (!this.need(4)) return 0; const x = this.v.getFloat32(this.p, true); this.p += 4; return x; }
+  f64() { if (!this.need(8)) return 0; const x = this.v.getFloat64(this.p, true); this.p += 8; return x; }
+  uv() {
+    let x = 0, mul = 1;
+    for (let i = 0; i < 10; ++i) {
+      if (!this.need(1)) return 0;
+      const c = this.b[this.p++];
+      x += (c & 0x7f) * mul;
+      if (!(c & 0x80)) return x > Number.MAX_SAFE_INTEGER ? Infinity : x;
+      mul *= 128;
+    }
+    this.overrun = true;
+    return 0;
+  }
+  take(n) {
+    if (!(n >= 0) || !this.need(n)) return null;
+    const r = this.b.subarray(this.p, this.p + n);
+    this.p += n;
+    return r;
+  }
+}
+
+// Byte ranges of a URL, fetched with Range requests; counts what it receives.
+export class RangeSource {
+  constructor(url) {
+    this.url = url;
+    this.size = -1;
+    this.bytesFetched = 0;
+    this.requests = 0;
+  }
+  // Reads [offset, offset + n); the first read also learns the file's size (Content-Range).
+  async read(offset, n, what) {
+    if (this.size >= 0 && (offset > this.size || n > this.size - offset))
+      throw new ClodError(`corrupt file: ${what} at offset ${offset} (${n} bytes) lies past the end of the file (${this.size} bytes)`);
+    if (n === 0) return new Uint8Array(0);
+    ++this.requests;
+    let r;
+    try {
+      r = await fetch(this.url, { headers: { Range: `bytes=${offset}-${offset + n - 1}` } });
+    } catch (e) {
+      throw new ClodError(`cannot read ${this.url}: ${e.message}`);
+    }
+    if (r.status === 416 && this.size < 0) throw new ClodError(`truncated .clod file: ${this.url} is shorter than ${what}`);
+    if (r.status !== 206 && r.status !== 200)
+      throw new ClodError(`cannot read ${what} of ${this.url}: HTTP ${r.status} ${r.statusText}`);
+    const body = new Uint8Array(await r.arrayBuffer());
+    this.bytesFetched += body.length;
+    let start = 0;
+    if (r.status === 206) {
+      const m = /^bytes (\d+)-(\d+)\/(\d+)$/.exec(r.headers.get('Content-Range') || '');
+      if (!m || Number(m[1]) !== offset) throw new ClodError(`${this.url}: the server answered a range it was not asked for`);
+      this.size = Number(m[3]);
+    } else {  // the server ignored the range: the whole file came
+      this.size = body.length;
+      start = offset;
+    }
+    if (start + n > body.length) {
+      if (this.size >= 0 && offset + n > this.size)
+        throw new ClodError(`truncated .clod file: ${what} at offset ${offset} lies past the end of the file (${this.size} bytes)`);
+      throw new ClodError(`${this.url}: short read of ${what}`);
+    }
+    return body.subarray(start, start + n);
+  }
+}
+
+function chunkHeader(b, at = 0) {
+  const d = new Decoder(b, at, at + CHUNK);
+  const h = { id: d.u32(), crc: d.u32(), dataBytes: d.u64(), childBytes: d.u64() };
+  h.totalBytes = CHUNK + h.dataBytes + h.childBytes;
+  return h;
+}
+
+function blobCrcOk(b, begin, end) {
+  return end - begin >= 4 && crc32(b, begin + 4, end) === new DataView(b.buffer, b.byteOffset).getUint32(begin, true);
+}
+
+function decodeConeAxis(o0, o1) {
+  let u = (o0 / 65535) * 2 - 1, v = (o1 / 65535) * 2 - 1;
+  const z = 1 - Math.abs(u) - Math.abs(v);
+  if (z < 0) {
+    const pu = u, pv = v;
+    u = (1 - Math.abs(pv)) * (pu >= 0 ? 1 : -1);
+    v = (1 - Math.abs(pu)) * (pv >= 0 ? 1 : -1);
+  }
+  const n = Math.sqrt(u * u + v * v + z * z);
+  return [u / n, v / n, z / n];
+}
+
+// A .clod file read on demand: open() reads the header, the containers' headers, the index
+// chunk and the roots (records and geometry). Node records: node(id) once loaded (roots, or by
+// loadChildren / loadNode). Geometry: loadUnit(id) decodes the unit (one blob, one range) that
+// holds node id and returns it; its nodes' faces are consecutive in its index buffer.
+export class ClodReader {
+  constructor(source) {
+    this.src = source;
+    this.nodes = new Map();        // id -> record
+    this.indexBlocks = new Map();  // block number -> Promise of its entries
+    this.recordReads = new Map();  // 'first:count' -> Promise of a read of records in flight
+    this.hierPages = new Map();    // page of the records -> Promise of its bytes
+    this.units = new Map();        // blob offset -> Promise of the decoded unit
+    this.unitSizes = new Map();  // blob offset -> bytes of the decoded unit (once decoded)
+    this.unitBytes = 0;          // their sum
+  }
+
+  static async open(url) {
+    await MeshoptDecoder.ready;
+    const r = new ClodReader(new RangeSource(url));
+    await r._open();
+    return r;
+  }
+
+  async _open() {
+    const src = this.src;
+    // The root chunk's header and the header's data (at most 128 + 64 x 32 bytes) in one range.
+    let head;
+    try {
+      head = await src.read(0, CHUNK + HEADER_FIXED + MAX_LEVELS * LEVEL_ENTRY, 'the file header');
+    } catch (e) {
+      if (src.size < 0 || src.size >= CHUNK + HEADER_FIXED + MAX_LEVELS * LEVEL_ENTRY) throw e;
+      head = await src.read(0, src.size, 'the file header');
+    }
+    const trunc = 'truncated .clod file: ';
+    if (head.length < CHUNK) throw new ClodError(trunc + `${src.size} bytes, shorter than a chunk header`);
+    const h = chunkHeader(head);
+    if (h.id !== ID.CLOD) throw new ClodError(`not a .clod file (wrong magic: ${chunkName(h.id)}, expected CLOD)`);
+    if (head.length < CHUNK + 4) throw new ClodError(trunc + 'no version field');
+    const version = new Decoder(head, CHUNK).u32();
+    if (version === 1)
+      throw new ClodError('this is a .clod version 1 file (written by an older ConeLOD, whose cuts could have cracks): rebuild it with conelod lod build (this reader reads version 3)');
+    if (version === 2)
+      throw new ClodError('this is a .clod version 2 file (uncompressed, written by an older ConeLOD): rebuild it with conelod lod build (this reader reads version 3)');
+    if (version !== VERSION) throw new ClodError(`unsupported .clod version ${version} (this reader reads version 3)`);
+    if (h.dataBytes < HEADER_FIXED + LEVEL_ENTRY || h.dataBytes > HEADER_FIXED + MAX_LEVELS * LEVEL_ENTRY ||
+        (h.dataBytes - HEADER_FIXED) % LEVEL_ENTRY !== 0 || !Number.isFinite(h.childBytes))
+      throw new ClodError('corrupt chunk size in the file header');
+    if (h.totalBytes > src.size) throw new ClodError(trunc + `the file has ${src.size} bytes, its header says ${h.totalBytes}`);
+    if (h.totalBytes < src.size)
+      throw new ClodError(`corrupt chunk size in the file header: it says ${h.totalBytes} bytes, the file has ${src.size}`);
+    if (crc32(head, CHUNK, CHUNK + h.dataBytes) !== h.crc) throw new ClodError('checksum mismatch in the file header');
+    const d = new Decoder(head, CHUNK, CHUNK + h.dataBytes);
+    const info = (this.info = { version: d.u32() });
+    const levelCount = d.u32();
+    info.inputVertices = d.u64();
+    info.inputFaces = d.u64();
+    info.nodeCount = d.u64();
+    info.globalVertices = d.u64();
+    const b = [];
+    for (let i = 0; i < 6; ++i) b.push(d.f32());
+    info.boxMin = b.slice(0, 3);
+    info.boxMax = b.slice(3);
+    const bad = 'corrupt file header: ';
+    for (let j = 0; j < 3; ++j)
+      if (!Number.isFinite(b[j]) || !Number.isFinite(b[j + 3]) || b[j] > b[j + 3])
+        throw new ClodError(bad + 'its bounding box is not finite or is inverted');
+    this.hierOffset = d.u64();
+    this.geosOffset = d.u64();
+    this.indexOffset = d.u64();
+    const grid = (info.grid = { origin: [d.f64(), d.f64(), d.f64()], step: d.f64(), bits: d.u32() });
+    this.indexBlock = d.u32();
+    if (grid.bits < 1 || grid.bits > MAX_GRID_BITS || !(grid.step > 0) || !Number.isFinite(grid.step))
+      throw new ClodError(bad + 'bad quantization grid');
+    for (let c = 0; c < 3; ++c) {
+      const top = grid.origin[c] + (2 ** grid.bits - 1) * grid.step;
+      if (!Number.isFinite(Math.fround(grid.origin[c])) || !Number.isFinite(Math.fround(top)))
+        throw new ClodError(bad + 'bad quantization grid');
+    }
+    if (levelCount < 1 || levelCount > MAX_LEVELS || h.dataBytes !== HEADER_FIXED + levelCount * LEVEL_ENTRY)
+      throw new ClodError(bad + `bad level count ${levelCount}`);
+    if (this.indexBlock === 0 || this.indexBlock > 1 << 20) throw new ClodError(bad + 'bad block size');
+    const levels = (this.levels = []);
+    for (let k = 0; k < levelCount; ++k) {
+      levels.push({ faces: d.u64(), nodes: d.u64(), firstId: d.u64(), error: d.f32() });
+      d.u32();
+    }
+    let id = 0;
+    for (let k = levelCount - 1; k >= 0; --k) {
+      const L = levels[k];
+      if (L.firstId !== id || L.nodes === 0 || L.nodes > src.size / RECORD_FIXED)
+        throw new ClodError(bad + `bad node count of level ${k}`);
+      id += L.nodes;
+      if (L.faces > src.size) throw new ClodError(bad + `counts of level ${k} larger than the file`);
+    }
+    if (id !== info.nodeCount || info.nodeCount >= 0xffffffff) throw new ClodError(bad + 'node counts do not add up');
+    if (levels[0].faces !== info.inputFaces || info.globalVertices >= 0xffffffff)
+      throw new ClodError(bad + 'level 0 does not match the input');
+    for (const o of [this.hierOffset, this.geosOffset, this.indexOffset])
+      if (!(o < src.size)) throw new ClodError(bad + 'an offset points past the end of the file');
+    info.levels = levelCount;
+    info.fileBytes = src.size;
+    info.levelFaces = levels.map((L) => L.faces);
+    // The containers and the index chunk (with the roots' index block, block 0: ids are coarsest first).
+    const [hier, geos] = await Promise.all([
+      src.read(this.hierOffset, CHUNK, 'the hierarchy chunk'),
+      src.read(this.geosOffset, CHUNK, 'the geometry chunk'),
+      this._readIndexChunk(),
+    ]);
+    [this.hierBegin, this.hierEnd] = this._container(hier, this.hierOffset, ID.HIER, 'the hierarchy chunk');
+    [this.geosBegin, this.geosEnd] = this._container(geos, this.geosOffset, ID.GEOS, 'the geometry chunk');
+    const top = levelCount - 1;
+    await this.loadRecords(levels[top].firstId, levels[top].nodes);
+    this.roots = [];
+    for (let r = 0; r < levels[top].nodes; ++r) this.roots.push(r);
+    await this.loadUnit(0);
+  }
+
+  _container(b, offset, id, what) {
+    const h = chunkHeader(b);
+    if (h.id !== id) throw new ClodError(`corrupt file: expected a ${chunkName(id)} chunk (${what}), found ${chunkName(h.id)}`);
+    if (h.crc !== 0 || h.childBytes !== 0 || !(h.dataBytes <= this.src.size - offset - CHUNK))
+      throw new ClodError(`corrupt chunk size in ${what}`);
+    return [offset + CHUNK, offset + CHUNK + h.dataBytes];
+  }
+
+  async _readIndexChunk() {
+    const b = await this.src.read(this.indexOffset, CHUNK + INDEX_DATA, 'the index chunk');
+    const h = chunkHeader(b);
+    if (h.id !== ID.INDX) throw new ClodError(`corrupt file: expected a INDX chunk (the index chunk), found ${chunkName(h.id)}`);
+    if (h.dataBytes !== INDEX_DATA) throw new ClodError('corrupt chunk size in the index chunk');
+    if (crc32(b, CHUNK, CHUNK + INDEX_DATA) !== h.crc) throw new ClodError('checksum mismatch in the index chunk');
+    const d = new Decoder(b, CHUNK);
+    const entries = d.u64(), block = d.u32();
+    const n = this.info.nodeCount, blocks = Math.ceil(n / this.indexBlock);
+    if (entries !== n || block !== this.indexBlock || h.childBytes !== blocks * (CHUNK + IBLOCK_BASE) + n * INDEX_ENTRY ||
+        h.totalBytes > this.src.size - this.indexOffset)
+      throw new ClodError('corrupt chunk size in the index chunk');
+  }
+
+  // Index block `blk`: per entry { record, recordBytes, geometry, geometryBytes } (cached).
+  _indexBlock(blk) {
+    let p = this.indexBlocks.get(blk);
+    if (!p) {
+      p = this._readIndexBlock(blk);
+      this.indexBlocks.set(blk, p);
+      p.catch(() => this.indexBlocks.delete(blk));
+    }
+    return p;
+  }
+
+  async _readIndexBlock(blk) {
+    const entries = Math.min(this.indexBlock, this.info.nodeCount - blk * this.indexBlock);
+    const bytes = CHUNK + IBLOCK_BASE + entries * INDEX_ENTRY;
+    const blockBytes = CHUNK + IBLOCK_BASE + this.indexBlock * INDEX_ENTRY;
+    const b = await this.src.read(this.indexOffset + CHUNK + INDEX_DATA + blk * blockBytes, bytes, 'index block');
+    const h = chunkHeader(b);
+    if (h.id !== ID.IBLK) throw new ClodError(`corrupt file: expected a IBLK chunk (index block), found ${chunkName(h.id)}`);
+    if (h.dataBytes !== bytes - CHUNK || h.childBytes !== 0) throw new ClodError('corrupt chunk size in index block');
+    if (crc32(b, CHUNK, bytes) !== h.crc) throw new ClodError('checksum mismatch in index block');
+    const d = new Decoder(b, CHUNK);
+    let record = d.u64(), geometry = d.u64();
+    const bad = `corrupt index block ${blk}: `;
+    if (record < this.hierBegin || record > this.hierEnd || geometry < this.geosBegin || geometry > this.geosEnd)
+      throw new ClodError(bad + 'it points outside the records or the geometry');
+    const recordBase = record, geometryBase = geometry;
+    let lastEnd = -1;
+    const out = [];
+    for (let i = 0; i < entries; ++i) {
+      const recordEnd = recordBase + d.u32(), geometryEnd = geometryBase + d.u32();
+      if (geometryEnd !== lastEnd && lastEnd !== -1) geometry = lastEnd;
+      if (recordEnd < record || recordEnd > this.hierEnd || geometryEnd <= geometry || geometryEnd > this.geosEnd)
+        throw new ClodError(bad + 'an entry points outside the records or the geometry');
+      out.push({ record, recordBytes: recordEnd - record, geometry, geometryBytes: geometryEnd - geometry });
+      record = recordEnd;
+      lastEnd = geometryEnd;
+    }
+    return out;
+  }
+
+  async _entries(first, count) {
+    const out = [];
+    for (let i = first; i < first + count; ++i) {
+      const blk = Math.floor(i / this.indexBlock);
+      const e = (await this._indexBlock(blk))[i - blk * this.indexBlock];
+      if (e.recordBytes < RECORD_FIXED || e.geometryBytes < GEOM_MIN)
+        throw new ClodError(`corrupt index: the entry of node ${i} is too small`);
+      out.push(e);
+    }
+    return out;
+  }
+
+  levelOf(id) {
+    for (let k = 0; k < this.levels.length; ++k)
+      if (id >= this.levels[k].firstId && id < this.levels[k].firstId + this.levels[k].nodes) return k;
+    return 0;
+  }
+
+  hasNode(id) { return this.nodes.has(id); }
+  node(id) { return this.nodes.get(id); }
+
+  // Bytes [offset, offset + n) of the records (HIER), read in pages of HIER_PAGE bytes that are
+  // kept: a level's records are consecutive in id order, and a group's clusters, their children
+  // and their parents have neighbouring ids, so one page serves many expansions (the demand for
+  // a group's missing clusters reads records one by one).
+  async _hier(offset, n) {
+    if (offset < this.hierBegin || n > this.hierEnd - offset)
+      throw new ClodError(`corrupt file: node records at offset ${offset} (${n} bytes) lie outside the hierarchy chunk`);
+    const first = Math.floor((offset - this.hierBegin) / HIER_PAGE);
+    const last = Math.floor((offset + n - 1 - this.hierBegin) / HIER_PAGE);
+    const pending = [];
+    for (let p = first; p <= last;) {
+      if (this.hierPages.has(p)) {
+        ++p;
+        continue;
+      }
+      let q = p;  // a run of missing pages: one range
+      while (q + 1 <= last && !this.hierPages.has(q + 1)) ++q;
+      const begin = this.hierBegin + p * HIER_PAGE, end = Math.min(this.hierEnd, this.hierBegin + (q + 1) * HIER_PAGE);
+      const read = this.src.read(begin, end - begin, 'node records'), runStart = p;
+      for (let k = p; k <= q; ++k) {
+        const at = (k - runStart) * HIER_PAGE;
+        const page = read.then((b) => b.subarray(at, Math.min(b.length, at + HIER_PAGE)));
+        this.hierPages.set(k, page);
+        page.catch(() => this.hierPages.delete(k));
+      }
+      p = q + 1;
+    }
+    for (let p = first; p <= last; ++p) pending.push(this.hierPages.get(p));
+    const pages = await Promise.all(pending);
+    const out = new Uint8Array(n);
+    for (let p = first, at = 0; p <= last; ++p) {
+      const pageBegin = this.hierBegin + p * HIER_PAGE;
+      const from = Math.max(offset, pageBegin) - pageBegin, to = Math.min(offset + n, pageBegin + pages[p - first].length) - pageBegin;
+      out.set(pages[p - first].subarray(from, to), at);
+      at += to - from;
+    }
+    return out;
+  }
+
+  // Records of nodes [first, first + count) (consecutive in the file): one range, read once
+  // however many callers ask for it meanwhile.
+  loadRecords(first, count) {
+    const key = first + ':' + count;
+    let p = this.recordReads.get(key);
+    if (!p) {
+      p = this._loadRecords(first, count);
+      this.recordReads.set(key, p);
+      p.finally(() => this.recordReads.delete(key)).catch(() => {});
+    }
+    return p;
+  }
+
+  async _loadRecords(first, count) {
+    if (count === 0) return;
+    const entries = await this._entries(first, count);
+    let span = 0;
+    for (let i = 0; i < count; ++i) {
+      if (entries[i].record !== entries[0].record + span)
+        throw new ClodError(`corrupt index: node records ${first}..${first + count - 1} are not consecutive`);
+      span += entries[i].recordBytes;
+    }
+    const buf = await this._hier(entries[0].record, span);
+    const level = this.levelOf(first), levels = this.levels, top = level + 1 === levels.length;
+    let at = 0;
+    for (let i = 0; i < count; ++i) {
+      const id = first + i, bytes = entries[i].recordBytes;
+      const bad = `corrupt record of node ${id}: `;
+      const begin = at;
+      at += bytes;
+      if (this.nodes.has(id)) continue;
+      if (!blobCrcOk(buf, begin, begin + bytes)) throw new ClodError(`checksum mismatch in the record of a node ${id}`);
+      const d = new Decoder(buf, begin + 4, begin + bytes);
+      const n = { id, level };
+      const o0 = d.u16(), o1 = d.u16(), angle = d.u16();
+      n.coneEmpty = angle === EMPTY_CONE;
+      n.coneAxis = n.coneEmpty ? [0, 0, 1] : decodeConeAxis(o0, o1);
+      n.coneHalfAngle = n.coneEmpty ? -1 : Math.min(Math.PI, angle * CONE_UNIT);
+      n.center = [d.f32(), d.f32(), d.f32()];
+      n.radius = d.f32();
+      n.error = d.f32();
+      n.parentError = d.f32();
+      const group = d.uv(), faces = d.uv(), vertices = d.uv(), children = d.uv();
+      if (d.overrun || group > 0xffffffff || faces > 0xffffffff || vertices > 0xffffffff)
+        throw new ClodError(bad + 'a count out of range');
+      n.group = group ? group - 1 : -1;
+      n.faceCount = faces;
+      n.vertexCount = vertices;
+      if (top !== (group === 0)) throw new ClodError(bad + (top ? 'a root with a group' : 'no group'));
+      if (level === 0 ? children !== 0 : children === 0 || children > levels[level - 1].nodes)
+        throw new ClodError(bad + 'children out of range');
+      n.children = [];
+      if (children) {
+        const firstChild = d.uv();
+        if (d.overrun || firstChild > levels[level - 1].nodes - children) throw new ClodError(bad + 'child out of range');
+        for (let c = 0; c < children; ++c) n.children.push(levels[level - 1].firstId + firstChild + c);
+      }
+      const readIds = (lvl) => {
+        const cnt = d.uv();
+        if (d.overrun || cnt > d.left() || (cnt && lvl >= levels.length)) return null;
+        const out = [];
+        if (!cnt) return out;
+        const end = levels[lvl].firstId + levels[lvl].nodes;
+        let next = levels[lvl].firstId;
+        for (let j = 0; j < cnt; ++j) {
+          const gap = d.uv();
+          if (d.overrun || gap >= end - next) return null;
+          out.push(next + gap);
+          next += gap + 1;
+        }
+        return out;
+      };
+      n.siblings = readIds(level);
+      if (!n.siblings || !n.siblings.includes(id)) throw new ClodError(bad + 'sibling out of range');
+      if (level === 0 && n.siblings.length !== 1) throw new ClodError(bad + 'siblings at level 0');
+      n.parents = readIds(level + 1);
+      if (!n.parents) throw new ClodError(bad + 'parent out of range');
+      if (top !== (n.parents.length === 0)) throw new ClodError(bad + (top ? 'a root with parents' : 'no parents'));
+      if (d.left() !== 0) throw new ClodError(bad + 'its size does not match its contents');
+      if (![...n.center, n.radius].every(Number.isFinite) || !(n.radius >= 0))
+        throw new ClodError(bad + 'non-finite or negative cone or sphere');
+      if (!(n.error >= 0) || !Number.isFinite(n.error) || (level === 0 && n.error !== 0) || !(n.parentError >= n.error) ||
+          (top ? n.parentError !== Infinity : !Number.isFinite(n.parentError)))
+        throw new ClodError(bad + 'bad error bounds');
+      if (n.vertexCount > 3 * n.faceCount || n.faceCount > levels[level].faces || n.faceCount === 0 || n.vertexCount === 0)
+        throw new ClodError(bad + 'impossible face or vertex count');
+      n.geometry = entries[i].geometry;
+      n.geometryBytes = entries[i].geometryBytes;
+      if (n.geometryBytes < GEOM_MIN + 17 + n.faceCount) throw new ClodError(bad + 'its geometry is too small for its face count');
+      this.nodes.set(id, n);
+    }
+  }
+
+  async loadNode(id) {
+    if (!(id >= 0 && id < this.info.nodeCount)) throw new ClodError(`no node ${id}`);
+    if (!this.nodes.has(id)) await this.loadRecords(id, 1);
+  }
+
+  // The records of id's children (one group's clusters: one range), checked to be that group.
+  async loadChildren(id) {
+    const p = this.nodes.get(id), ch = p.children;
+    if (ch.length && !ch.every((c) => this.nodes.has(c))) await this.loadRecords(ch[0], ch.length);
+    for (const c of ch) {
+      const n = this.nodes.get(c);
+      if (n.parentError !== p.error || n.group !== this.nodes.get(ch[0]).group)
+        throw new ClodError(`corrupt record of node ${c}: it does not belong to the group its parent ${id} was made from`);
+    }
+  }
+
+  // The unit holding node id (whose record is loaded): decoded once, shared by its nodes.
+  loadUnit(id) {
+    const n = this.nodes.get(id);
+    let p = this.units.get(n.geometry);
+    if (!p) {
+      p = this._decodeUnit(n.geometry, n.geometryBytes, id);
+      this.units.set(n.geometry, p);
+      p.catch(() => this.units.delete(n.geometry));
+    }
+    return p;
+  }
+
+  // Drops a decoded unit (its nodes left the cut); it is read again if needed.
+  dropUnit(offset) {
+    this.units.delete(offset);
+    this.unitBytes -= this.unitSizes.get(offset) || 0;
+    this.unitSizes.delete(offset);
+  }
+
+  async _decodeUnit(offset, bytes, id) {
+    const buf = await this.src.read(offset, bytes, 'node geometry');
+    const bad = `corrupt geometry of node ${id}: `;
+    if (!blobCrcOk(buf, 0, bytes)) throw new ClodError(`checksum mismatch in the geometry of a node ${id}`);
+    const d = new Decoder(buf, 4, bytes);
+    const flags = d.u8();
+    if (d.overrun || flags & ~KNOWN_FLAGS)
+      throw new ClodError(bad + `unknown flags 0x${flags.toString(16)} (written by a newer ConeLOD? this reader knows 0x${KNOWN_FLAGS.toString(16)})`);
+    const wide = (flags & FLAG_WIDE) !== 0;
+    const first = d.uv(), count = d.uv();
+    const L = this.levels[this.levelOf(id)];
+    if (d.overrun || first < L.firstId || count === 0 || count > L.nodes || first - L.firstId > L.nodes - count || count > d.left())
+      throw new ClodError(bad + 'its geometry blob names other nodes');
+    const faceStart = new Array(count + 1).fill(0);
+    for (let i = 0; i < count; ++i) {
+      const fc = d.uv();
+      if (d.overrun || fc === 0 || fc > bytes) throw new ClodError(bad + 'a face count out of range');
+      faceStart[i + 1] = faceStart[i] + fc;
+      if (faceStart[i + 1] > bytes) throw new ClodError(bad + 'more faces than its blob can hold');
+    }
+    const fc = faceStart[count];
+    const vc = d.uv();
+    if (d.overrun || vc === 0 || vc > 3 * fc) throw new ClodError(bad + 'impossible vertex count');
+    const grid = this.info.grid, cells = 2 ** grid.bits;
+    const qmin = [d.uv(), d.uv(), d.uv()];
+    const firstNew = d.uv();
+    if (d.overrun || qmin.some((q) => q >= cells) || firstNew > this.info.globalVertices)
+      throw new ClodError(bad + 'its grid corner or first vertex id is out of range');
+    const stride = wide ? 12 : 8;
+    let n = d.uv();
+    let p = d.overrun || n > d.left() ? null : d.take(n);
+    const raw = new Uint8Array(vc * stride);
+    try {
+      if (!p) throw new Error();
+      MeshoptDecoder.decodeVertexBuffer(raw, vc, stride, p);
+    } catch (e) {
+      throw new ClodError(bad + 'its positions do not decode');
+    }
+    const positions = new Float32Array(vc * 3);
+    const rv = new DataView(raw.buffer);
+    for (let v = 0; v < vc; ++v)
+      for (let c = 0; c < 3; ++c) {
+        const off = wide ? rv.getUint32(v * 12 + 4 * c, true) : rv.getUint16(v * 8 + 2 * c, true);
+        if (off >= cells - qmin[c]) throw new ClodError(bad + 'a position off the grid');
+        positions[v * 3 + c] = grid.origin[c] + (qmin[c] + off) * grid.step;  // double, then float: as the desktop reader
+      }
+    n = d.uv();
+    p = d.overrun || n > d.left() ? null : d.take(n);
+    const corners = new Uint32Array(fc * 3);
+    try {
+      if (!p) throw new Error();
+      MeshoptDecoder.decodeIndexBuffer(new Uint8Array(corners.buffer), fc * 3, 4, p);
+    } catch (e) {
+      throw new ClodError(bad + 'its triangles do not decode');
+    }
+    for (let i = 0; i < corners.length; ++i) if (corners[i] >= vc) throw new ClodError(bad + 'face index out of range');
+    const mask = d.take((vc + 7) >> 3);
+    if (!mask) throw new ClodError(bad + 'truncated vertex id mask');
+    if (vc % 8 && mask[vc >> 3] >> (vc % 8)) throw new ClodError(bad + 'stray bits in the vertex id mask');
+    let fresh = 0;
+    for (let v = 0; v < vc; ++v) fresh += (mask[v >> 3] >> (v & 7)) & 1;
+    if (fresh > this.info.globalVertices - firstNew) throw new ClodError(bad + 'vertex id out of range');
+    const listed = new Uint32Array(vc - fresh);
+    if (vc > fresh) {
+      n = d.uv();
+      p = d.overrun || n > d.left() ? null : d.take(n);
+      try {
+        if (!p) throw new Error();
+        MeshoptDecoder.decodeIndexSequence(new Uint8Array(listed.buffer), listed.length, 4, p);
+      } catch (e) {
+        throw new ClodError(bad + 'its vertex ids do not decode');
+      }
+    }
+    const attributes = {};
+    for (const s of OPTIONAL_STREAMS) {
+      if (!(flags & s.bit)) continue;
+      n = d.uv();
+      p = d.overrun || n > d.left() ? null : d.take(n);
+      const out = new Uint8Array(vc * s.stride);
+      try {
+        if (!p) throw new Error();
+        MeshoptDecoder.decodeVertexBuffer(out, vc, s.stride, p);
+      } catch (e) {
+        throw new ClodError(bad + `its ${s.name} stream does not decode`);
+      }
+      attributes[s.name] = out;
+    }
+    if (d.left() !== 0) throw new ClodError(bad + 'its size does not match its contents');
+    const vertexIds = new Uint32Array(vc);
+    for (let v = 0, nextNew = 0, nextOld = 0; v < vc; ++v) {
+      if ((mask[v >> 3] >> (v & 7)) & 1) {
+        vertexIds[v] = firstNew + nextNew++;
+      } else {
+        const old = listed[nextOld++];
+        if (old >= firstNew) throw new ClodError(bad + 'global vertex id out of range');
+        vertexIds[v] = old;
+      }
+    }
+    // Each node's faces and vertices must be its record's.
+    const seen = new Uint32Array(vc);
+    for (let m = 0; m < count; ++m) {
+      const node = this.nodes.get(first + m);
+      if (!node) continue;  // its record is not loaded (the roots' unit is checked whole at open)
+      if (faceStart[m + 1] - faceStart[m] !== node.faceCount) throw new ClodError(bad + 'its face count does not match its record');
+      let verts = 0;
+      for (let f = faceStart[m] * 3; f < faceStart[m + 1] * 3; ++f)
+        if (seen[corners[f]] !== m + 1) {
+          seen[corners[f]] = m + 1;
+          ++verts;
+        }
+      if (verts !== node.vertexCount) throw new ClodError(bad + 'its vertex count does not match its record');
+    }
+    const unit = { offset, firstNode: first, nodeCount: count, faceStart, positions, corners, vertexIds, attributes,
+      bytes: positions.byteLength + corners.byteLength + vertexIds.byteLength };
+    if (this.units.has(offset)) {
+      this.unitSizes.set(offset, unit.bytes);
+      this.unitBytes += unit.bytes;
+    }
+    return unit;
+  }
+}
