@@ -16,6 +16,12 @@
 // A group's error is the largest distance from its vertices (before) to its simplified faces plus
 // the largest error of its clusters: monotonic up the DAG, in model units. Groups are simplified
 // side by side on several threads; the result does not depend on their number.
+// In spatial chunks (LodBuildParams::chunkFaces, `lod build --memory`; docs/scale.md): the faces
+// are split into kd chunks, step 1 runs on each chunk (side by side) and step 2 gathers only
+// clusters of one chunk, so a chunk's border is locked; the chunks of level k are the kd nodes
+// one depth up from those of level k - 1 (two siblings merge, freeing their common border), and
+// each time a level no longer shrinks under the locked borders the chunks merge one depth more
+// (for that level and the rest of the build).
 #include "conelod/lod/lod_build.h"
 
 #include <algorithm>
