@@ -22,9 +22,14 @@
 // cuts of the file at these budgets (% of the input's faces; far eye, error in model units, no
 // culling: scripts/lod_fidelity.py's cuts, measured here in-process) beside both, with the faces
 // the cut takes from each level: where the cut loses against its levels.
+// --chunk-faces N: instead, the DAG built in spatial chunks of at most N faces (conelod lod build
+// --memory; LodBuildParams::chunkFaces) against the DAG built whole: per level of the chunked DAG
+// its faces and RMS, and the whole DAG's RMS at the same face count (interpolated in log-log
+// between its two levels around that count), and their ratio.
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -80,7 +85,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   int samples = 200000;
-  size_t maxFaces = 0;  // 0: every level
+  size_t maxFaces = 0;    // 0: every level
+  size_t chunkFaces = 0;  // --chunk-faces N: chunked against whole
   bool tree = true, file = false;
   conelod::LodBuildParams dagParams;
   std::vector<double> cuts;  // --cuts P,...: cuts at these budgets (% of the input's faces) instead of levels
@@ -94,6 +100,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--fine-group-clusters")) dagParams.fineGroupClusters = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--max-group-error")) dagParams.maxGroupError = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--max-faces")) maxFaces = size_t(std::atoll(argv[i + 1]));
+    if (!std::strcmp(argv[i], "--chunk-faces")) chunkFaces = size_t(std::atoll(argv[i + 1]));
     if (!std::strcmp(argv[i], "--cuts")) {
       tree = false;
       for (const char* c = argv[i + 1]; *c;) {
@@ -116,6 +123,49 @@ int main(int argc, char** argv) {
   const vcg::Box3d box = conelod::UsedVertexBox(input);
   const double diag = box.Diag();
 
+  if (chunkFaces > 0) {
+    std::vector<double> wholeFaces, wholeRms;
+    const conelod::IndexedMesh welded = conelod::WeldByPosition(input).mesh;  // as conelod lod build
+    for (size_t chunk : {size_t(0), chunkFaces}) {
+      conelod::LodBuildParams p = dagParams;
+      p.chunkFaces = chunk;
+      conelod::LodDag dag;
+      size_t chunks = 1;
+      const double w = Wall();
+      if (!conelod::BuildLodDag(welded, p, dag, conelod::Progress(), &chunks).ok()) return 1;
+      std::printf("\n%s (%zu faces), DAG %s: %zu chunks, %.2f s wall\n", argv[1], input.faces.size(),
+                  chunk ? "in chunks" : "whole", chunks, Wall() - w);
+      std::printf(chunk ? "| level | faces | RMS (chunks) | RMS (whole, same faces) | ratio |\n|---|---|---|---|---|\n"
+                        : "| level | faces | RMS (whole) |\n|---|---|---|\n");
+      for (size_t k = 1; k < dag.levels.size(); ++k) {
+        conelod::IndexedMesh m;
+        m.positions = dag.positions;
+        m.faces = dag.levels[k].faces;
+        if (maxFaces > 0 && m.faces.size() > maxFaces) continue;
+        const double rms = Rms(m, input, samples, diag), f = double(m.faces.size());
+        if (!chunk) {
+          wholeFaces.push_back(f);
+          wholeRms.push_back(rms);
+          std::printf("| %zu | %zu | %.4f |\n", k, m.faces.size(), 100 * rms);
+          std::fflush(stdout);
+          continue;
+        }
+        double same = -1;  // the whole DAG's RMS at f faces (its levels' faces decrease)
+        for (size_t i = 0; i + 1 < wholeFaces.size(); ++i)
+          if (wholeFaces[i] >= f && f >= wholeFaces[i + 1] && wholeRms[i] > 0 && wholeRms[i + 1] > 0) {
+            const double t = std::log(f / wholeFaces[i]) / std::log(wholeFaces[i + 1] / wholeFaces[i]);
+            same = std::exp(std::log(wholeRms[i]) + t * (std::log(wholeRms[i + 1]) - std::log(wholeRms[i])));
+            break;
+          }
+        if (same > 0)
+          std::printf("| %zu | %zu | %.4f | %.4f | %.3f |\n", k, m.faces.size(), 100 * rms, 100 * same, rms / same);
+        else
+          std::printf("| %zu | %zu | %.4f | (outside the whole DAG's levels) | |\n", k, m.faces.size(), 100 * rms);
+        std::fflush(stdout);
+      }
+    }
+    return 0;
+  }
   if (file) {
     conelod::LodDag dag;
     if (!conelod::BuildLodDag(input, dagParams, dag).ok()) return 1;

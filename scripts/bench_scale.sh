@@ -1,40 +1,52 @@
 #!/usr/bin/env bash
-# Scale benchmark: the Stanford dragon (871,414 faces) subdivided once at edge midpoints (3.49 M
-# faces, written to build/bench_scale/, never committed) through `conelod group`, `simplify` to
-# 50 % and `lod build`: wall time and peak memory (GNU time's maximum resident set size) of each.
-# Takes minutes: not part of CI.
+# Scale benchmark (issue 27): the Stanford dragon (871,414 faces) subdivided 1, 2 and 3 times at
+# edge midpoints (3.49 M, 13.94 M, 55.77 M faces; written to build/bench_scale/, never
+# committed), through `conelod lod build --memory 1G` (2G at 55.8 M faces) at 1 and 2 threads
+# and on every core, and optionally `conelod group` and `simplify` to 10 %. One table: wall
+# seconds, CPU seconds (user + system), peak resident memory (GNU time's maximum RSS), peak
+# bytes per input face, file bytes per input face. Takes minutes to hours: not part of CI.
 #   scripts/bench_scale.sh [CONELOD]   default build/conelod/conelod
+#   SCALE_LEVELS="1 2 3"               subdivisions to run (default: 1 2 3)
+#   SCALE_STEPS="lod"                  any of: lod group simplify (default: lod)
+#   SCALE_THREADS="1 2 0"              lod build --threads values (0: one per core; default 1 2 0)
 #   CONELOD_TEST_MESHES=...            where stanford_dragon_vrip_binary.ply is (../shared/test_meshes)
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 CONELOD="${1:-$ROOT/build/conelod/conelod}"
 MESHES="${CONELOD_TEST_MESHES:-$ROOT/../shared/test_meshes}"
+LEVELS="${SCALE_LEVELS:-1 2 3}"
+STEPS="${SCALE_STEPS:-lod}"
+THREADS="${SCALE_THREADS:-1 2 0}"
 OUT="$ROOT/build/bench_scale"
 mkdir -p "$OUT"
 [ -x "$CONELOD" ] || { echo "bench_scale.sh: $CONELOD not built" >&2; exit 1; }
-MESH="$OUT/dragon_subdivided.ply"
-if [ ! -f "$MESH" ]; then
-  python3 - "$MESHES/stanford_dragon_vrip_binary.ply" "$MESH" <<'PY'
-import struct, sys
+[ -x /usr/bin/time ] || { echo "bench_scale.sh: needs GNU time (/usr/bin/time)" >&2; exit 1; }
+
+# dragon_sub{K}.ply: the dragon subdivided K times (each from the previous one).
+subdivide() {  # src dst
+  python3 - "$1" "$2" <<'PY'
+import sys
 from array import array
 src, dst = sys.argv[1], sys.argv[2]
-data = open(src, "rb").read()
-end = data.index(b"end_header\n") + len(b"end_header\n")
-head = data[:end].decode().split("\n")
-nv = int([l for l in head if l.startswith("element vertex")][0].split()[2])
-nf = int([l for l in head if l.startswith("element face")][0].split()[2])
-assert "property float x" in head and "format binary_little_endian 1.0" in head
-pos = array("f", data[end:end + nv * 12])  # x y z floats only (the file has no other vertex property)
-body = memoryview(data)[end + nv * 12:]
+with open(src, "rb") as f:
+    head = b""
+    while not head.endswith(b"end_header\n"):
+        head += f.readline()
+    lines = head.decode().split("\n")
+    nv = int([l for l in lines if l.startswith("element vertex")][0].split()[2])
+    nf = int([l for l in lines if l.startswith("element face")][0].split()[2])
+    assert "property float x" in lines and "format binary_little_endian 1.0" in lines
+    pos = array("f")
+    pos.frombytes(f.read(nv * 12))  # x y z floats only (the file has no other vertex property)
+    body = f.read(nf * 13)
 faces = array("i")
-o = 0
-for _ in range(nf):
+for o in range(0, nf * 13, 13):
     assert body[o] == 3
     faces.frombytes(body[o + 1:o + 13])
-    o += 13
+del body
 mid = {}
 def midpoint(a, b):
-    k = (a, b) if a < b else (b, a)
+    k = a * 4294967296 + b if a < b else b * 4294967296 + a
     m = mid.get(k)
     if m is None:
         m = len(pos) // 3
@@ -46,26 +58,71 @@ for f in range(nf):
     a, b, c = faces[3 * f], faces[3 * f + 1], faces[3 * f + 2]
     ab, bc, ca = midpoint(a, b), midpoint(b, c), midpoint(c, a)
     out.extend((a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca))
+del mid, faces
 n_v, n_f = len(pos) // 3, len(out) // 3
-with open(dst, "wb") as w:
+with open(dst + ".part", "wb") as w:
     w.write(("ply\nformat binary_little_endian 1.0\nelement vertex %d\nproperty float x\nproperty float y\n"
              "property float z\nelement face %d\nproperty list uchar int vertex_indices\nend_header\n" % (n_v, n_f)).encode())
     w.write(pos.tobytes())
     three = b"\x03"
-    for f in range(n_f):
-        w.write(three)
-        w.write(out[3 * f:3 * f + 3].tobytes())
+    for f in range(0, n_f, 65536):
+        chunk = out[3 * f:3 * min(n_f, f + 65536)].tobytes()
+        w.write(b"".join(three + chunk[12 * i:12 * i + 12] for i in range(len(chunk) // 12)))
+import os
+os.replace(dst + ".part", dst)
 print("bench_scale.sh: wrote %s: %d vertices, %d faces" % (dst, n_v, n_f))
 PY
-fi
-run() {  # label, then the command: prints wall time and peak memory
-  local label="$1"; shift
-  /usr/bin/time -f "%e %M" -o "$OUT/time.txt" "$@" >/dev/null
-  read -r secs kib < "$OUT/time.txt"
-  printf "%-22s %8.1f s %8.0f MiB\n" "$label" "$secs" "$((kib / 1024))"
 }
-ls -l "$MESH" | awk '{printf "bench_scale.sh: %s, %.0f MiB\n", $NF, $5 / 1048576}'
-run "info (load only)" "$CONELOD" info "$MESH"
-run "group" "$CONELOD" group "$MESH" -o "$OUT/grouped.ply"
-run "simplify to 50 %" "$CONELOD" simplify "$MESH" --groups cone:1 --target-ratio 0.5 -o "$OUT/simplified.ply"
-run "lod build" "$CONELOD" lod build "$MESH" -o "$OUT/dragon.clod"
+prev="$MESHES/stanford_dragon_vrip_binary.ply"
+for k in 1 2 3; do
+  mesh="$OUT/dragon_sub$k.ply"
+  need=0
+  for want in $LEVELS; do
+    if [ "$want" -ge "$k" ]; then need=1; fi
+  done
+  if [ "$need" = 1 ] && [ ! -f "$mesh" ]; then subdivide "$prev" "$mesh"; fi
+  prev="$mesh"
+done
+
+faces_of() { head -c 400 "$1" | tr -d '\0' | awk '/^element face/ {print $3; exit}'; }
+echo "bench_scale.sh: $(nproc) cores, $(awk '/MemTotal/ {printf "%.1f GiB", $2 / 1048576}' /proc/meminfo), load: $(cut -d' ' -f1-3 /proc/loadavg)"
+printf "| faces | step | threads | wall s | CPU s | CPU us/face | peak RSS MiB | peak B/face | file B/face |\n"
+printf "|---|---|---|---|---|---|---|---|---|\n"
+row() {  # faces, step, threads, output file or -, then the command
+  local faces="$1" step="$2" threads="$3" file="$4"
+  shift 4
+  if ! /usr/bin/time -f "%e %U %S %M" -o "$OUT/time.txt" "$@" >"$OUT/log.txt" 2>&1; then
+    echo "bench_scale.sh: failed: $*" >&2
+    tail -5 "$OUT/log.txt" >&2
+    return 1
+  fi
+  read -r wall user sys kib < <(tail -1 "$OUT/time.txt")
+  local bytes=0
+  if [ "$file" != - ]; then bytes=$(stat -c %s "$file"); fi
+  awk -v f="$faces" -v s="$step" -v t="$threads" -v w="$wall" -v u="$user" -v y="$sys" -v k="$kib" -v b="$bytes" \
+    'BEGIN { c = u + y; printf "| %.2f M | %s | %s | %.1f | %.1f | %.2f | %.0f | %.0f | %s |\n", f / 1e6, s, t, w, c,
+             c * 1e6 / f, k / 1024, k * 1024 / f, (b > 0 ? sprintf("%.1f", b / f) : "") }'
+}
+for k in $LEVELS; do
+  mesh="$OUT/dragon_sub$k.ply"
+  faces=$(faces_of "$mesh")
+  memory=1G
+  if [ "$k" -ge 3 ]; then memory=2G; fi
+  for step in $STEPS; do
+    case "$step" in
+      lod)
+        for t in $THREADS; do
+          row "$faces" "lod build --memory $memory" "$t" "$OUT/dragon_sub$k.clod" \
+            "$CONELOD" lod build "$mesh" -o "$OUT/dragon_sub$k.clod" --memory "$memory" --threads "$t"
+        done ;;
+      group)
+        row "$faces" "group" 1 - "$CONELOD" group "$mesh" -o "$OUT/grouped.ply" ;;
+      simplify)
+        for t in $THREADS; do
+          row "$faces" "simplify --groups cone:auto 10 %" "$t" - \
+            "$CONELOD" simplify "$mesh" --groups cone:auto --target-ratio 0.1 --threads "$t" -o "$OUT/simplified.ply"
+        done ;;
+      *) echo "bench_scale.sh: unknown step $step" >&2; exit 1 ;;
+    esac
+  done
+done

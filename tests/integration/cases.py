@@ -1236,6 +1236,68 @@ def cli_lod_round_trip(c):
 
 
 @case
+def cli_lod_memory(c):
+    """Issue 27: `lod build --memory SIZE` splits an input of more than SIZE / 2048 faces into spatial
+    chunks. The bunny at 16M (the smallest budget): 16 chunks of at most 8,192 faces; the full budget
+    gives the input back exactly (on the grid), the file does not depend on --threads, and a budget
+    the input fits gives the file of a build without --memory. The armadillo at 16M (8 chunks): its
+    cuts at 5 / 20 / 50 % are watertight. Bad sizes are refused and leave the output untouched."""
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    files = {}
+    for key, extra in (("16M-1", ["--memory", "16M", "--threads", "1"]), ("16M-2", ["--memory", "16m", "--threads", "2"]),
+                       ("1G", ["--memory", "1G"]), ("default", [])):
+        files[key] = c.out("bunny_%s.clod" % key)
+        r = json.loads(c.conelod("lod", "build", bunny, "-o", files[key], "--json", *extra).stdout)
+        if key.startswith("16M"):
+            assert r["chunks"] == 16 and r["memory_bytes"] == 16 << 20, r
+        else:
+            assert r["chunks"] == 1, r
+    data = {k: open(v, "rb").read() for k, v in files.items()}
+    assert data["16M-1"] == data["16M-2"], "the chunked file depends on --threads"
+    assert data["1G"] == data["default"], "a budget the input fits changed the file"
+    assert data["16M-1"] != data["default"], "16M did not split the bunny"
+    human = c.conelod("lod", "build", bunny, "-o", c.out("h.clod"), "--memory", "16M").stdout.decode()
+    assert "16 spatial chunks of at most 8192 faces" in human, human
+    info = json.loads(c.conelod("lod", "info", files["16M-1"], "--json").stdout)
+    full = c.out("full.ply")
+    r = json.loads(c.conelod("lod", "extract", files["16M-1"], "--eye", "0,0.1,0.6", "--budget", "100%", "-o", full,
+                             "--json").stdout)
+    assert r["faces"] == 69451 and r["max_level_difference"] == 0, r
+    src = read_ply(bunny)
+    assert canonical_faces(read_ply(full)) == canonical_faces(dict(src, positions=on_grid(src["positions"], info)))
+
+    arma = c.mesh("stanford_armadillo_cgal.ply")
+    clod = c.out("arma.clod")
+    r = json.loads(c.conelod("lod", "build", arma, "-o", clod, "--memory", "16M", "--json").stdout)
+    assert r["chunks"] >= 8, r
+    for eye in ("0,0,500", "-20,30,60"):
+        for budget in ("5%", "20%", "50%"):
+            out = c.out("cut.ply")
+            c.conelod("lod", "extract", clod, "--eye", eye, "--budget", budget, "-o", out)
+            ply = read_ply(out)
+            pos = ply["positions"]
+            edges = {}
+            for f in ply["faces"]:
+                for i in range(3):
+                    a, b = pos[f[i]], pos[f[(i + 1) % 3]]
+                    key = (a, b) if a < b else (b, a)
+                    edges[key] = edges.get(key, 0) + 1
+            bad = sum(1 for n in edges.values() if n != 2)
+            assert bad == 0, (eye, budget, bad)
+
+    before = b"not a .clod file\n"
+    kept = c.out("kept.clod")
+    for value in ("abc", "", "0", "15M", "16383K", "1.5G", "2X", "-1G", "16MB", "99999999999T"):
+        with open(kept, "wb") as f:
+            f.write(before)
+        p = c.conelod("lod", "build", bunny, "-o", kept, "--memory", value, expect=1)
+        assert b"--memory must" in p.stderr, (value, p.stderr)
+        assert open(kept, "rb").read() == before, value
+    left = sorted(n for n in os.listdir(c.tmp) if "conelod" in n or n.startswith("."))
+    assert not left, left
+
+
+@case
 def cli_lod_watertight_cuts(c):
     """Issue 17's check: the armadillo (watertight) built with defaults, extracted at 5-100% from
     three eyes, with and without culling; vertices welded at identical positions: no edge used by

@@ -48,7 +48,24 @@ struct LodBuildParams {
   // The positions' quantization (lod_read.h, LodGrid): no vertex moves by more than this fraction
   // of the diagonal of the box of the DAG's positions (kMinLodPrecision..kMaxLodPrecision).
   double precision = kDefaultLodPrecision;
+  // Spatial chunks (conelod lod build --memory; docs/scale.md): 0 builds the DAG over the whole
+  // mesh (today's build). Else the faces are split into kd chunks of at most chunkFaces faces (by
+  // face centroid, median splits on the longest axis, every leaf at the same depth); the level-0
+  // clusters and the groups of the fine levels stay within a chunk, so a chunk's border is locked
+  // while its levels are built, and sibling chunks merge one kd depth per level (sooner when a
+  // level no longer shrinks), which frees their common border. A mesh of at most chunkFaces faces
+  // is one chunk: its file is byte for byte the unchunked one.
+  size_t chunkFaces = 0;
 };
+
+// --memory: the budget's smallest value, and the faces of a chunk per byte of it (a chunk's own
+// working set, about 200 bytes a face measured, is then a tenth of the budget).
+constexpr uint64_t kLodMinMemoryBytes = uint64_t(16) << 20;
+constexpr uint64_t kLodMemoryBytesPerChunkFace = 2048;
+inline size_t LodChunkFacesForMemory(uint64_t bytes) { return size_t(bytes / kLodMemoryBytesPerChunkFace); }
+// The default budget: a quarter of the machine's physical memory, at most 4 GiB (at least the
+// minimum).
+uint64_t DefaultLodMemoryBytes();
 
 // The cluster DAG before it is written (BuildLodDag), level 0 = the input.
 struct LodDag {
@@ -70,12 +87,13 @@ struct LodDag {
 // from its vertices to its simplified surface plus the largest error of its clusters, so a
 // node's error is at least its children's.
 Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag& out,
-                   const Progress& progress = Progress());
+                   const Progress& progress = Progress(), size_t* chunks = nullptr);
 
 struct LodBuildStats {
   size_t inputVertices = 0, inputFaces = 0;  // of the mesh the DAG was built on (BuildLodFile: welded)
   size_t mergedVertices = 0;                 // BuildLodFile: input vertices welded into another (weld.h)
   size_t droppedVertices = 0;                // BuildLodFile: unreferenced input vertices left out
+  size_t chunks = 1;                         // spatial chunks of the build (LodBuildParams::chunkFaces)
   int levels = 0;                            // node levels, level 0 (the input) included
   std::vector<size_t> levelFaces;            // faces per node level, [0] = the input's
   std::vector<size_t> levelNodes;            // nodes per node level

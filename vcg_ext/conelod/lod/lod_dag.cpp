@@ -16,6 +16,12 @@
 // A group's error is the largest distance from its vertices (before) to its simplified faces plus
 // the largest error of its clusters: monotonic up the DAG, in model units. Groups are simplified
 // side by side on several threads; the result does not depend on their number.
+// In spatial chunks (LodBuildParams::chunkFaces, `lod build --memory`; docs/scale.md): the faces
+// are split into kd chunks, step 1 runs on each chunk (side by side) and step 2 gathers only
+// clusters of one chunk, so a chunk's border is locked; the chunks of level k are the kd nodes
+// one depth up from those of level k - 1 (two siblings merge, freeing their common border), and
+// each time a level no longer shrinks under the locked borders the chunks merge one depth more
+// (for that level and the rest of the build).
 #include "conelod/lod/lod_build.h"
 
 #include <algorithm>
@@ -25,6 +31,8 @@
 #include <numeric>
 #include <queue>
 #include <unordered_map>
+
+#include <unistd.h>
 
 #include "conelod/common.h"
 #include "conelod/parallel.h"
@@ -182,12 +190,17 @@ uint32_t GrowClusters(const std::vector<Face>& faces, const std::vector<vcg::Poi
 // Gathers the clusters of a level into groups of about `per` neighbouring clusters (those sharing
 // the most edges first); a connected part of at most `whole` clusters (clusters sharing edges)
 // is one group. Returns the group count.
-int GroupClusters(const LodDag::Level& L, int per, size_t whole, std::vector<int>& group) {
+// With `node` (per cluster: its kd chunk), clusters of two chunks are no neighbours: a group stays
+// within one chunk.
+int GroupClusters(const LodDag::Level& L, int per, size_t whole, std::vector<int>& group,
+                  const std::vector<uint32_t>* node = nullptr) {
   const uint32_t C = uint32_t(L.clusterCount());
   // Cluster adjacency weighted by shared edges.
   const std::vector<EdgeRecord> edges = SortedEdgeRecords(L.faces, [&](uint32_t f) { return L.faceCluster[f]; });
   std::vector<std::pair<uint64_t, uint32_t>> pairs;  // (a << 32 | b, 1) per shared edge, a != b
-  ForPairsOnSharedEdges(edges, [&](uint32_t a, uint32_t b) { pairs.push_back({uint64_t(a) << 32 | b, 1}); });
+  ForPairsOnSharedEdges(edges, [&](uint32_t a, uint32_t b) {
+    if (!node || (*node)[a] == (*node)[b]) pairs.push_back({uint64_t(a) << 32 | b, 1});
+  });
   std::sort(pairs.begin(), pairs.end());
   std::vector<uint32_t> off(C + 1, 0), nb, w;
   for (size_t i = 0; i < pairs.size();) {
@@ -245,6 +258,60 @@ int GroupClusters(const LodDag::Level& L, int per, size_t whole, std::vector<int
     }
   }
   return groups;
+}
+
+// Splits the faces into 2^depth kd chunks of at most `cap` faces each and returns depth: the box
+// of the face centroids is cut at the median on its longest axis (ties by face index, so the
+// halves do not depend on the sort's order), every leaf at the same depth. leaf[f]: the chunk of
+// face f, whose bits (most significant first) are the halves chosen from the root (1: the upper),
+// so that the chunk at depth d holding it is leaf[f] >> (depth - d).
+int KdChunks(const IndexedMesh& mesh, size_t cap, std::vector<uint32_t>& leaf) {
+  const size_t F = mesh.faces.size();
+  int depth = 0;
+  while (depth < 24 && (F + (size_t(1) << depth) - 1) >> depth > cap) ++depth;
+  leaf.assign(F, 0);
+  if (depth == 0) return 0;
+  std::vector<vcg::Point3f> c(F);
+  for (size_t f = 0; f < F; ++f) {
+    const auto& t = mesh.faces[f];
+    const vcg::Point3d p =
+        (vcg::Point3d::Construct(mesh.positions[t[0]]) + vcg::Point3d::Construct(mesh.positions[t[1]]) +
+         vcg::Point3d::Construct(mesh.positions[t[2]])) /
+        3.0;
+    c[f] = vcg::Point3f::Construct(p);
+  }
+  std::vector<uint32_t> order(F);
+  std::iota(order.begin(), order.end(), 0u);
+  struct Range {
+    size_t begin, end;
+    uint32_t node;
+    int level;
+  };
+  std::vector<Range> todo = {{0, F, 0u, 0}};
+  while (!todo.empty()) {
+    const Range r = todo.back();
+    todo.pop_back();
+    if (r.level == depth) {
+      for (size_t i = r.begin; i < r.end; ++i) leaf[order[i]] = r.node;
+      continue;
+    }
+    vcg::Box3f box;
+    for (size_t i = r.begin; i < r.end; ++i) box.Add(c[order[i]]);
+    int axis = 0;
+    if (!box.IsNull()) {
+      const vcg::Point3f d = box.Dim();
+      axis = d[1] > d[axis] ? 1 : axis;
+      axis = d[2] > d[axis] ? 2 : axis;
+    }
+    const size_t mid = r.begin + (r.end - r.begin) / 2;
+    std::nth_element(order.begin() + std::ptrdiff_t(r.begin), order.begin() + std::ptrdiff_t(mid),
+                     order.begin() + std::ptrdiff_t(r.end), [&](uint32_t a, uint32_t b) {
+                       return c[a][axis] < c[b][axis] || (c[a][axis] == c[b][axis] && a < b);
+                     });
+    todo.push_back({r.begin, mid, r.node << 1, r.level + 1});
+    todo.push_back({mid, r.end, r.node << 1 | 1u, r.level + 1});
+  }
+  return depth;
 }
 
 // One group simplified: its faces in the group's local vertex ids, the positions of the vertices
@@ -385,8 +452,16 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
 
 }  // namespace
 
-Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag& dag, const Progress& progress) {
+uint64_t DefaultLodMemoryBytes() {
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+  const uint64_t quarter = pages > 0 && page > 0 ? uint64_t(pages) * uint64_t(page) / 4 : 0;
+  return std::max(kLodMinMemoryBytes, std::min(quarter ? quarter : uint64_t(1) << 30, uint64_t(4) << 30));
+}
+
+Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag& dag, const Progress& progress,
+                   size_t* chunks) {
   dag = LodDag();
+  if (chunks) *chunks = 1;
   Status s = RequireValidForFaces(mesh);
   if (!s.ok()) return s;
   {
@@ -413,7 +488,49 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
   dag.positions = mesh.positions;
   dag.inputVertices = mesh.positions.size();
   dag.levels.emplace_back();
-  {
+  const unsigned threads = unsigned(std::max(1, SimplificationThreads(params.simplification)));
+  // Chunks (params.chunkFaces): clusterNode holds each cluster's kd chunk at depth `depth`.
+  std::vector<uint32_t> clusterNode;
+  int depth = 0;
+  if (params.chunkFaces > 0) {
+    std::vector<uint32_t> leaf;
+    depth = KdChunks(mesh, params.chunkFaces, leaf);
+    if (chunks) *chunks = size_t(1) << depth;
+    if (depth > 0) {  // each chunk's level-0 clusters on its own, chunks side by side
+      const uint32_t leaves = 1u << depth;
+      std::vector<uint32_t> start(leaves + 1, 0), members(mesh.faces.size()), at;
+      for (uint32_t l : leaf) ++start[l + 1];
+      std::partial_sum(start.begin(), start.end(), start.begin());
+      at.assign(start.begin(), start.end() - 1);
+      for (uint32_t f = 0; f < mesh.faces.size(); ++f) members[at[leaf[f]]++] = f;
+      std::vector<std::vector<uint32_t>> local(leaves);
+      std::vector<uint32_t> count(leaves, 0);
+      std::atomic<uint32_t> next(0);
+      RunThreads(std::min(threads, leaves), [&](unsigned) {
+        std::vector<Face> faces;
+        for (uint32_t l = next++; l < leaves; l = next++) {
+          faces.clear();
+          for (uint32_t j = start[l]; j < start[l + 1]; ++j) faces.push_back(mesh.faces[members[j]]);
+          count[l] = GrowClusters(faces, dag.positions, params.clusterFaces,
+                                  std::min(90.0, params.grouping.coneThresholdDeg) * kDeg, local[l]);
+        }
+      });
+      LodDag::Level& L0 = dag.levels[0];
+      L0.faces = mesh.faces;
+      L0.faceCluster.assign(mesh.faces.size(), 0);
+      uint32_t base = 0;
+      for (uint32_t l = 0; l < leaves; ++l) {
+        for (uint32_t j = start[l]; j < start[l + 1]; ++j) L0.faceCluster[members[j]] = base + local[l][j - start[l]];
+        clusterNode.insert(clusterNode.end(), count[l], l);
+        base += count[l];
+        std::vector<uint32_t>().swap(local[l]);
+      }
+      L0.clusterGroup.assign(base, -1);
+      L0.clusterCreator.assign(base, -1);
+      L0.clusterError.assign(base, 0.f);
+    }
+  }
+  if (depth == 0) {
     LodDag::Level& L0 = dag.levels[0];
     L0.faces = mesh.faces;
     const uint32_t C = GrowClusters(L0.faces, dag.positions, params.clusterFaces,
@@ -422,7 +539,11 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
     L0.clusterCreator.assign(C, -1);
     L0.clusterError.assign(C, 0.f);
   }
-  const unsigned threads = unsigned(std::max(1, SimplificationThreads(params.simplification)));
+  // Sibling chunks merge one kd depth per level (level k groups within the chunks at depth
+  // leafDepth - k - sooner), and one more each time a level no longer shrinks under their locked
+  // borders.
+  const int leafDepth = depth;
+  int sooner = 0;
   // The top. When a level no longer shrinks (the locked borders between groups leave no collapse
   // under the cap), each connected part of the mesh of at most 4 groups' clusters becomes one
   // group: nothing of it is locked, and a part down to one cluster stays as it is. When that no
@@ -439,12 +560,23 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
       return Status::Cancelled();
     }
     LodDag::Level& L = dag.levels[size_t(k)];
-    if (L.clusterCount() <= 1) break;
+    if (L.clusterCount() <= 1 && depth == 0) break;
+    if (depth > 0) {
+      const int want = std::max(0, leafDepth - k - sooner);
+      if (want < depth)
+        for (uint32_t& n : clusterNode) n >>= (depth - want);
+      depth = std::min(depth, want);
+    }
     std::vector<int> group;
     // Groups of fineGroupClusters on the fine levels (above 1/8 of the input's faces).
     const int per = params.fineGroupClusters > 0 && 8 * L.faces.size() > mesh.faces.size() ? params.fineGroupClusters
                                                                                            : params.groupClusters;
-    const int G = GroupClusters(L, per, wholeParts ? wholeUpTo : 0, group);
+    const int G = GroupClusters(L, per, wholeParts ? wholeUpTo : 0, group, depth > 0 ? &clusterNode : nullptr);
+    std::vector<uint32_t> groupNode;
+    if (depth > 0) {
+      groupNode.assign(size_t(G), 0);
+      for (size_t c = 0; c < group.size(); ++c) groupNode[size_t(group[c])] = clusterNode[c];
+    }
     // Faces per group; vertices shared by two groups stay frozen.
     std::vector<std::vector<uint32_t>> groupFaces(static_cast<size_t>(G));
     for (uint32_t f = 0; f < L.faces.size(); ++f) groupFaces[size_t(group[L.faceCluster[f]])].push_back(f);
@@ -481,7 +613,9 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
     size_t newFaces = 0;
     for (const auto& r : results) newFaces += r.faces.size();
     if (double(newFaces) > (cap > params.maxGroupError ? 0.75 : 0.97) * double(L.faces.size())) {
-      if (!wholeParts)
+      if (depth > 0)
+        ++sooner;  // the chunks' borders hold it: merge them
+      else if (!wholeParts)
         wholeParts = true;
       else if (cap > 0 && cap < 2 * params.maxGroupError)
         cap *= 2;
@@ -500,7 +634,7 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
       maxChild[size_t(group[c])] = std::max(maxChild[size_t(group[c])], double(L.clusterError[c]));
     const double angle =
         std::min(90.0, params.grouping.coneThresholdDeg * std::pow(params.grouping.thresholdGrowth, k + 1)) * kDeg;
-    std::vector<uint32_t> clusterOfFace;
+    std::vector<uint32_t> clusterOfFace, nextNode;
     for (int g = 0; g < G; ++g) {
       GroupResult& r = results[size_t(g)];
       const uint32_t V = uint32_t(r.localToGlobal.size());
@@ -531,12 +665,14 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
         N.clusterGroup.push_back(-1);
         N.clusterCreator.push_back(g);
         N.clusterError.push_back(ef);
+        if (depth > 0) nextNode.push_back(groupNode[size_t(g)]);
       }
       r = GroupResult();  // free it
     }
     L.clusterGroup = group;
     L.groupError = groupError;
     dag.levels.push_back(std::move(N));
+    clusterNode.swap(nextNode);
   }
   if (progress) progress(100, "LOD: DAG built");
   return Status::Ok();

@@ -620,12 +620,14 @@ Status BuildLodFile(const IndexedMesh& mesh, const LodBuildParams& params, const
   // are not written.
   const WeldResult welded = WeldByPosition(mesh);
   LodDag dag;
-  s = BuildLodDag(welded.mesh, params, dag, SubProgress(progress, 0, 90));
+  size_t chunks = 1;
+  s = BuildLodDag(welded.mesh, params, dag, SubProgress(progress, 0, 90), &chunks);
   if (!s.ok()) return s;
   const double dagSeconds = Seconds(t0);
   s = WriteLodFile(welded.mesh, dag, path, stats, SubProgress(progress, 90, 100), params.precision);
   if (!s.ok()) return s;
   if (stats) {
+    stats->chunks = chunks;
     stats->mergedVertices = welded.mergedVertices;
     stats->droppedVertices = welded.droppedVertices;
     stats->groupingSeconds = 0;
