@@ -86,12 +86,16 @@ int LodBuild(int argc, char** argv) {
     return Fail(kUsage, "--precision must be in [1e-9, 0.01] (a fraction of the diagonal)");
   params.clusterFaces = size_t(clusterFaces);
   params.groupClusters = int(groupClusters);
-  uint64_t memory = DefaultLodMemoryBytes();
-  if (a.has("--memory") && !ParseMemory(a.str("--memory"), memory))
-    return Fail(kUsage, "--memory must be a size like 512M or 2G (bytes, or K, M, G, T: powers of 1024)");
-  if (memory < kLodMinMemoryBytes)
-    return Fail(kUsage, "--memory must be at least " + std::to_string(kLodMinMemoryBytes >> 20) + "M");
-  params.chunkFaces = LodChunkFacesForMemory(memory);
+  // Without --memory the DAG is built whole, as the Export LOD File filter builds it: the file
+  // does not depend on the machine. The chunks do not bound the peak yet (docs/scale.md).
+  uint64_t memory = 0;
+  if (a.has("--memory")) {
+    if (!ParseMemory(a.str("--memory"), memory))
+      return Fail(kUsage, "--memory must be a size like 512M or 2G (bytes, or K, M, G, T: powers of 1024)");
+    if (memory < kLodMinMemoryBytes)
+      return Fail(kUsage, "--memory must be at least " + std::to_string(kLodMinMemoryBytes >> 20) + "M");
+    params.chunkFaces = LodChunkFacesForMemory(memory);
+  }
   const std::string partsError = ReadPartsOptions(a, params.simplification);
   if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kLodUsage);
   if (!partsError.empty()) return Fail(kUsage, partsError);
@@ -354,9 +358,10 @@ const char* kLodUsage =
     "  --boundary-weight W [1] --no-preserve-normal.\n"
     "  Positions are quantized on one grid: none moves by more than E x the diagonal [2e-5];\n"
     "  the nodes' vertices and triangles are compressed (meshoptimizer's codecs).\n"
-    "  --memory SIZE (512M, 2G; default a quarter of the memory, at most 4G; at least 16M): an\n"
-    "  input of more than SIZE / 2048 faces is split into spatial chunks of at most that many\n"
-    "  faces, each built with its border locked until neighbouring chunks merge (docs/scale.md).\n"
+    "  --memory SIZE (512M, 2G; at least 16M): an input of more than SIZE / 2048 faces is split\n"
+    "  into spatial chunks of at most that many faces, each built with its border locked until\n"
+    "  neighbouring chunks merge. Not yet a bound: the input and the DAG are still held whole\n"
+    "  (docs/scale.md gives the peaks). Without it the DAG is built whole.\n"
     "  The file does not depend on N. The other grouping options and --faces-per-part are\n"
     "  accepted for compatibility and not used.\n"
     "  extract: opens the file, refines for a perspective eye at X,Y,Z under a budget of N faces\n"

@@ -63,9 +63,6 @@ struct LodBuildParams {
 constexpr uint64_t kLodMinMemoryBytes = uint64_t(16) << 20;
 constexpr uint64_t kLodMemoryBytesPerChunkFace = 2048;
 inline size_t LodChunkFacesForMemory(uint64_t bytes) { return size_t(bytes / kLodMemoryBytesPerChunkFace); }
-// The default budget: a quarter of the machine's physical memory, at most 4 GiB (at least the
-// minimum).
-uint64_t DefaultLodMemoryBytes();
 
 // The cluster DAG before it is written (BuildLodDag), level 0 = the input.
 struct LodDag {

@@ -32,8 +32,6 @@
 #include <queue>
 #include <unordered_map>
 
-#include <unistd.h>
-
 #include "conelod/common.h"
 #include "conelod/parallel.h"
 #include "conelod/mesh/mesh_check.h"
@@ -451,12 +449,6 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
 }
 
 }  // namespace
-
-uint64_t DefaultLodMemoryBytes() {
-  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
-  const uint64_t quarter = pages > 0 && page > 0 ? uint64_t(pages) * uint64_t(page) / 4 : 0;
-  return std::max(kLodMinMemoryBytes, std::min(quarter ? quarter : uint64_t(1) << 30, uint64_t(4) << 30));
-}
 
 Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag& dag, const Progress& progress,
                    size_t* chunks) {
