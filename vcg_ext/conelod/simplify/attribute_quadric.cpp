@@ -14,7 +14,11 @@ using vcg::Point3d;
 
 namespace {
 constexpr uint32_t kNoFace = UINT32_MAX;
-}
+// At weight 1 a full-scale difference in every channel costs as much as a distance of this
+// fraction of the diagonal: chosen on the coloured dragon (docs/attributes.md) so that the
+// colour error drops while the geometric error stays within 5 % of the attribute-free run.
+constexpr double kUnitFraction = 0.003;
+}  // namespace
 
 Status AttributeQuadrics::Init(const IndexedMesh& mesh, const VertexAttributes& layout, std::vector<float> cornerValues,
                                double weight) {
@@ -22,8 +26,9 @@ Status AttributeQuadrics::Init(const IndexedMesh& mesh, const VertexAttributes& 
   channels_ = layout.channels();
   if (!(weight >= 0) || !std::isfinite(weight)) return Status::Invalid("the attribute weight must be >= 0");
   if (cornerValues.size() != 3 * F * size_t(channels_))
-    return Status::Invalid("the attributes are given for " + std::to_string(cornerValues.size()) + " values, the mesh's " +
-                           std::to_string(3 * F) + " face corners need " + std::to_string(3 * F * size_t(channels_)));
+    return Status::Invalid("the attributes are given for " + std::to_string(cornerValues.size()) +
+                           " values, the mesh's " + std::to_string(3 * F) + " face corners need " +
+                           std::to_string(3 * F * size_t(channels_)));
   for (const auto& t : mesh.faces)
     for (uint32_t v : t)
       if (v >= V) return Status::Invalid("a face uses a vertex out of range");
@@ -34,7 +39,7 @@ Status AttributeQuadrics::Init(const IndexedMesh& mesh, const VertexAttributes& 
   for (const auto& p : mesh.positions) box.Add(Point3d::Construct(p));
   center_ = box.IsNull() ? Point3d(0, 0, 0) : box.Center();
   const double diag = box.IsNull() || !(box.Diag() > 0) ? 1.0 : box.Diag();
-  scale_ = weight * diag * diag;
+  scale_ = weight * (kUnitFraction * diag) * (kUnitFraction * diag);
   // Wedges: distinct corner values per vertex (the first value seen, then any other).
   wedges_.assign(V, 0);
   std::vector<uint32_t> firstCorner(V, kNoFace);

@@ -154,7 +154,8 @@ TEST(AttributeQuadric, WeightSteersTheCollapseAwayFromColourEdges) {
     p.targetFaces = 60;
     p.condition1 = false;
     GroupQemResult r;
-    EXPECT_TRUE(SimplifyPreservingGroups(m, std::vector<int>(m.faceCount(), 0), p, r, Progress(), {}, nullptr, &aq).ok());
+    EXPECT_TRUE(
+        SimplifyPreservingGroups(m, std::vector<int>(m.faceCount(), 0), p, r, Progress(), {}, nullptr, &aq).ok());
     std::vector<float> red(r.mesh.positions.size());
     for (size_t f = 0; f < r.mesh.faceCount(); ++f)
       for (int k = 0; k < 3; ++k) red[r.mesh.faces[f][size_t(k)]] = At(aq, r, f, k)[0];
