@@ -150,7 +150,8 @@ int main(int argc, char** argv) {
   for (size_t f = 0; f < a.triangles.size(); ++f) {
     const auto& t = a.triangles[f];
     vcg::Point3d p[3];
-    for (int k = 0; k < 3; ++k) p[k] = vcg::Point3d(a.positions[t[size_t(k)]][0], a.positions[t[size_t(k)]][1], a.positions[t[size_t(k)]][2]);
+    for (int k = 0; k < 3; ++k)
+      p[k] = vcg::Point3d(a.positions[t[size_t(k)]][0], a.positions[t[size_t(k)]][1], a.positions[t[size_t(k)]][2]);
     total += 0.5 * ((p[1] - p[0]) ^ (p[2] - p[0])).Norm();
     cumulative[f] = total;
   }
@@ -161,7 +162,8 @@ int main(int argc, char** argv) {
   marker.SetMesh(&target);
   vcg::face::PointDistanceBaseFunctor<double> distance;
   for (long s = 0; s < samples; ++s) {
-    const size_t f = size_t(std::lower_bound(cumulative.begin(), cumulative.end(), Unit(seed) * total) - cumulative.begin());
+    const size_t f =
+        size_t(std::lower_bound(cumulative.begin(), cumulative.end(), Unit(seed) * total) - cumulative.begin());
     if (f >= a.triangles.size()) continue;
     double r1 = Unit(seed), r2 = Unit(seed);
     if (r1 + r2 > 1) {

@@ -343,14 +343,16 @@ class GroupQemSimplifier {
   // primary groups but one coarser group remain to check.
   bool coarserNested_ = false;
   GroupQemParams p_;
-  const bool groupConstraints_;    // contour-aware placement and quadrics (paper mode or the lock)
-  const bool integrity_;           // the integrity test (integrity mode, condition1)
-  const bool countGroups_;         // live faces per group are counted (condition1, either mode)
-  int primaryGroups_ = 0;          // dense group ids are 0 .. primaryGroups_ - 1
-  const bool paperConditions_;     // conditions 1 and 2 as the paper (paper mode)
-  const uint8_t* frozen_;          // per vertex, or null: see GroupQemRegion
-  const double regionDiagonal_;    // > 0: the whole mesh's diagonal
-  AttributeQuadrics* attributes_;  // or null: attribute cost, seams, models merged on collapse
+  const bool groupConstraints_;  // contour-aware placement and quadrics (paper mode or the lock)
+  const bool integrity_;         // the integrity test (integrity mode, condition1)
+  const bool countGroups_;       // live faces per group are counted (condition1, either mode)
+  int primaryGroups_ = 0;        // dense group ids are 0 .. primaryGroups_ - 1
+  const bool paperConditions_;   // conditions 1 and 2 as the paper (paper mode)
+  const uint8_t* frozen_;        // per vertex, or null: see GroupQemRegion
+  const double regionDiagonal_;  // > 0: the whole mesh's diagonal
+
+  // Or null: attribute cost, seams, models merged on collapse (attribute_quadric.h).
+  AttributeQuadrics* attributes_;
   const AttributeQuadrics::FaceCorners faceCorners_ = [this](uint32_t f) -> const std::array<uint32_t, 3>& {
     return faces_[f];
   };
