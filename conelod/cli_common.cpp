@@ -1,6 +1,7 @@
 // ConeLOD CLI — shared helpers (see cli_common.h).
 #include "cli_common.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
@@ -161,11 +162,105 @@ Json& Json::endArray() {
   return *this;
 }
 
-std::string LoadInput(const std::string& path, CMesh& mesh, IndexedMesh& indexed, std::vector<size_t>& faceOfIndex) {
-  const std::string err = LoadPly(mesh, path);
+std::string LoadInput(const std::string& path, CMesh& mesh, IndexedMesh& indexed, std::vector<size_t>& faceOfIndex,
+                      int* loadMask) {
+  const std::string err = LoadPly(mesh, path, loadMask);
   if (!err.empty()) return err;
   indexed = ToIndexedMesh(mesh, &faceOfIndex);
   return "";
+}
+
+VertexAttributes AttributesOf(const CMesh& mesh, int loadMask) {
+  using vcg::tri::io::Mask;
+  VertexAttributes a;
+  const bool colour = loadMask & Mask::IOM_VERTCOLOR;
+  bool alpha = false;
+  if (colour)
+    for (const auto& v : mesh.vert) alpha |= !v.IsD() && v.cC()[3] != 255;
+  a.colorChannels = colour ? (alpha ? 4 : 3) : 0;
+  a.normals = loadMask & Mask::IOM_VERTNORMAL;
+  a.texCoords = loadMask & (Mask::IOM_VERTTEXCOORD | Mask::IOM_WEDGTEXCOORD);
+  if (a.empty()) return a;
+  a.values.reserve(size_t(mesh.vn) * size_t(a.channels()));
+  for (const auto& v : mesh.vert) {
+    if (v.IsD()) continue;
+    for (int c = 0; c < a.colorChannels; ++c) a.values.push_back(v.cC()[c] / 255.0f);
+    if (a.normals)
+      for (int c = 0; c < 3; ++c) a.values.push_back(v.cN()[c]);
+    if (a.texCoords) {
+      a.values.push_back(v.cT().U());
+      a.values.push_back(v.cT().V());
+    }
+  }
+  return a;
+}
+
+std::vector<float> CornerAttributes(const CMesh& mesh, const std::vector<size_t>& faceOf,
+                                    const VertexAttributes& perVertex) {
+  // perVertex is in ToIndexedMesh's order: the live vertices.
+  std::vector<uint32_t> live(mesh.vert.size(), 0);
+  for (uint32_t i = 0, n = 0; i < mesh.vert.size(); ++i) live[i] = mesh.vert[i].IsD() ? UINT32_MAX : n++;
+  const size_t C = size_t(perVertex.channels());
+  std::vector<float> corner;
+  corner.reserve(3 * faceOf.size() * C);
+  for (size_t f : faceOf)
+    for (int k = 0; k < 3; ++k) {
+      const float* v = perVertex.of(live[vcg::tri::Index(mesh, mesh.face[f].cV(k))]);
+      corner.insert(corner.end(), v, v + C);
+    }
+  return corner;
+}
+
+void SetCornerAttributes(CMesh& mesh, const VertexAttributes& layout, const std::vector<float>& corner) {
+  const size_t C = size_t(layout.channels()), V = mesh.vert.size();
+  auto set = [&](CMesh::VertexType& x, const float* values) {
+    for (int c = 0; c < std::min(layout.colorChannels, 4); ++c)
+      x.C()[c] = (unsigned char)std::lround(std::min(1.0f, std::max(0.0f, values[c])) * 255.0f);
+    if (layout.normals)
+      for (int c = 0; c < 3; ++c) x.N()[c] = values[layout.normalOffset() + c];
+    if (layout.texCoords) {
+      x.T().U() = values[layout.texCoordOffset()];
+      x.T().V() = values[layout.texCoordOffset() + 1];
+    }
+  };
+  // Per vertex, the distinct values its corners want: the first stays on the vertex, the others
+  // become copies (appended after all, so that no pointer moves while faces are read).
+  std::vector<std::vector<std::pair<const float*, size_t>>> variants(V);  // value, vertex index
+  std::vector<std::array<size_t, 3>> target(mesh.face.size());
+  size_t copies = 0;
+  for (size_t f = 0; f < mesh.face.size(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const size_t v = vcg::tri::Index(mesh, mesh.face[f].cV(k));
+      const float* want = corner.data() + (3 * f + size_t(k)) * C;
+      size_t to = SIZE_MAX;
+      for (const auto& x : variants[v])
+        if (std::equal(want, want + C, x.first)) to = x.second;
+      if (to == SIZE_MAX) {
+        to = variants[v].empty() ? v : V + copies++;
+        variants[v].push_back({want, to});
+      }
+      target[f][size_t(k)] = to;
+    }
+  if (copies) vcg::tri::Allocator<CMesh>::AddVertices(mesh, copies);
+  for (size_t v = 0; v < V; ++v)
+    for (const auto& x : variants[v]) {
+      if (x.second != v) {
+        mesh.vert[x.second].ImportData(mesh.vert[v]);
+        mesh.vert[x.second].P() = mesh.vert[v].P();
+      }
+      set(mesh.vert[x.second], x.first);
+    }
+  for (size_t f = 0; f < mesh.face.size(); ++f)
+    for (int k = 0; k < 3; ++k) mesh.face[f].V(k) = &mesh.vert[target[f][size_t(k)]];
+}
+
+std::string DescribeAttributes(const VertexAttributes& a) {
+  std::string s;
+  auto add = [&](const char* what) { s += (s.empty() ? "" : ", ") + std::string(what); };
+  if (a.colorChannels) add(a.colorChannels == 4 ? "colour (RGBA)" : "colour");
+  if (a.normals) add("normals");
+  if (a.texCoords) add("texture coordinates");
+  return s;
 }
 
 namespace {

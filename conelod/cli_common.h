@@ -10,6 +10,7 @@
 
 #include "conelod/grouping/cone_grouping.h"
 #include "conelod/simplify/hierarchical_simplification.h"
+#include "conelod/mesh/attributes.h"
 #include "conelod/mesh/indexed_mesh.h"
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"
@@ -79,8 +80,23 @@ class Timer {
   std::chrono::steady_clock::time_point start_;
 };
 
-// Loads `path` into `mesh` and its indexed form. Returns "" or an error message.
-std::string LoadInput(const std::string& path, CMesh& mesh, IndexedMesh& indexed, std::vector<size_t>& faceOfIndex);
+// Loads `path` into `mesh` and its indexed form (`loadMask`: LoadPly's). Returns "" or an error message.
+std::string LoadInput(const std::string& path, CMesh& mesh, IndexedMesh& indexed, std::vector<size_t>& faceOfIndex,
+                      int* loadMask = nullptr);
+
+// The attributes a loaded mesh keeps from its file (`loadMask` from LoadPly), as float channels per
+// live vertex in ToIndexedMesh's order: colour (RGB, or RGBA when some alpha is not 255), normals,
+// texture coordinates. Empty (no channel) for a geometry-only file.
+VertexAttributes AttributesOf(const CMesh& mesh, int loadMask);
+// The attribute values of each face corner of the faces `faceOf` lists (3 f + k), from the
+// attributes of the vertices they use (`perVertex`: AttributesOf's result).
+std::vector<float> CornerAttributes(const CMesh& mesh, const std::vector<size_t>& faceOf,
+                                    const VertexAttributes& perVertex);
+// Gives face i's corner k of `mesh` (compacted) the values corner[(3 i + k) * channels]: a vertex
+// whose corners differ (a seam) is repeated, once per distinct value.
+void SetCornerAttributes(CMesh& mesh, const VertexAttributes& layout, const std::vector<float>& corner);
+// "colour, normals, texture coordinates" (what `layout` holds), for messages.
+std::string DescribeAttributes(const VertexAttributes& layout);
 
 int Fail(int code, const std::string& message);  // prints "conelod: message" to stderr
 // Fail for a LoadInput/LoadPly error: kIoError when the file could not be read, kBadInput when it

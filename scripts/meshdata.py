@@ -128,7 +128,8 @@ def read_ply_elements(path):
                 for prop in props:
                     if prop[0] == "list":
                         n = int(tokens[pos])
-                        rec[prop[-1]] = [int(t) for t in tokens[pos + 1:pos + 1 + n]]
+                        item = float if prop[2] in ("float", "float32", "double", "float64") else int
+                        rec[prop[-1]] = [item(t) for t in tokens[pos + 1:pos + 1 + n]]
                         pos += 1 + n
                     else:
                         rec[prop[-1]] = float(tokens[pos])

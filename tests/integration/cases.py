@@ -606,6 +606,119 @@ def cli_simplify_hierarchy(c):
               expect=1)  # --threads goes with --hierarchy
 
 
+def write_attribute_grid(path, n=30, wedge=False):
+    """A bumpy n x n grid in [0, 1]^2 whose colour is linear in the position and whose texture has
+    two charts: u = x left of x = 0.5, u = x + 1 right of it (a seam down the middle), v = y; with
+    normals. Per-vertex texture_u/v (the seam's vertices repeated) or, with `wedge`, per-face
+    texcoord lists (one vertex per position), as MeshLab writes either."""
+    import math
+    pos, key = [], {}
+
+    def colour(x, y):
+        return (round(255 * (0.2 + 0.6 * x)), round(255 * (0.9 - 0.7 * y)), round(255 * (0.3 + 0.3 * x + 0.3 * y)))
+
+    def vertex(i, j, chart):
+        k = (i, j, chart if (not wedge and 2 * i == n) else 0)
+        if k not in key:
+            x, y = i / n, j / n
+            key[k] = len(pos)
+            pos.append((x, y, 0.05 * math.sin(7 * x) * math.cos(5 * y), chart))
+        return key[k]
+
+    faces = []
+    for j in range(n):
+        for i in range(n):
+            chart = 1 if 2 * i >= n else 0
+            q = [vertex(i, j, chart), vertex(i + 1, j, chart), vertex(i + 1, j + 1, chart), vertex(i, j + 1, chart)]
+            faces.append(([q[0], q[1], q[2]], chart))
+            faces.append(([q[0], q[2], q[3]], chart))
+    lines = ["ply", "format ascii 1.0", "comment TextureFile chart.png", "element vertex %d" % len(pos)]
+    lines += ["property float %s" % p for p in ("x", "y", "z", "nx", "ny", "nz")]
+    lines += ["property uchar red", "property uchar green", "property uchar blue"]
+    if not wedge:
+        lines += ["property float texture_u", "property float texture_v"]
+    lines += ["element face %d" % len(faces), "property list uchar int vertex_indices"]
+    if wedge:
+        lines += ["property list uchar float texcoord"]
+    lines += ["end_header"]
+    for x, y, z, chart in pos:
+        rec = "%r %r %r 0 0 1 %d %d %d" % ((x, y, z) + colour(x, y))
+        if not wedge:
+            rec += " %r %r" % (x + chart, y)
+        lines.append(rec)
+    for f, chart in faces:
+        rec = "3 %d %d %d" % tuple(f)
+        if wedge:
+            rec += " 6 " + " ".join("%r %r" % (pos[v][0] + chart, pos[v][1]) for v in f)
+        lines.append(rec)
+    with open(path, "w") as out:
+        out.write("\n".join(lines) + "\n")
+    return colour
+
+
+@case
+def cli_simplify_attributes(c):
+    """Issue 26: a mesh with vertex colour, normals and texture coordinates (per vertex, or per face
+    corner) keeps them through `simplify` (interpolated: a linear colour comes out linear at the
+    new positions), the texture seam stays (no face has corners of both charts), `group` writes
+    them back unchanged, and a geometry-only input writes none."""
+    for wedge in (False, True):
+        src = c.out("attr_%d.ply" % wedge)
+        colour = write_attribute_grid(src, wedge=wedge)
+        out = c.out("attr_out_%d.ply" % wedge)
+        r = json.loads(c.conelod("simplify", src, "--groups", "cone:auto", "--target-ratio", "0.1", "-o", out,
+                                 "--json").stdout)
+        assert r["target_reached"] and r["attributes"] == "colour, normals, texture coordinates", r
+        assert r["seam_vertices"] == 31, r
+        with open(out, "rb") as f:
+            header = f.read(2000).split(b"end_header")[0].decode()
+        assert "comment TextureFile chart.png" in header, header
+        assert ("property list uchar float texcoord" in header) == wedge, header
+        vertices, faces = [], []
+        for name, records in read_ply_elements(out):
+            if name == "vertex":
+                vertices = records
+            elif name == "face":
+                faces = records
+        assert len(faces) == r["faces_out"], (len(faces), r)
+        moved = 0
+        for v in vertices:
+            want = colour(v["x"], v["y"])
+            got = (v["red"], v["green"], v["blue"])
+            assert all(abs(a - b) <= 1 for a, b in zip(got, want)), (v, want)
+            assert abs(v["nz"] - 1) < 1e-6, v
+            moved += abs(v["x"] * 30 - round(v["x"] * 30)) > 1e-3 or abs(v["y"] * 30 - round(v["y"] * 30)) > 1e-3
+        assert moved > 0, "no vertex moved off the grid: interpolation not exercised"
+        for f in faces:
+            if wedge:
+                u = f["texcoord"][0::2]
+                xs = [vertices[i]["x"] for i in f["vertex_indices"]]
+            else:
+                u = [vertices[i]["texture_u"] for i in f["vertex_indices"]]
+                xs = [vertices[i]["x"] for i in f["vertex_indices"]]
+            charts = set(int(uu >= 1 - 1e-6) for uu in u)
+            assert len(charts) == 1, ("a face with corners of both charts", f, u)
+            chart = charts.pop()
+            for uu, x in zip(u, xs):
+                assert abs(uu - chart - x) < 2e-3, ("u does not follow x in its chart", u, xs)
+        # `group` rewrites the mesh with its groups and the attributes as read.
+        grouped = c.out("attr_group_%d.ply" % wedge)
+        c.conelod("group", src, "-o", grouped)
+        at = lambda v: (round(v["x"], 5), round(v["y"], 5), round(v["z"], 5))  # noqa: E731
+        before = {at(v): (int(v["red"]), int(v["green"]), int(v["blue"]))
+                  for v in [r for n, r in read_ply_elements(src) if n == "vertex"][0]}
+        after = [r for n, r in read_ply_elements(grouped) if n == "vertex"][0]
+        assert len(after) >= len(before) and all(
+            (v["red"], v["green"], v["blue"]) == before[at(v)] for v in after), "group lost the colours"
+    # Geometry only: nothing added to the output.
+    bunny_out = c.out("bunny_attr.ply")
+    c.conelod("simplify", c.mesh("stanford_bunny_bun_zipper.ply"), "--groups", "cone:auto", "--target-ratio", "0.1",
+              "-o", bunny_out)
+    with open(bunny_out, "rb") as f:
+        header = f.read(2000).split(b"end_header")[0].decode()
+    assert "red" not in header.split("element face")[0] and "texture" not in header and "nx" not in header, header
+
+
 @case
 def cli_simplify_pca_groups(c):
     """Group-preserving QEM on the clusters of the PCA partition: every cluster survives whole."""

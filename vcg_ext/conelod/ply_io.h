@@ -3,7 +3,9 @@
 // it replaces the target.
 #pragma once
 
+#include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -22,17 +24,105 @@ namespace conelod {
 // Messages of a file that could not be opened or read (rather than a malformed one) start with this.
 inline bool IsReadFailure(const std::string& message) { return message.compare(0, 13, "cannot read '") == 0; }
 
+// The IOM_ bits of the attributes a mesh keeps from its file (what commands that write a mesh pass on).
+inline int AttributeMask(int loadMask) {
+  return loadMask & (vcg::tri::io::Mask::IOM_VERTCOLOR | vcg::tri::io::Mask::IOM_VERTNORMAL |
+                     vcg::tri::io::Mask::IOM_VERTTEXCOORD | vcg::tri::io::Mask::IOM_WEDGTEXCOORD);
+}
+
+// Per-face texture coordinates as per-vertex ones: each (vertex, u, v) of a corner becomes a vertex
+// (a vertex with one pair of coordinates stays one vertex; a texture seam's vertices are repeated
+// with their coordinates). New vertices are numbered by their original vertex, then (u, v); a
+// vertex no face uses is kept with (0, 0).
+inline void SplitWedgeTexCoords(PlyMesh& in) {
+  struct Corner {
+    uint32_t vertex;
+    float u, v;
+    size_t at;
+  };
+  std::vector<Corner> corners;
+  corners.reserve(3 * in.triangles.size());
+  for (size_t f = 0; f < in.triangles.size(); ++f)
+    for (size_t k = 0; k < 3; ++k)
+      corners.push_back({in.triangles[f][k], in.wedgeTexCoords[f][2 * k], in.wedgeTexCoords[f][2 * k + 1], 3 * f + k});
+  std::sort(corners.begin(), corners.end(), [](const Corner& a, const Corner& b) {
+    if (a.vertex != b.vertex) return a.vertex < b.vertex;
+    if (a.u != b.u) return a.u < b.u;
+    if (a.v != b.v) return a.v < b.v;
+    return a.at < b.at;
+  });
+  PlyMesh out;
+  out.triangles = in.triangles;
+  out.faceQuality = std::move(in.faceQuality);
+  out.polygons = in.polygons;
+  out.colorAlpha = in.colorAlpha;
+  out.colorIsFloat = in.colorIsFloat;
+  out.textureFiles = std::move(in.textureFiles);
+  auto addVertex = [&](uint32_t v, float u, float t) {
+    out.positions.push_back(in.positions[v]);
+    if (!in.colors.empty()) out.colors.push_back(in.colors[v]);
+    if (!in.normals.empty()) out.normals.push_back(in.normals[v]);
+    out.texCoords.push_back({{u, t}});
+  };
+  size_t i = 0;
+  for (uint32_t v = 0; v < in.positions.size(); ++v) {
+    if (i == corners.size() || corners[i].vertex != v) {
+      addVertex(v, 0, 0);
+      continue;
+    }
+    while (i < corners.size() && corners[i].vertex == v) {
+      const size_t first = i;
+      addVertex(v, corners[i].u, corners[i].v);
+      const uint32_t id = uint32_t(out.positions.size() - 1);
+      while (i < corners.size() && corners[i].vertex == v && corners[i].u == corners[first].u &&
+             corners[i].v == corners[first].v)
+        out.triangles[corners[i].at / 3][corners[i].at % 3] = id, ++i;
+    }
+  }
+  in = std::move(out);
+}
+
 // Replaces `m` by the mesh in `path` (ReadPly). `loadMask` gets vcg's IOM_ bits of what was read
-// (coordinates, face indices, and IOM_FACEQUALITY when the faces had a quality). "" or the error;
-// `m` is untouched on error.
+// (coordinates, face indices, and IOM_FACEQUALITY when the faces had a quality; IOM_VERTCOLOR,
+// IOM_VERTNORMAL, IOM_VERTTEXCOORD or IOM_WEDGTEXCOORD for the attributes the file has and the
+// mesh type holds; per-face texture coordinates are split into per-vertex ones,
+// SplitWedgeTexCoords, and m.textures gets the file's texture names). "" or the error; `m` is
+// untouched on error.
 template <class MeshType>
 std::string LoadPlyChecked(MeshType& m, const std::string& path, int* loadMask = nullptr) {
+  using VertexType = typename MeshType::VertexType;
   PlyMesh in;
   std::string err = ReadPly(path, in);
   if (!err.empty()) return err;
+  const bool wedge = !in.wedgeTexCoords.empty() && VertexType::HasTexCoord();
+  if (wedge) SplitWedgeTexCoords(in);
   m.Clear();
   auto vi = vcg::tri::Allocator<MeshType>::AddVertices(m, in.positions.size());
   for (const auto& p : in.positions) (vi++)->P() = typename MeshType::CoordType(p[0], p[1], p[2]);
+  int attributeBits = 0;
+  if (!in.colors.empty() && VertexType::HasColor()) {
+    for (size_t v = 0; v < in.colors.size(); ++v) {
+      unsigned char c[4];
+      for (size_t k = 0; k < 4; ++k)
+        c[k] = (unsigned char)std::lround(std::min(1.0f, std::max(0.0f, in.colors[v][k])) * 255.0f);
+      m.vert[v].C() = vcg::Color4b(c[0], c[1], c[2], c[3]);
+    }
+    attributeBits |= vcg::tri::io::Mask::IOM_VERTCOLOR;
+  }
+  if (!in.normals.empty() && VertexType::HasNormal()) {
+    for (size_t v = 0; v < in.normals.size(); ++v)
+      m.vert[v].N() = typename VertexType::NormalType(in.normals[v][0], in.normals[v][1], in.normals[v][2]);
+    attributeBits |= vcg::tri::io::Mask::IOM_VERTNORMAL;
+  }
+  if (!in.texCoords.empty() && VertexType::HasTexCoord()) {
+    for (size_t v = 0; v < in.texCoords.size(); ++v) {
+      m.vert[v].T().U() = in.texCoords[v][0];
+      m.vert[v].T().V() = in.texCoords[v][1];
+      m.vert[v].T().N() = 0;
+    }
+    attributeBits |= wedge ? vcg::tri::io::Mask::IOM_WEDGTEXCOORD : vcg::tri::io::Mask::IOM_VERTTEXCOORD;
+    m.textures = in.textureFiles;
+  }
   auto fi = vcg::tri::Allocator<MeshType>::AddFaces(m, in.triangles.size());
   for (size_t f = 0; f < in.triangles.size(); ++f, ++fi) {
     for (int k = 0; k < 3; ++k) fi->V(k) = &m.vert[in.triangles[f][size_t(k)]];
@@ -41,7 +131,7 @@ std::string LoadPlyChecked(MeshType& m, const std::string& path, int* loadMask =
   vcg::tri::UpdateBounding<MeshType>::Box(m);  // as vcglib's importer leaves it
   if (loadMask)
     *loadMask = vcg::tri::io::Mask::IOM_VERTCOORD | vcg::tri::io::Mask::IOM_FACEINDEX |
-                (in.faceQuality.empty() ? 0 : vcg::tri::io::Mask::IOM_FACEQUALITY);
+                (in.faceQuality.empty() ? 0 : vcg::tri::io::Mask::IOM_FACEQUALITY) | attributeBits;
   return "";
 }
 

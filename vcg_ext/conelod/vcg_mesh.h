@@ -12,8 +12,10 @@ namespace conelod {
 class CVertex;
 class CFace;
 struct CUsedTypes : public vcg::UsedTypes<vcg::Use<CVertex>::AsVertexType, vcg::Use<CFace>::AsFaceType> {};
+// Per-vertex texture coordinates hold what a PLY file has per vertex or per face corner (a face
+// list is read as vertices split by their coordinates, ply_io.h).
 class CVertex : public vcg::Vertex<CUsedTypes, vcg::vertex::Coord3f, vcg::vertex::Normal3f, vcg::vertex::Qualityf,
-                                   vcg::vertex::Color4b, vcg::vertex::BitFlags> {};
+                                   vcg::vertex::Color4b, vcg::vertex::TexCoord2f, vcg::vertex::BitFlags> {};
 class CFace : public vcg::Face<CUsedTypes, vcg::face::VertexRef, vcg::face::Normal3f, vcg::face::Qualityf,
                                vcg::face::Color4b, vcg::face::BitFlags> {};
 class CMesh : public vcg::tri::TriMesh<std::vector<CVertex>, std::vector<CFace>> {

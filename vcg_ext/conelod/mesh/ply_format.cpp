@@ -210,7 +210,14 @@ std::string ParsePlyHeader(const char* data, size_t size, PlyHeader& h, uint64_t
     if (!line.empty() && line.back() == '\r') line.pop_back();
     const std::vector<std::string> w = Split(line);
     const std::string where = "PLY header line " + std::to_string(lineNo) + " ('" + line.substr(0, 60) + "')";
-    if (lineNo == 1) continue;  // "ply"
+    if (lineNo == 1) continue;                                          // "ply"
+    if (w.size() >= 3 && w[0] == "comment" && w[1] == "TextureFile") {  // MeshLab's texture names
+      const size_t at = line.find("TextureFile") + 11;
+      const size_t from = line.find_first_not_of(" \t", at);
+      const size_t to = line.find_last_not_of(" \t");
+      h.textureFiles.push_back(line.substr(from, to + 1 - from));
+      continue;
+    }
     if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
     if (w[0] == "end_header") {
       ended = true;
@@ -420,10 +427,43 @@ std::string ParsePly(const char* data, size_t size, const std::string& name, Ply
   for (const PlyElement& e : h.elements) {
     const bool isVertex = e.name == "vertex", isFace = e.name == "face";
     if ((isVertex && haveVertices) || (isFace && haveFaces)) return file + "has two '" + e.name + "' elements";
-    int xyz[3] = {-1, -1, -1}, quality = -1, indices = -1;
+    int xyz[3] = {-1, -1, -1}, quality = -1, indices = -1, texcoord = -1;
+    // Per-vertex attributes: the property's index per channel (-1: absent); what each one fills.
+    int colour[4] = {-1, -1, -1, -1}, normal[3] = {-1, -1, -1}, uv[2] = {-1, -1};
+    double colourScale = 1;
     for (size_t i = 0; i < e.properties.size(); ++i) {
       const PlyProperty& p = e.properties[i];
       if (isVertex && !p.isList && (p.name == "x" || p.name == "y" || p.name == "z")) xyz[p.name[0] - 'x'] = int(i);
+      if (isVertex && !p.isList) {
+        static const char* const kColour[2][4] = {{"red", "green", "blue", "alpha"},
+                                                  {"diffuse_red", "diffuse_green", "diffuse_blue", "diffuse_alpha"}};
+        for (int k = 0; k < 2; ++k)
+          for (int c = 0; c < 4; ++c)
+            if (p.name == kColour[k][c]) {
+              if (colour[c] >= 0)
+                return file + "its vertex element has two properties for one colour channel ('" + p.name + "')";
+              const double scale = p.type == kUint8 ? 255 : p.type == kUint16 ? 65535 : p.type >= kFloat32 ? 1 : 0;
+              if (scale == 0)
+                return file + "the vertex colour '" + p.name + "' is a " + kTypes[p.type].name +
+                       ": colours are read as uchar, ushort or float";
+              if (colour[0] >= 0 || colour[1] >= 0 || colour[2] >= 0 || colour[3] >= 0) {
+                if (scale != colourScale)
+                  return file + "its vertex colour channels are of different types ('" + p.name + "')";
+              }
+              colourScale = scale;
+              colour[c] = int(i);
+            }
+        if (p.name == "nx" || p.name == "ny" || p.name == "nz") normal[p.name[1] - 'x'] = int(i);
+        if (p.name == "texture_u" || p.name == "s") {
+          if (uv[0] >= 0) return file + "its vertex element has both texture_u and s";
+          uv[0] = int(i);
+        }
+        if (p.name == "texture_v" || p.name == "t") {
+          if (uv[1] >= 0) return file + "its vertex element has both texture_v and t";
+          uv[1] = int(i);
+        }
+      }
+      if (isFace && p.isList && p.name == "texcoord") texcoord = int(i);
       if (isFace && !p.isList && p.name == "quality") quality = int(i);
       if (isFace && p.isList && (p.name == "vertex_indices" || p.name == "vertex_index")) {
         if (indices >= 0)
@@ -436,12 +476,33 @@ std::string ParsePly(const char* data, size_t size, const std::string& name, Ply
     if (isVertex && (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0))
       return file + "its vertex element lacks one of the x, y, z properties (non-list)";
     if (isFace && indices < 0) return file + "its face element has no vertex_indices list";
+    const bool hasColour = colour[0] >= 0 || colour[1] >= 0 || colour[2] >= 0;
+    if (isVertex && hasColour && (colour[0] < 0 || colour[1] < 0 || colour[2] < 0))
+      return file + "its vertex colour lacks one of red, green, blue";
+    const bool hasNormal = normal[0] >= 0 || normal[1] >= 0 || normal[2] >= 0;
+    if (isVertex && hasNormal && (normal[0] < 0 || normal[1] < 0 || normal[2] < 0))
+      return file + "its vertex normal lacks one of nx, ny, nz";
+    const bool hasUv = uv[0] >= 0 || uv[1] >= 0;
+    if (isVertex && hasUv && (uv[0] < 0 || uv[1] < 0))
+      return file + "its vertex texture coordinates lack one of texture_u/s, texture_v/t";
+    if (isVertex && hasColour) {
+      mesh.colors.reserve(size_t(e.count));
+      mesh.colorAlpha = colour[3] >= 0;
+      mesh.colorIsFloat = colourScale == 1;
+    }
+    if (isVertex && hasNormal) mesh.normals.reserve(size_t(e.count));
+    if (isVertex && hasUv) mesh.texCoords.reserve(size_t(e.count));
+    if (isFace && texcoord >= 0) mesh.wedgeTexCoords.reserve(size_t(e.count));
     if (isFace && !haveVertices && e.count) return file + "its face element comes before the vertex element";
     if (isVertex) mesh.positions.reserve(size_t(e.count));
     if (isFace) mesh.triangles.reserve(size_t(e.count));
     if (isFace && quality >= 0) mesh.faceQuality.reserve(size_t(e.count));
+    std::vector<float> cornerUv;  // this face's texcoord list
     for (uint64_t r = 0; r < e.count; ++r) {
       std::array<float, 3> pos{{0, 0, 0}};
+      std::array<float, 4> rgba{{0, 0, 0, 1}};
+      std::array<float, 3> nrm{{0, 0, 0}};
+      std::array<float, 2> st{{0, 0}};
       float q = 0;
       for (size_t i = 0; i < e.properties.size(); ++i) {
         const PlyProperty& p = e.properties[i];
@@ -461,6 +522,12 @@ std::string ParsePly(const char* data, size_t size, const std::string& name, Ply
               pos[size_t(c)] = float(v);
             }
           if (int(i) == quality) q = float(v);
+          if (isVertex)
+            for (int c = 0; c < 4; ++c) {
+              if (int(i) == colour[c]) rgba[size_t(c)] = float(v / colourScale);
+              if (c < 3 && int(i) == normal[c]) nrm[size_t(c)] = float(v);
+              if (c < 2 && int(i) == uv[c]) st[size_t(c)] = float(v);
+            }
           continue;
         }
         double count = 0;
@@ -473,7 +540,8 @@ std::string ParsePly(const char* data, size_t size, const std::string& name, Ply
         const uint64_t minBytes =
             h.encoding == PlyEncoding::Ascii ? 2 * items - (items ? 1 : 0) : items * uint64_t(kTypes[p.type].bytes);
         if (minBytes > in.left()) return file + "ends early: " + rec + " lists " + std::to_string(items) + " items";
-        const bool isCorners = int(i) == indices;
+        const bool isCorners = int(i) == indices, isTexcoord = int(i) == texcoord;
+        if (isTexcoord) cornerUv.clear();
         if (isCorners) {
           if (items < 3)
             return file + "face " + std::to_string(r) + " has " + std::to_string(items) +
@@ -487,6 +555,7 @@ std::string ParsePly(const char* data, size_t size, const std::string& name, Ply
           if (!in.scalar(p.type, v))
             return file + (in.badToken().empty() ? "ends early, in " + rec
                                                  : rec + ": '" + in.badToken() + "' is not a number");
+          if (isTexcoord) cornerUv.push_back(float(v));
           if (!isCorners) continue;
           if (!std::isfinite(v) || v != std::floor(v)) {  // a float index list: 2.7 is no vertex
             char text[32];
@@ -500,13 +569,46 @@ std::string ParsePly(const char* data, size_t size, const std::string& name, Ply
           corners.push_back(uint32_t(v));
         }
       }
-      if (isVertex) mesh.positions.push_back(pos);
+      if (isVertex) {
+        mesh.positions.push_back(pos);
+        if (hasColour) mesh.colors.push_back(rgba);
+        if (hasNormal) mesh.normals.push_back(nrm);
+        if (hasUv) mesh.texCoords.push_back(st);
+      }
       if (isFace) {
+        if (texcoord >= 0 && cornerUv.size() != 2 * corners.size())
+          return file + "face " + std::to_string(r) + " has " + std::to_string(corners.size()) + " corners but " +
+                 std::to_string(cornerUv.size()) + " texcoord values (two per corner)";
         if (corners.size() == 3) {
           mesh.triangles.push_back({corners[0], corners[1], corners[2]});
-        } else {
+          if (texcoord >= 0)
+            mesh.wedgeTexCoords.push_back(
+                {{cornerUv[0], cornerUv[1], cornerUv[2], cornerUv[3], cornerUv[4], cornerUv[5]}});
+        } else if (texcoord < 0) {
           err = TriangulatePolygon(mesh.positions, corners, mesh.triangles);
           if (!err.empty()) return file + "face " + std::to_string(r) + " " + err;
+          ++mesh.polygons;
+        } else {
+          // Triangulated over the polygon's own corner numbers, so that each triangle corner
+          // finds its texture coordinates.
+          std::vector<std::array<float, 3>> local(corners.size());
+          std::vector<uint32_t> order(corners.size());
+          for (size_t k = 0; k < corners.size(); ++k) {
+            local[k] = mesh.positions[corners[k]];
+            order[k] = uint32_t(k);
+          }
+          std::vector<std::array<uint32_t, 3>> pieces;
+          err = TriangulatePolygon(local, order, pieces);
+          if (!err.empty()) return file + "face " + std::to_string(r) + " " + err;
+          for (const auto& t : pieces) {
+            mesh.triangles.push_back({corners[t[0]], corners[t[1]], corners[t[2]]});
+            std::array<float, 6> w;
+            for (size_t k = 0; k < 3; ++k) {
+              w[2 * k] = cornerUv[2 * t[k]];
+              w[2 * k + 1] = cornerUv[2 * t[k] + 1];
+            }
+            mesh.wedgeTexCoords.push_back(w);
+          }
           ++mesh.polygons;
         }
         if (quality >= 0) mesh.faceQuality.resize(mesh.triangles.size(), q);
@@ -516,6 +618,7 @@ std::string ParsePly(const char* data, size_t size, const std::string& name, Ply
     haveFaces |= isFace;
   }
   if (!haveVertices) return file + "has no vertex element";
+  mesh.textureFiles = h.textureFiles;
   return "";
 }
 

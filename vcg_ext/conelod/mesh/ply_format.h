@@ -8,7 +8,11 @@
 // file can never ask for gigabytes, and it never reads past the end of the file.
 //
 // Read: ASCII, binary little and big endian; vertex x, y, z of any numeric type (double is
-// rounded to float, the tool's precision); per-face `quality` when present; faces as
+// rounded to float, the tool's precision); per-face `quality` when present; the attributes a scan
+// carries (PlyMesh): per-vertex colour (red green blue [alpha], or diffuse_red ...; uchar, ushort
+// or float), normals (nx ny nz), texture coordinates (texture_u texture_v, or s t), per-face
+// `texcoord` lists (two floats a corner) and the `comment TextureFile NAME` lines of the header
+// (as MeshLab writes them); faces as
 // `vertex_indices` (or `vertex_index`) lists of any count and index type. Every other property
 // and element is skipped. Faces with more than three corners are triangulated by ear clipping in
 // their own plane (a convex polygon gives the fan from its first corner, as vcglib does); a
@@ -45,7 +49,8 @@ struct PlyElement {
 struct PlyHeader {
   PlyEncoding encoding = PlyEncoding::Ascii;
   std::vector<PlyElement> elements;
-  size_t headerBytes = 0;  // up to and including the end_header line
+  std::vector<std::string> textureFiles;  // `comment TextureFile NAME` lines, in order
+  size_t headerBytes = 0;                 // up to and including the end_header line
 };
 
 // Parses and checks the header of the `size` bytes at `data`: "" or what is wrong. Checks that
@@ -58,12 +63,26 @@ std::string ParsePlyHeader(const char* data, size_t size, PlyHeader& header, uin
 // vcglib's exporter write): used to check that a written file is complete. 0 for ASCII.
 uint64_t PlyTriangleFileBytes(const PlyHeader& header);
 
-// A mesh as read: positions, triangles, and per-face quality when the file has it.
+// A mesh as read: positions, triangles, per-face quality and the attributes the file has (every
+// attribute vector is empty when the file lacks it).
 struct PlyMesh {
   std::vector<std::array<float, 3>> positions;
   std::vector<std::array<uint32_t, 3>> triangles;
   std::vector<float> faceQuality;  // per triangle (a polygon's triangles share its value), or empty
   size_t polygons = 0;             // faces with more than three corners (triangulated)
+  // Per vertex: RGBA in [0, 1] (uchar / 255, ushort / 65535, float as is; alpha 1 when absent).
+  std::vector<std::array<float, 4>> colors;
+  bool colorAlpha = false;                      // the file has an alpha channel
+  bool colorIsFloat = false;                    // stored as float or double (else as integers)
+  std::vector<std::array<float, 3>> normals;    // per vertex, as stored (not renormalised)
+  std::vector<std::array<float, 2>> texCoords;  // per vertex (texture_u texture_v, or s t)
+  // Per triangle: u, v of its three corners (a face's `texcoord` list; a polygon's triangles take
+  // the values of their corners).
+  std::vector<std::array<float, 6>> wedgeTexCoords;
+  std::vector<std::string> textureFiles;  // `comment TextureFile NAME`, in order
+  bool hasAttributes() const {
+    return !colors.empty() || !normals.empty() || !texCoords.empty() || !wedgeTexCoords.empty();
+  }
 };
 
 // Reads `path`. "" or a message that names the file and what is wrong with it; `ioError` is set

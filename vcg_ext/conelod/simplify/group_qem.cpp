@@ -246,7 +246,7 @@ class GroupQemSimplifier {
  public:
   GroupQemSimplifier(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
                      const std::vector<const std::vector<int>*>& coarser, const GroupQemParams& p,
-                     const GroupQemRegion* region = nullptr)
+                     const GroupQemRegion* region = nullptr, AttributeQuadrics* attributes = nullptr)
       : mesh_(mesh),
         group_(faceGroup),
         coarser_(coarser),
@@ -256,7 +256,8 @@ class GroupQemSimplifier {
         countGroups_(p.condition1),
         paperConditions_(p.mode == GroupMode::Paper),
         frozen_(region && !region->frozenVertex.empty() ? region->frozenVertex.data() : nullptr),
-        regionDiagonal_(region ? region->diagonal : 0) {}
+        regionDiagonal_(region ? region->diagonal : 0),
+        attributes_(attributes && attributes->active() ? attributes : nullptr) {}
 
   void init();
   Candidate evaluate(uint32_t a, uint32_t b);  // judge() + counts
@@ -272,7 +273,7 @@ class GroupQemSimplifier {
   void AnalyzeVertex(uint32_t v);
   bool interior(uint32_t v) const { return (vs_[v].info.flags & kClosed) && vs_[v].info.groups == 1; }
   bool interiorIn(uint32_t v, const std::vector<int>& layer) const;
-  bool fixedVertex(uint32_t v) const;
+  bool fixedVertex(uint32_t v, bool countSeams = true) const;
   bool contourVertex(uint32_t v) const {
     const VertexInfo& vi = vs_[v].info;
     return groupConstraints_ && !p_.lockGroupBoundaries && vi.groups == 2 && (vi.flags & kSimpleContour);
@@ -349,6 +350,12 @@ class GroupQemSimplifier {
   const bool paperConditions_;   // conditions 1 and 2 as the paper (paper mode)
   const uint8_t* frozen_;        // per vertex, or null: see GroupQemRegion
   const double regionDiagonal_;  // > 0: the whole mesh's diagonal
+
+  // Or null: attribute cost, seams, models merged on collapse (attribute_quadric.h).
+  AttributeQuadrics* attributes_;
+  const AttributeQuadrics::FaceCorners faceCorners_ = [this](uint32_t f) -> const std::array<uint32_t, 3>& {
+    return faces_[f];
+  };
 
   Point3d center_;
   double diag_ = 1;
@@ -509,10 +516,11 @@ bool GroupQemSimplifier::interiorIn(uint32_t v, const std::vector<int>& layer) c
   return true;
 }
 
-bool GroupQemSimplifier::fixedVertex(uint32_t v) const {
+bool GroupQemSimplifier::fixedVertex(uint32_t v, bool countSeams) const {
   const VertexInfo& vi = vs_[v].info;
   if (vi.flags & kNonManifold) return true;
   if (p_.preserveBoundary && (vi.flags & kOpen)) return true;
+  if (countSeams && attributes_ && attributes_->seam(v)) return true;  // attribute_quadric.h
   if (groupConstraints_ && vi.groups >= 2) {
     if (p_.lockGroupBoundaries) return true;
     if (vi.groups > 2 || !(vi.flags & kSimpleContour)) return true;  // a corner, or a contour end
@@ -642,10 +650,18 @@ bool GroupQemSimplifier::condition1(const GroupOf& g, uint32_t a, uint32_t b, ui
 
 bool GroupQemSimplifier::place(uint32_t a, uint32_t b, bool contourEdge, Candidate& c) const {
   const bool fixedA = fixedVertex(a), fixedB = fixedVertex(b);
-  if (fixedA && fixedB) return false;
-  const bool contourA = contourVertex(a), contourB = contourVertex(b);
   Quadric q = quadric_[a];
   q += quadric_[b];
+  if (fixedA && fixedB) {
+    // Two attribute-seam vertices may go along their seam (MayRemove), into the cheaper end.
+    if (!attributes_ || fixedVertex(a, false) || fixedVertex(b, false)) return false;
+    c.keep = q.error(pos_[a]) <= q.error(pos_[b]) ? a : b;
+    c.remove = c.keep == a ? b : a;
+    c.position = pos_[c.keep];
+    c.error = q.error(c.position);
+    return true;
+  }
+  const bool contourA = contourVertex(a), contourB = contourVertex(b);
   if (fixedA || (contourA && !contourB)) {
     c.keep = a;
     c.position = pos_[a];
@@ -826,6 +842,9 @@ Candidate GroupQemSimplifier::judge(uint32_t a, uint32_t b) {
 
   c.verdict = CollapseVerdict::FixedEndpoints;
   if (!nonManifold && !place(a, b, ne == 2 && faces_[e[0]].group != faces_[e[1]].group, c)) return c;
+  if (attributes_ && (ne > 2 ? attributes_->seam(a) || attributes_->seam(b)
+                             : !attributes_->MayRemove(c.remove, c.keep, e[0], e[1], faceCorners_)))
+    return c;
 
   // Geometry of the faces that survive: no flip, no zero-area face; their worst quality
   // (2 area / longest edge^2, compared squared: no square root per face).
@@ -863,7 +882,8 @@ Candidate GroupQemSimplifier::judge(uint32_t a, uint32_t b) {
     }
 
   c.verdict = CollapseVerdict::Allowed;
-  c.priority = priorityOf(c.error, std::sqrt(minQualitySq), a, b);
+  const double attributeCost = attributes_ ? attributes_->Cost(a, b, inputPosition(c.position)) : 0;
+  c.priority = priorityOf(c.error + attributeCost, std::sqrt(minQualitySq), a, b);
   return c;
 }
 
@@ -896,8 +916,8 @@ bool GroupQemSimplifier::nonManifoldCollapse(uint32_t a, uint32_t b, uint32_t ne
   const VertexInfo& ib = vs_[b].info;
   // A manifold end goes into a non-manifold one (which keeps its kind), never the reverse.
   const bool nmA = ia.flags & kNonManifold, nmB = ib.flags & kNonManifold;
-  const bool goA = removable(ia) && (nmA || nmB ? nmA == nmB || !nmA : true);
-  const bool goB = removable(ib) && (nmA || nmB ? nmA == nmB || !nmB : true);
+  const bool goA = removable(ia) && (nmA || nmB ? nmA == nmB || !nmA : true) && !(attributes_ && attributes_->seam(a));
+  const bool goB = removable(ib) && (nmA || nmB ? nmA == nmB || !nmB : true) && !(attributes_ && attributes_->seam(b));
   if (!goA && !goB) return false;
   // Link condition: the common neighbours of a and b are the opposite vertices only.
   ++stamp_;
@@ -1142,6 +1162,7 @@ void GroupQemSimplifier::PushEdgesOf(uint32_t v) {
 
 void GroupQemSimplifier::collapse(const Candidate& c) {
   const uint32_t keep = c.keep, gone = c.remove;
+  if (attributes_) attributes_->Collapse(keep, gone, facesBegin(gone), count_[gone], faceCorners_);
   // The faces on the edge die and leave the lists of their opposite vertices.
   opposite_.clear();
   for (const uint32_t* f = facesBegin(gone); f != facesEnd(gone); ++f) {
@@ -1584,8 +1605,8 @@ const char* ToString(CollapseVerdict v) {
 
 Status SimplifyPreservingGroups(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
                                 const GroupQemParams& params, GroupQemResult& out, const Progress& progress,
-                                const std::vector<const std::vector<int>*>& coarserGroups,
-                                const GroupQemRegion* region) {
+                                const std::vector<const std::vector<int>*>& coarserGroups, const GroupQemRegion* region,
+                                AttributeQuadrics* attributes) {
   out = GroupQemResult();
   Status s = ValidateParams(params);
   if (!s.ok()) return s;
@@ -1596,7 +1617,7 @@ Status SimplifyPreservingGroups(const IndexedMesh& mesh, const std::vector<int>&
                            std::to_string(mesh.positions.size()) + " vertices");
   if (region && !(region->diagonal >= 0 && std::isfinite(region->diagonal)))
     return Status::Invalid("the region's diagonal must be finite and >= 0");
-  GroupQemSimplifier simplifier(mesh, faceGroup, coarserGroups, params, region);
+  GroupQemSimplifier simplifier(mesh, faceGroup, coarserGroups, params, region, attributes);
   simplifier.init();
   s = simplifier.run(progress, out.stats);
   if (s.ok() || s.code == Status::Code::Cancelled) simplifier.output(out);

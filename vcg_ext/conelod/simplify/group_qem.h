@@ -76,6 +76,7 @@
 
 #include "conelod/mesh/indexed_mesh.h"
 #include "conelod/grouping/normal_cone.h"
+#include "conelod/simplify/attribute_quadric.h"
 #include "conelod/status.h"
 
 namespace conelod {
@@ -174,12 +175,15 @@ struct GroupQemRegion {
 // being intact does not keep their unions connected). On bad input `out` is left empty; on
 // cancellation by `progress` the run stops at once and `out` holds the valid mesh reached so far
 // (Status::Cancelled): callers that promise to leave the user's data untouched just drop it.
-// `region` (optional): `mesh` is a part of a larger mesh (see GroupQemRegion).
+// `region` (optional): `mesh` is a part of a larger mesh (see GroupQemRegion). `attributes`
+// (optional, Init on `mesh`): colour, normals and texture coordinates carried along
+// (attribute_quadric.h): their cost joins each collapse's priority, seam vertices stay, and the
+// models merge on every collapse; AttributeQuadrics::Evaluate then gives the output's attributes.
 Status SimplifyPreservingGroups(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
                                 const GroupQemParams& params, GroupQemResult& out,
                                 const Progress& progress = Progress(),
                                 const std::vector<const std::vector<int>*>& coarserGroups = {},
-                                const GroupQemRegion* region = nullptr);
+                                const GroupQemRegion* region = nullptr, AttributeQuadrics* attributes = nullptr);
 
 // The verdict on one collapse, as the simplifier would judge it on the unmodified mesh (tests,
 // diagnostics). Checks run in this order: topology, lock, condition 1 (in integrity mode: the

@@ -339,3 +339,99 @@ TEST(PlyFormat, NamesOtherFormats) {
   for (const char* other : {"OFF\n3 1 0\n", "solid x\nfacet\n", "v 0 0 0\nf 1 2 3\n", "\x1f\x8b\x08\x00"})
     EXPECT_NE(Read(other, m).find("only PLY is read"), std::string::npos) << other;
 }
+
+// Attributes (issue 26): what MeshLab writes for a coloured scan with normals, and for a textured
+// mesh with per-face texture coordinates and its image named in the header.
+TEST(PlyFormat, ReadsVertexColourNormalsAndTextureCoordinates) {
+  const std::string f =
+      "ply\nformat ascii 1.0\ncomment TextureFile my texture.png\nelement vertex 3\nproperty float x\n"
+      "property float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+      "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n"
+      "property float texture_u\nproperty float texture_v\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0 0 0 1 255 0 51 255 0 0.5\n1 0 0 0 0 1 0 255 0 128 1 0.5\n0 1 0 0 1 0 0 0 255 0 0.25 1\n3 0 1 2\n";
+  PlyMesh m;
+  ASSERT_EQ(Read(f, m), "");
+  ASSERT_EQ(m.colors.size(), 3u);
+  EXPECT_TRUE(m.colorAlpha);
+  EXPECT_FALSE(m.colorIsFloat);
+  EXPECT_FLOAT_EQ(m.colors[0][0], 1.0f);
+  EXPECT_FLOAT_EQ(m.colors[0][2], 0.2f);  // 51 / 255
+  EXPECT_FLOAT_EQ(m.colors[1][3], 128.0f / 255);
+  ASSERT_EQ(m.normals.size(), 3u);
+  EXPECT_EQ(m.normals[2][1], 1.0f);
+  ASSERT_EQ(m.texCoords.size(), 3u);
+  EXPECT_EQ(m.texCoords[2][0], 0.25f);
+  EXPECT_EQ(m.texCoords[2][1], 1.0f);
+  ASSERT_EQ(m.textureFiles.size(), 1u);
+  EXPECT_EQ(m.textureFiles[0], "my texture.png");  // a name with a space, as MeshLab writes it
+  EXPECT_TRUE(m.wedgeTexCoords.empty());
+  EXPECT_TRUE(m.hasAttributes());
+}
+
+TEST(PlyFormat, ReadsFloatColourWithoutAlphaAndSt) {
+  const std::string f =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "property float diffuse_red\nproperty float diffuse_green\nproperty float diffuse_blue\n"
+      "property float s\nproperty float t\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0 0.5 0.25 1 0 0\n1 0 0 0 0 0 1 0\n0 1 0 1 1 1 0 1\n3 0 1 2\n";
+  PlyMesh m;
+  ASSERT_EQ(Read(f, m), "");
+  ASSERT_EQ(m.colors.size(), 3u);
+  EXPECT_FALSE(m.colorAlpha);
+  EXPECT_TRUE(m.colorIsFloat);
+  EXPECT_EQ(m.colors[0][1], 0.25f);
+  EXPECT_EQ(m.colors[0][3], 1.0f);
+  ASSERT_EQ(m.texCoords.size(), 3u);
+  EXPECT_EQ(m.texCoords[1][0], 1.0f);
+}
+
+// A quad with a texcoord list: each triangle of its fan takes its own corners' coordinates.
+TEST(PlyFormat, ReadsPerFaceTexcoordListsThroughTriangulation) {
+  const std::string f =
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nproperty list uchar float texcoord\nend_header\n"
+      "0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3 8 0 0 0.5 0 0.5 0.5 0 0.5\n";
+  PlyMesh m;
+  ASSERT_EQ(Read(f, m), "");
+  ASSERT_EQ(m.triangles.size(), 2u);
+  ASSERT_EQ(m.wedgeTexCoords.size(), 2u);
+  for (size_t t = 0; t < 2; ++t)
+    for (size_t k = 0; k < 3; ++k) {
+      const auto& p = m.positions[m.triangles[t][k]];
+      EXPECT_EQ(m.wedgeTexCoords[t][2 * k], 0.5f * p[0]);  // u = x / 2, v = y / 2 on this quad
+      EXPECT_EQ(m.wedgeTexCoords[t][2 * k + 1], 0.5f * p[1]);
+    }
+}
+
+TEST(PlyFormat, RefusesIncompleteAttributes) {
+  PlyMesh m;
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
+  const std::string tail = "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  EXPECT_NE(
+      Read(head + "property uchar red\nproperty uchar green\n" + tail + "0 0 0 1 1\n1 0 0 1 1\n0 1 0 1 1\n3 0 1 2\n", m)
+          .find("lacks one of red, green, blue"),
+      std::string::npos);
+  EXPECT_NE(Read(head + "property float nx\n" + tail + "0 0 0 1\n1 0 0 1\n0 1 0 1\n3 0 1 2\n", m)
+                .find("lacks one of nx, ny, nz"),
+            std::string::npos);
+  EXPECT_NE(Read(head + "property int red\nproperty int green\nproperty int blue\n" + tail +
+                     "0 0 0 1 1 1\n1 0 0 1 1 1\n0 1 0 1 1 1\n3 0 1 2\n",
+                 m)
+                .find("colours are read as uchar, ushort or float"),
+            std::string::npos);
+  const std::string withList =
+      "element face 1\nproperty list uchar int vertex_indices\n"
+      "property list uchar float texcoord\nend_header\n";
+  EXPECT_NE(Read(head + withList + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2 4 0 0 1 0\n", m).find("texcoord values"),
+            std::string::npos);
+}
+
+// A geometry-only file has no attribute at all (the attribute-free paths stay as they were).
+TEST(PlyFormat, GeometryOnlyHasNoAttributes) {
+  PlyMesh m;
+  ASSERT_EQ(Read(std::string(kTriangleHeader) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", m), "");
+  EXPECT_FALSE(m.hasAttributes());
+  EXPECT_TRUE(m.textureFiles.empty());
+}

@@ -1,0 +1,94 @@
+// ConeLOD — attributes (colour, normals, texture coordinates) carried through the group-preserving
+// collapse (group_qem.h).
+//
+// Garland & Heckbert, "Simplifying surfaces with color and texture using quadric error metrics"
+// (IEEE Visualization 1998), extend each face's quadric to the space (position, attributes): on a
+// face the attributes are a linear function of position, s(p) = g . p + d per channel (g in the
+// face's plane, d fixed by the corners). For a given position p, the attribute value that
+// minimises the extended quadric of a vertex is the area-weighted mean of its faces' planes at p,
+//     s*(p) = (sum_f a_f (g_f . p + d_f)) / (sum_f a_f),
+// which needs only the sums G = sum a_f g_f and D = sum a_f d_f per channel and the weight
+// W = sum a_f, summed on every collapse as the quadrics are. This is Hoppe's memory-lean choice
+// ("New quadric metric for simplifying meshes with appearance attributes", Visualization 1999):
+// the position comes from the geometric quadric alone (the attribute-free placement is kept, so
+// the geometry changes only through the collapse order), and the attributes follow from it. We
+// keep only the linear part: 4 doubles a channel instead of G&H's (3 + k)^2 / 2.
+//
+// Cost added to a collapse's error: the weighted variance that merging the two endpoints' models
+// at the new position p adds (Ward's criterion),
+//     attributeWeight * (0.003 diagonal)^2 * Wa Wb / (Wa + Wb)^2 * sum_c (sa_c(p) - sb_c(p))^2,
+// in squared length as the geometric error: at weight 1 a full-scale difference of 1 in every
+// channel costs as much as a distance of 0.3 % of the diagonal. (G&H's unit-cube convention, 1 for
+// one diagonal, let colour override geometry on the coloured dragon: 7 times its geometric error
+// at 10 % of the faces; docs/attributes.md.)
+//
+// Seams, as wedges (Hoppe 1999): the attributes are given per face corner, so one vertex of the
+// position-welded mesh may carry several values (a texture seam: one position, two texture
+// coordinates; a colour seam; a crease's split normals). A vertex whose corners differ is a seam
+// vertex. It never moves (its corners keep their exact values, and both sides of the seam keep
+// their positions: no crack), and it is removed only along its seam: into the neighbour across a
+// seam edge (both ends seam vertices with two wedges each, the edge's two faces on different
+// wedges at both ends), each of its faces taking the keeper's value on its own side. A vertex that
+// is not on a seam may be removed into a seam vertex when the edge's faces see one value there;
+// its faces then take that value. So a collapse never drags texture coordinates across a seam.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include <vcg/space/point3.h>
+
+#include "conelod/mesh/attributes.h"
+#include "conelod/mesh/indexed_mesh.h"
+#include "conelod/status.h"
+
+namespace conelod {
+
+class AttributeQuadrics {
+ public:
+  // The current corners of face f (the simplifier's face array: a collapse replaces the removed
+  // vertex in place, so corner k of face f stays corner k).
+  using FaceCorners = std::function<const std::array<uint32_t, 3>&(uint32_t f)>;
+
+  // mesh: the (position-welded) mesh the collapse runs on; cornerValues: per face corner (3 f + k),
+  // `layout.channels()` values each, laid out as `layout` says (its `values` are not read);
+  // weight >= 0 (the CLI's --attribute-weight).
+  Status Init(const IndexedMesh& mesh, const VertexAttributes& layout, std::vector<float> cornerValues, double weight);
+  bool active() const { return channels_ > 0; }
+  int channels() const { return channels_; }
+  bool seam(uint32_t v) const { return wedges_[v] >= 2; }
+  size_t seamVertices() const;
+
+  // The cost of merging a and b at p (input coordinates), squared length.
+  double Cost(uint32_t a, uint32_t b, const vcg::Point3d& p) const;
+  // Whether `gone` may be removed into `keep` (see the top); e0, e1: the faces on the edge (e1 may
+  // be none: UINT32_MAX).
+  bool MayRemove(uint32_t gone, uint32_t keep, uint32_t e0, uint32_t e1, const FaceCorners& faces) const;
+  // The collapse of `gone` into `keep`, before the simplifier replaces `gone` in `goneFaces`' corners:
+  // the corner values of those faces (seams) and the models.
+  void Collapse(uint32_t keep, uint32_t gone, const uint32_t* goneFaces, size_t count, const FaceCorners& faces);
+
+  // The attributes of corner k of face f, at vertex v now at p (input coordinates), into
+  // out[channels()]: a seam vertex's corner value; otherwise s*(p), colours clamped to [0, 1],
+  // normals made unit length.
+  void Evaluate(uint32_t f, int k, uint32_t v, const vcg::Point3d& p, float* out) const;
+
+ private:
+  double predict(uint32_t v, int c, const vcg::Point3d& q) const;  // s*_c at q (centred)
+  const float* corner(uint32_t f, int k) const { return corner_.data() + (3 * size_t(f) + size_t(k)) * channels_; }
+  float* corner(uint32_t f, int k) { return corner_.data() + (3 * size_t(f) + size_t(k)) * channels_; }
+  const float* valueAt(uint32_t f, uint32_t v, const FaceCorners& faces) const;
+  bool same(const float* x, const float* y) const;
+
+  int channels_ = 0;
+  VertexAttributes layout_;
+  std::vector<float> corner_;    // per face corner
+  std::vector<uint8_t> wedges_;  // distinct corner values per vertex, saturated at 3
+  vcg::Point3d center_;
+  double scale_ = 0;           // weight * (0.003 diagonal)^2
+  std::vector<double> model_;  // per vertex: W, then per channel Gx Gy Gz D
+};
+
+}  // namespace conelod

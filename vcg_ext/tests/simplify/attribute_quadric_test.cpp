@@ -1,0 +1,196 @@
+// Tests of attribute_quadric.h: a linear colour survives any collapse exactly (the attribute
+// planes reproduce it at any new position, which the survivor's own colour does not); a texture
+// seam given per face corner keeps its vertices in place and its charts apart while it is
+// simplified along; weight 0 keeps the attribute-free collapse; a colour edge steers the collapse
+// order with a weight.
+#include "conelod/simplify/attribute_quadric.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "conelod/mesh/attributes.h"
+#include "conelod/simplify/group_qem.h"
+#include "test_util.h"
+
+namespace conelod {
+namespace {
+
+constexpr int kN = 12;
+
+// Grid(kN) scaled to the unit square in z = 0 ( vertex (x, y) = y (n+1) + x) with RGB = a linear function of
+// the position, bent along its middle column so that collapses move vertices off the old ones.
+IndexedMesh UnitGrid() {
+  IndexedMesh m = test::Grid(kN);
+  for (auto& p : m.positions) p /= float(kN);
+  return m;
+}
+IndexedMesh BentGrid() {
+  IndexedMesh m = UnitGrid();
+  for (auto& p : m.positions) p[2] = 0.3f * std::fabs(p[0] - 0.5f);
+  return m;
+}
+std::array<float, 3> LinearColour(const vcg::Point3f& p) {
+  return {{0.2f + 0.5f * p[0], 0.9f - 0.6f * p[1], 0.1f + 0.3f * p[0] + 0.4f * p[1]}};
+}
+// Per face corner, the values of the corner's vertex.
+std::vector<float> Corners(const IndexedMesh& m, const VertexAttributes& a) {
+  std::vector<float> c;
+  for (const auto& t : m.faces)
+    for (uint32_t v : t) c.insert(c.end(), a.of(v), a.of(v) + a.channels());
+  return c;
+}
+// The values at output corner k of face f.
+std::vector<float> At(const AttributeQuadrics& aq, const GroupQemResult& r, size_t f, int k) {
+  std::vector<float> out(size_t(aq.channels()));
+  const uint32_t o = r.mesh.faces[f][size_t(k)];
+  const auto& q = r.mesh.positions[o];
+  aq.Evaluate(r.sourceFace[f], k, r.sourceVertex[o], vcg::Point3d(q[0], q[1], q[2]), out.data());
+  return out;
+}
+VertexAttributes ColoursOf(const IndexedMesh& m) {
+  VertexAttributes a;
+  a.colorChannels = 3;
+  for (const auto& p : m.positions)
+    for (float c : LinearColour(p)) a.values.push_back(c);
+  return a;
+}
+
+TEST(AttributeQuadric, ReproducesALinearColourAtEveryNewPosition) {
+  const IndexedMesh m = BentGrid();
+  const VertexAttributes colours = ColoursOf(m);
+  AttributeQuadrics aq;
+  ASSERT_TRUE(aq.Init(m, colours, Corners(m, colours), 1.0).ok());
+  GroupQemParams p;
+  p.targetFaces = m.faceCount() / 8;
+  p.condition1 = false;
+  GroupQemResult r;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, std::vector<int>(m.faceCount(), 0), p, r, Progress(), {}, nullptr, &aq).ok());
+  ASSERT_LE(r.mesh.faceCount(), p.targetFaces);
+  size_t moved = 0;
+  for (size_t f = 0; f < r.mesh.faceCount(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t o = r.mesh.faces[f][size_t(k)];
+      const auto got = At(aq, r, f, k);
+      const auto want = LinearColour(r.mesh.positions[o]);
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[size_t(c)], want[size_t(c)], 2e-5) << "vertex " << o;
+      moved += r.mesh.positions[o] != m.positions[r.sourceVertex[o]];
+    }
+  EXPECT_GT(moved, 0u) << "no vertex moved: the test would not tell interpolation from the survivor's colour";
+}
+
+// A grid cut along x = 0.5 into two texture charts, given per face corner (u = x left, x + 1
+// right): the middle column's vertices are seam vertices. They never move, the seam is simplified
+// along itself, and no face ends with corners of both charts.
+TEST(AttributeQuadric, KeepsTextureSeams) {
+  const IndexedMesh m = BentGrid();
+  VertexAttributes layout;
+  layout.texCoords = true;
+  std::vector<float> corner;
+  for (const auto& t : m.faces) {
+    const float cx = (m.positions[t[0]][0] + m.positions[t[1]][0] + m.positions[t[2]][0]) / 3;
+    for (uint32_t v : t) {
+      corner.push_back(m.positions[v][0] + (cx > 0.5f ? 1 : 0));
+      corner.push_back(m.positions[v][1]);
+    }
+  }
+  AttributeQuadrics aq;
+  ASSERT_TRUE(aq.Init(m, layout, corner, 1.0).ok());
+  EXPECT_EQ(aq.seamVertices(), size_t(kN + 1));
+  GroupQemParams p;
+  p.targetFaces = 16;
+  p.condition1 = false;
+  GroupQemResult r;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, std::vector<int>(m.faceCount(), 0), p, r, Progress(), {}, nullptr, &aq).ok());
+  size_t seamLeft = 0;
+  for (size_t o = 0; o < r.mesh.positions.size(); ++o)
+    if (aq.seam(r.sourceVertex[o])) {
+      ++seamLeft;
+      EXPECT_EQ(r.mesh.positions[o], m.positions[r.sourceVertex[o]]) << "a seam vertex moved";
+    }
+  EXPECT_GE(seamLeft, 2u);
+  EXPECT_LT(seamLeft, size_t(kN + 1)) << "the seam was not simplified along itself";
+  for (size_t f = 0; f < r.mesh.faceCount(); ++f) {
+    int right = 0;
+    for (int k = 0; k < 3; ++k) {
+      const auto uv = At(aq, r, f, k);
+      const auto& q = r.mesh.positions[r.mesh.faces[f][size_t(k)]];
+      right += uv[0] >= 1;
+      EXPECT_NEAR(uv[0] - (uv[0] >= 1 ? 1 : 0), q[0], 1e-5) << "u does not follow x in its chart";
+      EXPECT_NEAR(uv[1], q[1], 1e-5);
+    }
+    EXPECT_TRUE(right == 0 || right == 3) << "face " << f << " has corners of both charts";
+  }
+}
+
+// Weight 0: the collapse is the attribute-free one, vertex for vertex.
+TEST(AttributeQuadric, WeightZeroKeepsTheAttributeFreeCollapse) {
+  const IndexedMesh m = BentGrid();
+  AttributeQuadrics aq;
+  ASSERT_TRUE(aq.Init(m, ColoursOf(m), Corners(m, ColoursOf(m)), 0.0).ok());
+  GroupQemParams p;
+  p.targetFaces = 40;
+  const std::vector<int> groups(m.faceCount(), 0);
+  GroupQemResult with, without;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, groups, p, with, Progress(), {}, nullptr, &aq).ok());
+  ASSERT_TRUE(SimplifyPreservingGroups(m, groups, p, without).ok());
+  EXPECT_EQ(with.mesh.positions, without.mesh.positions);
+  EXPECT_EQ(with.mesh.faces, without.mesh.faces);
+}
+
+// A flat grid whose colour jumps from black to white between two columns (no seam: each vertex
+// has one colour, the faces across the jump blend): with a weight, the collapses keep the jump
+// sharp, so the colour interpolated on the result at the original vertices is closer to theirs.
+TEST(AttributeQuadric, WeightSteersTheCollapseAwayFromColourEdges) {
+  IndexedMesh m = UnitGrid();
+  VertexAttributes a;
+  a.colorChannels = 3;
+  for (const auto& q : m.positions)
+    for (int c = 0; c < 3; ++c) a.values.push_back(q[0] < 0.45f ? 0.0f : 1.0f);
+  auto error = [&](double weight) {
+    AttributeQuadrics aq;
+    EXPECT_TRUE(aq.Init(m, a, Corners(m, a), weight).ok());
+    GroupQemParams p;
+    p.targetFaces = 60;
+    p.condition1 = false;
+    GroupQemResult r;
+    EXPECT_TRUE(
+        SimplifyPreservingGroups(m, std::vector<int>(m.faceCount(), 0), p, r, Progress(), {}, nullptr, &aq).ok());
+    std::vector<float> red(r.mesh.positions.size());
+    for (size_t f = 0; f < r.mesh.faceCount(); ++f)
+      for (int k = 0; k < 3; ++k) red[r.mesh.faces[f][size_t(k)]] = At(aq, r, f, k)[0];
+    // Sum of squared differences at the input's vertices, interpolated in the output face
+    // (in the plane) that holds each.
+    double sum = 0;
+    for (size_t v = 0; v < m.positions.size(); ++v) {
+      const auto& p0 = m.positions[v];
+      for (const auto& t : r.mesh.faces) {
+        const auto &A = r.mesh.positions[t[0]], &B = r.mesh.positions[t[1]], &C = r.mesh.positions[t[2]];
+        const double det = (B[0] - A[0]) * (C[1] - A[1]) - (C[0] - A[0]) * (B[1] - A[1]);
+        if (det == 0) continue;
+        const double u = ((p0[0] - A[0]) * (C[1] - A[1]) - (C[0] - A[0]) * (p0[1] - A[1])) / det;
+        const double w = ((B[0] - A[0]) * (p0[1] - A[1]) - (p0[0] - A[0]) * (B[1] - A[1])) / det;
+        if (u < -1e-9 || w < -1e-9 || u + w > 1 + 1e-9) continue;
+        const double got = (1 - u - w) * red[t[0]] + u * red[t[1]] + w * red[t[2]];
+        sum += (got - a.of(v)[0]) * (got - a.of(v)[0]);
+        break;
+      }
+    }
+    return sum;
+  };
+  EXPECT_LT(error(1.0), 0.5 * error(0.0));
+}
+
+TEST(AttributeQuadric, RefusesMismatchedInput) {
+  const IndexedMesh m = BentGrid();
+  const VertexAttributes a = ColoursOf(m);
+  std::vector<float> corner = Corners(m, a);
+  AttributeQuadrics aq;
+  EXPECT_TRUE(aq.Init(m, a, corner, 1.0).ok());
+  EXPECT_FALSE(aq.Init(m, a, corner, -1.0).ok());
+  corner.pop_back();
+  EXPECT_FALSE(aq.Init(m, a, corner, 1.0).ok());
+}
+
+}  // namespace
+}  // namespace conelod
