@@ -1,4 +1,4 @@
-// ConeLOD web viewer — the .clod (version 3) reader over HTTP Range requests.
+// ConeLOD web viewer — the .clod (versions 3 and 4) reader over HTTP Range requests.
 //
 // The JavaScript twin of vcg_ext/conelod/lod/lod_reader.cpp; the byte layout is
 // vcg_ext/conelod/lod/lod_format.md. It reads only the byte ranges it needs: the header, the three
@@ -8,14 +8,15 @@
 // ranges. Errors name the problem as the desktop reader's do.
 import { MeshoptDecoder } from './node_modules/meshoptimizer/meshopt_decoder.mjs';
 
-export const VERSION = 3;
+export const VERSION = 4;  // written by this ConeLOD; version 3 is read too
+const OLDEST_VERSION = 3;
 const CHUNK = 24;
 const HEADER_FIXED = 128;
 const LEVEL_ENTRY = 32;
 const INDEX_DATA = 16;
 const IBLOCK_BASE = 16;
 const INDEX_ENTRY = 8;
-const RECORD_FIXED = 34;
+const RECORD_FIXED = 26;  // the smallest record (version 4 at level 0): CRC, cone, sphere
 const GEOM_MIN = 5;
 const MAX_LEVELS = 64;
 const MAX_GRID_BITS = 30;
@@ -62,6 +63,15 @@ export function crc32(bytes, begin = 0, end = bytes.length) {
 }
 
 export class ClodError extends Error {}
+
+// Version 4: a record's parentError and parents from its group's first record, checked.
+function inherit(n, head) {
+  if (!head.groupHead || head.group !== n.group || head.level !== n.level)
+    throw new ClodError(`corrupt record of node ${n.id}: a bad group reference`);
+  n.parentError = head.parentError;
+  n.parents = head.parents;
+  if (!(n.parentError >= n.error)) throw new ClodError(`corrupt record of node ${n.id}: bad error bounds`);
+}
 
 // Little-endian fields and LEB128 varints of a byte array; `overrun` once a read passes the end.
 class Decoder {
@@ -218,10 +228,11 @@ export class ClodReader {
     if (head.length < CHUNK + 4) throw new ClodError(trunc + 'no version field');
     const version = new Decoder(head, CHUNK).u32();
     if (version === 1)
-      throw new ClodError('this is a .clod version 1 file (written by an older ConeLOD, whose cuts could have cracks): rebuild it with conelod lod build (this reader reads version 3)');
+      throw new ClodError('this is a .clod version 1 file (written by an older ConeLOD, whose cuts could have cracks): rebuild it with conelod lod build (this reader reads versions 3 to 4)');
     if (version === 2)
-      throw new ClodError('this is a .clod version 2 file (uncompressed, written by an older ConeLOD): rebuild it with conelod lod build (this reader reads version 3)');
-    if (version !== VERSION) throw new ClodError(`unsupported .clod version ${version} (this reader reads version 3)`);
+      throw new ClodError('this is a .clod version 2 file (uncompressed, written by an older ConeLOD): rebuild it with conelod lod build (this reader reads versions 3 to 4)');
+    if (version < OLDEST_VERSION || version > VERSION)
+      throw new ClodError(`unsupported .clod version ${version} (this reader reads versions 3 to 4)`);
     if (h.dataBytes < HEADER_FIXED + LEVEL_ENTRY || h.dataBytes > HEADER_FIXED + MAX_LEVELS * LEVEL_ENTRY ||
         (h.dataBytes - HEADER_FIXED) % LEVEL_ENTRY !== 0 || !Number.isFinite(h.childBytes))
       throw new ClodError('corrupt chunk size in the file header');
@@ -419,18 +430,20 @@ export class ClodReader {
 
   // Records of nodes [first, first + count) (consecutive in the file): one range, read once
   // however many callers ask for it meanwhile.
-  loadRecords(first, count) {
-    const key = first + ':' + count;
+  loadRecords(first, count, headOnly = false) {
+    const key = first + ':' + count + (headOnly ? ':h' : '');
     let p = this.recordReads.get(key);
     if (!p) {
-      p = this._loadRecords(first, count);
+      p = this._loadRecords(first, count, headOnly);
       this.recordReads.set(key, p);
       p.finally(() => this.recordReads.delete(key)).catch(() => {});
     }
     return p;
   }
 
-  async _loadRecords(first, count) {
+  // Version 4: a record that names its group's first record takes parentError and parents from it
+  // (read here if not loaded; headOnly: this is such a read, and the record must be its group's first).
+  async _loadRecords(first, count, headOnly = false) {
     if (count === 0) return;
     const entries = await this._entries(first, count);
     let span = 0;
@@ -441,6 +454,7 @@ export class ClodReader {
     }
     const buf = await this._hier(entries[0].record, span);
     const level = this.levelOf(first), levels = this.levels, top = level + 1 === levels.length;
+    const v4 = this.info.version >= 4, pending = [];  // [node, head id]: the head not loaded yet
     let at = 0;
     for (let i = 0; i < count; ++i) {
       const id = first + i, bytes = entries[i].recordBytes;
@@ -457,8 +471,8 @@ export class ClodReader {
       n.coneHalfAngle = n.coneEmpty ? -1 : Math.min(Math.PI, angle * CONE_UNIT);
       n.center = [d.f32(), d.f32(), d.f32()];
       n.radius = d.f32();
-      n.error = d.f32();
-      n.parentError = d.f32();
+      n.error = v4 && level === 0 ? 0 : d.f32();
+      if (!v4) n.parentError = d.f32();
       const group = d.uv(), faces = d.uv(), vertices = d.uv(), children = d.uv();
       if (d.overrun || group > 0xffffffff || faces > 0xffffffff || vertices > 0xffffffff)
         throw new ClodError(bad + 'a count out of range');
@@ -492,21 +506,43 @@ export class ClodReader {
       n.siblings = readIds(level);
       if (!n.siblings || !n.siblings.includes(id)) throw new ClodError(bad + 'sibling out of range');
       if (level === 0 && n.siblings.length !== 1) throw new ClodError(bad + 'siblings at level 0');
-      n.parents = readIds(level + 1);
-      if (!n.parents) throw new ClodError(bad + 'parent out of range');
-      if (top !== (n.parents.length === 0)) throw new ClodError(bad + (top ? 'a root with parents' : 'no parents'));
+      const back = v4 ? d.uv() : 0;  // how many ids back its group's first record is
+      if (d.overrun || back > id - levels[level].firstId || (back && top) || (back && headOnly))
+        throw new ClodError(bad + 'a bad group reference');
+      n.groupHead = back === 0;
+      if (back === 0) {
+        if (v4) n.parentError = d.f32();
+        n.parents = readIds(level + 1);
+        if (!n.parents) throw new ClodError(bad + 'parent out of range');
+        if (top !== (n.parents.length === 0)) throw new ClodError(bad + (top ? 'a root with parents' : 'no parents'));
+      }
       if (d.left() !== 0) throw new ClodError(bad + 'its size does not match its contents');
       if (![...n.center, n.radius].every(Number.isFinite) || !(n.radius >= 0))
         throw new ClodError(bad + 'non-finite or negative cone or sphere');
-      if (!(n.error >= 0) || !Number.isFinite(n.error) || (level === 0 && n.error !== 0) || !(n.parentError >= n.error) ||
-          (top ? n.parentError !== Infinity : !Number.isFinite(n.parentError)))
+      if (!(n.error >= 0) || !Number.isFinite(n.error) || (level === 0 && n.error !== 0))
+        throw new ClodError(bad + 'bad error bounds');
+      if (n.groupHead && (!(n.parentError >= n.error) || (top ? n.parentError !== Infinity : !Number.isFinite(n.parentError))))
         throw new ClodError(bad + 'bad error bounds');
       if (n.vertexCount > 3 * n.faceCount || n.faceCount > levels[level].faces || n.faceCount === 0 || n.vertexCount === 0)
         throw new ClodError(bad + 'impossible face or vertex count');
       n.geometry = entries[i].geometry;
       n.geometryBytes = entries[i].geometryBytes;
       if (n.geometryBytes < GEOM_MIN + 17 + n.faceCount) throw new ClodError(bad + 'its geometry is too small for its face count');
+      if (!n.groupHead) {
+        const head = id - back;
+        if (!this.nodes.has(head)) {
+          pending.push([n, head]);
+          continue;
+        }
+        inherit(n, this.nodes.get(head));
+      }
       this.nodes.set(id, n);
+    }
+    // (A group's first record read here stays loaded: another caller may be waiting on it.)
+    for (const [n, head] of pending) {
+      if (!this.nodes.has(head)) await this.loadRecords(head, 1, true);
+      inherit(n, this.nodes.get(head));
+      if (!this.nodes.has(n.id)) this.nodes.set(n.id, n);
     }
   }
 

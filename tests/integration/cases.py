@@ -1292,7 +1292,7 @@ def cli_lod_round_trip(c):
     assert b["file_bytes"] == os.path.getsize(clod), b
     assert all(b["level_faces"][k] <= b["level_faces"][k - 1] for k in range(1, b["levels"])), b
     info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
-    assert info["faces"] == 69451 and info["nodes"] == b["nodes"] and info["version"] == 3, info
+    assert info["faces"] == 69451 and info["nodes"] == b["nodes"] and info["version"] == 4, info
     # Positions on one grid, within the bound asked for (--precision, default 2e-5 of the diagonal).
     assert 0 < b["quantization_error"] == info["quantization_error"] <= 2e-5 * 0.27, (b, info)
     human = c.conelod("lod", "info", clod).stdout.decode()
@@ -2285,7 +2285,8 @@ def web_viewer_armadillo(c):
     pixels (a crack would show the background through the culled far side), with a real mix of
     levels; and the refinement gives the very cut `conelod lod extract` gives for the same eye and
     budget (the same rules and order as lod_refine.cpp), also after the view is turned with the
-    mouse; a unit whose bytes were changed stops the page with the desktop reader's message."""
+    mouse; a unit whose bytes were changed stops the page with the desktop reader's message; a
+    version 3 file (the sphere of lod_test's Version3FilesStillRead) still reads, to its last face."""
     clod = build_clod(c, "stanford_armadillo_cgal.ply", "arma.clod")
     info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
     faces = info["faces"]
@@ -2303,17 +2304,20 @@ def web_viewer_armadillo(c):
     corrupt = c.out("corrupt.clod")
     open(corrupt, "wb").write(bad)
     s, s2 = Serve(c, clod), Serve(c, corrupt)
+    s3 = Serve(c, os.path.join(c.source, "vcg_ext", "tests", "lod", "data", "sphere512_v3.clod"))
     try:
-        pngs = [c.out("web%d.png" % i) for i in range(6)]
-        first, full, mid, same, dragged, broken = shoot(
+        pngs = [c.out("web%d.png" % i) for i in range(7)]
+        first, full, mid, same, dragged, broken, v3 = shoot(
             c, (s.url + "&refine=0&hud=0", pngs[0]), (s.url + "&budget=%d&pixel=0&hud=0" % faces, pngs[1]),
             (s.url + "&budget=%d&hud=0" % (faces // 2), pngs[2]),
             (s.url + "&budget=%d&pixel=0&hud=0&eye=%s" % (ref["budget"], eye), pngs[3]),
             (s.url + "&budget=%d&pixel=0&hud=0" % ref["budget"], pngs[4], "120,-60"),
-            (s2.url + "&pixel=0", pngs[5]), expect=2)
+            (s2.url + "&pixel=0", pngs[5]), (s3.url + "&budget=100000&pixel=0&hud=0", pngs[6]), expect=2)
     finally:
         log = s.stop()
         s2.stop()
+        s3.stop()
+    assert v3["state"] == "done" and v3["cutFaces"] == 512 and v3["maxLevel"] == 0, v3
     assert broken["state"] == "error" and re.match(r"checksum mismatch in the geometry of a node \d+$", broken["error"]), broken
     for st in (first, full, mid, same, dragged):
         assert st["state"] == "done" and st["fileBytes"] == size, st

@@ -21,9 +21,11 @@ constexpr uint32_t kGeos = FourCC('G', 'E', 'O', 'S');   // the nodes' compresse
 constexpr uint32_t kIndex = FourCC('I', 'N', 'D', 'X');  // the offset index, in IBLK blocks
 constexpr uint32_t kIBlock = FourCC('I', 'B', 'L', 'K');
 
-// 3: quantized, compressed nodes (2: float positions per level, refused by name; 1: the tree of
-// groups, refused).
-constexpr uint32_t kVersion = 3;
+// 4: a group's parentError and parents in its first record only (written); 3: quantized,
+// compressed nodes (read too); 2: float positions per level, refused by name; 1: the tree of
+// groups, refused.
+constexpr uint32_t kVersion = 4;
+constexpr uint32_t kOldestReadVersion = 3;
 constexpr uint32_t kMaxLevels = 64;
 constexpr uint32_t kNoParent = 0xFFFFFFFFu;
 constexpr uint32_t kMaxGridBits = 30;  // grid coordinates below 2^30 (the u32 vertex stream)
@@ -45,11 +47,13 @@ constexpr size_t kLevelEntryBytes = 8 * 3 + 4 + 4;                              
 constexpr size_t kIndexDataBytes = 8 + 4 + 4;                                        // INDX data = 16
 constexpr size_t kIndexBlockBaseBytes = 8 + 8;                                       // IBLK: two bases ...
 constexpr size_t kIndexEntryBytes = 4 + 4;                                           // ... then ends
-constexpr size_t kRecordFixedBytes = 4 + 2 * 3 + 4 * 6;  // a record: CRC, cone, 6 floats, then varints
-constexpr uint16_t kEmptyConeAngle = 0xFFFF;             // a record's cone angle: no face normal
-constexpr size_t kGeomMinBytes = 4 + 1;                  // a geometry blob: CRC, flags, then varints and codecs
-constexpr uint8_t kGeomWidePositions = 1;                // geometry flag: positions are u32 x 3 (else u16 x 4)
-constexpr uint32_t kIndexBlock = 512;                    // index entries per IBLK (4 KiB)
+// The smallest record: CRC, cone, sphere (version 4: a level-0 record has no error field; version
+// 3: 34 bytes, every record with its error and parentError).
+constexpr size_t kRecordFixedBytes = 4 + 2 * 3 + 4 * 4;
+constexpr uint16_t kEmptyConeAngle = 0xFFFF;  // a record's cone angle: no face normal
+constexpr size_t kGeomMinBytes = 4 + 1;       // a geometry blob: CRC, flags, then varints and codecs
+constexpr uint8_t kGeomWidePositions = 1;     // geometry flag: positions are u32 x 3 (else u16 x 4)
+constexpr uint32_t kIndexBlock = 512;         // index entries per IBLK (4 KiB)
 // meshoptimizer's codec versions written: vertex 0 (every version decodes it), index 1 (0.14+).
 constexpr int kVertexCodecVersion = 0;
 constexpr int kIndexCodecVersion = 1;

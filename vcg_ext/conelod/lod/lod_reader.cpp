@@ -182,7 +182,8 @@ struct LodReader::Impl {
   struct Entry {
     LodNode node;
     uint64_t geometryOffset = 0;
-    uint64_t geometryBytes = 0;
+    uint32_t geometryBytes = 0;  // below 2^32: an index entry's offsets are u32 from its block's base
+    bool groupHead = true;       // version 4: the record holds its group's parentError and parents
     std::unique_ptr<LodGeometry> geometry;
   };
   std::unordered_map<uint32_t, Entry> nodes;
@@ -294,8 +295,10 @@ struct LodReader::Impl {
     return Status::Ok();
   }
 
-  // Reads the records of nodes [first, first+count) (one level, consecutive in the file).
-  Status LoadRecords(uint32_t first, uint32_t count) {
+  // Reads the records of nodes [first, first+count) (one level, consecutive in the file). Version
+  // 4: a record that names its group's first record takes parentError and parents from it (read
+  // here if not loaded; headOnly: this is such a read, and the record must be its group's first).
+  Status LoadRecords(uint32_t first, uint32_t count, bool headOnly = false) {
     if (count == 0) return Status::Ok();
     std::vector<IndexEntry> entries;
     Status s = ReadIndex(first, count, entries);
@@ -310,6 +313,12 @@ struct LodReader::Impl {
     s = ReadRange(entries[0].record, span, "node records");
     if (!s.ok()) return s;
     const uint32_t level = levelOf(first);
+    const bool v4 = info.version >= 4;
+    struct Pending {
+      Entry e;
+      uint32_t id, head;
+    };
+    std::vector<Pending> pending;  // records whose group's first record is not loaded
     uint64_t at = 0;
     for (uint32_t i = 0; i < count; ++i) {
       const uint32_t id = first + i;
@@ -336,8 +345,8 @@ struct LodReader::Impl {
       }
       for (int j = 0; j < 3; ++j) n.center[j] = d.f32();
       n.radius = d.f32();
-      n.error = d.f32();
-      n.parentError = d.f32();
+      n.error = v4 && level == 0 ? 0.f : d.f32();
+      if (!v4) n.parentError = d.f32();
       const uint64_t group = d.uv(), faces = d.uv(), vertices = d.uv(), children = d.uv();
       const bool top = level + 1 == levels.size();
       if (d.overrun || group > 0xFFFFFFFFull || faces > 0xFFFFFFFFull || vertices > 0xFFFFFFFFull)
@@ -375,28 +384,72 @@ struct LodReader::Impl {
       if (!readIds(level, n.siblings) || std::find(n.siblings.begin(), n.siblings.end(), id) == n.siblings.end())
         return Status::Invalid(bad + "sibling out of range");
       if (level == 0 && n.siblings.size() != 1) return Status::Invalid(bad + "siblings at level 0");
-      if (!readIds(level + 1, n.parents)) return Status::Invalid(bad + "parent out of range");
-      if (top != n.parents.empty()) return Status::Invalid(bad + (top ? "a root with parents" : "no parents"));
+      const uint64_t back = v4 ? d.uv() : 0;  // how many ids back its group's first record is
+      if (d.overrun || back > id - levels[level].firstId || (back && top) || (back && headOnly))
+        return Status::Invalid(bad + "a bad group reference");
+      e.groupHead = back == 0;
+      if (back == 0) {
+        if (v4) n.parentError = d.f32();
+        if (!readIds(level + 1, n.parents)) return Status::Invalid(bad + "parent out of range");
+        if (top != n.parents.empty()) return Status::Invalid(bad + (top ? "a root with parents" : "no parents"));
+      }
       if (d.left() != 0) return Status::Invalid(bad + "its size does not match its contents");
       const bool emptyCone = n.cone.halfAngle == NormalCone::Empty().halfAngle;
       if (!(std::isfinite(n.cone.halfAngle) && n.cone.halfAngle <= NormalCone::kPi) ||
           !(n.cone.halfAngle >= 0 || emptyCone) || !std::isfinite(n.cone.axis[0] + n.cone.axis[1] + n.cone.axis[2]) ||
           !std::isfinite(n.center[0] + n.center[1] + n.center[2]) || !(n.radius >= 0) || !std::isfinite(n.radius))
         return Status::Invalid(bad + "non-finite or negative cone or sphere");
-      if (!(n.error >= 0) || !std::isfinite(n.error) || (level == 0 && n.error != 0) || !(n.parentError >= n.error) ||
-          (top ? !std::isinf(n.parentError) : !std::isfinite(n.parentError)))
+      if (!(n.error >= 0) || !std::isfinite(n.error) || (level == 0 && n.error != 0))
         return Status::Invalid(bad + "bad error bounds");
       if (n.vertexCount > uint64_t(3) * n.faceCount || n.faceCount > levels[level].faces || n.faceCount == 0 ||
           n.vertexCount == 0)
         return Status::Invalid(bad + "impossible face or vertex count");
       e.geometryOffset = entries[i].geometry;
-      e.geometryBytes = entries[i].geometryBytes;
+      if (entries[i].geometryBytes > 0xFFFFFFFFu) return Status::Invalid(bad + "its geometry is too large");
+      e.geometryBytes = uint32_t(entries[i].geometryBytes);
       // The index codec spends at least a byte a triangle and 17 more (meshopt_decodeIndexBuffer).
       if (e.geometryBytes < kGeomMinBytes + 17 + uint64_t(n.faceCount))
         return Status::Invalid(bad + "its geometry is too small for its face count");
+      if (!e.groupHead) {
+        const uint32_t head = uint32_t(id - back);
+        auto h = nodes.find(head);
+        if (h == nodes.end()) {
+          pending.push_back(Pending{std::move(e), id, head});
+          continue;
+        }
+        Status st = Inherit(e, h->second, id);
+        if (!st.ok()) return st;
+      } else if (!(n.parentError >= n.error) || (top ? !std::isinf(n.parentError) : !std::isfinite(n.parentError))) {
+        return Status::Invalid(bad + "bad error bounds");
+      }
       auto it = nodes.find(id);
       if (it == nodes.end()) nodes.emplace(id, std::move(e));
     }
+    // (The read buffer is free again: the group's first records can be read. They are dropped
+    // afterwards: only the records asked for stay resident.)
+    std::vector<uint32_t> readHeads;
+    for (Pending& pe : pending) {
+      if (nodes.find(pe.head) == nodes.end()) {
+        Status st = LoadRecords(pe.head, 1, true);
+        if (!st.ok()) return st;
+        readHeads.push_back(pe.head);
+      }
+      Status st = Inherit(pe.e, nodes.find(pe.head)->second, pe.id);
+      if (!st.ok()) return st;
+      if (nodes.find(pe.id) == nodes.end()) nodes.emplace(pe.id, std::move(pe.e));
+    }
+    for (uint32_t h : readHeads) nodes.erase(h);
+    return Status::Ok();
+  }
+
+  // Version 4: a record's parentError and parents from its group's first record, checked.
+  static Status Inherit(Entry& e, const Entry& head, uint32_t id) {
+    LodNode& n = e.node;
+    if (!head.groupHead || head.node.group != n.group || head.node.level != n.level)
+      return Status::Invalid("corrupt record of node " + Num(id) + ": a bad group reference");
+    n.parentError = head.node.parentError;
+    n.parents = head.node.parents;
+    if (!(n.parentError >= n.error)) return Status::Invalid("corrupt record of node " + Num(id) + ": bad error bounds");
     return Status::Ok();
   }
 
@@ -560,16 +613,16 @@ struct LodReader::Impl {
     if (version == 1)
       return Status::Invalid(
           "this is a .clod version 1 file (written by an older ConeLOD, whose cuts could have "
-          "cracks): rebuild it with conelod lod build (this reader reads version " +
-          Num(kVersion) + ")");
+          "cracks): rebuild it with conelod lod build (this reader reads versions " +
+          Num(kOldestReadVersion) + " to " + Num(kVersion) + ")");
     if (version == 2)
       return Status::Invalid(
           "this is a .clod version 2 file (uncompressed, written by an older ConeLOD): rebuild it "
-          "with conelod lod build (this reader reads version " +
-          Num(kVersion) + ")");
-    if (version != kVersion)
-      return Status::Invalid("unsupported .clod version " + Num(version) + " (this reader reads version " +
-                             Num(kVersion) + ")");
+          "with conelod lod build (this reader reads versions " +
+          Num(kOldestReadVersion) + " to " + Num(kVersion) + ")");
+    if (version < kOldestReadVersion || version > kVersion)
+      return Status::Invalid("unsupported .clod version " + Num(version) + " (this reader reads versions " +
+                             Num(kOldestReadVersion) + " to " + Num(kVersion) + ")");
     if (h.dataBytes < kHeaderFixedBytes + kLevelEntryBytes ||
         h.dataBytes > kHeaderFixedBytes + kMaxLevels * kLevelEntryBytes ||
         (h.dataBytes - kHeaderFixedBytes) % kLevelEntryBytes != 0 || h.childBytes > (uint64_t(1) << 62))

@@ -376,6 +376,7 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
         last = uint64_t(n) + 1;
       }
     };
+    uint32_t groupFirst = 0;  // the first record of the current node's group
     for (uint32_t id = 0; id < nodeCount; ++id) {
       const NodeRecord& R = records[id];
       e.clear();
@@ -398,15 +399,23 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
       e.u16(angle);
       for (int i = 0; i < 3; ++i) e.f32(R.center[i]);
       e.f32(R.radius);
-      e.f32(R.error);
-      e.f32(R.parentError);
+      if (R.level > 0) e.f32(R.error);  // 0 at level 0
       e.uv(R.group == LodNode::kNoGroup ? 0 : uint64_t(R.group) + 1);
       e.uv(R.faceCount);
       e.uv(R.vertexCount);
       e.uv(R.children.size());
       if (!R.children.empty()) e.uv(R.children.front() - firstId[R.level - 1]);
       idList(R.siblings, firstId[R.level]);
-      idList(R.parents, R.level + 1 < nodeLevels ? firstId[R.level + 1] : 0);
+      // A group's clusters are consecutive and share parentError and parents: the group's first
+      // record holds them, the others name it (how many ids back).
+      if (id == firstId[R.level] || records[id - 1].group != R.group) groupFirst = id;
+      if (R.group != LodNode::kNoGroup && groupFirst != id) {
+        e.uv(id - groupFirst);
+      } else {
+        e.uv(0);
+        e.f32(R.parentError);
+        idList(R.parents, R.level + 1 < nodeLevels ? firstId[R.level + 1] : 0);
+      }
       blob(e);
       recordEnd[id] = out.offset();
     }

@@ -241,7 +241,7 @@ TEST_F(TinyLod, HeaderAndNodeStructure) {
   const LodFileInfo& i = r->info();
   const size_t H = b.dag.levels.size();
   ASSERT_GE(H, 3u) << "the tiny sphere should give a DAG of several levels";
-  EXPECT_EQ(i.version, 3u);
+  EXPECT_EQ(i.version, 4u);
   EXPECT_EQ(i.levels, int(H));
   EXPECT_EQ(i.inputFaces, 128u);
   EXPECT_EQ(i.inputVertices, 66u);
@@ -495,8 +495,8 @@ TEST_F(TinyLod, BadFilesAreRefusedWithTheirReason) {
     RechecksumBlob(b, rec, recBytes);
     EXPECT_TRUE(has(OpenError(b), "bad error bounds")) << OpenError(b);
     b = good;
-    ASSERT_EQ(b[rec + kRecordFixedBytes], 0);  // a root's group: none
-    b[rec + kRecordFixedBytes] = 1;
+    ASSERT_EQ(b[rec + kRecordFixedBytes + 4], 0);  // a root's group (after its error): none
+    b[rec + kRecordFixedBytes + 4] = 1;
     RechecksumBlob(b, rec, recBytes);
     EXPECT_TRUE(has(OpenError(b), "a root with a group")) << OpenError(b);
   }
@@ -605,6 +605,90 @@ TEST_F(TinyLod, BadFilesAreRefusedWithTheirReason) {
     EXPECT_FALSE(s.ok());
     EXPECT_TRUE(has(s.message, "cannot open")) << s.message;
   }
+}
+
+// A version 3 file (written by the ConeLOD before version 4, from data/sphere512.ply) reads as the
+// version 4 file of the same mesh: every record and the full-budget cut are the same.
+TEST(Lod, Version3FilesStillRead) {
+  const std::string dir = std::string(CONELOD_SOURCE_DIR) + "/vcg_ext/tests/lod/data/";
+  CMesh m;
+  ASSERT_EQ(LoadPly(m, dir + "sphere512.ply"), "");
+  const std::string path = TempPath("sphere512_v4.clod");
+  const Status b = BuildLodFile(ToIndexedMesh(m), LodBuildParams(), path);
+  ASSERT_TRUE(b.ok()) << b.message;
+  std::unique_ptr<LodReader> r3, r4;
+  Status s = LodReader::Open(dir + "sphere512_v3.clod", r3);
+  ASSERT_TRUE(s.ok()) << s.message;
+  s = LodReader::Open(path, r4);
+  ASSERT_TRUE(s.ok()) << s.message;
+  EXPECT_EQ(r3->info().version, 3u);
+  EXPECT_EQ(r4->info().version, 4u);
+  ASSERT_EQ(r3->info().nodeCount, r4->info().nodeCount);
+  EXPECT_LT(ReadBytes(path).size(), ReadBytes(dir + "sphere512_v3.clod").size());
+  size_t inherited = 0;
+  for (uint32_t id = 0; id < r4->info().nodeCount; ++id) {
+    ASSERT_TRUE(r3->LoadNode(id).ok());
+    s = r4->LoadNode(id);  // alone: a record that names its group's first reads that one too
+    ASSERT_TRUE(s.ok()) << s.message;
+    const LodNode &a = r3->node(id), &c = r4->node(id);
+    EXPECT_EQ(a.level, c.level);
+    EXPECT_EQ(a.group, c.group);
+    EXPECT_EQ(a.children, c.children);
+    EXPECT_EQ(a.siblings, c.siblings);
+    EXPECT_EQ(a.parents, c.parents) << id;
+    EXPECT_EQ(a.center, c.center);
+    EXPECT_EQ(a.radius, c.radius);
+    EXPECT_EQ(a.cone.axis, c.cone.axis);
+    EXPECT_EQ(a.cone.halfAngle, c.cone.halfAngle);
+    EXPECT_EQ(a.faceCount, c.faceCount);
+    EXPECT_EQ(a.vertexCount, c.vertexCount);
+    EXPECT_EQ(a.error, c.error);
+    EXPECT_EQ(a.parentError, c.parentError) << id;
+    if (id > 0 && c.group != LodNode::kNoGroup && r4->node(id - 1).group == c.group &&
+        r4->levelOfNode(id - 1) == r4->levelOfNode(id))
+      ++inherited;
+  }
+  EXPECT_GT(inherited, 0u);  // the file has records that take their group's parents
+  {                          // a record naming a record that is not its group's first (its `back` + 1, the last byte)
+    const std::vector<uint8_t> good = ReadBytes(path);
+    const size_t index = size_t(Decoder(good.data() + kChunkHeaderBytes + 80, 8).u64());
+    const size_t block0 = index + kChunkHeaderBytes + kIndexDataBytes + kChunkHeaderBytes;
+    const uint64_t recordBase = Decoder(good.data() + block0, 8).u64();
+    auto recordEnd = [&](uint32_t id) {
+      return size_t(recordBase + Decoder(good.data() + block0 + kIndexBlockBaseBytes + 8 * id, 4).u32());
+    };
+    uint32_t id = 1;
+    while (id < r4->info().nodeCount &&
+           (r4->node(id).group == LodNode::kNoGroup || r4->node(id - 1).group != r4->node(id).group ||
+            r4->levelOfNode(id - 1) != r4->levelOfNode(id)))
+      ++id;
+    ASSERT_LT(id, r4->info().nodeCount);
+    ASSERT_LT(id, kIndexBlock);
+    std::vector<uint8_t> b = good;
+    const size_t end = recordEnd(id), begin = recordEnd(id - 1);
+    ASSERT_GT(b[end - 1], 0);  // back: 1 byte here
+    ASSERT_LT(b[end - 1], 127);
+    ++b[end - 1];
+    RechecksumBlob(b, begin, end - begin);
+    std::unique_ptr<LodReader> r;
+    s = LodReader::OpenMemory(b, r);
+    ASSERT_TRUE(s.ok()) << s.message;
+    s = r->LoadNode(id);
+    EXPECT_FALSE(s.ok());
+    EXPECT_NE(s.message.find("a bad group reference"), std::string::npos) << s.message;
+  }
+  for (LodReader* r : {r3.get(), r4.get()}) {
+    LodView view;
+    view.eye = vcg::Point3d(0, 0, 5);
+    view.faceBudget = size_t(1) << 40;
+    view.cullBackFacing = false;
+    LodCut cut;
+    ASSERT_TRUE(RefineLod(*r, view, cut).ok());
+    IndexedMesh out;
+    ASSERT_TRUE(ExtractCutMesh(*r, cut, true, out).ok());
+    EXPECT_EQ(SortedFacePositions(out), SortedFacePositions(OnGrid(ToIndexedMesh(m), r->info().grid)));
+  }
+  std::remove(path.c_str());
 }
 
 // --- The bunny --------------------------------------------------------------------------------
