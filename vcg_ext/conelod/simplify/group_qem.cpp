@@ -447,19 +447,23 @@ void GroupQemSimplifier::AnalyzeVertex(uint32_t v) {
     fanOther_[2 * i] = t[size_t((j + 1) % 3)];
     fanOther_[2 * i + 1] = t[size_t((j + 2) % 3)];
   }
-  // How many faces use each edge (v, u): 1 = border, 2 = manifold, 3+ = non-manifold.
+  // How many faces use each edge (v, u): 1 = border, 2 = manifold, 3+ = non-manifold. Counted in
+  // the vertices' marks, linear in k: mark = base + uses - 1 (saturated at 3+), then base + 4
+  // once a non-manifold edge is counted.
+  const uint32_t base = stamp_ + 1;
+  stamp_ += 5;
+  for (uint32_t s = 0; s < 2 * k; ++s) {
+    uint32_t& m = vs_[fanOther_[s]].mark;
+    m = (m >= base && m < base + 4) ? std::min(m + 1, base + 2) : base;
+  }
   uint32_t borderEnds = 0, startFace = 0, startVertex = fanOther_[0], nmEdges = 0;
   for (uint32_t s = 0; s < 2 * k; ++s) {
-    uint32_t uses = 0;
-    bool first = true;
-    for (uint32_t r = 0; r < 2 * k; ++r)
-      if (fanOther_[r] == fanOther_[s]) {
-        ++uses;
-        first &= r >= s;
-      }
+    uint32_t& m = vs_[fanOther_[s]].mark;
+    const uint32_t uses = m == base + 4 ? 3 : m - base + 1;
     if (uses > 2) {
       nonManifold = true;
-      nmEdges += first;
+      nmEdges += m != base + 4;
+      m = base + 4;
     }
     if (uses == 1) {
       ++borderEnds;
