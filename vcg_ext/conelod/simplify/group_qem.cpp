@@ -25,6 +25,8 @@ constexpr double kDegenerateQuality = 1e-6;
 // merged vertex's fan, a search inside the group looks for a path between them through at most
 // this many faces; a collapse whose path is longer (or missing) is refused.
 constexpr uint32_t kIntegritySearchFaces = 256;
+// Meshes from this many faces are simplified in a spatial order (GroupQemSimplifier::SpatialOrder).
+constexpr size_t kSpatialOrderFaces = 4096;
 
 // Symmetric quadric Q(x) = x^T A x + 2 b.x + c, with the total weight w of its planes.
 struct Quadric {
@@ -255,7 +257,7 @@ class GroupQemSimplifier {
  public:
   GroupQemSimplifier(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
                      const std::vector<const std::vector<int>*>& coarser, const GroupQemParams& p,
-                     const GroupQemRegion* region = nullptr)
+                     const GroupQemRegion* region = nullptr, bool spatialOrder = false)
       : mesh_(mesh),
         group_(faceGroup),
         coarser_(coarser),
@@ -265,7 +267,8 @@ class GroupQemSimplifier {
         countGroups_(p.condition1),
         paperConditions_(p.mode == GroupMode::Paper),
         frozen_(region && !region->frozenVertex.empty() ? region->frozenVertex.data() : nullptr),
-        regionDiagonal_(region ? region->diagonal : 0) {}
+        regionDiagonal_(region ? region->diagonal : 0),
+        spatialOrder_(spatialOrder && coarser.empty() && !frozen_) {}
 
   void init();
   Candidate evaluate(uint32_t a, uint32_t b);  // judge() + counts
@@ -332,7 +335,7 @@ class GroupQemSimplifier {
   // bound of its group in every grouping that has bounds.
   bool insideCones(uint32_t f, const Point3d& n, double lenSq) const {
     for (size_t l = 0; l < coneAxis_.size(); ++l) {
-      const size_t g = size_t(l == 0 ? group_[f] : (*coarser_[l - 1])[f]);
+      const size_t g = size_t(l == 0 ? group_[inputFace(f)] : (*coarser_[l - 1])[f]);
       if (g >= coneAxis_[l].size() || !(coneCos_[l][g] > -2)) continue;
       const double dot = n * coneAxis_[l][g], c = coneCos_[l][g];
       if (!(c >= 0 ? (dot >= 0 && dot * dot >= c * c * lenSq) : (dot >= 0 || dot * dot <= c * c * lenSq))) return false;
@@ -358,6 +361,13 @@ class GroupQemSimplifier {
   const bool paperConditions_;   // conditions 1 and 2 as the paper (paper mode)
   const uint8_t* frozen_;        // per vertex, or null: see GroupQemRegion
   const double regionDiagonal_;  // > 0: the whole mesh's diagonal
+  // Vertices and faces are numbered in a spatial order inside the simplifier (see SpatialOrder);
+  // vertexInput_/faceInput_: the input index of each (empty: the input's order).
+  const bool spatialOrder_;
+  std::vector<uint32_t> vertexInput_, faceInput_;
+  uint32_t inputFace(uint32_t f) const { return faceInput_.empty() ? f : faceInput_[f]; }
+  // Fills vertexInput_ and faceInput_ (box: the input's bounding box).
+  void SpatialOrder(const vcg::Box3<double>& box);
 
   Point3d center_;
   double diag_ = 1;
@@ -533,6 +543,52 @@ bool GroupQemSimplifier::fixedVertex(uint32_t v) const {
   return false;
 }
 
+// Spreads the low 21 bits of x to every third bit (a Morton code's axis).
+uint64_t SpreadBits(uint64_t x) {
+  x &= 0x1fffff;
+  x = (x | x << 32) & 0x1f00000000ffffull;
+  x = (x | x << 16) & 0x1f0000ff0000ffull;
+  x = (x | x << 8) & 0x100f00f00f00f00full;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+  x = (x | x << 2) & 0x1249249249249249ull;
+  return x;
+}
+
+// The loop judges each collapse on the faces around its two vertices and their neighbours: with
+// the input's numbering (a scan's, in slices) these lie thousands of entries apart in every
+// array, a cache miss each. Numbered along a Morton curve of the positions (faces by their
+// first vertex in that order), a neighbourhood lies in a few cache lines. The order is
+// deterministic (ties by input index); the output is mapped back to the input's order.
+void GroupQemSimplifier::SpatialOrder(const vcg::Box3<double>& box) {
+  const size_t nv = mesh_.positions.size(), nf = mesh_.faces.size();
+  const double extent = std::max({box.DimX(), box.DimY(), box.DimZ()});
+  const double scale = extent > 0 ? double((1 << 21) - 1) / extent : 0;
+  std::vector<std::pair<uint64_t, uint32_t>> keys(nv);
+  for (uint32_t v = 0; v < nv; ++v) {
+    const Point3d p = Point3d::Construct(mesh_.positions[v]);
+    uint64_t code = 0;
+    if (std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]) && box.IsIn(p))
+      for (int k = 0; k < 3; ++k) code |= SpreadBits(uint64_t((p[k] - box.min[k]) * scale)) << k;
+    keys[v] = {code, v};
+  }
+  std::sort(keys.begin(), keys.end());
+  vertexInput_.resize(nv);
+  std::vector<uint32_t> internal(nv);
+  for (uint32_t i = 0; i < nv; ++i) {
+    vertexInput_[i] = keys[i].second;
+    internal[keys[i].second] = i;
+  }
+  std::vector<std::pair<uint64_t, uint32_t>>().swap(keys);
+  std::vector<uint64_t> faceKeys(nf);
+  for (uint32_t f = 0; f < nf; ++f) {
+    const auto& t = mesh_.faces[f];
+    faceKeys[f] = uint64_t(std::min({internal[t[0]], internal[t[1]], internal[t[2]]})) << 32 | f;
+  }
+  std::sort(faceKeys.begin(), faceKeys.end());
+  faceInput_.resize(nf);
+  for (size_t f = 0; f < nf; ++f) faceInput_[f] = uint32_t(faceKeys[f]);
+}
+
 void GroupQemSimplifier::init() {
   const size_t nv = mesh_.positions.size(), nf = mesh_.faces.size();
   // Work around the bounding-box centre: quadrics lose less precision near the origin.
@@ -543,15 +599,29 @@ void GroupQemSimplifier::init() {
   diag_ = regionDiagonal_ > 0 ? regionDiagonal_ : (box.Diag() > 0 ? box.Diag() : 1.0);
   // As vcglib: errors below a floor (~1e-6 of the diagonal) are equal, and shorter edges go first.
   floorError_ = 1e-12 * diag_ * diag_;
+  if (spatialOrder_ && nf >= kSpatialOrderFaces) SpatialOrder(box);
   pos_.resize(nv);
-  for (size_t v = 0; v < nv; ++v) pos_[v] = Point3d::Construct(mesh_.positions[v]) - center_;
   faces_.resize(nf);
   std::vector<int> dense;
   const int groups = DenseIds(group_, dense);
   primaryGroups_ = groups;
-  for (size_t f = 0; f < nf; ++f) {
-    static_cast<std::array<uint32_t, 3>&>(faces_[f]) = mesh_.faces[f];
-    faces_[f].group = dense[f];
+  if (vertexInput_.empty()) {
+    for (size_t v = 0; v < nv; ++v) pos_[v] = Point3d::Construct(mesh_.positions[v]) - center_;
+    for (size_t f = 0; f < nf; ++f) {
+      static_cast<std::array<uint32_t, 3>&>(faces_[f]) = mesh_.faces[f];
+      faces_[f].group = dense[f];
+    }
+  } else {
+    std::vector<uint32_t> internal(nv);
+    for (uint32_t i = 0; i < nv; ++i) {
+      internal[vertexInput_[i]] = i;
+      pos_[i] = Point3d::Construct(mesh_.positions[vertexInput_[i]]) - center_;
+    }
+    for (size_t f = 0; f < nf; ++f) {
+      const auto& t = mesh_.faces[faceInput_[f]];
+      for (int j = 0; j < 3; ++j) faces_[f][size_t(j)] = internal[t[size_t(j)]];
+      faces_[f].group = dense[faceInput_[f]];
+    }
   }
   if (countGroups_) {
     groupFaces_.assign(1 + coarser_.size(), std::vector<int>());
@@ -1477,19 +1547,31 @@ void GroupQemSimplifier::output(GroupQemResult& out) const {
   out.mesh.faces.clear();
   out.sourceFace.clear();
   out.sourceVertex.clear();
+  // In the input's order: internal index of each input vertex and face.
+  const auto inverse = [](const std::vector<uint32_t>& input, size_t n) {
+    std::vector<uint32_t> of(n);
+    for (uint32_t i = 0; i < n; ++i) of[input.empty() ? i : input[i]] = i;
+    return of;
+  };
   std::vector<uint32_t> remap(pos_.size(), kNone);
-  for (uint32_t v = 0; v < pos_.size(); ++v) {
-    if (vs_[v].dead) continue;
-    remap[v] = uint32_t(out.mesh.positions.size());
-    const Point3d p = inputPosition(pos_[v]);
-    out.mesh.positions.emplace_back(float(p[0]), float(p[1]), float(p[2]));
-    out.sourceVertex.push_back(v);
+  {
+    const std::vector<uint32_t> internal = inverse(vertexInput_, pos_.size());
+    for (uint32_t v = 0; v < pos_.size(); ++v) {
+      const uint32_t i = internal[v];
+      if (vs_[i].dead) continue;
+      remap[i] = uint32_t(out.mesh.positions.size());
+      const Point3d p = inputPosition(pos_[i]);
+      out.mesh.positions.emplace_back(float(p[0]), float(p[1]), float(p[2]));
+      out.sourceVertex.push_back(v);
+    }
   }
   out.mesh.faces.reserve(liveFaces_);
   out.sourceFace.reserve(liveFaces_);
+  const std::vector<uint32_t> internal = inverse(faceInput_, faces_.size());
   for (uint32_t f = 0; f < faces_.size(); ++f) {
-    if (faceDead_[f]) continue;
-    const auto& t = faces_[f];
+    const uint32_t i = internal[f];
+    if (faceDead_[i]) continue;
+    const auto& t = faces_[i];
     out.mesh.faces.push_back({remap[t[0]], remap[t[1]], remap[t[2]]});
     out.sourceFace.push_back(f);
   }
@@ -1612,7 +1694,7 @@ Status SimplifyPreservingGroups(const IndexedMesh& mesh, const std::vector<int>&
                            std::to_string(mesh.positions.size()) + " vertices");
   if (region && !(region->diagonal >= 0 && std::isfinite(region->diagonal)))
     return Status::Invalid("the region's diagonal must be finite and >= 0");
-  GroupQemSimplifier simplifier(mesh, faceGroup, coarserGroups, params, region);
+  GroupQemSimplifier simplifier(mesh, faceGroup, coarserGroups, params, region, true);
   simplifier.init();
   s = simplifier.run(progress, out.stats);
   if (s.ok() || s.code == Status::Code::Cancelled) simplifier.output(out);
