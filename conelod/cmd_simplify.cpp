@@ -283,6 +283,13 @@ int CmdSimplify(int argc, char** argv) {
     return kOk;
   }
 
+  // What the report needs of the hierarchy; then it is freed: the collapse's own arrays are the
+  // run's peak, and the hierarchy's levels would sit under them unused.
+  const double coneLimitDeg = coneLevel > 0 ? std::min(h.level(coneLevel).thresholdDeg, 180.0) : 0;
+  const size_t levelGroups = coneLevel > 0 ? h.level(coneLevel).groups.size() : 0;
+  const int wouldLevel = coneLevel > 0 ? AutoGroupLevel(h, p.targetFaces) : 0;
+  h = GroupHierarchy();
+
   GroupQemResult r;
   Timer timer;
   AttributeQuadrics attributes;
@@ -302,7 +309,6 @@ int CmdSimplify(int argc, char** argv) {
   const std::string floorReason = DescribeFloor(r.stats, p);
   // Cone groups: the cones now wider than their level's threshold; and, when the target was
   // missed, the level that would reach it.
-  const double coneLimitDeg = coneLevel > 0 ? std::min(h.level(coneLevel).thresholdDeg, 180.0) : 0;
   const int conesOver = coneLevel > 0 ? CountConesOverLimit(r.mesh, groupsAfter, coneLimitDeg) : 0;
   const bool targetReached = p.targetFaces == 0 || r.mesh.faceCount() <= p.targetFaces;
   std::string unreachable;
@@ -311,10 +317,10 @@ int CmdSimplify(int argc, char** argv) {
   // choice.)
   if (coneLevel > 0 && !autoLevel && !targetReached && p.condition1 && !p.lockGroupBoundaries && !(p.maxError > 0) &&
       !p.keepCones) {
-    const int would = AutoGroupLevel(h, p.targetFaces);
+    const int would = wouldLevel;
     unreachable = input + ": the target of " + std::to_string(p.targetFaces) + " faces cannot be reached with " +
-                  std::to_string(h.level(coneLevel).groups.size()) + " groups (level " + std::to_string(coneLevel) +
-                  "): stopped at " + std::to_string(r.mesh.faceCount()) + " faces (" + ToString(r.stats.stop) + "); " +
+                  std::to_string(levelGroups) + " groups (level " + std::to_string(coneLevel) + "): stopped at " +
+                  std::to_string(r.mesh.faceCount()) + " faces (" + ToString(r.stats.stop) + "); " +
                   (would > coneLevel ? "level " + std::to_string(would) + " (--groups cone:" + std::to_string(would) +
                                            ", or cone:auto) would reach it"
                                      : std::string("no coarser level has fewer groups per face: try a larger target"));

@@ -664,6 +664,50 @@ TEST(Simplify, GroupsDisconnectedOnInputStayAsTheyAre) {
   EXPECT_EQ(gi.groupsVanished, 0);
 }
 
+// Meshes from 4096 faces are simplified in a spatial order of their own (group_qem.cpp,
+// SpatialOrder); the output comes back in the input's order and numbering: without a collapse it
+// is the input, index for index; with collapses every face keeps its surviving corners in place.
+TEST(Simplify, SpatialOrderMapsBackToTheInput) {
+  const IndexedMesh m = test::Sphere(5);  // 8192 faces
+  ASSERT_GE(m.faces.size(), 4096u);
+  std::vector<int> g;
+  for (const auto& t : m.faces) g.push_back(m.positions[t[0]][0] > 0);
+  GroupQemParams p;
+  p.targetFaces = m.faces.size();
+  GroupQemResult r;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+  ASSERT_EQ(r.mesh.faces.size(), m.faces.size());
+  ASSERT_EQ(r.mesh.positions.size(), m.positions.size());
+  for (uint32_t f = 0; f < m.faces.size(); ++f) {
+    ASSERT_EQ(r.sourceFace[f], f);
+    ASSERT_EQ(r.mesh.faces[f], m.faces[f]);
+  }
+  for (uint32_t v = 0; v < m.positions.size(); ++v) {
+    ASSERT_EQ(r.sourceVertex[v], v);
+    ASSERT_EQ(r.mesh.positions[v], m.positions[v]);
+  }
+  p.targetFaces = 1000;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+  ExpectValidOutput(m, r);
+  ASSERT_LE(r.mesh.faces.size(), 1000u);
+  size_t kept = 0;
+  for (size_t o = 0; o < r.mesh.faces.size(); ++o) {
+    const auto& in = m.faces[r.sourceFace[o]];
+    for (int j = 0; j < 3; ++j) {
+      const uint32_t source = r.sourceVertex[r.mesh.faces[o][size_t(j)]];
+      for (int k = 0; k < 3; ++k)
+        if (in[size_t(k)] == source) {
+          EXPECT_EQ(k, j) << "output face " << o << " has input vertex " << source << " in another corner";
+          ++kept;
+        }
+    }
+  }
+  EXPECT_GT(kept, r.mesh.faces.size() / 4) << "surviving input corners (459 of 3000 when written)";
+  GroupIntegrity gi;
+  ASSERT_TRUE(MeasureGroupIntegrity(m, g, r.mesh, GroupsAfter(r, g), gi).ok());
+  EXPECT_EQ(gi.groupsSplit + gi.groupsVanished, 0);
+}
+
 TEST(Simplify, CancellationStopsAtOnceAndLeavesAValidMesh) {
   const IndexedMesh m = test::Sphere(5);  // 8192 faces
   std::vector<int> g;
