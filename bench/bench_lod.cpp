@@ -1,4 +1,5 @@
-// ConeLOD benchmark — the .clod LOD file (lod_build.h, lod_read.h): build time, file size, time to the first image,
+// ConeLOD benchmark — the .clod LOD file (lod_build.h, lod_read.h) of a mesh welded by position as `conelod lod build`
+// welds it: build time, file size, time to the first image,
 // resident memory of the on-demand reader against loading the whole mesh with vcglib.
 //
 //   bench_lod [MESH.ply...] [--budget-fraction F] [--keep DIR]
@@ -235,7 +236,8 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "bench_lod: cannot read %s\n", path.c_str());
       return 1;
     }
-    const IndexedMesh mesh = ToIndexedMesh(cm);
+    // Welded by position as `conelod lod build` and the filter weld it (BuildLodFile, weld.h).
+    const IndexedMesh mesh = WeldByPosition(ToIndexedMesh(cm)).mesh;
     cm.Clear();
     const std::string name = path.substr(path.find_last_of('/') + 1);
     const std::string file =
