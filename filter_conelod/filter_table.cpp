@@ -192,6 +192,23 @@ QString Label(const FilterCall& c, const char* name) {
 
 double Diagonal(const MeshModel* m) { return m && !m->cm.bbox.IsNull() ? double(m->cm.bbox.Diag()) : 0.0; }
 
+// The filters' collapses keep a kept vertex's or corner's own attributes and interpolate none
+// (conelod simplify does): said in the log, so that nobody takes them for interpolated. colour:
+// false when the filter colours the vertices itself.
+void LogKeptAttributes(Report& out, const MeshModel& mm, bool colour = true) {
+  if (colour && mm.hasDataMask(MeshModel::MM_VERTCOLOR))
+    out.log(
+        "vertex colours: each kept vertex keeps its own colour, not interpolated (conelod simplify "
+        "interpolates colour, normals and texture coordinates)");
+  if (mm.hasDataMask(MeshModel::MM_VERTTEXCOORD))
+    out.log("vertex texture coordinates: each kept vertex keeps its own, not interpolated");
+  if (mm.hasDataMask(MeshModel::MM_WEDGTEXCOORD))
+    out.log(
+        "wedge texture coordinates: not kept consistent: a kept corner keeps its coordinates after its vertex "
+        "moved, so the texture may stretch or tear (Quadric Edge Collapse Decimation (with texture) and "
+        "conelod simplify keep them)");
+}
+
 // Per-face quality of the live faces, in ToIndexedMesh order.
 std::vector<float> FaceQualities(const CMeshO& m) {
   std::vector<float> q;
@@ -595,6 +612,7 @@ Status ApplyGroupQem(FilterCall& c) {
       int(r.stats.collapses), int(r.stats.refusedTopology), int(r.stats.refusedCondition1),
       int(r.stats.refusedCondition2), int(r.stats.refusedLock), int(r.stats.refusedFixed), int(r.stats.refusedGeometry),
       int(r.stats.refusedCone));
+  LogKeptAttributes(out, mm);
   out.figure("faces_out", double(r.mesh.faceCount()));
   out.figure("groups_before", gi.groupsBefore);
   out.figure("groups_after", gi.groupsAfter);
@@ -746,6 +764,7 @@ Status ApplyFeatureSimplify(FilterCall& c) {
   if (!s.ok()) return s;
   const double seconds = timer.elapsed() / 1000.0;
 
+  LogKeptAttributes(c.report, mm, !mark);  // marking colours the vertices itself
   if (mark) mm.updateDataMask(MeshModel::MM_VERTCOLOR);
   mm.clearDataMask(MeshModel::MM_FACEFACETOPO | MeshModel::MM_VERTFACETOPO);
   conelod::WriteSimplifiedMesh(mm.cm, faceOf, r, mark);

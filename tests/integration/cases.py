@@ -657,6 +657,27 @@ def write_attribute_grid(path, n=30, wedge=False):
 
 
 @case
+def meshlab_collapses_say_what_they_keep(c):
+    """Issue 26: the filters' collapses keep a kept vertex's or corner's own colour and texture
+    coordinates (they interpolate none): on a grid with vertex colour and per-face texcoord lists
+    (MeshLab's wedge coordinates) the Group-Preserving Quadric Edge Collapse and the
+    Feature-Preserving Edge Simplification say so in the log (the latter says nothing of the colour
+    when it colours the feature vertices itself); on the geometry-only armadillo neither says a thing."""
+    src = c.out("attr_wedge.ply")
+    write_attribute_grid(src, wedge=True)
+    runs = (("group_preserving_quadric_edge_collapse.mlx", {}, True),
+            ("feature_preserving_edge_simplification.mlx", {"MarkFeatures": False}, True),
+            ("feature_preserving_edge_simplification.mlx", {"MarkFeatures": True}, False))
+    for mlx, values, colour in runs:
+        _, log = c.meshlab([src], mlx_with(c, mlx, values), c.out("out.ply"))
+        said = "vertex colours: each kept vertex keeps its own colour, not interpolated" in log
+        assert said == colour, (mlx, values, log[-2000:])
+        assert "wedge texture coordinates: not kept consistent" in log, (mlx, log[-2000:])
+        _, log = c.meshlab([c.mesh("stanford_armadillo_cgal.ply")], mlx_with(c, mlx), c.out("out.ply"))
+        assert "texture coordinates" not in log and "vertex colours" not in log, (mlx, log[-2000:])
+
+
+@case
 def cli_simplify_attributes(c):
     """Issue 26: a mesh with vertex colour, normals and texture coordinates (per vertex, or per face
     corner) keeps them through `simplify` (interpolated: a linear colour comes out linear at the
