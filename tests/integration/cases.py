@@ -94,8 +94,9 @@ def read_ply(path):
     return result
 
 
-def welded_border_edges(ply):
-    """Edges used by one face once the vertices at identical positions are welded."""
+def welded_edge_uses(ply):
+    """Per edge (a pair of positions), the faces using it once the vertices at identical positions
+    are welded."""
     pos = ply["positions"]
     count = {}
     for f in ply["faces"]:
@@ -103,7 +104,12 @@ def welded_border_edges(ply):
             a, b = pos[f[i]], pos[f[(i + 1) % len(f)]]
             key = (a, b) if a < b else (b, a)
             count[key] = count.get(key, 0) + 1
-    return sum(1 for n in count.values() if n == 1)
+    return count
+
+
+def welded_border_edges(ply):
+    """Edges used by one face once the vertices at identical positions are welded."""
+    return sum(1 for n in welded_edge_uses(ply).values() if n == 1)
 
 
 def last_float(log, key):
@@ -1408,15 +1414,7 @@ def cli_lod_memory(c):
         for budget in ("5%", "20%", "50%"):
             out = c.out("cut.ply")
             c.conelod("lod", "extract", clod, "--eye", eye, "--budget", budget, "-o", out)
-            ply = read_ply(out)
-            pos = ply["positions"]
-            edges = {}
-            for f in ply["faces"]:
-                for i in range(3):
-                    a, b = pos[f[i]], pos[f[(i + 1) % 3]]
-                    key = (a, b) if a < b else (b, a)
-                    edges[key] = edges.get(key, 0) + 1
-            bad = sum(1 for n in edges.values() if n != 2)
+            bad = sum(1 for n in welded_edge_uses(read_ply(out)).values() if n != 2)
             assert bad == 0, (eye, budget, bad)
 
     before = b"not a .clod file\n"
@@ -1445,14 +1443,7 @@ def cli_lod_watertight_cuts(c):
                 out = c.out("cut.ply")
                 r = json.loads(c.conelod("lod", "extract", clod, "--eye", eye, "--budget", budget, "-o", out,
                                          "--json", *cull).stdout)
-                ply = read_ply(out)
-                pos = ply["positions"]
-                edges = {}
-                for f in ply["faces"]:
-                    for i in range(3):
-                        a, b = pos[f[i]], pos[f[(i + 1) % 3]]
-                        key = (a, b) if a < b else (b, a)
-                        edges[key] = edges.get(key, 0) + 1
+                edges = welded_edge_uses(read_ply(out))
                 border = sum(1 for n in edges.values() if n == 1)
                 over = sum(1 for n in edges.values() if n > 2)
                 assert border == 0 and over == 0, (eye, budget, cull, border, over, r["faces"])
