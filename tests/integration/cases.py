@@ -2399,6 +2399,71 @@ def web_screenshot_script(c):
         p.returncode, p.stderr)
 
 
+@case
+def cli_lod_attributes(c):
+    """Issue 26 in the .clod file: a grid with vertex colour (linear in position), normals and
+    texture coordinates. `lod build` carries colour and normals (version 5; it says the texture
+    coordinates are not carried), `lod extract` at full budget writes every vertex's colour exactly
+    and its normal within the code's bound; a coarse cut's colours are the linear colour at the
+    moved vertices (interpolated, not the survivors'); --no-attributes writes the geometry-only
+    input's file byte for byte (version 4); a bad --attribute-weight is a usage error."""
+    src = c.out("attr.ply")
+    colour = write_attribute_grid(src)
+    clod = c.out("attr.clod")
+    p = c.conelod("lod", "build", src, "-o", clod, "--json")
+    r = json.loads(p.stdout)
+    assert r["attributes"] == "colour, normals" and r["color_bytes"] > 0 and r["normal_bytes"] > 0, r
+    assert r["attribute_conflicts"] == 0, r  # the seam's repeated vertices agree on colour and normal
+    assert b"texture coordinates are not carried" in p.stderr, p.stderr
+    info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
+    assert info["version"] == 5 and info["colors"] and info["normals"], info
+    text = c.conelod("lod", "info", clod).stdout.decode()
+    assert "attributes per vertex: colour (RGBA8), normals (octahedral 2 x 16 bits)" in text, text
+    # Full budget: the input back, colours exact.
+    full = c.out("full.ply")
+    e = json.loads(c.conelod("lod", "extract", clod, "--eye", "0.5,0.5,3", "--budget", "100%", "--no-cull", "-o", full,
+                             "--json").stdout)
+    assert e["faces"] == 1800, e
+    verts = [rec for name, recs in read_ply_elements(full) if name == "vertex" for rec in recs]
+    assert len(verts) == 31 * 31, len(verts)  # welded: the seam's repeats are one vertex
+    for v in verts:
+        i, j = round(v["x"] * 30), round(v["y"] * 30)
+        assert abs(v["x"] - i / 30) < 1e-4 and abs(v["y"] - j / 30) < 1e-4, v
+        assert (v["red"], v["green"], v["blue"]) == colour(i / 30, j / 30), (v, colour(i / 30, j / 30))
+        assert abs(v["nz"] - 1) < 1e-8 and abs(v["nx"]) < 1e-4 and abs(v["ny"]) < 1e-4, v
+    # A coarse cut: most vertices placed by the collapse, their colour the linear one there.
+    coarse = c.out("coarse.ply")
+    e = json.loads(c.conelod("lod", "extract", clod, "--eye", "0.5,0.5,3", "--budget", "200", "--no-cull", "-o", coarse,
+                             "--json").stdout)
+    assert e["faces"] <= 200, e
+    moved = 0
+    for name, recs in read_ply_elements(coarse):
+        if name != "vertex":
+            continue
+        for v in recs:
+            want = colour(v["x"], v["y"])
+            assert all(abs(a - b) <= 2 for a, b in zip((v["red"], v["green"], v["blue"]), want)), (v, want)
+            moved += abs(v["x"] * 30 - round(v["x"] * 30)) > 1e-3 or abs(v["y"] * 30 - round(v["y"] * 30)) > 1e-3
+    assert moved > 0, "no vertex moved: interpolation not exercised"
+    # Geometry only: --no-attributes gives the file of the same mesh without attributes.
+    plain_ply, plain, noattr = c.out("plain.ply"), c.out("plain.clod"), c.out("noattr.clod")
+    positions, faces = [], []
+    for name, recs in read_ply_elements(src):
+        if name == "vertex":
+            positions = [(v["x"], v["y"], v["z"]) for v in recs]
+        elif name == "face":
+            faces = [f["vertex_indices"] for f in recs]
+    write_ply(plain_ply, positions, faces)
+    c.conelod("lod", "build", plain_ply, "-o", plain)
+    p = c.conelod("lod", "build", src, "-o", noattr, "--no-attributes")
+    assert b"texture coordinates" not in p.stderr, p.stderr
+    assert open(plain, "rb").read() == open(noattr, "rb").read(), "--no-attributes is not the geometry-only file"
+    assert json.loads(c.conelod("lod", "info", plain, "--json").stdout)["version"] == 4
+    assert os.path.getsize(clod) > os.path.getsize(plain)
+    p = c.conelod("lod", "build", src, "-o", c.out("bad.clod"), "--attribute-weight", "-1", expect=1)
+    assert b"--attribute-weight must be >= 0" in p.stderr and not os.path.exists(c.out("bad.clod")), p.stderr
+
+
 def main():
     if sys.argv[1:] == ["--list"]:  # for CMake: one "NAME NEEDS" line per case
         for name in sorted(CASES):
