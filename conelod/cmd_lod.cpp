@@ -62,9 +62,11 @@ bool ParseMemory(const std::string& text, uint64_t& bytes) {
 
 int LodBuild(int argc, char** argv) {
   Args a(argc, argv,
-         With(kGroupingOptions, {"-o", "--level-ratio", "--threads", "--faces-per-part", "--cluster-faces",
-                                 "--group-clusters", "--quality-thr", "--boundary-weight", "--precision", "--memory"}),
-         {"--json", "--strict-greedy", "--no-optimal-placement", "--preserve-boundary", "--no-preserve-normal"});
+         With(kGroupingOptions,
+              {"-o", "--level-ratio", "--threads", "--faces-per-part", "--cluster-faces", "--group-clusters",
+               "--quality-thr", "--boundary-weight", "--precision", "--memory", "--attribute-weight"}),
+         {"--json", "--strict-greedy", "--no-optimal-placement", "--preserve-boundary", "--no-preserve-normal",
+          "--no-attributes"});
   LodBuildParams params;
   params.grouping = ReadGroupingParams(a);
   params.simplification.levelRatio = a.num("--level-ratio", params.simplification.levelRatio);
@@ -86,6 +88,10 @@ int LodBuild(int argc, char** argv) {
     return Fail(kUsage, "--precision must be in [1e-9, 0.01] (a fraction of the diagonal)");
   params.clusterFaces = size_t(clusterFaces);
   params.groupClusters = int(groupClusters);
+  params.attributeWeight = a.num("--attribute-weight", params.attributeWeight);
+  if (!(params.attributeWeight >= 0) || !std::isfinite(params.attributeWeight))
+    return Fail(kUsage, "--attribute-weight must be >= 0");
+  const bool keepAttributes = !a.has("--no-attributes");
   // Without --memory the DAG is built whole, as the Export LOD File filter builds it: the file
   // does not depend on the machine. The chunks do not bound the peak yet (docs/scale.md).
   uint64_t memory = 0;
@@ -107,11 +113,24 @@ int LodBuild(int argc, char** argv) {
   // Read straight into the indexed mesh (the same positions and faces as LoadInput's, without its
   // vcglib mesh: about 100 bytes a face less at the peak).
   IndexedMesh im;
+  LodAttributes attributes;  // per-vertex colour and normals, carried into the file (version 5)
+  bool texCoordsDropped = false;
   Timer timer;
   {
     PlyMesh ply;
     const std::string err = ReadPly(input, ply);
     if (!err.empty()) return FailLoad(err);
+    if (keepAttributes) {
+      attributes.colors.reserve(ply.colors.size());
+      for (const auto& c : ply.colors) {
+        std::array<uint8_t, 4> q;
+        for (size_t i = 0; i < 4; ++i) q[i] = uint8_t(std::lround(std::min(1.f, std::max(0.f, c[i])) * 255.f));
+        attributes.colors.push_back(q);
+      }
+      attributes.normals.reserve(ply.normals.size());
+      for (const auto& n : ply.normals) attributes.normals.push_back(EncodeLodNormal(vcg::Point3f(n[0], n[1], n[2])));
+      texCoordsDropped = !ply.texCoords.empty() || !ply.wedgeTexCoords.empty();
+    }
     im.positions.reserve(ply.positions.size());
     for (const auto& p : ply.positions) im.positions.emplace_back(p[0], p[1], p[2]);
     std::vector<std::array<float, 3>>().swap(ply.positions);
@@ -122,8 +141,11 @@ int LodBuild(int argc, char** argv) {
   if (!s.ok()) return Fail(kUsage, s.message);
   s = RequireValidForFaces(im);
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
+  if (texCoordsDropped)
+    std::fprintf(stderr, "conelod: %s: texture coordinates are not carried into the .clod file (not yet)\n",
+                 input.c_str());
   LodBuildStats st;
-  s = BuildLodFile(im, params, output, &st);
+  s = BuildLodFile(im, params, output, &st, Progress(), attributes.empty() ? nullptr : &attributes);
   if (!s.ok() && s.message.compare(0, 14, "cannot write '") == 0) return Fail(kIoError, s.message);
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
   if (a.has("--json")) {
@@ -144,6 +166,12 @@ int LodBuild(int argc, char** argv) {
         .field("position_bytes", size_t(st.positionBytes))
         .field("triangle_bytes", size_t(st.triangleBytes))
         .field("vertex_id_bytes", size_t(st.vertexIdBytes))
+        .field("color_bytes", size_t(st.colorBytes))
+        .field("normal_bytes", size_t(st.normalBytes))
+        .field("attributes", std::string(attributes.colors.empty() ? "" : "colour") +
+                                 (!attributes.colors.empty() && !attributes.normals.empty() ? ", " : "") +
+                                 (attributes.normals.empty() ? "" : "normals"))
+        .field("attribute_conflicts", st.attributeConflicts)
         .field("quantization_error", st.quantizationError)
         .field("load_seconds", loadSeconds)
         .field("grouping_seconds", st.groupingSeconds)
@@ -168,6 +196,16 @@ int LodBuild(int argc, char** argv) {
         double(st.fileBytes) / double(st.inputFaces), (unsigned long long)st.recordBytes,
         (unsigned long long)st.positionBytes, (unsigned long long)st.triangleBytes,
         (unsigned long long)st.vertexIdBytes, st.quantizationError, params.precision);
+    if (!attributes.empty())
+      std::printf(
+          "attributes: %s%s%s, %llu + %llu bytes (colour, normals; normals within %.2g rad)%s\n",
+          attributes.colors.empty() ? "" : "colour",
+          !attributes.colors.empty() && !attributes.normals.empty() ? ", " : "",
+          attributes.normals.empty() ? "" : "normals", (unsigned long long)st.colorBytes,
+          (unsigned long long)st.normalBytes, kLodNormalErrorBound,
+          st.attributeConflicts
+              ? (", " + std::to_string(st.attributeConflicts) + " welded vertices took another's values").c_str()
+              : "");
     if (st.chunks > 1)
       std::printf("built in %zu spatial chunks of at most %zu faces (--memory %lluM)\n", st.chunks, params.chunkFaces,
                   (unsigned long long)(memory >> 20));
@@ -223,7 +261,8 @@ int LodExtract(int argc, char** argv) {
   const size_t resident = reader->residentBytes();
   IndexedMesh out;
   std::vector<int> faceLevel;
-  s = ExtractCutMesh(*reader, cut, !drop, out, &faceLevel);
+  LodAttributes attributes;
+  s = ExtractCutMesh(*reader, cut, !drop, out, &faceLevel, nullptr, &attributes);
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
   const double seconds = timer.seconds();
 
@@ -234,7 +273,20 @@ int LodExtract(int argc, char** argv) {
       m.face[f].Q() = float(faceLevel[f]);
       m.face[f].C() = GroupColor(faceLevel[f]);
     }
-    const std::string err = SavePly(m, a.str("-o"));
+    // The file's attributes per vertex (AppendIndexedMesh keeps the vertex order).
+    int mask = 0;
+    if (!attributes.colors.empty()) {
+      mask |= vcg::tri::io::Mask::IOM_VERTCOLOR;
+      for (size_t v = 0; v < m.vert.size(); ++v) {
+        const auto& c = attributes.colors[v];
+        m.vert[v].C() = vcg::Color4b(c[0], c[1], c[2], c[3]);
+      }
+    }
+    if (!attributes.normals.empty()) {
+      mask |= vcg::tri::io::Mask::IOM_VERTNORMAL;
+      for (size_t v = 0; v < m.vert.size(); ++v) m.vert[v].N() = DecodeLodNormal(attributes.normals[v]);
+    }
+    const std::string err = SavePly(m, a.str("-o"), mask);
     if (!err.empty()) return Fail(kIoError, err);
   }
   const int levels = reader->info().levels;
@@ -309,6 +361,8 @@ int LodInfo(int argc, char** argv) {
         .field("file_bytes", size_t(i.fileBytes))
         .field("roots", reader->roots().size())
         .field("grid_bits", int(i.grid.bits))
+        .field("colors", i.colors)
+        .field("normals", i.normals)
         .field("quantization_error", i.quantizationError);
     // The grid exactly: a script can round positions as the file does (lod_read.h, LodGrid).
     j.key("grid_step").precise(i.grid.step);
@@ -329,6 +383,9 @@ int LodInfo(int argc, char** argv) {
                 (unsigned long long)i.fileBytes);
     std::printf("positions on a %u-bit grid of step %.6g: within %.6g of the DAG's\n", i.grid.bits, i.grid.step,
                 i.quantizationError);
+    if (i.colors || i.normals)
+      std::printf("attributes per vertex: %s%s%s\n", i.colors ? "colour (RGBA8)" : "",
+                  i.colors && i.normals ? ", " : "", i.normals ? "normals (octahedral 2 x 16 bits)" : "");
     std::printf("opened in %.4f s, %zu bytes resident (roots and their geometry)\n", seconds, reader->residentBytes());
     std::printf("%5s %8s %10s\n", "level", "nodes", "faces");
     for (int k = i.levels - 1; k >= 0; --k)
@@ -343,7 +400,7 @@ int LodInfo(int argc, char** argv) {
 const char* kLodUsage =
     "conelod lod build IN.ply -o OUT.clod [--threshold T] [--growth F] [--level-ratio R] [--cluster-faces C]\n"
     "                  [--group-clusters G] [collapse options] [--threads N] [--precision E] [--memory SIZE]\n"
-    "                  [--json]\n"
+    "                  [--attribute-weight W] [--no-attributes] [--json]\n"
     "conelod lod extract IN.clod --eye X,Y,Z --budget N|P% -o OUT.ply [--priority screen|error|fg]\n"
     "                  [--no-cull] [--drop-culled] [--json]\n"
     "conelod lod info IN.clod [--json]\n"
@@ -362,6 +419,9 @@ const char* kLodUsage =
     "  into spatial chunks of at most that many faces, each built with its border locked until\n"
     "  neighbouring chunks merge. Not yet a bound: the input and the DAG are still held whole\n"
     "  (docs/scale.md gives the peaks). Without it the DAG is built whole.\n"
+    "  Per-vertex colour and normals of IN.ply are carried into every level (interpolated as in\n"
+    "  conelod simplify, --attribute-weight W [1]) and stored per node (file version 5; colour\n"
+    "  exact as RGBA8, normals within 1e-4 rad); --no-attributes: geometry only (version 4).\n"
     "  The file does not depend on N. The other grouping options and --faces-per-part are\n"
     "  accepted for compatibility and not used.\n"
     "  extract: opens the file, refines for a perspective eye at X,Y,Z under a budget of N faces\n"
@@ -369,7 +429,8 @@ const char* kLodUsage =
     "  their distance to the eye is largest (--priority error: the error alone; fg: the paper's\n"
     "  f(g)), back-facing groups last (--no-cull: no back-face test); every cut is crack-free.\n"
     "  Writes the cut as OUT.ply with per-face quality = node level (0 = the input's faces) and a\n"
-    "  colour per level. --drop-culled leaves the back-facing groups out of OUT.ply.\n";
+    "  colour per level, and the file's vertex colours and normals. --drop-culled leaves the\n"
+    "  back-facing groups out of OUT.ply.\n";
 
 int CmdLod(int argc, char** argv) {
   if (argc < 1) return Fail(kUsage, std::string("expected build, extract or info\n") + kLodUsage);

@@ -1188,7 +1188,8 @@ Status ApplyLodExtract(FilterCall& c) {
   if (c.cb) c.cb(80, "extracting the cut");
   conelod::IndexedMesh mesh;
   std::vector<int> faceLevel;
-  s = conelod::ExtractCutMesh(*reader, cut, !drop, mesh, &faceLevel);
+  conelod::LodAttributes attributes;  // the file's vertex colours and normals (version 5)
+  s = conelod::ExtractCutMesh(*reader, cut, !drop, mesh, &faceLevel, nullptr, &attributes);
   if (!s.ok()) return failed(s);
   const double seconds = timer.elapsed() / 1000.0;
 
@@ -1206,6 +1207,20 @@ Status ApplyLodExtract(FilterCall& c) {
   }
   vcg::tri::UpdateBounding<CMeshO>::Box(layer->cm);
   vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFaceNormalized(layer->cm);
+  // The file's attributes (AppendIndexedMesh keeps the vertex order): vertex colours, and the
+  // stored normals in place of the computed ones.
+  if (!attributes.colors.empty()) {
+    layer->updateDataMask(MeshModel::MM_VERTCOLOR);
+    for (size_t v = 0; v < layer->cm.vert.size(); ++v) {
+      const auto& col = attributes.colors[v];
+      layer->cm.vert[v].C() = vcg::Color4b(col[0], col[1], col[2], col[3]);
+    }
+  }
+  if (!attributes.normals.empty())
+    for (size_t v = 0; v < layer->cm.vert.size(); ++v) {
+      const vcg::Point3f n = conelod::DecodeLodNormal(attributes.normals[v]);
+      layer->cm.vert[v].N() = CMeshO::VertexType::NormalType(n[0], n[1], n[2]);
+    }
   if (c.cb) c.cb(100, "view-dependent LOD: done");
 
   Report& out = c.report;
@@ -1218,6 +1233,9 @@ Status ApplyLodExtract(FilterCall& c) {
     out.log("orthographic view direction (%g, %g, %g)", dir[0], dir[1], dir[2]);
   else
     out.log("eye (%g, %g, %g)", e[0], e[1], e[2]);
+  if (info.colors || info.normals)
+    out.log("the file's per-vertex %s%s%s given to the layer", info.colors ? "colours" : "",
+            info.colors && info.normals ? " and " : "", info.normals ? "normals" : "");
   for (size_t l = 0; l < facesPerLevel.size(); ++l)
     if (facesPerLevel[l]) out.log("faces at level %d: %d", int(l), int(facesPerLevel[l]));
   out.log("lod_faces %d", int(mesh.faceCount()));

@@ -59,7 +59,8 @@ build_fuzzer ply_reader_fuzz \
   "$ROOT/vcg_ext/conelod/grouping/cone_grouping.cpp" "$ROOT/vcg_ext/conelod/grouping/normal_cone.cpp"
 
 # Seeds: an octahedron subdivided once and twice (32 and 128 faces, a sphere) and a bumpy variant,
-# with default and two-level hierarchies.
+# with default and two-level hierarchies; the bumpy one also with vertex colour and normals (a
+# version 5 file with attribute streams).
 python3 - "$OUT/seeds" <<'PY'
 import math, sys
 def sphere(levels, bump):
@@ -79,12 +80,19 @@ def sphere(levels, bump):
         f = nf
     p = [tuple(v*(1+bump*math.sin(5*q[0])*math.cos(3*q[1])) for v in q) for q in p]
     return p, f
-for name, lv, bump in (("oct1", 1, 0), ("sphere2", 2, 0), ("bumpy2", 2, 0.2)):
+for name, lv, bump, attr in (("oct1", 1, 0, 0), ("sphere2", 2, 0, 0), ("bumpy2", 2, 0.2, 0), ("bumpy2c", 2, 0.2, 1)):
     p, f = sphere(lv, bump)
     with open(f"{sys.argv[1]}/{name}.ply", "w") as o:
-        o.write(f"ply\nformat ascii 1.0\nelement vertex {len(p)}\nproperty float x\nproperty float y\nproperty float z\n"
-                f"element face {len(f)}\nproperty list uchar int vertex_indices\nend_header\n")
-        o.writelines(f"{x:.6f} {y:.6f} {z:.6f}\n" for x,y,z in p)
+        o.write(f"ply\nformat ascii 1.0\nelement vertex {len(p)}\nproperty float x\nproperty float y\nproperty float z\n")
+        if attr:
+            o.write("property float nx\nproperty float ny\nproperty float nz\n"
+                    "property uchar red\nproperty uchar green\nproperty uchar blue\n")
+        o.write(f"element face {len(f)}\nproperty list uchar int vertex_indices\nend_header\n")
+        for x, y, z in p:
+            n = math.sqrt(x*x + y*y + z*z) or 1
+            extra = (f" {x/n:.6f} {y/n:.6f} {z/n:.6f} {int(127.5*(x/n+1))} {int(127.5*(y/n+1))} {int(127.5*(z/n+1))}"
+                     if attr else "")
+            o.write(f"{x:.6f} {y:.6f} {z:.6f}{extra}\n")
         o.writelines(f"3 {a} {b} {c}\n" for a,b,c in f)
 PY
 for m in "$OUT"/seeds/*.ply; do

@@ -4,7 +4,7 @@
 # the refinement is done, writes OUT.png and prints the page's figures (JSON: bytes fetched before
 # the first image and in all, the cut's faces and levels, frames per second).
 #   scripts/web_screenshot.sh FILE.clod OUT.png [--budget F] [--pixel E] [--size WxH]
-#       [--eye X,Y,Z] [--color none|level|group|node] [--fps N] [--no-hud]
+#       [--eye X,Y,Z] [--color vertex|none|level|group|node] [--fps N] [--no-hud]
 #   --budget F  faces of the cut [500000]; --pixel E  screen-space error in pixels [1];
 #   --size      the window [800x600]; --eye  model coordinates [in front, +Z];
 #   --fps N     after the refinement, time N frames [60].
@@ -26,7 +26,7 @@ while [ $# -gt 0 ]; do
     --pixel) [[ "$2" =~ ^[0-9.]+$ ]] || die "--pixel must be a number of pixels"; QUERY+="&pixel=$2"; shift 2 ;;
     --size) [[ "$2" =~ ^[0-9]+x[0-9]+$ ]] || die "--size must be WxH"; SIZE="$2"; shift 2 ;;
     --eye) [[ "$2" =~ ^[-0-9.eE+]+,[-0-9.eE+]+,[-0-9.eE+]+$ ]] || die "--eye must be X,Y,Z"; QUERY+="&eye=$2"; shift 2 ;;
-    --color) [[ "$2" =~ ^(none|level|group|node)$ ]] || die "--color must be none, level, group or node"; QUERY+="&color=$2"; shift 2 ;;
+    --color) [[ "$2" =~ ^(vertex|none|level|group|node)$ ]] || die "--color must be vertex, none, level, group or node"; QUERY+="&color=$2"; shift 2 ;;
     --fps) [[ "$2" =~ ^[0-9]+$ ]] || die "--fps must be a number of frames"; FPS="$2"; shift 2 ;;
     --no-hud) QUERY+="&hud=0"; shift ;;
     *) usage ;;

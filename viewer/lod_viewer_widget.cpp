@@ -25,15 +25,18 @@ const float kFovDeg = 35.0f;
 const char* const kVertexShader = R"(
 attribute vec3 aPosition;
 attribute vec3 aNormal;
+attribute vec3 aColour;
 uniform mat4 uModelView;
 uniform mat4 uProjection;
 uniform mat3 uNormalMatrix;
 varying vec3 vNormal;
 varying vec3 vPosition;
+varying vec3 vColour;
 void main() {
   vec4 p = uModelView * vec4(aPosition, 1.0);
   vPosition = p.xyz;
   vNormal = uNormalMatrix * aNormal;
+  vColour = aColour;
   gl_Position = uProjection * p;
 }
 )";
@@ -43,15 +46,18 @@ const char* const kFragmentShader = R"(
 precision mediump float;
 #endif
 uniform vec3 uColour;
+uniform float uVertexColour;  // 1: the file's vertex colours (times uColour), 0: uColour alone
 varying vec3 vNormal;
 varying vec3 vPosition;
+varying vec3 vColour;
 void main() {
   vec3 n = normalize(vNormal);
   vec3 l = normalize(-vPosition);
   if (dot(n, l) < 0.0) n = -n;
   float diffuse = max(dot(n, l), 0.0);
   float specular = pow(diffuse, 64.0) * 0.12;
-  gl_FragColor = vec4(uColour * (0.18 + 0.82 * diffuse) + vec3(specular), 1.0);
+  vec3 albedo = uColour * mix(vec3(1.0), vColour, uVertexColour);
+  gl_FragColor = vec4(albedo * (0.18 + 0.82 * diffuse) + vec3(specular), 1.0);
 }
 )";
 
@@ -210,31 +216,42 @@ bool LodViewerWidget::upload(uint32_t id, NodeBuffers& b) {
     }
   }
   const LodGeometry& g = *reader_.geometry(id);
-  std::vector<float> interleaved;  // position, normal
-  auto put = [&interleaved](const vcg::Point3f& p, const vcg::Point3f& n) {
-    interleaved.insert(interleaved.end(), {p[0], p[1], p[2], n[0], n[1], n[2]});
+  static const LodAttributes kNone;
+  const LodAttributes& ga = reader_.attributes(id) ? *reader_.attributes(id) : kNone;
+  std::vector<float> interleaved;  // position, normal, colour (the file's, else white)
+  const bool colours = !ga.colors.empty();
+  auto put = [&](const vcg::Point3f& p, const vcg::Point3f& n, uint32_t v) {
+    float c[3] = {1, 1, 1};
+    if (colours)
+      for (int k = 0; k < 3; ++k) c[k] = ga.colors[v][size_t(k)] / 255.0f;
+    interleaved.insert(interleaved.end(), {p[0], p[1], p[2], n[0], n[1], n[2], c[0], c[1], c[2]});
   };
   auto faceNormal = [&g](const std::array<uint32_t, 3>& f) {  // length = twice the area
     return (g.positions[f[1]] - g.positions[f[0]]) ^ (g.positions[f[2]] - g.positions[f[0]]);
   };
   if (options_.flatShading) {
-    interleaved.reserve(g.faces.size() * 18);
+    interleaved.reserve(g.faces.size() * 27);
     for (const auto& f : g.faces) {
       const vcg::Point3f n = faceNormal(f).Normalize();
-      for (uint32_t v : f) put(g.positions[v], n);
+      for (uint32_t v : f) put(g.positions[v], n, v);
     }
     b.vertexCount = int(g.faces.size() * 3);
     b.indexCount = 0;
   } else {
-    // Area-weighted vertex normals within the node. Nodes share no vertex buffer, so the normals
-    // of a vertex on a group border may differ a little on both sides: a faint seam at most.
+    // The file's normals (version 5), else area-weighted vertex normals within the node. Nodes
+    // share no vertex buffer, so computed normals of a vertex on a group border may differ a
+    // little on both sides: a faint seam at most (stored ones are the same on both sides).
     std::vector<vcg::Point3f> normals(g.positions.size(), vcg::Point3f(0, 0, 0));
-    for (const auto& f : g.faces) {
-      const vcg::Point3f n = faceNormal(f);
-      for (uint32_t v : f) normals[v] += n;
+    if (!ga.normals.empty()) {
+      for (size_t v = 0; v < g.positions.size(); ++v) normals[v] = conelod::DecodeLodNormal(ga.normals[v]);
+    } else {
+      for (const auto& f : g.faces) {
+        const vcg::Point3f n = faceNormal(f);
+        for (uint32_t v : f) normals[v] += n;
+      }
     }
-    interleaved.reserve(g.positions.size() * 6);
-    for (size_t v = 0; v < g.positions.size(); ++v) put(g.positions[v], normals[v].Normalize());
+    interleaved.reserve(g.positions.size() * 9);
+    for (size_t v = 0; v < g.positions.size(); ++v) put(g.positions[v], normals[v].Normalize(), uint32_t(v));
     b.vertexCount = int(g.positions.size());
     b.indexCount = int(g.faces.size() * 3);
   }
@@ -316,14 +333,18 @@ void LodViewerWidget::renderScene() {
   program_.setUniformValue("uModelView", view);
   program_.setUniformValue("uProjection", projectionMatrix());
   program_.setUniformValue("uNormalMatrix", view.normalMatrix());
-  const int position = program_.attributeLocation("aPosition"), normal = program_.attributeLocation("aNormal");
+  const int position = program_.attributeLocation("aPosition"), normal = program_.attributeLocation("aNormal"),
+            colour = program_.attributeLocation("aColour");
   program_.enableAttributeArray(position);
   program_.enableAttributeArray(normal);
+  program_.enableAttributeArray(colour);
+  // The file's vertex colours unless the level colours are asked for (c).
+  program_.setUniformValue("uVertexColour", options_.colourLevels ? 0.0f : 1.0f);
   const QVector3D e = eyeInModel();
   const vcg::Point3d eye(e.x(), e.y(), e.z());
   const LodView lodView = currentView();
   s.budgetReached = cut.budgetReached;
-  const QVector3D plain(0.82f, 0.80f, 0.74f);
+  const QVector3D plain = reader_.info().colors ? QVector3D(1, 1, 1) : QVector3D(0.82f, 0.80f, 0.74f);
   const int colourUniform = program_.uniformLocation("uColour");  // looked up once, not per draw
   int colourLevel = -1;                                           // the level uColour holds now
   if (!options_.colourLevels) program_.setUniformValue(colourUniform, plain);
@@ -348,9 +369,11 @@ void LodViewerWidget::renderScene() {
       colourLevel = node.level;
     }
     b.vertices.bind();
-    glVertexAttribPointer(GLuint(position), 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
-    glVertexAttribPointer(GLuint(normal), 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float),
+    glVertexAttribPointer(GLuint(position), 3, GL_FLOAT, GL_FALSE, 9 * sizeof(float), nullptr);
+    glVertexAttribPointer(GLuint(normal), 3, GL_FLOAT, GL_FALSE, 9 * sizeof(float),
                           reinterpret_cast<const void*>(3 * sizeof(float)));
+    glVertexAttribPointer(GLuint(colour), 3, GL_FLOAT, GL_FALSE, 9 * sizeof(float),
+                          reinterpret_cast<const void*>(6 * sizeof(float)));
     if (b.indexCount) {
       b.indices.bind();
       glDrawElements(GL_TRIANGLES, b.indexCount, GL_UNSIGNED_INT, nullptr);
@@ -365,6 +388,7 @@ void LodViewerWidget::renderScene() {
   }
   program_.disableAttributeArray(position);
   program_.disableAttributeArray(normal);
+  program_.disableAttributeArray(colour);
   glBindBuffer(GL_ARRAY_BUFFER, 0);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, 0);
   program_.release();

@@ -7,7 +7,7 @@
 // tests each node of the cut once against the eye (three-state normal-cone test, perspective-
 // correct: normal_cone.h's ClassifyPerspective) and skips the back-facing ones.
 //
-// GPU data: one vertex buffer (positions + normals) and one index buffer per node of the cut,
+// GPU data: one vertex buffer (positions, normals, colours) and one index buffer per node of the cut,
 // uploaded when the node enters the cut and freed when it leaves (the refiner then evicts the
 // node's geometry from the reader too). OpenGL 2.1 / GLSL 1.10 (GLES 2 compatible), so that Mesa's
 // llvmpipe under Xvfb runs it.
@@ -33,6 +33,8 @@ struct ViewerOptions {
   bool cullBackFacing = true;  // per-frame cone test; the refiner also refines back-facing nodes last
   bool flatShading = false;    // flat face normals (unshared vertices) instead of per-vertex normals
   bool colourLevels = false;   // one colour per node level (GroupColor(level), as conelod lod extract)
+                               // instead of the file's vertex colours (version 5 files; else grey);
+                               // a file's stored normals shade it smoothly unless flatShading
   int stillMs = 150;           // the view counts as still after this long without input
   bool refineWhenIdle = true;  // false: only refineToDone() refines (headless measurements)
   bool hud = true;             // the text overlay

@@ -1,6 +1,8 @@
 // conelod-viewer: opens a .clod LOD file, draws its coarsest level at once and refines it while
 // the user is idle (lod_viewer_widget.h). With --screenshot it renders in a real window (run it
-// under xvfb-run without a display), writes the picture, prints the figures and exits.
+// under xvfb-run without a display), writes the picture, prints the figures and exits. A file
+// with vertex colours and normals (version 5) is drawn with them; --color-levels (or the c key)
+// shows one colour per level instead.
 //
 //   conelod-viewer FILE.clod [--budget F] [--priority screen|error|fg] [--pixel-error PX] [--flat]
 //                            [--color-levels] [--no-cull] [--no-hud]
@@ -75,7 +77,8 @@ int main(int argc, char** argv) {
   parser.addPositionalArgument("file", "the .clod file (conelod lod build)");
   const QCommandLineOption budget("budget", "face budget of the refined cut (default 500000)", "F", "500000");
   const QCommandLineOption flat("flat", "flat shading (face normals)");
-  const QCommandLineOption colours("color-levels", "one colour per level (as conelod lod extract's output)");
+  const QCommandLineOption colours(
+      "color-levels", "one colour per level (as conelod lod extract's output) instead of the file's vertex colours");
   const QCommandLineOption noCull("no-cull", "no back-face culling (neither per group nor on the GPU)");
   const QCommandLineOption noHud("no-hud", "no text overlay");
   const QCommandLineOption screenshot("screenshot", "render, save the picture to OUT.png and exit", "OUT.png");

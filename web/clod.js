@@ -1,4 +1,4 @@
-// ConeLOD web viewer — the .clod (versions 3 and 4) reader over HTTP Range requests.
+// ConeLOD web viewer — the .clod (versions 3 to 5) reader over HTTP Range requests.
 //
 // The JavaScript twin of vcg_ext/conelod/lod/lod_reader.cpp; the byte layout is
 // vcg_ext/conelod/lod/lod_format.md. It reads only the byte ranges it needs: the header, the three
@@ -8,7 +8,7 @@
 // ranges. Errors name the problem as the desktop reader's do.
 import { MeshoptDecoder } from './node_modules/meshoptimizer/meshopt_decoder.mjs';
 
-export const VERSION = 4;  // written by this ConeLOD; version 3 is read too
+export const VERSION = 5;  // the newest read (5: with attribute streams; 4: geometry only); 3 is read too
 const OLDEST_VERSION = 3;
 const CHUNK = 24;
 const HEADER_FIXED = 128;
@@ -24,11 +24,32 @@ const EMPTY_CONE = 0xffff;
 const CONE_UNIT = Math.PI / 65534;
 const FLAG_WIDE = 1;
 const HIER_PAGE = 8192;  // the records are read and kept in pages of this size
-// Optional per-vertex streams after the ids, announced by geometry flag bits (lod_format.md,
-// "Attributes to come"), in this order: a reader that meets a bit it does not know refuses the
-// file by name. Each entry: { bit, name, stride } decoded by meshopt_decodeVertexBuffer into
-// unit.attributes[name] (vertexCount x stride bytes); none is written by this version's writer.
-export const OPTIONAL_STREAMS = [];
+// Optional per-vertex streams after the ids (version 5), announced by the header's attributes field
+// and the same geometry flag bits (lod_format.md, "Attributes"), in this order: a reader that
+// meets a bit it does not know refuses the file by name. Each entry: { bit, name, stride } decoded
+// by meshopt_decodeVertexBuffer into unit.attributes[name] (vertexCount x stride bytes): colours
+// RGBA8, normals as octahedral u16 x 2 (decodeNormal).
+export const OPTIONAL_STREAMS = [
+  { bit: 2, name: 'colors', stride: 4 },
+  { bit: 4, name: 'normals', stride: 4 },
+];
+const KNOWN_ATTRIBUTES = OPTIONAL_STREAMS.reduce((m, s) => m | s.bit, 0);
+const HEADER_ATTRIBUTES = 8;  // version 5: u32 attributes, u32 pad after the level entries
+
+// An octahedral normal code (two u16, lod_internal.h's DecodeConeAxis) into out[at..at+2].
+export function decodeNormal(cu, cv, out, at) {
+  let u = (cu / 65535) * 2 - 1, v = (cv / 65535) * 2 - 1;
+  const z = 1 - Math.abs(u) - Math.abs(v);
+  if (z < 0) {
+    const pu = u, pv = v;
+    u = (1 - Math.abs(pv)) * (pu >= 0 ? 1 : -1);
+    v = (1 - Math.abs(pu)) * (pv >= 0 ? 1 : -1);
+  }
+  const n = Math.hypot(u, v, z);
+  out[at] = u / n;
+  out[at + 1] = v / n;
+  out[at + 2] = z / n;
+}
 const KNOWN_FLAGS = OPTIONAL_STREAMS.reduce((m, s) => m | s.bit, FLAG_WIDE);
 
 const fourcc = (s) => s.charCodeAt(0) | (s.charCodeAt(1) << 8) | (s.charCodeAt(2) << 16) | (s.charCodeAt(3) << 24);
@@ -228,13 +249,14 @@ export class ClodReader {
     if (head.length < CHUNK + 4) throw new ClodError(trunc + 'no version field');
     const version = new Decoder(head, CHUNK).u32();
     if (version === 1)
-      throw new ClodError('this is a .clod version 1 file (written by an older ConeLOD, whose cuts could have cracks): rebuild it with conelod lod build (this reader reads versions 3 to 4)');
+      throw new ClodError('this is a .clod version 1 file (written by an older ConeLOD, whose cuts could have cracks): rebuild it with conelod lod build (this reader reads versions 3 to 5)');
     if (version === 2)
-      throw new ClodError('this is a .clod version 2 file (uncompressed, written by an older ConeLOD): rebuild it with conelod lod build (this reader reads versions 3 to 4)');
+      throw new ClodError('this is a .clod version 2 file (uncompressed, written by an older ConeLOD): rebuild it with conelod lod build (this reader reads versions 3 to 5)');
     if (version < OLDEST_VERSION || version > VERSION)
-      throw new ClodError(`unsupported .clod version ${version} (this reader reads versions 3 to 4)`);
-    if (h.dataBytes < HEADER_FIXED + LEVEL_ENTRY || h.dataBytes > HEADER_FIXED + MAX_LEVELS * LEVEL_ENTRY ||
-        (h.dataBytes - HEADER_FIXED) % LEVEL_ENTRY !== 0 || !Number.isFinite(h.childBytes))
+      throw new ClodError(`unsupported .clod version ${version} (this reader reads versions 3 to 5)`);
+    const tail = version >= 5 ? HEADER_ATTRIBUTES : 0;
+    if (h.dataBytes < HEADER_FIXED + LEVEL_ENTRY + tail || h.dataBytes > HEADER_FIXED + MAX_LEVELS * LEVEL_ENTRY + tail ||
+        (h.dataBytes - HEADER_FIXED - tail) % LEVEL_ENTRY !== 0 || !Number.isFinite(h.childBytes))
       throw new ClodError('corrupt chunk size in the file header');
     if (h.totalBytes > src.size) throw new ClodError(trunc + `the file has ${src.size} bytes, its header says ${h.totalBytes}`);
     if (h.totalBytes < src.size)
@@ -267,7 +289,7 @@ export class ClodReader {
       if (!Number.isFinite(Math.fround(grid.origin[c])) || !Number.isFinite(Math.fround(top)))
         throw new ClodError(bad + 'bad quantization grid');
     }
-    if (levelCount < 1 || levelCount > MAX_LEVELS || h.dataBytes !== HEADER_FIXED + levelCount * LEVEL_ENTRY)
+    if (levelCount < 1 || levelCount > MAX_LEVELS || h.dataBytes !== HEADER_FIXED + levelCount * LEVEL_ENTRY + tail)
       throw new ClodError(bad + `bad level count ${levelCount}`);
     if (this.indexBlock === 0 || this.indexBlock > 1 << 20) throw new ClodError(bad + 'bad block size');
     const levels = (this.levels = []);
@@ -275,6 +297,15 @@ export class ClodReader {
       levels.push({ faces: d.u64(), nodes: d.u64(), firstId: d.u64(), error: d.f32() });
       d.u32();
     }
+    this.attributeMask = 0;
+    if (tail) {
+      this.attributeMask = d.u32();
+      d.u32();
+      if (this.attributeMask === 0 || this.attributeMask & ~KNOWN_ATTRIBUTES)
+        throw new ClodError(bad + `unknown attribute streams (${this.attributeMask}; this reader knows colour 2 and normals 4)`);
+    }
+    info.colors = (this.attributeMask & 2) !== 0;
+    info.normals = (this.attributeMask & 4) !== 0;
     let id = 0;
     for (let k = levelCount - 1; k >= 0; --k) {
       const L = levels[k];
@@ -589,6 +620,7 @@ export class ClodReader {
     const flags = d.u8();
     if (d.overrun || flags & ~KNOWN_FLAGS)
       throw new ClodError(bad + `unknown flags 0x${flags.toString(16)} (written by a newer ConeLOD? this reader knows 0x${KNOWN_FLAGS.toString(16)})`);
+    if ((flags & KNOWN_ATTRIBUTES) !== this.attributeMask) throw new ClodError(bad + "its attribute streams are not the file's");
     const wide = (flags & FLAG_WIDE) !== 0;
     const first = d.uv(), count = d.uv();
     const L = this.levels[this.levelOf(id)];
@@ -664,7 +696,7 @@ export class ClodReader {
         if (!p) throw new Error();
         MeshoptDecoder.decodeVertexBuffer(out, vc, s.stride, p);
       } catch (e) {
-        throw new ClodError(bad + `its ${s.name} stream does not decode`);
+        throw new ClodError(bad + `its ${s.name === 'colors' ? 'colours' : s.name} do not decode`);
       }
       attributes[s.name] = out;
     }
@@ -694,7 +726,8 @@ export class ClodReader {
       if (verts !== node.vertexCount) throw new ClodError(bad + 'its vertex count does not match its record');
     }
     const unit = { offset, firstNode: first, nodeCount: count, faceStart, positions, corners, vertexIds, attributes,
-      bytes: positions.byteLength + corners.byteLength + vertexIds.byteLength };
+      bytes: positions.byteLength + corners.byteLength + vertexIds.byteLength +
+        Object.values(attributes).reduce((b, a) => b + a.byteLength, 0) };
     if (this.units.has(offset)) {
       this.unitSizes.set(offset, unit.bytes);
       this.unitBytes += unit.bytes;

@@ -1,19 +1,22 @@
 // ConeLOD web viewer — the page: opens the .clod named by ?file= over HTTP Range requests, draws
 // the coarsest cut (the roots) at once, then refines by screen-space error within a face budget
 // (refine.js) while the view is still, and again from the roots (its reads cached) whenever the
-// view changes. Orbit/zoom: three.js's OrbitControls. Keys: c cycles the colours (shaded,
-// one per level, one per group of its level, one per node), h hides the text.
+// view changes. Orbit/zoom: three.js's OrbitControls. Keys: c cycles the colours (the file's
+// vertex colours with smooth shading by its normals when it has them, shaded grey, one per level,
+// one per group of its level, one per node), a switches between the file's attributes and the
+// level colours, h hides the text.
 //
 // Page parameters: file (URL of the .clod, relative to the page), budget (faces, default
 // 500000), pixel (screen-space error in pixels, default 1), eye=X,Y,Z (model coordinates; default:
-// in front, +Z, framing the box), color=none|level|group|node, hud=0, cull=0 (no back-face culling),
-// refine=0 (draw the roots only), fps=N (after refinement, time N frames).
+// in front, +Z, framing the box), color=vertex|none|level|group|node (default: vertex when the file
+// has colours or normals, else none), hud=0, cull=0 (no back-face culling), refine=0 (draw the
+// roots only), fps=N (after refinement, time N frames).
 // For scripts (web/shoot.mjs): window.conelod holds the state ('loading', 'refining', 'done',
 // 'error'), the views refined so far, the eye and the figures; the title ends in "[done]" or
 // "[error]".
 import * as THREE from 'three';
 import { OrbitControls } from './node_modules/three/examples/jsm/controls/OrbitControls.js';
-import { ClodReader } from './clod.js';
+import { ClodReader, decodeNormal } from './clod.js';
 import { Refiner, projectedError } from './refine.js';
 
 const params = new URLSearchParams(location.search);
@@ -37,6 +40,12 @@ function numberParam(name, def) {
   if (!Number.isFinite(x) || x < 0) throw new Error(`page parameter ${name}=${v} is not a non-negative number`);
   return x;
 }
+
+// sRGB byte -> linear (three.js works in linear sRGB and encodes its output as sRGB).
+const SRGB_TO_LINEAR = Float32Array.from({ length: 256 }, (_, i) => {
+  const c = i / 255;
+  return c < 0.04045 ? c / 12.92 : ((c + 0.055) / 1.055) ** 2.4;
+});
 
 const nextFrame = () => new Promise((r) => requestAnimationFrame(() => r()));
 
@@ -87,9 +96,15 @@ async function main() {
     node: palette(24, 0.6, 0.6),
   };
   materials.group = materials.node;
-  const modes = ['none', 'level', 'group', 'node'];
-  let colorMode = params.get('color') || 'none';
-  if (!modes.includes(colorMode)) throw new Error(`page parameter color must be one of ${modes.join(', ')}`);
+  // The file's attributes: vertex colours (else grey), smooth shading by the stored normals (else flat).
+  const hasAttributes = info.colors || info.normals;
+  materials.vertex = [new THREE.MeshLambertMaterial({ color: info.colors ? 0xffffff : 0xc8c2b8,
+    vertexColors: info.colors, flatShading: !info.normals })];
+  const modes = hasAttributes ? ['vertex', 'none', 'level', 'group', 'node'] : ['none', 'level', 'group', 'node'];
+  let colorMode = params.get('color') || (hasAttributes ? 'vertex' : 'none');
+  if (!modes.includes(colorMode)) throw new Error(`page parameter color must be one of ${modes.join(', ')}` +
+    (colorMode === 'vertex' ? ' (the file has no colours or normals)' : ''));
+  status.colorMode = colorMode;
 
   const view = () => {
     const h = renderer.getDrawingBufferSize(new THREE.Vector2()).y;
@@ -132,6 +147,18 @@ async function main() {
       if (!d) {
         const g = new THREE.BufferGeometry();
         g.setAttribute('position', new THREE.BufferAttribute(unit.positions, 3));
+        const vc = unit.positions.length / 3;
+        if (unit.attributes.colors) {  // sRGB bytes to three.js's linear working space
+          const c = unit.attributes.colors, lin = new Float32Array(vc * 3);
+          for (let i = 0; i < vc; ++i)
+            for (let k = 0; k < 3; ++k) lin[i * 3 + k] = SRGB_TO_LINEAR[c[i * 4 + k]];
+          g.setAttribute('color', new THREE.BufferAttribute(lin, 3));
+        }
+        if (unit.attributes.normals) {
+          const q = new DataView(unit.attributes.normals.buffer), nrm = new Float32Array(vc * 3);
+          for (let i = 0; i < vc; ++i) decodeNormal(q.getUint16(i * 4, true), q.getUint16(i * 4 + 2, true), nrm, i * 3);
+          g.setAttribute('normal', new THREE.BufferAttribute(nrm, 3));
+        }
         g.setIndex(new THREE.BufferAttribute(unit.corners, 1));
         g.computeBoundingSphere();
         d = { mesh: new THREE.Mesh(g, materials[colorMode]), unit };
@@ -171,7 +198,9 @@ async function main() {
       `${refiner.cut.size} nodes, levels ${status.minLevel}-${status.maxLevel}, budget ${budget.toLocaleString()}\n` +
       `fetched: ${kb(reader.src.bytesFetched)} (${((100 * reader.src.bytesFetched) / info.fileBytes).toFixed(1)} %) ` +
       `in ${reader.src.requests} requests; first image after ${kb(status.firstImageBytes || 0)}\n` +
-      `${status.state}${status.fps ? `, ${status.fps.toFixed(1)} frames/s` : ''}   (c: colours, h: hide)`;
+      `${status.state}${status.fps ? `, ${status.fps.toFixed(1)} frames/s` : ''}   colours: ${colorMode}` +
+      `${info.colors || info.normals ? ` (file: ${[info.colors && 'colour', info.normals && 'normals'].filter(Boolean).join(', ')})` : ''}` +
+      `   (c: colours,${hasAttributes ? ' a: attributes/levels,' : ''} h: hide)`;
   }
 
   const render = () => renderer.render(scene, camera);
@@ -194,8 +223,10 @@ async function main() {
     controls.dispatchEvent({ type: 'change' });
   });
   window.addEventListener('keydown', (e) => {
-    if (e.key === 'c') {
-      colorMode = modes[(modes.indexOf(colorMode) + 1) % modes.length];
+    if (e.key === 'c' || (e.key === 'a' && hasAttributes)) {
+      colorMode = e.key === 'c' ? modes[(modes.indexOf(colorMode) + 1) % modes.length]
+        : colorMode === 'vertex' ? 'level' : 'vertex';
+      status.colorMode = colorMode;
       updateScene().then(render);
     } else if (e.key === 'h') {
       hud.style.display = hud.style.display === 'none' ? '' : 'none';

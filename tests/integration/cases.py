@@ -60,14 +60,14 @@ class Ctx:
     def out(self, name):
         return os.path.join(self.tmp, name)
 
-    def meshlab(self, inputs, script, output=None, expect_ok=True):
-        """Runs meshlabserver; returns (exit code, log text)."""
+    def meshlab(self, inputs, script, output=None, expect_ok=True, save=("fq", "fc")):
+        """Runs meshlabserver; returns (exit code, log text). `save`: what -m saves of the output."""
         log = self.out("meshlab.log")
         if os.path.exists(log):
             os.remove(log)
         cmd = ["xvfb-run", "-a", self.server, "-l", log, "-i"] + inputs + ["-s", script]
         if output:
-            cmd += ["-o", output, "-m", "fq", "fc"]
+            cmd += ["-o", output, "-m"] + list(save)
         p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=600, cwd=self.tmp)
         text = open(log, errors="replace").read() if os.path.exists(log) else ""
         if expect_ok and p.returncode != 0:
@@ -1220,6 +1220,33 @@ def meshlab_lod_export_extract_bunny(c):
     _, log = c.meshlab([bunny], mlx_with(c, "extract_view_dependent_lod.mlx", FileName=clod, FaceBudget=8000,
                                          ViewMode=2), c.out("ortho.ply"))
     assert 0 < last_int(log, "lod_faces") <= 8000, log[-1500:]
+
+
+@case
+def meshlab_lod_extract_colours(c):
+    """Extract View-Dependent LOD gives the layer the file's vertex colours and normals (a .clod
+    of cli_lod_attributes' grid): at full budget every vertex has its input colour exactly and
+    the normal (0, 0, 1); the log says so. A geometry-only file's layer gets no such line."""
+    src = c.out("attr.ply")
+    colour = write_attribute_grid(src)
+    clod = c.out("attr.clod")
+    c.conelod("lod", "build", src, "-o", clod)
+    out = c.out("extracted.ply")
+    _, log = c.meshlab([c.mesh("stanford_bunny_bun_zipper.ply")],
+                       mlx_with(c, "extract_view_dependent_lod.mlx", FileName=clod, FaceBudget=100000), out,
+                       save=("fq", "fc", "vc", "vn"))
+    assert "the file's per-vertex colours and normals given to the layer" in log, log[-1500:]
+    verts = [r for name, recs in read_ply_elements(out) if name == "vertex" for r in recs]
+    assert len(verts) == 31 * 31, len(verts)
+    for v in verts:
+        i, j = round(v["x"] * 30), round(v["y"] * 30)
+        assert (v["red"], v["green"], v["blue"]) == colour(i / 30, j / 30), (v, colour(i / 30, j / 30))
+        assert abs(v["nz"] - 1) < 1e-4, v
+    plain = c.out("plain.clod")
+    c.conelod("lod", "build", src, "-o", plain, "--no-attributes")
+    _, log = c.meshlab([c.mesh("stanford_bunny_bun_zipper.ply")],
+                       mlx_with(c, "extract_view_dependent_lod.mlx", FileName=plain, FaceBudget=100000), c.out("p.ply"))
+    assert "given to the layer" not in log, log[-1500:]
 
 
 @case
@@ -2397,6 +2424,134 @@ def web_screenshot_script(c):
                        timeout=60)
     assert p.returncode == 2 and b"not a .clod file (wrong magic" in p.stderr and not os.path.exists(c.out("bad.png")), (
         p.returncode, p.stderr)
+
+
+@case
+def cli_lod_attributes(c):
+    """Issue 26 in the .clod file: a grid with vertex colour (linear in position), normals and
+    texture coordinates. `lod build` carries colour and normals (version 5; it says the texture
+    coordinates are not carried), `lod extract` at full budget writes every vertex's colour exactly
+    and its normal within the code's bound; a coarse cut's colours are the linear colour at the
+    moved vertices (interpolated, not the survivors'); --no-attributes writes the geometry-only
+    input's file byte for byte (version 4); a bad --attribute-weight is a usage error."""
+    src = c.out("attr.ply")
+    colour = write_attribute_grid(src)
+    clod = c.out("attr.clod")
+    p = c.conelod("lod", "build", src, "-o", clod, "--json")
+    r = json.loads(p.stdout)
+    assert r["attributes"] == "colour, normals" and r["color_bytes"] > 0 and r["normal_bytes"] > 0, r
+    assert r["attribute_conflicts"] == 0, r  # the seam's repeated vertices agree on colour and normal
+    assert b"texture coordinates are not carried" in p.stderr, p.stderr
+    info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
+    assert info["version"] == 5 and info["colors"] and info["normals"], info
+    text = c.conelod("lod", "info", clod).stdout.decode()
+    assert "attributes per vertex: colour (RGBA8), normals (octahedral 2 x 16 bits)" in text, text
+    # Full budget: the input back, colours exact.
+    full = c.out("full.ply")
+    e = json.loads(c.conelod("lod", "extract", clod, "--eye", "0.5,0.5,3", "--budget", "100%", "--no-cull", "-o", full,
+                             "--json").stdout)
+    assert e["faces"] == 1800, e
+    verts = [rec for name, recs in read_ply_elements(full) if name == "vertex" for rec in recs]
+    assert len(verts) == 31 * 31, len(verts)  # welded: the seam's repeats are one vertex
+    for v in verts:
+        i, j = round(v["x"] * 30), round(v["y"] * 30)
+        assert abs(v["x"] - i / 30) < 1e-4 and abs(v["y"] - j / 30) < 1e-4, v
+        assert (v["red"], v["green"], v["blue"]) == colour(i / 30, j / 30), (v, colour(i / 30, j / 30))
+        assert abs(v["nz"] - 1) < 1e-8 and abs(v["nx"]) < 1e-4 and abs(v["ny"]) < 1e-4, v
+    # A coarse cut: most vertices placed by the collapse, their colour the linear one there.
+    coarse = c.out("coarse.ply")
+    e = json.loads(c.conelod("lod", "extract", clod, "--eye", "0.5,0.5,3", "--budget", "200", "--no-cull", "-o", coarse,
+                             "--json").stdout)
+    assert e["faces"] <= 200, e
+    moved = 0
+    for name, recs in read_ply_elements(coarse):
+        if name != "vertex":
+            continue
+        for v in recs:
+            want = colour(v["x"], v["y"])
+            assert all(abs(a - b) <= 2 for a, b in zip((v["red"], v["green"], v["blue"]), want)), (v, want)
+            moved += abs(v["x"] * 30 - round(v["x"] * 30)) > 1e-3 or abs(v["y"] * 30 - round(v["y"] * 30)) > 1e-3
+    assert moved > 0, "no vertex moved: interpolation not exercised"
+    # Geometry only: --no-attributes gives the file of the same mesh without attributes.
+    plain_ply, plain, noattr = c.out("plain.ply"), c.out("plain.clod"), c.out("noattr.clod")
+    positions, faces = [], []
+    for name, recs in read_ply_elements(src):
+        if name == "vertex":
+            positions = [(v["x"], v["y"], v["z"]) for v in recs]
+        elif name == "face":
+            faces = [f["vertex_indices"] for f in recs]
+    write_ply(plain_ply, positions, faces)
+    c.conelod("lod", "build", plain_ply, "-o", plain)
+    p = c.conelod("lod", "build", src, "-o", noattr, "--no-attributes")
+    assert b"texture coordinates" not in p.stderr, p.stderr
+    assert open(plain, "rb").read() == open(noattr, "rb").read(), "--no-attributes is not the geometry-only file"
+    assert json.loads(c.conelod("lod", "info", plain, "--json").stdout)["version"] == 4
+    assert os.path.getsize(clod) > os.path.getsize(plain)
+    p = c.conelod("lod", "build", src, "-o", c.out("bad.clod"), "--attribute-weight", "-1", expect=1)
+    assert b"--attribute-weight must be >= 0" in p.stderr and not os.path.exists(c.out("bad.clod")), p.stderr
+
+
+def red_green_gradient(png, covered=0.2):
+    """How much red minus green grows from the left fifth to the right fifth of the model's pixels
+    (those unlike the corner's background) in a picture of write_attribute_grid's grid; shading
+    changes both channels alike."""
+    w, h, px = read_png(png)
+    bg = px[0][0]
+    cols = [(x, px[y][x]) for y in range(h) for x in range(w) if max(abs(a - b) for a, b in zip(px[y][x], bg)) > 6]
+    assert len(cols) > covered * w * h, "the model covers %d pixels" % len(cols)
+    xs = sorted(x for x, _ in cols)
+    lo, hi = xs[len(xs) // 5], xs[4 * len(xs) // 5]
+    left = [q for x, q in cols if x <= lo]
+    right = [q for x, q in cols if x >= hi]
+
+    def mean(qs, k):
+        return sum(q[k] for q in qs) / len(qs)
+    return (mean(right, 0) - mean(right, 1)) - (mean(left, 0) - mean(left, 1))
+
+
+@case
+def viewer_colours(c):
+    """conelod-viewer draws a coloured .clod (write_attribute_grid's grid) with its vertex colours,
+    and with one colour per level under --color-levels: the red gradient across the model is in
+    the first picture only."""
+    src = c.out("attr.ply")
+    write_attribute_grid(src)
+    clod = c.out("attr.clod")
+    c.conelod("lod", "build", src, "-o", clod)
+    stats = []
+    for extra in ((), ("--color-levels",)):
+        png = c.out("viewer%d.png" % len(stats))
+        rc, out, err = run_viewer(c, clod, "--screenshot", png, "--size", "320x240", "--eye", "0.5,0.5,2.2",
+                                  "--refine", "--budget", "100000", "--no-hud", *extra)
+        assert rc == 0, (rc, err)
+        stats.append(red_green_gradient(png, 0.1))
+    print("red - green across the model: vertex colours %.1f, level colours %.1f" % tuple(stats))
+    assert stats[0] > 40 and abs(stats[1]) < 15, stats
+
+
+@case
+def web_viewer_colours(c):
+    """The web viewer draws a coloured .clod with its vertex colours by default (the grid of
+    cli_lod_attributes: red grows with x, green falls with y) and with today's level colours under
+    color=level: the pictures' red gradient across the model is there in the first and not in the
+    second, and their hues differ."""
+    src = c.out("attr.ply")
+    write_attribute_grid(src)
+    clod = c.out("attr.clod")
+    c.conelod("lod", "build", src, "-o", clod)
+    s = Serve(c, clod)
+    try:
+        pngs = [c.out("colour%d.png" % i) for i in range(2)]
+        vertex, level = shoot(c, (s.url + "&budget=100000&pixel=0&hud=0&eye=0.5,0.5,2.2", pngs[0]),
+                              (s.url + "&budget=100000&pixel=0&hud=0&eye=0.5,0.5,2.2&color=level", pngs[1]))
+    finally:
+        s.stop()
+    assert vertex["state"] == "done" and vertex["colorMode"] == "vertex", vertex
+    assert level["state"] == "done" and level["colorMode"] == "level", level
+    stats = [red_green_gradient(png) for png in pngs]
+    print("red - green across the model: vertex colours %.1f, level colours %.1f" % tuple(stats))
+    assert stats[0] > 40, "vertex colours: red - green grows by %.1f from left to right" % stats[0]
+    assert abs(stats[1]) < 15, "level colours: red - green changes by %.1f across the model" % stats[1]
 
 
 def main():

@@ -1,6 +1,7 @@
 // ConeLOD — libFuzzer target for the .clod reader (lod_read.h): any byte string must open cleanly or be
 // refused with a Status, never crash, read out of bounds or allocate more than the input justifies.
-// Opened inputs are refined at two budgets, for two eyes, extracted, and their geometry evicted.
+// Opened inputs are refined at two budgets, for two eyes, extracted (with their attribute streams,
+// version 5: one value per vertex, or the fuzzer stops), and their geometry evicted.
 // Built and run by scripts/fuzz.sh (clang++ -fsanitize=fuzzer,address,undefined), with a seed
 // corpus written by `conelod lod build` from small generated meshes.
 #include <cstddef>
@@ -28,7 +29,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (!RefineLod(*reader, view, cut).ok()) return 0;
     IndexedMesh mesh;
     std::vector<int> level;
-    if (!ExtractCutMesh(*reader, cut, i == 1, mesh, &level).ok()) return 0;
+    LodAttributes attributes;
+    if (!ExtractCutMesh(*reader, cut, i == 1, mesh, &level, nullptr, &attributes).ok()) return 0;
+    if (attributes.colors.size() != (info.colors ? mesh.positions.size() : 0) ||
+        attributes.normals.size() != (info.normals ? mesh.positions.size() : 0))
+      __builtin_trap();  // a stream that does not match its vertices: a reader bug
     for (uint32_t id : cut.nodes) reader->EvictGeometry(id);
   }
   // Random access by id, as a viewer would after a jump.

@@ -56,6 +56,9 @@ struct LodBuildParams {
   // level no longer shrinks), which frees their common border. A mesh of at most chunkFaces faces
   // is one chunk: its file is byte for byte the unchunked one.
   size_t chunkFaces = 0;
+  // With attributes (LodAttributes): how much an attribute change costs a collapse, as
+  // conelod simplify's --attribute-weight (attribute_quadric.h); >= 0. Unused without attributes.
+  double attributeWeight = 1.0;
 };
 
 // --memory: the budget's smallest value, and the faces of a chunk per byte of it (a chunk's own
@@ -78,13 +81,16 @@ struct LodDag {
     size_t clusterCount() const { return clusterGroup.size(); }
   };
   std::vector<Level> levels;
+  LodAttributes attributes;  // per global vertex (streams as the input's; empty: geometry only)
 };
 
 // Builds the DAG. Errors are geometric, in model units: a group's error is the largest distance
 // from its vertices to its simplified surface plus the largest error of its clusters, so a
 // node's error is at least its children's.
+// `attributes` (optional, per vertex of `mesh`): carried through every level (LodAttributes).
 Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag& out,
-                   const Progress& progress = Progress(), size_t* chunks = nullptr);
+                   const Progress& progress = Progress(), size_t* chunks = nullptr,
+                   const LodAttributes* attributes = nullptr);
 
 struct LodBuildStats {
   size_t inputVertices = 0, inputFaces = 0;  // of the mesh the DAG was built on (BuildLodFile: welded)
@@ -99,6 +105,8 @@ struct LodBuildStats {
   // Of fileBytes: the node records (HIER), and the compressed positions, triangles and global
   // vertex ids of the geometry (GEOS); quantizationError: the grid's bound, model units.
   uint64_t recordBytes = 0, positionBytes = 0, triangleBytes = 0, vertexIdBytes = 0;
+  uint64_t colorBytes = 0, normalBytes = 0;  // the attribute streams (version 5), compressed
+  size_t attributeConflicts = 0;  // BuildLodFile: welded vertices whose attributes differed (the lowest kept)
   double quantizationError = 0;
   double groupingSeconds = 0, simplifySeconds = 0, writeSeconds = 0,
          seconds = 0;  // grouping: the
@@ -114,8 +122,11 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
 // Welds the mesh's vertices by position (WeldByPosition, weld.h: coincident vertices become one,
 // unreferenced ones are left out), builds the DAG of the welded mesh and writes it: level 0 of the
 // file is the welded mesh. BuildLodDag and WriteLodFile take their mesh as it is. The mesh must
-// pass RequireValidForFaces.
+// pass RequireValidForFaces. `attributes` (optional, per vertex of `mesh`): a welded vertex takes
+// its representative's (the lowest input vertex at its position; stats->attributeConflicts counts
+// the vertices whose values differed from it); the file is then version 5.
 Status BuildLodFile(const IndexedMesh& mesh, const LodBuildParams& params, const std::string& path,
-                    LodBuildStats* stats = nullptr, const Progress& progress = Progress());
+                    LodBuildStats* stats = nullptr, const Progress& progress = Progress(),
+                    const LodAttributes* attributes = nullptr);
 
 }  // namespace conelod

@@ -35,6 +35,7 @@
 #include "conelod/common.h"
 #include "conelod/parallel.h"
 #include "conelod/mesh/mesh_check.h"
+#include "conelod/simplify/attribute_quadric.h"
 
 namespace conelod {
 namespace {
@@ -318,13 +319,40 @@ struct GroupResult {
   std::vector<Face> faces;              // local vertex ids: < keptBase: input vertex; else newPositions
   std::vector<uint32_t> localToGlobal;  // per input local vertex: its global id
   std::vector<vcg::Point3f> newPositions;
+  LodAttributes newAttributes;  // per new vertex (the streams the DAG carries)
   double distance = 0;
   bool ok = false;
 };
 
+// The attributes of the DAG's vertices as the attribute quadrics' float channels (colour RGBA in
+// [0, 1], then the unit normal) and back to the stored codes.
+VertexAttributes LayoutOf(const LodAttributes& a) {
+  VertexAttributes l;
+  l.colorChannels = a.colors.empty() ? 0 : 4;
+  l.normals = !a.normals.empty();
+  return l;
+}
+void ChannelsOf(const LodAttributes& a, uint32_t v, float* out) {
+  if (!a.colors.empty())
+    for (int c = 0; c < 4; ++c) *out++ = float(a.colors[v][size_t(c)]) / 255.f;
+  if (!a.normals.empty()) {
+    const vcg::Point3f n = DecodeLodNormal(a.normals[v]);
+    for (int c = 0; c < 3; ++c) *out++ = n[c];
+  }
+}
+void StoreChannels(const float* in, const LodAttributes& like, std::array<uint8_t, 4>& color,
+                   std::array<uint16_t, 2>& normal) {
+  if (!like.colors.empty()) {
+    for (int c = 0; c < 4; ++c) color[size_t(c)] = uint8_t(std::lround(std::min(1.f, std::max(0.f, in[c])) * 255.f));
+    in += 4;
+  }
+  if (!like.normals.empty()) normal = EncodeLodNormal(vcg::Point3f(in[0], in[1], in[2]));
+}
+
 void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32_t>& groupFaces,
                    const std::vector<vcg::Point3f>& positions, const std::vector<uint8_t>& sharedVertex,
-                   const LodBuildParams& params, double maxError, double diagonal, bool keep, GroupResult& out) {
+                   const LodBuildParams& params, double maxError, double diagonal, bool keep,
+                   const LodAttributes& attributes, GroupResult& out) {
   IndexedMesh local;
   std::unordered_map<uint32_t, uint32_t> toLocal;
   out.localToGlobal.clear();
@@ -345,6 +373,7 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
   const uint32_t V = uint32_t(local.positions.size());
   out.faces.clear();
   out.newPositions.clear();
+  out.newAttributes = LodAttributes();
   out.distance = 0;
   out.ok = true;
   if (keep) {  // the group stays as it is
@@ -361,12 +390,49 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
   qem.lockGroupBoundaries = false;
   if (maxError > 0) qem.maxError = qem.maxError > 0 ? std::min(qem.maxError, maxError) : maxError;
   const std::vector<int> oneGroup(local.faces.size(), 0);
+  // Attributes: one value per vertex (no seam), each corner taking its vertex's.
+  const bool withAttributes = !attributes.empty();
+  AttributeQuadrics quadrics;
+  const VertexAttributes layout = LayoutOf(attributes);
+  const size_t channels = size_t(layout.channels());
+  if (withAttributes) {
+    std::vector<float> corners(local.faces.size() * 3 * channels);
+    for (size_t f = 0; f < local.faces.size(); ++f)
+      for (size_t k = 0; k < 3; ++k)
+        ChannelsOf(attributes, out.localToGlobal[local.faces[f][k]], corners.data() + (3 * f + k) * channels);
+    if (!quadrics.Init(local, layout, std::move(corners), params.attributeWeight).ok()) {
+      out.faces = local.faces;  // (cannot happen: the layout and sizes are ours) the group stays
+      return;
+    }
+  }
   GroupQemResult res;
-  const Status s = SimplifyPreservingGroups(local, oneGroup, qem, res, Progress(), {}, &region);
+  const Status s = SimplifyPreservingGroups(local, oneGroup, qem, res, Progress(), {}, &region,
+                                            withAttributes ? &quadrics : nullptr);
   if (!s.ok() || res.mesh.faces.empty()) {  // the group stays as it is
     out.faces = local.faces;
     return;
   }
+  // Each output vertex's attributes at its place, as they will be stored (one corner of each:
+  // without seams every corner of a vertex gives the same value).
+  std::vector<std::array<uint8_t, 4>> color(withAttributes ? res.mesh.positions.size() : 0);
+  std::vector<std::array<uint16_t, 2>> normal(color.size());
+  if (withAttributes) {
+    std::vector<uint8_t> done(res.mesh.positions.size(), 0);
+    std::vector<float> value(channels);
+    for (size_t f = 0; f < res.mesh.faces.size(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t o = res.mesh.faces[f][size_t(k)];
+        if (done[o]) continue;
+        done[o] = 1;
+        const vcg::Point3f& q = res.mesh.positions[o];
+        quadrics.Evaluate(res.sourceFace[f], k, res.sourceVertex[o], vcg::Point3d(q[0], q[1], q[2]), value.data());
+        StoreChannels(value.data(), attributes, color[o], normal[o]);
+      }
+  }
+  auto sameAttributes = [&](size_t o, uint32_t global) {
+    return !withAttributes || ((attributes.colors.empty() || attributes.colors[global] == color[o]) &&
+                               (attributes.normals.empty() || attributes.normals[global] == normal[o]));
+  };
   // Output vertex -> local id. A frozen vertex never moves: it keeps its id and its position bit
   // for bit (the simplifier works around the group's centre in double, which can change the last
   // bits of a coordinate near 0, so its output position is not used). Another vertex keeps its
@@ -377,12 +443,16 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
     const uint32_t src = res.sourceVertex[v];
     const vcg::Point3f& p = res.mesh.positions[v];
     const vcg::Point3f& q = local.positions[src];
-    if (region.frozenVertex[src] ||
-        (std::fabs(p[0] - q[0]) <= still && std::fabs(p[1] - q[1]) <= still && std::fabs(p[2] - q[2]) <= still)) {
+    // With attributes a vertex also keeps its id only when its stored values did not change (a
+    // global id has one value in the file); a frozen vertex keeps its own.
+    if (region.frozenVertex[src] || (std::fabs(p[0] - q[0]) <= still && std::fabs(p[1] - q[1]) <= still &&
+                                     std::fabs(p[2] - q[2]) <= still && sameAttributes(v, out.localToGlobal[src]))) {
       outId[v] = src;
     } else {
       outId[v] = V + uint32_t(out.newPositions.size());
       out.newPositions.push_back(p);
+      if (!attributes.colors.empty()) out.newAttributes.colors.push_back(color[v]);
+      if (!attributes.normals.empty()) out.newAttributes.normals.push_back(normal[v]);
     }
   }
   for (const auto& t : res.mesh.faces) out.faces.push_back({outId[t[0]], outId[t[1]], outId[t[2]]});
@@ -451,11 +521,17 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
 }  // namespace
 
 Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag& dag, const Progress& progress,
-                   size_t* chunks) {
+                   size_t* chunks, const LodAttributes* attributes) {
   dag = LodDag();
   if (chunks) *chunks = 1;
   Status s = RequireValidForFaces(mesh);
   if (!s.ok()) return s;
+  if (attributes) {
+    const std::string bad = attributes->Check(mesh.positions.size());
+    if (!bad.empty()) return Status::Invalid(bad);
+    if (!(params.attributeWeight >= 0) || !std::isfinite(params.attributeWeight))
+      return Status::Invalid("the attribute weight must be >= 0");
+  }
   {
     GroupQemParams q = params.simplification.qem;
     q.targetFaces = 1;  // set per group
@@ -479,6 +555,7 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
   const double diagonal = box.IsNull() ? 0.0 : box.Diag();
   dag.positions = mesh.positions;
   dag.inputVertices = mesh.positions.size();
+  if (attributes) dag.attributes = *attributes;
   dag.levels.emplace_back();
   const unsigned threads = unsigned(std::max(1, SimplificationThreads(params.simplification)));
   // Chunks (params.chunkFaces): clusterNode holds each cluster's kd chunk at depth `depth`.
@@ -599,7 +676,7 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
       RunThreads(std::min<unsigned>(threads, unsigned(G)), [&](unsigned) {
         for (int g = next++; g < G; g = next++)
           SimplifyGroup(L.faces, groupFaces[size_t(g)], dag.positions, shared, params, cap, diagonal,
-                        keep[size_t(g)] != 0, results[size_t(g)]);
+                        keep[size_t(g)] != 0, dag.attributes, results[size_t(g)]);
       });
     }
     size_t newFaces = 0;
@@ -632,6 +709,9 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
       const uint32_t V = uint32_t(r.localToGlobal.size());
       const uint32_t firstNew = uint32_t(dag.positions.size());
       dag.positions.insert(dag.positions.end(), r.newPositions.begin(), r.newPositions.end());
+      LodAttributes& A = dag.attributes;
+      A.colors.insert(A.colors.end(), r.newAttributes.colors.begin(), r.newAttributes.colors.end());
+      A.normals.insert(A.normals.end(), r.newAttributes.normals.begin(), r.newAttributes.normals.end());
       std::vector<Face> faces;
       faces.reserve(r.faces.size());
       for (const auto& t : r.faces) {

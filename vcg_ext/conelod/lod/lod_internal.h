@@ -21,10 +21,13 @@ constexpr uint32_t kGeos = FourCC('G', 'E', 'O', 'S');   // the nodes' compresse
 constexpr uint32_t kIndex = FourCC('I', 'N', 'D', 'X');  // the offset index, in IBLK blocks
 constexpr uint32_t kIBlock = FourCC('I', 'B', 'L', 'K');
 
-// 4: a group's parentError and parents in its first record only (written); 3: quantized,
-// compressed nodes (read too); 2: float positions per level, refused by name; 1: the tree of
-// groups, refused.
-constexpr uint32_t kVersion = 4;
+// 5: version 4 plus per-vertex attribute streams (colour, normals), written only when the DAG
+// carries attributes (a geometry-only file stays version 4, byte for byte); 4: a group's
+// parentError and parents in its first record only (written); 3: quantized, compressed nodes
+// (read too); 2: float positions per level, refused by name; 1: the tree of groups, refused.
+constexpr uint32_t kVersion = 5;              // the newest version read
+constexpr uint32_t kGeometryOnlyVersion = 4;  // written for a DAG without attributes
+constexpr uint32_t kAttributeVersion = 5;     // written for a DAG with attributes
 constexpr uint32_t kOldestReadVersion = 3;
 constexpr uint32_t kMaxLevels = 64;
 constexpr uint32_t kNoParent = 0xFFFFFFFFu;
@@ -53,7 +56,13 @@ constexpr size_t kRecordFixedBytes = 4 + 2 * 3 + 4 * 4;
 constexpr uint16_t kEmptyConeAngle = 0xFFFF;  // a record's cone angle: no face normal
 constexpr size_t kGeomMinBytes = 4 + 1;       // a geometry blob: CRC, flags, then varints and codecs
 constexpr uint8_t kGeomWidePositions = 1;     // geometry flag: positions are u32 x 3 (else u16 x 4)
-constexpr uint32_t kIndexBlock = 512;         // index entries per IBLK (4 KiB)
+// Version 5: attribute streams, announced by the header's `attributes` field and by the same bits
+// in every geometry blob's flags (each unit carries every stream the file has).
+constexpr uint8_t kGeomColors = 2;   // u8 x 4 RGBA per unit vertex
+constexpr uint8_t kGeomNormals = 4;  // octahedral u16 x 2 per unit vertex (EncodeNormal)
+constexpr uint32_t kKnownAttributes = kGeomColors | kGeomNormals;
+constexpr size_t kHeaderAttributeBytes = 4 + 4;  // version 5: u32 attributes, u32 pad after the levels
+constexpr uint32_t kIndexBlock = 512;            // index entries per IBLK (4 KiB)
 // meshoptimizer's codec versions written: vertex 0 (every version decodes it), index 1 (0.14+).
 constexpr int kVertexCodecVersion = 0;
 constexpr int kIndexCodecVersion = 1;
@@ -86,6 +95,19 @@ inline void DecodeConeAxis(const uint16_t in[2], double a[3]) {
   a[1] = v / n;
   a[2] = z / n;
 }
+// A vertex normal: the cone axis's octahedral code (u16 x 2). Round trip: the decoded unit normal
+// is within kLodNormalErrorBound radians of the input's direction (lod_build.h, lod_format.md).
+// A zero or non-finite normal encodes as (0, 0, 1)'s code.
+inline void EncodeNormal(const float n[3], uint16_t out[2]) {
+  const double a[3] = {n[0], n[1], n[2]};
+  if (!(std::isfinite(a[0] + a[1] + a[2])) || (a[0] == 0 && a[1] == 0 && a[2] == 0)) {
+    const double z[3] = {0, 0, 1};
+    EncodeConeAxis(z, out);
+    return;
+  }
+  EncodeConeAxis(a, out);
+}
+
 // A record's cone half-angle: units of pi / 65534, rounded up (kEmptyConeAngle: the empty cone).
 constexpr double kConeAngleUnit = 3.14159265358979323846 / 65534;
 

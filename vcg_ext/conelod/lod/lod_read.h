@@ -84,6 +84,24 @@ LodGrid ChooseLodGrid(const vcg::Box3f& box, double precision);
 constexpr double kMinLodPrecision = 1e-9, kMaxLodPrecision = 0.01;
 constexpr double kDefaultLodPrecision = 2e-5;  // of the diagonal (the dragon's level 1: 2.5e-3)
 
+// Per-vertex attributes carried through the DAG into the file (version 5), each stream either
+// empty or one value per vertex: colour as RGBA8 (stored exactly), the normal as its octahedral
+// u16 x 2 code (lodfile::EncodeNormal; within kLodNormalErrorBound radians of the input's
+// direction). A simplified level interpolates them with the attribute quadrics of the
+// group-preserving collapse (attribute_quadric.h); a vertex keeps its id only when neither its
+// position nor its stored attributes changed.
+struct LodAttributes {
+  std::vector<std::array<uint8_t, 4>> colors;
+  std::vector<std::array<uint16_t, 2>> normals;
+  bool empty() const { return colors.empty() && normals.empty(); }
+  // "" or why the streams do not fit `vertices` vertices.
+  std::string Check(size_t vertices) const;
+};
+// Codes of a unit normal and back (octahedral, 16 bits a coordinate; lod_format.md).
+std::array<uint16_t, 2> EncodeLodNormal(const vcg::Point3f& n);
+vcg::Point3f DecodeLodNormal(const std::array<uint16_t, 2>& code);
+constexpr double kLodNormalErrorBound = 1e-4;  // radians (0.0057 degrees; 6.5e-5 measured)
+
 // A node's geometry as read from the file.
 struct LodGeometry {
   std::vector<uint32_t> vertexIds;             // per local vertex: its global id, the same in every
@@ -106,6 +124,7 @@ struct LodFileInfo {
   std::vector<uint64_t> levelNodes;  // nodes per node level
   uint64_t nodeCount = 0;
   uint64_t fileBytes = 0;
+  bool colors = false, normals = false;  // the attribute streams every node has (version 5)
 };
 
 // Reads a .clod file on demand. Every read is bounds- and checksum-checked: a truncated or
@@ -133,6 +152,9 @@ class LodReader {
 
   Status LoadGeometry(uint32_t id);                // reads and keeps the node's geometry
   const LodGeometry* geometry(uint32_t id) const;  // null when not loaded
+  // The node's attributes per local vertex of its geometry (the streams the file has, version 5);
+  // null when its geometry is not loaded or the file has none. Loaded and evicted with it.
+  const LodAttributes* attributes(uint32_t id) const;
   void EvictGeometry(uint32_t id);
 
   // Bytes the reader holds now: node records, index, loaded geometry, buffers.
@@ -222,8 +244,10 @@ Status RefineLod(LodReader& reader, const LodView& view, LodCut& cut);
 // The cut's geometry as one mesh, vertices welded by global id (so a cut of level-0 nodes gives
 // back the input mesh's faces and vertex positions, and nodes of different levels share their
 // border vertices). includeCulled = false drops culled nodes.
-// faceLevel / faceNode (optional): per output face, its node level / node id.
+// faceLevel / faceNode (optional): per output face, its node level / node id. attributes
+// (optional): per output vertex, the streams the file has (empty ones for a geometry-only file).
 Status ExtractCutMesh(LodReader& reader, const LodCut& cut, bool includeCulled, IndexedMesh& out,
-                      std::vector<int>* faceLevel = nullptr, std::vector<uint32_t>* faceNode = nullptr);
+                      std::vector<int>* faceLevel = nullptr, std::vector<uint32_t>* faceNode = nullptr,
+                      LodAttributes* attributes = nullptr);
 
 }  // namespace conelod

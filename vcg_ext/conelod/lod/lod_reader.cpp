@@ -93,6 +93,11 @@ struct IndexEntry {
 
 std::string Num(uint64_t v) { return std::to_string(v); }
 
+// What a node's attributes hold (with their hash map node).
+size_t AttributeBytes(const LodAttributes& a) {
+  return (a.colors.capacity() + a.normals.capacity()) * 4 + sizeof(LodAttributes) + 4 * sizeof(void*);
+}
+
 // The fuzz build (scripts/fuzz.sh) accepts bad CRCs, so that mutated inputs reach the structural
 // checks behind them: every count, size and offset must hold up without the checksums' help.
 #ifdef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
@@ -178,6 +183,7 @@ struct LodReader::Impl {
   uint64_t hierOffset = 0, geosOffset = 0, indexOffset = 0;
   uint64_t hierBegin = 0, hierEnd = 0, geosBegin = 0, geosEnd = 0;  // the blobs' data
   uint32_t indexBlock = 0;
+  uint32_t attributeMask = 0;  // version 5: kGeomColors | kGeomNormals, the streams of every unit
   std::vector<uint32_t> roots;
   struct Entry {
     LodNode node;
@@ -187,7 +193,10 @@ struct LodReader::Impl {
     std::unique_ptr<LodGeometry> geometry;
   };
   std::unordered_map<uint32_t, Entry> nodes;
-  size_t geometryBytes = 0;     // of the loaded geometry
+  // Version 5: the attributes of the nodes whose geometry is loaded (apart, so that a
+  // geometry-only file's nodes cost no more).
+  std::unordered_map<uint32_t, LodAttributes> nodeAttributes;
+  size_t geometryBytes = 0;     // of the loaded geometry (its attributes included)
   std::vector<uint8_t> buffer;  // reused for reads
   // The last unit decoded (the clusters of one group, or the roots: one geometry blob), kept
   // while its nodes are read one by one.
@@ -197,9 +206,12 @@ struct LodReader::Impl {
     std::vector<uint64_t> faceStart;        // per node, into corners / 3; nodeCount + 1 entries
     std::vector<vcg::Point3f> positions;    // per unit vertex
     std::vector<uint32_t> corners, vertexIds;
+    LodAttributes attributes;  // per unit vertex (version 5)
     size_t bytes() const {
       return faceStart.capacity() * 8 + positions.capacity() * sizeof(vcg::Point3f) +
-             (corners.capacity() + vertexIds.capacity()) * 4;
+             (corners.capacity() + vertexIds.capacity() + attributes.colors.capacity() +
+              attributes.normals.capacity()) *
+                 4;
     }
   } unit;
   std::vector<uint8_t> positionScratch;  // reused for decoding
@@ -463,7 +475,9 @@ struct LodReader::Impl {
       return Status::Invalid("checksum mismatch in the geometry of a node " + Num(id));
     Decoder d(buffer.data() + 4, size_t(bytes - 4));
     const uint8_t* flags = d.take(1);
-    if (!flags || (*flags & ~kGeomWidePositions)) return Status::Invalid(bad + "unknown flags");
+    if (!flags || (*flags & ~(kGeomWidePositions | kKnownAttributes))) return Status::Invalid(bad + "unknown flags");
+    if (uint32_t(*flags & kKnownAttributes) != attributeMask)
+      return Status::Invalid(bad + "its attribute streams are not the file's");
     const bool wide = *flags & kGeomWidePositions;
     // Its nodes: consecutive ids of one level, each with its face count (the index codec spends
     // at least a byte a face, so the counts are bounded by the blob's size).
@@ -528,6 +542,33 @@ struct LodReader::Impl {
       if (!p || meshopt_decodeIndexSequence(idScratch.data(), idScratch.size(), 4, p, size_t(n)) != 0)
         return Status::Invalid(bad + "its vertex ids do not decode");
     }
+    // Attribute streams (version 5): 4 bytes a vertex each.
+    auto stream = [&](const char* what, std::string& why) -> const uint8_t* {
+      n = d.uv();
+      p = d.overrun || n > d.left() ? nullptr : d.take(size_t(n));
+      positionScratch.resize(vc * 4);
+      if (!p || meshopt_decodeVertexBuffer(positionScratch.data(), vc, 4, p, size_t(n)) != 0) {
+        why = bad + "its " + what + " do not decode";
+        return nullptr;
+      }
+      return positionScratch.data();
+    };
+    std::string why;
+    unit.attributes = LodAttributes();
+    if (attributeMask & kGeomColors) {
+      const uint8_t* c = stream("colours", why);
+      if (!c) return Status::Invalid(why);
+      unit.attributes.colors.resize(vc);
+      for (size_t v = 0; v < vc; ++v) std::memcpy(unit.attributes.colors[v].data(), c + 4 * v, 4);
+    }
+    if (attributeMask & kGeomNormals) {
+      const uint8_t* c = stream("normals", why);
+      if (!c) return Status::Invalid(why);
+      unit.attributes.normals.resize(vc);
+      for (size_t v = 0; v < vc; ++v)
+        for (size_t k = 0; k < 2; ++k)
+          unit.attributes.normals[v][k] = uint16_t(c[4 * v + 2 * k] | c[4 * v + 2 * k + 1] << 8);
+    }
     if (d.left() != 0) return Status::Invalid(bad + "its size does not match its contents");
     unit.vertexIds.resize(vc);
     for (size_t v = 0, nextNew = 0, nextOld = 0; v < vc; ++v) {
@@ -562,6 +603,7 @@ struct LodReader::Impl {
     const size_t f0 = size_t(unit.faceStart[m]), f1 = size_t(unit.faceStart[m + 1]);
     if (f1 - f0 != n.faceCount) return Status::Invalid(bad + "its face count does not match its record");
     std::unique_ptr<LodGeometry> g(new LodGeometry);
+    LodAttributes a;
     g->faces.resize(n.faceCount);
     g->positions.reserve(n.vertexCount);
     g->vertexIds.reserve(n.vertexCount);
@@ -572,6 +614,8 @@ struct LodReader::Impl {
           localScratch[u] = uint32_t(g->positions.size());
           g->positions.push_back(unit.positions[u]);
           g->vertexIds.push_back(unit.vertexIds[u]);
+          if (!unit.attributes.colors.empty()) a.colors.push_back(unit.attributes.colors[u]);
+          if (!unit.attributes.normals.empty()) a.normals.push_back(unit.attributes.normals[u]);
         }
         g->faces[f - f0][c] = localScratch[u];
       }
@@ -580,6 +624,10 @@ struct LodReader::Impl {
       return Status::Invalid(bad + "its vertex count does not match its record");
     geometryBytes += g->bytes();
     e.geometry = std::move(g);
+    if (attributeMask) {
+      geometryBytes += AttributeBytes(a);
+      nodeAttributes[id] = std::move(a);
+    }
     return Status::Ok();
   }
 
@@ -623,9 +671,10 @@ struct LodReader::Impl {
     if (version < kOldestReadVersion || version > kVersion)
       return Status::Invalid("unsupported .clod version " + Num(version) + " (this reader reads versions " +
                              Num(kOldestReadVersion) + " to " + Num(kVersion) + ")");
-    if (h.dataBytes < kHeaderFixedBytes + kLevelEntryBytes ||
-        h.dataBytes > kHeaderFixedBytes + kMaxLevels * kLevelEntryBytes ||
-        (h.dataBytes - kHeaderFixedBytes) % kLevelEntryBytes != 0 || h.childBytes > (uint64_t(1) << 62))
+    const uint64_t tail = version >= kAttributeVersion ? kHeaderAttributeBytes : 0;  // the attributes field
+    if (h.dataBytes < kHeaderFixedBytes + kLevelEntryBytes + tail ||
+        h.dataBytes > kHeaderFixedBytes + kMaxLevels * kLevelEntryBytes + tail ||
+        (h.dataBytes - kHeaderFixedBytes - tail) % kLevelEntryBytes != 0 || h.childBytes > (uint64_t(1) << 62))
       return Status::Invalid("corrupt chunk size in the file header");
     if (h.totalBytes() > src->size)
       return Status::Invalid(trunc + "the file has " + Num(src->size) + " bytes, its header says " +
@@ -668,7 +717,7 @@ struct LodReader::Impl {
     }
     info.quantizationError = grid.ErrorBound();
     if (levelCount < 1 || levelCount > kMaxLevels ||
-        h.dataBytes != kHeaderFixedBytes + uint64_t(levelCount) * kLevelEntryBytes)
+        h.dataBytes != kHeaderFixedBytes + uint64_t(levelCount) * kLevelEntryBytes + tail)
       return Status::Invalid(bad + "bad level count " + Num(levelCount));
     if (indexBlock == 0 || indexBlock > (1u << 20)) return Status::Invalid(bad + "bad block size");
     levels.resize(levelCount);
@@ -680,6 +729,15 @@ struct LodReader::Impl {
       L.firstId = d.u64();
       L.error = d.f32();
       d.u32();
+    }
+    if (tail) {
+      attributeMask = d.u32();
+      d.u32();
+      if (attributeMask == 0 || (attributeMask & ~kKnownAttributes))
+        return Status::Invalid(bad + "unknown attribute streams (" + Num(attributeMask) +
+                               "; this reader knows colour 2 and normals 4)");
+      info.colors = attributeMask & kGeomColors;
+      info.normals = attributeMask & kGeomNormals;
     }
     for (int k = int(levelCount) - 1; k >= 0; --k) {
       LevelEntry& L = levels[size_t(k)];
@@ -819,6 +877,16 @@ void LodReader::EvictGeometry(uint32_t id) {
   if (it == impl_->nodes.end() || !it->second.geometry) return;
   impl_->geometryBytes -= it->second.geometry->bytes();
   it->second.geometry.reset();
+  auto a = impl_->nodeAttributes.find(id);
+  if (a != impl_->nodeAttributes.end()) {
+    impl_->geometryBytes -= AttributeBytes(a->second);
+    impl_->nodeAttributes.erase(a);
+  }
+}
+
+const LodAttributes* LodReader::attributes(uint32_t id) const {
+  auto it = impl_->nodeAttributes.find(id);
+  return it == impl_->nodeAttributes.end() ? nullptr : &it->second;
 }
 
 size_t LodReader::residentBytes() const {

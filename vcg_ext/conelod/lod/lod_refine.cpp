@@ -374,8 +374,9 @@ Status RefineLod(LodReader& reader, const LodView& view, LodCut& cut) {
 }
 
 Status ExtractCutMesh(LodReader& reader, const LodCut& cut, bool includeCulled, IndexedMesh& out,
-                      std::vector<int>* faceLevel, std::vector<uint32_t>* faceNode) {
+                      std::vector<int>* faceLevel, std::vector<uint32_t>* faceNode, LodAttributes* attributes) {
   out = IndexedMesh();
+  if (attributes) *attributes = LodAttributes();
   if (faceLevel) faceLevel->clear();
   if (faceNode) faceNode->clear();
   if (cut.culled.size() != cut.nodes.size())
@@ -405,11 +406,16 @@ Status ExtractCutMesh(LodReader& reader, const LodCut& cut, bool includeCulled, 
     Status s = reader.LoadGeometry(id);
     if (!s.ok()) return s;
     const LodGeometry& g = *reader.geometry(id);
+    const LodAttributes* ga = reader.attributes(id);
     const int level = reader.node(id).level;
     local.resize(g.vertexIds.size());
     for (size_t v = 0; v < g.vertexIds.size(); ++v) {
       auto ins = weld.emplace(g.vertexIds[v], uint32_t(out.positions.size()));
-      if (ins.second) out.positions.push_back(g.positions[v]);
+      if (ins.second) {
+        out.positions.push_back(g.positions[v]);
+        if (attributes && ga && !ga->colors.empty()) attributes->colors.push_back(ga->colors[v]);
+        if (attributes && ga && !ga->normals.empty()) attributes->normals.push_back(ga->normals[v]);
+      }
       local[v] = ins.first->second;
     }
     for (const auto& t : g.faces) {

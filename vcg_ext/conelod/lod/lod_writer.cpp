@@ -140,6 +140,28 @@ void ListBy(const std::vector<int>& key, size_t keys, const std::vector<uint32_t
 
 }  // namespace
 
+std::string LodAttributes::Check(size_t vertices) const {
+  if (!colors.empty() && colors.size() != vertices)
+    return "the LOD attributes have " + std::to_string(colors.size()) + " colours for " + std::to_string(vertices) +
+           " vertices";
+  if (!normals.empty() && normals.size() != vertices)
+    return "the LOD attributes have " + std::to_string(normals.size()) + " normals for " + std::to_string(vertices) +
+           " vertices";
+  return "";
+}
+
+std::array<uint16_t, 2> EncodeLodNormal(const vcg::Point3f& n) {
+  std::array<uint16_t, 2> code;
+  EncodeNormal(&n[0], code.data());
+  return code;
+}
+
+vcg::Point3f DecodeLodNormal(const std::array<uint16_t, 2>& code) {
+  double a[3];
+  DecodeConeAxis(code.data(), a);
+  return vcg::Point3f(float(a[0]), float(a[1]), float(a[2]));
+}
+
 Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::string& path, LodBuildStats* stats,
                     const Progress& progress, double precision) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -150,6 +172,14 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
       dag.positions.size() < mesh.positions.size())
     return Status::Invalid("the LOD DAG does not match the mesh");
   if (dag.positions.size() >= kNoParent) return Status::Invalid("too many vertices for the file format");
+  {
+    const std::string bad = dag.attributes.Check(dag.positions.size());
+    if (!bad.empty()) return Status::Invalid(bad);
+  }
+  // Attribute streams (version 5); none: the version 4 file, byte for byte.
+  const LodAttributes& attributes = dag.attributes;
+  const uint32_t attributeMask =
+      (attributes.colors.empty() ? 0u : kGeomColors) | (attributes.normals.empty() ? 0u : kGeomNormals);
   for (size_t k = 0; k < H; ++k) {
     const LodDag::Level& L = dag.levels[k];
     const std::string bad = "LOD level " + std::to_string(k) + " is inconsistent";
@@ -315,9 +345,10 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
   // The root chunk's header and data, rewritten at the end with the final offsets.
   uint64_t hierOffset = 0, geosOffset = 0, indexOffset = 0, globalVertices = 0;
   uint64_t positionBytes = 0, indexBytes = 0, idBytes = 0;  // the codecs' output, for the stats
+  uint64_t colorBytes = 0, normalBytes = 0;
   auto encodeHeader = [&]() {
     Encoder e;
-    e.u32(kVersion);
+    e.u32(attributeMask ? kAttributeVersion : kGeometryOnlyVersion);
     e.u32(nodeLevels);
     e.u64(mesh.positions.size());
     e.u64(mesh.faces.size());
@@ -337,6 +368,10 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
       e.u64(clusterOfNode[k].size());
       e.u64(firstId[k]);
       e.f32(levelError[k]);
+      e.u32(0);
+    }
+    if (attributeMask) {  // version 5
+      e.u32(attributeMask);
       e.u32(0);
     }
     return e;
@@ -440,6 +475,7 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
     std::vector<uint8_t> buf, mask;
     std::vector<uint16_t> q16;
     std::vector<uint32_t> q32;
+    std::vector<uint8_t> attr;
     Encoder e;
     meshopt_encodeVertexVersion(kVertexCodecVersion);
     meshopt_encodeIndexVersion(kIndexCodecVersion);
@@ -490,7 +526,7 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
           }
         const bool wide = std::max({qmax[0] - qmin[0], qmax[1] - qmin[1], qmax[2] - qmin[2]}) > 0xFFFFu;
         e.clear();
-        const uint8_t flags = wide ? kGeomWidePositions : 0;
+        const uint8_t flags = uint8_t((wide ? kGeomWidePositions : 0) | attributeMask);
         e.raw(&flags, 1);
         e.uv(firstId[size_t(k)] + u0);  // the unit's nodes
         e.uv(u1 - u0);
@@ -540,6 +576,31 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
           e.uv(buf.size());
           e.raw(buf.data(), buf.size());
           idBytes += buf.size();
+        }
+        // Attribute streams, 4 bytes a unit vertex each, in the unit's vertex order.
+        auto stream = [&](uint64_t& counter) {
+          buf.resize(meshopt_encodeVertexBufferBound(vc, 4));
+          buf.resize(meshopt_encodeVertexBuffer(buf.data(), buf.size(), attr.data(), vc, 4));
+          if (buf.empty()) return false;
+          e.uv(buf.size());
+          e.raw(buf.data(), buf.size());
+          counter += buf.size();
+          return true;
+        };
+        if (attributeMask & kGeomColors) {
+          attr.resize(vc * 4);
+          for (size_t v = 0; v < vc; ++v) std::memcpy(attr.data() + 4 * v, attributes.colors[verts[v]].data(), 4);
+          if (!stream(colorBytes)) return fail("internal error: the vertex codec failed");
+        }
+        if (attributeMask & kGeomNormals) {
+          attr.resize(vc * 4);
+          for (size_t v = 0; v < vc; ++v)
+            for (int c = 0; c < 2; ++c) {
+              const uint16_t x = attributes.normals[verts[v]][size_t(c)];
+              attr[4 * v + 2 * size_t(c)] = uint8_t(x & 0xFF);
+              attr[4 * v + 2 * size_t(c) + 1] = uint8_t(x >> 8);
+            }
+          if (!stream(normalBytes)) return fail("internal error: the vertex codec failed");
         }
         const uint64_t at = out.offset();
         blob(e);
@@ -613,6 +674,8 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
     stats->positionBytes = positionBytes;
     stats->triangleBytes = indexBytes;
     stats->vertexIdBytes = idBytes;
+    stats->colorBytes = colorBytes;
+    stats->normalBytes = normalBytes;
     stats->quantizationError = grid.ErrorBound();
     stats->writeSeconds = Seconds(t0);
   }
@@ -620,17 +683,44 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
 }
 
 Status BuildLodFile(const IndexedMesh& mesh, const LodBuildParams& params, const std::string& path,
-                    LodBuildStats* stats, const Progress& progress) {
+                    LodBuildStats* stats, const Progress& progress, const LodAttributes* attributes) {
   const auto t0 = std::chrono::steady_clock::now();
   Status s = RequireValidForFaces(mesh);
   if (!s.ok()) return s;
+  if (attributes) {
+    const std::string bad = attributes->Check(mesh.positions.size());
+    if (!bad.empty()) return Status::Invalid(bad);
+  }
   // Vertices at one position are one vertex of the DAG (a seam the file repeats would otherwise be
   // simplified from each side on its own, and the cuts would open along it); unreferenced vertices
   // are not written.
   const WeldResult welded = WeldByPosition(mesh);
   LodDag dag;
   size_t chunks = 1;
-  s = BuildLodDag(welded.mesh, params, dag, SubProgress(progress, 0, 90), &chunks);
+  // The welded vertices' attributes: their representative's.
+  LodAttributes weldedAttributes;
+  size_t conflicts = 0;
+  const bool withAttributes = attributes && !attributes->empty();
+  if (withAttributes) {
+    const std::vector<uint32_t>& rep = welded.representative;
+    for (uint32_t r : rep) {
+      if (!attributes->colors.empty()) weldedAttributes.colors.push_back(attributes->colors[r]);
+      if (!attributes->normals.empty()) weldedAttributes.normals.push_back(attributes->normals[r]);
+    }
+    // Input vertices welded into another whose values differ.
+    std::vector<uint32_t> welded1(mesh.positions.size(), kNoParent);
+    for (size_t f = 0; f < mesh.faces.size(); ++f)
+      for (int k = 0; k < 3; ++k) welded1[mesh.faces[f][size_t(k)]] = welded.mesh.faces[f][size_t(k)];
+    for (size_t v = 0; v < welded1.size(); ++v) {
+      if (welded1[v] == kNoParent) continue;
+      const uint32_t r = rep[welded1[v]];
+      if ((!attributes->colors.empty() && attributes->colors[v] != attributes->colors[r]) ||
+          (!attributes->normals.empty() && attributes->normals[v] != attributes->normals[r]))
+        ++conflicts;
+    }
+  }
+  s = BuildLodDag(welded.mesh, params, dag, SubProgress(progress, 0, 90), &chunks,
+                  withAttributes ? &weldedAttributes : nullptr);
   if (!s.ok()) return s;
   const double dagSeconds = Seconds(t0);
   s = WriteLodFile(welded.mesh, dag, path, stats, SubProgress(progress, 90, 100), params.precision);
@@ -639,6 +729,7 @@ Status BuildLodFile(const IndexedMesh& mesh, const LodBuildParams& params, const
     stats->chunks = chunks;
     stats->mergedVertices = welded.mergedVertices;
     stats->droppedVertices = welded.droppedVertices;
+    stats->attributeConflicts = conflicts;
     stats->groupingSeconds = 0;
     stats->simplifySeconds = dagSeconds;
     stats->seconds = Seconds(t0);

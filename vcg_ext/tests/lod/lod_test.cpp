@@ -1422,5 +1422,221 @@ TEST(LodChunks, DragonCutsAreWatertightAndItsRoundTripExact) {
   std::remove(b.path.c_str());
 }
 
+// --- Attributes (version 5): per-vertex colour and normals through the DAG ---------------------
+
+namespace attr {
+
+// The bunny with a colour that is a linear function of position (so that the attribute quadrics
+// reproduce it at every moved vertex, up to the RGBA8 rounding) and its vertex normals.
+struct Coloured {
+  IndexedMesh mesh;
+  LodAttributes attributes;
+  vcg::Box3f box;
+};
+std::array<uint8_t, 4> ColourAt(const vcg::Box3f& box, const vcg::Point3f& p) {
+  std::array<uint8_t, 4> c;
+  for (int i = 0; i < 3; ++i) {
+    const float t = (p[i] - box.min[i]) / std::max(1e-20f, box.max[i] - box.min[i]);
+    c[size_t(i)] = uint8_t(std::lround(std::min(1.f, std::max(0.f, t)) * 255.f));
+  }
+  c[3] = 255;
+  return c;
+}
+Coloured ColouredBunny() {
+  Coloured c;
+  CMesh m;
+  EXPECT_EQ(LoadPly(m, test::MeshPath("stanford_bunny_bun_zipper.ply")), "");
+  c.mesh = ToIndexedMesh(m);
+  for (const auto& p : c.mesh.positions) c.box.Add(p);
+  std::vector<vcg::Point3f> n(c.mesh.positions.size(), vcg::Point3f(0, 0, 0));
+  for (const auto& t : c.mesh.faces) {
+    const vcg::Point3f fn =
+        (c.mesh.positions[t[1]] - c.mesh.positions[t[0]]) ^ (c.mesh.positions[t[2]] - c.mesh.positions[t[0]]);
+    for (uint32_t v : t) n[v] += fn;
+  }
+  for (size_t v = 0; v < c.mesh.positions.size(); ++v) {
+    c.attributes.colors.push_back(ColourAt(c.box, c.mesh.positions[v]));
+    c.attributes.normals.push_back(EncodeLodNormal(n[v].Norm() > 0 ? n[v] / n[v].Norm() : n[v]));
+  }
+  return c;
+}
+// In double, by atan2 (acos of a float dot product cannot tell angles below ~3e-4 rad).
+double Angle(const vcg::Point3f& a, const vcg::Point3f& b) {
+  const vcg::Point3d x = vcg::Point3d::Construct(a), y = vcg::Point3d::Construct(b);
+  return std::atan2((x ^ y).Norm(), x * y);
+}
+
+}  // namespace attr
+
+// The normal code: every direction reads back within the stated bound (the largest error found
+// over a dense sample of the sphere is what lod_format.md states).
+TEST(LodAttributes, NormalCodeStaysWithinItsBound) {
+  double worst = 0;
+  uint64_t s = 12345;
+  auto rnd = [&]() {
+    s = s * 6364136223846793005ull + 1442695040888963407ull;
+    return double(s >> 11) / double(uint64_t(1) << 53) * 2 - 1;
+  };
+  for (int i = 0; i < 2000000; ++i) {
+    vcg::Point3f n(static_cast<float>(rnd()), static_cast<float>(rnd()), static_cast<float>(rnd()));
+    if (i < 6)
+      n = vcg::Point3f(i % 3 == 0 ? 1.f : 0.f, i % 3 == 1 ? 1.f : 0.f, i % 3 == 2 ? 1.f : 0.f) * (i < 3 ? 1.f : -1.f);
+    if (!(n.Norm() > 1e-3f)) continue;
+    n /= n.Norm();
+    const vcg::Point3f back = DecodeLodNormal(EncodeLodNormal(n));
+    EXPECT_NEAR(back.Norm(), 1.0, 1e-6);
+    worst = std::max(worst, attr::Angle(n, back));
+  }
+  EXPECT_LE(worst, kLodNormalErrorBound);
+  std::printf("largest normal code error: %.3g rad\n", worst);
+  // A zero normal reads back as +z, not as NaN.
+  const vcg::Point3f z = DecodeLodNormal(EncodeLodNormal(vcg::Point3f(0, 0, 0)));
+  EXPECT_NEAR(z[2], 1.0, 1e-6);
+}
+
+// The coloured bunny: a version 5 file; the full-budget cut gives every input vertex its colour
+// exactly and its normal within the bound; a coarse cut interpolates the (linear) colour at the
+// moved vertices, within the RGBA8 rounding; the geometry-only build is still version 4 and the
+// file of BuildLodFile without attributes byte for byte.
+TEST(LodAttributes, ColouredRoundTripIsExactAndCoarseLevelsInterpolate) {
+  const attr::Coloured c = attr::ColouredBunny();
+  const std::string path = TempPath("coloured.clod"), plain = TempPath("plain.clod"), plain2 = TempPath("plain2.clod");
+  LodBuildStats st, sp;
+  ASSERT_TRUE(BuildLodFile(c.mesh, LodBuildParams(), path, &st, Progress(), &c.attributes).ok());
+  ASSERT_TRUE(BuildLodFile(c.mesh, LodBuildParams(), plain, &sp).ok());
+  const LodAttributes none;
+  ASSERT_TRUE(BuildLodFile(c.mesh, LodBuildParams(), plain2, nullptr, Progress(), &none).ok());
+  EXPECT_EQ(ReadBytes(plain), ReadBytes(plain2));
+  EXPECT_GT(st.colorBytes, 0u);
+  EXPECT_GT(st.normalBytes, 0u);
+  EXPECT_EQ(st.fileBytes, ReadBytes(path).size());
+  EXPECT_EQ(sp.colorBytes + sp.normalBytes, 0u);
+  std::printf("bunny .clod: %llu bytes geometry only, %llu with colour (%llu) and normals (%llu)\n",
+              (unsigned long long)sp.fileBytes, (unsigned long long)st.fileBytes, (unsigned long long)st.colorBytes,
+              (unsigned long long)st.normalBytes);
+  std::unique_ptr<LodReader> r, rp;
+  ASSERT_TRUE(LodReader::Open(path, r).ok());
+  ASSERT_TRUE(LodReader::Open(plain, rp).ok());
+  EXPECT_EQ(r->info().version, 5u);
+  EXPECT_EQ(rp->info().version, 4u);
+  EXPECT_TRUE(r->info().colors && r->info().normals);
+  EXPECT_FALSE(rp->info().colors || rp->info().normals);
+
+  // Full budget: input vertex by grid position.
+  std::map<PosKey, size_t> inputAt;
+  for (size_t v = 0; v < c.mesh.positions.size(); ++v) {
+    const vcg::Point3f p = r->info().grid.Round(c.mesh.positions[v]);
+    inputAt.emplace(PosKey{{p[0], p[1], p[2]}}, v);
+  }
+  LodCut cut;
+  ASSERT_TRUE(RefineLod(*r, Eye(0, 0.1, 0.6, size_t(1) << 30), cut).ok());
+  IndexedMesh out;
+  LodAttributes a;
+  ASSERT_TRUE(ExtractCutMesh(*r, cut, true, out, nullptr, nullptr, &a).ok());
+  EXPECT_EQ(out.faces.size(), c.mesh.faces.size());
+  ASSERT_EQ(a.colors.size(), out.positions.size());
+  ASSERT_EQ(a.normals.size(), out.positions.size());
+  size_t colourMismatch = 0, normalMismatch = 0;
+  for (size_t v = 0; v < out.positions.size(); ++v) {
+    const auto it = inputAt.find(PosKey{{out.positions[v][0], out.positions[v][1], out.positions[v][2]}});
+    ASSERT_TRUE(it != inputAt.end());
+    colourMismatch += a.colors[v] != c.attributes.colors[it->second];
+    normalMismatch += a.normals[v] != c.attributes.normals[it->second];
+  }
+  EXPECT_EQ(colourMismatch, 0u);
+  EXPECT_EQ(normalMismatch, 0u);  // the input's code, stored as is
+  // The input's faces on the file's grid (each file's own: the grid spans the DAG's positions);
+  // a geometry-only file extracts no attributes.
+  EXPECT_EQ(SortedFacePositions(out), SortedFacePositions(OnGrid(c.mesh, r->info().grid)));
+  LodCut cp;
+  ASSERT_TRUE(RefineLod(*rp, Eye(0, 0.1, 0.6, size_t(1) << 30), cp).ok());
+  IndexedMesh outPlain;
+  LodAttributes ap;
+  ASSERT_TRUE(ExtractCutMesh(*rp, cp, true, outPlain, nullptr, nullptr, &ap).ok());
+  EXPECT_TRUE(ap.empty());
+
+  // A coarse cut: 5 % of the faces. Every vertex's colour is the linear function at its place
+  // (within rounding: the function is linear, clamped only outside the box); its normal faces
+  // the way of the surface around it.
+  LodCut coarse;
+  ASSERT_TRUE(RefineLod(*r, Eye(0, 0.1, 0.6, c.mesh.faces.size() / 20, false), coarse).ok());
+  IndexedMesh cm;
+  ASSERT_TRUE(ExtractCutMesh(*r, coarse, true, cm, nullptr, nullptr, &a).ok());
+  ASSERT_EQ(a.colors.size(), cm.positions.size());
+  int worst = 0;
+  size_t moved = 0;
+  for (size_t v = 0; v < cm.positions.size(); ++v) {
+    const auto want = attr::ColourAt(c.box, cm.positions[v]);
+    moved += !inputAt.count(PosKey{{cm.positions[v][0], cm.positions[v][1], cm.positions[v][2]}});
+    for (int i = 0; i < 4; ++i) worst = std::max(worst, std::abs(int(a.colors[v][size_t(i)]) - int(want[size_t(i)])));
+  }
+  EXPECT_GT(moved, cm.positions.size() / 2);  // most vertices were placed by the collapse
+  EXPECT_LE(worst, 3) << "of 255";
+  std::vector<vcg::Point3f> fn(cm.positions.size(), vcg::Point3f(0, 0, 0));
+  for (const auto& t : cm.faces) {
+    const vcg::Point3f n = (cm.positions[t[1]] - cm.positions[t[0]]) ^ (cm.positions[t[2]] - cm.positions[t[0]]);
+    for (uint32_t v : t) fn[v] += n;
+  }
+  size_t facing = 0;
+  for (size_t v = 0; v < cm.positions.size(); ++v) facing += attr::Angle(fn[v], DecodeLodNormal(a.normals[v])) < 1.0;
+  EXPECT_GE(facing, cm.positions.size() * 95 / 100);
+  // Colour shows the cut too: one more vertex stream, the same faces and positions.
+  for (const std::string& p : {path, plain, plain2}) std::remove(p.c_str());
+}
+
+// Version 5 files: a flipped byte is refused or read cleanly, never a crash; the streams' flags
+// must be the file's; a header naming an unknown stream is refused by name.
+TEST(LodAttributes, BadVersion5FilesAreRefused) {
+  // A small coloured sphere.
+  const IndexedMesh im = test::Sphere(4);
+  LodAttributes at;
+  vcg::Box3f box;
+  for (const auto& p : im.positions) box.Add(p);
+  for (const auto& p : im.positions) {
+    at.colors.push_back(attr::ColourAt(box, p));
+    at.normals.push_back(EncodeLodNormal(p));
+  }
+  LodBuildParams params;
+  params.clusterFaces = 32;
+  params.groupClusters = 4;
+  const std::string path = TempPath("sphere5.clod");
+  ASSERT_TRUE(BuildLodFile(im, params, path, nullptr, Progress(), &at).ok());
+  const std::vector<uint8_t> good = ReadBytes(path);
+  std::remove(path.c_str());
+  ASSERT_EQ(FullReadError(good), "");
+  size_t refused = 0, tried = 0;
+  const size_t header = kChunkHeaderBytes + size_t(DecodeChunkHeader(good.data()).dataBytes);
+  const size_t stride = std::max<size_t>(1, good.size() / 600);
+  for (size_t i = 0; i < good.size(); i += i < header ? 1 : stride) {
+    std::vector<uint8_t> bad = good;
+    bad[i] ^= 0x5A;
+    if (!FullReadError(bad).empty()) ++refused;
+    ++tried;
+  }
+  EXPECT_GE(refused, tried * 99 / 100) << "of " << tried << " flipped bytes";
+  // The header's attributes field: unknown bits, or none.
+  const size_t field = header - kHeaderAttributeBytes;
+  for (uint32_t mask : {0u, 8u, 2u | 16u}) {
+    std::vector<uint8_t> bad = good;
+    PutU32(bad, field, mask);
+    Rechecksum(bad, 0);
+    EXPECT_NE(OpenError(bad).find("unknown attribute streams"), std::string::npos) << OpenError(bad);
+  }
+  // The header says colour only: every unit's flags then disagree.
+  {
+    std::vector<uint8_t> bad = good;
+    PutU32(bad, field, kGeomColors);
+    Rechecksum(bad, 0);
+    EXPECT_NE(FullReadError(bad).find("attribute streams are not the file's"), std::string::npos) << FullReadError(bad);
+  }
+  // Mislabelled as version 4: the header's size no longer fits.
+  {
+    std::vector<uint8_t> bad = good;
+    PutU32(bad, kChunkHeaderBytes, 4);
+    Rechecksum(bad, 0);
+    EXPECT_NE(OpenError(bad), "");
+  }
+}
+
 }  // namespace
 }  // namespace conelod
