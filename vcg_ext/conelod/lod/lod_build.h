@@ -117,5 +117,12 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
 // pass RequireValidForFaces.
 Status BuildLodFile(const IndexedMesh& mesh, const LodBuildParams& params, const std::string& path,
                     LodBuildStats* stats = nullptr, const Progress& progress = Progress());
+// The same file from a mesh it takes (welded in place, then its positions and faces become the
+// DAG's level 0: no copy of the input is held beside the DAG); `mesh` is left empty.
+// With params.chunkFaces (`lod build --memory`) both overloads spill each finished level to a
+// temporary folder beside `path` and write the file from there (lod_spill.h, docs/scale.md): the
+// same bytes, the faces of one or two levels in memory; the folder is removed before they return.
+Status BuildLodFile(IndexedMesh&& mesh, const LodBuildParams& params, const std::string& path,
+                    LodBuildStats* stats = nullptr, const Progress& progress = Progress());
 
 }  // namespace conelod
