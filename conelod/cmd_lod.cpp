@@ -1,6 +1,7 @@
 // ConeLOD CLI — `conelod lod`: build the streamable .clod LOD file, extract a view-dependent cut of
 // it, describe it (Kamiya, Suzuki, Kawachi §7-9; vcg_ext/conelod/lod/).
 #include <cctype>
+#include <csignal>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -11,6 +12,7 @@
 #include "conelod/grouping/group_colors.h"
 #include "conelod/lod/lod_build.h"
 #include "conelod/lod/lod_read.h"
+#include "conelod/lod/lod_spill.h"
 #include "conelod/mesh/mesh_check.h"
 #include "conelod/mesh/ply_format.h"
 #include "conelod/mesh/safe_file.h"
@@ -145,7 +147,26 @@ int LodBuild(int argc, char** argv) {
     std::fprintf(stderr, "conelod: %s: texture coordinates are not carried into the .clod file (not yet)\n",
                  input.c_str());
   LodBuildStats st;
-  s = BuildLodFile(im, params, output, &st, Progress(), attributes.empty() ? nullptr : &attributes);
+  const size_t inputVertices = im.vertexCount();
+  // The mesh is handed over (welded in place, it becomes the DAG's level 0). An interrupted build
+  // removes its temporary folder (--memory) before it ends as the signal would end it.
+  struct SpillSignals {
+    SpillSignals() {
+      for (int sig : {SIGINT, SIGTERM, SIGHUP}) std::signal(sig, &SpillSignals::Handle);
+    }
+    ~SpillSignals() {
+      for (int sig : {SIGINT, SIGTERM, SIGHUP}) std::signal(sig, SIG_DFL);
+    }
+    static void Handle(int sig) {
+      RemoveLodSpillsOnSignal();
+      std::signal(sig, SIG_DFL);
+      std::raise(sig);
+    }
+  };
+  {
+    SpillSignals handlers;
+    s = BuildLodFile(std::move(im), params, output, &st, Progress(), attributes.empty() ? nullptr : &attributes);
+  }
   if (!s.ok() && s.message.compare(0, 14, "cannot write '") == 0) return Fail(kIoError, s.message);
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
   if (a.has("--json")) {
@@ -153,7 +174,7 @@ int LodBuild(int argc, char** argv) {
     j.BeginObject()
         .field("input", input)
         .field("output", output)
-        .field("vertices", im.vertexCount())
+        .field("vertices", inputVertices)
         .field("welded_vertices", st.mergedVertices)         // merged into another at the same position
         .field("unreferenced_vertices", st.droppedVertices)  // left out
         .field("faces", st.inputFaces)
@@ -417,8 +438,10 @@ const char* kLodUsage =
     "  the nodes' vertices and triangles are compressed (meshoptimizer's codecs).\n"
     "  --memory SIZE (512M, 2G; at least 16M): an input of more than SIZE / 2048 faces is split\n"
     "  into spatial chunks of at most that many faces, each built with its border locked until\n"
-    "  neighbouring chunks merge. Not yet a bound: the input and the DAG are still held whole\n"
-    "  (docs/scale.md gives the peaks). Without it the DAG is built whole.\n"
+    "  neighbouring chunks merge; each finished level goes to a temporary folder beside OUT\n"
+    "  (removed at the end, also on failure or Ctrl-C) and the file is written from there. The\n"
+    "  input is still read whole, so it is not yet a bound (docs/scale.md gives the peaks).\n"
+    "  Without it the DAG is built whole, in memory.\n"
     "  Per-vertex colour and normals of IN.ply are carried into every level (interpolated as in\n"
     "  conelod simplify, --attribute-weight W [1]) and stored per node (file version 5; colour\n"
     "  exact as RGBA8, normals within 1e-4 rad); --no-attributes: geometry only (version 4).\n"

@@ -4,7 +4,7 @@
 # committed), through `conelod lod build --memory 1G` (2G at 55.8 M faces) at 1 and 2 threads
 # and on every core, and optionally `conelod group` and `simplify` to 10 %. One table: wall
 # seconds, CPU seconds (user + system), peak resident memory (GNU time's maximum RSS), peak
-# bytes per input face, file bytes per input face. Takes minutes to hours: not part of CI.
+# bytes per input face, file bytes per input face, the 1-minute load as the step started. Takes minutes to hours: not part of CI.
 #   scripts/bench_scale.sh [CONELOD]   default build/conelod/conelod
 #   SCALE_LEVELS="1 2 3"               subdivisions to run (default: 1 2 3)
 #   SCALE_STEPS="lod"                  any of: lod group simplify (default: lod)
@@ -86,11 +86,13 @@ done
 
 faces_of() { head -c 400 "$1" | tr -d '\0' | awk '/^element face/ {print $3; exit}'; }
 echo "bench_scale.sh: $(nproc) cores, $(awk '/MemTotal/ {printf "%.1f GiB", $2 / 1048576}' /proc/meminfo), load: $(cut -d' ' -f1-3 /proc/loadavg)"
-printf "| faces | step | threads | wall s | CPU s | CPU us/face | peak RSS MiB | peak B/face | file B/face |\n"
-printf "|---|---|---|---|---|---|---|---|---|\n"
+printf "| faces | step | threads | wall s | CPU s | CPU us/face | peak RSS MiB | peak B/face | file B/face | load |\n"
+printf "|---|---|---|---|---|---|---|---|---|---|\n"
 row() {  # faces, step, threads, output file or -, then the command
   local faces="$1" step="$2" threads="$3" file="$4"
   shift 4
+  local load
+  load=$(cut -d' ' -f1 /proc/loadavg)  # the 1-minute load as the step starts (other work slows wall times)
   if ! /usr/bin/time -f "%e %U %S %M" -o "$OUT/time.txt" "$@" >"$OUT/log.txt" 2>&1; then
     echo "bench_scale.sh: failed: $*" >&2
     tail -5 "$OUT/log.txt" >&2
@@ -99,9 +101,9 @@ row() {  # faces, step, threads, output file or -, then the command
   read -r wall user sys kib < <(tail -1 "$OUT/time.txt")
   local bytes=0
   if [ "$file" != - ]; then bytes=$(stat -c %s "$file"); fi
-  awk -v f="$faces" -v s="$step" -v t="$threads" -v w="$wall" -v u="$user" -v y="$sys" -v k="$kib" -v b="$bytes" \
-    'BEGIN { c = u + y; printf "| %.2f M | %s | %s | %.1f | %.1f | %.2f | %.0f | %.0f | %s |\n", f / 1e6, s, t, w, c,
-             c * 1e6 / f, k / 1024, k * 1024 / f, (b > 0 ? sprintf("%.1f", b / f) : "") }'
+  awk -v f="$faces" -v s="$step" -v t="$threads" -v w="$wall" -v u="$user" -v y="$sys" -v k="$kib" -v b="$bytes" -v l="$load" \
+    'BEGIN { c = u + y; printf "| %.2f M | %s | %s | %.1f | %.1f | %.2f | %.0f | %.0f | %s | %s |\n", f / 1e6, s, t, w, c,
+             c * 1e6 / f, k / 1024, k * 1024 / f, (b > 0 ? sprintf("%.1f", b / f) : ""), l }'
 }
 for k in $LEVELS; do
   mesh="$OUT/dragon_sub$k.ply"

@@ -128,5 +128,14 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
 Status BuildLodFile(const IndexedMesh& mesh, const LodBuildParams& params, const std::string& path,
                     LodBuildStats* stats = nullptr, const Progress& progress = Progress(),
                     const LodAttributes* attributes = nullptr);
+// The same file from a mesh it takes (welded in place, then its positions and faces become the
+// DAG's level 0: no copy of the input is held beside the DAG); `mesh` is left empty. With
+// attributes the mesh is welded by a copy (the representatives give the welded vertices' values).
+// With params.chunkFaces (`lod build --memory`) both overloads spill each finished level to a
+// temporary folder beside `path` and write the file from there (lod_spill.h, docs/scale.md): the
+// same bytes, the faces of one or two levels in memory; the folder is removed before they return.
+Status BuildLodFile(IndexedMesh&& mesh, const LodBuildParams& params, const std::string& path,
+                    LodBuildStats* stats = nullptr, const Progress& progress = Progress(),
+                    const LodAttributes* attributes = nullptr);
 
 }  // namespace conelod

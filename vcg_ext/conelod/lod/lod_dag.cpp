@@ -23,6 +23,7 @@
 // each time a level no longer shrinks under the locked borders the chunks merge one depth more
 // (for that level and the rest of the build).
 #include "conelod/lod/lod_build.h"
+#include "conelod/lod/lod_spill.h"
 
 #include <algorithm>
 #include <atomic>
@@ -255,6 +256,60 @@ int GroupClusters(const LodDag::Level& L, int per, size_t whole, std::vector<int
       members.push_back(best);
       gain.erase(best);
     }
+  }
+  return groups;
+}
+
+// GroupClusters(L, per, 0, group, &node) chunk by chunk, when the clusters of a chunk are
+// consecutive (clusterNode never decreases: level 0's clusters are numbered chunk by chunk, and a
+// level's groups, hence the next level's clusters, follow them): each chunk's clusters and faces
+// are grouped on their own and their groups numbered after the previous chunk's, which gives the
+// same groups as over the whole level (its breadth-first walk never leaves a chunk) with the
+// edge records of one chunk at a time instead of the whole level's (48 bytes a face). Chunks side
+// by side on `threads`. Returns -1 when the clusters are not in chunk order.
+int GroupClustersByChunk(const LodDag::Level& L, int per, const std::vector<uint32_t>& node, unsigned threads,
+                         std::vector<int>& group) {
+  const size_t C = L.clusterCount();
+  std::vector<uint32_t> first;  // first cluster of each run of one chunk, then C
+  for (size_t c = 0; c < C; ++c) {
+    if (c > 0 && node[c] < node[c - 1]) return -1;
+    if (c == 0 || node[c] != node[c - 1]) first.push_back(uint32_t(c));
+  }
+  first.push_back(uint32_t(C));
+  const size_t runs = first.size() - 1;
+  std::vector<uint32_t> runOf(C);
+  for (size_t r = 0; r < runs; ++r)
+    for (uint32_t c = first[r]; c < first[r + 1]; ++c) runOf[c] = uint32_t(r);
+  // Faces of each run, in level order (counting sort).
+  std::vector<uint32_t> start(runs + 1, 0), faces(L.faces.size());
+  for (uint32_t c : L.faceCluster) ++start[runOf[c] + 1];
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  {
+    std::vector<uint32_t> at(start.begin(), start.end() - 1);
+    for (uint32_t f = 0; f < L.faces.size(); ++f) faces[at[runOf[L.faceCluster[f]]]++] = f;
+  }
+  std::vector<uint32_t>().swap(runOf);
+  std::vector<std::vector<int>> local(runs);
+  std::vector<int> count(runs, 0);
+  std::atomic<size_t> next(0);
+  RunThreads(unsigned(std::min<size_t>(std::max(1u, threads), runs)), [&](unsigned) {
+    LodDag::Level sub;
+    for (size_t r = next++; r < runs; r = next++) {
+      sub.faces.clear();
+      sub.faceCluster.clear();
+      for (uint32_t j = start[r]; j < start[r + 1]; ++j) {
+        sub.faces.push_back(L.faces[faces[j]]);
+        sub.faceCluster.push_back(L.faceCluster[faces[j]] - first[r]);
+      }
+      sub.clusterGroup.assign(first[r + 1] - first[r], -1);
+      count[r] = GroupClusters(sub, per, 0, local[r]);
+    }
+  });
+  group.assign(C, -1);
+  int groups = 0;
+  for (size_t r = 0; r < runs; ++r) {
+    for (uint32_t c = first[r]; c < first[r + 1]; ++c) group[c] = groups + local[r][c - first[r]];
+    groups += count[r];
   }
   return groups;
 }
@@ -518,10 +573,10 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
   out.distance = std::sqrt(worst2);
 }
 
-}  // namespace
-
-Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag& dag, const Progress& progress,
-                   size_t* chunks, const LodAttributes* attributes) {
+// BuildLodDag; with `owned` (== &mesh) the mesh's positions and faces are moved into the DAG; with
+// `spill` each finished level is written there (lod_spill.h).
+Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParams& params, LodDag& dag,
+                const Progress& progress, size_t* chunks, LodSpill* spill, const LodAttributes* attributes) {
   dag = LodDag();
   if (chunks) *chunks = 1;
   Status s = RequireValidForFaces(mesh);
@@ -553,25 +608,38 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
   const double kDeg = NormalCone::kPi / 180;
   const vcg::Box3d box = UsedVertexBox(mesh);
   const double diagonal = box.IsNull() ? 0.0 : box.Diag();
-  dag.positions = mesh.positions;
-  dag.inputVertices = mesh.positions.size();
-  if (attributes) dag.attributes = *attributes;
-  dag.levels.emplace_back();
+  const size_t inputFaces = mesh.faces.size();
   const unsigned threads = unsigned(std::max(1, SimplificationThreads(params.simplification)));
   // Chunks (params.chunkFaces): clusterNode holds each cluster's kd chunk at depth `depth`.
   std::vector<uint32_t> clusterNode;
   int depth = 0;
+  std::vector<uint32_t> leaf;
   if (params.chunkFaces > 0) {
-    std::vector<uint32_t> leaf;
     depth = KdChunks(mesh, params.chunkFaces, leaf);
     if (chunks) *chunks = size_t(1) << depth;
+  }
+  dag.levels.emplace_back();
+  if (owned) {  // `mesh` is *owned: not used below
+    dag.positions = std::move(owned->positions);
+    dag.levels[0].faces = std::move(owned->faces);
+    *owned = IndexedMesh();
+  } else {
+    dag.positions = mesh.positions;
+    dag.levels[0].faces = mesh.faces;
+  }
+  dag.inputVertices = dag.positions.size();
+  if (attributes) dag.attributes = *attributes;
+  {
     if (depth > 0) {  // each chunk's level-0 clusters on its own, chunks side by side
       const uint32_t leaves = 1u << depth;
-      std::vector<uint32_t> start(leaves + 1, 0), members(mesh.faces.size()), at;
+      std::vector<uint32_t> start(leaves + 1, 0), members(inputFaces), at;
       for (uint32_t l : leaf) ++start[l + 1];
       std::partial_sum(start.begin(), start.end(), start.begin());
       at.assign(start.begin(), start.end() - 1);
-      for (uint32_t f = 0; f < mesh.faces.size(); ++f) members[at[leaf[f]]++] = f;
+      for (uint32_t f = 0; f < inputFaces; ++f) members[at[leaf[f]]++] = f;
+      std::vector<uint32_t>().swap(leaf);
+      std::vector<uint32_t>().swap(at);
+      const std::vector<Face>& inFaces = dag.levels[0].faces;
       std::vector<std::vector<uint32_t>> local(leaves);
       std::vector<uint32_t> count(leaves, 0);
       std::atomic<uint32_t> next(0);
@@ -579,14 +647,13 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
         std::vector<Face> faces;
         for (uint32_t l = next++; l < leaves; l = next++) {
           faces.clear();
-          for (uint32_t j = start[l]; j < start[l + 1]; ++j) faces.push_back(mesh.faces[members[j]]);
+          for (uint32_t j = start[l]; j < start[l + 1]; ++j) faces.push_back(inFaces[members[j]]);
           count[l] = GrowClusters(faces, dag.positions, params.clusterFaces,
                                   std::min(90.0, params.grouping.coneThresholdDeg) * kDeg, local[l]);
         }
       });
       LodDag::Level& L0 = dag.levels[0];
-      L0.faces = mesh.faces;
-      L0.faceCluster.assign(mesh.faces.size(), 0);
+      L0.faceCluster.assign(inputFaces, 0);
       uint32_t base = 0;
       for (uint32_t l = 0; l < leaves; ++l) {
         for (uint32_t j = start[l]; j < start[l + 1]; ++j) L0.faceCluster[members[j]] = base + local[l][j - start[l]];
@@ -601,7 +668,6 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
   }
   if (depth == 0) {
     LodDag::Level& L0 = dag.levels[0];
-    L0.faces = mesh.faces;
     const uint32_t C = GrowClusters(L0.faces, dag.positions, params.clusterFaces,
                                     std::min(90.0, params.grouping.coneThresholdDeg) * kDeg, L0.faceCluster);
     L0.clusterGroup.assign(C, -1);
@@ -638,9 +704,10 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
     }
     std::vector<int> group;
     // Groups of fineGroupClusters on the fine levels (above 1/8 of the input's faces).
-    const int per = params.fineGroupClusters > 0 && 8 * L.faces.size() > mesh.faces.size() ? params.fineGroupClusters
-                                                                                           : params.groupClusters;
-    const int G = GroupClusters(L, per, wholeParts ? wholeUpTo : 0, group, depth > 0 ? &clusterNode : nullptr);
+    const int per = params.fineGroupClusters > 0 && 8 * L.faces.size() > inputFaces ? params.fineGroupClusters
+                                                                                    : params.groupClusters;
+    int G = depth > 0 && !wholeParts ? GroupClustersByChunk(L, per, clusterNode, threads, group) : -1;
+    if (G < 0) G = GroupClusters(L, per, wholeParts ? wholeUpTo : 0, group, depth > 0 ? &clusterNode : nullptr);
     std::vector<uint32_t> groupNode;
     if (depth > 0) {
       groupNode.assign(size_t(G), 0);
@@ -688,7 +755,7 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
         wholeParts = true;
       else if (cap > 0 && cap < 2 * params.maxGroupError)
         cap *= 2;
-      else if (cap > 0 && 100 * L.faces.size() > mesh.faces.size())
+      else if (cap > 0 && 100 * L.faces.size() > inputFaces)
         cap = 0;
       else
         break;  // no longer shrinks: L is the top
@@ -745,9 +812,28 @@ Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag
     L.groupError = groupError;
     dag.levels.push_back(std::move(N));
     clusterNode.swap(nextNode);
+    if (spill) {  // level k is finished: only its per-cluster fields stay
+      s = spill->put(size_t(k), dag.levels[size_t(k)], dag.positions);
+      if (!s.ok()) {
+        dag = LodDag();
+        return s;
+      }
+    }
   }
   if (progress) progress(100, "LOD: DAG built");
   return Status::Ok();
+}
+
+}  // namespace
+
+Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag& out, const Progress& progress,
+                   size_t* chunks, const LodAttributes* attributes) {
+  return BuildDag(mesh, nullptr, params, out, progress, chunks, nullptr, attributes);
+}
+
+Status BuildLodDagOwned(IndexedMesh&& mesh, const LodBuildParams& params, LodDag& out, const Progress& progress,
+                        size_t* chunks, LodSpill* spill, const LodAttributes* attributes) {
+  return BuildDag(mesh, &mesh, params, out, progress, chunks, spill, attributes);
 }
 
 }  // namespace conelod

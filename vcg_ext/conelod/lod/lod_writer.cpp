@@ -5,9 +5,11 @@
 // records (cone, sphere, errors, the children / siblings / parents lists: about 100-150 bytes a
 // node), then streams the geometry level by level, coarsest first, through one reused buffer:
 // besides the DAG it holds only the level's face order and vertex renumbering. Container sizes
-// and the header's offsets are patched in place at the end.
+// and the header's offsets are patched in place at the end. With --memory (lod_spill.h) the
+// levels' faces come back from the temporary folder one level at a time (LevelFaces).
 #include "conelod/lod/lod_build.h"
 #include "conelod/lod/lod_read.h"
+#include "conelod/lod/lod_spill.h"
 
 #include <algorithm>
 #include <cerrno>
@@ -113,16 +115,49 @@ struct NodeRecord {
 };
 
 // Faces of each node of a level in node order (counting sort by node).
-void BucketFaces(const LodDag::Level& L, const std::vector<uint32_t>& nodeOfCluster, std::vector<uint32_t>& start,
-                 std::vector<uint32_t>& faces) {
+void BucketFaces(const std::vector<uint32_t>& faceCluster, const std::vector<uint32_t>& nodeOfCluster,
+                 std::vector<uint32_t>& start, std::vector<uint32_t>& faces) {
   const size_t nodes = nodeOfCluster.size();
   start.assign(nodes + 1, 0);
-  for (uint32_t c : L.faceCluster) ++start[nodeOfCluster[c] + 1];
+  for (uint32_t c : faceCluster) ++start[nodeOfCluster[c] + 1];
   std::partial_sum(start.begin(), start.end(), start.begin());
-  faces.resize(L.faceCluster.size());
+  faces.resize(faceCluster.size());
   std::vector<uint32_t> at(start.begin(), start.end() - 1);
-  for (size_t f = 0; f < L.faceCluster.size(); ++f) faces[at[nodeOfCluster[L.faceCluster[f]]]++] = uint32_t(f);
+  for (size_t f = 0; f < faceCluster.size(); ++f) faces[at[nodeOfCluster[faceCluster[f]]]++] = uint32_t(f);
 }
+
+// A level's faces and faceCluster: the DAG's own, or read back from the spill into `faces` and
+// `faceCluster` (one level at a time).
+class LevelFaces {
+ public:
+  LevelFaces(const LodDag& dag, const LodSpill* spill) : dag_(dag), spill_(spill) {}
+  Status load(size_t k) {
+    if (spill_ && spill_->has(k)) {
+      const Status s = spill_->get(k, own_, ownCluster_);
+      faces_ = &own_;
+      cluster_ = &ownCluster_;
+      return s;
+    }
+    own_ = std::vector<std::array<uint32_t, 3>>();
+    ownCluster_ = std::vector<uint32_t>();
+    faces_ = &dag_.levels[k].faces;
+    cluster_ = &dag_.levels[k].faceCluster;
+    return Status::Ok();
+  }
+  size_t count(size_t k) const {
+    return spill_ && spill_->has(k) ? size_t(spill_->faceCount(k)) : dag_.levels[k].faces.size();
+  }
+  const std::vector<std::array<uint32_t, 3>>& faces() const { return *faces_; }
+  const std::vector<uint32_t>& faceCluster() const { return *cluster_; }
+
+ private:
+  const LodDag& dag_;
+  const LodSpill* spill_;
+  std::vector<std::array<uint32_t, 3>> own_;
+  std::vector<uint32_t> ownCluster_;
+  const std::vector<std::array<uint32_t, 3>>* faces_ = nullptr;
+  const std::vector<uint32_t>* cluster_ = nullptr;
+};
 
 // Per group (or creator) of a level: the node ids of its clusters, CSR.
 void ListBy(const std::vector<int>& key, size_t keys, const std::vector<uint32_t>& nodeId, std::vector<uint32_t>& start,
@@ -164,12 +199,22 @@ vcg::Point3f DecodeLodNormal(const std::array<uint16_t, 2>& code) {
 
 Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::string& path, LodBuildStats* stats,
                     const Progress& progress, double precision) {
+  if (dag.levels.size() < 1) return Status::Invalid("the LOD DAG has no level");
+  if (dag.levels[0].faces != mesh.faces || mesh.faces.empty() || dag.inputVertices != mesh.positions.size() ||
+      dag.positions.size() < mesh.positions.size())
+    return Status::Invalid("the LOD DAG does not match the mesh");
+  return WriteLodFileFrom(dag, nullptr, mesh.positions.size(), mesh.faces.size(), UsedVertexBox(mesh), path, stats,
+                          progress, precision);
+}
+
+Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVertices, size_t inputFaces,
+                        const vcg::Box3d& box, const std::string& path, LodBuildStats* stats, const Progress& progress,
+                        double precision) {
   const auto t0 = std::chrono::steady_clock::now();
   const size_t H = dag.levels.size();
   if (H < 1) return Status::Invalid("the LOD DAG has no level");
   if (H > kMaxLevels) return Status::Invalid("too many LOD levels for the file format");
-  if (dag.levels[0].faces != mesh.faces || mesh.faces.empty() || dag.inputVertices != mesh.positions.size() ||
-      dag.positions.size() < mesh.positions.size())
+  if (inputFaces == 0 || dag.inputVertices != inputVertices || dag.positions.size() < inputVertices)
     return Status::Invalid("the LOD DAG does not match the mesh");
   if (dag.positions.size() >= kNoParent) return Status::Invalid("too many vertices for the file format");
   {
@@ -180,17 +225,27 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
   const LodAttributes& attributes = dag.attributes;
   const uint32_t attributeMask =
       (attributes.colors.empty() ? 0u : kGeomColors) | (attributes.normals.empty() ? 0u : kGeomNormals);
+  LevelFaces level(dag, spill);
+  if (level.count(0) != inputFaces) return Status::Invalid("the LOD DAG does not match the mesh");
+  // The box of the positions the levels use (the grid's span), found while checking them.
+  vcg::Box3f span;
   for (size_t k = 0; k < H; ++k) {
     const LodDag::Level& L = dag.levels[k];
     const std::string bad = "LOD level " + std::to_string(k) + " is inconsistent";
     const size_t C = L.clusterCount();
-    if (L.faceCluster.size() != L.faces.size() || L.clusterCreator.size() != C || L.clusterError.size() != C || C == 0)
+    Status s = level.load(k);
+    if (!s.ok()) return s;
+    const auto& faces = level.faces();
+    const auto& faceCluster = level.faceCluster();
+    if (faceCluster.size() != faces.size() || L.clusterCreator.size() != C || L.clusterError.size() != C || C == 0)
       return Status::Invalid(bad);
-    for (uint32_t c : L.faceCluster)
+    for (uint32_t c : faceCluster)
       if (c >= C) return Status::Invalid(bad);
-    for (const auto& t : L.faces)
+    for (const auto& t : faces)
       for (uint32_t v : t)
         if (v >= dag.positions.size()) return Status::Invalid(bad + " (a bad vertex index)");
+    for (const auto& t : faces)
+      for (uint32_t v : t) span.Add(dag.positions[v]);
     const size_t groupsBelow = k ? dag.levels[k - 1].groupError.size() : 0;
     for (size_t c = 0; c < C; ++c) {
       if (k == 0 ? L.clusterCreator[c] != -1 : (L.clusterCreator[c] < 0 || size_t(L.clusterCreator[c]) >= groupsBelow))
@@ -235,7 +290,6 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
     for (size_t c = 0; c < nodeOfCluster[k].size(); ++c) idOfCluster[k][c] = uint32_t(firstId[k] + nodeOfCluster[k][c]);
   }
 
-  const vcg::Box3d box = UsedVertexBox(mesh);
   std::vector<float> levelError(nodeLevels, 0.f);
   for (size_t k = 0; k < H; ++k)
     for (float e : dag.levels[k].clusterError) levelError[k] = std::max(levelError[k], e);
@@ -243,12 +297,7 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
   // The grid: over every position a level uses (a collapse may place a vertex outside the input's
   // box). Records (spheres, cones) are computed from the positions as they will be read.
   LodGrid grid;
-  std::vector<vcg::Point3f> rounded(dag.positions.size());
   {
-    vcg::Box3f span;
-    for (const auto& L : dag.levels)
-      for (const auto& t : L.faces)
-        for (uint32_t v : t) span.Add(dag.positions[v]);
     for (const auto& p : dag.positions)
       if (!std::isfinite(p[0] + p[1] + p[2])) return Status::Invalid("the LOD DAG has a non-finite position");
     if (!(precision >= kMinLodPrecision && precision <= kMaxLodPrecision))
@@ -258,8 +307,10 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
     char digits[32];
     std::snprintf(digits, sizeof digits, "%.6g", precision);
     grid = ChooseLodGrid(span, std::strtod(digits, nullptr));
-    for (size_t v = 0; v < rounded.size(); ++v) rounded[v] = grid.Round(dag.positions[v]);
   }
+  // A position as it will be read (computed when needed: a copy of every position is 12 bytes a
+  // vertex of the DAG at the peak).
+  auto rounded = [&](uint32_t v) { return grid.Round(dag.positions[v]); };
 
   // Pass 1: node records (and the per-level counts).
   std::vector<NodeRecord> records(nodeCount);
@@ -271,8 +322,11 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
     for (uint32_t k = 0; k < nodeLevels; ++k) {
       if (progress && !progress(int(30 * k / nodeLevels), "LOD file: node records")) return Status::Cancelled();
       const LodDag::Level& L = dag.levels[k];
-      BucketFaces(L, nodeOfCluster[k], start, faces);
-      levelFaces[k] = L.faces.size();
+      Status s = level.load(k);
+      if (!s.ok()) return s;
+      const auto& levelFaceList = level.faces();
+      BucketFaces(level.faceCluster(), nodeOfCluster[k], start, faces);
+      levelFaces[k] = levelFaceList.size();
       ListBy(L.clusterCreator, k ? dag.levels[k - 1].groupError.size() : 0, idOfCluster[k], byCreatorStart, byCreator);
       if (k > 0)
         ListBy(dag.levels[k - 1].clusterGroup, dag.levels[k - 1].groupError.size(), idOfCluster[k - 1], byGroupStart,
@@ -306,15 +360,17 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
         vcg::Box3f nb;
         uint32_t vc = 0;
         for (uint32_t j = start[i]; j < start[i + 1]; ++j) {
-          const auto& t = L.faces[faces[j]];
-          const vcg::Point3d a = vcg::Point3d::Construct(rounded[t[0]]), b = vcg::Point3d::Construct(rounded[t[1]]),
-                             cc = vcg::Point3d::Construct(rounded[t[2]]);
+          const auto& t = levelFaceList[faces[j]];
+          const vcg::Point3f r0 = rounded(t[0]), r1 = rounded(t[1]), r2 = rounded(t[2]);
+          const vcg::Point3d a = vcg::Point3d::Construct(r0), b = vcg::Point3d::Construct(r1),
+                             cc = vcg::Point3d::Construct(r2);
           const vcg::Point3d n = (b - a) ^ (cc - a);
           const double len = n.Norm();
           const double scale = std::max({(b - a).SquaredNorm(), (cc - a).SquaredNorm(), (cc - b).SquaredNorm()});
           if (len > 1e-12 * scale && len > 0) normals.push_back(n / len);
-          for (uint32_t v : t) {
-            nb.Add(rounded[v]);
+          for (int q = 0; q < 3; ++q) {
+            const uint32_t v = t[size_t(q)];
+            nb.Add(q == 0 ? r0 : q == 1 ? r1 : r2);
             if (stamp[v] != i) {
               stamp[v] = i;
               ++vc;
@@ -327,7 +383,7 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
         R.center = nb.IsNull() ? vcg::Point3f(0, 0, 0) : nb.Center();
         float r2 = 0;
         for (uint32_t j = start[i]; j < start[i + 1]; ++j)
-          for (uint32_t v : L.faces[faces[j]]) r2 = std::max(r2, (rounded[v] - R.center).SquaredNorm());
+          for (uint32_t v : levelFaceList[faces[j]]) r2 = std::max(r2, (rounded(v) - R.center).SquaredNorm());
         R.radius = std::sqrt(r2) * (1 + 1e-6f);
       }
       std::fill(stamp.begin(), stamp.end(), kNoParent);
@@ -350,8 +406,8 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
     Encoder e;
     e.u32(attributeMask ? kAttributeVersion : kGeometryOnlyVersion);
     e.u32(nodeLevels);
-    e.u64(mesh.positions.size());
-    e.u64(mesh.faces.size());
+    e.u64(inputVertices);
+    e.u64(inputFaces);
     e.u64(nodeCount);
     e.u64(globalVertices);
     for (int i = 0; i < 3; ++i) e.f32(box.IsNull() ? 0.f : float(box.min[i]));
@@ -487,14 +543,19 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
       const LodDag::Level& L = dag.levels[size_t(k)];
       const auto& order = clusterOfNode[size_t(k)];
       const size_t nodes = order.size();
-      BucketFaces(L, nodeOfCluster[size_t(k)], start, faces);
+      {
+        const Status s = level.load(size_t(k));
+        if (!s.ok()) return fail(s.message);
+      }
+      const auto& levelFaceList = level.faces();
+      BucketFaces(level.faceCluster(), nodeOfCluster[size_t(k)], start, faces);
       for (uint32_t u0 = 0; u0 < nodes;) {
         uint32_t u1 = u0 + 1;
         while (u1 < nodes && L.clusterGroup[order[u1]] == L.clusterGroup[order[u0]]) ++u1;
         verts.clear();
         idx.clear();
         for (uint32_t j = start[u0]; j < start[u1]; ++j)
-          for (uint32_t v : L.faces[faces[j]]) {
+          for (uint32_t v : levelFaceList[faces[j]]) {
             if (local[v] == kNoParent) {
               local[v] = uint32_t(verts.size());
               verts.push_back(v);
@@ -662,8 +723,8 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
   if (progress) progress(100, "LOD file: written");
 
   if (stats) {
-    stats->inputVertices = mesh.positions.size();
-    stats->inputFaces = mesh.faces.size();
+    stats->inputVertices = inputVertices;
+    stats->inputFaces = inputFaces;
     stats->levels = int(nodeLevels);
     stats->levelFaces.assign(levelFaces.begin(), levelFaces.end());
     stats->levelNodes.clear();
@@ -682,6 +743,43 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
   return Status::Ok();
 }
 
+namespace {
+
+// BuildLodFile of the welded mesh `welded` (taken: left empty). With chunks (--memory) the finished
+// levels go to a temporary folder beside the output (lod_spill.h), removed before returning.
+Status BuildWelded(IndexedMesh&& welded, size_t merged, size_t dropped, const LodAttributes* attributes,
+                   size_t attributeConflicts, const LodBuildParams& params, const std::string& path,
+                   LodBuildStats* stats, const Progress& progress, std::chrono::steady_clock::time_point t0) {
+  const size_t inputVertices = welded.positions.size(), inputFaces = welded.faces.size();
+  const vcg::Box3d box = UsedVertexBox(welded);
+  LodSpill spill;
+  if (params.chunkFaces > 0) {
+    const std::string err = spill.create(path);
+    if (!err.empty()) return Status::Invalid(err);
+  }
+  LodDag dag;
+  size_t chunks = 1;
+  Status s = BuildLodDagOwned(std::move(welded), params, dag, SubProgress(progress, 0, 90), &chunks,
+                              params.chunkFaces > 0 ? &spill : nullptr, attributes);
+  if (!s.ok()) return s;
+  const double dagSeconds = Seconds(t0);
+  s = WriteLodFileFrom(dag, params.chunkFaces > 0 ? &spill : nullptr, inputVertices, inputFaces, box, path, stats,
+                       SubProgress(progress, 90, 100), params.precision);
+  if (!s.ok()) return s;
+  if (stats) {
+    stats->chunks = chunks;
+    stats->mergedVertices = merged;
+    stats->droppedVertices = dropped;
+    stats->attributeConflicts = attributeConflicts;
+    stats->groupingSeconds = 0;
+    stats->simplifySeconds = dagSeconds;
+    stats->seconds = Seconds(t0);
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
 Status BuildLodFile(const IndexedMesh& mesh, const LodBuildParams& params, const std::string& path,
                     LodBuildStats* stats, const Progress& progress, const LodAttributes* attributes) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -694,9 +792,7 @@ Status BuildLodFile(const IndexedMesh& mesh, const LodBuildParams& params, const
   // Vertices at one position are one vertex of the DAG (a seam the file repeats would otherwise be
   // simplified from each side on its own, and the cuts would open along it); unreferenced vertices
   // are not written.
-  const WeldResult welded = WeldByPosition(mesh);
-  LodDag dag;
-  size_t chunks = 1;
+  WeldResult welded = WeldByPosition(mesh);
   // The welded vertices' attributes: their representative's.
   LodAttributes weldedAttributes;
   size_t conflicts = 0;
@@ -719,22 +815,26 @@ Status BuildLodFile(const IndexedMesh& mesh, const LodBuildParams& params, const
         ++conflicts;
     }
   }
-  s = BuildLodDag(welded.mesh, params, dag, SubProgress(progress, 0, 90), &chunks,
-                  withAttributes ? &weldedAttributes : nullptr);
-  if (!s.ok()) return s;
-  const double dagSeconds = Seconds(t0);
-  s = WriteLodFile(welded.mesh, dag, path, stats, SubProgress(progress, 90, 100), params.precision);
-  if (!s.ok()) return s;
-  if (stats) {
-    stats->chunks = chunks;
-    stats->mergedVertices = welded.mergedVertices;
-    stats->droppedVertices = welded.droppedVertices;
-    stats->attributeConflicts = conflicts;
-    stats->groupingSeconds = 0;
-    stats->simplifySeconds = dagSeconds;
-    stats->seconds = Seconds(t0);
+  return BuildWelded(std::move(welded.mesh), welded.mergedVertices, welded.droppedVertices,
+                     withAttributes ? &weldedAttributes : nullptr, conflicts, params, path, stats, progress, t0);
+}
+
+Status BuildLodFile(IndexedMesh&& mesh, const LodBuildParams& params, const std::string& path, LodBuildStats* stats,
+                    const Progress& progress, const LodAttributes* attributes) {
+  // Attributes need the weld's representatives (the copying weld); without them the mesh is welded
+  // in place.
+  if (attributes && !attributes->empty()) {
+    const IndexedMesh& input = mesh;
+    Status s = BuildLodFile(input, params, path, stats, progress, attributes);
+    mesh = IndexedMesh();
+    return s;
   }
-  return Status::Ok();
+  const auto t0 = std::chrono::steady_clock::now();
+  Status s = RequireValidForFaces(mesh);
+  if (!s.ok()) return s;
+  size_t merged = 0, dropped = 0;
+  WeldByPositionInPlace(mesh, &merged, &dropped);  // as WeldByPosition, without a second copy
+  return BuildWelded(std::move(mesh), merged, dropped, nullptr, 0, params, path, stats, progress, t0);
 }
 
 }  // namespace conelod

@@ -72,4 +72,64 @@ WeldResult WeldByPosition(const IndexedMesh& in) {
   return r;
 }
 
+bool WeldByPositionInPlace(IndexedMesh& mesh, size_t* merged, size_t* dropped) {
+  const size_t V = mesh.positions.size();
+  if (merged) *merged = 0;
+  if (dropped) *dropped = 0;
+  if (mesh.faces.empty()) return false;
+  if (V >= 0x80000000u) {  // ids below are marked with their top bit
+    for (const auto& t : mesh.faces)
+      for (uint32_t v : t)
+        if (v >= V) return false;
+    WeldResult r = WeldByPosition(mesh);
+    mesh = std::move(r.mesh);
+    if (merged) *merged = r.mergedVertices;
+    if (dropped) *dropped = r.droppedVertices;
+    return true;
+  }
+  std::vector<uint32_t> repOf(V, UINT32_MAX);  // first: 1 marks a used vertex
+  for (const auto& t : mesh.faces)
+    for (uint32_t v : t) {
+      if (v >= V) return false;
+      repOf[v] = 1;
+    }
+  std::vector<std::array<uint32_t, 4>> keys;  // as WeldByPosition
+  for (uint32_t v = 0; v < V; ++v)
+    if (repOf[v] == 1) {
+      const vcg::Point3f& p = mesh.positions[v];
+      keys.push_back({{Bits(p[0]), Bits(p[1]), Bits(p[2]), v}});
+    }
+  if (dropped) *dropped = V - keys.size();
+  std::sort(keys.begin(), keys.end());
+  std::fill(repOf.begin(), repOf.end(), UINT32_MAX);
+  size_t mergedCount = 0;
+  for (size_t i = 0; i < keys.size();) {
+    size_t j = i;
+    while (j < keys.size() && keys[j][0] == keys[i][0] && keys[j][1] == keys[i][1] && keys[j][2] == keys[i][2]) {
+      repOf[keys[j][3]] = keys[i][3];
+      ++j;
+    }
+    mergedCount += j - i - 1;
+    i = j;
+  }
+  if (merged) *merged = mergedCount;
+  std::vector<std::array<uint32_t, 4>>().swap(keys);
+  // Representatives keep their input order, so a vertex's new id is at most its old one: the
+  // positions compact in place.
+  uint32_t next = 0;
+  for (uint32_t v = 0; v < V; ++v)
+    if (repOf[v] == v) {
+      mesh.positions[next] = mesh.positions[v];
+      repOf[v] = next++ | 0x80000000u;  // a representative's new id, marked
+    }
+  for (auto& t : mesh.faces)
+    for (uint32_t& v : t) {
+      const uint32_t r = repOf[v];
+      v = (r & 0x80000000u) ? (r & 0x7FFFFFFFu) : (repOf[r] & 0x7FFFFFFFu);
+    }
+  mesh.positions.resize(next);
+  mesh.positions.shrink_to_fit();
+  return true;
+}
+
 }  // namespace conelod

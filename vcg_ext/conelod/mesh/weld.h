@@ -36,4 +36,9 @@ struct WeldResult {
 // (for RequireValidForFaces to refuse it, counting its vertices).
 WeldResult WeldByPosition(const IndexedMesh& in);
 
+// WeldByPosition in place: `mesh` becomes WeldResult::mesh without a second copy of the mesh (the
+// out-of-core LOD build's input). Returns false (and leaves `mesh` as it is) where WeldByPosition
+// returns its input as it is; merged / dropped: WeldResult's counts.
+bool WeldByPositionInPlace(IndexedMesh& mesh, size_t* merged = nullptr, size_t* dropped = nullptr);
+
 }  // namespace conelod

@@ -21,9 +21,13 @@
 #include <set>
 #include <unordered_map>
 
+#include <dirent.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "conelod/lod/lod_internal.h"
+#include "conelod/lod/lod_spill.h"
+#include "conelod/mesh/weld.h"
 #include "conelod/mesh/sorted_faces.h"
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"
@@ -1636,6 +1640,151 @@ TEST(LodAttributes, BadVersion5FilesAreRefused) {
     Rechecksum(bad, 0);
     EXPECT_NE(OpenError(bad), "");
   }
+}
+
+// Issue 27's out-of-core build: with chunkFaces BuildLodFile spills each finished level to a
+// temporary folder beside the output and writes the file from there (lod_spill.h).
+
+// The names in a folder (without . and ..), sorted.
+std::vector<std::string> Listing(const std::string& dir) {
+  std::vector<std::string> names;
+  if (DIR* d = opendir(dir.c_str())) {
+    while (dirent* e = readdir(d)) {
+      const std::string n = e->d_name;
+      if (n != "." && n != "..") names.push_back(n);
+    }
+    closedir(d);
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// A new empty folder of its own for one test's output.
+std::string FreshFolder(const std::string& name) {
+  std::string pattern = TempPath(name + ".XXXXXX");
+  std::vector<char> buf(pattern.begin(), pattern.end());
+  buf.push_back(0);
+  EXPECT_NE(mkdtemp(buf.data()), nullptr);
+  return buf.data();
+}
+
+// Watches the output's folder while a build runs: the most level files seen at once in a
+// temporary folder of the build (.NAME.conelod-lod-*).
+struct SpillWatch {
+  std::string dir;
+  size_t mostLevelFiles = 0;
+  int calls = 0, cancelAt = -1;  // cancelAt: the progress call that cancels (after level files)
+  Progress progress() {
+    return [this](int, const char*) {
+      size_t files = 0;
+      for (const std::string& n : Listing(dir))
+        if (n.find(".conelod-lod-") != std::string::npos) files += Listing(dir + "/" + n).size();
+      mostLevelFiles = std::max(mostLevelFiles, files);
+      ++calls;
+      return !(cancelAt >= 0 && calls >= cancelAt && files > 0);
+    };
+  }
+};
+
+IndexedMesh WeldedBunny() {
+  CMesh m;
+  EXPECT_EQ(LoadPly(m, test::MeshPath("stanford_bunny_bun_zipper.ply")), "");
+  return WeldByPosition(ToIndexedMesh(m)).mesh;
+}
+
+// The spilled build (both overloads) gives the in-memory chunked build's file byte for byte, its
+// levels went through the folder, and the folder is gone afterwards: only the file is left.
+TEST(LodSpill, SpilledBuildIsTheInMemoryFileAndLeavesOnlyTheFile) {
+  Built memory;
+  memory.mesh = WeldedBunny();
+  Build(memory, "bunny_in_memory", Chunked(4096, 2));
+  const std::string dir = FreshFolder("spill_ok");
+  for (bool taken : {false, true}) {
+    SpillWatch watch;
+    watch.dir = dir;
+    const std::string out = dir + "/bunny.clod";
+    LodBuildStats st;
+    IndexedMesh copy = memory.mesh;
+    const Status s = taken ? BuildLodFile(std::move(copy), Chunked(4096, 2), out, &st, watch.progress())
+                           : BuildLodFile(copy, Chunked(4096, 2), out, &st, watch.progress());
+    ASSERT_TRUE(s.ok()) << s.message;
+    EXPECT_EQ(st.chunks, 32u);  // 69,451 faces in chunks of 4,096
+    EXPECT_GE(watch.mostLevelFiles, 3u) << "the levels were not spilled";
+    EXPECT_EQ(ReadBytes(out), memory.bytes) << (taken ? "taken" : "copied");
+    EXPECT_EQ(Listing(dir), std::vector<std::string>{"bunny.clod"});
+    std::remove(out.c_str());
+  }
+  // Without chunks nothing is spilled, and the taken mesh gives the same file too.
+  Built plain;
+  plain.mesh = memory.mesh;
+  Build(plain, "bunny_plain");
+  SpillWatch watch;
+  watch.dir = dir;
+  IndexedMesh copy = plain.mesh;
+  ASSERT_TRUE(BuildLodFile(std::move(copy), LodBuildParams(), dir + "/plain.clod", nullptr, watch.progress()).ok());
+  EXPECT_EQ(watch.mostLevelFiles, 0u);
+  EXPECT_EQ(ReadBytes(dir + "/plain.clod"), plain.bytes);
+  std::remove((dir + "/plain.clod").c_str());
+  rmdir(dir.c_str());
+  for (Built* b : {&memory, &plain}) std::remove(b->path.c_str());
+}
+
+// A build that fails after levels were spilled leaves nothing behind: cancelled midway, or an
+// output that cannot be written (a folder), found only by the writer.
+TEST(LodSpill, FolderIsGoneAfterAFailure) {
+  const IndexedMesh bunny = WeldedBunny();
+  const std::string dir = FreshFolder("spill_fail");
+  {
+    SpillWatch watch;
+    watch.dir = dir;
+    watch.cancelAt = 3;
+    const Status s = BuildLodFile(bunny, Chunked(4096), dir + "/cancelled.clod", nullptr, watch.progress());
+    EXPECT_FALSE(s.ok());
+    EXPECT_GE(watch.mostLevelFiles, 1u);
+    EXPECT_EQ(Listing(dir), std::vector<std::string>{});
+  }
+  {
+    const std::string folder = dir + "/a_folder.clod";
+    ASSERT_EQ(mkdir(folder.c_str(), 0755), 0);
+    SpillWatch watch;
+    watch.dir = dir;
+    IndexedMesh copy = bunny;
+    const Status s = BuildLodFile(std::move(copy), Chunked(4096), folder, nullptr, watch.progress());
+    EXPECT_FALSE(s.ok());
+    EXPECT_GE(watch.mostLevelFiles, 3u);
+    EXPECT_EQ(Listing(dir), std::vector<std::string>{"a_folder.clod"});
+    EXPECT_EQ(Listing(folder), std::vector<std::string>{});
+    rmdir(folder.c_str());
+  }
+  {  // a folder that cannot hold the temporary folder: refused before any work
+    const std::string missing = dir + "/missing/out.clod";
+    const Status s = BuildLodFile(bunny, Chunked(4096), missing, nullptr);
+    EXPECT_FALSE(s.ok());
+    EXPECT_NE(s.message.find("cannot write '"), std::string::npos) << s.message;
+  }
+  EXPECT_EQ(Listing(dir), std::vector<std::string>{});
+  rmdir(dir.c_str());
+}
+
+// The in-place weld is WeldByPosition's, on a mesh with repeated and unreferenced vertices.
+TEST(LodSpill, InPlaceWeldIsTheWeld) {
+  IndexedMesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {9, 9, 9}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {-0.f, 0, 0}};
+  m.faces = {{{0, 1, 2}}, {{4, 6, 5}}, {{7, 4, 5}}};
+  const WeldResult w = WeldByPosition(m);
+  size_t merged = 0, dropped = 0;
+  ASSERT_TRUE(WeldByPositionInPlace(m, &merged, &dropped));
+  EXPECT_EQ(m.positions, w.mesh.positions);
+  EXPECT_EQ(m.faces, w.mesh.faces);
+  EXPECT_EQ(merged, w.mergedVertices);
+  EXPECT_EQ(dropped, w.droppedVertices);
+  EXPECT_EQ(merged, 3u);
+  EXPECT_EQ(dropped, 1u);
+  IndexedMesh bad;
+  bad.positions = {{0, 0, 0}};
+  bad.faces = {{{0, 0, 5}}};
+  EXPECT_FALSE(WeldByPositionInPlace(bad));
+  EXPECT_EQ(bad.faces[0][2], 5u);
 }
 
 }  // namespace

@@ -1,0 +1,132 @@
+// ConeLOD — the out-of-core LOD build's temporary folder (lod_spill.h).
+#include "conelod/lod/lod_spill.h"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+
+namespace conelod {
+
+constexpr uint64_t LodSpill::kNone;
+
+namespace {
+
+// The folder of the spill being used, for RemoveLodSpillsOnSignal (one at a time: a second spill
+// while one is registered is removed by its destructor only).
+char g_folder[4096];
+std::atomic<int> g_registered(0);
+
+void LevelName(char* out, const char* folder, int k) {  // FOLDER/Lkk, without snprintf
+  size_t n = 0;
+  while (folder[n]) {
+    out[n] = folder[n];
+    ++n;
+  }
+  out[n++] = '/';
+  out[n++] = 'L';
+  out[n++] = char('0' + k / 10);
+  out[n++] = char('0' + k % 10);
+  out[n] = 0;
+}
+
+struct FileCloser {
+  void operator()(std::FILE* f) const {
+    if (f) std::fclose(f);
+  }
+};
+
+}  // namespace
+
+void RemoveLodSpillsOnSignal() {
+  int one = 1;
+  if (!g_registered.compare_exchange_strong(one, 0)) return;
+  char name[sizeof g_folder + 8];
+  for (int k = 0; k < 64; ++k) {
+    LevelName(name, g_folder, k);
+    ::unlink(name);
+  }
+  ::rmdir(g_folder);
+}
+
+std::string LodSpill::create(const std::string& outputPath) {
+  remove();
+  const size_t slash = outputPath.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? "." : (slash == 0 ? "/" : outputPath.substr(0, slash));
+  const std::string name = slash == std::string::npos ? outputPath : outputPath.substr(slash + 1);
+  std::string pattern = dir + "/." + name + ".conelod-lod-" + std::to_string(long(::getpid())) + ".XXXXXX";
+  std::vector<char> buf(pattern.begin(), pattern.end());
+  buf.push_back(0);
+  if (!::mkdtemp(buf.data()))
+    return "cannot write '" + pattern + "' (the temporary folder of --memory): " + std::strerror(errno);
+  folder_ = buf.data();
+  int zero = 0;
+  if (folder_.size() + 1 < sizeof g_folder && g_registered.load() == 0) {
+    std::memcpy(g_folder, folder_.c_str(), folder_.size() + 1);
+    g_registered.compare_exchange_strong(zero, 1);
+  }
+  return "";
+}
+
+void LodSpill::remove() {
+  if (folder_.empty()) return;
+  if (g_registered.load() && folder_ == g_folder) g_registered.store(0);
+  for (size_t k = 0; k < faces_.size(); ++k)
+    if (faces_[k] != kNone) std::remove(file(k).c_str());
+  ::rmdir(folder_.c_str());
+  folder_.clear();
+  faces_.clear();
+  boxes_.clear();
+}
+
+std::string LodSpill::file(size_t k) const {
+  char name[8];
+  std::snprintf(name, sizeof name, "/L%02d", int(k));
+  return folder_ + name;
+}
+
+Status LodSpill::put(size_t k, LodDag::Level& L, const std::vector<vcg::Point3f>& positions) {
+  if (folder_.empty() || k >= 64 || L.faces.size() != L.faceCluster.size())
+    return Status::Invalid("internal error: a LOD level cannot be spilled");
+  if (faces_.size() <= k) {
+    faces_.resize(k + 1, kNone);
+    boxes_.resize(k + 1);
+  }
+  vcg::Box3f box;
+  for (const auto& t : L.faces)
+    for (uint32_t v : t) box.Add(positions[v]);
+  const std::string path = file(k);
+  std::unique_ptr<std::FILE, FileCloser> f(std::fopen(path.c_str(), "wb"));
+  const size_t n = L.faces.size();
+  bool ok = f != nullptr;
+  if (ok && n) ok = std::fwrite(L.faces.data(), sizeof L.faces[0], n, f.get()) == n;
+  if (ok && n) ok = std::fwrite(L.faceCluster.data(), sizeof L.faceCluster[0], n, f.get()) == n;
+  if (f && std::fclose(f.release()) != 0) ok = false;
+  faces_[k] = n;  // so that remove() deletes it, whatever happened
+  if (!ok) return Status::Invalid("cannot write '" + path + "': " + std::strerror(errno));
+  boxes_[k] = box;
+  std::vector<std::array<uint32_t, 3>>().swap(L.faces);
+  std::vector<uint32_t>().swap(L.faceCluster);
+  return Status::Ok();
+}
+
+Status LodSpill::get(size_t k, std::vector<std::array<uint32_t, 3>>& faces, std::vector<uint32_t>& faceCluster) const {
+  if (!has(k)) return Status::Invalid("internal error: a LOD level was not spilled");
+  const std::string path = file(k);
+  std::unique_ptr<std::FILE, FileCloser> f(std::fopen(path.c_str(), "rb"));
+  const size_t n = size_t(faces_[k]);
+  faces.resize(n);
+  faceCluster.resize(n);
+  bool ok = f != nullptr;
+  if (ok && n) ok = std::fread(faces.data(), sizeof faces[0], n, f.get()) == n;
+  if (ok && n) ok = std::fread(faceCluster.data(), sizeof faceCluster[0], n, f.get()) == n;
+  if (!ok) return Status::Invalid("cannot read '" + path + "' (the temporary folder of --memory)");
+  return Status::Ok();
+}
+
+}  // namespace conelod
