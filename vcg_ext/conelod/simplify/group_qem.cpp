@@ -933,10 +933,6 @@ Candidate GroupQemSimplifier::judge(uint32_t a, uint32_t b) {
 
   c.verdict = CollapseVerdict::FixedEndpoints;
   if (!nonManifold && !place(a, b, ne == 2 && faces_[e[0]].group != faces_[e[1]].group, c)) return c;
-  if (separationSq_ > 0 && !keepsApart(a, b, c.position)) {
-    c.verdict = CollapseVerdict::Topology;
-    return c;
-  }
   if (attributes_ && (ne > 2 ? attributes_->seam(a) || attributes_->seam(b)
                              : !attributes_->MayRemove(c.remove, c.keep, e[0], e[1], faceCorners_)))
     return c;
@@ -1429,6 +1425,12 @@ Status GroupQemSimplifier::run(const Progress& progress, GroupQemStats& stats) {
       }
     }
     if (maxErrorSq >= 0 && c.error > maxErrorSq) {
+      vs_[a].dropped = vs_[b].dropped = 1;
+      continue;
+    }
+    // GroupQemRegion::separation, checked here rather than in judge(): only for the collapses
+    // about to be made (the dragon's LOD build: 10 % of its CPU time in judge(), 2-3 % here).
+    if (separationSq_ > 0 && !keepsApart(a, b, c.position)) {
       vs_[a].dropped = vs_[b].dropped = 1;
       continue;
     }
