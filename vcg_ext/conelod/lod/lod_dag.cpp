@@ -439,6 +439,11 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
   region.frozenVertex.resize(V);
   for (uint32_t v = 0; v < V; ++v) region.frozenVertex[v] = sharedVertex[out.localToGlobal[v]];
   region.diagonal = diagonal;
+  // Vertices kept apart by more than a cell of the file's grid (its cell's diagonal is 1.98 x
+  // precision x the diagonal of the DAG's positions; 2.5: a margin for a span beyond the input's
+  // box): two vertices in one cell read as one, and a vertex joined to both would use the edge to
+  // that cell 3 or 4 times (LodCracks.DragonCutsAreWatertightOnceWelded at the dragon's seams).
+  region.separation = 2.5 * params.precision * diagonal;
   GroupQemParams qem = params.simplification.qem;
   qem.targetFaces =
       std::max<size_t>(1, size_t(std::floor(double(local.faces.size()) * params.simplification.levelRatio)));

@@ -167,6 +167,12 @@ struct GroupQemRegion {
   std::vector<uint8_t> frozenVertex;  // per vertex of the part: 1 = shared with another part
   double diagonal = 0;                // the whole mesh's bounding-box diagonal (errors and ties are
                                       // relative to it); 0: the part's own
+  // > 0 (model units): a collapse never makes its vertex a neighbour of two distinct vertices
+  // closer than this to each other, nor places it this close to a neighbour. The LOD build gives
+  // its file's grid cell (lod_dag.cpp): two vertices in one cell are one vertex once read, and a
+  // vertex joined to both would use the edge to that cell 3 or 4 times (the dragon's seams hold
+  // distinct vertices 1.7e-6 apart, one cell).
+  double separation = 0;
 };
 
 // Simplifies `mesh` until targetFaces (and/or maxError) is reached or no allowed collapse is left.

@@ -602,6 +602,9 @@ TEST(Simplify, FrozenVerticesOfARegionStayWhereTheyAre) {
   bad.frozenVertex.clear();
   bad.diagonal = std::nan("");
   EXPECT_EQ(SimplifyPreservingGroups(m, g, p, r, Progress(), {}, &bad).code, Status::Code::InvalidInput);
+  bad.diagonal = 0;
+  bad.separation = -1;
+  EXPECT_EQ(SimplifyPreservingGroups(m, g, p, r, Progress(), {}, &bad).code, Status::Code::InvalidInput);
 }
 
 TEST(Simplify, LockedContoursDoNotChange) {
