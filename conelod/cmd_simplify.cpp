@@ -226,6 +226,8 @@ int CmdSimplify(int argc, char** argv) {
     if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
     groups = std::move(ids[0]);
   }
+  // Cone and PCA groups are written as the faces' quality: the file's is not needed.
+  if (coneLevel != 0 || pcaClusters > 0) std::vector<float>().swap(ply.faceQuality);
 
   if (hierarchy) {
     hp.qem = p;
