@@ -22,6 +22,9 @@
 // ours is at least as fast while enforcing the conditions; meshopt's ratio to vcglib beside it.
 #include <benchmark/benchmark.h>
 #include <meshoptimizer.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include <cstdio>
 #include <cstdlib>
@@ -54,7 +57,13 @@ std::map<std::string, size_t> g_faces;  // benchmark name -> faces reached
 std::map<std::string, size_t> g_peak;   // benchmark name -> peak resident bytes above the run's start
 
 // Resets the process's peak resident size (VmHWM) to the current one; false where Linux does not.
+// First the memory that earlier runs freed goes back to the system (glibc keeps freed small and
+// medium blocks for reuse: a run after another would reuse them without a new resident page, and
+// its peak would read as 0).
 bool ResetPeakMemory() {
+#if defined(__GLIBC__)
+  malloc_trim(0);
+#endif
   std::FILE* f = std::fopen("/proc/self/clear_refs", "w");
   if (!f) return false;
   const bool ok = std::fputs("5", f) >= 0;

@@ -170,6 +170,44 @@ std::string LoadInput(const std::string& path, CMesh& mesh, IndexedMesh& indexed
   return "";
 }
 
+VertexAttributes AttributesOf(const PlyMesh& ply, int loadMask) {
+  using vcg::tri::io::Mask;
+  VertexAttributes a;
+  const bool colour = (loadMask & Mask::IOM_VERTCOLOR) && !ply.colors.empty();
+  bool alpha = false;
+  if (colour)
+    for (const auto& c : ply.colors) alpha |= ColorByte(c[3]) != 255;
+  a.colorChannels = colour ? (alpha ? 4 : 3) : 0;
+  a.normals = (loadMask & Mask::IOM_VERTNORMAL) && !ply.normals.empty();
+  a.texCoords = (loadMask & (Mask::IOM_VERTTEXCOORD | Mask::IOM_WEDGTEXCOORD)) && !ply.texCoords.empty();
+  if (a.empty()) return a;
+  const size_t n = std::max({ply.colors.size(), ply.normals.size(), ply.texCoords.size()});  // the vertex count
+  a.values.reserve(n * size_t(a.channels()));
+  for (size_t v = 0; v < n; ++v) {
+    for (int c = 0; c < a.colorChannels; ++c) a.values.push_back(ColorByte(ply.colors[v][size_t(c)]) / 255.0f);
+    if (a.normals)
+      for (size_t c = 0; c < 3; ++c) a.values.push_back(ply.normals[v][c]);
+    if (a.texCoords) {
+      a.values.push_back(ply.texCoords[v][0]);
+      a.values.push_back(ply.texCoords[v][1]);
+    }
+  }
+  return a;
+}
+
+std::vector<float> CornerAttributes(const std::vector<std::array<uint32_t, 3>>& triangles,
+                                    const VertexAttributes& perVertex) {
+  const size_t C = size_t(perVertex.channels());
+  std::vector<float> corner;
+  corner.reserve(3 * triangles.size() * C);
+  for (const auto& t : triangles)
+    for (size_t k = 0; k < 3; ++k) {
+      const float* v = perVertex.of(t[k]);
+      corner.insert(corner.end(), v, v + C);
+    }
+  return corner;
+}
+
 VertexAttributes AttributesOf(const CMesh& mesh, int loadMask) {
   using vcg::tri::io::Mask;
   VertexAttributes a;

@@ -12,6 +12,7 @@
 #include "conelod/simplify/hierarchical_simplification.h"
 #include "conelod/mesh/attributes.h"
 #include "conelod/mesh/indexed_mesh.h"
+#include "conelod/mesh/ply_format.h"
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"
 
@@ -84,6 +85,12 @@ class Timer {
 std::string LoadInput(const std::string& path, CMesh& mesh, IndexedMesh& indexed, std::vector<size_t>& faceOfIndex,
                       int* loadMask = nullptr);
 
+// AttributesOf and CornerAttributes below for the file's data as LoadPlyData (ply_io.h) gives it (the values
+// are those of LoadPly's mesh: colours as bytes); `triangles`: the file's faces (ply.triangles,
+// which the caller may have moved elsewhere).
+VertexAttributes AttributesOf(const PlyMesh& ply, int loadMask);
+std::vector<float> CornerAttributes(const std::vector<std::array<uint32_t, 3>>& triangles,
+                                    const VertexAttributes& perVertex);
 // The attributes a loaded mesh keeps from its file (`loadMask` from LoadPly), as float channels per
 // live vertex in ToIndexedMesh's order: colour (RGB, or RGBA when some alpha is not 255), normals,
 // texture coordinates. Empty (no channel) for a geometry-only file.

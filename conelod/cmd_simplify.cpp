@@ -154,15 +154,13 @@ int CmdSimplify(int argc, char** argv) {
     return Fail(kUsage, "--keep-cones keeps the normal cones of cone groups: use --groups cone:L or cone:auto");
   const std::string& input = a.positional()[0];
 
-  CMesh mesh;
+  // Read straight into the indexed mesh (no vcglib mesh beside the collapse's data: `ply` keeps
+  // only the face quality and the attributes the output needs; the output's vcglib mesh is made of
+  // the simplified mesh alone, SimplifiedMeshFromPly).
+  PlyMesh ply;
   int loadMask = 0;
-  std::string err = LoadPly(mesh, input, &loadMask);
+  std::string err = LoadPlyData(input, ply, &loadMask);
   if (!err.empty()) return FailLoad(err);
-  std::vector<size_t> faceOf;
-  std::vector<uint32_t> representative;
-  // Welded by position (weld.h): a seam the file repeats is no border to the groups nor to the
-  // collapse; the output has one vertex per position (attributes: one per position and value).
-  const IndexedMesh im = ToWeldedIndexedMesh(mesh, &faceOf, &representative);
   // Attributes (one target): per face corner, so that texture, colour and normal seams keep their
   // values (attribute_quadric.h).
   const int attributeMask = hierarchy ? 0 : AttributeMask(loadMask);
@@ -172,7 +170,23 @@ int CmdSimplify(int argc, char** argv) {
                  "colour, normals and texture coordinates of %s\n",
                  input.c_str());
   VertexAttributes layout;
-  if (attributeMask) layout = AttributesOf(mesh, attributeMask);
+  if (attributeMask) layout = AttributesOf(ply, attributeMask);
+  std::vector<std::array<uint32_t, 3>> inputFaces;  // kept for the corner attributes only
+  std::vector<uint32_t> representative;
+  // Welded by position (weld.h): a seam the file repeats is no border to the groups nor to the
+  // collapse; the output has one vertex per position (attributes: one per position and value).
+  IndexedMesh im;
+  {
+    IndexedMesh read;
+    read.positions.reserve(ply.positions.size());
+    for (const auto& q : ply.positions) read.positions.emplace_back(q[0], q[1], q[2]);
+    std::vector<std::array<float, 3>>().swap(ply.positions);
+    read.faces.swap(ply.triangles);
+    WeldResult w = WeldByPosition(read);
+    im = std::move(w.mesh);
+    representative = std::move(w.representative);
+    if (attributeMask) inputFaces.swap(read.faces);
+  }
   Status s = RequireValidForFaces(im);
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
 
@@ -206,13 +220,14 @@ int CmdSimplify(int argc, char** argv) {
     if (!(loadMask & vcg::tri::io::Mask::IOM_FACEQUALITY))
       return Fail(kBadInput, input + " has no per-face quality to use as group ids: group it first (conelod group " +
                                  input + " -o grouped.ply) or pass --groups cone:1");
-    std::vector<float> quality(im.faceCount());
-    for (size_t f = 0; f < faceOf.size(); ++f) quality[f] = mesh.face[faceOf[f]].Q();
+    const std::vector<float>& quality = ply.faceQuality;  // per face of `im` (the weld keeps the faces)
     std::vector<std::vector<int>> ids;
     s = GroupIdsFromValues({&quality}, ids);
     if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
     groups = std::move(ids[0]);
   }
+  // Cone and PCA groups are written as the faces' quality: the file's is not needed.
+  if (coneLevel != 0 || pcaClusters > 0) std::vector<float>().swap(ply.faceQuality);
 
   if (hierarchy) {
     hp.qem = p;
@@ -268,10 +283,9 @@ int CmdSimplify(int argc, char** argv) {
       if (!json) std::printf("\n");
       if (a.has("-o")) {
         CMesh copy;
-        vcg::tri::Append<CMesh, CMesh>::MeshCopy(copy, mesh);
         std::vector<uint32_t> sourceVertex = L.sourceVertex;
         MapToRepresentatives(representative, sourceVertex);
-        ApplySimplifiedMesh(copy, faceOf, L.mesh, L.sourceFace, sourceVertex);
+        SimplifiedMeshFromPly(ply, L.mesh, L.sourceFace, sourceVertex, copy);
         WriteGroupsToFaces(copy, L.faceGroup, true);
         const std::string path = a.str("-o") + "_L" + std::to_string(L.level) + ".ply";
         err = SavePly(copy, path);
@@ -294,7 +308,8 @@ int CmdSimplify(int argc, char** argv) {
   Timer timer;
   AttributeQuadrics attributes;
   if (attributeMask) {
-    s = attributes.Init(im, layout, CornerAttributes(mesh, faceOf, layout), attributeWeight);
+    s = attributes.Init(im, layout, CornerAttributes(inputFaces, layout), attributeWeight);
+    std::vector<std::array<uint32_t, 3>>().swap(inputFaces);
     if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
   }
   s = SimplifyPreservingGroups(im, groups, p, r, Progress(), {}, nullptr, attributeMask ? &attributes : nullptr);
@@ -337,7 +352,8 @@ int CmdSimplify(int argc, char** argv) {
                             corner.data() + (3 * f + size_t(k)) * size_t(layout.channels()));
       }
     MapToRepresentatives(representative, r.sourceVertex);
-    ApplySimplifiedMesh(mesh, faceOf, r.mesh, r.sourceFace, r.sourceVertex);
+    CMesh mesh;
+    SimplifiedMeshFromPly(ply, r.mesh, r.sourceFace, r.sourceVertex, mesh);
     if (attributeMask) SetCornerAttributes(mesh, layout, corner);
     WriteGroupsToFaces(mesh, groupsAfter, coneLevel > 0 || pcaClusters > 0);  // quality source: faces keep theirs
     err = SavePly(mesh, a.str("-o"), attributeMask);

@@ -16,6 +16,7 @@
 #include <wrap/io_trimesh/export_ply.h>
 #include <wrap/io_trimesh/io_mask.h>
 
+#include "conelod/mesh/indexed_mesh.h"
 #include "conelod/mesh/ply_format.h"
 #include "conelod/mesh/safe_file.h"
 
@@ -28,6 +29,23 @@ inline bool IsReadFailure(const std::string& message) { return message.compare(0
 inline int AttributeMask(int loadMask) {
   return loadMask & (vcg::tri::io::Mask::IOM_VERTCOLOR | vcg::tri::io::Mask::IOM_VERTNORMAL |
                      vcg::tri::io::Mask::IOM_VERTTEXCOORD | vcg::tri::io::Mask::IOM_WEDGTEXCOORD);
+}
+
+// A colour channel read as [0, 1] (PlyMesh) as the byte a vcg mesh keeps.
+inline unsigned char ColorByte(float c) {
+  return (unsigned char)std::lround(std::min(1.0f, std::max(0.0f, c)) * 255.0f);
+}
+
+// vcg's IOM_ bits of what `in` holds (coordinates, face indices, face quality, the attributes),
+// for a mesh type with per-vertex colour, normal and texture coordinates; `wedge`: its per-face
+// texture coordinates were split into per-vertex ones (SplitWedgeTexCoords).
+inline int PlyLoadMask(const PlyMesh& in, bool wedge) {
+  using vcg::tri::io::Mask;
+  return Mask::IOM_VERTCOORD | Mask::IOM_FACEINDEX | (in.faceQuality.empty() ? 0 : Mask::IOM_FACEQUALITY) |
+         (in.colors.empty() ? 0 : Mask::IOM_VERTCOLOR) | (in.normals.empty() ? 0 : Mask::IOM_VERTNORMAL) |
+         (in.texCoords.empty() ? 0
+          : wedge              ? Mask::IOM_WEDGTEXCOORD
+                               : Mask::IOM_VERTTEXCOORD);
 }
 
 // Per-face texture coordinates as per-vertex ones: each (vertex, u, v) of a corner becomes a vertex
@@ -103,8 +121,7 @@ std::string LoadPlyChecked(MeshType& m, const std::string& path, int* loadMask =
   if (!in.colors.empty() && VertexType::HasColor()) {
     for (size_t v = 0; v < in.colors.size(); ++v) {
       unsigned char c[4];
-      for (size_t k = 0; k < 4; ++k)
-        c[k] = (unsigned char)std::lround(std::min(1.0f, std::max(0.0f, in.colors[v][k])) * 255.0f);
+      for (size_t k = 0; k < 4; ++k) c[k] = ColorByte(in.colors[v][k]);
       m.vert[v].C() = vcg::Color4b(c[0], c[1], c[2], c[3]);
     }
     attributeBits |= vcg::tri::io::Mask::IOM_VERTCOLOR;
@@ -133,6 +150,68 @@ std::string LoadPlyChecked(MeshType& m, const std::string& path, int* loadMask =
     *loadMask = vcg::tri::io::Mask::IOM_VERTCOORD | vcg::tri::io::Mask::IOM_FACEINDEX |
                 (in.faceQuality.empty() ? 0 : vcg::tri::io::Mask::IOM_FACEQUALITY) | attributeBits;
   return "";
+}
+
+// Reads `path` as LoadPlyChecked does for a mesh type with per-vertex colour, normal and texture
+// coordinates (CMesh), without building the vcg mesh (`simplify` works on the indexed mesh and
+// builds a vcg mesh of its output only, SimplifiedMeshFromPly): `in` holds what that mesh would
+// (per-face texture coordinates split into per-vertex ones), `loadMask` gets LoadPlyChecked's bits.
+// "" or the error.
+inline std::string LoadPlyData(const std::string& path, PlyMesh& in, int* loadMask = nullptr) {
+  std::string err = ReadPly(path, in);
+  if (!err.empty()) return err;
+  const bool wedge = !in.wedgeTexCoords.empty();
+  if (wedge) SplitWedgeTexCoords(in);
+  if (loadMask) *loadMask = PlyLoadMask(in, wedge);
+  return "";
+}
+
+// `m` = what ApplySimplifiedMesh (vcg_bridge.h) leaves of LoadPlyChecked's mesh of the file `in`
+// was read from (after SplitWedgeTexCoords, as LoadPlyChecked does), built from the simplified mesh
+// alone, so that the whole input need not be kept as a vcg mesh: the input vertices `sourceVertex`
+// lists (an input vertex per vertex of `simplified`, distinct) at their new positions with their
+// colour, normal and texture coordinates, in input order; the input faces `sourceFace` lists, in
+// input order, with their quality and `simplified`'s corners. `in.positions` and `in.triangles`
+// are not read (they may have been freed).
+template <class MeshType>
+void SimplifiedMeshFromPly(const PlyMesh& in, const IndexedMesh& simplified, const std::vector<uint32_t>& sourceFace,
+                           const std::vector<uint32_t>& sourceVertex, MeshType& m) {
+  using VertexType = typename MeshType::VertexType;
+  m.Clear();
+  std::vector<std::pair<uint32_t, uint32_t>> byInput(sourceVertex.size());  // input vertex, simplified vertex
+  for (size_t o = 0; o < sourceVertex.size(); ++o) byInput[o] = {sourceVertex[o], uint32_t(o)};
+  std::sort(byInput.begin(), byInput.end());
+  std::vector<uint32_t> at(sourceVertex.size());
+  auto vi = vcg::tri::Allocator<MeshType>::AddVertices(m, byInput.size());
+  const bool colour = !in.colors.empty() && VertexType::HasColor();
+  const bool normal = !in.normals.empty() && VertexType::HasNormal();
+  const bool tex = !in.texCoords.empty() && VertexType::HasTexCoord();
+  for (size_t j = 0; j < byInput.size(); ++j, ++vi) {
+    const uint32_t v = byInput[j].first, o = byInput[j].second;
+    at[o] = uint32_t(j);
+    const auto& p = simplified.positions[o];
+    vi->P() = typename MeshType::CoordType(p[0], p[1], p[2]);
+    if (colour) {
+      const auto& c = in.colors[v];
+      vi->C() = vcg::Color4b(ColorByte(c[0]), ColorByte(c[1]), ColorByte(c[2]), ColorByte(c[3]));
+    }
+    if (normal) vi->N() = typename VertexType::NormalType(in.normals[v][0], in.normals[v][1], in.normals[v][2]);
+    if (tex) {
+      vi->T().U() = in.texCoords[v][0];
+      vi->T().V() = in.texCoords[v][1];
+      vi->T().N() = 0;
+    }
+  }
+  if (tex) m.textures = in.textureFiles;
+  std::vector<uint32_t> order(sourceFace.size());
+  for (size_t o = 0; o < order.size(); ++o) order[o] = uint32_t(o);
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return sourceFace[a] < sourceFace[b]; });
+  auto fi = vcg::tri::Allocator<MeshType>::AddFaces(m, order.size());
+  for (size_t j = 0; j < order.size(); ++j, ++fi) {
+    const uint32_t o = order[j];
+    for (size_t k = 0; k < 3; ++k) fi->V(int(k)) = &m.vert[at[simplified.faces[o][k]]];
+    if (!in.faceQuality.empty() && MeshType::FaceType::HasQuality()) fi->Q() = in.faceQuality[sourceFace[o]];
+  }
 }
 
 // Writes `m` as binary PLY (vcglib's exporter, `mask` as for ExporterPLY::Save) into `out`'s

@@ -10,6 +10,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
 #include <set>
 
 #include "conelod/grouping/cone_grouping.h"
@@ -880,6 +883,80 @@ TEST(Simplify, ZeroAreaFacesAreLeftAlone) {
       EXPECT_EQ(r.mesh.positions[o], m.positions[r.sourceVertex[o]]);
     }
   }
+}
+
+// `conelod simplify` builds its output from the file's data and the simplified mesh alone
+// (SimplifiedMeshFromPly) instead of keeping the input as a vcg mesh and applying the
+// simplification to it (ApplySimplifiedMesh): the files written are the same, byte for byte, with
+// and without attributes (vertex colour with alpha, normals, per-corner texture coordinates, face
+// quality).
+std::string FileBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+void ExpectSimplifiedMeshFromPlyAsApplied(const std::string& path) {
+  SCOPED_TRACE(path);
+  CMesh applied;
+  int mask = 0;
+  ASSERT_EQ(LoadPly(applied, path, &mask), "");
+  PlyMesh ply;
+  int plyMask = 0;
+  ASSERT_EQ(LoadPlyData(path, ply, &plyMask), "");
+  EXPECT_EQ(plyMask, mask);
+  std::vector<size_t> faceOf;
+  const IndexedMesh im = ToIndexedMesh(applied, &faceOf);
+  ASSERT_EQ(im.vertexCount(), ply.positions.size());
+  GroupQemParams p;
+  p.targetFaces = im.faceCount() / 5;
+  GroupQemResult r;
+  ASSERT_TRUE(SimplifyPreservingGroups(im, std::vector<int>(im.faceCount(), 0), p, r).ok());
+  ASSERT_LT(r.mesh.faceCount(), im.faceCount() / 2);
+  ApplySimplifiedMesh(applied, faceOf, r.mesh, r.sourceFace, r.sourceVertex);
+  std::vector<std::array<float, 3>>().swap(ply.positions);  // not read
+  std::vector<std::array<uint32_t, 3>>().swap(ply.triangles);
+  CMesh built;
+  SimplifiedMeshFromPly(ply, r.mesh, r.sourceFace, r.sourceVertex, built);
+  const std::string a = ::testing::TempDir() + "conelod_applied.ply", b = ::testing::TempDir() + "conelod_built.ply";
+  ASSERT_EQ(SavePly(applied, a, AttributeMask(mask)), "");
+  ASSERT_EQ(SavePly(built, b, AttributeMask(mask)), "");
+  const std::string bytesA = FileBytes(a), bytesB = FileBytes(b);
+  EXPECT_GT(bytesA.size(), 1000u);
+  EXPECT_TRUE(bytesA == bytesB) << bytesA.size() << " vs " << bytesB.size() << " bytes";
+  std::remove(a.c_str());
+  std::remove(b.c_str());
+}
+
+TEST(Simplify, OutputFromTheFileDataIsTheAppliedOne) {
+  ExpectSimplifiedMeshFromPlyAsApplied(test::MeshPath("stanford_bunny_bun_zipper_res4.ply"));
+  // A bumpy grid with RGBA colour, normals, per-corner texture coordinates (a seam down the
+  // middle: two charts), face quality and a texture name.
+  const int n = 12;
+  const std::string path = ::testing::TempDir() + "conelod_attribute_grid.ply";
+  {
+    std::ofstream out(path);
+    out << "ply\nformat ascii 1.0\ncomment TextureFile chart.png\nelement vertex " << (n + 1) * (n + 1)
+        << "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\n"
+           "property float nz\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n"
+           "element face "
+        << 2 * n * n << "\nproperty list uchar int vertex_indices\nproperty list uchar float texcoord\n"
+        << "property float quality\nend_header\n";
+    for (int y = 0; y <= n; ++y)
+      for (int x = 0; x <= n; ++x)
+        out << x << ' ' << y << ' ' << 0.3 * std::sin(0.7 * x) * std::cos(0.5 * y) << " 0 0 1 " << 20 * x << ' '
+            << 20 * y << ' ' << 7 * (x + y) << ' ' << 100 + 10 * x << '\n';
+    const auto corner = [&](int x, int y, int chart) { return std::to_string(x + chart) + " " + std::to_string(y); };
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) {
+        const int c = 2 * x >= n ? 1 : 0, v = y * (n + 1) + x;
+        out << "3 " << v << ' ' << v + 1 << ' ' << v + n + 2 << " 6 " << corner(x, y, c) << ' ' << corner(x + 1, y, c)
+            << ' ' << corner(x + 1, y + 1, c) << ' ' << (x / 3) << '\n';
+        out << "3 " << v << ' ' << v + n + 2 << ' ' << v + n + 1 << " 6 " << corner(x, y, c) << ' '
+            << corner(x + 1, y + 1, c) << ' ' << corner(x, y + 1, c) << ' ' << (y / 4) << '\n';
+      }
+  }
+  ExpectSimplifiedMeshFromPlyAsApplied(path);
+  std::remove(path.c_str());
 }
 
 }  // namespace
