@@ -192,21 +192,76 @@ QString Label(const FilterCall& c, const char* name) {
 
 double Diagonal(const MeshModel* m) { return m && !m->cm.bbox.IsNull() ? double(m->cm.bbox.Diag()) : 0.0; }
 
-// The filters' collapses keep a kept vertex's or corner's own attributes and interpolate none
-// (conelod simplify does): said in the log, so that nobody takes them for interpolated. colour:
-// false when the filter colours the vertices itself.
-void LogKeptAttributes(Report& out, const MeshModel& mm, bool colour = true) {
+// What a filter's collapse does not interpolate, said in the log so that nobody takes it for
+// interpolated: a kept vertex's or corner's own attributes stay (conelod simplify interpolates
+// them). colour / wedge: false when the filter colours the vertices itself or interpolates them
+// (Group-Preserving Quadric Edge Collapse: LayerAttributes).
+void LogKeptAttributes(Report& out, const MeshModel& mm, bool colour = true, bool wedge = true) {
   if (colour && mm.hasDataMask(MeshModel::MM_VERTCOLOR))
     out.log(
         "vertex colours: each kept vertex keeps its own colour, not interpolated (conelod simplify "
         "interpolates colour, normals and texture coordinates)");
   if (mm.hasDataMask(MeshModel::MM_VERTTEXCOORD))
     out.log("vertex texture coordinates: each kept vertex keeps its own, not interpolated");
-  if (mm.hasDataMask(MeshModel::MM_WEDGTEXCOORD))
+  if (wedge && mm.hasDataMask(MeshModel::MM_WEDGTEXCOORD))
     out.log(
         "wedge texture coordinates: not kept consistent: a kept corner keeps its coordinates after its vertex "
         "moved, so the texture may stretch or tear (Quadric Edge Collapse Decimation (with texture) and "
         "conelod simplify keep them)");
+}
+
+// The layer's attributes the group-preserving collapse interpolates (attribute_quadric.h): the
+// vertex colour (RGB, RGBA when some alpha is not 255) and the wedge texture coordinates, per face
+// corner of ToIndexedMesh(m, &faceOf)'s faces (the welded mesh keeps their order). Normals are
+// not among them: the filter recomputes them from the new faces (UpdateBoxAndNormals).
+void LayerAttributes(const MeshModel& mm, const std::vector<size_t>& faceOf, conelod::VertexAttributes& layout,
+                     std::vector<float>& corner) {
+  layout = conelod::VertexAttributes();
+  corner.clear();
+  const CMeshO& m = mm.cm;
+  if (mm.hasDataMask(MeshModel::MM_VERTCOLOR)) {
+    bool alpha = false;
+    for (const auto& v : m.vert) alpha |= !v.IsD() && v.cC()[3] != 255;
+    layout.colorChannels = alpha ? 4 : 3;
+  }
+  layout.texCoords = mm.hasDataMask(MeshModel::MM_WEDGTEXCOORD);
+  if (layout.empty()) return;
+  corner.reserve(3 * faceOf.size() * size_t(layout.channels()));
+  for (size_t f : faceOf)
+    for (int k = 0; k < 3; ++k) {
+      const auto& face = m.face[f];
+      for (int c = 0; c < layout.colorChannels; ++c) corner.push_back(face.cV(k)->cC()[c] / 255.0f);
+      if (layout.texCoords) {
+        corner.push_back(float(face.cWT(k).U()));
+        corner.push_back(float(face.cWT(k).V()));
+      }
+    }
+}
+
+// After ApplySimplifiedMesh: the attributes of every corner at its vertex's new position (face o
+// of the layer is face o of r; weldedVertex: r.sourceVertex before MapToRepresentatives). A vertex
+// takes the colour of its first corner (they differ only at a colour seam, which never moves).
+void SetLayerAttributes(CMeshO& m, const conelod::VertexAttributes& layout, const conelod::AttributeQuadrics& aq,
+                        const conelod::GroupQemResult& r, const std::vector<uint32_t>& weldedVertex) {
+  std::vector<float> value(size_t(layout.channels()));
+  std::vector<char> coloured(m.vert.size(), 0);
+  for (size_t o = 0; o < r.sourceFace.size() && o < m.face.size(); ++o)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = r.mesh.faces[o][size_t(k)];
+      const auto& q = r.mesh.positions[v];
+      aq.Evaluate(r.sourceFace[o], k, weldedVertex[v], vcg::Point3d(q[0], q[1], q[2]), value.data());
+      auto& face = m.face[o];
+      const size_t vi = size_t(vcg::tri::Index(m, face.V(k)));
+      if (layout.colorChannels && !coloured[vi]) {
+        coloured[vi] = 1;
+        for (int c = 0; c < layout.colorChannels; ++c)
+          face.V(k)->C()[c] = (unsigned char)std::lround(std::min(1.0f, std::max(0.0f, value[size_t(c)])) * 255.0f);
+      }
+      if (layout.texCoords) {
+        face.WT(k).U() = value[size_t(layout.texCoordOffset())];
+        face.WT(k).V() = value[size_t(layout.texCoordOffset()) + 1];
+      }
+    }
 }
 
 // Per-face quality of the live faces, in ToIndexedMesh order.
@@ -471,6 +526,14 @@ std::vector<ParamSpec> GroupQemSpecs(const MeshDocument*, const MeshModel*) {
                         "(as the built-in filter drops small pieces); no group is ever split. On: no component is "
                         "removed, and the run stops at the floor it reached."));
   AddCollapseOptionParams(p, d, "Weight of the quadrics that keep mesh borders (and group contours) in place.");
+  p.push_back(FloatParam("AttributeWeight", 0.0, "Attribute weight",
+                         "The layer's vertex colour and wedge texture coordinates are interpolated at each new "
+                         "vertex (texture seams never move). How much an attribute change costs against geometric "
+                         "error, as conelod simplify --attribute-weight: 1 = a full-scale change as much as a "
+                         "distance of 0.3 % of the diagonal. 0 (the default): the attribute-free collapse order, so "
+                         "that a colour MeshLab gave the layer (a scan's intensity read as grey) does not change the "
+                         "geometry; the attributes are still interpolated.",
+                         AtLeast(0)));
   return p;
 }
 
@@ -485,6 +548,9 @@ Status ApplyGroupQem(FilterCall& c) {
   p.mode = c.args.integer("Mode") == 1 ? conelod::GroupMode::Paper : conelod::GroupMode::Integrity;
   p.keepCones = c.args.flag("KeepCones");
   p.removeComponents = !c.args.flag("KeepComponents");
+  const double attributeWeight = c.args.number("AttributeWeight");
+  if (!(attributeWeight >= 0) || !std::isfinite(attributeWeight))
+    return Invalid(Label(c, "AttributeWeight") + " must be >= 0");
   ReadCollapseOptions(c.args, p);
   if (p.targetFaces == 0 && p.maxError == 0)
     return Invalid("give a target: " + Label(c, "TargetFaceNum") + ", " + Label(c, "TargetPerc") + " or " +
@@ -536,8 +602,19 @@ Status ApplyGroupQem(FilterCall& c) {
     if (!s.ok()) return s;
     groups = std::move(ids[0]);
   }
+  conelod::VertexAttributes layout;
+  conelod::AttributeQuadrics attributes;
+  {
+    std::vector<float> corner;
+    LayerAttributes(mm, faceOf, layout, corner);
+    if (!layout.empty()) {
+      s = attributes.Init(im, layout, std::move(corner), attributeWeight);
+      if (!s.ok()) return s;
+    }
+  }
   conelod::GroupQemResult r;
-  s = conelod::SimplifyPreservingGroups(im, groups, p, r, progress);
+  s = conelod::SimplifyPreservingGroups(im, groups, p, r, progress, {}, nullptr,
+                                        layout.empty() ? nullptr : &attributes);
   if (!s.ok()) return s;
   const double seconds = timer.elapsed() / 1000.0;
 
@@ -571,8 +648,10 @@ Status ApplyGroupQem(FilterCall& c) {
   // get a colour each, as do per-face quality groups on a mesh without face colours.
   const bool hadFaceColour = mm.hasDataMask(MeshModel::MM_FACECOLOR);
   mm.updateDataMask(MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR);
+  const std::vector<uint32_t> weldedVertex = r.sourceVertex;
   conelod::MapToRepresentatives(representative, r.sourceVertex);
   conelod::ApplySimplifiedMesh(mm.cm, faceOf, r.mesh, r.sourceFace, r.sourceVertex);
+  if (!layout.empty()) SetLayerAttributes(mm.cm, layout, attributes, r, weldedVertex);
   for (size_t f = 0; f < groupsAfter.size(); ++f) {  // faces are in the same order as the groups after compaction
     if (coneSource) mm.cm.face[f].Q() = CMeshO::FaceType::QualityType(groupsAfter[f]);
     if (coneSource || !hadFaceColour) mm.cm.face[f].C() = conelod::GroupColor(groupsAfter[f]);
@@ -612,7 +691,12 @@ Status ApplyGroupQem(FilterCall& c) {
       int(r.stats.collapses), int(r.stats.refusedTopology), int(r.stats.refusedCondition1),
       int(r.stats.refusedCondition2), int(r.stats.refusedLock), int(r.stats.refusedFixed), int(r.stats.refusedGeometry),
       int(r.stats.refusedCone));
-  LogKeptAttributes(out, mm);
+  if (!layout.empty())
+    out.log("attributes interpolated at each new vertex (attribute weight %g): %s%s%s; %d seam vertices (never moved)",
+            attributeWeight, layout.colorChannels ? "vertex colours" : "",
+            layout.colorChannels && layout.texCoords ? ", " : "",
+            layout.texCoords ? "wedge texture coordinates (seams kept)" : "", int(attributes.seamVertices()));
+  LogKeptAttributes(out, mm, layout.colorChannels == 0, !layout.texCoords);
   out.figure("faces_out", double(r.mesh.faceCount()));
   out.figure("groups_before", gi.groupsBefore);
   out.figure("groups_after", gi.groupsAfter);
@@ -1295,6 +1379,9 @@ std::vector<FilterSpec> MakeFilters() {
                        "shown in face colour; or, with <i>Groups</i> = Per-face quality, the group ids already on "
                        "the mesh (e.g. from <i>Cone LOD: Normal Cone Face Grouping</i>; equal values = one group), "
                        "whose faces keep their quality and colour. Faces keep their attributes. "
+                       "The layer's vertex colour and wedge texture coordinates are interpolated at each new vertex "
+                       "(attribute quadrics, as <tt>conelod simplify</tt>; texture seams never move; "
+                       "<i>Attribute weight</i>); normals are recomputed. "
                        "The log lists faces, groups before/after, groups split or vanished, and the time.<br>") +
                    kPaperKamiya,
                kUnchanged, GroupQemSpecs, ApplyGroupQem});

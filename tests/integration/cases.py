@@ -665,23 +665,74 @@ def write_attribute_grid(path, n=30, wedge=False):
 
 @case
 def meshlab_collapses_say_what_they_keep(c):
-    """Issue 26: the filters' collapses keep a kept vertex's or corner's own colour and texture
-    coordinates (they interpolate none): on a grid with vertex colour and per-face texcoord lists
-    (MeshLab's wedge coordinates) the Group-Preserving Quadric Edge Collapse and the
-    Feature-Preserving Edge Simplification say so in the log (the latter says nothing of the colour
-    when it colours the feature vertices itself); on the geometry-only armadillo neither says a thing."""
+    """Issue 26: on a grid with vertex colour and per-face texcoord lists (MeshLab's wedge
+    coordinates) the Group-Preserving Quadric Edge Collapse says it interpolated both (and says
+    nothing of keeping them); the Feature-Preserving Edge Simplification, whose half-edge collapses
+    keep a kept vertex's or corner's own values, says so in the log (nothing of the colour when it
+    colours the feature vertices itself); on the geometry-only armadillo neither says a thing."""
     src = c.out("attr_wedge.ply")
     write_attribute_grid(src, wedge=True)
-    runs = (("group_preserving_quadric_edge_collapse.mlx", {}, True),
-            ("feature_preserving_edge_simplification.mlx", {"MarkFeatures": False}, True),
-            ("feature_preserving_edge_simplification.mlx", {"MarkFeatures": True}, False))
-    for mlx, values, colour in runs:
+    runs = (("group_preserving_quadric_edge_collapse.mlx", {}, False, True),
+            ("feature_preserving_edge_simplification.mlx", {"MarkFeatures": False}, True, False),
+            ("feature_preserving_edge_simplification.mlx", {"MarkFeatures": True}, False, False))
+    for mlx, values, colour, interpolated in runs:
         _, log = c.meshlab([src], mlx_with(c, mlx, values), c.out("out.ply"))
         said = "vertex colours: each kept vertex keeps its own colour, not interpolated" in log
         assert said == colour, (mlx, values, log[-2000:])
-        assert "wedge texture coordinates: not kept consistent" in log, (mlx, log[-2000:])
+        kept = "wedge texture coordinates: not kept consistent" in log
+        assert kept != interpolated, (mlx, log[-2000:])
+        said = ("attributes interpolated at each new vertex (attribute weight 0): vertex colours, wedge texture "
+                "coordinates (seams kept)") in log
+        assert said == interpolated, (mlx, log[-2000:])
         _, log = c.meshlab([c.mesh("stanford_armadillo_cgal.ply")], mlx_with(c, mlx), c.out("out.ply"))
         assert "texture coordinates" not in log and "vertex colours" not in log, (mlx, log[-2000:])
+        assert "interpolated" not in log, (mlx, log[-2000:])
+
+
+@case
+def meshlab_group_qem_interpolates_attributes(c):
+    """Issue 26: the Group-Preserving Quadric Edge Collapse interpolates the layer's vertex colour
+    and wedge texture coordinates as conelod simplify does. On a bumpy grid whose colour is linear
+    in position and whose wedge coordinates follow x and y in two charts (a seam at x = 0.5), at 10 %:
+    every vertex's colour is within 2 units of the linear colour at its new position (vertices did
+    move off the grid, so keeping a survivor's colour fails this), no face has corners of both
+    charts, and every corner's (u, v) is its vertex's (x + chart, y); at AttributeWeight 0 (the
+    default) and 1. The variant with per-vertex texture_u/v (not interpolated: the log says they
+    are kept) gives the same colours."""
+    for wedge, weight in ((True, 0), (True, 1), (False, 0)):
+        src = c.out("attr_ml_%d.ply" % wedge)
+        colour = write_attribute_grid(src, wedge=wedge)
+        out = c.out("attr_ml_out_%d_%d.ply" % (wedge, weight))
+        script = mlx_with(c, "group_preserving_quadric_edge_collapse.mlx", {"TargetPerc": 0.1, "AttributeWeight": weight})
+        _, log = c.meshlab([src], script, out, save=("vc", "wt") if wedge else ("vc", "vt"))
+        assert "(attribute weight %d)" % weight in log, log[-2000:]
+        assert last_int(log, "faces_out") <= 180, log[-2000:]
+        assert ("vertex texture coordinates: each kept vertex keeps its own" in log) != wedge, log[-2000:]
+        vertices, faces = [], []
+        for name, records in read_ply_elements(out):
+            if name == "vertex":
+                vertices = records
+            elif name == "face":
+                faces = records
+        assert len(faces) == last_int(log, "faces_out"), (len(faces), log[-2000:])
+        moved = 0
+        for v in vertices:
+            want = colour(v["x"], v["y"])
+            got = (v["red"], v["green"], v["blue"])
+            assert all(abs(a - b) <= 2 for a, b in zip(got, want)), ("colour not linear at the new position", v, want)
+            moved += abs(v["x"] * 30 - round(v["x"] * 30)) > 1e-3 or abs(v["y"] * 30 - round(v["y"] * 30)) > 1e-3
+        assert moved > 10, "only %d vertices moved off the grid: interpolation not exercised" % moved
+        if not wedge:
+            continue
+        for f in faces:
+            u, w = f["texcoord"][0::2], f["texcoord"][1::2]
+            idx = f["vertex_indices"]
+            charts = set(int(uu >= 1 - 1e-6) for uu in u)
+            assert len(charts) == 1, ("a face with corners of both charts", f, u)
+            chart = charts.pop()
+            for uu, ww, i in zip(u, w, idx):
+                assert abs(uu - chart - vertices[i]["x"]) < 2e-3 and abs(ww - vertices[i]["y"]) < 2e-3, (
+                    "a corner's (u, v) is not its vertex's (x + chart, y)", f, [vertices[i] for i in idx])
 
 
 @case

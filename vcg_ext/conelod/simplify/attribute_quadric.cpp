@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <string>
 
 #include <vcg/space/box3.h>
@@ -35,6 +36,14 @@ Status AttributeQuadrics::Init(const IndexedMesh& mesh, const VertexAttributes& 
   layout_ = layout;
   layout_.values.clear();
   corner_ = std::move(cornerValues);
+  constant_.assign(size_t(channels_), std::numeric_limits<float>::quiet_NaN());
+  if (F > 0)
+    for (int c = 0; c < channels_; ++c) {
+      bool same = true;
+      for (size_t i = size_t(c); same && i < corner_.size(); i += size_t(channels_))
+        same = corner_[i] == corner_[size_t(c)];
+      if (same) constant_[size_t(c)] = corner_[size_t(c)];
+    }
   vcg::Box3d box;
   for (const auto& p : mesh.positions) box.Add(Point3d::Construct(p));
   center_ = box.IsNull() ? Point3d(0, 0, 0) : box.Center();
@@ -144,6 +153,7 @@ double AttributeQuadrics::Cost(uint32_t a, uint32_t b, const Point3d& p) const {
   const Point3d q = p - center_;
   double sum = 0;
   for (int c = 0; c < channels_; ++c) {
+    if (!std::isnan(constant_[size_t(c)])) continue;
     const double d = predict(a, c, q) - predict(b, c, q);
     sum += d * d;
   }
@@ -196,7 +206,8 @@ void AttributeQuadrics::Evaluate(uint32_t f, int k, uint32_t v, const Point3d& p
     return;
   }
   const Point3d q = p - center_;
-  for (int c = 0; c < channels_; ++c) out[c] = float(predict(v, c, q));
+  for (int c = 0; c < channels_; ++c)
+    out[c] = std::isnan(constant_[size_t(c)]) ? float(predict(v, c, q)) : constant_[size_t(c)];
   for (int c = 0; c < layout_.colorChannels; ++c) out[c] = std::min(1.0f, std::max(0.0f, out[c]));
   if (layout_.normals) {
     float* n = out + layout_.normalOffset();
@@ -204,6 +215,46 @@ void AttributeQuadrics::Evaluate(uint32_t f, int k, uint32_t v, const Point3d& p
     if (len > 0)
       for (int k2 = 0; k2 < 3; ++k2) n[k2] = float(n[k2] / len);
   }
+}
+
+void AttributeQuadrics::Renumber(const std::vector<uint32_t>& vertexInput, const std::vector<uint32_t>& faceInput) {
+  RestoreInputOrder();
+  const size_t V = wedges_.size(), F = corner_.size() / (3 * size_t(std::max(channels_, 1)));
+  if (vertexInput.size() != V || faceInput.size() != F) return;  // not this mesh's numbering: keep the input's
+  const size_t stride = 1 + 4 * size_t(channels_), cornerStride = 3 * size_t(channels_);
+  std::vector<uint8_t> wedges(V);
+  std::vector<double> model(model_.size());
+  for (size_t i = 0; i < V; ++i) {
+    wedges[i] = wedges_[vertexInput[i]];
+    std::copy_n(model_.data() + vertexInput[i] * stride, stride, model.data() + i * stride);
+  }
+  std::vector<float> corner(corner_.size());
+  for (size_t f = 0; f < F; ++f)
+    std::copy_n(corner_.data() + faceInput[f] * cornerStride, cornerStride, corner.data() + f * cornerStride);
+  wedges_.swap(wedges);
+  model_.swap(model);
+  corner_.swap(corner);
+  vertexInput_ = vertexInput;
+  faceInput_ = faceInput;
+}
+
+void AttributeQuadrics::RestoreInputOrder() {
+  if (vertexInput_.empty() && faceInput_.empty()) return;
+  const size_t stride = 1 + 4 * size_t(channels_), cornerStride = 3 * size_t(channels_);
+  std::vector<uint8_t> wedges(wedges_.size());
+  std::vector<double> model(model_.size());
+  for (size_t i = 0; i < vertexInput_.size(); ++i) {
+    wedges[vertexInput_[i]] = wedges_[i];
+    std::copy_n(model_.data() + i * stride, stride, model.data() + vertexInput_[i] * stride);
+  }
+  std::vector<float> corner(corner_.size());
+  for (size_t f = 0; f < faceInput_.size(); ++f)
+    std::copy_n(corner_.data() + f * cornerStride, cornerStride, corner.data() + faceInput_[f] * cornerStride);
+  wedges_.swap(wedges);
+  model_.swap(model);
+  corner_.swap(corner);
+  vertexInput_.clear();
+  faceInput_.clear();
 }
 
 }  // namespace conelod

@@ -75,6 +75,13 @@ class AttributeQuadrics {
   // normals made unit length.
   void Evaluate(uint32_t f, int k, uint32_t v, const vcg::Point3d& p, float* out) const;
 
+  // The simplifier's own numbering (group_qem.cpp's spatial order): vertex i becomes input vertex
+  // vertexInput[i], face f input face faceInput[f] (corners in the same order), so that the
+  // collapse may run in that order with attributes too; RestoreInputOrder (before Evaluate) gives
+  // back the input's numbering. The values move, none changes: the collapse sees the same models.
+  void Renumber(const std::vector<uint32_t>& vertexInput, const std::vector<uint32_t>& faceInput);
+  void RestoreInputOrder();
+
  private:
   double predict(uint32_t v, int c, const vcg::Point3d& q) const;  // s*_c at q (centred)
   const float* corner(uint32_t f, int k) const { return corner_.data() + (3 * size_t(f) + size_t(k)) * channels_; }
@@ -87,8 +94,13 @@ class AttributeQuadrics {
   std::vector<float> corner_;    // per face corner
   std::vector<uint8_t> wedges_;  // distinct corner values per vertex, saturated at 3
   vcg::Point3d center_;
-  double scale_ = 0;           // weight * (0.003 diagonal)^2
-  std::vector<double> model_;  // per vertex: W, then per channel Gx Gy Gz D
+  double scale_ = 0;                               // weight * (0.003 diagonal)^2
+  std::vector<double> model_;                      // per vertex: W, then per channel Gx Gy Gz D
+  std::vector<uint32_t> vertexInput_, faceInput_;  // Renumber's maps (empty: the input's numbering)
+  // Per channel: the value every corner has, or NaN. A channel the same on every corner carries no
+  // information: it costs nothing and is that value everywhere, exactly (a colour every vertex
+  // shares leaves the collapse as it is without it; docs/attributes.md).
+  std::vector<float> constant_;
 };
 
 }  // namespace conelod

@@ -270,9 +270,9 @@ class GroupQemSimplifier {
         frozen_(region && !region->frozenVertex.empty() ? region->frozenVertex.data() : nullptr),
         regionDiagonal_(region ? region->diagonal : 0),
         separationSq_(region && region->separation > 0 ? region->separation * region->separation : 0),
-        // Attributes are kept per input vertex and corner: a run with attributes keeps the
-        // input's numbering.
-        spatialOrder_(spatialOrder && coarser.empty() && !frozen_ && !(attributes && attributes->active())),
+        // Attributes are kept per input vertex and corner: they are renumbered with the mesh
+        // (AttributeQuadrics::Renumber) and given back in the input's numbering by output().
+        spatialOrder_(spatialOrder && coarser.empty() && !frozen_),
         attributes_(attributes && attributes->active() ? attributes : nullptr) {}
 
   void init();
@@ -615,7 +615,10 @@ void GroupQemSimplifier::init() {
   diag_ = regionDiagonal_ > 0 ? regionDiagonal_ : (box.Diag() > 0 ? box.Diag() : 1.0);
   // As vcglib: errors below a floor (~1e-6 of the diagonal) are equal, and shorter edges go first.
   floorError_ = 1e-12 * diag_ * diag_;
-  if (spatialOrder_ && nf >= kSpatialOrderFaces) SpatialOrder(box);
+  if (spatialOrder_ && nf >= kSpatialOrderFaces) {
+    SpatialOrder(box);
+    if (attributes_) attributes_->Renumber(vertexInput_, faceInput_);
+  }
   pos_.resize(nv);
   faces_.resize(nf);
   std::vector<int> dense;
@@ -1607,6 +1610,7 @@ void GroupQemSimplifier::output(GroupQemResult& out) const {
   out.mesh.faces.clear();
   out.sourceFace.clear();
   out.sourceVertex.clear();
+  if (attributes_) attributes_->RestoreInputOrder();  // Evaluate reads the input's numbering
   // In the input's order: internal index of each input vertex and face.
   const auto inverse = [](const std::vector<uint32_t>& input, size_t n) {
     std::vector<uint32_t> of(n);
