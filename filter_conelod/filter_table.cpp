@@ -254,8 +254,10 @@ void SetLayerAttributes(CMeshO& m, const conelod::VertexAttributes& layout, cons
       const size_t vi = size_t(vcg::tri::Index(m, face.V(k)));
       if (layout.colorChannels && !coloured[vi]) {
         coloured[vi] = 1;
-        for (int c = 0; c < layout.colorChannels; ++c)
-          face.V(k)->C()[c] = (unsigned char)std::lround(std::min(1.0f, std::max(0.0f, value[size_t(c)])) * 255.0f);
+        vcg::Color4b rgba = face.V(k)->C();  // RGB: the alpha stays
+        for (int c = 0; c < std::min(4, layout.colorChannels); ++c)
+          rgba[c] = (unsigned char)std::lround(std::min(1.0f, std::max(0.0f, value[size_t(c)])) * 255.0f);
+        face.V(k)->C() = rgba;
       }
       if (layout.texCoords) {
         face.WT(k).U() = value[size_t(layout.texCoordOffset())];
