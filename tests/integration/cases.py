@@ -1537,8 +1537,11 @@ def cli_lod_memory_bounded(c):
     r = json.loads(stdout)
     assert r["faces"] == 871414 and r["chunks"] == 128, r
     peak = usage.ru_maxrss * 1024  # KiB on Linux
-    assert peak <= LOD_MEMORY_BOUND_BYTES_PER_FACE * r["faces"], \
-        "peak RSS %.1f MiB = %.0f B/face" % (peak / 2 ** 20, peak / r["faces"])
+    # Under AddressSanitizer (scripts/sanitize.sh) the shadow memory and the allocator's quarantine
+    # multiply the resident size: the bound is the Release build's; the rest is checked as usual.
+    if os.environ.get("CONELOD_SANITIZED") != "1":
+        assert peak <= LOD_MEMORY_BOUND_BYTES_PER_FACE * r["faces"], \
+            "peak RSS %.1f MiB = %.0f B/face" % (peak / 2 ** 20, peak / r["faces"])
     assert os.listdir(folder) == ["dragon.clod"], os.listdir(folder)
     two = c.out("dragon2.clod")
     c.conelod("lod", "build", dragon, "-o", two, "--memory", "16M", "--threads", "2")
