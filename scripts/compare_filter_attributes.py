@@ -21,15 +21,8 @@ import sys
 import xml.etree.ElementTree as ET
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-
-
-def faces_of(path):
-    with open(path, "rb") as f:
-        head = f.read(4096).split(b"end_header")[0].decode(errors="replace")
-    for line in head.splitlines():
-        if line.startswith("element face"):
-            return int(line.split()[2])
-    return 0
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from compare_attributes import faces_of  # noqa: E402
 
 
 def run_filter(a, build, mlxdir, ratio, weight, tag):

@@ -82,6 +82,12 @@ class Ctx:
         return p
 
 
+def ply_records(path):
+    """A PLY's vertex and face records as read_ply_elements gives them (every property)."""
+    elements = dict(read_ply_elements(path))
+    return elements.get("vertex", []), elements.get("face", [])
+
+
 def read_ply(path):
     """A saved mesh as the tests look at it: vertex count and positions, faces, per-face quality."""
     result = {"vertices": 0, "faces": [], "quality": [], "positions": []}
@@ -708,12 +714,7 @@ def meshlab_group_qem_interpolates_attributes(c):
         assert "(attribute weight %d)" % weight in log, log[-2000:]
         assert last_int(log, "faces_out") <= 180, log[-2000:]
         assert ("vertex texture coordinates: each kept vertex keeps its own" in log) != wedge, log[-2000:]
-        vertices, faces = [], []
-        for name, records in read_ply_elements(out):
-            if name == "vertex":
-                vertices = records
-            elif name == "face":
-                faces = records
+        vertices, faces = ply_records(out)
         assert len(faces) == last_int(log, "faces_out"), (len(faces), log[-2000:])
         moved = 0
         for v in vertices:
@@ -753,12 +754,7 @@ def cli_simplify_attributes(c):
             header = f.read(2000).split(b"end_header")[0].decode()
         assert "comment TextureFile chart.png" in header, header
         assert ("property list uchar float texcoord" in header) == wedge, header
-        vertices, faces = [], []
-        for name, records in read_ply_elements(out):
-            if name == "vertex":
-                vertices = records
-            elif name == "face":
-                faces = records
+        vertices, faces = ply_records(out)
         assert len(faces) == r["faces_out"], (len(faces), r)
         moved = 0
         for v in vertices:

@@ -55,6 +55,20 @@ VertexAttributes ColoursOf(const IndexedMesh& m) {
     for (float c : LinearColour(p)) a.values.push_back(c);
   return a;
 }
+// Every corner of `r` (simplified from `m` with `aq`'s linear colours) has the linear colour at its
+// vertex's place; returns how many corners sit at a vertex that moved.
+size_t ExpectLinearColours(const IndexedMesh& m, const AttributeQuadrics& aq, const GroupQemResult& r) {
+  size_t moved = 0;
+  for (size_t f = 0; f < r.mesh.faceCount(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t o = r.mesh.faces[f][size_t(k)];
+      const auto got = At(aq, r, f, k);
+      const auto want = LinearColour(r.mesh.positions[o]);
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[size_t(c)], want[size_t(c)], 2e-5) << "vertex " << o;
+      moved += r.mesh.positions[o] != m.positions[r.sourceVertex[o]];
+    }
+  return moved;
+}
 
 TEST(AttributeQuadric, ReproducesALinearColourAtEveryNewPosition) {
   const IndexedMesh m = BentGrid();
@@ -67,15 +81,7 @@ TEST(AttributeQuadric, ReproducesALinearColourAtEveryNewPosition) {
   GroupQemResult r;
   ASSERT_TRUE(SimplifyPreservingGroups(m, std::vector<int>(m.faceCount(), 0), p, r, Progress(), {}, nullptr, &aq).ok());
   ASSERT_LE(r.mesh.faceCount(), p.targetFaces);
-  size_t moved = 0;
-  for (size_t f = 0; f < r.mesh.faceCount(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t o = r.mesh.faces[f][size_t(k)];
-      const auto got = At(aq, r, f, k);
-      const auto want = LinearColour(r.mesh.positions[o]);
-      for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[size_t(c)], want[size_t(c)], 2e-5) << "vertex " << o;
-      moved += r.mesh.positions[o] != m.positions[r.sourceVertex[o]];
-    }
+  const size_t moved = ExpectLinearColours(m, aq, r);
   EXPECT_GT(moved, 0u) << "no vertex moved: the test would not tell interpolation from the survivor's colour";
 }
 
@@ -204,15 +210,7 @@ TEST(AttributeQuadric, SpatialOrderCarriesTheAttributes) {
   ASSERT_TRUE(linear.Init(m, colours, Corners(m, colours), 1.0).ok());
   GroupQemResult r;
   ASSERT_TRUE(SimplifyPreservingGroups(m, groups, p, r, Progress(), {}, nullptr, &linear).ok());
-  size_t moved = 0;
-  for (size_t f = 0; f < r.mesh.faceCount(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t o = r.mesh.faces[f][size_t(k)];
-      const auto got = At(linear, r, f, k);
-      const auto want = LinearColour(r.mesh.positions[o]);
-      for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[size_t(c)], want[size_t(c)], 2e-5) << "vertex " << o;
-      moved += r.mesh.positions[o] != m.positions[r.sourceVertex[o]];
-    }
+  const size_t moved = ExpectLinearColours(m, linear, r);
   EXPECT_GT(moved, 0u);
 
   AttributeQuadrics zero;
