@@ -12,18 +12,18 @@
 # buttons relative to its bottom edge). Exit 0 when the filter succeeded and the bunny shows colours.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# start_xvfb; inside a MeshLab root lib.sh lies beside this script
+# shellcheck source=scripts/lib.sh
+. "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 MESHLAB="$(readlink -f "$1")" OUT="$2" MESH="${3:-${CONELOD_TEST_MESHES:-$ROOT/../shared/test_meshes}/stanford_bunny_bun_zipper.ply}"
 FILTER="Cone LOD: Group-Preserving Quadric Edge Collapse"
 MENU=(121 10 275 160 559 186)   # Filters, Remeshing..., the filter
 work="$(mktemp -d)"
-DISP=":$((90 + RANDOM % 9))"
 XDG_RUNTIME_DIR="$(mktemp -d)"
-export DISPLAY="$DISP" XDG_RUNTIME_DIR
-Xvfb "$DISP" -screen 0 1400x1000x24 >/dev/null 2>&1 &
-XPID=$!
+export XDG_RUNTIME_DIR
+start_xvfb
 MPID=
 trap 'kill $MPID $XPID 2>/dev/null || true; rm -rf "$work" "$XDG_RUNTIME_DIR"' EXIT
-sleep 2
 (cd "$work" && exec "$MESHLAB" "$MESH" >/dev/null 2>&1) &
 MPID=$!
 wait_for() { for _ in $(seq 60); do xdotool search --name "$1" >/dev/null 2>&1 && return 0; sleep 0.5; done

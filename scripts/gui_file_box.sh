@@ -17,6 +17,9 @@
 # the parameters). Exit 0 when MeshLab did what is expected above.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# start_xvfb; inside a MeshLab root lib.sh lies beside this script
+# shellcheck source=scripts/lib.sh
+. "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 
 if [ "${1:-}" = --inside ]; then
   VERSION="$2" MESHLAB="$3" OUT="$4" MESH="$5"
@@ -30,14 +33,11 @@ if [ "${1:-}" = --inside ]; then
   work="$(mktemp -d)"
   typed="$work/typed/bunny.clod"
   mkdir -p "$work/typed" "$work/cwd"
-  DISP=":$((90 + RANDOM % 9))"
   XDG_RUNTIME_DIR="$(mktemp -d)"
-  export DISPLAY="$DISP" XDG_RUNTIME_DIR
-  Xvfb "$DISP" -screen 0 1400x1000x24 >/dev/null 2>&1 &
-  XPID=$!
+  export XDG_RUNTIME_DIR
+  start_xvfb
   MPID=
   trap 'kill $MPID $XPID 2>/dev/null || true' EXIT
-  sleep 2
   (cd "$work/cwd" && exec "$MESHLAB" "$MESH" >/dev/null 2>&1) &
   MPID=$!
   wait_for() { for _ in $(seq 60); do xdotool search --name "$1" >/dev/null 2>&1 && return 0; sleep 0.5; done
@@ -101,15 +101,13 @@ fi
 
 if [ "${1:-}" = --meshlab ]; then
   MESHLAB_VERSION="$2" OUT="$3" MESH="${4:-$ROOT/../shared/test_meshes/stanford_bunny_bun_zipper.ply}"
-  # shellcheck source=scripts/lib.sh
-  . "$ROOT/scripts/lib.sh"
   R="$CONELOD_ROOTS/$(meshlab_suite "$MESHLAB_VERSION")"
   plugin="$R/conelod/build/filter_conelod/libfilter_conelod.so"
   [ -f "$plugin" ] || { echo "gui_file_box.sh: no plugin in $R: run scripts/setup.sh --meshlab $MESHLAB_VERSION" >&2; exit 1; }
   extra="$R/root/.local/share/VCG/MeshLab_64bit_fp/MeshLabExtraPlugins/$MESHLAB_VERSION"  # as in gui_screenshot.sh
   mkdir -p "$extra" "$R/conelod/shots"
   cp -f "$plugin" "$extra/libfilter_conelod.so"
-  cp -f "$ROOT/scripts/gui_file_box.sh" "$R/conelod/gui_file_box.sh"
+  cp -f "$ROOT/scripts/gui_file_box.sh" "$ROOT/scripts/lib.sh" "$R/conelod/"
   cp -f "$MESH" "$R/conelod/shots/$(basename "$MESH")"
   root_run "$R" bash /conelod/gui_file_box.sh --inside "$MESHLAB_VERSION" meshlab /conelod/shots/file_box.png \
     "/conelod/shots/$(basename "$MESH")"

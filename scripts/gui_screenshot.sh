@@ -13,6 +13,9 @@
 # never appears or the mesh does not come out coloured.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# start_xvfb; inside a MeshLab root lib.sh lies beside this script
+# shellcheck source=scripts/lib.sh
+. "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 
 # Inside the machine (or root) whose MeshLab is used: drive the GUI.
 if [ "${1:-}" = --inside ]; then
@@ -26,14 +29,11 @@ if [ "${1:-}" = --inside ]; then
              CROP=934x730+0+0 ;;
     *) echo "gui_screenshot.sh: no click positions for MeshLab $VERSION" >&2; exit 1 ;;
   esac
-  DISP=":$((90 + RANDOM % 9))"
   XDG_RUNTIME_DIR="$(mktemp -d)"
-  export DISPLAY="$DISP" XDG_RUNTIME_DIR
-  Xvfb "$DISP" -screen 0 1400x1000x24 >/dev/null 2>&1 &
-  XPID=$!
+  export XDG_RUNTIME_DIR
+  start_xvfb
   MPID=
   trap 'kill $MPID $XPID 2>/dev/null || true' EXIT
-  sleep 2
   meshlab "$MESH" >/dev/null 2>&1 &
   MPID=$!
   wait_for() { for _ in $(seq 60); do xdotool search --name "$1" >/dev/null 2>&1 && return 0; sleep 0.5; done
@@ -72,8 +72,6 @@ if [ "$MESHLAB" = 2020.09 ]; then
   exec bash "$0" --inside 2020.09 "$OUT" "$MESH"
 fi
 
-# shellcheck source=scripts/lib.sh
-. "$ROOT/scripts/lib.sh"
 R="$CONELOD_ROOTS/$(meshlab_suite "$MESHLAB")"
 plugin="$R/conelod/build/filter_conelod/libfilter_conelod.so"
 [ -f "$plugin" ] || { echo "gui_screenshot.sh: no plugin in $R: run scripts/setup.sh --meshlab $MESHLAB" >&2; exit 1; }
@@ -82,7 +80,7 @@ plugin="$R/conelod/build/filter_conelod/libfilter_conelod.so"
 extra="$R/root/.local/share/VCG/MeshLab_64bit_fp/MeshLabExtraPlugins/$MESHLAB"
 mkdir -p "$extra" "$R/conelod/shots"
 cp -f "$plugin" "$extra/libfilter_conelod.so"
-cp -f "$ROOT/scripts/gui_screenshot.sh" "$R/conelod/gui_screenshot.sh"
+cp -f "$ROOT/scripts/gui_screenshot.sh" "$ROOT/scripts/lib.sh" "$R/conelod/"
 cp -f "$MESH" "$R/conelod/shots/$(basename "$MESH")"
 rm -f "$R/conelod/shots/shot.png"
 root_run "$R" bash /conelod/gui_screenshot.sh --inside "$MESHLAB" /conelod/shots/shot.png "/conelod/shots/$(basename "$MESH")"

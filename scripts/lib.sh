@@ -199,3 +199,21 @@ build_in_root() {
   root_run "$r" cmake --build /conelod/build -j "$(nproc)" --target filter_conelod plugin_harness >&2 || return 1
   echo "$r/conelod/build/filter_conelod/libfilter_conelod.so"
 }
+
+# start_xvfb: starts Xvfb (1400x1000x24) on a display it finds free itself (-displayfd), exports
+# DISPLAY and sets XPID; returns once the server accepts clients. Tests run side by side, so a
+# display number picked by the caller could be taken by another test's server.
+start_xvfb() {
+  local f n=; f="$(mktemp)"
+  Xvfb -displayfd 3 -screen 0 1400x1000x24 3>"$f" >/dev/null 2>&1 &
+  XPID=$!
+  for _ in $(seq 100); do
+    n="$(tr -dc 0-9 <"$f")"
+    [ -n "$n" ] && break
+    kill -0 "$XPID" 2>/dev/null || break
+    sleep 0.1
+  done
+  rm -f "$f"
+  [ -n "$n" ] || { echo "Xvfb did not start" >&2; return 1; }
+  export DISPLAY=":$n"
+}
