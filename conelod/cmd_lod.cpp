@@ -1,11 +1,14 @@
 // ConeLOD CLI — `conelod lod`: build the streamable .clod LOD file, extract a view-dependent cut of
 // it, describe it (Kamiya, Suzuki, Kawachi §7-9; vcg_ext/conelod/lod/).
 #include <cctype>
+#include <cerrno>
 #include <csignal>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+
+#include <unistd.h>
 
 #include "cli_common.h"
 #include "commands.h"
@@ -20,6 +23,16 @@
 namespace conelod {
 namespace cli {
 namespace {
+
+// "colour, normals, texture coordinates" (those the streams have).
+std::string AttributeNames(const LodAttributes& a) {
+  std::string s;
+  auto add = [&](const char* what) { s += (s.empty() ? "" : ", ") + std::string(what); };
+  if (!a.colors.empty()) add("colour");
+  if (!a.normals.empty()) add("normals");
+  if (!a.texCoords.empty()) add("texture coordinates");
+  return s;
+}
 
 bool ParsePoint(const std::string& text, vcg::Point3d& p) {
   double v[3];
@@ -37,6 +50,26 @@ bool ParsePoint(const std::string& text, vcg::Point3d& p) {
   if (*s) return false;
   p = vcg::Point3d(v[0], v[1], v[2]);
   return true;
+}
+
+// The folder part of a path ("" for a bare name), with its final slash.
+std::string FolderOf(const std::string& path) {
+  const size_t slash = path.rfind('/');
+  return slash == std::string::npos ? std::string() : path.substr(0, slash + 1);
+}
+
+// A whole file's bytes; false when it cannot be read (a missing texture image).
+bool ReadFileBytes(const std::string& path, std::vector<uint8_t>& out) {
+  out.clear();
+  if (!CheckInputPath(path).empty()) return false;
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return false;
+  uint8_t buf[1 << 16];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) out.insert(out.end(), buf, buf + n);
+  const bool ok = !std::ferror(f);
+  std::fclose(f);
+  return ok;
 }
 
 // --memory SIZE: a whole number of bytes, or one followed by K, M, G or T (powers of 1024).
@@ -115,13 +148,15 @@ int LodBuild(int argc, char** argv) {
   // Read straight into the indexed mesh (the same positions and faces as LoadInput's, without its
   // vcglib mesh: about 100 bytes a face less at the peak).
   IndexedMesh im;
-  LodAttributes attributes;  // per-vertex colour and normals, carried into the file (version 5)
-  bool texCoordsDropped = false;
+  LodAttributes attributes;  // per-vertex colour, normals and UVs, carried into the file (version 5)
+  std::string textureNote;   // why the texture image is not stored, when it is not
   Timer timer;
   {
     PlyMesh ply;
     const std::string err = ReadPly(input, ply);
     if (!err.empty()) return FailLoad(err);
+    if (keepAttributes && !ply.wedgeTexCoords.empty())
+      SplitWedgeTexCoords(ply);  // per-face texcoord lists: one vertex per (vertex, UV)
     if (keepAttributes) {
       attributes.colors.reserve(ply.colors.size());
       for (const auto& c : ply.colors) {
@@ -131,7 +166,50 @@ int LodBuild(int argc, char** argv) {
       }
       attributes.normals.reserve(ply.normals.size());
       for (const auto& n : ply.normals) attributes.normals.push_back(EncodeLodNormal(vcg::Point3f(n[0], n[1], n[2])));
-      texCoordsDropped = !ply.texCoords.empty() || !ply.wedgeTexCoords.empty();
+      if (!ply.texCoords.empty()) {
+        // The UV box of the used vertices; the coordinates as u16 codes over it.
+        std::vector<uint8_t> used(ply.texCoords.size(), 0);
+        for (const auto& t : ply.triangles)
+          for (uint32_t v : t)
+            if (v < used.size()) used[v] = 1;
+        bool any = false;
+        for (size_t v = 0; v < ply.texCoords.size(); ++v) {
+          if (!used[v]) continue;
+          for (int c = 0; c < 2; ++c) {
+            const float x = ply.texCoords[v][size_t(c)];
+            if (!std::isfinite(x))
+              return Fail(kBadInput, input + ": vertex " + std::to_string(v) + " has a non-finite texture coordinate");
+            attributes.uvMin[c] = any ? std::min(attributes.uvMin[c], x) : x;
+            attributes.uvMax[c] = any ? std::max(attributes.uvMax[c], x) : x;
+          }
+          any = true;
+        }
+        attributes.texCoords.reserve(ply.texCoords.size());
+        for (const auto& t : ply.texCoords)
+          attributes.texCoords.push_back(EncodeLodTexCoord(t.data(), attributes.uvMin, attributes.uvMax));
+        // The texture image beside the input, stored in the file as it is.
+        if (ply.textureFiles.empty()) {
+          textureNote = "the file names no texture image (comment TextureFile)";
+        } else {
+          const std::string& named = ply.textureFiles[0];
+          const std::string base =
+              named.substr(named.find_last_of("/\\") == std::string::npos ? 0 : named.find_last_of("/\\") + 1);
+          const std::string at = named.size() && named[0] == '/' ? named : FolderOf(input) + named;
+          LodTexture& tex = attributes.texture;
+          if (!CheckLodTextureName(base).empty()) {
+            textureNote = "its texture name '" + named + "' is not a plain file name";
+          } else if (!ReadFileBytes(at, tex.bytes) || tex.bytes.empty()) {
+            tex.bytes.clear();
+            textureNote = "cannot read its texture image '" + at + "'";
+          } else {
+            tex.name = base;
+            tex.mime = LodTextureMime(base, tex.bytes);
+          }
+          if (ply.textureFiles.size() > 1)
+            std::fprintf(stderr, "conelod: %s: %zu texture images named; only the first, %s, is stored\n",
+                         input.c_str(), ply.textureFiles.size(), named.c_str());
+        }
+      }
     }
     im.positions.reserve(ply.positions.size());
     for (const auto& p : ply.positions) im.positions.emplace_back(p[0], p[1], p[2]);
@@ -143,9 +221,9 @@ int LodBuild(int argc, char** argv) {
   if (!s.ok()) return Fail(kUsage, s.message);
   s = RequireValidForFaces(im);
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
-  if (texCoordsDropped)
-    std::fprintf(stderr, "conelod: %s: texture coordinates are not carried into the .clod file (not yet)\n",
-                 input.c_str());
+  if (!textureNote.empty())
+    std::fprintf(stderr, "conelod: %s: texture coordinates are stored without the image: %s\n", input.c_str(),
+                 textureNote.c_str());
   LodBuildStats st;
   const size_t inputVertices = im.vertexCount();
   // The mesh is handed over (welded in place, it becomes the DAG's level 0). An interrupted build
@@ -189,9 +267,10 @@ int LodBuild(int argc, char** argv) {
         .field("vertex_id_bytes", size_t(st.vertexIdBytes))
         .field("color_bytes", size_t(st.colorBytes))
         .field("normal_bytes", size_t(st.normalBytes))
-        .field("attributes", std::string(attributes.colors.empty() ? "" : "colour") +
-                                 (!attributes.colors.empty() && !attributes.normals.empty() ? ", " : "") +
-                                 (attributes.normals.empty() ? "" : "normals"))
+        .field("texcoord_bytes", size_t(st.texCoordBytes))
+        .field("texture_bytes", size_t(st.textureBytes))
+        .field("texture", attributes.texture.name)
+        .field("attributes", AttributeNames(attributes))
         .field("attribute_conflicts", st.attributeConflicts)
         .field("quantization_error", st.quantizationError)
         .field("load_seconds", loadSeconds)
@@ -217,7 +296,13 @@ int LodBuild(int argc, char** argv) {
         double(st.fileBytes) / double(st.inputFaces), (unsigned long long)st.recordBytes,
         (unsigned long long)st.positionBytes, (unsigned long long)st.triangleBytes,
         (unsigned long long)st.vertexIdBytes, st.quantizationError, params.precision);
-    if (!attributes.empty())
+    if (!attributes.texCoords.empty())
+      std::printf("texture coordinates: %llu bytes (16 bits over the UV box, within %.2g)%s%s%s\n",
+                  (unsigned long long)st.texCoordBytes, LodTexCoordErrorBound(attributes.uvMin, attributes.uvMax),
+                  attributes.texture.empty() ? "" : ("; texture " + attributes.texture.name + ", ").c_str(),
+                  attributes.texture.empty() ? "" : std::to_string(st.textureBytes).c_str(),
+                  attributes.texture.empty() ? "" : " bytes");
+    if (!attributes.colors.empty() || !attributes.normals.empty())
       std::printf(
           "attributes: %s%s%s, %llu + %llu bytes (colour, normals; normals within %.2g rad)%s\n",
           attributes.colors.empty() ? "" : "colour",
@@ -307,7 +392,47 @@ int LodExtract(int argc, char** argv) {
       mask |= vcg::tri::io::Mask::IOM_VERTNORMAL;
       for (size_t v = 0; v < m.vert.size(); ++v) m.vert[v].N() = DecodeLodNormal(attributes.normals[v]);
     }
-    const std::string err = SavePly(m, a.str("-o"), mask);
+    // Texture coordinates: per face corner (`texcoord` lists, as MeshLab writes them), the image
+    // beside the output under its stored name (`comment TextureFile NAME`). An existing file of that
+    // name is left as it is: kept when it holds the same bytes, else the command stops before
+    // writing anything.
+    SafeFile textureOut;
+    std::string texturePath;
+    if (!attributes.texCoords.empty()) {
+      mask |= vcg::tri::io::Mask::IOM_WEDGTEXCOORD;
+      for (size_t v = 0; v < m.vert.size(); ++v) {
+        float uv[2];
+        DecodeLodTexCoord(attributes.texCoords[v], attributes.uvMin, attributes.uvMax, uv);
+        m.vert[v].T().U() = uv[0];
+        m.vert[v].T().V() = uv[1];
+        m.vert[v].T().N() = 0;
+      }
+      if (reader->info().textureBytes) {
+        LodTexture tex;
+        s = reader->LoadTexture(tex);
+        if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
+        m.textures.push_back(tex.name);
+        texturePath = FolderOf(a.str("-o")) + tex.name;
+        std::vector<uint8_t> existing;
+        if (CheckInputPath(texturePath).empty() || access(texturePath.c_str(), F_OK) == 0) {
+          if (!ReadFileBytes(texturePath, existing) || existing != tex.bytes)
+            return Fail(kIoError, "'" + texturePath + "' exists and is not the texture image stored in " + input +
+                                      ": it is left as it is and nothing was written (move it away, or write -o "
+                                      "into another folder)");
+          texturePath.clear();  // the same image is there already
+        } else {
+          std::string err = textureOut.open(texturePath);
+          if (err.empty() && std::fwrite(tex.bytes.data(), 1, tex.bytes.size(), textureOut.file()) != tex.bytes.size())
+            err = "cannot write '" + texturePath + "': " + std::strerror(errno);
+          if (err.empty()) err = textureOut.sync();
+          if (!err.empty()) return Fail(kIoError, err);
+        }
+      }
+    }
+    SafeFile meshOut;
+    std::string err = SavePlyUncommitted(m, a.str("-o"), meshOut, mask);
+    if (err.empty() && !texturePath.empty()) err = textureOut.commit();
+    if (err.empty()) err = meshOut.commit();
     if (!err.empty()) return Fail(kIoError, err);
   }
   const int levels = reader->info().levels;
@@ -354,6 +479,9 @@ int LodExtract(int argc, char** argv) {
       std::printf("%5d %8zu %10zu\n", k, levelNodes[size_t(k)], levelFaces[size_t(k)]);
     if (a.has("-o"))
       std::printf("wrote %s: %zu faces (quality and colour = node level)\n", a.str("-o").c_str(), out.faces.size());
+    if (a.has("-o") && reader->info().textureBytes)
+      std::printf("its texture: %s%s\n", (FolderOf(a.str("-o")) + reader->info().textureName).c_str(),
+                  " (beside it; comment TextureFile)");
   }
   return kOk;
 }
@@ -384,7 +512,16 @@ int LodInfo(int argc, char** argv) {
         .field("grid_bits", int(i.grid.bits))
         .field("colors", i.colors)
         .field("normals", i.normals)
+        .field("texcoords", i.texCoords)
+        .field("texture", i.textureName)
+        .field("texture_mime", i.textureMime)
+        .field("texture_bytes", size_t(i.textureBytes))
         .field("quantization_error", i.quantizationError);
+    if (i.texCoords) {
+      j.key("uv_min").BeginArray().precise(i.uvMin[0]).precise(i.uvMin[1]).endArray();
+      j.key("uv_max").BeginArray().precise(i.uvMax[0]).precise(i.uvMax[1]).endArray();
+      j.field("texcoord_error", LodTexCoordErrorBound(i.uvMin, i.uvMax));
+    }
     // The grid exactly: a script can round positions as the file does (lod_read.h, LodGrid).
     j.key("grid_step").precise(i.grid.step);
     j.key("grid_origin").BeginArray();
@@ -407,6 +544,12 @@ int LodInfo(int argc, char** argv) {
     if (i.colors || i.normals)
       std::printf("attributes per vertex: %s%s%s\n", i.colors ? "colour (RGBA8)" : "",
                   i.colors && i.normals ? ", " : "", i.normals ? "normals (octahedral 2 x 16 bits)" : "");
+    if (i.texCoords)
+      std::printf("texture coordinates per vertex: 2 x 16 bits over u %.6g..%.6g, v %.6g..%.6g (within %.3g)\n",
+                  i.uvMin[0], i.uvMax[0], i.uvMin[1], i.uvMax[1], LodTexCoordErrorBound(i.uvMin, i.uvMax));
+    if (i.textureBytes)
+      std::printf("texture image: %s (%s), %llu bytes\n", i.textureName.c_str(), i.textureMime.c_str(),
+                  (unsigned long long)i.textureBytes);
     std::printf("opened in %.4f s, %zu bytes resident (roots and their geometry)\n", seconds, reader->residentBytes());
     std::printf("%5s %8s %10s\n", "level", "nodes", "faces");
     for (int k = i.levels - 1; k >= 0; --k)
@@ -442,9 +585,12 @@ const char* kLodUsage =
     "  (removed at the end, also on failure or Ctrl-C) and the file is written from there. The\n"
     "  input is still read whole, so it is not yet a bound (docs/scale.md gives the peaks).\n"
     "  Without it the DAG is built whole, in memory.\n"
-    "  Per-vertex colour and normals of IN.ply are carried into every level (interpolated as in\n"
-    "  conelod simplify, --attribute-weight W [1]) and stored per node (file version 5; colour\n"
-    "  exact as RGBA8, normals within 1e-4 rad); --no-attributes: geometry only (version 4).\n"
+    "  Per-vertex colour, normals and texture coordinates (per vertex or per face corner) of\n"
+    "  IN.ply are carried into every level (interpolated as in conelod simplify,\n"
+    "  --attribute-weight W [1]; texture seams kept) and stored per node (file version 5; colour\n"
+    "  exact as RGBA8, normals within 1e-4 rad, UVs as 16 bits over their box), with the texture\n"
+    "  image its `comment TextureFile` names (read beside IN.ply, stored as it is: the .clod\n"
+    "  moves as one file); --no-attributes: geometry only (version 4).\n"
     "  The file does not depend on N. The other grouping options and --faces-per-part are\n"
     "  accepted for compatibility and not used.\n"
     "  extract: opens the file, refines for a perspective eye at X,Y,Z under a budget of N faces\n"
@@ -452,8 +598,9 @@ const char* kLodUsage =
     "  their distance to the eye is largest (--priority error: the error alone; fg: the paper's\n"
     "  f(g)), back-facing groups last (--no-cull: no back-face test); every cut is crack-free.\n"
     "  Writes the cut as OUT.ply with per-face quality = node level (0 = the input's faces) and a\n"
-    "  colour per level, and the file's vertex colours and normals. --drop-culled leaves the\n"
-    "  back-facing groups out of OUT.ply.\n";
+    "  colour per level, and the file's vertex colours, normals and texture coordinates (per face\n"
+    "  corner); the texture image is written beside OUT.ply (`comment TextureFile NAME`), never\n"
+    "  over a different file of that name. --drop-culled leaves the back-facing groups out.\n";
 
 int CmdLod(int argc, char** argv) {
   if (argc < 1) return Fail(kUsage, std::string("expected build, extract or info\n") + kLodUsage);

@@ -80,20 +80,33 @@ def sphere(levels, bump):
         f = nf
     p = [tuple(v*(1+bump*math.sin(5*q[0])*math.cos(3*q[1])) for v in q) for q in p]
     return p, f
-for name, lv, bump, attr in (("oct1", 1, 0, 0), ("sphere2", 2, 0, 0), ("bumpy2", 2, 0.2, 0), ("bumpy2c", 2, 0.2, 1)):
+# The texture of the textured seed (bumpy2t: texture coordinates per face corner, two charts, and
+# an image stored in the .clod's TEXR chunk): any bytes will do, the reader does not decode them.
+with open(f"{sys.argv[1]}/tex.png", "wb") as o:
+    o.write(b"\x89PNG\r\n\x1a\n" + bytes(range(64)))
+for name, lv, bump, attr in (("oct1", 1, 0, 0), ("sphere2", 2, 0, 0), ("bumpy2", 2, 0.2, 0), ("bumpy2c", 2, 0.2, 1),
+                             ("bumpy2t", 2, 0.2, 2)):
     p, f = sphere(lv, bump)
     with open(f"{sys.argv[1]}/{name}.ply", "w") as o:
-        o.write(f"ply\nformat ascii 1.0\nelement vertex {len(p)}\nproperty float x\nproperty float y\nproperty float z\n")
+        o.write("ply\nformat ascii 1.0\n" + ("comment TextureFile tex.png\n" if attr == 2 else ""))
+        o.write(f"element vertex {len(p)}\nproperty float x\nproperty float y\nproperty float z\n")
         if attr:
             o.write("property float nx\nproperty float ny\nproperty float nz\n"
                     "property uchar red\nproperty uchar green\nproperty uchar blue\n")
-        o.write(f"element face {len(f)}\nproperty list uchar int vertex_indices\nend_header\n")
+        o.write(f"element face {len(f)}\nproperty list uchar int vertex_indices\n")
+        o.write("property list uchar float texcoord\nend_header\n" if attr == 2 else "end_header\n")
         for x, y, z in p:
             n = math.sqrt(x*x + y*y + z*z) or 1
             extra = (f" {x/n:.6f} {y/n:.6f} {z/n:.6f} {int(127.5*(x/n+1))} {int(127.5*(y/n+1))} {int(127.5*(z/n+1))}"
                      if attr else "")
             o.write(f"{x:.6f} {y:.6f} {z:.6f}{extra}\n")
-        o.writelines(f"3 {a} {b} {c}\n" for a,b,c in f)
+        for a, b, c in f:
+            uv = ""
+            if attr == 2:  # u from the angle round z, a chart per hemisphere (a seam at the equator)
+                chart = 0.5 if sum(p[v][2] for v in (a, b, c)) > 0 else 0.0
+                uv = " 6" + "".join(f" {chart + 0.25 * (1 + math.atan2(p[v][1], p[v][0]) / math.pi):.6f}"
+                                    f" {0.5 * (1 + p[v][2]):.6f}" for v in (a, b, c))
+            o.write(f"3 {a} {b} {c}{uv}\n")
 PY
 for m in "$OUT"/seeds/*.ply; do
   b="$(basename "$m" .ply)"

@@ -2536,21 +2536,25 @@ def web_screenshot_script(c):
 @case
 def cli_lod_attributes(c):
     """Issue 26 in the .clod file: a grid with vertex colour (linear in position), normals and
-    texture coordinates. `lod build` carries colour and normals (version 5; it says the texture
-    coordinates are not carried), `lod extract` at full budget writes every vertex's colour exactly
-    and its normal within the code's bound; a coarse cut's colours are the linear colour at the
-    moved vertices (interpolated, not the survivors'); --no-attributes writes the geometry-only
-    input's file byte for byte (version 4); a bad --attribute-weight is a usage error."""
+    texture coordinates (two charts, a seam down the middle; its texture image is missing).
+    `lod build` carries colour, normals and the UVs (version 5; it says the image is not stored),
+    `lod extract` at full budget writes every vertex's colour exactly, its normal within the code's
+    bound and its UV within the quantization (the seam's vertices once per chart); a coarse cut's
+    colours are the linear colour at the moved vertices (interpolated, not the survivors');
+    --no-attributes writes the geometry-only input's file byte for byte (version 4); a bad
+    --attribute-weight is a usage error."""
     src = c.out("attr.ply")
     colour = write_attribute_grid(src)
     clod = c.out("attr.clod")
     p = c.conelod("lod", "build", src, "-o", clod, "--json")
     r = json.loads(p.stdout)
-    assert r["attributes"] == "colour, normals" and r["color_bytes"] > 0 and r["normal_bytes"] > 0, r
+    assert r["attributes"] == "colour, normals, texture coordinates", r
+    assert r["color_bytes"] > 0 and r["normal_bytes"] > 0 and r["texcoord_bytes"] > 0 and r["texture_bytes"] == 0, r
     assert r["attribute_conflicts"] == 0, r  # the seam's repeated vertices agree on colour and normal
-    assert b"texture coordinates are not carried" in p.stderr, p.stderr
+    assert b"texture coordinates are stored without the image: cannot read its texture image" in p.stderr, p.stderr
     info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
-    assert info["version"] == 5 and info["colors"] and info["normals"], info
+    assert info["version"] == 5 and info["colors"] and info["normals"] and info["texcoords"], info
+    assert info["uv_min"] == [0, 0] and info["uv_max"] == [2, 1] and info["texture_bytes"] == 0, info
     text = c.conelod("lod", "info", clod).stdout.decode()
     assert "attributes per vertex: colour (RGBA8), normals (octahedral 2 x 16 bits)" in text, text
     # Full budget: the input back, colours exact.
@@ -2558,13 +2562,23 @@ def cli_lod_attributes(c):
     e = json.loads(c.conelod("lod", "extract", clod, "--eye", "0.5,0.5,3", "--budget", "100%", "--no-cull", "-o", full,
                              "--json").stdout)
     assert e["faces"] == 1800, e
-    verts = [rec for name, recs in read_ply_elements(full) if name == "vertex" for rec in recs]
-    assert len(verts) == 31 * 31, len(verts)  # welded: the seam's repeats are one vertex
+    elements = dict(read_ply_elements(full))
+    verts = elements["vertex"]
+    assert len(verts) == 31 * 31 + 31, len(verts)  # one vertex per (position, UV): the seam's twice
     for v in verts:
         i, j = round(v["x"] * 30), round(v["y"] * 30)
         assert abs(v["x"] - i / 30) < 1e-4 and abs(v["y"] - j / 30) < 1e-4, v
         assert (v["red"], v["green"], v["blue"]) == colour(i / 30, j / 30), (v, colour(i / 30, j / 30))
         assert abs(v["nz"] - 1) < 1e-8 and abs(v["nx"]) < 1e-4 and abs(v["ny"]) < 1e-4, v
+    bound = info["texcoord_error"]
+    assert bound < 2e-5, info  # half of 2 / 65535, plus float rounding
+    for f in elements["face"]:  # texcoord per corner: u = x (+ 1 right of the seam), v = y
+        corners = [verts[k] for k in f["vertex_indices"]]
+        uv = f["texcoord"]
+        chart = 1 if min(uv[0::2]) > 0.999 else 0
+        for k, v in enumerate(corners):  # (the positions are on the file's grid: within its error)
+            tol = bound + info["quantization_error"]
+            assert abs(uv[2 * k] - (v["x"] + chart)) <= tol and abs(uv[2 * k + 1] - v["y"]) <= tol, (f, corners)
     # A coarse cut: most vertices placed by the collapse, their colour the linear one there.
     coarse = c.out("coarse.ply")
     e = json.loads(c.conelod("lod", "extract", clod, "--eye", "0.5,0.5,3", "--budget", "200", "--no-cull", "-o", coarse,
@@ -2596,6 +2610,61 @@ def cli_lod_attributes(c):
     assert os.path.getsize(clod) > os.path.getsize(plain)
     p = c.conelod("lod", "build", src, "-o", c.out("bad.clod"), "--attribute-weight", "-1", expect=1)
     assert b"--attribute-weight must be >= 0" in p.stderr and not os.path.exists(c.out("bad.clod")), p.stderr
+
+
+@case
+def cli_lod_texture(c):
+    """Issue 26: the texture image travels in the .clod. The grid of cli_lod_attributes written with
+    per-face texcoord lists and its image beside it: `lod build` stores the image's bytes (TEXR),
+    `lod info` names it, `lod extract` writes texcoord lists, `comment TextureFile chart.png` and
+    the image beside its output byte for byte; extracting again beside the same image is fine, beside
+    a different file of that name exits 3 and writes nothing; a coarse cut's faces each stay in one
+    chart (no face drags its UVs across the seam)."""
+    src = c.out("tex.ply")
+    write_attribute_grid(src, wedge=True)
+    image = bytes([0x89]) + b"PNG\r\n\x1a\n" + bytes(range(256)) * 8
+    with open(c.out("chart.png"), "wb") as f:
+        f.write(image)
+    clod = c.out("tex.clod")
+    r = json.loads(c.conelod("lod", "build", src, "-o", clod, "--json").stdout)
+    assert r["texture"] == "chart.png" and r["texture_bytes"] == len(image) and r["texcoord_bytes"] > 0, r
+    info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
+    assert info["texture"] == "chart.png" and info["texture_mime"] == "image/png", info
+    assert info["texture_bytes"] == len(image) and info["texcoords"], info
+    text = c.conelod("lod", "info", clod).stdout.decode()
+    assert "texture image: chart.png (image/png), %d bytes" % len(image) in text, text
+    out_dir = c.out("extracted")
+    os.makedirs(out_dir)
+    full = os.path.join(out_dir, "full.ply")
+    c.conelod("lod", "extract", clod, "--eye", "0.5,0.5,3", "--budget", "100%", "--no-cull", "-o", full)
+    with open(full, "rb") as f:
+        head = f.read(400)
+    assert b"comment TextureFile chart.png" in head and b"property list uchar float texcoord" in head, head
+    assert open(os.path.join(out_dir, "chart.png"), "rb").read() == image
+    coarse = os.path.join(out_dir, "coarse.ply")
+    c.conelod("lod", "extract", clod, "--eye", "0.5,0.5,3", "--budget", "200", "--no-cull", "-o", coarse)
+    elements = dict(read_ply_elements(coarse))
+    verts = elements["vertex"]
+    bound = info["texcoord_error"]
+    for f in elements["face"]:
+        uv = f["texcoord"]
+        charts = {1 if u > 0.999 else 0 for u in uv[0::2]}
+        seam = all(abs(verts[k]["x"] - 0.5) < 1e-6 for k in f["vertex_indices"])
+        assert len(charts) == 1 or seam, f  # (a sliver along the seam has all three corners on it)
+        chart = charts.pop()
+        for k, v in zip(f["vertex_indices"], zip(uv[0::2], uv[1::2])):
+            want = (verts[k]["x"] + chart, verts[k]["y"])
+            assert abs(v[0] - want[0]) < 1e-3 + bound and abs(v[1] - want[1]) < 1e-3 + bound, (f, verts[k])
+    # A different file under the image's name: left alone, nothing written, exit 3.
+    other = c.out("other")
+    os.makedirs(other)
+    with open(os.path.join(other, "chart.png"), "wb") as f:
+        f.write(b"not the image")
+    p = c.conelod("lod", "extract", clod, "--eye", "0.5,0.5,3", "--budget", "200", "-o", os.path.join(other, "x.ply"),
+                  expect=3)
+    assert b"exists and is not the texture image" in p.stderr, p.stderr
+    assert sorted(os.listdir(other)) == ["chart.png"], os.listdir(other)
+    assert open(os.path.join(other, "chart.png"), "rb").read() == b"not the image"
 
 
 def red_green_gradient(png, covered=0.2):

@@ -1,7 +1,8 @@
 // ConeLOD — libFuzzer target for the .clod reader (lod_read.h): any byte string must open cleanly or be
 // refused with a Status, never crash, read out of bounds or allocate more than the input justifies.
 // Opened inputs are refined at two budgets, for two eyes, extracted (with their attribute streams,
-// version 5: one value per vertex, or the fuzzer stops), and their geometry evicted.
+// version 5: one value per vertex, or the fuzzer stops), their texture image read, and their
+// geometry evicted.
 // Built and run by scripts/fuzz.sh (clang++ -fsanitize=fuzzer,address,undefined), with a seed
 // corpus written by `conelod lod build` from small generated meshes.
 #include <cstddef>
@@ -32,9 +33,15 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     LodAttributes attributes;
     if (!ExtractCutMesh(*reader, cut, i == 1, mesh, &level, nullptr, &attributes).ok()) return 0;
     if (attributes.colors.size() != (info.colors ? mesh.positions.size() : 0) ||
-        attributes.normals.size() != (info.normals ? mesh.positions.size() : 0))
+        attributes.normals.size() != (info.normals ? mesh.positions.size() : 0) ||
+        attributes.texCoords.size() != (info.texCoords ? mesh.positions.size() : 0))
       __builtin_trap();  // a stream that does not match its vertices: a reader bug
     for (uint32_t id : cut.nodes) reader->EvictGeometry(id);
+  }
+  // The texture image (its TEXR chunk), when the file names one: read whole and checked.
+  if (info.textureBytes) {
+    LodTexture texture;
+    if (reader->LoadTexture(texture).ok() && texture.bytes.size() != info.textureBytes) __builtin_trap();
   }
   // Random access by id, as a viewer would after a jump.
   for (uint64_t id = 0; id < info.nodeCount; id += 1 + info.nodeCount / 8) {

@@ -106,6 +106,8 @@ struct LodBuildStats {
   // vertex ids of the geometry (GEOS); quantizationError: the grid's bound, model units.
   uint64_t recordBytes = 0, positionBytes = 0, triangleBytes = 0, vertexIdBytes = 0;
   uint64_t colorBytes = 0, normalBytes = 0;  // the attribute streams (version 5), compressed
+  uint64_t texCoordBytes = 0;                // the UV stream (version 5, bit 8), compressed
+  uint64_t textureBytes = 0;                 // the texture image stored in the file (TEXR), as it is
   size_t attributeConflicts = 0;  // BuildLodFile: welded vertices whose attributes differed (the lowest kept)
   double quantizationError = 0;
   double groupingSeconds = 0, simplifySeconds = 0, writeSeconds = 0,

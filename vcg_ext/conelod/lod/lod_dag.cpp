@@ -42,6 +42,7 @@ namespace conelod {
 namespace {
 
 using Face = std::array<uint32_t, 3>;
+constexpr uint32_t kNoPlace = 0xFFFFFFFFu;
 
 // One record per edge of every face, carrying an id of that face (the face itself, or its cluster),
 // sorted by edge and then by id: the records of one edge stand together. Works on any vertex id
@@ -375,16 +376,22 @@ struct GroupResult {
   std::vector<uint32_t> localToGlobal;  // per input local vertex: its global id
   std::vector<vcg::Point3f> newPositions;
   LodAttributes newAttributes;  // per new vertex (the streams the DAG carries)
+  // With places (texture seams): per new vertex, the local id of a vertex at its position (< the
+  // input local count: that vertex's place; else a new vertex, the first made at that position).
+  std::vector<uint32_t> newPlace;
   double distance = 0;
   bool ok = false;
 };
 
 // The attributes of the DAG's vertices as the attribute quadrics' float channels (colour RGBA in
-// [0, 1], then the unit normal) and back to the stored codes.
+// [0, 1], then the unit normal, then the texture coordinates' codes / 65535: the UV box mapped to
+// [0, 1], an affine map, so the quadrics' linear model is the same and the codes round trip
+// exactly) and back to the stored codes.
 VertexAttributes LayoutOf(const LodAttributes& a) {
   VertexAttributes l;
   l.colorChannels = a.colors.empty() ? 0 : 4;
   l.normals = !a.normals.empty();
+  l.texCoords = !a.texCoords.empty();
   return l;
 }
 void ChannelsOf(const LodAttributes& a, uint32_t v, float* out) {
@@ -394,50 +401,106 @@ void ChannelsOf(const LodAttributes& a, uint32_t v, float* out) {
     const vcg::Point3f n = DecodeLodNormal(a.normals[v]);
     for (int c = 0; c < 3; ++c) *out++ = n[c];
   }
+  if (!a.texCoords.empty())
+    for (int c = 0; c < 2; ++c) *out++ = float(a.texCoords[v][size_t(c)]) / 65535.f;
 }
-void StoreChannels(const float* in, const LodAttributes& like, std::array<uint8_t, 4>& color,
-                   std::array<uint16_t, 2>& normal) {
+// The stored codes of one vertex.
+struct Codes {
+  std::array<uint8_t, 4> color{{0, 0, 0, 0}};
+  std::array<uint16_t, 2> normal{{0, 0}}, uv{{0, 0}};
+  bool operator==(const Codes& o) const { return color == o.color && normal == o.normal && uv == o.uv; }
+};
+Codes StoreChannels(const float* in, const LodAttributes& like) {
+  Codes k;
   if (!like.colors.empty()) {
-    for (int c = 0; c < 4; ++c) color[size_t(c)] = uint8_t(std::lround(std::min(1.f, std::max(0.f, in[c])) * 255.f));
+    for (int c = 0; c < 4; ++c) k.color[size_t(c)] = uint8_t(std::lround(std::min(1.f, std::max(0.f, in[c])) * 255.f));
     in += 4;
   }
-  if (!like.normals.empty()) normal = EncodeLodNormal(vcg::Point3f(in[0], in[1], in[2]));
+  if (!like.normals.empty()) {
+    k.normal = EncodeLodNormal(vcg::Point3f(in[0], in[1], in[2]));
+    in += 3;
+  }
+  if (!like.texCoords.empty())
+    for (int c = 0; c < 2; ++c) {
+      const float x = std::isfinite(in[c]) ? in[c] : 0.f;
+      k.uv[size_t(c)] = uint16_t(std::lround(std::min(1.f, std::max(0.f, x)) * 65535.f));
+    }
+  return k;
+}
+Codes CodesOf(const LodAttributes& a, uint32_t v) {
+  Codes k;
+  if (!a.colors.empty()) k.color = a.colors[v];
+  if (!a.normals.empty()) k.normal = a.normals[v];
+  if (!a.texCoords.empty()) k.uv = a.texCoords[v];
+  return k;
+}
+// How far apart two vertices' codes are (a frozen seam vertex whose corner matches none of its
+// wedges exactly takes the nearest; it cannot happen, the corners keep their values).
+double CodeDistance(const Codes& x, const Codes& y) {
+  double d = 0;
+  for (size_t c = 0; c < 4; ++c) d += std::fabs(double(x.color[c]) - double(y.color[c]));
+  for (size_t c = 0; c < 2; ++c)
+    d += std::fabs(double(x.normal[c]) - double(y.normal[c])) + std::fabs(double(x.uv[c]) - double(y.uv[c]));
+  return d;
 }
 
+// A group's faces are in global ids; with places (texture coordinates) one position may carry
+// several ids (wedges: one per UV). The collapse runs on the group welded by place, each face
+// corner carrying its wedge's attributes (so the attribute quadrics see the seams: a seam vertex
+// never moves and goes only along its seam); afterwards every output corner takes the wedge of its
+// position and stored values: an existing one where the position and the values did not change,
+// else a new one, the wedges of one new position sharing that position.
 void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32_t>& groupFaces,
                    const std::vector<vcg::Point3f>& positions, const std::vector<uint8_t>& sharedVertex,
                    const LodBuildParams& params, double maxError, double diagonal, bool keep,
                    const LodAttributes& attributes, GroupResult& out) {
-  IndexedMesh local;
-  std::unordered_map<uint32_t, uint32_t> toLocal;
+  const bool wedges = !attributes.place.empty();
+  IndexedMesh local;                 // welded by place (without places: one vertex per id)
+  std::vector<Face> wedgeFaces;      // the same faces in wedge-local ids (localToGlobal)
+  std::vector<uint32_t> weldedOf;    // per wedge-local id: its vertex of `local`
+  std::vector<uint32_t> firstWedge;  // per vertex of `local`: its first wedge-local id
+  std::unordered_map<uint32_t, uint32_t> toLocal, toWelded;
   out.localToGlobal.clear();
   local.faces.reserve(groupFaces.size());
+  wedgeFaces.reserve(groupFaces.size());
   for (uint32_t f : groupFaces) {
-    Face t;
+    Face t, w;
     for (int i = 0; i < 3; ++i) {
       const uint32_t v = levelFaces[f][size_t(i)];
       auto ins = toLocal.emplace(v, uint32_t(out.localToGlobal.size()));
       if (ins.second) {
         out.localToGlobal.push_back(v);
-        local.positions.push_back(positions[v]);
+        auto wp = toWelded.emplace(wedges ? attributes.place[v] : v, uint32_t(local.positions.size()));
+        if (wp.second) {
+          local.positions.push_back(positions[v]);
+          firstWedge.push_back(ins.first->second);
+        }
+        weldedOf.push_back(wp.first->second);
       }
-      t[size_t(i)] = ins.first->second;
+      w[size_t(i)] = ins.first->second;
+      t[size_t(i)] = weldedOf[ins.first->second];
     }
     local.faces.push_back(t);
+    wedgeFaces.push_back(w);
   }
-  const uint32_t V = uint32_t(local.positions.size());
+  const uint32_t V = uint32_t(out.localToGlobal.size());  // wedges
+  const uint32_t W = uint32_t(local.positions.size());    // positions (V without places)
   out.faces.clear();
   out.newPositions.clear();
+  out.newPlace.clear();
   out.newAttributes = LodAttributes();
   out.distance = 0;
   out.ok = true;
   if (keep) {  // the group stays as it is
-    out.faces = local.faces;
+    out.faces = wedgeFaces;
     return;
   }
   GroupQemRegion region;
-  region.frozenVertex.resize(V);
-  for (uint32_t v = 0; v < V; ++v) region.frozenVertex[v] = sharedVertex[out.localToGlobal[v]];
+  region.frozenVertex.resize(W);
+  for (uint32_t v = 0; v < W; ++v) {
+    const uint32_t g = out.localToGlobal[firstWedge[v]];
+    region.frozenVertex[v] = sharedVertex[wedges ? attributes.place[g] : g];
+  }
   region.diagonal = diagonal;
   // Vertices kept apart by more than a cell of the file's grid (its cell's diagonal is 1.98 x
   // precision x the diagonal of the DAG's positions; 2.5: a margin for a span beyond the input's
@@ -450,7 +513,7 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
   qem.lockGroupBoundaries = false;
   if (maxError > 0) qem.maxError = qem.maxError > 0 ? std::min(qem.maxError, maxError) : maxError;
   const std::vector<int> oneGroup(local.faces.size(), 0);
-  // Attributes: one value per vertex (no seam), each corner taking its vertex's.
+  // Attributes per face corner: its wedge's (without places one value per vertex, no seam).
   const bool withAttributes = !attributes.empty();
   AttributeQuadrics quadrics;
   const VertexAttributes layout = LayoutOf(attributes);
@@ -459,9 +522,9 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
     std::vector<float> corners(local.faces.size() * 3 * channels);
     for (size_t f = 0; f < local.faces.size(); ++f)
       for (size_t k = 0; k < 3; ++k)
-        ChannelsOf(attributes, out.localToGlobal[local.faces[f][k]], corners.data() + (3 * f + k) * channels);
+        ChannelsOf(attributes, out.localToGlobal[wedgeFaces[f][k]], corners.data() + (3 * f + k) * channels);
     if (!quadrics.Init(local, layout, std::move(corners), params.attributeWeight).ok()) {
-      out.faces = local.faces;  // (cannot happen: the layout and sizes are ours) the group stays
+      out.faces = wedgeFaces;  // (cannot happen: the layout and sizes are ours) the group stays
       return;
     }
   }
@@ -469,63 +532,103 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
   const Status s = SimplifyPreservingGroups(local, oneGroup, qem, res, Progress(), {}, &region,
                                             withAttributes ? &quadrics : nullptr);
   if (!s.ok() || res.mesh.faces.empty()) {  // the group stays as it is
-    out.faces = local.faces;
+    out.faces = wedgeFaces;
     return;
   }
-  // Each output vertex's attributes at its place, as they will be stored (one corner of each:
-  // without seams every corner of a vertex gives the same value).
-  std::vector<std::array<uint8_t, 4>> color(withAttributes ? res.mesh.positions.size() : 0);
-  std::vector<std::array<uint16_t, 2>> normal(color.size());
-  if (withAttributes) {
-    std::vector<uint8_t> done(res.mesh.positions.size(), 0);
-    std::vector<float> value(channels);
+  // Each output corner's attributes at its place, as they will be stored; the distinct values of
+  // each output vertex in the order its corners come (without seams: one).
+  const size_t O = res.mesh.positions.size();
+  std::vector<std::vector<std::pair<Codes, uint32_t>>> variants(O);
+  std::vector<uint32_t> cornerVariant(res.mesh.faces.size() * 3, 0);
+  {
+    std::vector<float> value(std::max<size_t>(1, channels));
     for (size_t f = 0; f < res.mesh.faces.size(); ++f)
       for (int k = 0; k < 3; ++k) {
         const uint32_t o = res.mesh.faces[f][size_t(k)];
-        if (done[o]) continue;
-        done[o] = 1;
-        const vcg::Point3f& q = res.mesh.positions[o];
-        quadrics.Evaluate(res.sourceFace[f], k, res.sourceVertex[o], vcg::Point3d(q[0], q[1], q[2]), value.data());
-        StoreChannels(value.data(), attributes, color[o], normal[o]);
+        Codes c;
+        if (withAttributes) {
+          if (!wedges && !variants[o].empty()) {  // one value per vertex: its first corner's
+            cornerVariant[3 * f + size_t(k)] = 0;
+            continue;
+          }
+          const vcg::Point3f& q = res.mesh.positions[o];
+          quadrics.Evaluate(res.sourceFace[f], k, res.sourceVertex[o], vcg::Point3d(q[0], q[1], q[2]), value.data());
+          c = StoreChannels(value.data(), attributes);
+        }
+        uint32_t j = 0;
+        while (j < variants[o].size() && !(variants[o][j].first == c)) ++j;
+        if (j == variants[o].size()) variants[o].push_back({c, 0});
+        cornerVariant[3 * f + size_t(k)] = j;
       }
   }
-  auto sameAttributes = [&](size_t o, uint32_t global) {
-    return !withAttributes || ((attributes.colors.empty() || attributes.colors[global] == color[o]) &&
-                               (attributes.normals.empty() || attributes.normals[global] == normal[o]));
-  };
-  // Output vertex -> local id. A frozen vertex never moves: it keeps its id and its position bit
-  // for bit (the simplifier works around the group's centre in double, which can change the last
-  // bits of a coordinate near 0, so its output position is not used). Another vertex keeps its
-  // id when it did not move (within 1e-9 of the diagonal: the same rounding), else it is new.
-  std::vector<uint32_t> outId(res.mesh.positions.size());
+  // Output vertex (and value) -> local id. A frozen vertex never moves: it keeps its id and its
+  // position bit for bit (the simplifier works around the group's centre in double, which can
+  // change the last bits of a coordinate near 0, so its output position is not used). Another
+  // vertex keeps its id when it did not move (within 1e-9 of the diagonal: the same rounding)
+  // and its stored values did not change (a global id has one value in the file), else it is new.
   const float still = float(1e-9 * diagonal);
-  for (size_t v = 0; v < res.mesh.positions.size(); ++v) {
-    const uint32_t src = res.sourceVertex[v];
-    const vcg::Point3f& p = res.mesh.positions[v];
+  std::vector<std::vector<uint32_t>> wedgesOf(wedges ? W : 0);
+  for (uint32_t v = 0; v < V && wedges; ++v) wedgesOf[weldedOf[v]].push_back(v);
+  auto addNew = [&](const vcg::Point3f& p, const Codes& c, uint32_t place) {
+    const uint32_t id = V + uint32_t(out.newPositions.size());
+    out.newPositions.push_back(p);
+    if (!attributes.colors.empty()) out.newAttributes.colors.push_back(c.color);
+    if (!attributes.normals.empty()) out.newAttributes.normals.push_back(c.normal);
+    if (!attributes.texCoords.empty()) out.newAttributes.texCoords.push_back(c.uv);
+    if (wedges) out.newPlace.push_back(place == kNoPlace ? id : place);
+    return id;
+  };
+  for (size_t o = 0; o < O; ++o) {
+    const uint32_t src = res.sourceVertex[o];
+    const vcg::Point3f& p = res.mesh.positions[o];
     const vcg::Point3f& q = local.positions[src];
-    // With attributes a vertex also keeps its id only when its stored values did not change (a
-    // global id has one value in the file); a frozen vertex keeps its own.
-    if (region.frozenVertex[src] || (std::fabs(p[0] - q[0]) <= still && std::fabs(p[1] - q[1]) <= still &&
-                                     std::fabs(p[2] - q[2]) <= still && sameAttributes(v, out.localToGlobal[src]))) {
-      outId[v] = src;
-    } else {
-      outId[v] = V + uint32_t(out.newPositions.size());
-      out.newPositions.push_back(p);
-      if (!attributes.colors.empty()) out.newAttributes.colors.push_back(color[v]);
-      if (!attributes.normals.empty()) out.newAttributes.normals.push_back(normal[v]);
+    const bool unmoved =
+        region.frozenVertex[src] ||
+        (std::fabs(p[0] - q[0]) <= still && std::fabs(p[1] - q[1]) <= still && std::fabs(p[2] - q[2]) <= still);
+    uint32_t firstNew = kNoPlace;  // a moved vertex's wedges share their new position
+    for (auto& var : variants[o]) {
+      const Codes& c = var.first;
+      uint32_t id = kNoPlace;
+      if (!wedges) {
+        if (region.frozenVertex[src] ||
+            (unmoved && (!withAttributes || CodesOf(attributes, out.localToGlobal[src]) == c)))
+          id = src;
+        else
+          id = addNew(p, c, kNoPlace);
+      } else if (unmoved) {
+        const std::vector<uint32_t>& mine = wedgesOf[src];
+        for (uint32_t w : mine)
+          if (CodesOf(attributes, out.localToGlobal[w]) == c) id = w;
+        if (id == kNoPlace && region.frozenVertex[src]) {
+          double best = std::numeric_limits<double>::infinity();
+          for (uint32_t w : mine) {
+            const double d = CodeDistance(CodesOf(attributes, out.localToGlobal[w]), c);
+            if (d < best) best = d, id = w;
+          }
+        }
+        if (id == kNoPlace) id = addNew(q, c, mine[0]);  // new values at the same position
+      } else {
+        id = addNew(p, c, firstNew);
+        if (firstNew == kNoPlace) firstNew = id;
+      }
+      var.second = id;
     }
   }
-  for (const auto& t : res.mesh.faces) out.faces.push_back({outId[t[0]], outId[t[1]], outId[t[2]]});
+  for (size_t f = 0; f < res.mesh.faces.size(); ++f) {
+    Face t;
+    for (size_t k = 0; k < 3; ++k) t[k] = variants[res.mesh.faces[f][k]][cornerVariant[3 * f + k]].second;
+    out.faces.push_back(t);
+  }
   // One-sided distance: every input vertex of the group to the simplified faces. Faces and
   // vertices are visited in Morton order of their position, each vertex scanning the faces
   // outwards from its own place in that order: a near face comes early, and a vertex stops as
   // soon as a face lies within the largest distance found so far (it cannot raise it), so the
   // result is the exact maximum at a fraction of the pairs.
   auto P = [&](uint32_t id) {
-    return vcg::Point3d::Construct(id < V ? local.positions[id] : out.newPositions[id - V]);
+    return vcg::Point3d::Construct(id < V ? local.positions[weldedOf[id]] : out.newPositions[id - V]);
   };
   vcg::Box3d gb;
-  for (uint32_t v = 0; v < V; ++v) gb.Add(vcg::Point3d::Construct(local.positions[v]));
+  for (uint32_t v = 0; v < W; ++v) gb.Add(vcg::Point3d::Construct(local.positions[v]));
   const vcg::Point3d gd = gb.Dim();
   auto morton = [&](const vcg::Point3d& p) {
     uint32_t code = 0;
@@ -547,7 +650,7 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
   }
   std::sort(tri.begin(), tri.end(), [](const Tri& a, const Tri& b) { return a.code < b.code; });
   std::vector<std::pair<uint32_t, uint32_t>> order;  // (code, vertex) of the vertices that can move
-  for (uint32_t v = 0; v < V; ++v)
+  for (uint32_t v = 0; v < W; ++v)
     if (!region.frozenVertex[v])
       order.push_back({morton(vcg::Point3d::Construct(local.positions[v])), v});  // frozen: on the surface
   std::sort(order.begin(), order.end());
@@ -634,6 +737,16 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
   }
   dag.inputVertices = dag.positions.size();
   if (attributes) dag.attributes = *attributes;
+  // Texture seams: the ids of one position are one place for the topology (clusters, groups,
+  // frozen borders); the faces by place (a copy) where the ids would split them.
+  std::vector<uint32_t>& place = dag.attributes.place;
+  const bool wedges = !place.empty();
+  auto byPlace = [&](const std::vector<Face>& faces) {
+    std::vector<Face> t(faces);
+    for (Face& f : t)
+      for (uint32_t& v : f) v = place[v];
+    return t;
+  };
   {
     if (depth > 0) {  // each chunk's level-0 clusters on its own, chunks side by side
       const uint32_t leaves = 1u << depth;
@@ -652,7 +765,11 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
         std::vector<Face> faces;
         for (uint32_t l = next++; l < leaves; l = next++) {
           faces.clear();
-          for (uint32_t j = start[l]; j < start[l + 1]; ++j) faces.push_back(inFaces[members[j]]);
+          for (uint32_t j = start[l]; j < start[l + 1]; ++j) {
+            faces.push_back(inFaces[members[j]]);
+            if (wedges)
+              for (uint32_t& v : faces.back()) v = place[v];
+          }
           count[l] = GrowClusters(faces, dag.positions, params.clusterFaces,
                                   std::min(90.0, params.grouping.coneThresholdDeg) * kDeg, local[l]);
         }
@@ -673,7 +790,7 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
   }
   if (depth == 0) {
     LodDag::Level& L0 = dag.levels[0];
-    const uint32_t C = GrowClusters(L0.faces, dag.positions, params.clusterFaces,
+    const uint32_t C = GrowClusters(wedges ? byPlace(L0.faces) : L0.faces, dag.positions, params.clusterFaces,
                                     std::min(90.0, params.grouping.coneThresholdDeg) * kDeg, L0.faceCluster);
     L0.clusterGroup.assign(C, -1);
     L0.clusterCreator.assign(C, -1);
@@ -711,8 +828,16 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
     // Groups of fineGroupClusters on the fine levels (above 1/8 of the input's faces).
     const int per = params.fineGroupClusters > 0 && 8 * L.faces.size() > inputFaces ? params.fineGroupClusters
                                                                                     : params.groupClusters;
-    int G = depth > 0 && !wholeParts ? GroupClustersByChunk(L, per, clusterNode, threads, group) : -1;
-    if (G < 0) G = GroupClusters(L, per, wholeParts ? wholeUpTo : 0, group, depth > 0 ? &clusterNode : nullptr);
+    LodDag::Level topology;  // with places: L's faces by place
+    if (wedges) {
+      topology.faces = byPlace(L.faces);
+      topology.faceCluster = L.faceCluster;
+      topology.clusterGroup = L.clusterGroup;
+    }
+    const LodDag::Level& T = wedges ? topology : L;
+    int G = depth > 0 && !wholeParts ? GroupClustersByChunk(T, per, clusterNode, threads, group) : -1;
+    if (G < 0) G = GroupClusters(T, per, wholeParts ? wholeUpTo : 0, group, depth > 0 ? &clusterNode : nullptr);
+    std::vector<Face>().swap(topology.faces);
     std::vector<uint32_t> groupNode;
     if (depth > 0) {
       groupNode.assign(size_t(G), 0);
@@ -725,7 +850,8 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
     std::vector<uint8_t> shared(dag.positions.size(), 0);
     for (uint32_t f = 0; f < L.faces.size(); ++f) {
       const int g = group[L.faceCluster[f]];
-      for (uint32_t v : L.faces[f]) {
+      for (uint32_t w : L.faces[f]) {
+        const uint32_t v = wedges ? place[w] : w;  // (a place: the lowest id at its position)
         if (owner[v] < 0)
           owner[v] = g;
         else if (owner[v] != g)
@@ -740,7 +866,7 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
       for (int g = 0; g < G; ++g) keep[size_t(g)] = clustersOfGroup[size_t(g)] <= 1;
       for (uint32_t f = 0; f < L.faces.size(); ++f)
         for (uint32_t v : L.faces[f])
-          if (shared[v]) keep[size_t(group[L.faceCluster[f]])] = 0;
+          if (shared[wedges ? place[v] : v]) keep[size_t(group[L.faceCluster[f]])] = 0;
     }
     std::vector<GroupResult> results(static_cast<size_t>(G));
     {
@@ -784,6 +910,9 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
       LodAttributes& A = dag.attributes;
       A.colors.insert(A.colors.end(), r.newAttributes.colors.begin(), r.newAttributes.colors.end());
       A.normals.insert(A.normals.end(), r.newAttributes.normals.begin(), r.newAttributes.normals.end());
+      A.texCoords.insert(A.texCoords.end(), r.newAttributes.texCoords.begin(), r.newAttributes.texCoords.end());
+      for (uint32_t x : r.newPlace)  // the place of a new vertex: an input one's, or the first new one's
+        place.push_back(x < V ? place[r.localToGlobal[x]] : firstNew + (x - V));
       std::vector<Face> faces;
       faces.reserve(r.faces.size());
       for (const auto& t : r.faces) {
@@ -799,7 +928,8 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
       const float floor = float(maxChild[size_t(g)]);
       if (!(ef > floor)) ef = std::nextafter(std::max(floor, 0.f), std::numeric_limits<float>::infinity());
       groupError[size_t(g)] = ef;
-      const uint32_t C = GrowClusters(faces, dag.positions, params.clusterFaces, angle, clusterOfFace);
+      const uint32_t C =
+          GrowClusters(wedges ? byPlace(faces) : faces, dag.positions, params.clusterFaces, angle, clusterOfFace);
       const uint32_t base = uint32_t(N.clusterCount());
       for (size_t f = 0; f < faces.size(); ++f) {
         N.faces.push_back(faces[f]);

@@ -20,6 +20,7 @@ constexpr uint32_t kHier = FourCC('H', 'I', 'E', 'R');   // the node records, pa
 constexpr uint32_t kGeos = FourCC('G', 'E', 'O', 'S');   // the nodes' compressed geometry, packed
 constexpr uint32_t kIndex = FourCC('I', 'N', 'D', 'X');  // the offset index, in IBLK blocks
 constexpr uint32_t kIBlock = FourCC('I', 'B', 'L', 'K');
+constexpr uint32_t kTexture = FourCC('T', 'E', 'X', 'R');  // version 5 with texture coordinates: the image
 
 // 5: version 4 plus per-vertex attribute streams (colour, normals), written only when the DAG
 // carries attributes (a geometry-only file stays version 4, byte for byte); 4: a group's
@@ -58,11 +59,16 @@ constexpr size_t kGeomMinBytes = 4 + 1;       // a geometry blob: CRC, flags, th
 constexpr uint8_t kGeomWidePositions = 1;     // geometry flag: positions are u32 x 3 (else u16 x 4)
 // Version 5: attribute streams, announced by the header's `attributes` field and by the same bits
 // in every geometry blob's flags (each unit carries every stream the file has).
-constexpr uint8_t kGeomColors = 2;   // u8 x 4 RGBA per unit vertex
-constexpr uint8_t kGeomNormals = 4;  // octahedral u16 x 2 per unit vertex (EncodeNormal)
-constexpr uint32_t kKnownAttributes = kGeomColors | kGeomNormals;
+constexpr uint8_t kGeomColors = 2;     // u8 x 4 RGBA per unit vertex
+constexpr uint8_t kGeomNormals = 4;    // octahedral u16 x 2 per unit vertex (EncodeNormal)
+constexpr uint8_t kGeomTexCoords = 8;  // u16 x 2 per unit vertex over the header's UV box
+constexpr uint32_t kKnownAttributes = kGeomColors | kGeomNormals | kGeomTexCoords;
 constexpr size_t kHeaderAttributeBytes = 4 + 4;  // version 5: u32 attributes, u32 pad after the levels
-constexpr uint32_t kIndexBlock = 512;            // index entries per IBLK (4 KiB)
+// Version 5 with kGeomTexCoords: then f32 uvMin[2], f32 uvMax[2], u64 textureOffset (0: none).
+constexpr size_t kHeaderTexCoordBytes = 4 * 4 + 8;
+// The TEXR chunk's data: u32 nameBytes, u32 mimeBytes, u64 imageBytes, then the three.
+constexpr size_t kTextureFixedBytes = 4 + 4 + 8;
+constexpr uint32_t kIndexBlock = 512;  // index entries per IBLK (4 KiB)
 // meshoptimizer's codec versions written: vertex 0 (every version decodes it), index 1 (0.14+).
 constexpr int kVertexCodecVersion = 0;
 constexpr int kIndexCodecVersion = 1;

@@ -84,19 +84,49 @@ LodGrid ChooseLodGrid(const vcg::Box3f& box, double precision);
 constexpr double kMinLodPrecision = 1e-9, kMaxLodPrecision = 0.01;
 constexpr double kDefaultLodPrecision = 2e-5;  // of the diagonal (the dragon's level 1: 2.5e-3)
 
+// The texture image a textured .clod carries (its TEXR chunk, lod_format.md): the image file's
+// bytes as they were read, its file name (a plain name: no folder, no control character) and
+// its MIME type (image/jpeg, image/png, ...).
+struct LodTexture {
+  std::string name, mime;
+  std::vector<uint8_t> bytes;
+  bool empty() const { return bytes.empty(); }
+};
+constexpr size_t kMaxLodTextureNameBytes = 255;  // a texture's name or MIME type, at most
+// "" when `name` may name a texture beside a mesh (a plain file name), else why not.
+std::string CheckLodTextureName(const std::string& name);
+// The MIME type of an image file from its first bytes (JPEG, PNG, BMP, TGA by its name, ...);
+// "application/octet-stream" when unknown.
+std::string LodTextureMime(const std::string& name, const std::vector<uint8_t>& bytes);
+
 // Per-vertex attributes carried through the DAG into the file (version 5), each stream either
 // empty or one value per vertex: colour as RGBA8 (stored exactly), the normal as its octahedral
 // u16 x 2 code (lodfile::EncodeNormal; within kLodNormalErrorBound radians of the input's
-// direction). A simplified level interpolates them with the attribute quadrics of the
-// group-preserving collapse (attribute_quadric.h); a vertex keeps its id only when neither its
-// position nor its stored attributes changed.
+// direction), texture coordinates as u16 x 2 over the file's UV box (EncodeLodTexCoord; within
+// half a step of the box, LodTexCoordErrorBound). A simplified level interpolates them with the
+// attribute quadrics of the group-preserving collapse (attribute_quadric.h); a vertex keeps its id
+// only when neither its position nor its stored attributes changed.
 struct LodAttributes {
   std::vector<std::array<uint8_t, 4>> colors;
   std::vector<std::array<uint16_t, 2>> normals;
-  bool empty() const { return colors.empty() && normals.empty(); }
+  std::vector<std::array<uint16_t, 2>> texCoords;
+  float uvMin[2] = {0, 0}, uvMax[2] = {0, 0};  // the UV box the texCoords codes span
+  // With texCoords (building only; not stored): per vertex the lowest vertex id at the same
+  // position. A texture seam's position has one vertex per (position, UV) (wedges): the DAG
+  // treats them as one place (clusters, groups, frozen borders; the collapse's seams).
+  std::vector<uint32_t> place;
+  LodTexture texture;  // the image the coordinates refer to (optional; written to the TEXR chunk)
+  bool empty() const { return colors.empty() && normals.empty() && texCoords.empty(); }
   // "" or why the streams do not fit `vertices` vertices.
   std::string Check(size_t vertices) const;
 };
+// Texture coordinates and their u16 codes over the box [uvMin, uvMax] (per axis: q = round((u -
+// min) / (max - min) x 65535), clamped; read back as float(min + q (max - min) / 65535)).
+std::array<uint16_t, 2> EncodeLodTexCoord(const float uv[2], const float uvMin[2], const float uvMax[2]);
+void DecodeLodTexCoord(const std::array<uint16_t, 2>& code, const float uvMin[2], const float uvMax[2], float out[2]);
+// The largest |u - Decode(Encode(u))| for u inside the box: half a step plus the float rounding.
+double LodTexCoordErrorBound(const float uvMin[2], const float uvMax[2]);
+
 // Codes of a unit normal and back (octahedral, 16 bits a coordinate; lod_format.md).
 std::array<uint16_t, 2> EncodeLodNormal(const vcg::Point3f& n);
 vcg::Point3f DecodeLodNormal(const std::array<uint16_t, 2>& code);
@@ -125,6 +155,12 @@ struct LodFileInfo {
   uint64_t nodeCount = 0;
   uint64_t fileBytes = 0;
   bool colors = false, normals = false;  // the attribute streams every node has (version 5)
+  bool texCoords = false;                // the UV stream (version 5, bit 8), over uvMin..uvMax
+  float uvMin[2] = {0, 0}, uvMax[2] = {0, 0};
+  // The texture chunk (TEXR), when the file has one: its image's name, MIME type and size
+  // (LodReader::LoadTexture reads the bytes).
+  std::string textureName, textureMime;
+  uint64_t textureBytes = 0;
 };
 
 // Reads a .clod file on demand. Every read is bounds- and checksum-checked: a truncated or
@@ -156,6 +192,9 @@ class LodReader {
   // null when its geometry is not loaded or the file has none. Loaded and evicted with it.
   const LodAttributes* attributes(uint32_t id) const;
   void EvictGeometry(uint32_t id);
+  // The texture image stored in the file (its TEXR chunk): read and checked against the chunk's
+  // CRC. An error when the file has none (info().textureBytes == 0) or the chunk is corrupt.
+  Status LoadTexture(LodTexture& out);
 
   // Bytes the reader holds now: node records, index, loaded geometry, buffers.
   size_t residentBytes() const;

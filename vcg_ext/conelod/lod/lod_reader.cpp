@@ -18,6 +18,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <unordered_map>
 
 #include <meshoptimizer.h>
@@ -95,7 +96,8 @@ std::string Num(uint64_t v) { return std::to_string(v); }
 
 // What a node's attributes hold (with their hash map node).
 size_t AttributeBytes(const LodAttributes& a) {
-  return (a.colors.capacity() + a.normals.capacity()) * 4 + sizeof(LodAttributes) + 4 * sizeof(void*);
+  return (a.colors.capacity() + a.normals.capacity() + a.texCoords.capacity()) * 4 + sizeof(LodAttributes) +
+         4 * sizeof(void*);
 }
 
 // The fuzz build (scripts/fuzz.sh) accepts bad CRCs, so that mutated inputs reach the structural
@@ -180,7 +182,7 @@ struct LodReader::Impl {
   std::unique_ptr<ByteSource> src;
   LodFileInfo info;
   std::vector<LevelEntry> levels;
-  uint64_t hierOffset = 0, geosOffset = 0, indexOffset = 0;
+  uint64_t hierOffset = 0, geosOffset = 0, indexOffset = 0, textureOffset = 0;
   uint64_t hierBegin = 0, hierEnd = 0, geosBegin = 0, geosEnd = 0;  // the blobs' data
   uint32_t indexBlock = 0;
   uint32_t attributeMask = 0;  // version 5: kGeomColors | kGeomNormals, the streams of every unit
@@ -209,8 +211,8 @@ struct LodReader::Impl {
     LodAttributes attributes;  // per unit vertex (version 5)
     size_t bytes() const {
       return faceStart.capacity() * 8 + positions.capacity() * sizeof(vcg::Point3f) +
-             (corners.capacity() + vertexIds.capacity() + attributes.colors.capacity() +
-              attributes.normals.capacity()) *
+             (corners.capacity() + vertexIds.capacity() + attributes.colors.capacity() + attributes.normals.capacity() +
+              attributes.texCoords.capacity()) *
                  4;
     }
   } unit;
@@ -569,6 +571,14 @@ struct LodReader::Impl {
         for (size_t k = 0; k < 2; ++k)
           unit.attributes.normals[v][k] = uint16_t(c[4 * v + 2 * k] | c[4 * v + 2 * k + 1] << 8);
     }
+    if (attributeMask & kGeomTexCoords) {
+      const uint8_t* c = stream("texture coordinates", why);
+      if (!c) return Status::Invalid(why);
+      unit.attributes.texCoords.resize(vc);
+      for (size_t v = 0; v < vc; ++v)
+        for (size_t k = 0; k < 2; ++k)
+          unit.attributes.texCoords[v][k] = uint16_t(c[4 * v + 2 * k] | c[4 * v + 2 * k + 1] << 8);
+    }
     if (d.left() != 0) return Status::Invalid(bad + "its size does not match its contents");
     unit.vertexIds.resize(vc);
     for (size_t v = 0, nextNew = 0, nextOld = 0; v < vc; ++v) {
@@ -604,6 +614,10 @@ struct LodReader::Impl {
     if (f1 - f0 != n.faceCount) return Status::Invalid(bad + "its face count does not match its record");
     std::unique_ptr<LodGeometry> g(new LodGeometry);
     LodAttributes a;
+    for (int c = 0; c < 2; ++c) {
+      a.uvMin[c] = info.uvMin[c];
+      a.uvMax[c] = info.uvMax[c];
+    }
     g->faces.resize(n.faceCount);
     g->positions.reserve(n.vertexCount);
     g->vertexIds.reserve(n.vertexCount);
@@ -616,6 +630,7 @@ struct LodReader::Impl {
           g->vertexIds.push_back(unit.vertexIds[u]);
           if (!unit.attributes.colors.empty()) a.colors.push_back(unit.attributes.colors[u]);
           if (!unit.attributes.normals.empty()) a.normals.push_back(unit.attributes.normals[u]);
+          if (!unit.attributes.texCoords.empty()) a.texCoords.push_back(unit.attributes.texCoords[u]);
         }
         g->faces[f - f0][c] = localScratch[u];
       }
@@ -671,10 +686,16 @@ struct LodReader::Impl {
     if (version < kOldestReadVersion || version > kVersion)
       return Status::Invalid("unsupported .clod version " + Num(version) + " (this reader reads versions " +
                              Num(kOldestReadVersion) + " to " + Num(kVersion) + ")");
-    const uint64_t tail = version >= kAttributeVersion ? kHeaderAttributeBytes : 0;  // the attributes field
-    if (h.dataBytes < kHeaderFixedBytes + kLevelEntryBytes + tail ||
-        h.dataBytes > kHeaderFixedBytes + kMaxLevels * kLevelEntryBytes + tail ||
-        (h.dataBytes - kHeaderFixedBytes - tail) % kLevelEntryBytes != 0 || h.childBytes > (uint64_t(1) << 62))
+    // The attributes field (version 5), and with texture coordinates the UV box and the texture's
+    // offset (checked against the field below).
+    const uint64_t tail = version >= kAttributeVersion ? kHeaderAttributeBytes : 0;
+    const uint64_t extra = h.dataBytes > kHeaderFixedBytes + tail && version >= kAttributeVersion &&
+                                   (h.dataBytes - kHeaderFixedBytes - tail) % kLevelEntryBytes == kHeaderTexCoordBytes
+                               ? kHeaderTexCoordBytes
+                               : 0;
+    if (h.dataBytes < kHeaderFixedBytes + kLevelEntryBytes + tail + extra ||
+        h.dataBytes > kHeaderFixedBytes + kMaxLevels * kLevelEntryBytes + tail + extra ||
+        (h.dataBytes - kHeaderFixedBytes - tail - extra) % kLevelEntryBytes != 0 || h.childBytes > (uint64_t(1) << 62))
       return Status::Invalid("corrupt chunk size in the file header");
     if (h.totalBytes() > src->size)
       return Status::Invalid(trunc + "the file has " + Num(src->size) + " bytes, its header says " +
@@ -717,7 +738,7 @@ struct LodReader::Impl {
     }
     info.quantizationError = grid.ErrorBound();
     if (levelCount < 1 || levelCount > kMaxLevels ||
-        h.dataBytes != kHeaderFixedBytes + uint64_t(levelCount) * kLevelEntryBytes + tail)
+        h.dataBytes != kHeaderFixedBytes + uint64_t(levelCount) * kLevelEntryBytes + tail + extra)
       return Status::Invalid(bad + "bad level count " + Num(levelCount));
     if (indexBlock == 0 || indexBlock > (1u << 20)) return Status::Invalid(bad + "bad block size");
     levels.resize(levelCount);
@@ -735,9 +756,19 @@ struct LodReader::Impl {
       d.u32();
       if (attributeMask == 0 || (attributeMask & ~kKnownAttributes))
         return Status::Invalid(bad + "unknown attribute streams (" + Num(attributeMask) +
-                               "; this reader knows colour 2 and normals 4)");
+                               "; this reader knows colour 2, normals 4 and texture coordinates 8)");
       info.colors = attributeMask & kGeomColors;
       info.normals = attributeMask & kGeomNormals;
+      info.texCoords = attributeMask & kGeomTexCoords;
+      if (info.texCoords != (extra != 0)) return Status::Invalid(bad + "its size does not match its attribute streams");
+    }
+    if (extra) {
+      for (float& x : info.uvMin) x = d.f32();
+      for (float& x : info.uvMax) x = d.f32();
+      textureOffset = d.u64();
+      for (int c = 0; c < 2; ++c)
+        if (!std::isfinite(info.uvMin[c]) || !std::isfinite(info.uvMax[c]) || !(info.uvMin[c] <= info.uvMax[c]))
+          return Status::Invalid(bad + "its UV box is not finite or is inverted");
     }
     for (int k = int(levelCount) - 1; k >= 0; --k) {
       LevelEntry& L = levels[size_t(k)];
@@ -758,6 +789,34 @@ struct LodReader::Impl {
     for (const auto& L : levels) {
       info.levelFaces.push_back(L.faces);
       info.levelNodes.push_back(L.nodes);
+    }
+    // The texture chunk: its header and its name and MIME type (the image is read by LoadTexture).
+    if (textureOffset) {
+      if (textureOffset >= src->size || src->size - textureOffset < kChunkHeaderBytes + kTextureFixedBytes)
+        return Status::Invalid(bad + "the texture's offset points past the end of the file");
+      s = ReadRange(textureOffset, kChunkHeaderBytes + kTextureFixedBytes, "the texture chunk");
+      if (!s.ok()) return s;
+      const ChunkHeader th = DecodeChunkHeader(buffer.data());
+      Decoder dt(buffer.data() + kChunkHeaderBytes, kTextureFixedBytes);
+      const uint32_t nameBytes = dt.u32(), mimeBytes = dt.u32();
+      const uint64_t imageBytes = dt.u64();
+      if (th.id != kTexture)
+        return Status::Invalid("corrupt file: expected a TEXR chunk (the texture), found " + ChunkName(th.id));
+      if (th.childBytes != 0 || th.dataBytes > src->size - textureOffset - kChunkHeaderBytes ||
+          nameBytes > kMaxLodTextureNameBytes || mimeBytes > kMaxLodTextureNameBytes || imageBytes == 0 ||
+          th.dataBytes != kTextureFixedBytes + uint64_t(nameBytes) + mimeBytes + imageBytes)
+        return Status::Invalid("corrupt chunk size in the texture chunk");
+      s = ReadRange(textureOffset + kChunkHeaderBytes + kTextureFixedBytes, uint64_t(nameBytes) + mimeBytes,
+                    "the texture chunk");
+      if (!s.ok()) return s;
+      info.textureName.assign(reinterpret_cast<const char*>(buffer.data()), nameBytes);
+      info.textureMime.assign(reinterpret_cast<const char*>(buffer.data()) + nameBytes, mimeBytes);
+      const std::string why = CheckLodTextureName(info.textureName);
+      if (!why.empty()) return Status::Invalid("corrupt texture chunk: " + why);
+      if (info.textureMime.empty()) return Status::Invalid("corrupt texture chunk: no MIME type");
+      for (unsigned char c : info.textureMime)
+        if (c < 0x20 || c >= 0x7F) return Status::Invalid("corrupt texture chunk: its MIME type is not ASCII text");
+      info.textureBytes = imageBytes;
     }
     // The containers the header points to.
     s = CheckContainer(hierOffset, kHier, "the hierarchy chunk", hierBegin, hierEnd);
@@ -882,6 +941,50 @@ void LodReader::EvictGeometry(uint32_t id) {
     impl_->geometryBytes -= AttributeBytes(a->second);
     impl_->nodeAttributes.erase(a);
   }
+}
+
+std::string CheckLodTextureName(const std::string& name) {
+  if (name.empty()) return "the texture has no name";
+  if (name.size() > kMaxLodTextureNameBytes) return "the texture's name is longer than 255 bytes";
+  if (name == "." || name == "..") return "the texture's name '" + name + "' is not a file name";
+  for (unsigned char c : name)
+    if (c < 0x20 || c == 0x7F || c == '/' || c == '\\' || c == ':')
+      return "the texture's name is not a plain file name (no folder, no control character)";
+  return "";
+}
+
+void DecodeLodTexCoord(const std::array<uint16_t, 2>& code, const float uvMin[2], const float uvMax[2], float out[2]) {
+  for (int c = 0; c < 2; ++c)
+    out[c] = float(double(uvMin[c]) + double(code[size_t(c)]) * ((double(uvMax[c]) - double(uvMin[c])) / 65535.0));
+}
+
+double LodTexCoordErrorBound(const float uvMin[2], const float uvMax[2]) {
+  double worst = 0;
+  for (int c = 0; c < 2; ++c) {
+    const double range = double(uvMax[c]) - double(uvMin[c]);
+    const double top = std::max(std::fabs(double(uvMin[c])), std::fabs(double(uvMax[c])));
+    worst = std::max(worst, range / 65535.0 / 2 + top * std::numeric_limits<float>::epsilon());
+  }
+  return worst;
+}
+
+Status LodReader::LoadTexture(LodTexture& out) {
+  out = LodTexture();
+  Impl& m = *impl_;
+  if (!m.textureOffset) return Status::Invalid("this .clod file has no texture image");
+  const uint64_t data = m.info.textureName.size() + m.info.textureMime.size() + m.info.textureBytes;
+  Status s = m.ReadRange(m.textureOffset, kChunkHeaderBytes + kTextureFixedBytes + data, "the texture chunk");
+  if (!s.ok()) return s;
+  const ChunkHeader h = DecodeChunkHeader(m.buffer.data());
+  if (kCheckCrc && Crc32(m.buffer.data() + kChunkHeaderBytes, size_t(kTextureFixedBytes + data)) != h.crc)
+    return Status::Invalid("checksum mismatch in the texture chunk");
+  const uint8_t* p = m.buffer.data() + kChunkHeaderBytes + kTextureFixedBytes;
+  out.name = m.info.textureName;
+  out.mime = m.info.textureMime;
+  p += out.name.size() + out.mime.size();
+  out.bytes.assign(p, p + m.info.textureBytes);
+  std::vector<uint8_t>().swap(m.buffer);  // the image is not kept
+  return Status::Ok();
 }
 
 const LodAttributes* LodReader::attributes(uint32_t id) const {

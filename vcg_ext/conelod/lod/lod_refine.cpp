@@ -376,7 +376,13 @@ Status RefineLod(LodReader& reader, const LodView& view, LodCut& cut) {
 Status ExtractCutMesh(LodReader& reader, const LodCut& cut, bool includeCulled, IndexedMesh& out,
                       std::vector<int>* faceLevel, std::vector<uint32_t>* faceNode, LodAttributes* attributes) {
   out = IndexedMesh();
-  if (attributes) *attributes = LodAttributes();
+  if (attributes) {
+    *attributes = LodAttributes();
+    for (int c = 0; c < 2; ++c) {
+      attributes->uvMin[c] = reader.info().uvMin[c];
+      attributes->uvMax[c] = reader.info().uvMax[c];
+    }
+  }
   if (faceLevel) faceLevel->clear();
   if (faceNode) faceNode->clear();
   if (cut.culled.size() != cut.nodes.size())
@@ -415,6 +421,7 @@ Status ExtractCutMesh(LodReader& reader, const LodCut& cut, bool includeCulled, 
         out.positions.push_back(g.positions[v]);
         if (attributes && ga && !ga->colors.empty()) attributes->colors.push_back(ga->colors[v]);
         if (attributes && ga && !ga->normals.empty()) attributes->normals.push_back(ga->normals[v]);
+        if (attributes && ga && !ga->texCoords.empty()) attributes->texCoords.push_back(ga->texCoords[v]);
       }
       local[v] = ins.first->second;
     }

@@ -182,7 +182,53 @@ std::string LodAttributes::Check(size_t vertices) const {
   if (!normals.empty() && normals.size() != vertices)
     return "the LOD attributes have " + std::to_string(normals.size()) + " normals for " + std::to_string(vertices) +
            " vertices";
+  if (!texCoords.empty() && texCoords.size() != vertices)
+    return "the LOD attributes have " + std::to_string(texCoords.size()) + " texture coordinates for " +
+           std::to_string(vertices) + " vertices";
+  if (!texCoords.empty())
+    for (int c = 0; c < 2; ++c)
+      if (!std::isfinite(uvMin[c]) || !std::isfinite(uvMax[c]) || !(uvMin[c] <= uvMax[c]))
+        return "the LOD attributes' UV box is not finite or is inverted";
+  if (!place.empty()) {
+    if (place.size() != vertices) return "the LOD attributes' places do not fit the vertices";
+    for (size_t v = 0; v < place.size(); ++v)
+      if (place[v] > v || place[place[v]] != place[v]) return "the LOD attributes' places are inconsistent";
+  }
+  if (!texture.empty()) {
+    if (texCoords.empty()) return "a texture image without texture coordinates";
+    const std::string bad = CheckLodTextureName(texture.name);
+    if (!bad.empty()) return bad;
+    if (texture.mime.empty() || texture.mime.size() > kMaxLodTextureNameBytes)
+      return "the texture's MIME type is empty or too long";
+  }
   return "";
+}
+
+std::string LodTextureMime(const std::string& name, const std::vector<uint8_t>& b) {
+  auto starts = [&](std::initializer_list<uint8_t> sig) {
+    return b.size() >= sig.size() && std::equal(sig.begin(), sig.end(), b.begin());
+  };
+  if (starts({0xFF, 0xD8, 0xFF})) return "image/jpeg";
+  if (starts({0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A})) return "image/png";
+  if (starts({'B', 'M'})) return "image/bmp";
+  if (starts({'G', 'I', 'F', '8'})) return "image/gif";
+  if (b.size() >= 12 && starts({'R', 'I', 'F', 'F'}) && std::equal(b.begin() + 8, b.begin() + 12, "WEBP"))
+    return "image/webp";
+  std::string ext =
+      name.substr(std::min(name.size(), name.rfind('.') == std::string::npos ? name.size() : name.rfind('.') + 1));
+  for (char& c : ext) c = char(std::tolower((unsigned char)c));
+  if (ext == "tga") return "image/x-tga";
+  return "application/octet-stream";
+}
+
+std::array<uint16_t, 2> EncodeLodTexCoord(const float uv[2], const float uvMin[2], const float uvMax[2]) {
+  std::array<uint16_t, 2> q;
+  for (int c = 0; c < 2; ++c) {
+    const double range = double(uvMax[c]) - double(uvMin[c]);
+    const double t = range > 0 ? (double(uv[c]) - double(uvMin[c])) / range * 65535.0 : 0.0;
+    q[size_t(c)] = uint16_t(std::isfinite(t) ? std::lround(std::min(65535.0, std::max(0.0, t))) : 0);
+  }
+  return q;
 }
 
 std::array<uint16_t, 2> EncodeLodNormal(const vcg::Point3f& n) {
@@ -223,8 +269,9 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
   }
   // Attribute streams (version 5); none: the version 4 file, byte for byte.
   const LodAttributes& attributes = dag.attributes;
-  const uint32_t attributeMask =
-      (attributes.colors.empty() ? 0u : kGeomColors) | (attributes.normals.empty() ? 0u : kGeomNormals);
+  const uint32_t attributeMask = (attributes.colors.empty() ? 0u : kGeomColors) |
+                                 (attributes.normals.empty() ? 0u : kGeomNormals) |
+                                 (attributes.texCoords.empty() ? 0u : kGeomTexCoords);
   LevelFaces level(dag, spill);
   if (level.count(0) != inputFaces) return Status::Invalid("the LOD DAG does not match the mesh");
   // The box of the positions the levels use (the grid's span), found while checking them.
@@ -399,9 +446,9 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
   };
 
   // The root chunk's header and data, rewritten at the end with the final offsets.
-  uint64_t hierOffset = 0, geosOffset = 0, indexOffset = 0, globalVertices = 0;
+  uint64_t hierOffset = 0, geosOffset = 0, indexOffset = 0, globalVertices = 0, textureOffset = 0;
   uint64_t positionBytes = 0, indexBytes = 0, idBytes = 0;  // the codecs' output, for the stats
-  uint64_t colorBytes = 0, normalBytes = 0;
+  uint64_t colorBytes = 0, normalBytes = 0, texCoordBytes = 0;
   auto encodeHeader = [&]() {
     Encoder e;
     e.u32(attributeMask ? kAttributeVersion : kGeometryOnlyVersion);
@@ -430,11 +477,29 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
       e.u32(attributeMask);
       e.u32(0);
     }
+    if (attributeMask & kGeomTexCoords) {  // version 5 with texture coordinates
+      for (int c = 0; c < 2; ++c) e.f32(attributes.uvMin[c]);
+      for (int c = 0; c < 2; ++c) e.f32(attributes.uvMax[c]);
+      e.u64(textureOffset);
+    }
     return e;
   };
   Encoder header = encodeHeader();
   const uint64_t headerBytes = header.bytes.size();
   out.chunk(kRoot, header);  // placeholder: rewritten at the end
+
+  // The texture image (with texture coordinates and an image): its bytes as they are.
+  if (!attributes.texture.empty()) {
+    textureOffset = out.offset();
+    Encoder e;
+    e.u32(uint32_t(attributes.texture.name.size()));
+    e.u32(uint32_t(attributes.texture.mime.size()));
+    e.u64(attributes.texture.bytes.size());
+    e.raw(attributes.texture.name.data(), attributes.texture.name.size());
+    e.raw(attributes.texture.mime.data(), attributes.texture.mime.size());
+    e.raw(attributes.texture.bytes.data(), attributes.texture.bytes.size());
+    out.chunk(kTexture, e);
+  }
 
   // A container of packed blobs (HIER, GEOS): its CRC field is 0, each blob carries its own.
   auto patchContainer = [&](uint32_t id, uint64_t at) {
@@ -663,6 +728,16 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
             }
           if (!stream(normalBytes)) return fail("internal error: the vertex codec failed");
         }
+        if (attributeMask & kGeomTexCoords) {
+          attr.resize(vc * 4);
+          for (size_t v = 0; v < vc; ++v)
+            for (int c = 0; c < 2; ++c) {
+              const uint16_t x = attributes.texCoords[verts[v]][size_t(c)];
+              attr[4 * v + 2 * size_t(c)] = uint8_t(x & 0xFF);
+              attr[4 * v + 2 * size_t(c) + 1] = uint8_t(x >> 8);
+            }
+          if (!stream(texCoordBytes)) return fail("internal error: the vertex codec failed");
+        }
         const uint64_t at = out.offset();
         blob(e);
         for (uint32_t i = u0; i < u1; ++i) {
@@ -737,6 +812,8 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
     stats->vertexIdBytes = idBytes;
     stats->colorBytes = colorBytes;
     stats->normalBytes = normalBytes;
+    stats->texCoordBytes = texCoordBytes;
+    stats->textureBytes = attributes.texture.bytes.size();
     stats->quantizationError = grid.ErrorBound();
     stats->writeSeconds = Seconds(t0);
   }
@@ -815,7 +892,48 @@ Status BuildLodFile(const IndexedMesh& mesh, const LodBuildParams& params, const
         ++conflicts;
     }
   }
-  return BuildWelded(std::move(welded.mesh), welded.mergedVertices, welded.droppedVertices,
+  size_t merged = welded.mergedVertices;
+  if (withAttributes && !attributes->texCoords.empty()) {
+    // Texture coordinates: one DAG vertex per (position, UV), a wedge; the wedges of a position
+    // share it (and its colour and normal: the representative's) and are one place of the DAG.
+    for (int c = 0; c < 2; ++c) {
+      weldedAttributes.uvMin[c] = attributes->uvMin[c];
+      weldedAttributes.uvMax[c] = attributes->uvMax[c];
+    }
+    weldedAttributes.texture = attributes->texture;
+    const IndexedMesh& wm = welded.mesh;
+    std::vector<uint64_t> keys;  // position << 32 | uv code, per face corner
+    keys.reserve(3 * wm.faces.size());
+    auto keyOf = [&](size_t f, size_t k) {
+      const auto& uv = attributes->texCoords[mesh.faces[f][k]];
+      return uint64_t(wm.faces[f][k]) << 32 | uint64_t(uv[0]) << 16 | uv[1];
+    };
+    for (size_t f = 0; f < wm.faces.size(); ++f)
+      for (size_t k = 0; k < 3; ++k) keys.push_back(keyOf(f, k));
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    IndexedMesh wedgeMesh;
+    LodAttributes& A = weldedAttributes;
+    LodAttributes byPosition;
+    byPosition.colors.swap(A.colors);
+    byPosition.normals.swap(A.normals);
+    wedgeMesh.positions.reserve(keys.size());
+    for (size_t i = 0; i < keys.size(); ++i) {
+      const uint32_t pos = uint32_t(keys[i] >> 32);
+      wedgeMesh.positions.push_back(wm.positions[pos]);
+      if (!byPosition.colors.empty()) A.colors.push_back(byPosition.colors[pos]);
+      if (!byPosition.normals.empty()) A.normals.push_back(byPosition.normals[pos]);
+      A.texCoords.push_back({{uint16_t(keys[i] >> 16 & 0xFFFF), uint16_t(keys[i] & 0xFFFF)}});
+      A.place.push_back(i > 0 && (keys[i - 1] >> 32) == pos ? A.place.back() : uint32_t(i));
+    }
+    wedgeMesh.faces.resize(wm.faces.size());
+    for (size_t f = 0; f < wm.faces.size(); ++f)
+      for (size_t k = 0; k < 3; ++k)
+        wedgeMesh.faces[f][k] = uint32_t(std::lower_bound(keys.begin(), keys.end(), keyOf(f, k)) - keys.begin());
+    merged -= keys.size() - wm.positions.size();  // the wedges beyond one a position were not merged
+    welded.mesh = std::move(wedgeMesh);
+  }
+  return BuildWelded(std::move(welded.mesh), merged, welded.droppedVertices,
                      withAttributes ? &weldedAttributes : nullptr, conflicts, params, path, stats, progress, t0);
 }
 

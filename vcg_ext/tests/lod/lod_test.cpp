@@ -1620,7 +1620,7 @@ TEST(LodAttributes, BadVersion5FilesAreRefused) {
   EXPECT_GE(refused, tried * 99 / 100) << "of " << tried << " flipped bytes";
   // The header's attributes field: unknown bits, or none.
   const size_t field = header - kHeaderAttributeBytes;
-  for (uint32_t mask : {0u, 8u, 2u | 16u}) {
+  for (uint32_t mask : {0u, 16u, 2u | 32u}) {
     std::vector<uint8_t> bad = good;
     PutU32(bad, field, mask);
     Rechecksum(bad, 0);
@@ -1640,6 +1640,380 @@ TEST(LodAttributes, BadVersion5FilesAreRefused) {
     Rechecksum(bad, 0);
     EXPECT_NE(OpenError(bad), "");
   }
+}
+
+// --- Texture coordinates (version 5, bit 8) and the texture image (TEXR) ------------------------
+
+namespace uv {
+
+// A mesh with a texture atlas: each face's chart is the cell of its centroid in a k x k x k grid
+// over the box; a vertex is repeated once per chart its faces use (as a PLY with per-vertex UVs,
+// or per-face texcoord lists split by SplitWedgeTexCoords, has it), and its UV in chart c is
+// (c % 8, c / 8) + 0.9 x its (x, y) in the box: linear in position within a chart, a seam
+// wherever charts meet, junctions where three or more meet.
+struct Textured {
+  IndexedMesh mesh;  // split by chart
+  LodAttributes attributes;
+  vcg::Box3f box;
+};
+int ChartOf(const vcg::Box3f& box, const vcg::Point3f& c, int k) {
+  int cell[3];
+  for (int i = 0; i < 3; ++i)
+    cell[i] = std::min(k - 1, std::max(0, int(k * (c[i] - box.min[i]) / std::max(1e-20f, box.max[i] - box.min[i]))));
+  return (cell[2] * k + cell[1]) * k + cell[0];
+}
+std::array<float, 2> UvAt(const vcg::Box3f& box, const vcg::Point3f& p, int chart) {
+  return {{float(chart % 8) + 0.9f * (p[0] - box.min[0]) / (box.max[0] - box.min[0]),
+           float(chart / 8) + 0.9f * (p[1] - box.min[1]) / (box.max[1] - box.min[1])}};
+}
+Textured Atlas(const IndexedMesh& welded, int k, bool withTexture = true) {
+  Textured t;
+  for (const auto& p : welded.positions) t.box.Add(p);
+  std::map<std::pair<uint32_t, int>, uint32_t> split;
+  std::vector<std::array<float, 2>> uvs;
+  for (const auto& f : welded.faces) {
+    const vcg::Point3f c = (welded.positions[f[0]] + welded.positions[f[1]] + welded.positions[f[2]]) / 3.f;
+    const int chart = ChartOf(t.box, c, k);
+    std::array<uint32_t, 3> g;
+    for (size_t i = 0; i < 3; ++i) {
+      auto ins = split.emplace(std::make_pair(f[i], chart), uint32_t(t.mesh.positions.size()));
+      if (ins.second) {
+        t.mesh.positions.push_back(welded.positions[f[i]]);
+        uvs.push_back(UvAt(t.box, welded.positions[f[i]], chart));
+      }
+      g[i] = ins.first->second;
+    }
+    t.mesh.faces.push_back(g);
+  }
+  for (int c = 0; c < 2; ++c) {
+    t.attributes.uvMin[c] = std::numeric_limits<float>::infinity();
+    t.attributes.uvMax[c] = -std::numeric_limits<float>::infinity();
+    for (const auto& u : uvs) {
+      t.attributes.uvMin[c] = std::min(t.attributes.uvMin[c], u[size_t(c)]);
+      t.attributes.uvMax[c] = std::max(t.attributes.uvMax[c], u[size_t(c)]);
+    }
+  }
+  for (const auto& u : uvs)
+    t.attributes.texCoords.push_back(EncodeLodTexCoord(u.data(), t.attributes.uvMin, t.attributes.uvMax));
+  if (withTexture) {
+    t.attributes.texture.name = "atlas.png";
+    t.attributes.texture.bytes = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
+    for (int i = 0; i < 3000; ++i) t.attributes.texture.bytes.push_back(uint8_t(i * 7));
+    t.attributes.texture.mime = LodTextureMime(t.attributes.texture.name, t.attributes.texture.bytes);
+  }
+  return t;
+}
+// Distinct (grid position, chart) pairs of a mesh split by chart: its wedges as the file keeps them.
+size_t Wedges(const IndexedMesh& m, const LodAttributes& a, const LodGrid& grid) {
+  std::set<std::pair<PosKey, std::array<uint16_t, 2>>> w;
+  for (const auto& f : m.faces)
+    for (uint32_t v : f) {
+      const vcg::Point3f p = grid.Round(m.positions[v]);
+      w.insert({PosKey{{p[0], p[1], p[2]}}, a.texCoords[v]});
+    }
+  return w.size();
+}
+// Each face of a cut lies in one chart (its corners' UVs on one chart's tile), and each corner's
+// UV is its chart's linear function of its position within `tolerance` (a chart's UV span is
+// 0.9). Returns the faces whose corners are on different charts.
+size_t FacesAcrossCharts(const IndexedMesh& m, const LodAttributes& a, const vcg::Box3f& box, double tolerance,
+                         double* worst) {
+  size_t across = 0;
+  *worst = 0;
+  for (const auto& f : m.faces) {
+    float uv[3][2];
+    for (size_t i = 0; i < 3; ++i) DecodeLodTexCoord(a.texCoords[f[i]], a.uvMin, a.uvMax, uv[i]);
+    // (A chart's tile is [c, c + 0.9]: its UVs rounded below c still name it.)
+    const int cu = int(std::floor(uv[0][0] + 0.05f)), cv = int(std::floor(uv[0][1] + 0.05f));
+    bool same = true;
+    for (size_t i = 1; i < 3; ++i)
+      same &= int(std::floor(uv[i][0] + 0.05f)) == cu && int(std::floor(uv[i][1] + 0.05f)) == cv;
+    if (!same) {
+      ++across;
+      continue;
+    }
+    for (size_t i = 0; i < 3; ++i) {
+      const auto want = UvAt(box, m.positions[f[i]], cv * 8 + cu);
+      *worst = std::max({*worst, std::fabs(double(uv[i][0]) - want[0]), std::fabs(double(uv[i][1]) - want[1])});
+    }
+  }
+  EXPECT_LE(*worst, tolerance);
+  return across;
+}
+
+}  // namespace uv
+
+// The UV stream: a textured torus (27 charts) gives a version 5 file with bit 8 and its texture;
+// at full budget the cut is the input's faces with one vertex per (position, UV), each UV within
+// LodTexCoordErrorBound of the input's; a coarse cut has no face across charts and its UVs are
+// the charts' linear functions at the moved vertices; the texture reads back byte for byte.
+TEST(LodTexCoords, UvStreamRoundTripIsExactUpToTheQuantization) {
+  const uv::Textured t = uv::Atlas(Torus(96, 48, 1.f, 0.35f), 3);
+  const std::string path = TempPath("textured.clod");
+  LodBuildStats st;
+  const Status b = BuildLodFile(t.mesh, LodBuildParams(), path, &st, Progress(), &t.attributes);
+  ASSERT_TRUE(b.ok()) << b.message;
+  EXPECT_GT(st.texCoordBytes, 0u);
+  EXPECT_EQ(st.textureBytes, t.attributes.texture.bytes.size());
+  EXPECT_EQ(st.fileBytes, ReadBytes(path).size());
+  std::unique_ptr<LodReader> r;
+  ASSERT_TRUE(LodReader::Open(path, r).ok());
+  const LodFileInfo& info = r->info();
+  EXPECT_EQ(info.version, 5u);
+  EXPECT_TRUE(info.texCoords);
+  EXPECT_FALSE(info.colors || info.normals);
+  EXPECT_EQ(info.textureName, "atlas.png");
+  EXPECT_EQ(info.textureMime, "image/png");
+  EXPECT_EQ(info.textureBytes, t.attributes.texture.bytes.size());
+  for (int c = 0; c < 2; ++c) {
+    EXPECT_EQ(info.uvMin[c], t.attributes.uvMin[c]);
+    EXPECT_EQ(info.uvMax[c], t.attributes.uvMax[c]);
+  }
+  LodTexture tex;
+  ASSERT_TRUE(r->LoadTexture(tex).ok());
+  EXPECT_EQ(tex.bytes, t.attributes.texture.bytes);
+  EXPECT_EQ(tex.name, "atlas.png");
+  std::printf(
+      "textured torus: %zu levels, %llu bytes, of which UVs %llu, texture %llu; level faces:", info.levelFaces.size(),
+      (unsigned long long)st.fileBytes, (unsigned long long)st.texCoordBytes, (unsigned long long)st.textureBytes);
+  for (auto f : info.levelFaces) std::printf(" %llu", (unsigned long long)f);
+  std::printf("\n");
+  EXPECT_LT(info.levelFaces.back() * 2, info.levelFaces[0]) << "the levels should go down";
+
+  // Full budget: every input wedge back once, its UV within the bound.
+  LodCut cut;
+  ASSERT_TRUE(RefineLod(*r, Eye(0, 0.2, 4, size_t(1) << 30), cut).ok());
+  IndexedMesh out;
+  LodAttributes a;
+  ASSERT_TRUE(ExtractCutMesh(*r, cut, true, out, nullptr, nullptr, &a).ok());
+  ASSERT_EQ(a.texCoords.size(), out.positions.size());
+  EXPECT_EQ(out.faces.size(), t.mesh.faces.size());
+  EXPECT_EQ(out.positions.size(), uv::Wedges(t.mesh, t.attributes, info.grid));
+  EXPECT_EQ(SortedFacePositions(out), SortedFacePositions(OnGrid(t.mesh, info.grid)));
+  std::map<PosKey, std::vector<std::array<float, 2>>> inputAt;
+  for (size_t v = 0; v < t.mesh.positions.size(); ++v) {
+    const vcg::Point3f p = info.grid.Round(t.mesh.positions[v]);
+    float in[2];
+    DecodeLodTexCoord(t.attributes.texCoords[v], t.attributes.uvMin, t.attributes.uvMax, in);
+    inputAt[PosKey{{p[0], p[1], p[2]}}].push_back({{in[0], in[1]}});
+  }
+  const double bound = LodTexCoordErrorBound(info.uvMin, info.uvMax);
+  double worst = 0;
+  for (size_t v = 0; v < out.positions.size(); ++v) {
+    const auto it = inputAt.find(PosKey{{out.positions[v][0], out.positions[v][1], out.positions[v][2]}});
+    ASSERT_TRUE(it != inputAt.end());
+    float got[2];
+    DecodeLodTexCoord(a.texCoords[v], a.uvMin, a.uvMax, got);
+    double best = HUGE_VAL;
+    for (const auto& w : it->second)
+      best = std::min(best, std::max(std::fabs(double(w[0]) - got[0]), std::fabs(double(w[1]) - got[1])));
+    worst = std::max(worst, best);
+  }
+  EXPECT_EQ(worst, 0.0) << "the input's codes are stored as they are";
+  // Against the input's float UVs: within the stated quantization bound.
+  double worstFloat = 0;
+  for (size_t v = 0; v < t.mesh.positions.size(); ++v) {
+    const vcg::Point3f c = t.mesh.positions[v];
+    float back[2];
+    DecodeLodTexCoord(t.attributes.texCoords[v], info.uvMin, info.uvMax, back);
+    const int chart = int(std::floor(back[1] + 0.05f)) * 8 + int(std::floor(back[0] + 0.05f));
+    const auto exact = uv::UvAt(t.box, c, chart);
+    worstFloat = std::max({worstFloat, std::fabs(double(exact[0]) - back[0]), std::fabs(double(exact[1]) - back[1])});
+  }
+  EXPECT_LE(worstFloat, bound);
+  std::printf("UV quantization: largest error %.3g, bound %.3g (UV box %g x %g)\n", worstFloat, bound,
+              double(info.uvMax[0] - info.uvMin[0]), double(info.uvMax[1] - info.uvMin[1]));
+  double lin = 0;
+  EXPECT_EQ(uv::FacesAcrossCharts(out, a, t.box, 2 * bound + 1e-6, &lin), 0u);
+
+  // Coarse cuts: no face across a seam, UVs linear in position within each chart.
+  for (size_t budget : {t.mesh.faces.size() / 20, t.mesh.faces.size() / 4}) {
+    LodCut coarse;
+    ASSERT_TRUE(RefineLod(*r, Eye(0, 0.2, 4, budget, false), coarse).ok());
+    IndexedMesh cm;
+    ASSERT_TRUE(ExtractCutMesh(*r, coarse, true, cm, nullptr, nullptr, &a).ok());
+    EXPECT_LT(cm.faces.size(), t.mesh.faces.size() * 3 / 4);
+    size_t moved = 0;
+    for (const auto& p : cm.positions) moved += !inputAt.count(PosKey{{p[0], p[1], p[2]}});
+    EXPECT_GT(moved, 0u) << "no vertex moved: interpolation not exercised";
+    EXPECT_EQ(uv::FacesAcrossCharts(cm, a, t.box, 0.01, &lin), 0u) << "a face drags its UVs across a seam";
+    std::printf("cut of %zu faces: %zu moved vertices, UV off the charts' linear function by %.3g at most\n",
+                cm.faces.size(), moved, lin);
+  }
+  std::remove(path.c_str());
+
+  // Without the image the file has the UV stream only; with neither, the geometry-only file.
+  uv::Textured bare = uv::Atlas(Torus(24, 12, 1.f, 0.35f), 2, false);
+  const std::string p2 = TempPath("uv_only.clod");
+  ASSERT_TRUE(BuildLodFile(bare.mesh, LodBuildParams(), p2, nullptr, Progress(), &bare.attributes).ok());
+  ASSERT_TRUE(LodReader::Open(p2, r).ok());
+  EXPECT_TRUE(r->info().texCoords);
+  EXPECT_EQ(r->info().textureBytes, 0u);
+  EXPECT_FALSE(r->LoadTexture(tex).ok());
+  std::remove(p2.c_str());
+}
+
+// Cracks: every cut of textured watertight meshes (a sphere and a torus, their atlases' seams and
+// junctions) is watertight by position, as the untextured ones (ExpectCrackFree's checks).
+void ExpectTexturedCrackFree(const IndexedMesh& welded, int k, const std::string& name) {
+  const uv::Textured t = uv::Atlas(welded, k);
+  Built b;
+  b.mesh = t.mesh;
+  b.path = TempPath(name + ".clod");
+  ASSERT_TRUE(BuildLodFile(b.mesh, LodBuildParams(), b.path, nullptr, Progress(), &t.attributes).ok());
+  std::unique_ptr<LodReader> r;
+  ASSERT_TRUE(LodReader::Open(b.path, r).ok());
+  ASSERT_TRUE(r->info().texCoords);
+  const EdgeMap input = EdgesByPosition(OnGrid(b.mesh, r->info().grid));
+  size_t inputBorder = 0;
+  for (const auto& e : input) inputBorder += e.second != 2;
+  ASSERT_EQ(inputBorder, 0u);
+  const vcg::Point3d c = vcg::Point3d::Construct(r->info().box.Center());
+  const double d = r->info().box.Diag();
+  const size_t F = b.mesh.faces.size();
+  size_t mixed = 0, cuts = 0;
+  for (const vcg::Point3d& eye : {c + vcg::Point3d(0, 0, 2 * d), c + vcg::Point3d(1.5 * d, 0.3 * d, 0),
+                                  c + vcg::Point3d(0.3 * d, 0.1 * d, 0.45 * d)})
+    for (double pct : {0.0, 5.0, 20.0, 50.0, 100.0})
+      for (bool cull : {true, false}) {
+        LodCut cut;
+        ASSERT_TRUE(RefineLod(*r, Eye(eye[0], eye[1], eye[2], size_t(double(F) * pct / 100), cull), cut).ok());
+        SCOPED_TRACE(name + " budget " + std::to_string(pct) + "% cull " + std::to_string(cull));
+        const CrackCount k2 = CheckCut(b, *r, cut, &input);
+        EXPECT_EQ(k2.border, 0u);
+        EXPECT_EQ(k2.overused, 0u);
+        EXPECT_EQ(k2.drawnBorderNotCulled, 0u);
+        if (pct == 100) {
+          EXPECT_EQ(cut.faces, F);
+        }
+        ++cuts;
+        mixed += cut.maxLevelDifference > 0;
+      }
+  EXPECT_GT(mixed, cuts / 3) << "most cuts should mix levels (else the test proves little)";
+  std::remove(b.path.c_str());
+}
+
+TEST(LodTexCoords, TexturedSphereCutsAreWatertight) { ExpectTexturedCrackFree(test::Sphere(5), 3, "tex_sphere"); }
+TEST(LodTexCoords, TexturedTorusCutsAreWatertight) {
+  ExpectTexturedCrackFree(Torus(96, 48, 1.f, 0.35f), 4, "tex_torus");
+}
+
+// The textured dragon of `scripts/get_test_meshes.sh attributes` (per-vertex UVs repeated along
+// its seams, a real UV atlas of 21,142 seam positions): its cuts are watertight by position and no face of a
+// coarse cut has UVs from two charts. The mesh is fetched into deps/test_meshes (or
+// CONELOD_ATTRIBUTE_MESHES); the test says so and passes without it.
+TEST(LodTexCoords, TexturedDragonCutsAreWatertight) {
+  const char* env = std::getenv("CONELOD_ATTRIBUTE_MESHES");
+  const std::string dir = env ? env : std::string(CONELOD_SOURCE_DIR) + "/deps/test_meshes";
+  PlyMesh ply;
+  if (!ReadPly(dir + "/dragon_textured.ply", ply).empty()) {
+    std::printf("no %s/dragon_textured.ply (scripts/get_test_meshes.sh attributes): not checked\n", dir.c_str());
+    return;
+  }
+  if (!ply.wedgeTexCoords.empty()) SplitWedgeTexCoords(ply);
+  ASSERT_FALSE(ply.texCoords.empty());
+  Built b;
+  for (const auto& p : ply.positions) b.mesh.positions.emplace_back(p[0], p[1], p[2]);
+  b.mesh.faces = ply.triangles;
+  LodAttributes a;
+  for (int c = 0; c < 2; ++c) {
+    a.uvMin[c] = std::numeric_limits<float>::infinity();
+    a.uvMax[c] = -std::numeric_limits<float>::infinity();
+    for (const auto& t : ply.texCoords) {
+      a.uvMin[c] = std::min(a.uvMin[c], t[size_t(c)]);
+      a.uvMax[c] = std::max(a.uvMax[c], t[size_t(c)]);
+    }
+  }
+  for (const auto& t : ply.texCoords) a.texCoords.push_back(EncodeLodTexCoord(t.data(), a.uvMin, a.uvMax));
+  b.path = TempPath("dragon_textured.clod");
+  LodBuildStats st;
+  ASSERT_TRUE(BuildLodFile(b.mesh, LodBuildParams(), b.path, &st, Progress(), &a).ok());
+  std::unique_ptr<LodReader> r;
+  ASSERT_TRUE(LodReader::Open(b.path, r).ok());
+  std::printf("textured dragon: %zu faces, %zu levels, level faces:", b.mesh.faces.size(), size_t(r->info().levels));
+  for (auto f : r->info().levelFaces) std::printf(" %llu", (unsigned long long)f);
+  std::printf("\n");
+  const EdgeMap input = EdgesByPosition(OnGrid(b.mesh, r->info().grid));
+  const size_t F = b.mesh.faces.size();
+  const vcg::Point3d c = vcg::Point3d::Construct(r->info().box.Center());
+  const double d = r->info().box.Diag();
+  for (const vcg::Point3d& eye : {c + vcg::Point3d(0, 0, 2 * d), c + vcg::Point3d(0.6 * d, 0.2 * d, -0.5 * d)})
+    for (double pct : {0.0, 5.0, 20.0, 50.0, 100.0}) {
+      LodCut cut;
+      ASSERT_TRUE(RefineLod(*r, Eye(eye[0], eye[1], eye[2], size_t(double(F) * pct / 100)), cut).ok());
+      SCOPED_TRACE("textured dragon budget " + std::to_string(pct) + "%");
+      const CrackCount k = CheckCut(b, *r, cut, &input);
+      EXPECT_EQ(k.border, 0u);
+      EXPECT_EQ(k.overused, 0u);
+      EXPECT_EQ(k.drawnBorderNotCulled, 0u);
+      if (pct == 100) {
+        EXPECT_EQ(cut.faces, F);
+      }
+    }
+  std::remove(b.path.c_str());
+}
+
+// The texture chunk: a flipped byte of its image is caught by LoadTexture's CRC (the file still
+// opens: the image is read on demand), a bad name or size by Open; a header whose attributes say
+// texture coordinates without the UV box (or the reverse) is refused.
+TEST(LodTexCoords, BadTextureChunksAreRefused) {
+  const uv::Textured t = uv::Atlas(test::Sphere(3), 2);
+  const std::string path = TempPath("tex_bad.clod");
+  ASSERT_TRUE(BuildLodFile(t.mesh, LodBuildParams(), path, nullptr, Progress(), &t.attributes).ok());
+  const std::vector<uint8_t> good = ReadBytes(path);
+  std::remove(path.c_str());
+  ASSERT_EQ(FullReadError(good), "");
+  const size_t header = kChunkHeaderBytes + size_t(DecodeChunkHeader(good.data()).dataBytes);
+  const ChunkHeader th = DecodeChunkHeader(good.data() + header);  // the TEXR chunk follows the header
+  ASSERT_EQ(th.id, kTexture);
+  const size_t image = header + kChunkHeaderBytes + kTextureFixedBytes + 9 + 9;  // "atlas.png", "image/png"
+  {
+    std::vector<uint8_t> bad = good;
+    bad[image + 100] ^= 0x5A;
+    std::unique_ptr<LodReader> r = OpenOk(bad);
+    ASSERT_TRUE(r);
+    LodTexture tex;
+    const Status s = r->LoadTexture(tex);
+    EXPECT_NE(s.message.find("checksum mismatch in the texture chunk"), std::string::npos) << s.message;
+  }
+  {
+    std::vector<uint8_t> bad = good;
+    bad[header + kChunkHeaderBytes + kTextureFixedBytes] = '/';  // the name: "/tlas.png"
+    EXPECT_NE(OpenError(bad).find("not a plain file name"), std::string::npos) << OpenError(bad);
+  }
+  {
+    std::vector<uint8_t> bad = good;
+    PutU32(bad, header + kChunkHeaderBytes, 300);  // a name longer than the chunk allows
+    EXPECT_NE(OpenError(bad).find("corrupt chunk size in the texture chunk"), std::string::npos) << OpenError(bad);
+  }
+  {
+    std::vector<uint8_t> bad = good;
+    PutU32(bad, header, kHier);  // not a TEXR chunk
+    EXPECT_NE(OpenError(bad).find("expected a TEXR chunk"), std::string::npos) << OpenError(bad);
+  }
+  // The attributes field without bit 8 while the header holds the UV box.
+  {
+    std::vector<uint8_t> bad = good;
+    PutU32(bad, header - kHeaderAttributeBytes - kHeaderTexCoordBytes, kGeomColors);
+    Rechecksum(bad, 0);
+    EXPECT_NE(OpenError(bad).find("does not match its attribute streams"), std::string::npos) << OpenError(bad);
+  }
+  // Flipped bytes all over: refused or read cleanly (the image's own bytes only by LoadTexture).
+  size_t refused = 0, tried = 0;
+  const size_t stride = std::max<size_t>(1, good.size() / 500);
+  for (size_t i = 0; i < good.size(); i += i < image ? 1 : stride) {
+    std::vector<uint8_t> bad = good;
+    bad[i] ^= 0x5A;
+    std::string e = FullReadError(bad);
+    if (e.empty()) {
+      std::unique_ptr<LodReader> r = OpenOk(bad);
+      LodTexture tex;
+      if (r && !r->LoadTexture(tex).ok()) e = "texture";
+    }
+    refused += !e.empty();
+    ++tried;
+  }
+  EXPECT_GE(refused, tried * 99 / 100) << "of " << tried << " flipped bytes";
 }
 
 // Issue 27's out-of-core build: with chunkFaces BuildLodFile spills each finished level to a
