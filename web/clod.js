@@ -28,13 +28,30 @@ const HIER_PAGE = 8192;  // the records are read and kept in pages of this size
 // and the same geometry flag bits (lod_format.md, "Attributes"), in this order: a reader that
 // meets a bit it does not know refuses the file by name. Each entry: { bit, name, stride } decoded
 // by meshopt_decodeVertexBuffer into unit.attributes[name] (vertexCount x stride bytes): colours
-// RGBA8, normals as octahedral u16 x 2 (decodeNormal).
+// RGBA8, normals as octahedral u16 x 2 (decodeNormal), texture coordinates as u16 x 2 over the
+// header's UV box (decodeTexCoords).
 export const OPTIONAL_STREAMS = [
   { bit: 2, name: 'colors', stride: 4 },
   { bit: 4, name: 'normals', stride: 4 },
+  { bit: 8, name: 'texCoords', stride: 4 },
 ];
 const KNOWN_ATTRIBUTES = OPTIONAL_STREAMS.reduce((m, s) => m | s.bit, 0);
 const HEADER_ATTRIBUTES = 8;  // version 5: u32 attributes, u32 pad after the level entries
+const HEADER_TEXCOORDS = 24;  // with bit 8: f32 uvMin[2], f32 uvMax[2], u64 textureOffset
+const TEXTURE_FIXED = 16;     // TEXR data: u32 nameBytes, u32 mimeBytes, u64 imageBytes, then the three
+
+// A unit's texture coordinate codes (u16 x 2 a vertex) as floats, as the C++ reader decodes them
+// (DecodeLodTexCoord: float(min + q (max - min) / 65535), in double).
+export function decodeTexCoords(codes, uvMin, uvMax) {
+  const q = new DataView(codes.buffer, codes.byteOffset, codes.byteLength), n = codes.byteLength / 4;
+  const out = new Float32Array(n * 2);
+  const su = (uvMax[0] - uvMin[0]) / 65535, sv = (uvMax[1] - uvMin[1]) / 65535;
+  for (let i = 0; i < n; ++i) {
+    out[2 * i] = uvMin[0] + q.getUint16(i * 4, true) * su;
+    out[2 * i + 1] = uvMin[1] + q.getUint16(i * 4 + 2, true) * sv;
+  }
+  return out;
+}
 
 // An octahedral normal code (two u16, lod_internal.h's DecodeConeAxis) into out[at..at+2].
 export function decodeNormal(cu, cv, out, at) {
@@ -54,7 +71,7 @@ const KNOWN_FLAGS = OPTIONAL_STREAMS.reduce((m, s) => m | s.bit, FLAG_WIDE);
 
 const fourcc = (s) => s.charCodeAt(0) | (s.charCodeAt(1) << 8) | (s.charCodeAt(2) << 16) | (s.charCodeAt(3) << 24);
 const ID = { CLOD: fourcc('CLOD') >>> 0, HIER: fourcc('HIER') >>> 0, GEOS: fourcc('GEOS') >>> 0,
-  INDX: fourcc('INDX') >>> 0, IBLK: fourcc('IBLK') >>> 0 };
+  INDX: fourcc('INDX') >>> 0, IBLK: fourcc('IBLK') >>> 0, TEXR: fourcc('TEXR') >>> 0 };
 
 function chunkName(id) {
   let s = '';
@@ -237,9 +254,11 @@ export class ClodReader {
     // The root chunk's header and the header's data (at most 128 + 64 x 32 bytes) in one range.
     let head;
     try {
-      head = await src.read(0, CHUNK + HEADER_FIXED + MAX_LEVELS * LEVEL_ENTRY, 'the file header');
+      head = await src.read(0, CHUNK + HEADER_FIXED + MAX_LEVELS * LEVEL_ENTRY + HEADER_ATTRIBUTES + HEADER_TEXCOORDS,
+        'the file header');
     } catch (e) {
-      if (src.size < 0 || src.size >= CHUNK + HEADER_FIXED + MAX_LEVELS * LEVEL_ENTRY) throw e;
+      if (src.size < 0 || src.size >= CHUNK + HEADER_FIXED + MAX_LEVELS * LEVEL_ENTRY + HEADER_ATTRIBUTES + HEADER_TEXCOORDS)
+        throw e;
       head = await src.read(0, src.size, 'the file header');
     }
     const trunc = 'truncated .clod file: ';
@@ -255,8 +274,12 @@ export class ClodReader {
     if (version < OLDEST_VERSION || version > VERSION)
       throw new ClodError(`unsupported .clod version ${version} (this reader reads versions 3 to 5)`);
     const tail = version >= 5 ? HEADER_ATTRIBUTES : 0;
-    if (h.dataBytes < HEADER_FIXED + LEVEL_ENTRY + tail || h.dataBytes > HEADER_FIXED + MAX_LEVELS * LEVEL_ENTRY + tail ||
-        (h.dataBytes - HEADER_FIXED - tail) % LEVEL_ENTRY !== 0 || !Number.isFinite(h.childBytes))
+    // With texture coordinates (bit 8) the UV box and the texture's offset follow (checked below).
+    const extra = version >= 5 && h.dataBytes > HEADER_FIXED + tail &&
+      (h.dataBytes - HEADER_FIXED - tail) % LEVEL_ENTRY === HEADER_TEXCOORDS ? HEADER_TEXCOORDS : 0;
+    if (h.dataBytes < HEADER_FIXED + LEVEL_ENTRY + tail + extra ||
+        h.dataBytes > HEADER_FIXED + MAX_LEVELS * LEVEL_ENTRY + tail + extra ||
+        (h.dataBytes - HEADER_FIXED - tail - extra) % LEVEL_ENTRY !== 0 || !Number.isFinite(h.childBytes))
       throw new ClodError('corrupt chunk size in the file header');
     if (h.totalBytes > src.size) throw new ClodError(trunc + `the file has ${src.size} bytes, its header says ${h.totalBytes}`);
     if (h.totalBytes < src.size)
@@ -289,7 +312,7 @@ export class ClodReader {
       if (!Number.isFinite(Math.fround(grid.origin[c])) || !Number.isFinite(Math.fround(top)))
         throw new ClodError(bad + 'bad quantization grid');
     }
-    if (levelCount < 1 || levelCount > MAX_LEVELS || h.dataBytes !== HEADER_FIXED + levelCount * LEVEL_ENTRY + tail)
+    if (levelCount < 1 || levelCount > MAX_LEVELS || h.dataBytes !== HEADER_FIXED + levelCount * LEVEL_ENTRY + tail + extra)
       throw new ClodError(bad + `bad level count ${levelCount}`);
     if (this.indexBlock === 0 || this.indexBlock > 1 << 20) throw new ClodError(bad + 'bad block size');
     const levels = (this.levels = []);
@@ -302,10 +325,22 @@ export class ClodReader {
       this.attributeMask = d.u32();
       d.u32();
       if (this.attributeMask === 0 || this.attributeMask & ~KNOWN_ATTRIBUTES)
-        throw new ClodError(bad + `unknown attribute streams (${this.attributeMask}; this reader knows colour 2 and normals 4)`);
+        throw new ClodError(bad + `unknown attribute streams (${this.attributeMask}; this reader knows colour 2, normals 4 and texture coordinates 8)`);
     }
     info.colors = (this.attributeMask & 2) !== 0;
     info.normals = (this.attributeMask & 4) !== 0;
+    info.texCoords = (this.attributeMask & 8) !== 0;
+    if (info.texCoords !== (extra !== 0)) throw new ClodError(bad + 'its size does not match its attribute streams');
+    this.textureOffset = 0;
+    info.textureBytes = 0;
+    if (extra) {
+      info.uvMin = [d.f32(), d.f32()];
+      info.uvMax = [d.f32(), d.f32()];
+      this.textureOffset = d.u64();
+      for (let c = 0; c < 2; ++c)
+        if (!Number.isFinite(info.uvMin[c]) || !Number.isFinite(info.uvMax[c]) || info.uvMin[c] > info.uvMax[c])
+          throw new ClodError(bad + 'its UV box is not finite or is inverted');
+    }
     let id = 0;
     for (let k = levelCount - 1; k >= 0; --k) {
       const L = levels[k];
@@ -322,6 +357,29 @@ export class ClodReader {
     info.levels = levelCount;
     info.fileBytes = src.size;
     info.levelFaces = levels.map((L) => L.faces);
+    if (this.textureOffset) {  // the texture chunk's header, name and MIME type (the image: loadTexture)
+      if (!(this.textureOffset < src.size) || src.size - this.textureOffset < CHUNK + TEXTURE_FIXED)
+        throw new ClodError(bad + "the texture's offset points past the end of the file");
+      const t = await src.read(this.textureOffset, Math.min(CHUNK + TEXTURE_FIXED + 2 * 255, src.size - this.textureOffset),
+        'the texture chunk');
+      const th = chunkHeader(t);
+      if (th.id !== ID.TEXR) throw new ClodError(`corrupt file: expected a TEXR chunk (the texture), found ${chunkName(th.id)}`);
+      const dt = new Decoder(t, CHUNK, CHUNK + TEXTURE_FIXED);
+      const nameBytes = dt.u32(), mimeBytes = dt.u32(), imageBytes = dt.u64();
+      if (th.childBytes !== 0 || !(th.dataBytes <= src.size - this.textureOffset - CHUNK) || nameBytes > 255 ||
+          mimeBytes > 255 || !(imageBytes > 0) || th.dataBytes !== TEXTURE_FIXED + nameBytes + mimeBytes + imageBytes ||
+          t.length < CHUNK + TEXTURE_FIXED + nameBytes + mimeBytes)
+        throw new ClodError('corrupt chunk size in the texture chunk');
+      const text = (a, b) => String.fromCharCode(...t.subarray(a, b));
+      info.textureName = new TextDecoder().decode(t.subarray(CHUNK + TEXTURE_FIXED, CHUNK + TEXTURE_FIXED + nameBytes));
+      info.textureMime = text(CHUNK + TEXTURE_FIXED + nameBytes, CHUNK + TEXTURE_FIXED + nameBytes + mimeBytes);
+      info.textureBytes = imageBytes;
+      this.textureCrc = th.crc;
+      this.textureData = [CHUNK + TEXTURE_FIXED + nameBytes + mimeBytes, th.dataBytes];
+      if (!info.textureName || /[\u0000-\u001f\u007f/\\:]/.test(info.textureName) || !info.textureMime ||
+          /[^\u0020-\u007e]/.test(info.textureMime))
+        throw new ClodError('corrupt texture chunk: a bad name or MIME type');
+    }
     // The containers and the index chunk (with the roots' index block, block 0: ids are coarsest first).
     const [hier, geos] = await Promise.all([
       src.read(this.hierOffset, CHUNK, 'the hierarchy chunk'),
@@ -335,6 +393,16 @@ export class ClodReader {
     this.roots = [];
     for (let r = 0; r < levels[top].nodes; ++r) this.roots.push(r);
     await this.loadUnit(0);
+  }
+
+  // The texture image stored in the file (its TEXR chunk), checked against the chunk's CRC:
+  // { name, mime, bytes } (a Uint8Array), or null when the file has none.
+  async loadTexture() {
+    if (!this.textureOffset) return null;
+    const [begin, dataBytes] = this.textureData;
+    const b = await this.src.read(this.textureOffset, CHUNK + dataBytes, 'the texture chunk');
+    if (crc32(b, CHUNK, CHUNK + dataBytes) !== this.textureCrc) throw new ClodError('checksum mismatch in the texture chunk');
+    return { name: this.info.textureName, mime: this.info.textureMime, bytes: b.subarray(begin, CHUNK + dataBytes) };
   }
 
   _container(b, offset, id, what) {
@@ -696,7 +764,7 @@ export class ClodReader {
         if (!p) throw new Error();
         MeshoptDecoder.decodeVertexBuffer(out, vc, s.stride, p);
       } catch (e) {
-        throw new ClodError(bad + `its ${s.name === 'colors' ? 'colours' : s.name} do not decode`);
+        throw new ClodError(bad + `its ${s.name === 'colors' ? 'colours' : s.name === 'texCoords' ? 'texture coordinates' : s.name} do not decode`);
       }
       attributes[s.name] = out;
     }

@@ -2,21 +2,23 @@
 // the coarsest cut (the roots) at once, then refines by screen-space error within a face budget
 // (refine.js) while the view is still, and again from the roots (its reads cached) whenever the
 // view changes. Orbit/zoom: three.js's OrbitControls. Keys: c cycles the colours (the file's
-// vertex colours with smooth shading by its normals when it has them, shaded grey, one per level,
-// one per group of its level, one per node), a switches between the file's attributes and the
-// level colours, h hides the text.
+// attributes: its texture image (stored in the file, shown through a Blob URL) or vertex colours,
+// with smooth shading by its normals when it has them; shaded grey, one per level, one per group
+// of its level, one per node), a switches between the file's attributes and the level colours,
+// h hides the text.
 //
 // Page parameters: file (URL of the .clod, relative to the page), budget (faces, default
 // 500000), pixel (screen-space error in pixels, default 1), eye=X,Y,Z (model coordinates; default:
 // in front, +Z, framing the box), color=vertex|none|level|group|node (default: vertex when the file
-// has colours or normals, else none), hud=0, cull=0 (no back-face culling), refine=0 (draw the
-// roots only), fps=N (after refinement, time N frames).
+// has colours, normals or texture coordinates, else none), texture=0 (the file's attributes
+// without its texture image), hud=0, cull=0 (no back-face culling), refine=0 (draw the roots
+// only), fps=N (after refinement, time N frames).
 // For scripts (web/shoot.mjs): window.conelod holds the state ('loading', 'refining', 'done',
 // 'error'), the views refined so far, the eye and the figures; the title ends in "[done]" or
 // "[error]".
 import * as THREE from 'three';
 import { OrbitControls } from './node_modules/three/examples/jsm/controls/OrbitControls.js';
-import { ClodReader, decodeNormal } from './clod.js';
+import { ClodReader, decodeNormal, decodeTexCoords } from './clod.js';
 import { Refiner, projectedError } from './refine.js';
 
 const params = new URLSearchParams(location.search);
@@ -96,10 +98,29 @@ async function main() {
     node: palette(24, 0.6, 0.6),
   };
   materials.group = materials.node;
-  // The file's attributes: vertex colours (else grey), smooth shading by the stored normals (else flat).
-  const hasAttributes = info.colors || info.normals;
-  materials.vertex = [new THREE.MeshLambertMaterial({ color: info.colors ? 0xffffff : 0xc8c2b8,
+  // The file's attributes: its texture and vertex colours (else grey), smooth shading by the stored
+  // normals (else flat).
+  const hasAttributes = info.colors || info.normals || info.texCoords;
+  const useTexture = info.textureBytes > 0 && params.get('texture') !== '0';
+  materials.vertex = [new THREE.MeshLambertMaterial({ color: info.colors || useTexture ? 0xffffff : 0xc8c2b8,
     vertexColors: info.colors, flatShading: !info.normals })];
+  // The texture image from the file's TEXR chunk, read beside the first image (not before it):
+  // decoded by the browser from a Blob URL, then put on the attributes' material.
+  status.texture = useTexture ? 'loading' : 'none';
+  const textureReady = !useTexture ? Promise.resolve() : reader.loadTexture().then(async (t) => {
+    const url = URL.createObjectURL(new Blob([t.bytes], { type: t.mime }));
+    try {
+      const tex = await new THREE.TextureLoader().loadAsync(url);
+      tex.colorSpace = THREE.SRGBColorSpace;
+      tex.anisotropy = renderer.capabilities.getMaxAnisotropy();
+      materials.vertex[0].map = tex;
+      materials.vertex[0].needsUpdate = true;
+      status.texture = `${t.name} (${t.mime}, ${t.bytes.length} bytes, ${tex.image.width} x ${tex.image.height})`;
+      status.textureBytes = t.bytes.length;
+    } finally {
+      URL.revokeObjectURL(url);
+    }
+  });
   const modes = hasAttributes ? ['vertex', 'none', 'level', 'group', 'node'] : ['none', 'level', 'group', 'node'];
   let colorMode = params.get('color') || (hasAttributes ? 'vertex' : 'none');
   if (!modes.includes(colorMode)) throw new Error(`page parameter color must be one of ${modes.join(', ')}` +
@@ -154,6 +175,8 @@ async function main() {
             for (let k = 0; k < 3; ++k) lin[i * 3 + k] = SRGB_TO_LINEAR[c[i * 4 + k]];
           g.setAttribute('color', new THREE.BufferAttribute(lin, 3));
         }
+        if (unit.attributes.texCoords)
+          g.setAttribute('uv', new THREE.BufferAttribute(decodeTexCoords(unit.attributes.texCoords, info.uvMin, info.uvMax), 2));
         if (unit.attributes.normals) {
           const q = new DataView(unit.attributes.normals.buffer), nrm = new Float32Array(vc * 3);
           for (let i = 0; i < vc; ++i) decodeNormal(q.getUint16(i * 4, true), q.getUint16(i * 4 + 2, true), nrm, i * 3);
@@ -199,7 +222,8 @@ async function main() {
       `fetched: ${kb(reader.src.bytesFetched)} (${((100 * reader.src.bytesFetched) / info.fileBytes).toFixed(1)} %) ` +
       `in ${reader.src.requests} requests; first image after ${kb(status.firstImageBytes || 0)}\n` +
       `${status.state}${status.fps ? `, ${status.fps.toFixed(1)} frames/s` : ''}   colours: ${colorMode}` +
-      `${info.colors || info.normals ? ` (file: ${[info.colors && 'colour', info.normals && 'normals'].filter(Boolean).join(', ')})` : ''}` +
+      `${hasAttributes ? ` (file: ${[info.colors && 'colour', info.normals && 'normals', info.texCoords && 'UV',
+        useTexture && 'texture'].filter(Boolean).join(', ')})` : ''}` +
       `   (c: colours,${hasAttributes ? ' a: attributes/levels,' : ''} h: hide)`;
   }
 
@@ -241,6 +265,8 @@ async function main() {
   status.firstImageBytes = reader.src.bytesFetched;
   status.firstImageRequests = reader.src.requests;
   status.firstImageMs = performance.now() - t0;
+  // The texture, once decoded, on the picture (before the refinement's first update at the latest).
+  textureReady.then(render, fail);
   status.state = 'refining';
   status.views = 1;  // + 1 each time the view changes
   status.eye = camera.position.toArray();
@@ -263,6 +289,9 @@ async function main() {
       render();
       await nextFrame();
       if (status.state !== 'done') {
+        await textureReady;  // 'done' shows the file's texture
+        render();
+        await nextFrame();
         status.doneMs = performance.now() - t0;
         status.doneBytes = reader.src.bytesFetched;
         if (fpsFrames > 0 && status.fps === undefined) await measureFps(fpsFrames);

@@ -2730,6 +2730,70 @@ def web_viewer_colours(c):
     assert abs(stats[1]) < 15, "level colours: red - green changes by %.1f across the model" % stats[1]
 
 
+def write_stripes_png(path, w=64, h=64, band=8):
+    """An RGB PNG of horizontal stripes `band` pixels high, red (230, 60, 40) and blue (40, 60, 230)
+    in turn: a texture whose bands show along v."""
+    import zlib
+    rows = b"".join(b"\x00" + (bytes((230, 60, 40)) if (y // band) % 2 == 0 else bytes((40, 60, 230))) * w
+                    for y in range(h))
+
+    def chunk(kind, body):
+        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF)
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)) +
+                chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
+
+
+def stripe_changes(png):
+    """Sign changes, from top to bottom, of the model's mean red minus blue per picture row (rows
+    with at least 10 model pixels, unlike the corner's background): one per boundary between
+    write_stripes_png's bands (7 for 8 bands), none to two for a smooth colour."""
+    w, h, px = read_png(png)
+    bg = px[0][0]
+    means = []
+    for y in range(h):
+        q = [px[y][x] for x in range(w) if max(abs(a - b) for a, b in zip(px[y][x], bg)) > 6]
+        if len(q) >= 10:
+            means.append(sum(p[0] - p[2] for p in q) / len(q))
+    signs = [m > 0 for m in means if abs(m) > 8]
+    return sum(1 for a, b in zip(signs, signs[1:]) if a != b), len(means)
+
+
+@case
+def web_viewer_texture(c):
+    """The web viewer draws a .clod's texture image from the file's own TEXR chunk (a Blob URL, no
+    other request): the grid of cli_lod_attributes with per-face texcoord lists and a texture of 8
+    red and blue bands along v. With the texture the model's rows alternate red and blue (many sign
+    changes of red minus blue down the picture); with texture=0 (vertex colours) and with
+    color=level they do not."""
+    src = c.out("tex.ply")
+    write_attribute_grid(src, wedge=True)
+    write_stripes_png(c.out("chart.png"))
+    clod = c.out("tex.clod")
+    r = json.loads(c.conelod("lod", "build", src, "-o", clod, "--json").stdout)
+    assert r["texture"] == "chart.png", r
+    s = Serve(c, clod)
+    try:
+        pngs = [c.out("tex%d.png" % i) for i in range(3)]
+        base = s.url + "&budget=100000&pixel=0&hud=0&eye=0.5,0.5,2.2"
+        tex, plain, level = shoot(c, (base, pngs[0]), (base + "&texture=0", pngs[1]), (base + "&color=level", pngs[2]))
+        log = s.stop()
+    except BaseException:
+        s.stop()
+        raise
+    assert tex["state"] == "done" and tex["texture"].startswith("chart.png (image/png"), tex
+    assert "64 x 64" in tex["texture"], tex
+    assert plain["state"] == "done" and plain["texture"] == "none", plain
+    assert level["colorMode"] == "level", level
+    requested = {line.split()[1] for line in log.splitlines() if line.startswith("GET")}
+    assert not any("chart" in p for p in requested), requested  # the image came from the .clod
+    changes = [stripe_changes(p) for p in pngs]
+    print("sign changes of red - blue down the picture (rows): texture %d (%d), texture=0 %d (%d), level %d (%d)" %
+          (changes[0] + changes[1] + changes[2]))
+    assert changes[0][0] >= 6, changes
+    assert changes[1][0] <= 2 and changes[2][0] <= 2, changes
+
+
 def main():
     if sys.argv[1:] == ["--list"]:  # for CMake: one "NAME NEEDS" line per case
         for name in sorted(CASES):
