@@ -1,12 +1,14 @@
 // conelod-viewer: the widget (see lod_viewer_widget.h).
 #include "lod_viewer_widget.h"
 
+#include <QImage>
 #include <QKeyEvent>
 #include <QMouseEvent>
 #include <QPainter>
 #include <QWheelEvent>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <unordered_set>
 #include <vector>
 
@@ -19,6 +21,7 @@ using namespace conelod;
 namespace {
 
 const float kFovDeg = 35.0f;
+const int kStride = 11;  // floats a vertex: position, normal, colour, texture coordinates
 
 // GLSL 1.10 / GLSL ES 1.00: a headlight, Lambert plus a little specular; both sides lit, so that
 // a mesh with flipped faces still shows when culling is off.
@@ -26,17 +29,20 @@ const char* const kVertexShader = R"(
 attribute vec3 aPosition;
 attribute vec3 aNormal;
 attribute vec3 aColour;
+attribute vec2 aTexCoord;
 uniform mat4 uModelView;
 uniform mat4 uProjection;
 uniform mat3 uNormalMatrix;
 varying vec3 vNormal;
 varying vec3 vPosition;
 varying vec3 vColour;
+varying vec2 vTexCoord;
 void main() {
   vec4 p = uModelView * vec4(aPosition, 1.0);
   vPosition = p.xyz;
   vNormal = uNormalMatrix * aNormal;
   vColour = aColour;
+  vTexCoord = aTexCoord;
   gl_Position = uProjection * p;
 }
 )";
@@ -47,16 +53,20 @@ precision mediump float;
 #endif
 uniform vec3 uColour;
 uniform float uVertexColour;  // 1: the file's vertex colours (times uColour), 0: uColour alone
+uniform float uUseTexture;    // 1: times the file's texture image at vTexCoord
+uniform sampler2D uTexture;
 varying vec3 vNormal;
 varying vec3 vPosition;
 varying vec3 vColour;
+varying vec2 vTexCoord;
 void main() {
   vec3 n = normalize(vNormal);
   vec3 l = normalize(-vPosition);
   if (dot(n, l) < 0.0) n = -n;
   float diffuse = max(dot(n, l), 0.0);
   float specular = pow(diffuse, 64.0) * 0.12;
-  vec3 albedo = uColour * mix(vec3(1.0), vColour, uVertexColour);
+  vec3 albedo = uColour * mix(vec3(1.0), vColour, uVertexColour) *
+                mix(vec3(1.0), texture2D(uTexture, vTexCoord).rgb, uUseTexture);
   gl_FragColor = vec4(albedo * (0.18 + 0.82 * diffuse) + vec3(specular), 1.0);
 }
 )";
@@ -96,6 +106,7 @@ LodViewerWidget::LodViewerWidget(LodReader& reader, const std::string& title, co
 LodViewerWidget::~LodViewerWidget() {
   makeCurrent();
   buffers_.clear();  // QOpenGLBuffer destroys its buffer with the context current
+  texture_.reset();
   program_.removeAllShaders();
   doneCurrent();
 }
@@ -218,19 +229,21 @@ bool LodViewerWidget::upload(uint32_t id, NodeBuffers& b) {
   const LodGeometry& g = *reader_.geometry(id);
   static const LodAttributes kNone;
   const LodAttributes& ga = reader_.attributes(id) ? *reader_.attributes(id) : kNone;
-  std::vector<float> interleaved;  // position, normal, colour (the file's, else white)
-  const bool colours = !ga.colors.empty();
+  // Position, normal, colour (the file's, else white), texture coordinates (the file's, else 0).
+  std::vector<float> interleaved;
+  const bool colours = !ga.colors.empty(), uvs = !ga.texCoords.empty();
   auto put = [&](const vcg::Point3f& p, const vcg::Point3f& n, uint32_t v) {
-    float c[3] = {1, 1, 1};
+    float c[3] = {1, 1, 1}, t[2] = {0, 0};
     if (colours)
       for (int k = 0; k < 3; ++k) c[k] = ga.colors[v][size_t(k)] / 255.0f;
-    interleaved.insert(interleaved.end(), {p[0], p[1], p[2], n[0], n[1], n[2], c[0], c[1], c[2]});
+    if (uvs) conelod::DecodeLodTexCoord(ga.texCoords[v], ga.uvMin, ga.uvMax, t);
+    interleaved.insert(interleaved.end(), {p[0], p[1], p[2], n[0], n[1], n[2], c[0], c[1], c[2], t[0], t[1]});
   };
   auto faceNormal = [&g](const std::array<uint32_t, 3>& f) {  // length = twice the area
     return (g.positions[f[1]] - g.positions[f[0]]) ^ (g.positions[f[2]] - g.positions[f[0]]);
   };
   if (options_.flatShading) {
-    interleaved.reserve(g.faces.size() * 27);
+    interleaved.reserve(g.faces.size() * 3 * kStride);
     for (const auto& f : g.faces) {
       const vcg::Point3f n = faceNormal(f).Normalize();
       for (uint32_t v : f) put(g.positions[v], n, v);
@@ -250,7 +263,7 @@ bool LodViewerWidget::upload(uint32_t id, NodeBuffers& b) {
         for (uint32_t v : f) normals[v] += n;
       }
     }
-    interleaved.reserve(g.positions.size() * 9);
+    interleaved.reserve(g.positions.size() * kStride);
     for (size_t v = 0; v < g.positions.size(); ++v) put(g.positions[v], normals[v].Normalize(), uint32_t(v));
     b.vertexCount = int(g.positions.size());
     b.indexCount = int(g.faces.size() * 3);
@@ -304,6 +317,22 @@ void LodViewerWidget::initializeGL() {
   if (!program_.addShaderFromSourceCode(QOpenGLShader::Vertex, kVertexShader) ||
       !program_.addShaderFromSourceCode(QOpenGLShader::Fragment, kFragmentShader) || !program_.link())
     error_ = "shader: " + program_.log().toStdString();
+  // The texture image stored in the file, decoded by Qt (v up, as the PLY's coordinates: the
+  // image's rows bottom first). One that does not decode is said on stderr and not drawn.
+  if (reader_.info().texCoords && reader_.info().textureBytes) {
+    conelod::LodTexture tex;
+    const Status s = reader_.LoadTexture(tex);
+    QImage image;
+    if (s.ok() && image.loadFromData(tex.bytes.data(), int(tex.bytes.size()))) {
+      texture_.reset(new QOpenGLTexture(image.mirrored()));
+      texture_->setMinificationFilter(QOpenGLTexture::LinearMipMapLinear);
+      texture_->setMagnificationFilter(QOpenGLTexture::Linear);
+      texture_->setWrapMode(QOpenGLTexture::Repeat);
+    } else {
+      std::fprintf(stderr, "conelod-viewer: the texture image %s is not drawn: %s\n",
+                   reader_.info().textureName.c_str(), s.ok() ? "Qt cannot decode it" : s.message.c_str());
+    }
+  }
 }
 
 void LodViewerWidget::resizeGL(int, int) {}
@@ -334,17 +363,23 @@ void LodViewerWidget::renderScene() {
   program_.setUniformValue("uProjection", projectionMatrix());
   program_.setUniformValue("uNormalMatrix", view.normalMatrix());
   const int position = program_.attributeLocation("aPosition"), normal = program_.attributeLocation("aNormal"),
-            colour = program_.attributeLocation("aColour");
+            colour = program_.attributeLocation("aColour"), texCoord = program_.attributeLocation("aTexCoord");
   program_.enableAttributeArray(position);
   program_.enableAttributeArray(normal);
   program_.enableAttributeArray(colour);
+  if (texCoord >= 0) program_.enableAttributeArray(texCoord);
+  // The file's texture image, times the vertex colours, unless the level colours are asked for.
+  const bool textured = texture_ && !options_.colourLevels;
+  program_.setUniformValue("uUseTexture", textured ? 1.0f : 0.0f);
+  program_.setUniformValue("uTexture", 0);
+  if (textured) texture_->bind(0);
   // The file's vertex colours unless the level colours are asked for (c).
   program_.setUniformValue("uVertexColour", options_.colourLevels ? 0.0f : 1.0f);
   const QVector3D e = eyeInModel();
   const vcg::Point3d eye(e.x(), e.y(), e.z());
   const LodView lodView = currentView();
   s.budgetReached = cut.budgetReached;
-  const QVector3D plain = reader_.info().colors ? QVector3D(1, 1, 1) : QVector3D(0.82f, 0.80f, 0.74f);
+  const QVector3D plain = reader_.info().colors || textured ? QVector3D(1, 1, 1) : QVector3D(0.82f, 0.80f, 0.74f);
   const int colourUniform = program_.uniformLocation("uColour");  // looked up once, not per draw
   int colourLevel = -1;                                           // the level uColour holds now
   if (!options_.colourLevels) program_.setUniformValue(colourUniform, plain);
@@ -369,11 +404,14 @@ void LodViewerWidget::renderScene() {
       colourLevel = node.level;
     }
     b.vertices.bind();
-    glVertexAttribPointer(GLuint(position), 3, GL_FLOAT, GL_FALSE, 9 * sizeof(float), nullptr);
-    glVertexAttribPointer(GLuint(normal), 3, GL_FLOAT, GL_FALSE, 9 * sizeof(float),
+    glVertexAttribPointer(GLuint(position), 3, GL_FLOAT, GL_FALSE, kStride * sizeof(float), nullptr);
+    glVertexAttribPointer(GLuint(normal), 3, GL_FLOAT, GL_FALSE, kStride * sizeof(float),
                           reinterpret_cast<const void*>(3 * sizeof(float)));
-    glVertexAttribPointer(GLuint(colour), 3, GL_FLOAT, GL_FALSE, 9 * sizeof(float),
+    glVertexAttribPointer(GLuint(colour), 3, GL_FLOAT, GL_FALSE, kStride * sizeof(float),
                           reinterpret_cast<const void*>(6 * sizeof(float)));
+    if (texCoord >= 0)
+      glVertexAttribPointer(GLuint(texCoord), 2, GL_FLOAT, GL_FALSE, kStride * sizeof(float),
+                            reinterpret_cast<const void*>(9 * sizeof(float)));
     if (b.indexCount) {
       b.indices.bind();
       glDrawElements(GL_TRIANGLES, b.indexCount, GL_UNSIGNED_INT, nullptr);
@@ -389,6 +427,8 @@ void LodViewerWidget::renderScene() {
   program_.disableAttributeArray(position);
   program_.disableAttributeArray(normal);
   program_.disableAttributeArray(colour);
+  if (texCoord >= 0) program_.disableAttributeArray(texCoord);
+  if (textured) texture_->release(0);
   glBindBuffer(GL_ARRAY_BUFFER, 0);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, 0);
   program_.release();

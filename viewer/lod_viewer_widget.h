@@ -18,6 +18,7 @@
 #include <QOpenGLBuffer>
 #include <QOpenGLFunctions>
 #include <QOpenGLShaderProgram>
+#include <QOpenGLTexture>
 #include <QOpenGLWidget>
 #include <QQuaternion>
 #include <QTimer>
@@ -118,6 +119,7 @@ class LodViewerWidget : public QOpenGLWidget, protected QOpenGLFunctions {
   std::string error_;
 
   QOpenGLShaderProgram program_;
+  std::unique_ptr<QOpenGLTexture> texture_;  // the file's texture image (its TEXR chunk), when it has one
   std::unordered_map<uint32_t, NodeBuffers> buffers_;
   size_t gpuBytes_ = 0;
   bool cutChanged_ = true;  // the refiner's cut changed since the last syncBuffers()

@@ -2794,6 +2794,29 @@ def web_viewer_texture(c):
     assert changes[1][0] <= 2 and changes[2][0] <= 2, changes
 
 
+@case
+def viewer_texture(c):
+    """conelod-viewer draws a .clod's texture image from the file (web_viewer_texture's grid and
+    banded texture): the model's rows alternate red and blue down the picture with the texture,
+    not under --color-levels."""
+    src = c.out("tex.ply")
+    write_attribute_grid(src, wedge=True)
+    write_stripes_png(c.out("chart.png"))
+    clod = c.out("tex.clod")
+    c.conelod("lod", "build", src, "-o", clod)
+    changes = []
+    for extra in ((), ("--color-levels",)):
+        png = c.out("viewer%d.png" % len(changes))
+        rc, out, err = run_viewer(c, clod, "--screenshot", png, "--size", "320x240", "--eye", "0.5,0.5,2.2",
+                                  "--refine", "--budget", "100000", "--no-hud", *extra)
+        assert rc == 0, (rc, err)
+        assert "texture" not in err, err  # decoded and drawn
+        changes.append(stripe_changes(png))
+    print("sign changes of red - blue down the picture (rows): texture %d (%d), level colours %d (%d)" %
+          (changes[0] + changes[1]))
+    assert changes[0][0] >= 6 and changes[1][0] <= 2, changes
+
+
 def main():
     if sys.argv[1:] == ["--list"]:  # for CMake: one "NAME NEEDS" line per case
         for name in sorted(CASES):
