@@ -1285,7 +1285,9 @@ def meshlab_lod_extract_colours(c):
                        save=("fq", "fc", "vc", "vn"))
     assert "the file's per-vertex colours and normals given to the layer" in log, log[-1500:]
     verts = [r for name, recs in read_ply_elements(out) if name == "vertex" for r in recs]
-    assert len(verts) == 31 * 31, len(verts)
+    # One vertex per (position, UV) in the file: the seam's 31 positions twice (the filter does not
+    # give the layer the texture coordinates yet).
+    assert len(verts) == 31 * 31 + 31, len(verts)
     for v in verts:
         i, j = round(v["x"] * 30), round(v["y"] * 30)
         assert (v["red"], v["green"], v["blue"]) == colour(i / 30, j / 30), (v, colour(i / 30, j / 30))
