@@ -1,4 +1,4 @@
-// ConeLOD web viewer — the .clod (versions 3 to 5) reader over HTTP Range requests.
+// ConeLOD web viewer — the .clod (versions 3 to 6) reader over HTTP Range requests.
 //
 // The JavaScript twin of vcg_ext/conelod/lod/lod_reader.cpp; the byte layout is
 // vcg_ext/conelod/lod/lod_format.md. It reads only the byte ranges it needs: the header, the three
@@ -8,14 +8,15 @@
 // ranges. Errors name the problem as the desktop reader's do.
 import { MeshoptDecoder } from './node_modules/meshoptimizer/meshopt_decoder.mjs';
 
-export const VERSION = 5;  // the newest read (5: with attribute streams; 4: geometry only); 3 is read too
+export const VERSION = 6;  // the newest read (6: the compact index; 5: with attribute streams; 4, 3: geometry only)
 const OLDEST_VERSION = 3;
 const CHUNK = 24;
 const HEADER_FIXED = 128;
 const LEVEL_ENTRY = 32;
 const INDEX_DATA = 16;
 const IBLOCK_BASE = 16;
-const INDEX_ENTRY = 8;
+const INDEX_ENTRY = 8;  // versions 3 to 5: u32 recordEnd, u32 geometryEnd
+const COMPACT_INDEX_VERSION = 6;  // varint entries, INDX data listing where each block starts
 const RECORD_FIXED = 26;  // the smallest record (version 4 at level 0): CRC, cone, sphere
 const GEOM_MIN = 5;
 const MAX_LEVELS = 64;
@@ -34,7 +35,7 @@ export const OPTIONAL_STREAMS = [
   { bit: 4, name: 'normals', stride: 4 },
 ];
 const KNOWN_ATTRIBUTES = OPTIONAL_STREAMS.reduce((m, s) => m | s.bit, 0);
-const HEADER_ATTRIBUTES = 8;  // version 5: u32 attributes, u32 pad after the level entries
+const HEADER_ATTRIBUTES = 8;  // versions 5, 6: u32 attributes (6: 0 allowed), u32 pad after the level entries
 
 // An octahedral normal code (two u16, lod_internal.h's DecodeConeAxis) into out[at..at+2].
 export function decodeNormal(cu, cv, out, at) {
@@ -249,11 +250,11 @@ export class ClodReader {
     if (head.length < CHUNK + 4) throw new ClodError(trunc + 'no version field');
     const version = new Decoder(head, CHUNK).u32();
     if (version === 1)
-      throw new ClodError('this is a .clod version 1 file (written by an older ConeLOD, whose cuts could have cracks): rebuild it with conelod lod build (this reader reads versions 3 to 5)');
+      throw new ClodError('this is a .clod version 1 file (written by an older ConeLOD, whose cuts could have cracks): rebuild it with conelod lod build (this reader reads versions 3 to 6)');
     if (version === 2)
-      throw new ClodError('this is a .clod version 2 file (uncompressed, written by an older ConeLOD): rebuild it with conelod lod build (this reader reads versions 3 to 5)');
+      throw new ClodError('this is a .clod version 2 file (uncompressed, written by an older ConeLOD): rebuild it with conelod lod build (this reader reads versions 3 to 6)');
     if (version < OLDEST_VERSION || version > VERSION)
-      throw new ClodError(`unsupported .clod version ${version} (this reader reads versions 3 to 5)`);
+      throw new ClodError(`unsupported .clod version ${version} (this reader reads versions 3 to 6)`);
     const tail = version >= 5 ? HEADER_ATTRIBUTES : 0;
     if (h.dataBytes < HEADER_FIXED + LEVEL_ENTRY + tail || h.dataBytes > HEADER_FIXED + MAX_LEVELS * LEVEL_ENTRY + tail ||
         (h.dataBytes - HEADER_FIXED - tail) % LEVEL_ENTRY !== 0 || !Number.isFinite(h.childBytes))
@@ -301,7 +302,7 @@ export class ClodReader {
     if (tail) {
       this.attributeMask = d.u32();
       d.u32();
-      if (this.attributeMask === 0 || this.attributeMask & ~KNOWN_ATTRIBUTES)
+      if ((this.attributeMask === 0 && version < COMPACT_INDEX_VERSION) || this.attributeMask & ~KNOWN_ATTRIBUTES)
         throw new ClodError(bad + `unknown attribute streams (${this.attributeMask}; this reader knows colour 2 and normals 4)`);
     }
     info.colors = (this.attributeMask & 2) !== 0;
@@ -346,17 +347,34 @@ export class ClodReader {
   }
 
   async _readIndexChunk() {
-    const b = await this.src.read(this.indexOffset, CHUNK + INDEX_DATA, 'the index chunk');
+    const n = this.info.nodeCount, blocks = Math.ceil(n / this.indexBlock);
+    const compact = this.info.version >= COMPACT_INDEX_VERSION;
+    const dataBytes = INDEX_DATA + (compact ? 4 * blocks : 0);  // version 6: u32 start per block
+    const b = await this.src.read(this.indexOffset, CHUNK + dataBytes, 'the index chunk');
     const h = chunkHeader(b);
     if (h.id !== ID.INDX) throw new ClodError(`corrupt file: expected a INDX chunk (the index chunk), found ${chunkName(h.id)}`);
-    if (h.dataBytes !== INDEX_DATA) throw new ClodError('corrupt chunk size in the index chunk');
-    if (crc32(b, CHUNK, CHUNK + INDEX_DATA) !== h.crc) throw new ClodError('checksum mismatch in the index chunk');
+    if (h.dataBytes !== dataBytes) throw new ClodError('corrupt chunk size in the index chunk');
+    if (crc32(b, CHUNK, CHUNK + dataBytes) !== h.crc) throw new ClodError('checksum mismatch in the index chunk');
     const d = new Decoder(b, CHUNK);
     const entries = d.u64(), block = d.u32();
-    const n = this.info.nodeCount, blocks = Math.ceil(n / this.indexBlock);
-    if (entries !== n || block !== this.indexBlock || h.childBytes !== blocks * (CHUNK + IBLOCK_BASE) + n * INDEX_ENTRY ||
-        h.totalBytes > this.src.size - this.indexOffset)
+    d.u32();
+    if (entries !== n || block !== this.indexBlock ||
+        !(compact ? h.childBytes >= blocks * (CHUNK + IBLOCK_BASE) + n
+                  : h.childBytes === blocks * (CHUNK + IBLOCK_BASE) + n * INDEX_ENTRY) ||
+        !(h.totalBytes <= this.src.size - this.indexOffset))
       throw new ClodError('corrupt chunk size in the index chunk');
+    if (!compact) return;
+    this.indexChildBytes = h.childBytes;
+    this.blockStarts = [];
+    const fullBlock = CHUNK + IBLOCK_BASE + this.indexBlock;  // every block before the last is full
+    for (let k = 0; k < blocks; ++k) {
+      const start = d.u32();
+      const least = CHUNK + IBLOCK_BASE + Math.min(this.indexBlock, n - k * this.indexBlock);
+      if ((k === 0 && start !== 0) || (k > 0 && start < this.blockStarts[k - 1] + fullBlock) ||
+          start > h.childBytes || h.childBytes - start < least)
+        throw new ClodError(`corrupt index chunk: bad start of index block ${k}`);
+      this.blockStarts.push(start);
+    }
   }
 
   // Index block `blk`: per entry { record, recordBytes, geometry, geometryBytes } (cached).
@@ -372,6 +390,7 @@ export class ClodReader {
 
   async _readIndexBlock(blk) {
     const entries = Math.min(this.indexBlock, this.info.nodeCount - blk * this.indexBlock);
+    if (this.info.version >= COMPACT_INDEX_VERSION) return this._readCompactIndexBlock(blk, entries);
     const bytes = CHUNK + IBLOCK_BASE + entries * INDEX_ENTRY;
     const blockBytes = CHUNK + IBLOCK_BASE + this.indexBlock * INDEX_ENTRY;
     const b = await this.src.read(this.indexOffset + CHUNK + INDEX_DATA + blk * blockBytes, bytes, 'index block');
@@ -396,6 +415,44 @@ export class ClodReader {
       record = recordEnd;
       lastEnd = geometryEnd;
     }
+    return out;
+  }
+
+  // Version 6: the block where the INDX data says; per entry a varint (record size - RECORD_FIXED)
+  // x 2 + 1 when the entry starts a new geometry blob, whose size follows, else (never the
+  // block's first) the previous entry's blob.
+  async _readCompactIndexBlock(blk, entries) {
+    const starts = this.blockStarts;
+    const start = starts[blk], end = blk + 1 < starts.length ? starts[blk + 1] : this.indexChildBytes;
+    const bytes = end - start;
+    const b = await this.src.read(this.indexOffset + CHUNK + INDEX_DATA + 4 * starts.length + start, bytes, 'index block');
+    const h = chunkHeader(b);
+    if (h.id !== ID.IBLK) throw new ClodError(`corrupt file: expected a IBLK chunk (index block), found ${chunkName(h.id)}`);
+    if (h.dataBytes !== bytes - CHUNK || h.childBytes !== 0) throw new ClodError('corrupt chunk size in index block');
+    if (crc32(b, CHUNK, bytes) !== h.crc) throw new ClodError('checksum mismatch in index block');
+    const d = new Decoder(b, CHUNK);
+    let record = d.u64(), geometry = d.u64(), geometryEnd = geometry;
+    const bad = `corrupt index block ${blk}: `;
+    if (record < this.hierBegin || record > this.hierEnd || geometry < this.geosBegin || geometry > this.geosEnd)
+      throw new ClodError(bad + 'it points outside the records or the geometry');
+    const out = [];
+    for (let i = 0; i < entries; ++i) {
+      const code = d.uv();
+      const newBlob = code % 2 === 1;
+      const recordBytes = Math.floor(code / 2) + RECORD_FIXED;
+      if (!newBlob && i === 0) throw new ClodError(bad + 'its first entry has no geometry');
+      if (newBlob) {
+        const n = d.uv();
+        if (!(n <= this.geosEnd - geometryEnd)) throw new ClodError(bad + 'an entry points outside the records or the geometry');
+        geometry = geometryEnd;
+        geometryEnd += n;
+      }
+      if (d.overrun || !(recordBytes <= this.hierEnd - record))
+        throw new ClodError(bad + 'an entry points outside the records or the geometry');
+      out.push({ record, recordBytes, geometry, geometryBytes: geometryEnd - geometry });
+      record += recordBytes;
+    }
+    if (d.left() !== 0) throw new ClodError(bad + 'it does not end with its last entry');
     return out;
   }
 

@@ -1394,7 +1394,7 @@ def cli_lod_round_trip(c):
     assert b["file_bytes"] == os.path.getsize(clod), b
     assert all(b["level_faces"][k] <= b["level_faces"][k - 1] for k in range(1, b["levels"])), b
     info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
-    assert info["faces"] == 69451 and info["nodes"] == b["nodes"] and info["version"] == 4, info
+    assert info["faces"] == 69451 and info["nodes"] == b["nodes"] and info["version"] == 6, info
     # Positions on one grid, within the bound asked for (--precision, default 2e-5 of the diagonal).
     assert 0 < b["quantization_error"] == info["quantization_error"] <= 2e-5 * 0.27, (b, info)
     human = c.conelod("lod", "info", clod).stdout.decode()
@@ -2444,8 +2444,21 @@ def web_viewer_armadillo(c):
     # server's check at start (header and roots) passes; the page finds the blob's CRC wrong.
     bad = bytearray(open(clod, "rb").read())
     index_offset = struct.unpack_from("<Q", bad, 24 + 80)[0]
-    block = index_offset + 24 + 16  # the first IBLK: header, recordBase, geometryBase, entries
-    roots_end = struct.unpack_from("<Q", bad, block + 24 + 8)[0] + struct.unpack_from("<I", bad, block + 24 + 16 + 4)[0]
+    blocks = (info["nodes"] + 511) // 512
+    block = index_offset + 24 + 16 + 4 * blocks  # the first IBLK (version 6: after the blocks' starts)
+    at = block + 24 + 16  # its header, recordBase, geometryBase, then varints: node 0's record, its blob's size
+    sizes = []
+    while len(sizes) < 2:
+        v, shift = 0, 0
+        while True:
+            v |= (bad[at] & 0x7F) << shift
+            shift += 7
+            at += 1
+            if bad[at - 1] < 0x80:
+                break
+        sizes.append(v)
+    assert sizes[0] & 1, sizes  # the first entry starts a blob
+    roots_end = struct.unpack_from("<Q", bad, block + 24 + 8)[0] + sizes[1]
     bad[roots_end + 20] ^= 0x10
     corrupt = c.out("corrupt.clod")
     open(corrupt, "wb").write(bad)
@@ -2550,7 +2563,7 @@ def cli_lod_attributes(c):
     assert r["attribute_conflicts"] == 0, r  # the seam's repeated vertices agree on colour and normal
     assert b"texture coordinates are not carried" in p.stderr, p.stderr
     info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
-    assert info["version"] == 5 and info["colors"] and info["normals"], info
+    assert info["version"] == 6 and info["colors"] and info["normals"], info
     text = c.conelod("lod", "info", clod).stdout.decode()
     assert "attributes per vertex: colour (RGBA8), normals (octahedral 2 x 16 bits)" in text, text
     # Full budget: the input back, colours exact.
@@ -2592,7 +2605,7 @@ def cli_lod_attributes(c):
     p = c.conelod("lod", "build", src, "-o", noattr, "--no-attributes")
     assert b"texture coordinates" not in p.stderr, p.stderr
     assert open(plain, "rb").read() == open(noattr, "rb").read(), "--no-attributes is not the geometry-only file"
-    assert json.loads(c.conelod("lod", "info", plain, "--json").stdout)["version"] == 4
+    assert json.loads(c.conelod("lod", "info", plain, "--json").stdout)["version"] == 6
     assert os.path.getsize(clod) > os.path.getsize(plain)
     p = c.conelod("lod", "build", src, "-o", c.out("bad.clod"), "--attribute-weight", "-1", expect=1)
     assert b"--attribute-weight must be >= 0" in p.stderr and not os.path.exists(c.out("bad.clod")), p.stderr

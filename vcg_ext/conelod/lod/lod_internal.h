@@ -21,13 +21,14 @@ constexpr uint32_t kGeos = FourCC('G', 'E', 'O', 'S');   // the nodes' compresse
 constexpr uint32_t kIndex = FourCC('I', 'N', 'D', 'X');  // the offset index, in IBLK blocks
 constexpr uint32_t kIBlock = FourCC('I', 'B', 'L', 'K');
 
-// 5: version 4 plus per-vertex attribute streams (colour, normals), written only when the DAG
-// carries attributes (a geometry-only file stays version 4, byte for byte); 4: a group's
-// parentError and parents in its first record only (written); 3: quantized, compressed nodes
-// (read too); 2: float positions per level, refused by name; 1: the tree of groups, refused.
-constexpr uint32_t kVersion = 5;              // the newest version read
-constexpr uint32_t kGeometryOnlyVersion = 4;  // written for a DAG without attributes
-constexpr uint32_t kAttributeVersion = 5;     // written for a DAG with attributes
+// 6: a compact offset index (varint sizes per entry, a table of where each block starts) and the
+// header's attributes field always present (0: geometry only): written; 5: version 4 plus
+// per-vertex attribute streams (colour, normals), the attributes field present; 4: a group's
+// parentError and parents in its first record only; 3: quantized, compressed nodes (5, 4, 3 are
+// still read); 2: float positions per level, refused by name; 1: the tree of groups, refused.
+constexpr uint32_t kVersion = 6;              // the newest version read, and the one written
+constexpr uint32_t kAttributeVersion = 5;     // the first with the header's attributes field
+constexpr uint32_t kCompactIndexVersion = 6;  // the first with the compact index
 constexpr uint32_t kOldestReadVersion = 3;
 constexpr uint32_t kMaxLevels = 64;
 constexpr uint32_t kNoParent = 0xFFFFFFFFu;
@@ -47,9 +48,10 @@ struct ChunkHeader {
 // Fixed part of the root chunk's data (then kLevelEntryBytes per level).
 constexpr size_t kHeaderFixedBytes = 4 + 4 + 8 * 4 + 4 * 6 + 8 * 3 + 8 * 4 + 4 + 4;  // = 128
 constexpr size_t kLevelEntryBytes = 8 * 3 + 4 + 4;                                   // = 32
-constexpr size_t kIndexDataBytes = 8 + 4 + 4;                                        // INDX data = 16
-constexpr size_t kIndexBlockBaseBytes = 8 + 8;                                       // IBLK: two bases ...
-constexpr size_t kIndexEntryBytes = 4 + 4;                                           // ... then ends
+constexpr size_t kIndexDataBytes = 8 + 4 + 4;   // INDX data = 16 (version 6: then u32 per block)
+constexpr size_t kIndexBlockBaseBytes = 8 + 8;  // IBLK: two bases ...
+constexpr size_t kIndexEntryBytes = 4 + 4;      // ... then ends (versions 3 to 5)
+constexpr size_t kIndexBlockStartBytes = 4;     // version 6: INDX data lists each IBLK's start
 // The smallest record: CRC, cone, sphere (version 4: a level-0 record has no error field; version
 // 3: 34 bytes, every record with its error and parentError).
 constexpr size_t kRecordFixedBytes = 4 + 2 * 3 + 4 * 4;
@@ -61,8 +63,8 @@ constexpr uint8_t kGeomWidePositions = 1;     // geometry flag: positions are u3
 constexpr uint8_t kGeomColors = 2;   // u8 x 4 RGBA per unit vertex
 constexpr uint8_t kGeomNormals = 4;  // octahedral u16 x 2 per unit vertex (EncodeNormal)
 constexpr uint32_t kKnownAttributes = kGeomColors | kGeomNormals;
-constexpr size_t kHeaderAttributeBytes = 4 + 4;  // version 5: u32 attributes, u32 pad after the levels
-constexpr uint32_t kIndexBlock = 512;            // index entries per IBLK (4 KiB)
+constexpr size_t kHeaderAttributeBytes = 4 + 4;  // versions 5, 6: u32 attributes, u32 pad after the levels
+constexpr uint32_t kIndexBlock = 512;            // index entries per IBLK
 // meshoptimizer's codec versions written: vertex 0 (every version decodes it), index 1 (0.14+).
 constexpr int kVertexCodecVersion = 0;
 constexpr int kIndexCodecVersion = 1;

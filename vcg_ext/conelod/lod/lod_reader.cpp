@@ -3,7 +3,7 @@
 // Kamiya, Suzuki, Kawachi, §8-9: the viewer keeps little in memory and reads from the file as it
 // refines. Open() reads the header, checks the index and container chunks it points to, and
 // loads the roots (records and geometry). Everything else is read by node: its index entry (one
-// 12 KiB IBLK block), its record, its geometry and the vertex blocks it uses. Every size and
+// IBLK block), its record, its geometry and the vertex blocks it uses. Every size and
 // count read from the file is checked against the file's size before anything is allocated, and
 // every chunk's CRC-32 is checked before its data is used.
 #include "conelod/lod/lod_read.h"
@@ -219,6 +219,9 @@ struct LodReader::Impl {
   // The last index block read (a node's children share one most of the time).
   uint64_t cachedIndexBlock = ~uint64_t(0);
   std::vector<IndexEntry> indexCache;
+  // Version 6: where each index block starts, from the first block's header (INDX's data).
+  std::vector<uint32_t> blockStarts;
+  uint64_t indexChildBytes = 0;
 
   uint32_t levelOf(uint32_t id) const {
     for (size_t k = 0; k < levels.size(); ++k)
@@ -259,42 +262,99 @@ struct LodReader::Impl {
     return !kCheckCrc || (bytes >= 4 && Crc32(p + 4, size_t(bytes - 4)) == Decoder(p, 4).u32());
   }
 
+  // Versions 3 to 5: block b at a fixed offset, entries u32 ends relative to the block's bases.
+  Status ReadIndexBlock(uint64_t b) {
+    const uint64_t blocksData = kChunkHeaderBytes + kIndexDataBytes;
+    const uint64_t blockBytes = kChunkHeaderBytes + kIndexBlockBaseBytes + uint64_t(indexBlock) * kIndexEntryBytes;
+    const uint64_t entries = std::min<uint64_t>(indexBlock, info.nodeCount - b * indexBlock);
+    const uint64_t bytes = kChunkHeaderBytes + kIndexBlockBaseBytes + entries * kIndexEntryBytes;
+    Status s = ReadRange(indexOffset + blocksData + b * blockBytes, bytes, "index block");
+    if (!s.ok()) return s;
+    ChunkHeader h;
+    s = CheckChunk(buffer.data(), bytes, kIBlock, bytes, "index block", h);
+    if (!s.ok()) return s;
+    indexCache.resize(size_t(entries));
+    Decoder d(buffer.data() + kChunkHeaderBytes, size_t(bytes - kChunkHeaderBytes));
+    uint64_t record = d.u64(), geometry = d.u64();
+    const std::string bad = "corrupt index block " + Num(b) + ": ";
+    if (record < hierBegin || record > hierEnd || geometry < geosBegin || geometry > geosEnd)
+      return Status::Invalid(bad + "it points outside the records or the geometry");
+    // Nodes of one unit share its geometry blob: an entry ending where the previous one
+    // ended has the previous one's blob.
+    const uint64_t recordBase = record, geometryBase = geometry;
+    uint64_t lastEnd = ~uint64_t(0);
+    for (auto& e : indexCache) {
+      const uint64_t recordEnd = recordBase + d.u32(), geometryEnd = geometryBase + d.u32();
+      if (geometryEnd != lastEnd && lastEnd != ~uint64_t(0)) geometry = lastEnd;
+      if (recordEnd < record || recordEnd > hierEnd || geometryEnd <= geometry || geometryEnd > geosEnd)
+        return Status::Invalid(bad + "an entry points outside the records or the geometry");
+      e.record = record;
+      e.recordBytes = recordEnd - record;
+      e.geometry = geometry;
+      e.geometryBytes = geometryEnd - geometry;
+      record = recordEnd;
+      lastEnd = geometryEnd;
+    }
+    return Status::Ok();
+  }
+
+  // Version 6: block b where the INDX data says, read whole (its CRC checked); per entry a varint
+  // (record size - kRecordFixedBytes) x 2 + 1 when the entry starts a new geometry blob, whose
+  // size follows; else (never the block's first) it shares the previous entry's blob.
+  Status ReadCompactIndexBlock(uint64_t b) {
+    const uint64_t entries = std::min<uint64_t>(indexBlock, info.nodeCount - b * indexBlock);
+    const uint64_t start = blockStarts[size_t(b)];
+    const uint64_t end = b + 1 < blockStarts.size() ? blockStarts[size_t(b) + 1] : indexChildBytes;
+    const uint64_t bytes = end - start;  // > entries + the bases (checked at Open)
+    Status s = ReadRange(
+        indexOffset + kChunkHeaderBytes + kIndexDataBytes + blockStarts.size() * kIndexBlockStartBytes + start, bytes,
+        "index block");
+    if (!s.ok()) return s;
+    ChunkHeader h;
+    s = CheckChunk(buffer.data(), bytes, kIBlock, bytes, "index block", h);
+    if (!s.ok()) return s;
+    indexCache.resize(size_t(entries));
+    Decoder d(buffer.data() + kChunkHeaderBytes, size_t(bytes - kChunkHeaderBytes));
+    uint64_t record = d.u64(), geometry = d.u64(), geometryEnd = geometry;
+    const std::string bad = "corrupt index block " + Num(b) + ": ";
+    if (record < hierBegin || record > hierEnd || geometry < geosBegin || geometry > geosEnd)
+      return Status::Invalid(bad + "it points outside the records or the geometry");
+    bool firstEntry = true;
+    for (auto& e : indexCache) {
+      const uint64_t code = d.uv();
+      const uint64_t recordBytes = (code >> 1) + kRecordFixedBytes;
+      if ((code & 1) == 0 && firstEntry) return Status::Invalid(bad + "its first entry has no geometry");
+      if (code & 1) {
+        const uint64_t n = d.uv();
+        if (n > geosEnd - geometryEnd)
+          return Status::Invalid(bad + "an entry points outside the records or the geometry");
+        geometry = geometryEnd;
+        geometryEnd += n;
+      }
+      if (d.overrun || recordBytes > hierEnd - record)
+        return Status::Invalid(bad + "an entry points outside the records or the geometry");
+      e.record = record;
+      e.recordBytes = recordBytes;
+      e.geometry = geometry;
+      e.geometryBytes = geometryEnd - geometry;
+      if (e.geometryBytes > 0xFFFFFFFFu) return Status::Invalid(bad + "a geometry blob of 4 GiB or more");
+      record += recordBytes;
+      firstEntry = false;
+    }
+    if (d.left() != 0) return Status::Invalid(bad + "it does not end with its last entry");
+    return Status::Ok();
+  }
+
   // Index entries of nodes [first, first+count).
   Status ReadIndex(uint32_t first, uint32_t count, std::vector<IndexEntry>& out) {
     out.clear();
-    const uint64_t blocksData = kChunkHeaderBytes + kIndexDataBytes;
-    const uint64_t blockBytes = kChunkHeaderBytes + kIndexBlockBaseBytes + uint64_t(indexBlock) * kIndexEntryBytes;
     for (uint64_t i = first; i < uint64_t(first) + count;) {
       const uint64_t b = i / indexBlock;
       if (b != cachedIndexBlock) {
-        const uint64_t entries = std::min<uint64_t>(indexBlock, info.nodeCount - b * indexBlock);
-        const uint64_t bytes = kChunkHeaderBytes + kIndexBlockBaseBytes + entries * kIndexEntryBytes;
-        Status s = ReadRange(indexOffset + blocksData + b * blockBytes, bytes, "index block");
-        if (!s.ok()) return s;
-        ChunkHeader h;
-        s = CheckChunk(buffer.data(), bytes, kIBlock, bytes, "index block", h);
-        if (!s.ok()) return s;
-        indexCache.resize(size_t(entries));
-        Decoder d(buffer.data() + kChunkHeaderBytes, size_t(bytes - kChunkHeaderBytes));
-        uint64_t record = d.u64(), geometry = d.u64();
-        const std::string bad = "corrupt index block " + Num(b) + ": ";
-        if (record < hierBegin || record > hierEnd || geometry < geosBegin || geometry > geosEnd)
-          return Status::Invalid(bad + "it points outside the records or the geometry");
-        // Nodes of one unit share its geometry blob: an entry ending where the previous one
-        // ended has the previous one's blob.
-        const uint64_t recordBase = record, geometryBase = geometry;
-        uint64_t lastEnd = ~uint64_t(0);
-        for (auto& e : indexCache) {
-          const uint64_t recordEnd = recordBase + d.u32(), geometryEnd = geometryBase + d.u32();
-          if (geometryEnd != lastEnd && lastEnd != ~uint64_t(0)) geometry = lastEnd;
-          if (recordEnd < record || recordEnd > hierEnd || geometryEnd <= geometry || geometryEnd > geosEnd)
-            return Status::Invalid(bad + "an entry points outside the records or the geometry");
-          e.record = record;
-          e.recordBytes = recordEnd - record;
-          e.geometry = geometry;
-          e.geometryBytes = geometryEnd - geometry;
-          record = recordEnd;
-          lastEnd = geometryEnd;
+        Status s = info.version >= kCompactIndexVersion ? ReadCompactIndexBlock(b) : ReadIndexBlock(b);
+        if (!s.ok()) {
+          cachedIndexBlock = ~uint64_t(0);
+          return s;
         }
         cachedIndexBlock = b;
       }
@@ -733,7 +793,7 @@ struct LodReader::Impl {
     if (tail) {
       attributeMask = d.u32();
       d.u32();
-      if (attributeMask == 0 || (attributeMask & ~kKnownAttributes))
+      if ((attributeMask == 0 && info.version < kCompactIndexVersion) || (attributeMask & ~kKnownAttributes))
         return Status::Invalid(bad + "unknown attribute streams (" + Num(attributeMask) +
                                "; this reader knows colour 2 and normals 4)");
       info.colors = attributeMask & kGeomColors;
@@ -765,20 +825,42 @@ struct LodReader::Impl {
     s = CheckContainer(geosOffset, kGeos, "the geometry chunk", geosBegin, geosEnd);
     if (!s.ok()) return s;
     {
-      const uint64_t indexBytes = kChunkHeaderBytes + kIndexDataBytes;
-      s = ReadRange(indexOffset, indexBytes, "the index chunk");
+      const uint64_t blocks = (info.nodeCount + indexBlock - 1) / indexBlock;
+      const bool compact = info.version >= kCompactIndexVersion;
+      // Version 6: the INDX data lists where each block starts (u32 each).
+      const uint64_t dataBytes = kIndexDataBytes + (compact ? blocks * kIndexBlockStartBytes : 0);
+      s = ReadRange(indexOffset, kChunkHeaderBytes + dataBytes, "the index chunk");
       if (!s.ok()) return s;
       ChunkHeader ih;
-      s = CheckChunk(buffer.data(), indexBytes, kIndex, 0, "the index chunk", ih);
+      s = CheckChunk(buffer.data(), kChunkHeaderBytes + dataBytes, kIndex, 0, "the index chunk", ih);
       if (!s.ok()) return s;
-      Decoder di(buffer.data() + kChunkHeaderBytes, kIndexDataBytes);
+      Decoder di(buffer.data() + kChunkHeaderBytes, size_t(dataBytes));
       const uint64_t entries = di.u64();
       const uint32_t block = di.u32();
-      const uint64_t blocks = (info.nodeCount + indexBlock - 1) / indexBlock;
-      if (ih.dataBytes != kIndexDataBytes || entries != info.nodeCount || block != indexBlock ||
-          ih.childBytes != blocks * (kChunkHeaderBytes + kIndexBlockBaseBytes) + info.nodeCount * kIndexEntryBytes ||
+      di.u32();
+      // A compact block: its header, its bases, at least a byte an entry.
+      const uint64_t leastChildren = blocks * (kChunkHeaderBytes + kIndexBlockBaseBytes) + info.nodeCount;
+      if (ih.dataBytes != dataBytes || entries != info.nodeCount || block != indexBlock ||
+          (compact ? ih.childBytes < leastChildren
+                   : ih.childBytes !=
+                         blocks * (kChunkHeaderBytes + kIndexBlockBaseBytes) + info.nodeCount * kIndexEntryBytes) ||
           ih.totalBytes() > src->size - indexOffset)
         return Status::Invalid("corrupt chunk size in the index chunk");
+      if (compact) {
+        indexChildBytes = ih.childBytes;
+        blockStarts.resize(size_t(blocks));
+        for (uint64_t b = 0; b < blocks; ++b) {
+          blockStarts[size_t(b)] = di.u32();
+          const uint64_t entriesOf = std::min<uint64_t>(indexBlock, info.nodeCount - b * indexBlock);
+          const uint64_t least = kChunkHeaderBytes + kIndexBlockBaseBytes + entriesOf;
+          const uint64_t start = blockStarts[size_t(b)];
+          // (Every block before the last is full.)
+          const uint64_t fullBlock = kChunkHeaderBytes + kIndexBlockBaseBytes + indexBlock;
+          if ((b == 0 && start != 0) || (b > 0 && start < uint64_t(blockStarts[size_t(b) - 1]) + fullBlock) ||
+              start > ih.childBytes || ih.childBytes - start < least)
+            return Status::Invalid("corrupt index chunk: bad start of index block " + Num(b));
+        }
+      }
     }
     // The roots: records and geometry.
     const uint32_t top = levelCount - 1;
@@ -894,8 +976,8 @@ size_t LodReader::residentBytes() const {
   size_t b = sizeof(LodReader) + sizeof(Impl) + m.levels.capacity() * sizeof(LevelEntry) + m.roots.capacity() * 4 +
              m.buffer.capacity() + m.positionScratch.capacity() +
              (m.idScratch.capacity() + m.localScratch.capacity()) * 4 + m.unit.bytes() +
-             m.indexCache.capacity() * sizeof(IndexEntry) + m.info.levelFaces.capacity() * 16 + m.src->heldBytes() +
-             m.geometryBytes;
+             m.indexCache.capacity() * sizeof(IndexEntry) + m.blockStarts.capacity() * 4 +
+             m.info.levelFaces.capacity() * 16 + m.src->heldBytes() + m.geometryBytes;
   // Hash map: buckets plus one heap node per record (key, entry, next pointer, cached hash).
   b += m.nodes.bucket_count() * sizeof(void*);
   for (const auto& kv : m.nodes)

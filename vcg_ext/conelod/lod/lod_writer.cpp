@@ -221,7 +221,7 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
     const std::string bad = dag.attributes.Check(dag.positions.size());
     if (!bad.empty()) return Status::Invalid(bad);
   }
-  // Attribute streams (version 5); none: the version 4 file, byte for byte.
+  // Attribute streams (the header's attributes field and every blob's flags); none: 0.
   const LodAttributes& attributes = dag.attributes;
   const uint32_t attributeMask =
       (attributes.colors.empty() ? 0u : kGeomColors) | (attributes.normals.empty() ? 0u : kGeomNormals);
@@ -404,7 +404,7 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
   uint64_t colorBytes = 0, normalBytes = 0;
   auto encodeHeader = [&]() {
     Encoder e;
-    e.u32(attributeMask ? kAttributeVersion : kGeometryOnlyVersion);
+    e.u32(kVersion);
     e.u32(nodeLevels);
     e.u64(inputVertices);
     e.u64(inputFaces);
@@ -426,10 +426,8 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
       e.f32(levelError[k]);
       e.u32(0);
     }
-    if (attributeMask) {  // version 5
-      e.u32(attributeMask);
-      e.u32(0);
-    }
+    e.u32(attributeMask);  // 0: geometry only
+    e.u32(0);
     return e;
   };
   Encoder header = encodeHeader();
@@ -677,33 +675,39 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
     patchContainer(kGeos, geosOffset);
   }
 
-  // The offset index, in blocks: each block gives the offsets of its first record and its first
-  // node's geometry blob, then per entry where its record and its geometry blob end (relative to
-  // those).
+  // The offset index (version 6), in blocks of kIndexBlock entries: each block gives the offsets
+  // of its first record and its first node's geometry blob, then per entry its record's size and,
+  // when the entry starts a new blob (not its unit's previous node), that blob's size, as varints;
+  // the INDX chunk's data lists where each block starts, so that one block is read alone.
   indexOffset = out.offset();
   {
     const uint64_t blocks = (nodeCount + kIndexBlock - 1) / kIndexBlock;
+    const uint64_t hierData = hierOffset + kChunkHeaderBytes;
+    std::vector<Encoder> blockData(static_cast<size_t>(blocks));
     Encoder e;
     e.u64(nodeCount);
     e.u32(kIndexBlock);
     e.u32(0);
-    out.chunk(kIndex, e, blocks * (kChunkHeaderBytes + kIndexBlockBaseBytes) + nodeCount * kIndexEntryBytes);
-    const uint64_t hierData = hierOffset + kChunkHeaderBytes;
+    uint64_t childBytes = 0;
     for (uint64_t b = 0; b < blocks; ++b) {
-      e.clear();
+      if (childBytes > 0xFFFFFFFFu) return fail("too many nodes for the file format's index");
+      e.u32(uint32_t(childBytes));
+      Encoder& d = blockData[size_t(b)];
       const uint64_t first = b * kIndexBlock, end = std::min<uint64_t>(nodeCount, (b + 1) * kIndexBlock);
-      // (Nodes of one unit share its blob: their entries end at the same offset.)
-      const uint64_t rb = first ? recordEnd[first - 1] : hierData, gb = geometryStart[first];
-      e.u64(rb);
-      e.u64(gb);
+      uint64_t record = first ? recordEnd[first - 1] : hierData;
+      d.u64(record);
+      d.u64(geometryStart[first]);
       for (uint64_t i = first; i < end; ++i) {
-        if (recordEnd[i] - rb > 0xFFFFFFFFu || geometryEnd[i] - gb > 0xFFFFFFFFu)
-          return fail("too much geometry in one index block for the file format");
-        e.u32(uint32_t(recordEnd[i] - rb));
-        e.u32(uint32_t(geometryEnd[i] - gb));
+        // (Nodes of one unit share its blob: the same start.)
+        const bool newBlob = i == first || geometryStart[i] != geometryStart[i - 1];
+        d.uv((recordEnd[i] - record - kRecordFixedBytes) * 2 + (newBlob ? 1 : 0));
+        if (newBlob) d.uv(geometryEnd[i] - geometryStart[i]);
+        record = recordEnd[i];
       }
-      out.chunk(kIBlock, e);
+      childBytes += kChunkHeaderBytes + d.bytes.size();
     }
+    out.chunk(kIndex, e, childBytes);
+    for (const Encoder& d : blockData) out.chunk(kIBlock, d);
   }
   const uint64_t fileBytes = out.offset();
   {
