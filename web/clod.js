@@ -144,6 +144,68 @@ class Decoder {
   }
 }
 
+// Versions 3 to 5: a unit's grid coordinates (minus its corner) as stored, u16 x 4 or u32 x 3.
+function storedGrid(raw, vc, wide) {
+  const q = new Float64Array(vc * 3), rv = new DataView(raw.buffer, raw.byteOffset, raw.byteLength);
+  for (let v = 0; v < vc; ++v)
+    for (let c = 0; c < 3; ++c) q[v * 3 + c] = wide ? rv.getUint32(v * 12 + 4 * c, true) : rv.getUint16(v * 8 + 2 * c, true);
+  return q;
+}
+
+// Version 6: the residuals of the positions' predictions, stored as running signed bytes, and the
+// predictions walked over the faces as lod_internal.h's PositionPredictor walks them (the same
+// order, the same integer arithmetic modulo 2^(8 x width)).
+function predictedGrid(raw, vc, wide, corners, fc) {
+  const width = wide ? 4 : 2, stride = wide ? 12 : 8, modulus = 2 ** (8 * width);
+  const wrap = (x) => ((x % modulus) + modulus) % modulus;
+  const r = new Float64Array(vc * 3);
+  for (let v = 0; v < vc; ++v)
+    for (let c = 0; c < 3; ++c) {
+      let x = 0;
+      for (let j = width - 1; j >= 0; --j) {
+        const at = v * stride + width * c + j;
+        const delta = (raw[at] - (v ? raw[at - stride] : 0)) & 0xff;
+        x = x * 256 + (delta >= 128 ? delta - 256 : delta);
+      }
+      r[v * 3 + c] = wrap(x);
+    }
+  const q = new Float64Array(vc * 3), visited = new Uint8Array(vc), opposite = new Map();
+  const last = [0, 0, 0], pred = [0, 0, 0];
+  const visit = (v) => {
+    for (let c = 0; c < 3; ++c) last[c] = q[v * 3 + c] = wrap(pred[c] + r[v * 3 + c]);
+    visited[v] = 1;
+  };
+  for (let f = 0; f < fc; ++f) {
+    const t = [corners[3 * f], corners[3 * f + 1], corners[3 * f + 2]];
+    for (let k = 0; k < 3; ++k) {
+      const v = t[k];
+      if (visited[v]) continue;
+      const a = t[(k + 1) % 3], b = t[(k + 2) % 3];
+      if (visited[a] && visited[b]) {
+        const o = opposite.get(b * vc + a);  // a neighbour's edge b -> a
+        for (let c = 0; c < 3; ++c)
+          pred[c] = o !== undefined ? q[a * 3 + c] + q[b * 3 + c] - q[o * 3 + c] : Math.floor((q[a * 3 + c] + q[b * 3 + c]) / 2);
+      } else if (visited[a] || visited[b]) {
+        const k2 = visited[a] ? a : b;
+        for (let c = 0; c < 3; ++c) pred[c] = q[k2 * 3 + c];
+      } else {
+        for (let c = 0; c < 3; ++c) pred[c] = last[c];
+      }
+      visit(v);
+    }
+    for (let k = 0; k < 3; ++k) {
+      const key = t[k] * vc + t[(k + 1) % 3];
+      if (!opposite.has(key)) opposite.set(key, t[(k + 2) % 3]);
+    }
+  }
+  for (let v = 0; v < vc; ++v)
+    if (!visited[v]) {
+      for (let c = 0; c < 3; ++c) pred[c] = last[c];
+      visit(v);
+    }
+  return q;
+}
+
 // Byte ranges of a URL, fetched with Range requests; counts what it receives.
 export class RangeSource {
   constructor(url) {
@@ -708,14 +770,6 @@ export class ClodReader {
     } catch (e) {
       throw new ClodError(bad + 'its positions do not decode');
     }
-    const positions = new Float32Array(vc * 3);
-    const rv = new DataView(raw.buffer);
-    for (let v = 0; v < vc; ++v)
-      for (let c = 0; c < 3; ++c) {
-        const off = wide ? rv.getUint32(v * 12 + 4 * c, true) : rv.getUint16(v * 8 + 2 * c, true);
-        if (off >= cells - qmin[c]) throw new ClodError(bad + 'a position off the grid');
-        positions[v * 3 + c] = grid.origin[c] + (qmin[c] + off) * grid.step;  // double, then float: as the desktop reader
-      }
     n = d.uv();
     p = d.overrun || n > d.left() ? null : d.take(n);
     const corners = new Uint32Array(fc * 3);
@@ -726,6 +780,14 @@ export class ClodReader {
       throw new ClodError(bad + 'its triangles do not decode');
     }
     for (let i = 0; i < corners.length; ++i) if (corners[i] >= vc) throw new ClodError(bad + 'face index out of range');
+    const q = this.info.version >= COMPACT_INDEX_VERSION ? predictedGrid(raw, vc, wide, corners, fc) : storedGrid(raw, vc, wide);
+    const positions = new Float32Array(vc * 3);
+    for (let v = 0; v < vc; ++v)
+      for (let c = 0; c < 3; ++c) {
+        const off = q[v * 3 + c];
+        if (off >= cells - qmin[c]) throw new ClodError(bad + 'a position off the grid');
+        positions[v * 3 + c] = grid.origin[c] + (qmin[c] + off) * grid.step;  // double, then float: as the desktop reader
+      }
     const mask = d.take((vc + 7) >> 3);
     if (!mask) throw new ClodError(bad + 'truncated vertex id mask');
     if (vc % 8 && mask[vc >> 3] >> (vc % 8)) throw new ClodError(bad + 'stray bits in the vertex id mask');

@@ -71,6 +71,114 @@ constexpr int kIndexCodecVersion = 1;
 
 uint32_t Crc32(const void* data, size_t bytes, uint32_t crc = 0);
 
+// Version 6 positions: each unit vertex's grid coordinates (minus the unit's corner) are stored as
+// the residual from a prediction made from vertices decoded before it. The faces, as the index
+// codec gives them back, are walked in order; a corner not yet visited is predicted by the
+// parallelogram across the opposite edge when an earlier face has that edge (a + b - c), else
+// that edge's midpoint when both its ends were visited, else a visited corner of the face, else
+// the vertex visited last (0 for the first); vertices no face uses come last, in index order,
+// from the vertex visited last. Residuals are taken modulo 2^(8 x width) (width: 2 or 4 bytes a
+// coordinate) and laid out so that meshoptimizer's vertex codec, which codes each byte's change
+// from the previous vertex, sees the residual's signed bytes: byte j of a stored coordinate is
+// the running sum (mod 256) of byte j of the residuals of the vertices before it and itself,
+// where a residual is written as signed digits d_0 + 256 d_1 + ... (each d in -128..127, the last
+// one taken mod 256).
+class PositionPredictor {
+ public:
+  // Walks the unit: visit(v, prediction) for each vertex in the order above; the callback sets
+  // q[v] (the writer: the value it knows; the reader: prediction + residual). q holds
+  // vertexCount x 3 values below 2^32; corners are below vertexCount (checked by the caller).
+  template <typename Visit>
+  void Walk(const uint32_t* corners, size_t faceCount, size_t vertexCount, uint64_t* q, Visit visit) {
+    // Each face's three directed edges, bucketed by their first vertex in face order (a
+    // counting sort): the edge b -> a of the earliest face before f is the first match in b's
+    // bucket whose face is below f.
+    first_.assign(vertexCount + 1, 0);
+    for (size_t i = 0; i < faceCount * 3; ++i) ++first_[corners[i] + 1];
+    for (size_t v = 0; v < vertexCount; ++v) first_[v + 1] += first_[v];
+    edges_.resize(faceCount * 3);
+    fill_.assign(first_.begin(), first_.end() - 1);
+    for (size_t f = 0; f < faceCount; ++f)
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t* t = corners + 3 * f;
+        edges_[fill_[t[k]]++] = Edge{t[(k + 1) % 3], t[(k + 2) % 3], uint32_t(f)};
+      }
+    visited_.assign(vertexCount, 0);
+    uint64_t last[3] = {0, 0, 0};
+    uint64_t pred[3];
+    auto done = [&](uint32_t v) {
+      visited_[v] = 1;
+      for (int c = 0; c < 3; ++c) last[c] = q[3 * size_t(v) + size_t(c)];
+    };
+    for (size_t f = 0; f < faceCount; ++f) {
+      const uint32_t* t = corners + 3 * f;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = t[k];
+        if (visited_[v]) continue;
+        const uint32_t a = t[(k + 1) % 3], b = t[(k + 2) % 3];
+        const uint64_t *qa = q + 3 * size_t(a), *qb = q + 3 * size_t(b);
+        if (visited_[a] && visited_[b]) {
+          uint32_t c = kNone;  // the opposite corner of an earlier face's edge b -> a
+          for (uint32_t i = first_[b]; i < first_[b + 1] && edges_[i].face < f; ++i)
+            if (edges_[i].to == a) {
+              c = edges_[i].opposite;
+              break;
+            }
+          for (int i = 0; i < 3; ++i)
+            pred[i] = c != kNone ? qa[i] + qb[i] - q[3 * size_t(c) + size_t(i)] : (qa[i] + qb[i]) >> 1;
+        } else if (visited_[a] || visited_[b]) {
+          const uint64_t* qk = visited_[a] ? qa : qb;
+          for (int i = 0; i < 3; ++i) pred[i] = qk[i];
+        } else {
+          for (int i = 0; i < 3; ++i) pred[i] = last[i];
+        }
+        visit(v, pred);
+        done(v);
+      }
+    }
+    for (uint32_t v = 0; v < vertexCount; ++v)
+      if (!visited_[v]) {
+        for (int i = 0; i < 3; ++i) pred[i] = last[i];
+        visit(v, pred);
+        done(v);
+      }
+  }
+  void Release() {  // its buffers (a reader keeps little between units)
+    std::vector<uint8_t>().swap(visited_);
+    std::vector<uint32_t>().swap(first_);
+    std::vector<uint32_t>().swap(fill_);
+    std::vector<Edge>().swap(edges_);
+  }
+  size_t bytes() const {
+    return visited_.capacity() + (first_.capacity() + fill_.capacity()) * 4 + edges_.capacity() * sizeof(Edge);
+  }
+
+ private:
+  static constexpr uint32_t kNone = 0xFFFFFFFFu;
+  struct Edge {
+    uint32_t to, opposite, face;
+  };
+  std::vector<uint8_t> visited_;
+  std::vector<uint32_t> first_, fill_;  // per vertex: where its edges start; the next free slot
+  std::vector<Edge> edges_;
+};
+
+// The residual r (mod 2^(8 x width)) as signed byte digits added to the running bytes `lane`.
+inline void AddResidualBytes(uint64_t r, int width, uint8_t* lane) {
+  int64_t rest = int64_t(r << (64 - 8 * width)) >> (64 - 8 * width);  // r as a signed value
+  for (int j = 0; j < width; ++j) {
+    const int8_t digit = int8_t(uint8_t(rest & 0xFF));
+    lane[j] = uint8_t(lane[j] + uint8_t(digit));
+    rest = (rest - digit) >> 8;
+  }
+}
+// The residual (mod 2^(8 x width)) from a vertex's stored bytes and the previous vertex's.
+inline uint64_t ResidualFromBytes(const uint8_t* bytes, const uint8_t* previous, int width) {
+  uint64_t r = 0;
+  for (int j = width - 1; j >= 0; --j) r = (r << 8) + uint64_t(int64_t(int8_t(uint8_t(bytes[j] - previous[j]))));
+  return width == 8 ? r : r & ((uint64_t(1) << (8 * width)) - 1);
+}
+
 // A record's cone axis: octahedral coordinates in two u16 (the writer widens the angle by the
 // axis's rounding, so the cone still holds every normal).
 inline void EncodeConeAxis(const double a[3], uint16_t out[2]) {

@@ -215,6 +215,8 @@ struct LodReader::Impl {
     }
   } unit;
   std::vector<uint8_t> positionScratch;  // reused for decoding
+  std::vector<uint64_t> gridScratch, residualScratch;
+  PositionPredictor predictor;  // version 6: the positions' predictions
   std::vector<uint32_t> idScratch, localScratch;
   // The last index block read (a node's children share one most of the time).
   uint64_t cachedIndexBlock = ~uint64_t(0);
@@ -556,6 +558,7 @@ struct LodReader::Impl {
       if (unit.faceStart[size_t(i) + 1] > bytes) return Status::Invalid(bad + "more faces than its blob can hold");
     }
     const size_t fc = size_t(unit.faceStart.back());
+    if (fc > 0x3FFFFFFF) return Status::Invalid(bad + "more faces than a unit can hold");  // 3 x fc corners: u32
     const uint64_t vc64 = d.uv();
     if (d.overrun || vc64 == 0 || vc64 > uint64_t(3) * fc) return Status::Invalid(bad + "impossible vertex count");
     const size_t vc = size_t(vc64);
@@ -572,14 +575,6 @@ struct LodReader::Impl {
     positionScratch.resize(vc * stride);
     if (!p || meshopt_decodeVertexBuffer(positionScratch.data(), vc, stride, p, size_t(n)) != 0)
       return Status::Invalid(bad + "its positions do not decode");
-    unit.positions.resize(vc);
-    for (size_t v = 0; v < vc; ++v)
-      for (int c = 0; c < 3; ++c) {
-        const uint8_t* q = positionScratch.data() + v * stride + (wide ? 4 : 2) * size_t(c);
-        const uint64_t off = wide ? Decoder(q, 4).u32() : Decoder(q, 2).u16();
-        if (off >= cells - qmin[c]) return Status::Invalid(bad + "a position off the grid");
-        unit.positions[v][c] = info.grid.Dequantize(uint32_t(qmin[c] + off), c);
-      }
     // Triangles.
     n = d.uv();
     p = d.overrun || n > d.left() ? nullptr : d.take(size_t(n));
@@ -588,6 +583,42 @@ struct LodReader::Impl {
       return Status::Invalid(bad + "its triangles do not decode");
     for (uint32_t v : unit.corners)
       if (v >= vc) return Status::Invalid(bad + "face index out of range");
+    // Grid coordinates relative to qmin: stored (versions 3 to 5), or (version 6) the residuals
+    // of the predictions as running signed bytes, the faces walked as the writer walked them.
+    gridScratch.resize(vc * 3);
+    const int width = wide ? 4 : 2;
+    if (info.version >= kCompactIndexVersion) {
+      residualScratch.resize(vc * 3);
+      static const uint8_t zeros[12] = {0};
+      for (size_t v = 0; v < vc; ++v) {
+        const uint8_t* at = positionScratch.data() + v * stride;
+        const uint8_t* before = v ? at - stride : zeros;
+        for (int c = 0; c < 3; ++c)
+          residualScratch[v * 3 + size_t(c)] = ResidualFromBytes(at + width * c, before + width * c, width);
+      }
+      const uint64_t valueMask = (uint64_t(1) << (8 * width)) - 1;
+      predictor.Walk(unit.corners.data(), fc, vc, gridScratch.data(), [&](uint32_t v, const uint64_t* pred) {
+        for (size_t c = 0; c < 3; ++c)
+          gridScratch[3 * size_t(v) + c] = (pred[c] + residualScratch[3 * size_t(v) + c]) & valueMask;
+      });
+    } else {
+      for (size_t v = 0; v < vc; ++v)
+        for (int c = 0; c < 3; ++c) {
+          const uint8_t* q = positionScratch.data() + v * stride + size_t(width * c);
+          gridScratch[v * 3 + size_t(c)] = wide ? Decoder(q, 4).u32() : Decoder(q, 2).u16();
+        }
+    }
+    unit.positions.resize(vc);
+    for (size_t v = 0; v < vc; ++v)
+      for (int c = 0; c < 3; ++c) {
+        const uint64_t off = gridScratch[v * 3 + size_t(c)];
+        if (off >= cells - qmin[c]) return Status::Invalid(bad + "a position off the grid");
+        unit.positions[v][c] = info.grid.Dequantize(uint32_t(qmin[c] + off), c);
+      }
+    // The prediction's buffers go (a unit's are 50-60 bytes a face): the reader holds the cut.
+    std::vector<uint64_t>().swap(gridScratch);
+    std::vector<uint64_t>().swap(residualScratch);
+    predictor.Release();
     // Global ids: the vertices new to the file in order from firstNew, the others listed.
     const uint8_t* mask = d.take((vc + 7) / 8);
     if (!mask) return Status::Invalid(bad + "truncated vertex id mask");
@@ -975,6 +1006,7 @@ size_t LodReader::residentBytes() const {
   const Impl& m = *impl_;
   size_t b = sizeof(LodReader) + sizeof(Impl) + m.levels.capacity() * sizeof(LevelEntry) + m.roots.capacity() * 4 +
              m.buffer.capacity() + m.positionScratch.capacity() +
+             (m.gridScratch.capacity() + m.residualScratch.capacity()) * 8 + m.predictor.bytes() +
              (m.idScratch.capacity() + m.localScratch.capacity()) * 4 + m.unit.bytes() +
              m.indexCache.capacity() * sizeof(IndexEntry) + m.blockStarts.capacity() * 4 +
              m.info.levelFaces.capacity() * 16 + m.src->heldBytes() + m.geometryBytes;

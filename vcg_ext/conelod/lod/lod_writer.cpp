@@ -527,8 +527,10 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
     std::vector<uint32_t> start, faces, local(dag.positions.size(), kNoParent), verts, idx, tmp, remap, old;
     std::vector<uint32_t> fileId(dag.positions.size(), kNoParent);
     std::vector<uint8_t> buf, mask;
-    std::vector<uint16_t> q16;
-    std::vector<uint32_t> q32;
+    std::vector<uint32_t> q32, decoded;
+    std::vector<uint64_t> qrel, residual;
+    std::vector<uint8_t> lanes, ibuf;
+    PositionPredictor predictor;
     std::vector<uint8_t> attr;
     Encoder e;
     meshopt_encodeVertexVersion(kVertexCodecVersion);
@@ -593,28 +595,40 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
         e.uv(vc);
         for (int c = 0; c < 3; ++c) e.uv(qmin[c]);
         e.uv(globalVertices);  // the first new global id
-        if (wide) {
-          for (size_t v = 0; v < vc; ++v)
-            for (int c = 0; c < 3; ++c) q32[v * 3 + size_t(c)] -= qmin[c];
-          buf.resize(meshopt_encodeVertexBufferBound(vc, 12));
-          buf.resize(meshopt_encodeVertexBuffer(buf.data(), buf.size(), q32.data(), vc, 12));
-        } else {
-          q16.assign(vc * 4, 0);
-          for (size_t v = 0; v < vc; ++v)
-            for (int c = 0; c < 3; ++c) q16[v * 4 + size_t(c)] = uint16_t(q32[v * 3 + size_t(c)] - qmin[c]);
-          buf.resize(meshopt_encodeVertexBufferBound(vc, 8));
-          buf.resize(meshopt_encodeVertexBuffer(buf.data(), buf.size(), q16.data(), vc, 8));
+        // The triangles are coded first: the positions' predictions walk the faces as the reader
+        // gets them back from the index codec (which may rotate a face's corners).
+        ibuf.resize(meshopt_encodeIndexBufferBound(idx.size(), vc));
+        ibuf.resize(meshopt_encodeIndexBuffer(ibuf.data(), ibuf.size(), idx.data(), idx.size()));
+        if (ibuf.empty()) return fail("internal error: the index codec failed");
+        decoded.resize(idx.size());
+        if (meshopt_decodeIndexBuffer(decoded.data(), decoded.size(), 4, ibuf.data(), ibuf.size()) != 0)
+          return fail("internal error: the index codec failed");
+        // Positions: residuals from the predictions, as running signed bytes (lod_internal.h).
+        const int width = wide ? 4 : 2;
+        const size_t stride = wide ? 12 : 8;
+        const uint64_t valueMask = (uint64_t(1) << (8 * width)) - 1;
+        qrel.resize(vc * 3);
+        residual.resize(vc * 3);
+        for (size_t v = 0; v < vc; ++v)
+          for (int c = 0; c < 3; ++c) qrel[v * 3 + size_t(c)] = q32[v * 3 + size_t(c)] - qmin[c];
+        predictor.Walk(decoded.data(), decoded.size() / 3, vc, qrel.data(), [&](uint32_t v, const uint64_t* pred) {
+          for (size_t c = 0; c < 3; ++c) residual[3 * size_t(v) + c] = (qrel[3 * size_t(v) + c] - pred[c]) & valueMask;
+        });
+        lanes.assign(vc * stride, 0);
+        uint8_t running[12] = {0};
+        for (size_t v = 0; v < vc; ++v) {
+          for (int c = 0; c < 3; ++c) AddResidualBytes(residual[v * 3 + size_t(c)], width, running + width * c);
+          std::memcpy(lanes.data() + v * stride, running, size_t(3 * width));
         }
+        buf.resize(meshopt_encodeVertexBufferBound(vc, stride));
+        buf.resize(meshopt_encodeVertexBuffer(buf.data(), buf.size(), lanes.data(), vc, stride));
         if (buf.empty()) return fail("internal error: the vertex codec failed");
         e.uv(buf.size());
         e.raw(buf.data(), buf.size());
         positionBytes += buf.size();
-        buf.resize(meshopt_encodeIndexBufferBound(idx.size(), vc));
-        buf.resize(meshopt_encodeIndexBuffer(buf.data(), buf.size(), idx.data(), idx.size()));
-        if (buf.empty()) return fail("internal error: the index codec failed");
-        e.uv(buf.size());
-        e.raw(buf.data(), buf.size());
-        indexBytes += buf.size();
+        e.uv(ibuf.size());
+        e.raw(ibuf.data(), ibuf.size());
+        indexBytes += ibuf.size();
         mask.assign((vc + 7) / 8, 0);
         old.clear();
         for (size_t v = 0; v < vc; ++v) {

@@ -794,6 +794,50 @@ TEST(Lod, Version4And5FilesStillRead) {
   }
 }
 
+// Version 6 positions are residuals of predictions made along the faces (lod_internal.h's
+// PositionPredictor): the full-budget cut gives back the input on the grid exactly, on a grid of
+// u16 units and on one fine enough that the coarse units are u32 ("wide"), and the predicted
+// positions take fewer bytes than the stored ones did (the version 4 file of the same sphere).
+TEST(Lod, PredictedPositionsRoundTripNarrowAndWide) {
+  const IndexedMesh m = test::Sphere(5);
+  LodBuildParams p;
+  size_t wideUnits = 0;
+  for (double precision : {2e-5, 1e-7}) {
+    SCOPED_TRACE(precision);
+    p.precision = precision;
+    const std::string path = TempPath("sphere_predicted.clod");
+    LodBuildStats st;
+    ASSERT_TRUE(BuildLodFile(m, p, path, &st).ok());
+    std::unique_ptr<LodReader> r;
+    ASSERT_TRUE(LodReader::Open(path, r).ok());
+    LodCut cut;
+    ASSERT_TRUE(RefineLod(*r, Eye(0, 0, 5, size_t(1) << 30, false), cut).ok());
+    IndexedMesh out;
+    ASSERT_TRUE(ExtractCutMesh(*r, cut, true, out).ok());
+    EXPECT_EQ(SortedFacePositions(out), SortedFacePositions(OnGrid(m, r->info().grid)));
+    // The geometry blobs' flags (each blob: CRC, flags, ...; the index gives where they start).
+    const std::vector<uint8_t> f = ReadBytes(path);
+    const ParsedIndex x = ParseIndex(f);
+    std::set<size_t> blobs;
+    for (const auto& e : x.entries) blobs.insert(e.geometry);
+    for (size_t at : blobs) wideUnits += f[at + 4] & kGeomWidePositions;
+    std::remove(path.c_str());
+  }
+  EXPECT_GT(wideUnits, 0u);
+  // Against the stored sphere512_v4b.clod (the same input, stored positions): fewer bytes.
+  const std::string dir = std::string(CONELOD_SOURCE_DIR) + "/vcg_ext/tests/lod/data/";
+  PlyMesh ply;
+  ASSERT_EQ(ReadPly(dir + "sphere512.ply", ply), "");
+  IndexedMesh im;
+  for (const auto& q : ply.positions) im.positions.emplace_back(q[0], q[1], q[2]);
+  im.faces = ply.triangles;
+  LodBuildStats st;
+  const std::string path = TempPath("sphere512_predicted.clod");
+  ASSERT_TRUE(BuildLodFile(im, LodBuildParams(), path, &st).ok());
+  std::remove(path.c_str());
+  EXPECT_LT(st.positionBytes, 4490u);  // the version 4 file's positions (conelod lod build at 0d3679e)
+}
+
 // The compact index (version 6): a few bytes a node, random access by block, and hostile entries
 // (each with a valid CRC) refused by name; a file of several blocks (the bunny's nodes) reads
 // every node through each block.
