@@ -2650,6 +2650,27 @@ def viewer_colours(c):
 
 
 @case
+def web_reader_positions(c):
+    """web/clod.js decodes every node's positions as the desktop reader does, bit for bit: the
+    version 6 prediction walked over the faces the same way in C++ and JavaScript (tools/
+    lod_node_hash against tests/integration/web_node_hash.mjs: per node, a hash of its sorted
+    positions), on the bunny's file at the default precision (units of u16 coordinates) and at
+    1e-6 (its coarse units need u32), and on the stored version 3, 4 and 5 files."""
+    tool = os.path.join(c.build, "tools", "lod_node_hash")
+    script = os.path.join(c.source, "tests", "integration", "web_node_hash.mjs")
+    data = os.path.join(c.source, "vcg_ext", "tests", "lod", "data")
+    fine = c.out("bunny_fine.clod")
+    c.conelod("lod", "build", c.mesh("stanford_bunny_bun_zipper.ply"), "-o", fine, "--precision", "1e-6")
+    files = [build_clod(c, "stanford_bunny_bun_zipper.ply", "bunny.clod"), fine] + [
+        os.path.join(data, n) for n in ("sphere512_v3.clod", "sphere512_v4b.clod", "sphere512_color_v5.clod")]
+    for f in files:
+        desktop = subprocess.run([tool, f], capture_output=True, text=True, check=True).stdout
+        web = subprocess.run(["node", script, c.source, f], capture_output=True, text=True, check=True).stdout
+        lines = desktop.split("\n")
+        assert len(lines) > 20 and desktop == web, (f, [(a, b) for a, b in zip(lines, web.split("\n")) if a != b][:5])
+
+
+@case
 def web_viewer_colours(c):
     """The web viewer draws a coloured .clod with its vertex colours by default (the grid of
     cli_lod_attributes: red grows with x, green falls with y) and with today's level colours under
