@@ -148,7 +148,7 @@ int LodBuild(int argc, char** argv) {
   // Read straight into the indexed mesh (the same positions and faces as LoadInput's, without its
   // vcglib mesh: about 100 bytes a face less at the peak).
   IndexedMesh im;
-  LodAttributes attributes;  // per-vertex colour, normals and UVs, carried into the file (version 5)
+  LodAttributes attributes;  // per-vertex colour, normals and UVs, carried into the file (versions 5, 6)
   std::string textureNote;   // why the texture image is not stored, when it is not
   Timer timer;
   {
@@ -587,10 +587,10 @@ const char* kLodUsage =
     "  Without it the DAG is built whole, in memory.\n"
     "  Per-vertex colour, normals and texture coordinates (per vertex or per face corner) of\n"
     "  IN.ply are carried into every level (interpolated as in conelod simplify,\n"
-    "  --attribute-weight W [1]; texture seams kept) and stored per node (file version 5; colour\n"
-    "  exact as RGBA8, normals within 1e-4 rad, UVs as 16 bits over their box), with the texture\n"
-    "  image its `comment TextureFile` names (read beside IN.ply, stored as it is: the .clod\n"
-    "  moves as one file); --no-attributes: geometry only (version 4).\n"
+    "  --attribute-weight W [1]; texture seams kept) and stored per node (colour exact as RGBA8,\n"
+    "  normals within 1e-4 rad, UVs as 16 bits over their box), with the texture image its\n"
+    "  `comment TextureFile` names (read beside IN.ply, stored as it is: the .clod moves as one\n"
+    "  file); --no-attributes: geometry only. File version 6 (versions 3 to 5 are still read).\n"
     "  The file does not depend on N. The other grouping options and --faces-per-part are\n"
     "  accepted for compatibility and not used.\n"
     "  extract: opens the file, refines for a perspective eye at X,Y,Z under a budget of N faces\n"

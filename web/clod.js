@@ -1,4 +1,4 @@
-// ConeLOD web viewer — the .clod (versions 3 to 5) reader over HTTP Range requests.
+// ConeLOD web viewer — the .clod (versions 3 to 6) reader over HTTP Range requests.
 //
 // The JavaScript twin of vcg_ext/conelod/lod/lod_reader.cpp; the byte layout is
 // vcg_ext/conelod/lod/lod_format.md. It reads only the byte ranges it needs: the header, the three
@@ -8,14 +8,15 @@
 // ranges. Errors name the problem as the desktop reader's do.
 import { MeshoptDecoder } from './node_modules/meshoptimizer/meshopt_decoder.mjs';
 
-export const VERSION = 5;  // the newest read (5: with attribute streams; 4: geometry only); 3 is read too
+export const VERSION = 6;  // the newest read (6: the compact index; 5: with attribute streams; 4, 3: geometry only)
 const OLDEST_VERSION = 3;
 const CHUNK = 24;
 const HEADER_FIXED = 128;
 const LEVEL_ENTRY = 32;
 const INDEX_DATA = 16;
 const IBLOCK_BASE = 16;
-const INDEX_ENTRY = 8;
+const INDEX_ENTRY = 8;  // versions 3 to 5: u32 recordEnd, u32 geometryEnd
+const COMPACT_INDEX_VERSION = 6;  // varint entries, INDX data listing where each block starts
 const RECORD_FIXED = 26;  // the smallest record (version 4 at level 0): CRC, cone, sphere
 const GEOM_MIN = 5;
 const MAX_LEVELS = 64;
@@ -24,7 +25,7 @@ const EMPTY_CONE = 0xffff;
 const CONE_UNIT = Math.PI / 65534;
 const FLAG_WIDE = 1;
 const HIER_PAGE = 8192;  // the records are read and kept in pages of this size
-// Optional per-vertex streams after the ids (version 5), announced by the header's attributes field
+// Optional per-vertex streams after the ids (versions 5, 6), announced by the header's attributes field
 // and the same geometry flag bits (lod_format.md, "Attributes"), in this order: a reader that
 // meets a bit it does not know refuses the file by name. Each entry: { bit, name, stride } decoded
 // by meshopt_decodeVertexBuffer into unit.attributes[name] (vertexCount x stride bytes): colours
@@ -36,7 +37,7 @@ export const OPTIONAL_STREAMS = [
   { bit: 8, name: 'texCoords', stride: 4 },
 ];
 const KNOWN_ATTRIBUTES = OPTIONAL_STREAMS.reduce((m, s) => m | s.bit, 0);
-const HEADER_ATTRIBUTES = 8;  // version 5: u32 attributes, u32 pad after the level entries
+const HEADER_ATTRIBUTES = 8;  // versions 5, 6: u32 attributes (6: 0 allowed), u32 pad after the level entries
 const HEADER_TEXCOORDS = 24;  // with bit 8: f32 uvMin[2], f32 uvMax[2], u64 textureOffset
 const TEXTURE_FIXED = 16;     // TEXR data: u32 nameBytes, u32 mimeBytes, u64 imageBytes, then the three
 
@@ -160,6 +161,68 @@ class Decoder {
   }
 }
 
+// Versions 3 to 5: a unit's grid coordinates (minus its corner) as stored, u16 x 4 or u32 x 3.
+function storedGrid(raw, vc, wide) {
+  const q = new Float64Array(vc * 3), rv = new DataView(raw.buffer, raw.byteOffset, raw.byteLength);
+  for (let v = 0; v < vc; ++v)
+    for (let c = 0; c < 3; ++c) q[v * 3 + c] = wide ? rv.getUint32(v * 12 + 4 * c, true) : rv.getUint16(v * 8 + 2 * c, true);
+  return q;
+}
+
+// Version 6: the residuals of the positions' predictions, stored as running signed bytes, and the
+// predictions walked over the faces as lod_internal.h's PositionPredictor walks them (the same
+// order, the same integer arithmetic modulo 2^(8 x width)).
+function predictedGrid(raw, vc, wide, corners, fc) {
+  const width = wide ? 4 : 2, stride = wide ? 12 : 8, modulus = 2 ** (8 * width);
+  const wrap = (x) => ((x % modulus) + modulus) % modulus;
+  const r = new Float64Array(vc * 3);
+  for (let v = 0; v < vc; ++v)
+    for (let c = 0; c < 3; ++c) {
+      let x = 0;
+      for (let j = width - 1; j >= 0; --j) {
+        const at = v * stride + width * c + j;
+        const delta = (raw[at] - (v ? raw[at - stride] : 0)) & 0xff;
+        x = x * 256 + (delta >= 128 ? delta - 256 : delta);
+      }
+      r[v * 3 + c] = wrap(x);
+    }
+  const q = new Float64Array(vc * 3), visited = new Uint8Array(vc), opposite = new Map();
+  const last = [0, 0, 0], pred = [0, 0, 0];
+  const visit = (v) => {
+    for (let c = 0; c < 3; ++c) last[c] = q[v * 3 + c] = wrap(pred[c] + r[v * 3 + c]);
+    visited[v] = 1;
+  };
+  for (let f = 0; f < fc; ++f) {
+    const t = [corners[3 * f], corners[3 * f + 1], corners[3 * f + 2]];
+    for (let k = 0; k < 3; ++k) {
+      const v = t[k];
+      if (visited[v]) continue;
+      const a = t[(k + 1) % 3], b = t[(k + 2) % 3];
+      if (visited[a] && visited[b]) {
+        const o = opposite.get(b * vc + a);  // a neighbour's edge b -> a
+        for (let c = 0; c < 3; ++c)
+          pred[c] = o !== undefined ? q[a * 3 + c] + q[b * 3 + c] - q[o * 3 + c] : Math.floor((q[a * 3 + c] + q[b * 3 + c]) / 2);
+      } else if (visited[a] || visited[b]) {
+        const k2 = visited[a] ? a : b;
+        for (let c = 0; c < 3; ++c) pred[c] = q[k2 * 3 + c];
+      } else {
+        for (let c = 0; c < 3; ++c) pred[c] = last[c];
+      }
+      visit(v);
+    }
+    for (let k = 0; k < 3; ++k) {
+      const key = t[k] * vc + t[(k + 1) % 3];
+      if (!opposite.has(key)) opposite.set(key, t[(k + 2) % 3]);
+    }
+  }
+  for (let v = 0; v < vc; ++v)
+    if (!visited[v]) {
+      for (let c = 0; c < 3; ++c) pred[c] = last[c];
+      visit(v);
+    }
+  return q;
+}
+
 // Byte ranges of a URL, fetched with Range requests; counts what it receives.
 export class RangeSource {
   constructor(url) {
@@ -268,11 +331,11 @@ export class ClodReader {
     if (head.length < CHUNK + 4) throw new ClodError(trunc + 'no version field');
     const version = new Decoder(head, CHUNK).u32();
     if (version === 1)
-      throw new ClodError('this is a .clod version 1 file (written by an older ConeLOD, whose cuts could have cracks): rebuild it with conelod lod build (this reader reads versions 3 to 5)');
+      throw new ClodError('this is a .clod version 1 file (written by an older ConeLOD, whose cuts could have cracks): rebuild it with conelod lod build (this reader reads versions 3 to 6)');
     if (version === 2)
-      throw new ClodError('this is a .clod version 2 file (uncompressed, written by an older ConeLOD): rebuild it with conelod lod build (this reader reads versions 3 to 5)');
+      throw new ClodError('this is a .clod version 2 file (uncompressed, written by an older ConeLOD): rebuild it with conelod lod build (this reader reads versions 3 to 6)');
     if (version < OLDEST_VERSION || version > VERSION)
-      throw new ClodError(`unsupported .clod version ${version} (this reader reads versions 3 to 5)`);
+      throw new ClodError(`unsupported .clod version ${version} (this reader reads versions 3 to 6)`);
     const tail = version >= 5 ? HEADER_ATTRIBUTES : 0;
     // With texture coordinates (bit 8) the UV box and the texture's offset follow (checked below).
     const extra = version >= 5 && h.dataBytes > HEADER_FIXED + tail &&
@@ -324,7 +387,7 @@ export class ClodReader {
     if (tail) {
       this.attributeMask = d.u32();
       d.u32();
-      if (this.attributeMask === 0 || this.attributeMask & ~KNOWN_ATTRIBUTES)
+      if ((this.attributeMask === 0 && version < COMPACT_INDEX_VERSION) || this.attributeMask & ~KNOWN_ATTRIBUTES)
         throw new ClodError(bad + `unknown attribute streams (${this.attributeMask}; this reader knows colour 2, normals 4 and texture coordinates 8)`);
     }
     info.colors = (this.attributeMask & 2) !== 0;
@@ -414,17 +477,34 @@ export class ClodReader {
   }
 
   async _readIndexChunk() {
-    const b = await this.src.read(this.indexOffset, CHUNK + INDEX_DATA, 'the index chunk');
+    const n = this.info.nodeCount, blocks = Math.ceil(n / this.indexBlock);
+    const compact = this.info.version >= COMPACT_INDEX_VERSION;
+    const dataBytes = INDEX_DATA + (compact ? 4 * blocks : 0);  // version 6: u32 start per block
+    const b = await this.src.read(this.indexOffset, CHUNK + dataBytes, 'the index chunk');
     const h = chunkHeader(b);
     if (h.id !== ID.INDX) throw new ClodError(`corrupt file: expected a INDX chunk (the index chunk), found ${chunkName(h.id)}`);
-    if (h.dataBytes !== INDEX_DATA) throw new ClodError('corrupt chunk size in the index chunk');
-    if (crc32(b, CHUNK, CHUNK + INDEX_DATA) !== h.crc) throw new ClodError('checksum mismatch in the index chunk');
+    if (h.dataBytes !== dataBytes) throw new ClodError('corrupt chunk size in the index chunk');
+    if (crc32(b, CHUNK, CHUNK + dataBytes) !== h.crc) throw new ClodError('checksum mismatch in the index chunk');
     const d = new Decoder(b, CHUNK);
     const entries = d.u64(), block = d.u32();
-    const n = this.info.nodeCount, blocks = Math.ceil(n / this.indexBlock);
-    if (entries !== n || block !== this.indexBlock || h.childBytes !== blocks * (CHUNK + IBLOCK_BASE) + n * INDEX_ENTRY ||
-        h.totalBytes > this.src.size - this.indexOffset)
+    d.u32();
+    if (entries !== n || block !== this.indexBlock ||
+        !(compact ? h.childBytes >= blocks * (CHUNK + IBLOCK_BASE) + n
+                  : h.childBytes === blocks * (CHUNK + IBLOCK_BASE) + n * INDEX_ENTRY) ||
+        !(h.totalBytes <= this.src.size - this.indexOffset))
       throw new ClodError('corrupt chunk size in the index chunk');
+    if (!compact) return;
+    this.indexChildBytes = h.childBytes;
+    this.blockStarts = [];
+    const fullBlock = CHUNK + IBLOCK_BASE + this.indexBlock;  // every block before the last is full
+    for (let k = 0; k < blocks; ++k) {
+      const start = d.u32();
+      const least = CHUNK + IBLOCK_BASE + Math.min(this.indexBlock, n - k * this.indexBlock);
+      if ((k === 0 && start !== 0) || (k > 0 && start < this.blockStarts[k - 1] + fullBlock) ||
+          start > h.childBytes || h.childBytes - start < least)
+        throw new ClodError(`corrupt index chunk: bad start of index block ${k}`);
+      this.blockStarts.push(start);
+    }
   }
 
   // Index block `blk`: per entry { record, recordBytes, geometry, geometryBytes } (cached).
@@ -440,6 +520,7 @@ export class ClodReader {
 
   async _readIndexBlock(blk) {
     const entries = Math.min(this.indexBlock, this.info.nodeCount - blk * this.indexBlock);
+    if (this.info.version >= COMPACT_INDEX_VERSION) return this._readCompactIndexBlock(blk, entries);
     const bytes = CHUNK + IBLOCK_BASE + entries * INDEX_ENTRY;
     const blockBytes = CHUNK + IBLOCK_BASE + this.indexBlock * INDEX_ENTRY;
     const b = await this.src.read(this.indexOffset + CHUNK + INDEX_DATA + blk * blockBytes, bytes, 'index block');
@@ -464,6 +545,44 @@ export class ClodReader {
       record = recordEnd;
       lastEnd = geometryEnd;
     }
+    return out;
+  }
+
+  // Version 6: the block where the INDX data says; per entry a varint (record size - RECORD_FIXED)
+  // x 2 + 1 when the entry starts a new geometry blob, whose size follows, else (never the
+  // block's first) the previous entry's blob.
+  async _readCompactIndexBlock(blk, entries) {
+    const starts = this.blockStarts;
+    const start = starts[blk], end = blk + 1 < starts.length ? starts[blk + 1] : this.indexChildBytes;
+    const bytes = end - start;
+    const b = await this.src.read(this.indexOffset + CHUNK + INDEX_DATA + 4 * starts.length + start, bytes, 'index block');
+    const h = chunkHeader(b);
+    if (h.id !== ID.IBLK) throw new ClodError(`corrupt file: expected a IBLK chunk (index block), found ${chunkName(h.id)}`);
+    if (h.dataBytes !== bytes - CHUNK || h.childBytes !== 0) throw new ClodError('corrupt chunk size in index block');
+    if (crc32(b, CHUNK, bytes) !== h.crc) throw new ClodError('checksum mismatch in index block');
+    const d = new Decoder(b, CHUNK);
+    let record = d.u64(), geometry = d.u64(), geometryEnd = geometry;
+    const bad = `corrupt index block ${blk}: `;
+    if (record < this.hierBegin || record > this.hierEnd || geometry < this.geosBegin || geometry > this.geosEnd)
+      throw new ClodError(bad + 'it points outside the records or the geometry');
+    const out = [];
+    for (let i = 0; i < entries; ++i) {
+      const code = d.uv();
+      const newBlob = code % 2 === 1;
+      const recordBytes = Math.floor(code / 2) + RECORD_FIXED;
+      if (!newBlob && i === 0) throw new ClodError(bad + 'its first entry has no geometry');
+      if (newBlob) {
+        const n = d.uv();
+        if (!(n <= this.geosEnd - geometryEnd)) throw new ClodError(bad + 'an entry points outside the records or the geometry');
+        geometry = geometryEnd;
+        geometryEnd += n;
+      }
+      if (d.overrun || !(recordBytes <= this.hierEnd - record))
+        throw new ClodError(bad + 'an entry points outside the records or the geometry');
+      out.push({ record, recordBytes, geometry, geometryBytes: geometryEnd - geometry });
+      record += recordBytes;
+    }
+    if (d.left() !== 0) throw new ClodError(bad + 'it does not end with its last entry');
     return out;
   }
 
@@ -719,14 +838,6 @@ export class ClodReader {
     } catch (e) {
       throw new ClodError(bad + 'its positions do not decode');
     }
-    const positions = new Float32Array(vc * 3);
-    const rv = new DataView(raw.buffer);
-    for (let v = 0; v < vc; ++v)
-      for (let c = 0; c < 3; ++c) {
-        const off = wide ? rv.getUint32(v * 12 + 4 * c, true) : rv.getUint16(v * 8 + 2 * c, true);
-        if (off >= cells - qmin[c]) throw new ClodError(bad + 'a position off the grid');
-        positions[v * 3 + c] = grid.origin[c] + (qmin[c] + off) * grid.step;  // double, then float: as the desktop reader
-      }
     n = d.uv();
     p = d.overrun || n > d.left() ? null : d.take(n);
     const corners = new Uint32Array(fc * 3);
@@ -737,6 +848,14 @@ export class ClodReader {
       throw new ClodError(bad + 'its triangles do not decode');
     }
     for (let i = 0; i < corners.length; ++i) if (corners[i] >= vc) throw new ClodError(bad + 'face index out of range');
+    const q = this.info.version >= COMPACT_INDEX_VERSION ? predictedGrid(raw, vc, wide, corners, fc) : storedGrid(raw, vc, wide);
+    const positions = new Float32Array(vc * 3);
+    for (let v = 0; v < vc; ++v)
+      for (let c = 0; c < 3; ++c) {
+        const off = q[v * 3 + c];
+        if (off >= cells - qmin[c]) throw new ClodError(bad + 'a position off the grid');
+        positions[v * 3 + c] = grid.origin[c] + (qmin[c] + off) * grid.step;  // double, then float: as the desktop reader
+      }
     const mask = d.take((vc + 7) >> 3);
     if (!mask) throw new ClodError(bad + 'truncated vertex id mask');
     if (vc % 8 && mask[vc >> 3] >> (vc % 8)) throw new ClodError(bad + 'stray bits in the vertex id mask');

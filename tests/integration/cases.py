@@ -1396,7 +1396,7 @@ def cli_lod_round_trip(c):
     assert b["file_bytes"] == os.path.getsize(clod), b
     assert all(b["level_faces"][k] <= b["level_faces"][k - 1] for k in range(1, b["levels"])), b
     info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
-    assert info["faces"] == 69451 and info["nodes"] == b["nodes"] and info["version"] == 4, info
+    assert info["faces"] == 69451 and info["nodes"] == b["nodes"] and info["version"] == 6, info
     # Positions on one grid, within the bound asked for (--precision, default 2e-5 of the diagonal).
     assert 0 < b["quantization_error"] == info["quantization_error"] <= 2e-5 * 0.27, (b, info)
     human = c.conelod("lod", "info", clod).stdout.decode()
@@ -2446,8 +2446,21 @@ def web_viewer_armadillo(c):
     # server's check at start (header and roots) passes; the page finds the blob's CRC wrong.
     bad = bytearray(open(clod, "rb").read())
     index_offset = struct.unpack_from("<Q", bad, 24 + 80)[0]
-    block = index_offset + 24 + 16  # the first IBLK: header, recordBase, geometryBase, entries
-    roots_end = struct.unpack_from("<Q", bad, block + 24 + 8)[0] + struct.unpack_from("<I", bad, block + 24 + 16 + 4)[0]
+    blocks = (info["nodes"] + 511) // 512
+    block = index_offset + 24 + 16 + 4 * blocks  # the first IBLK (version 6: after the blocks' starts)
+    at = block + 24 + 16  # its header, recordBase, geometryBase, then varints: node 0's record, its blob's size
+    sizes = []
+    while len(sizes) < 2:
+        v, shift = 0, 0
+        while True:
+            v |= (bad[at] & 0x7F) << shift
+            shift += 7
+            at += 1
+            if bad[at - 1] < 0x80:
+                break
+        sizes.append(v)
+    assert sizes[0] & 1, sizes  # the first entry starts a blob
+    roots_end = struct.unpack_from("<Q", bad, block + 24 + 8)[0] + sizes[1]
     bad[roots_end + 20] ^= 0x10
     corrupt = c.out("corrupt.clod")
     open(corrupt, "wb").write(bad)
@@ -2555,7 +2568,7 @@ def cli_lod_attributes(c):
     assert r["attribute_conflicts"] == 0, r  # the seam's repeated vertices agree on colour and normal
     assert b"texture coordinates are stored without the image: cannot read its texture image" in p.stderr, p.stderr
     info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
-    assert info["version"] == 5 and info["colors"] and info["normals"] and info["texcoords"], info
+    assert info["version"] == 6 and info["colors"] and info["normals"] and info["texcoords"], info
     assert info["uv_min"] == [0, 0] and info["uv_max"] == [2, 1] and info["texture_bytes"] == 0, info
     text = c.conelod("lod", "info", clod).stdout.decode()
     assert "attributes per vertex: colour (RGBA8), normals (octahedral 2 x 16 bits)" in text, text
@@ -2608,7 +2621,7 @@ def cli_lod_attributes(c):
     p = c.conelod("lod", "build", src, "-o", noattr, "--no-attributes")
     assert b"texture coordinates" not in p.stderr, p.stderr
     assert open(plain, "rb").read() == open(noattr, "rb").read(), "--no-attributes is not the geometry-only file"
-    assert json.loads(c.conelod("lod", "info", plain, "--json").stdout)["version"] == 4
+    assert json.loads(c.conelod("lod", "info", plain, "--json").stdout)["version"] == 6
     assert os.path.getsize(clod) > os.path.getsize(plain)
     p = c.conelod("lod", "build", src, "-o", c.out("bad.clod"), "--attribute-weight", "-1", expect=1)
     assert b"--attribute-weight must be >= 0" in p.stderr and not os.path.exists(c.out("bad.clod")), p.stderr
@@ -2705,6 +2718,27 @@ def viewer_colours(c):
         stats.append(red_green_gradient(png, 0.1))
     print("red - green across the model: vertex colours %.1f, level colours %.1f" % tuple(stats))
     assert stats[0] > 40 and abs(stats[1]) < 15, stats
+
+
+@case
+def web_reader_positions(c):
+    """web/clod.js decodes every node's positions as the desktop reader does, bit for bit: the
+    version 6 prediction walked over the faces the same way in C++ and JavaScript (tools/
+    lod_node_hash against tests/integration/web_node_hash.mjs: per node, a hash of its sorted
+    positions), on the bunny's file at the default precision (units of u16 coordinates) and at
+    1e-6 (its coarse units need u32), and on the stored version 3, 4 and 5 files."""
+    tool = os.path.join(c.build, "tools", "lod_node_hash")
+    script = os.path.join(c.source, "tests", "integration", "web_node_hash.mjs")
+    data = os.path.join(c.source, "vcg_ext", "tests", "lod", "data")
+    fine = c.out("bunny_fine.clod")
+    c.conelod("lod", "build", c.mesh("stanford_bunny_bun_zipper.ply"), "-o", fine, "--precision", "1e-6")
+    files = [build_clod(c, "stanford_bunny_bun_zipper.ply", "bunny.clod"), fine] + [
+        os.path.join(data, n) for n in ("sphere512_v3.clod", "sphere512_v4b.clod", "sphere512_color_v5.clod")]
+    for f in files:
+        desktop = subprocess.run([tool, f], capture_output=True, text=True, check=True).stdout
+        web = subprocess.run(["node", script, c.source, f], capture_output=True, text=True, check=True).stdout
+        lines = desktop.split("\n")
+        assert len(lines) > 20 and desktop == web, (f, [(a, b) for a, b in zip(lines, web.split("\n")) if a != b][:5])
 
 
 @case

@@ -105,8 +105,8 @@ struct LodBuildStats {
   // Of fileBytes: the node records (HIER), and the compressed positions, triangles and global
   // vertex ids of the geometry (GEOS); quantizationError: the grid's bound, model units.
   uint64_t recordBytes = 0, positionBytes = 0, triangleBytes = 0, vertexIdBytes = 0;
-  uint64_t colorBytes = 0, normalBytes = 0;  // the attribute streams (version 5), compressed
-  uint64_t texCoordBytes = 0;                // the UV stream (version 5, bit 8), compressed
+  uint64_t colorBytes = 0, normalBytes = 0;  // the attribute streams (versions 5, 6), compressed
+  uint64_t texCoordBytes = 0;                // the UV stream (bit 8), compressed
   uint64_t textureBytes = 0;                 // the texture image stored in the file (TEXR), as it is
   size_t attributeConflicts = 0;  // BuildLodFile: welded vertices whose attributes differed (the lowest kept)
   double quantizationError = 0;
@@ -126,7 +126,7 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
 // file is the welded mesh. BuildLodDag and WriteLodFile take their mesh as it is. The mesh must
 // pass RequireValidForFaces. `attributes` (optional, per vertex of `mesh`): a welded vertex takes
 // its representative's (the lowest input vertex at its position; stats->attributeConflicts counts
-// the vertices whose values differed from it); the file is then version 5.
+// the vertices whose values differed from it); the file then carries their streams.
 Status BuildLodFile(const IndexedMesh& mesh, const LodBuildParams& params, const std::string& path,
                     LodBuildStats* stats = nullptr, const Progress& progress = Progress(),
                     const LodAttributes* attributes = nullptr);

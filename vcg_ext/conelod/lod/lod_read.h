@@ -99,7 +99,7 @@ std::string CheckLodTextureName(const std::string& name);
 // "application/octet-stream" when unknown.
 std::string LodTextureMime(const std::string& name, const std::vector<uint8_t>& bytes);
 
-// Per-vertex attributes carried through the DAG into the file (version 5), each stream either
+// Per-vertex attributes carried through the DAG into the file (versions 5, 6), each stream either
 // empty or one value per vertex: colour as RGBA8 (stored exactly), the normal as its octahedral
 // u16 x 2 code (lodfile::EncodeNormal; within kLodNormalErrorBound radians of the input's
 // direction), texture coordinates as u16 x 2 over the file's UV box (EncodeLodTexCoord; within
@@ -154,8 +154,8 @@ struct LodFileInfo {
   std::vector<uint64_t> levelNodes;  // nodes per node level
   uint64_t nodeCount = 0;
   uint64_t fileBytes = 0;
-  bool colors = false, normals = false;  // the attribute streams every node has (version 5)
-  bool texCoords = false;                // the UV stream (version 5, bit 8), over uvMin..uvMax
+  bool colors = false, normals = false;  // the attribute streams every node has (versions 5, 6)
+  bool texCoords = false;                // the UV stream (bit 8), over uvMin..uvMax
   float uvMin[2] = {0, 0}, uvMax[2] = {0, 0};
   // The texture chunk (TEXR), when the file has one: its image's name, MIME type and size
   // (LodReader::LoadTexture reads the bytes).
@@ -188,7 +188,7 @@ class LodReader {
 
   Status LoadGeometry(uint32_t id);                // reads and keeps the node's geometry
   const LodGeometry* geometry(uint32_t id) const;  // null when not loaded
-  // The node's attributes per local vertex of its geometry (the streams the file has, version 5);
+  // The node's attributes per local vertex of its geometry (the streams the file has, versions 5, 6);
   // null when its geometry is not loaded or the file has none. Loaded and evicted with it.
   const LodAttributes* attributes(uint32_t id) const;
   void EvictGeometry(uint32_t id);

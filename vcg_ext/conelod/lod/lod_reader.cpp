@@ -3,7 +3,7 @@
 // Kamiya, Suzuki, Kawachi, §8-9: the viewer keeps little in memory and reads from the file as it
 // refines. Open() reads the header, checks the index and container chunks it points to, and
 // loads the roots (records and geometry). Everything else is read by node: its index entry (one
-// 12 KiB IBLK block), its record, its geometry and the vertex blocks it uses. Every size and
+// IBLK block), its record, its geometry and the vertex blocks it uses. Every size and
 // count read from the file is checked against the file's size before anything is allocated, and
 // every chunk's CRC-32 is checked before its data is used.
 #include "conelod/lod/lod_read.h"
@@ -185,7 +185,7 @@ struct LodReader::Impl {
   uint64_t hierOffset = 0, geosOffset = 0, indexOffset = 0, textureOffset = 0;
   uint64_t hierBegin = 0, hierEnd = 0, geosBegin = 0, geosEnd = 0;  // the blobs' data
   uint32_t indexBlock = 0;
-  uint32_t attributeMask = 0;  // version 5: kGeomColors | kGeomNormals, the streams of every unit
+  uint32_t attributeMask = 0;  // versions 5, 6: kGeomColors | kGeomNormals | kGeomTexCoords, the streams of every unit
   std::vector<uint32_t> roots;
   struct Entry {
     LodNode node;
@@ -195,7 +195,7 @@ struct LodReader::Impl {
     std::unique_ptr<LodGeometry> geometry;
   };
   std::unordered_map<uint32_t, Entry> nodes;
-  // Version 5: the attributes of the nodes whose geometry is loaded (apart, so that a
+  // Versions 5, 6: the attributes of the nodes whose geometry is loaded (apart, so that a
   // geometry-only file's nodes cost no more).
   std::unordered_map<uint32_t, LodAttributes> nodeAttributes;
   size_t geometryBytes = 0;     // of the loaded geometry (its attributes included)
@@ -208,7 +208,7 @@ struct LodReader::Impl {
     std::vector<uint64_t> faceStart;        // per node, into corners / 3; nodeCount + 1 entries
     std::vector<vcg::Point3f> positions;    // per unit vertex
     std::vector<uint32_t> corners, vertexIds;
-    LodAttributes attributes;  // per unit vertex (version 5)
+    LodAttributes attributes;  // per unit vertex (versions 5, 6)
     size_t bytes() const {
       return faceStart.capacity() * 8 + positions.capacity() * sizeof(vcg::Point3f) +
              (corners.capacity() + vertexIds.capacity() + attributes.colors.capacity() + attributes.normals.capacity() +
@@ -217,10 +217,15 @@ struct LodReader::Impl {
     }
   } unit;
   std::vector<uint8_t> positionScratch;  // reused for decoding
+  std::vector<uint64_t> gridScratch, residualScratch;
+  PositionPredictor predictor;  // version 6: the positions' predictions
   std::vector<uint32_t> idScratch, localScratch;
   // The last index block read (a node's children share one most of the time).
   uint64_t cachedIndexBlock = ~uint64_t(0);
   std::vector<IndexEntry> indexCache;
+  // Version 6: where each index block starts, from the first block's header (INDX's data).
+  std::vector<uint32_t> blockStarts;
+  uint64_t indexChildBytes = 0;
 
   uint32_t levelOf(uint32_t id) const {
     for (size_t k = 0; k < levels.size(); ++k)
@@ -261,42 +266,99 @@ struct LodReader::Impl {
     return !kCheckCrc || (bytes >= 4 && Crc32(p + 4, size_t(bytes - 4)) == Decoder(p, 4).u32());
   }
 
+  // Versions 3 to 5: block b at a fixed offset, entries u32 ends relative to the block's bases.
+  Status ReadIndexBlock(uint64_t b) {
+    const uint64_t blocksData = kChunkHeaderBytes + kIndexDataBytes;
+    const uint64_t blockBytes = kChunkHeaderBytes + kIndexBlockBaseBytes + uint64_t(indexBlock) * kIndexEntryBytes;
+    const uint64_t entries = std::min<uint64_t>(indexBlock, info.nodeCount - b * indexBlock);
+    const uint64_t bytes = kChunkHeaderBytes + kIndexBlockBaseBytes + entries * kIndexEntryBytes;
+    Status s = ReadRange(indexOffset + blocksData + b * blockBytes, bytes, "index block");
+    if (!s.ok()) return s;
+    ChunkHeader h;
+    s = CheckChunk(buffer.data(), bytes, kIBlock, bytes, "index block", h);
+    if (!s.ok()) return s;
+    indexCache.resize(size_t(entries));
+    Decoder d(buffer.data() + kChunkHeaderBytes, size_t(bytes - kChunkHeaderBytes));
+    uint64_t record = d.u64(), geometry = d.u64();
+    const std::string bad = "corrupt index block " + Num(b) + ": ";
+    if (record < hierBegin || record > hierEnd || geometry < geosBegin || geometry > geosEnd)
+      return Status::Invalid(bad + "it points outside the records or the geometry");
+    // Nodes of one unit share its geometry blob: an entry ending where the previous one
+    // ended has the previous one's blob.
+    const uint64_t recordBase = record, geometryBase = geometry;
+    uint64_t lastEnd = ~uint64_t(0);
+    for (auto& e : indexCache) {
+      const uint64_t recordEnd = recordBase + d.u32(), geometryEnd = geometryBase + d.u32();
+      if (geometryEnd != lastEnd && lastEnd != ~uint64_t(0)) geometry = lastEnd;
+      if (recordEnd < record || recordEnd > hierEnd || geometryEnd <= geometry || geometryEnd > geosEnd)
+        return Status::Invalid(bad + "an entry points outside the records or the geometry");
+      e.record = record;
+      e.recordBytes = recordEnd - record;
+      e.geometry = geometry;
+      e.geometryBytes = geometryEnd - geometry;
+      record = recordEnd;
+      lastEnd = geometryEnd;
+    }
+    return Status::Ok();
+  }
+
+  // Version 6: block b where the INDX data says, read whole (its CRC checked); per entry a varint
+  // (record size - kRecordFixedBytes) x 2 + 1 when the entry starts a new geometry blob, whose
+  // size follows; else (never the block's first) it shares the previous entry's blob.
+  Status ReadCompactIndexBlock(uint64_t b) {
+    const uint64_t entries = std::min<uint64_t>(indexBlock, info.nodeCount - b * indexBlock);
+    const uint64_t start = blockStarts[size_t(b)];
+    const uint64_t end = b + 1 < blockStarts.size() ? blockStarts[size_t(b) + 1] : indexChildBytes;
+    const uint64_t bytes = end - start;  // > entries + the bases (checked at Open)
+    Status s = ReadRange(
+        indexOffset + kChunkHeaderBytes + kIndexDataBytes + blockStarts.size() * kIndexBlockStartBytes + start, bytes,
+        "index block");
+    if (!s.ok()) return s;
+    ChunkHeader h;
+    s = CheckChunk(buffer.data(), bytes, kIBlock, bytes, "index block", h);
+    if (!s.ok()) return s;
+    indexCache.resize(size_t(entries));
+    Decoder d(buffer.data() + kChunkHeaderBytes, size_t(bytes - kChunkHeaderBytes));
+    uint64_t record = d.u64(), geometry = d.u64(), geometryEnd = geometry;
+    const std::string bad = "corrupt index block " + Num(b) + ": ";
+    if (record < hierBegin || record > hierEnd || geometry < geosBegin || geometry > geosEnd)
+      return Status::Invalid(bad + "it points outside the records or the geometry");
+    bool firstEntry = true;
+    for (auto& e : indexCache) {
+      const uint64_t code = d.uv();
+      const uint64_t recordBytes = (code >> 1) + kRecordFixedBytes;
+      if ((code & 1) == 0 && firstEntry) return Status::Invalid(bad + "its first entry has no geometry");
+      if (code & 1) {
+        const uint64_t n = d.uv();
+        if (n > geosEnd - geometryEnd)
+          return Status::Invalid(bad + "an entry points outside the records or the geometry");
+        geometry = geometryEnd;
+        geometryEnd += n;
+      }
+      if (d.overrun || recordBytes > hierEnd - record)
+        return Status::Invalid(bad + "an entry points outside the records or the geometry");
+      e.record = record;
+      e.recordBytes = recordBytes;
+      e.geometry = geometry;
+      e.geometryBytes = geometryEnd - geometry;
+      if (e.geometryBytes > 0xFFFFFFFFu) return Status::Invalid(bad + "a geometry blob of 4 GiB or more");
+      record += recordBytes;
+      firstEntry = false;
+    }
+    if (d.left() != 0) return Status::Invalid(bad + "it does not end with its last entry");
+    return Status::Ok();
+  }
+
   // Index entries of nodes [first, first+count).
   Status ReadIndex(uint32_t first, uint32_t count, std::vector<IndexEntry>& out) {
     out.clear();
-    const uint64_t blocksData = kChunkHeaderBytes + kIndexDataBytes;
-    const uint64_t blockBytes = kChunkHeaderBytes + kIndexBlockBaseBytes + uint64_t(indexBlock) * kIndexEntryBytes;
     for (uint64_t i = first; i < uint64_t(first) + count;) {
       const uint64_t b = i / indexBlock;
       if (b != cachedIndexBlock) {
-        const uint64_t entries = std::min<uint64_t>(indexBlock, info.nodeCount - b * indexBlock);
-        const uint64_t bytes = kChunkHeaderBytes + kIndexBlockBaseBytes + entries * kIndexEntryBytes;
-        Status s = ReadRange(indexOffset + blocksData + b * blockBytes, bytes, "index block");
-        if (!s.ok()) return s;
-        ChunkHeader h;
-        s = CheckChunk(buffer.data(), bytes, kIBlock, bytes, "index block", h);
-        if (!s.ok()) return s;
-        indexCache.resize(size_t(entries));
-        Decoder d(buffer.data() + kChunkHeaderBytes, size_t(bytes - kChunkHeaderBytes));
-        uint64_t record = d.u64(), geometry = d.u64();
-        const std::string bad = "corrupt index block " + Num(b) + ": ";
-        if (record < hierBegin || record > hierEnd || geometry < geosBegin || geometry > geosEnd)
-          return Status::Invalid(bad + "it points outside the records or the geometry");
-        // Nodes of one unit share its geometry blob: an entry ending where the previous one
-        // ended has the previous one's blob.
-        const uint64_t recordBase = record, geometryBase = geometry;
-        uint64_t lastEnd = ~uint64_t(0);
-        for (auto& e : indexCache) {
-          const uint64_t recordEnd = recordBase + d.u32(), geometryEnd = geometryBase + d.u32();
-          if (geometryEnd != lastEnd && lastEnd != ~uint64_t(0)) geometry = lastEnd;
-          if (recordEnd < record || recordEnd > hierEnd || geometryEnd <= geometry || geometryEnd > geosEnd)
-            return Status::Invalid(bad + "an entry points outside the records or the geometry");
-          e.record = record;
-          e.recordBytes = recordEnd - record;
-          e.geometry = geometry;
-          e.geometryBytes = geometryEnd - geometry;
-          record = recordEnd;
-          lastEnd = geometryEnd;
+        Status s = info.version >= kCompactIndexVersion ? ReadCompactIndexBlock(b) : ReadIndexBlock(b);
+        if (!s.ok()) {
+          cachedIndexBlock = ~uint64_t(0);
+          return s;
         }
         cachedIndexBlock = b;
       }
@@ -498,6 +560,7 @@ struct LodReader::Impl {
       if (unit.faceStart[size_t(i) + 1] > bytes) return Status::Invalid(bad + "more faces than its blob can hold");
     }
     const size_t fc = size_t(unit.faceStart.back());
+    if (fc > 0x3FFFFFFF) return Status::Invalid(bad + "more faces than a unit can hold");  // 3 x fc corners: u32
     const uint64_t vc64 = d.uv();
     if (d.overrun || vc64 == 0 || vc64 > uint64_t(3) * fc) return Status::Invalid(bad + "impossible vertex count");
     const size_t vc = size_t(vc64);
@@ -514,14 +577,6 @@ struct LodReader::Impl {
     positionScratch.resize(vc * stride);
     if (!p || meshopt_decodeVertexBuffer(positionScratch.data(), vc, stride, p, size_t(n)) != 0)
       return Status::Invalid(bad + "its positions do not decode");
-    unit.positions.resize(vc);
-    for (size_t v = 0; v < vc; ++v)
-      for (int c = 0; c < 3; ++c) {
-        const uint8_t* q = positionScratch.data() + v * stride + (wide ? 4 : 2) * size_t(c);
-        const uint64_t off = wide ? Decoder(q, 4).u32() : Decoder(q, 2).u16();
-        if (off >= cells - qmin[c]) return Status::Invalid(bad + "a position off the grid");
-        unit.positions[v][c] = info.grid.Dequantize(uint32_t(qmin[c] + off), c);
-      }
     // Triangles.
     n = d.uv();
     p = d.overrun || n > d.left() ? nullptr : d.take(size_t(n));
@@ -530,6 +585,42 @@ struct LodReader::Impl {
       return Status::Invalid(bad + "its triangles do not decode");
     for (uint32_t v : unit.corners)
       if (v >= vc) return Status::Invalid(bad + "face index out of range");
+    // Grid coordinates relative to qmin: stored (versions 3 to 5), or (version 6) the residuals
+    // of the predictions as running signed bytes, the faces walked as the writer walked them.
+    gridScratch.resize(vc * 3);
+    const int width = wide ? 4 : 2;
+    if (info.version >= kCompactIndexVersion) {
+      residualScratch.resize(vc * 3);
+      static const uint8_t zeros[12] = {0};
+      for (size_t v = 0; v < vc; ++v) {
+        const uint8_t* at = positionScratch.data() + v * stride;
+        const uint8_t* before = v ? at - stride : zeros;
+        for (int c = 0; c < 3; ++c)
+          residualScratch[v * 3 + size_t(c)] = ResidualFromBytes(at + width * c, before + width * c, width);
+      }
+      const uint64_t valueMask = (uint64_t(1) << (8 * width)) - 1;
+      predictor.Walk(unit.corners.data(), fc, vc, gridScratch.data(), [&](uint32_t v, const uint64_t* pred) {
+        for (size_t c = 0; c < 3; ++c)
+          gridScratch[3 * size_t(v) + c] = (pred[c] + residualScratch[3 * size_t(v) + c]) & valueMask;
+      });
+    } else {
+      for (size_t v = 0; v < vc; ++v)
+        for (int c = 0; c < 3; ++c) {
+          const uint8_t* q = positionScratch.data() + v * stride + size_t(width * c);
+          gridScratch[v * 3 + size_t(c)] = wide ? Decoder(q, 4).u32() : Decoder(q, 2).u16();
+        }
+    }
+    unit.positions.resize(vc);
+    for (size_t v = 0; v < vc; ++v)
+      for (int c = 0; c < 3; ++c) {
+        const uint64_t off = gridScratch[v * 3 + size_t(c)];
+        if (off >= cells - qmin[c]) return Status::Invalid(bad + "a position off the grid");
+        unit.positions[v][c] = info.grid.Dequantize(uint32_t(qmin[c] + off), c);
+      }
+    // The prediction's buffers go (a unit's are 50-60 bytes a face): the reader holds the cut.
+    std::vector<uint64_t>().swap(gridScratch);
+    std::vector<uint64_t>().swap(residualScratch);
+    predictor.Release();
     // Global ids: the vertices new to the file in order from firstNew, the others listed.
     const uint8_t* mask = d.take((vc + 7) / 8);
     if (!mask) return Status::Invalid(bad + "truncated vertex id mask");
@@ -544,7 +635,7 @@ struct LodReader::Impl {
       if (!p || meshopt_decodeIndexSequence(idScratch.data(), idScratch.size(), 4, p, size_t(n)) != 0)
         return Status::Invalid(bad + "its vertex ids do not decode");
     }
-    // Attribute streams (version 5): 4 bytes a vertex each.
+    // Attribute streams (versions 5, 6): 4 bytes a vertex each.
     auto stream = [&](const char* what, std::string& why) -> const uint8_t* {
       n = d.uv();
       p = d.overrun || n > d.left() ? nullptr : d.take(size_t(n));
@@ -686,7 +777,7 @@ struct LodReader::Impl {
     if (version < kOldestReadVersion || version > kVersion)
       return Status::Invalid("unsupported .clod version " + Num(version) + " (this reader reads versions " +
                              Num(kOldestReadVersion) + " to " + Num(kVersion) + ")");
-    // The attributes field (version 5), and with texture coordinates the UV box and the texture's
+    // The attributes field (versions 5, 6), and with texture coordinates the UV box and the texture's
     // offset (checked against the field below).
     const uint64_t tail = version >= kAttributeVersion ? kHeaderAttributeBytes : 0;
     const uint64_t extra = h.dataBytes > kHeaderFixedBytes + tail && version >= kAttributeVersion &&
@@ -754,7 +845,7 @@ struct LodReader::Impl {
     if (tail) {
       attributeMask = d.u32();
       d.u32();
-      if (attributeMask == 0 || (attributeMask & ~kKnownAttributes))
+      if ((attributeMask == 0 && info.version < kCompactIndexVersion) || (attributeMask & ~kKnownAttributes))
         return Status::Invalid(bad + "unknown attribute streams (" + Num(attributeMask) +
                                "; this reader knows colour 2, normals 4 and texture coordinates 8)");
       info.colors = attributeMask & kGeomColors;
@@ -824,20 +915,42 @@ struct LodReader::Impl {
     s = CheckContainer(geosOffset, kGeos, "the geometry chunk", geosBegin, geosEnd);
     if (!s.ok()) return s;
     {
-      const uint64_t indexBytes = kChunkHeaderBytes + kIndexDataBytes;
-      s = ReadRange(indexOffset, indexBytes, "the index chunk");
+      const uint64_t blocks = (info.nodeCount + indexBlock - 1) / indexBlock;
+      const bool compact = info.version >= kCompactIndexVersion;
+      // Version 6: the INDX data lists where each block starts (u32 each).
+      const uint64_t dataBytes = kIndexDataBytes + (compact ? blocks * kIndexBlockStartBytes : 0);
+      s = ReadRange(indexOffset, kChunkHeaderBytes + dataBytes, "the index chunk");
       if (!s.ok()) return s;
       ChunkHeader ih;
-      s = CheckChunk(buffer.data(), indexBytes, kIndex, 0, "the index chunk", ih);
+      s = CheckChunk(buffer.data(), kChunkHeaderBytes + dataBytes, kIndex, 0, "the index chunk", ih);
       if (!s.ok()) return s;
-      Decoder di(buffer.data() + kChunkHeaderBytes, kIndexDataBytes);
+      Decoder di(buffer.data() + kChunkHeaderBytes, size_t(dataBytes));
       const uint64_t entries = di.u64();
       const uint32_t block = di.u32();
-      const uint64_t blocks = (info.nodeCount + indexBlock - 1) / indexBlock;
-      if (ih.dataBytes != kIndexDataBytes || entries != info.nodeCount || block != indexBlock ||
-          ih.childBytes != blocks * (kChunkHeaderBytes + kIndexBlockBaseBytes) + info.nodeCount * kIndexEntryBytes ||
+      di.u32();
+      // A compact block: its header, its bases, at least a byte an entry.
+      const uint64_t leastChildren = blocks * (kChunkHeaderBytes + kIndexBlockBaseBytes) + info.nodeCount;
+      if (ih.dataBytes != dataBytes || entries != info.nodeCount || block != indexBlock ||
+          (compact ? ih.childBytes < leastChildren
+                   : ih.childBytes !=
+                         blocks * (kChunkHeaderBytes + kIndexBlockBaseBytes) + info.nodeCount * kIndexEntryBytes) ||
           ih.totalBytes() > src->size - indexOffset)
         return Status::Invalid("corrupt chunk size in the index chunk");
+      if (compact) {
+        indexChildBytes = ih.childBytes;
+        blockStarts.resize(size_t(blocks));
+        for (uint64_t b = 0; b < blocks; ++b) {
+          blockStarts[size_t(b)] = di.u32();
+          const uint64_t entriesOf = std::min<uint64_t>(indexBlock, info.nodeCount - b * indexBlock);
+          const uint64_t least = kChunkHeaderBytes + kIndexBlockBaseBytes + entriesOf;
+          const uint64_t start = blockStarts[size_t(b)];
+          // (Every block before the last is full.)
+          const uint64_t fullBlock = kChunkHeaderBytes + kIndexBlockBaseBytes + indexBlock;
+          if ((b == 0 && start != 0) || (b > 0 && start < uint64_t(blockStarts[size_t(b) - 1]) + fullBlock) ||
+              start > ih.childBytes || ih.childBytes - start < least)
+            return Status::Invalid("corrupt index chunk: bad start of index block " + Num(b));
+        }
+      }
     }
     // The roots: records and geometry.
     const uint32_t top = levelCount - 1;
@@ -996,9 +1109,10 @@ size_t LodReader::residentBytes() const {
   const Impl& m = *impl_;
   size_t b = sizeof(LodReader) + sizeof(Impl) + m.levels.capacity() * sizeof(LevelEntry) + m.roots.capacity() * 4 +
              m.buffer.capacity() + m.positionScratch.capacity() +
+             (m.gridScratch.capacity() + m.residualScratch.capacity()) * 8 + m.predictor.bytes() +
              (m.idScratch.capacity() + m.localScratch.capacity()) * 4 + m.unit.bytes() +
-             m.indexCache.capacity() * sizeof(IndexEntry) + m.info.levelFaces.capacity() * 16 + m.src->heldBytes() +
-             m.geometryBytes;
+             m.indexCache.capacity() * sizeof(IndexEntry) + m.blockStarts.capacity() * 4 +
+             m.info.levelFaces.capacity() * 16 + m.src->heldBytes() + m.geometryBytes;
   // Hash map: buckets plus one heap node per record (key, entry, next pointer, cached hash).
   b += m.nodes.bucket_count() * sizeof(void*);
   for (const auto& kv : m.nodes)

@@ -267,7 +267,7 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
     const std::string bad = dag.attributes.Check(dag.positions.size());
     if (!bad.empty()) return Status::Invalid(bad);
   }
-  // Attribute streams (version 5); none: the version 4 file, byte for byte.
+  // Attribute streams (the header's attributes field and every blob's flags); none: 0.
   const LodAttributes& attributes = dag.attributes;
   const uint32_t attributeMask = (attributes.colors.empty() ? 0u : kGeomColors) |
                                  (attributes.normals.empty() ? 0u : kGeomNormals) |
@@ -451,7 +451,7 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
   uint64_t colorBytes = 0, normalBytes = 0, texCoordBytes = 0;
   auto encodeHeader = [&]() {
     Encoder e;
-    e.u32(attributeMask ? kAttributeVersion : kGeometryOnlyVersion);
+    e.u32(kVersion);
     e.u32(nodeLevels);
     e.u64(inputVertices);
     e.u64(inputFaces);
@@ -473,11 +473,9 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
       e.f32(levelError[k]);
       e.u32(0);
     }
-    if (attributeMask) {  // version 5
-      e.u32(attributeMask);
-      e.u32(0);
-    }
-    if (attributeMask & kGeomTexCoords) {  // version 5 with texture coordinates
+    e.u32(attributeMask);  // 0: geometry only
+    e.u32(0);
+    if (attributeMask & kGeomTexCoords) {  // texture coordinates: the UV box and the image
       for (int c = 0; c < 2; ++c) e.f32(attributes.uvMin[c]);
       for (int c = 0; c < 2; ++c) e.f32(attributes.uvMax[c]);
       e.u64(textureOffset);
@@ -594,8 +592,10 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
     std::vector<uint32_t> start, faces, local(dag.positions.size(), kNoParent), verts, idx, tmp, remap, old;
     std::vector<uint32_t> fileId(dag.positions.size(), kNoParent);
     std::vector<uint8_t> buf, mask;
-    std::vector<uint16_t> q16;
-    std::vector<uint32_t> q32;
+    std::vector<uint32_t> q32, decoded;
+    std::vector<uint64_t> qrel, residual;
+    std::vector<uint8_t> lanes, ibuf;
+    PositionPredictor predictor;
     std::vector<uint8_t> attr;
     Encoder e;
     meshopt_encodeVertexVersion(kVertexCodecVersion);
@@ -660,28 +660,40 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
         e.uv(vc);
         for (int c = 0; c < 3; ++c) e.uv(qmin[c]);
         e.uv(globalVertices);  // the first new global id
-        if (wide) {
-          for (size_t v = 0; v < vc; ++v)
-            for (int c = 0; c < 3; ++c) q32[v * 3 + size_t(c)] -= qmin[c];
-          buf.resize(meshopt_encodeVertexBufferBound(vc, 12));
-          buf.resize(meshopt_encodeVertexBuffer(buf.data(), buf.size(), q32.data(), vc, 12));
-        } else {
-          q16.assign(vc * 4, 0);
-          for (size_t v = 0; v < vc; ++v)
-            for (int c = 0; c < 3; ++c) q16[v * 4 + size_t(c)] = uint16_t(q32[v * 3 + size_t(c)] - qmin[c]);
-          buf.resize(meshopt_encodeVertexBufferBound(vc, 8));
-          buf.resize(meshopt_encodeVertexBuffer(buf.data(), buf.size(), q16.data(), vc, 8));
+        // The triangles are coded first: the positions' predictions walk the faces as the reader
+        // gets them back from the index codec (which may rotate a face's corners).
+        ibuf.resize(meshopt_encodeIndexBufferBound(idx.size(), vc));
+        ibuf.resize(meshopt_encodeIndexBuffer(ibuf.data(), ibuf.size(), idx.data(), idx.size()));
+        if (ibuf.empty()) return fail("internal error: the index codec failed");
+        decoded.resize(idx.size());
+        if (meshopt_decodeIndexBuffer(decoded.data(), decoded.size(), 4, ibuf.data(), ibuf.size()) != 0)
+          return fail("internal error: the index codec failed");
+        // Positions: residuals from the predictions, as running signed bytes (lod_internal.h).
+        const int width = wide ? 4 : 2;
+        const size_t stride = wide ? 12 : 8;
+        const uint64_t valueMask = (uint64_t(1) << (8 * width)) - 1;
+        qrel.resize(vc * 3);
+        residual.resize(vc * 3);
+        for (size_t v = 0; v < vc; ++v)
+          for (int c = 0; c < 3; ++c) qrel[v * 3 + size_t(c)] = q32[v * 3 + size_t(c)] - qmin[c];
+        predictor.Walk(decoded.data(), decoded.size() / 3, vc, qrel.data(), [&](uint32_t v, const uint64_t* pred) {
+          for (size_t c = 0; c < 3; ++c) residual[3 * size_t(v) + c] = (qrel[3 * size_t(v) + c] - pred[c]) & valueMask;
+        });
+        lanes.assign(vc * stride, 0);
+        uint8_t running[12] = {0};
+        for (size_t v = 0; v < vc; ++v) {
+          for (int c = 0; c < 3; ++c) AddResidualBytes(residual[v * 3 + size_t(c)], width, running + width * c);
+          std::memcpy(lanes.data() + v * stride, running, size_t(3 * width));
         }
+        buf.resize(meshopt_encodeVertexBufferBound(vc, stride));
+        buf.resize(meshopt_encodeVertexBuffer(buf.data(), buf.size(), lanes.data(), vc, stride));
         if (buf.empty()) return fail("internal error: the vertex codec failed");
         e.uv(buf.size());
         e.raw(buf.data(), buf.size());
         positionBytes += buf.size();
-        buf.resize(meshopt_encodeIndexBufferBound(idx.size(), vc));
-        buf.resize(meshopt_encodeIndexBuffer(buf.data(), buf.size(), idx.data(), idx.size()));
-        if (buf.empty()) return fail("internal error: the index codec failed");
-        e.uv(buf.size());
-        e.raw(buf.data(), buf.size());
-        indexBytes += buf.size();
+        e.uv(ibuf.size());
+        e.raw(ibuf.data(), ibuf.size());
+        indexBytes += ibuf.size();
         mask.assign((vc + 7) / 8, 0);
         old.clear();
         for (size_t v = 0; v < vc; ++v) {
@@ -752,33 +764,39 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
     patchContainer(kGeos, geosOffset);
   }
 
-  // The offset index, in blocks: each block gives the offsets of its first record and its first
-  // node's geometry blob, then per entry where its record and its geometry blob end (relative to
-  // those).
+  // The offset index (version 6), in blocks of kIndexBlock entries: each block gives the offsets
+  // of its first record and its first node's geometry blob, then per entry its record's size and,
+  // when the entry starts a new blob (not its unit's previous node), that blob's size, as varints;
+  // the INDX chunk's data lists where each block starts, so that one block is read alone.
   indexOffset = out.offset();
   {
     const uint64_t blocks = (nodeCount + kIndexBlock - 1) / kIndexBlock;
+    const uint64_t hierData = hierOffset + kChunkHeaderBytes;
+    std::vector<Encoder> blockData(static_cast<size_t>(blocks));
     Encoder e;
     e.u64(nodeCount);
     e.u32(kIndexBlock);
     e.u32(0);
-    out.chunk(kIndex, e, blocks * (kChunkHeaderBytes + kIndexBlockBaseBytes) + nodeCount * kIndexEntryBytes);
-    const uint64_t hierData = hierOffset + kChunkHeaderBytes;
+    uint64_t childBytes = 0;
     for (uint64_t b = 0; b < blocks; ++b) {
-      e.clear();
+      if (childBytes > 0xFFFFFFFFu) return fail("too many nodes for the file format's index");
+      e.u32(uint32_t(childBytes));
+      Encoder& d = blockData[size_t(b)];
       const uint64_t first = b * kIndexBlock, end = std::min<uint64_t>(nodeCount, (b + 1) * kIndexBlock);
-      // (Nodes of one unit share its blob: their entries end at the same offset.)
-      const uint64_t rb = first ? recordEnd[first - 1] : hierData, gb = geometryStart[first];
-      e.u64(rb);
-      e.u64(gb);
+      uint64_t record = first ? recordEnd[first - 1] : hierData;
+      d.u64(record);
+      d.u64(geometryStart[first]);
       for (uint64_t i = first; i < end; ++i) {
-        if (recordEnd[i] - rb > 0xFFFFFFFFu || geometryEnd[i] - gb > 0xFFFFFFFFu)
-          return fail("too much geometry in one index block for the file format");
-        e.u32(uint32_t(recordEnd[i] - rb));
-        e.u32(uint32_t(geometryEnd[i] - gb));
+        // (Nodes of one unit share its blob: the same start.)
+        const bool newBlob = i == first || geometryStart[i] != geometryStart[i - 1];
+        d.uv((recordEnd[i] - record - kRecordFixedBytes) * 2 + (newBlob ? 1 : 0));
+        if (newBlob) d.uv(geometryEnd[i] - geometryStart[i]);
+        record = recordEnd[i];
       }
-      out.chunk(kIBlock, e);
+      childBytes += kChunkHeaderBytes + d.bytes.size();
     }
+    out.chunk(kIndex, e, childBytes);
+    for (const Encoder& d : blockData) out.chunk(kIBlock, d);
   }
   const uint64_t fileBytes = out.offset();
   {

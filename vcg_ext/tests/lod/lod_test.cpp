@@ -27,6 +27,7 @@
 
 #include "conelod/lod/lod_internal.h"
 #include "conelod/lod/lod_spill.h"
+#include "conelod/mesh/ply_format.h"
 #include "conelod/mesh/weld.h"
 #include "conelod/mesh/sorted_faces.h"
 #include "conelod/vcg_bridge.h"
@@ -245,7 +246,7 @@ TEST_F(TinyLod, HeaderAndNodeStructure) {
   const LodFileInfo& i = r->info();
   const size_t H = b.dag.levels.size();
   ASSERT_GE(H, 3u) << "the tiny sphere should give a DAG of several levels";
-  EXPECT_EQ(i.version, 4u);
+  EXPECT_EQ(i.version, 6u);
   EXPECT_EQ(i.levels, int(H));
   EXPECT_EQ(i.inputFaces, 128u);
   EXPECT_EQ(i.inputVertices, 66u);
@@ -441,6 +442,44 @@ void RechecksumBlob(std::vector<uint8_t>& bytes, size_t at, size_t size) {
   PutU32(bytes, at, Crc32(bytes.data() + at + 4, size - 4));
 }
 
+// The version 6 index of a good file, parsed apart from the reader (lod_format.md): where each
+// IBLK starts, and per node where its record and its geometry blob lie.
+struct ParsedIndex {
+  size_t indexAt = 0, startsAt = 0;  // the INDX chunk; its table of block starts (in its data)
+  std::vector<size_t> blockAt;       // each IBLK chunk (absolute)
+  struct Entry {
+    size_t record, recordBytes, geometry, geometryBytes;
+  };
+  std::vector<Entry> entries;
+};
+ParsedIndex ParseIndex(const std::vector<uint8_t>& f) {
+  ParsedIndex x;
+  x.indexAt = size_t(Decoder(f.data() + kChunkHeaderBytes + 80, 8).u64());
+  const size_t n = size_t(Decoder(f.data() + x.indexAt + kChunkHeaderBytes, 8).u64());
+  const size_t blocks = (n + kIndexBlock - 1) / kIndexBlock;
+  x.startsAt = x.indexAt + kChunkHeaderBytes + kIndexDataBytes;
+  const size_t first = x.startsAt + kIndexBlockStartBytes * blocks;
+  for (size_t b = 0; b < blocks; ++b) {
+    x.blockAt.push_back(first + Decoder(f.data() + x.startsAt + 4 * b, 4).u32());
+    const ChunkHeader h = DecodeChunkHeader(f.data() + x.blockAt.back());
+    EXPECT_EQ(h.id, kIBlock);
+    Decoder d(f.data() + x.blockAt.back() + kChunkHeaderBytes, size_t(h.dataBytes));
+    size_t record = size_t(d.u64()), geometry = size_t(d.u64()), end = geometry;
+    for (size_t i = b * kIndexBlock; i < std::min(n, (b + 1) * kIndexBlock); ++i) {
+      const uint64_t code = d.uv();
+      if (code & 1) {
+        geometry = end;
+        end += size_t(d.uv());
+      }
+      x.entries.push_back({record, size_t(code >> 1) + kRecordFixedBytes, geometry, end - geometry});
+      record += x.entries.back().recordBytes;
+    }
+    EXPECT_EQ(d.left(), 0u);
+    EXPECT_FALSE(d.overrun);
+  }
+  return x;
+}
+
 TEST_F(TinyLod, BadFilesAreRefusedWithTheirReason) {
   const std::vector<uint8_t>& good = tiny_->bytes;
   auto has = [](const std::string& msg, const std::string& what) { return msg.find(what) != std::string::npos; };
@@ -487,8 +526,10 @@ TEST_F(TinyLod, BadFilesAreRefusedWithTheirReason) {
   const size_t hier = size_t(Decoder(good.data() + kChunkHeaderBytes + 64, 8).u64());
   const size_t index = size_t(Decoder(good.data() + kChunkHeaderBytes + 80, 8).u64());
   const size_t rec = hier + kChunkHeaderBytes;  // node 0's record
-  const size_t block0 = index + kChunkHeaderBytes + kIndexDataBytes + kChunkHeaderBytes;
-  const size_t recBytes = size_t(Decoder(good.data() + block0 + kIndexBlockBaseBytes, 4).u32());
+  const ParsedIndex parsed = ParseIndex(good);
+  ASSERT_EQ(parsed.entries.size(), size_t(OpenOk(good)->info().nodeCount));
+  ASSERT_EQ(parsed.entries[0].record, rec);
+  const size_t recBytes = parsed.entries[0].recordBytes;
   {  // a root's record with a negative radius, then a negative error, then a group: checksum redone
     std::vector<uint8_t> b = good;
     PutF32(b, rec + 4 + 6 + 12, -0.5f);
@@ -536,24 +577,10 @@ TEST_F(TinyLod, BadFilesAreRefusedWithTheirReason) {
     const std::string e = FullReadError(b);
     EXPECT_TRUE(has(e, "checksum mismatch in index block")) << e;
   }
-  // The last node's geometry (level 0, read on demand) ends where the index chunk begins.
-  const size_t lastBlock = (size_t(OpenOk(good)->info().nodeCount) - 1) / kIndexBlock;
-  const size_t lastBlockAt =
-      block0 + lastBlock * (kChunkHeaderBytes + kIndexBlockBaseBytes + kIndexBlock * kIndexEntryBytes);
-  const size_t lastEntries = size_t(OpenOk(good)->info().nodeCount) - lastBlock * kIndexBlock;
-  const size_t geomBase = size_t(Decoder(good.data() + lastBlockAt + 8, 8).u64());
-  auto geometryEndOf = [&](size_t entry) {
-    return geomBase + Decoder(good.data() + lastBlockAt + 16 + entry * 8 + 4, 4).u32();
-  };
-  // The last blob (a unit: its nodes' entries end at the same offset) starts where an earlier
-  // entry ends.
-  const size_t geomEnd = geometryEndOf(lastEntries - 1);
-  size_t geomStart = geomBase;
-  for (size_t j = lastEntries - 1; j-- > 0;)
-    if (geometryEndOf(j) != geomEnd) {
-      geomStart = geometryEndOf(j);
-      break;
-    }
+  // The last node's geometry (level 0, read on demand) ends where the index chunk begins; its
+  // blob is its unit's (its nodes' entries name the same blob).
+  const size_t geomStart = parsed.entries.back().geometry;
+  const size_t geomEnd = geomStart + parsed.entries.back().geometryBytes;
   ASSERT_EQ(geomEnd, index);
   {  // a node's geometry: its checksum is checked when it is read
     std::vector<uint8_t> b = good;
@@ -693,6 +720,247 @@ TEST(Lod, Version3FilesStillRead) {
     ASSERT_TRUE(ExtractCutMesh(*r, cut, true, out).ok());
     EXPECT_EQ(SortedFacePositions(out), SortedFacePositions(OnGrid(ToIndexedMesh(m), r->info().grid)));
   }
+}
+
+// Version 6 (the compact index) reads as the version 4 and 5 files of the same DAG: every record,
+// every node's geometry and attributes, the header's figures. Both are stored, written by main at
+// 0d3679e (before version 6) with `conelod lod build` of data/sphere512.ply (sphere512_v4b.clod)
+// and of data/sphere512_color.ply, the same sphere with a colour and a normal per vertex
+// (sphere512_color_v5.clod); version 6 is built here the way `conelod lod build` builds it.
+TEST(Lod, Version4And5FilesStillRead) {
+  const std::string dir = std::string(CONELOD_SOURCE_DIR) + "/vcg_ext/tests/lod/data/";
+  for (const std::string name : {"sphere512", "sphere512_color"}) {
+    SCOPED_TRACE(name);
+    const std::string old = dir + (name == "sphere512" ? "sphere512_v4b.clod" : "sphere512_color_v5.clod");
+    PlyMesh ply;
+    ASSERT_EQ(ReadPly(dir + name + ".ply", ply), "");
+    IndexedMesh im;
+    LodAttributes at;
+    for (const auto& c : ply.colors) {
+      std::array<uint8_t, 4> q;
+      for (size_t i = 0; i < 4; ++i) q[i] = uint8_t(std::lround(std::min(1.f, std::max(0.f, c[i])) * 255.f));
+      at.colors.push_back(q);
+    }
+    for (const auto& n : ply.normals) at.normals.push_back(EncodeLodNormal(vcg::Point3f(n[0], n[1], n[2])));
+    for (const auto& p : ply.positions) im.positions.emplace_back(p[0], p[1], p[2]);
+    im.faces = ply.triangles;
+    const std::string path = TempPath(name + "_v6.clod");
+    ASSERT_TRUE(BuildLodFile(im, LodBuildParams(), path, nullptr, Progress(), at.empty() ? nullptr : &at).ok());
+    std::unique_ptr<LodReader> ro, rn;
+    Status s = LodReader::Open(old, ro);
+    ASSERT_TRUE(s.ok()) << s.message;
+    s = LodReader::Open(path, rn);
+    ASSERT_TRUE(s.ok()) << s.message;
+    const LodFileInfo &io = ro->info(), &in = rn->info();
+    EXPECT_EQ(io.version, at.empty() ? 4u : 5u);
+    EXPECT_EQ(in.version, 6u);
+    EXPECT_EQ(io.colors, in.colors);
+    EXPECT_EQ(io.normals, in.normals);
+    EXPECT_EQ(in.colors, !at.colors.empty());
+    ASSERT_EQ(io.nodeCount, in.nodeCount);
+    EXPECT_EQ(io.levelFaces, in.levelFaces);
+    EXPECT_EQ(io.globalVertices, in.globalVertices);
+    EXPECT_EQ(io.grid.step, in.grid.step);
+    // The same bytes but for the header (version, attributes field) and the index, 8 bytes a
+    // node smaller than before.
+    const size_t oldBytes = ReadBytes(old).size(), newBytes = ReadBytes(path).size();
+    EXPECT_LT(newBytes + 5 * io.nodeCount, oldBytes);
+    for (uint32_t id = 0; id < in.nodeCount; ++id) {
+      ASSERT_TRUE(ro->LoadNode(id).ok());
+      s = rn->LoadNode(id);
+      ASSERT_TRUE(s.ok()) << s.message;
+      const LodNode &a = ro->node(id), &c = rn->node(id);
+      EXPECT_EQ(a.children, c.children);
+      EXPECT_EQ(a.siblings, c.siblings);
+      EXPECT_EQ(a.parents, c.parents) << id;
+      EXPECT_EQ(a.center, c.center);
+      EXPECT_EQ(a.radius, c.radius);
+      EXPECT_EQ(a.cone.axis, c.cone.axis);
+      EXPECT_EQ(a.error, c.error);
+      EXPECT_EQ(a.parentError, c.parentError) << id;
+      ASSERT_TRUE(ro->LoadGeometry(id).ok());
+      s = rn->LoadGeometry(id);
+      ASSERT_TRUE(s.ok()) << s.message;
+      EXPECT_EQ(ro->geometry(id)->vertexIds, rn->geometry(id)->vertexIds) << id;
+      EXPECT_EQ(ro->geometry(id)->positions, rn->geometry(id)->positions) << id;
+      EXPECT_EQ(ro->geometry(id)->faces, rn->geometry(id)->faces) << id;
+      if (!at.empty()) {
+        ASSERT_TRUE(ro->attributes(id) && rn->attributes(id));
+        EXPECT_EQ(ro->attributes(id)->colors, rn->attributes(id)->colors) << id;
+        EXPECT_EQ(ro->attributes(id)->normals, rn->attributes(id)->normals) << id;
+      }
+    }
+    std::remove(path.c_str());
+  }
+}
+
+// Version 6 positions are residuals of predictions made along the faces (lod_internal.h's
+// PositionPredictor): the full-budget cut gives back the input on the grid exactly, on a grid of
+// u16 units and on one fine enough that the coarse units are u32 ("wide"), and the predicted
+// positions take fewer bytes than the stored ones did (the version 4 file of the same sphere).
+TEST(Lod, PredictedPositionsRoundTripNarrowAndWide) {
+  const IndexedMesh m = test::Sphere(5);
+  LodBuildParams p;
+  size_t wideUnits = 0;
+  for (double precision : {2e-5, 1e-7}) {
+    SCOPED_TRACE(precision);
+    p.precision = precision;
+    const std::string path = TempPath("sphere_predicted.clod");
+    LodBuildStats st;
+    ASSERT_TRUE(BuildLodFile(m, p, path, &st).ok());
+    std::unique_ptr<LodReader> r;
+    ASSERT_TRUE(LodReader::Open(path, r).ok());
+    LodCut cut;
+    ASSERT_TRUE(RefineLod(*r, Eye(0, 0, 5, size_t(1) << 30, false), cut).ok());
+    IndexedMesh out;
+    ASSERT_TRUE(ExtractCutMesh(*r, cut, true, out).ok());
+    EXPECT_EQ(SortedFacePositions(out), SortedFacePositions(OnGrid(m, r->info().grid)));
+    // The geometry blobs' flags (each blob: CRC, flags, ...; the index gives where they start).
+    const std::vector<uint8_t> f = ReadBytes(path);
+    const ParsedIndex x = ParseIndex(f);
+    std::set<size_t> blobs;
+    for (const auto& e : x.entries) blobs.insert(e.geometry);
+    for (size_t at : blobs) wideUnits += f[at + 4] & kGeomWidePositions;
+    std::remove(path.c_str());
+  }
+  EXPECT_GT(wideUnits, 0u);
+  // Against the stored sphere512_v4b.clod (the same input, stored positions): fewer bytes.
+  const std::string dir = std::string(CONELOD_SOURCE_DIR) + "/vcg_ext/tests/lod/data/";
+  PlyMesh ply;
+  ASSERT_EQ(ReadPly(dir + "sphere512.ply", ply), "");
+  IndexedMesh im;
+  for (const auto& q : ply.positions) im.positions.emplace_back(q[0], q[1], q[2]);
+  im.faces = ply.triangles;
+  LodBuildStats st;
+  const std::string path = TempPath("sphere512_predicted.clod");
+  ASSERT_TRUE(BuildLodFile(im, LodBuildParams(), path, &st).ok());
+  std::remove(path.c_str());
+  EXPECT_LT(st.positionBytes, 4490u);  // the version 4 file's positions (conelod lod build at 0d3679e)
+}
+
+// The compact index (version 6): a few bytes a node, random access by block, and hostile entries
+// (each with a valid CRC) refused by name; a file of several blocks (the bunny's nodes) reads
+// every node through each block.
+TEST(Lod, CompactIndexIsSmallAndChecked) {
+  Built b;
+  CMesh m;
+  ASSERT_EQ(LoadPly(m, test::MeshPath("stanford_bunny_bun_zipper.ply")), "");
+  b.mesh = ToIndexedMesh(m);
+  LodBuildParams p;
+  p.clusterFaces = 32;  // more nodes: several index blocks
+  Build(b, "bunny_index", p);
+  const std::vector<uint8_t>& good = b.bytes;
+  const ParsedIndex x = ParseIndex(good);
+  const size_t n = x.entries.size();
+  ASSERT_GE(x.blockAt.size(), 3u);
+  const size_t indexBytes = good.size() - x.indexAt;
+  std::printf("bunny, 32-face clusters: %zu nodes, index %zu bytes (%.2f a node; versions 3-5: %zu)\n", n, indexBytes,
+              double(indexBytes) / double(n),
+              kChunkHeaderBytes + kIndexDataBytes + x.blockAt.size() * (kChunkHeaderBytes + kIndexBlockBaseBytes) +
+                  n * kIndexEntryBytes);
+  EXPECT_LT(indexBytes, n * 2);  // versions 3 to 5: 8 bytes a node and more
+  {                              // every node's entry as the parse finds it: the blobs the reader reads are those
+    auto r = OpenOk(good);
+    ASSERT_TRUE(r);
+    for (uint32_t id = 0; id < n; id += 7) {  // blocks out of order, each cached in turn
+      const uint32_t j = uint32_t((uint64_t(id) * 2654435761u) % n);
+      Status s = r->LoadNode(j);
+      ASSERT_TRUE(s.ok()) << s.message;
+      s = r->LoadGeometry(j);
+      ASSERT_TRUE(s.ok()) << s.message;
+    }
+    EXPECT_EQ(FullReadError(good), "");
+  }
+  auto has = [](const std::string& msg, const std::string& what) { return msg.find(what) != std::string::npos; };
+  const size_t last = x.blockAt.size() - 1;
+  {  // a block's start moved (INDX data, its CRC redone): out of the index, refused at Open;
+     // a byte further, refused when the block is read
+    std::vector<uint8_t> bad = good;
+    PutU32(bad, x.startsAt + 4 * last, 0x7FFFFFFFu);
+    Rechecksum(bad, x.indexAt);
+    EXPECT_TRUE(has(OpenError(bad), "bad start of index block " + std::to_string(last))) << OpenError(bad);
+    bad = good;
+    PutU32(bad, x.startsAt + 4 * last, uint32_t(x.blockAt[last] - x.blockAt[0]) + 1);
+    Rechecksum(bad, x.indexAt);
+    EXPECT_EQ(OpenError(bad), "");
+    const std::string e = FullReadError(bad);
+    EXPECT_TRUE(has(e, "(index block), found")) << e;
+    bad = good;
+    PutU32(bad, x.startsAt, 1);
+    Rechecksum(bad, x.indexAt);
+    EXPECT_TRUE(has(OpenError(bad), "bad start of index block 0")) << OpenError(bad);
+  }
+  // An IBLK's entries, rewritten (its CRC redone): the last block's first entry.
+  const size_t blockData = x.blockAt[last] + kChunkHeaderBytes;
+  const size_t e0 = blockData + kIndexBlockBaseBytes;
+  auto rewritten = [&](const std::vector<uint8_t>& entries0, size_t replaced) {
+    std::vector<uint8_t> bad = good;
+    bad.erase(bad.begin() + long(e0), bad.begin() + long(e0 + replaced));
+    bad.insert(bad.begin() + long(e0), entries0.begin(), entries0.end());
+    return bad;
+  };
+  {  // the first entry without a blob of its own, a record or a blob past the end of its
+     // container, a byte left over: the chunks' sizes and the CRC made consistent each time
+    ASSERT_EQ(good[e0] & 1, 1);
+    std::vector<uint8_t> bad = good;
+    bad[e0] ^= 1;
+    Rechecksum(bad, x.blockAt[last]);
+    std::string e = FullReadError(bad);
+    EXPECT_TRUE(has(e, "corrupt index block " + std::to_string(last) + ": its first entry has no geometry")) << e;
+    // A record past the records' end: the first entry's record size huge (a 9-byte varint).
+    const std::vector<uint8_t> huge = {0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x01};
+    size_t firstLen = 1;
+    while (good[e0 + firstLen - 1] & 0x80) ++firstLen;
+    bad = rewritten(huge, firstLen);
+    // The block grew by huge.size() - firstLen bytes: its chunk size and the root's.
+    const uint64_t grow = huge.size() - firstLen;
+    PutU64(bad, x.blockAt[last] + 8, DecodeChunkHeader(good.data() + x.blockAt[last]).dataBytes + grow);
+    PutU64(bad, x.indexAt + 16, DecodeChunkHeader(good.data() + x.indexAt).childBytes + grow);
+    PutU64(bad, 16, DecodeChunkHeader(good.data()).childBytes + grow);
+    Rechecksum(bad, x.blockAt[last]);
+    e = FullReadError(bad);
+    EXPECT_TRUE(has(e, "corrupt index block " + std::to_string(last) + ": an entry points outside")) << e;
+    // A trailing byte in the block.
+    bad = good;
+    bad.insert(bad.end(), uint8_t(0));
+    PutU64(bad, x.blockAt[last] + 8, DecodeChunkHeader(good.data() + x.blockAt[last]).dataBytes + 1);
+    PutU64(bad, x.indexAt + 16, DecodeChunkHeader(good.data() + x.indexAt).childBytes + 1);
+    PutU64(bad, 16, DecodeChunkHeader(good.data()).childBytes + 1);
+    Rechecksum(bad, x.blockAt[last]);
+    e = FullReadError(bad);
+    EXPECT_TRUE(has(e, "corrupt index block " + std::to_string(last) + ": it does not end with its last entry")) << e;
+    // A geometry size past the geometry's end.
+    bad = good;
+    const size_t at = e0 + firstLen;  // the first entry's blob size (a varint)
+    size_t len = 1;
+    while (good[at + len - 1] & 0x80) ++len;
+    const std::vector<uint8_t> big = {0xFF, 0xFF, 0xFF, 0xFF, 0x0F};
+    bad.erase(bad.begin() + long(at), bad.begin() + long(at + len));
+    bad.insert(bad.begin() + long(at), big.begin(), big.end());
+    const int64_t g = int64_t(big.size()) - int64_t(len);
+    PutU64(bad, x.blockAt[last] + 8, uint64_t(int64_t(DecodeChunkHeader(good.data() + x.blockAt[last]).dataBytes) + g));
+    PutU64(bad, x.indexAt + 16, uint64_t(int64_t(DecodeChunkHeader(good.data() + x.indexAt).childBytes) + g));
+    PutU64(bad, 16, uint64_t(int64_t(DecodeChunkHeader(good.data()).childBytes) + g));
+    Rechecksum(bad, x.blockAt[last]);
+    e = FullReadError(bad);
+    EXPECT_TRUE(has(e, "corrupt index block " + std::to_string(last) + ": an entry points outside")) << e;
+  }
+  {  // every byte of the index changed in turn (CRC redone): a clean read or a refusal, no crash
+    size_t refused = 0, tried = 0;
+    const size_t stride = std::max<size_t>(1, (good.size() - x.indexAt) / 400);
+    for (size_t at = x.indexAt + kChunkHeaderBytes; at < good.size(); at += stride) {
+      std::vector<uint8_t> bad = good;
+      bad[at] ^= 0x21;
+      size_t chunk = x.indexAt;
+      for (size_t b = 0; b < x.blockAt.size(); ++b)
+        if (at >= x.blockAt[b]) chunk = x.blockAt[b];
+      if (at >= chunk + kChunkHeaderBytes) Rechecksum(bad, chunk);
+      refused += !FullReadError(bad).empty();
+      ++tried;
+    }
+    EXPECT_GT(refused, tried / 2) << "of " << tried;
+  }
+  std::remove(b.path.c_str());
 }
 
 // --- The bunny --------------------------------------------------------------------------------
@@ -1498,10 +1766,10 @@ TEST(LodAttributes, NormalCodeStaysWithinItsBound) {
   EXPECT_NEAR(z[2], 1.0, 1e-6);
 }
 
-// The coloured bunny: a version 5 file; the full-budget cut gives every input vertex its colour
-// exactly and its normal within the bound; a coarse cut interpolates the (linear) colour at the
-// moved vertices, within the RGBA8 rounding; the geometry-only build is still version 4 and the
-// file of BuildLodFile without attributes byte for byte.
+// The coloured bunny: a file with attribute streams; the full-budget cut gives every input vertex
+// its colour exactly and its normal within the bound; a coarse cut interpolates the (linear)
+// colour at the moved vertices, within the RGBA8 rounding; the geometry-only build is the file of
+// BuildLodFile without attributes byte for byte.
 TEST(LodAttributes, ColouredRoundTripIsExactAndCoarseLevelsInterpolate) {
   const attr::Coloured c = attr::ColouredBunny();
   const std::string path = TempPath("coloured.clod"), plain = TempPath("plain.clod"), plain2 = TempPath("plain2.clod");
@@ -1521,8 +1789,8 @@ TEST(LodAttributes, ColouredRoundTripIsExactAndCoarseLevelsInterpolate) {
   std::unique_ptr<LodReader> r, rp;
   ASSERT_TRUE(LodReader::Open(path, r).ok());
   ASSERT_TRUE(LodReader::Open(plain, rp).ok());
-  EXPECT_EQ(r->info().version, 5u);
-  EXPECT_EQ(rp->info().version, 4u);
+  EXPECT_EQ(r->info().version, 6u);
+  EXPECT_EQ(rp->info().version, 6u);
   EXPECT_TRUE(r->info().colors && r->info().normals);
   EXPECT_FALSE(rp->info().colors || rp->info().normals);
 
@@ -1618,20 +1886,29 @@ TEST(LodAttributes, BadVersion5FilesAreRefused) {
     ++tried;
   }
   EXPECT_GE(refused, tried * 99 / 100) << "of " << tried << " flipped bytes";
-  // The header's attributes field: unknown bits, or none.
+  // The header's attributes field: unknown bits.
   const size_t field = header - kHeaderAttributeBytes;
-  for (uint32_t mask : {0u, 16u, 2u | 32u}) {
+  for (uint32_t mask : {16u, 2u | 32u}) {  // 0 is geometry only in version 6; 8 needs the UV fields
     std::vector<uint8_t> bad = good;
     PutU32(bad, field, mask);
     Rechecksum(bad, 0);
     EXPECT_NE(OpenError(bad).find("unknown attribute streams"), std::string::npos) << OpenError(bad);
   }
-  // The header says colour only: every unit's flags then disagree.
-  {
+  // The header says colour only, or none (version 6: a geometry-only file): every unit's flags
+  // then disagree.
+  for (uint32_t mask : {uint32_t(kGeomColors), 0u}) {
     std::vector<uint8_t> bad = good;
-    PutU32(bad, field, kGeomColors);
+    PutU32(bad, field, mask);
     Rechecksum(bad, 0);
     EXPECT_NE(FullReadError(bad).find("attribute streams are not the file's"), std::string::npos) << FullReadError(bad);
+  }
+  // Version 5 requires a stream.
+  {
+    std::vector<uint8_t> bad = good;
+    PutU32(bad, kChunkHeaderBytes, 5);
+    PutU32(bad, field, 0);
+    Rechecksum(bad, 0);
+    EXPECT_NE(OpenError(bad).find("unknown attribute streams"), std::string::npos) << OpenError(bad);
   }
   // Mislabelled as version 4: the header's size no longer fits.
   {
@@ -1759,7 +2036,7 @@ TEST(LodTexCoords, UvStreamRoundTripIsExactUpToTheQuantization) {
   std::unique_ptr<LodReader> r;
   ASSERT_TRUE(LodReader::Open(path, r).ok());
   const LodFileInfo& info = r->info();
-  EXPECT_EQ(info.version, 5u);
+  EXPECT_EQ(info.version, 6u);
   EXPECT_TRUE(info.texCoords);
   EXPECT_FALSE(info.colors || info.normals);
   EXPECT_EQ(info.textureName, "atlas.png");
