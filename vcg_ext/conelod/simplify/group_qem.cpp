@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 
 #include <vcg/space/box3.h>
 
@@ -160,6 +161,11 @@ class EntryHeap {
     for (size_t i = n_ / 4 + 1; i-- > 0;)
       if (i < n_) SiftDown(i);
   }
+  void release() {
+    storage_.reset();
+    h_ = nullptr;
+    n_ = cap_ = 0;
+  }
   template <class Pred>
   void RemoveIf(Pred pred) {
     n_ = size_t(std::remove_if(h_, h_ + n_, pred) - h_);
@@ -167,10 +173,12 @@ class EntryHeap {
   }
 
  private:
+  // Left uninitialised: pages of the room that no entry has reached are never touched and take no
+  // memory (the reserve is two entries per face; the heap holds about one per edge, 1.5 per face).
   void grow(size_t cap) {
-    std::vector<HeapEntry> storage(cap + 4);  // + room to align
-    const uintptr_t addr = reinterpret_cast<uintptr_t>(storage.data());
-    HeapEntry* h = storage.data() + ((48 - addr % 64 + 64) % 64) / sizeof(HeapEntry);
+    std::unique_ptr<HeapEntry[]> storage(new HeapEntry[cap + 4]);  // + room to align
+    const uintptr_t addr = reinterpret_cast<uintptr_t>(storage.get());
+    HeapEntry* h = storage.get() + ((48 - addr % 64 + 64) % 64) / sizeof(HeapEntry);
     std::copy(h_, h_ + n_, h);
     storage_.swap(storage);
     h_ = h;
@@ -202,8 +210,8 @@ class EntryHeap {
     }
     h_[i] = x;
   }
-  std::vector<HeapEntry> storage_;
-  HeapEntry* h_ = nullptr;  // storage_.data() + 0..3, at 48 modulo 64 bytes
+  std::unique_ptr<HeapEntry[]> storage_;
+  HeapEntry* h_ = nullptr;  // storage_.get() + 0..3, at 48 modulo 64 bytes
   size_t n_ = 0, cap_ = 0;
 };
 static_assert(sizeof(HeapEntry) == 16, "four heap entries per cache line");
@@ -278,6 +286,9 @@ class GroupQemSimplifier {
   void init();
   Candidate evaluate(uint32_t a, uint32_t b);  // judge() + counts
   Status run(const Progress& progress, GroupQemStats& stats);
+  // Frees what only run() reads (the heap, the face lists, the quadrics, the search marks), so
+  // that output()'s mesh does not sit on top of them: the run's own arrays are its peak.
+  void ReleaseLoop();
   void output(GroupQemResult& out) const;
   Point3d inputPosition(const Point3d& p) const { return p + center_; }
 
@@ -444,7 +455,9 @@ void GroupQemSimplifier::BuildFaceLists() {
     count_[v] = 0;
   }
   // Twice the room: a collapse appends the survivor's new list at the end; we rebuild when full.
-  refs_.assign(std::max<size_t>(size_t(total) * 2, 64), 0);
+  // (reserve, not assign: the room is not written until a collapse appends to it.)
+  refs_.clear();
+  refs_.reserve(std::max<size_t>(size_t(total) * 2, 64));
   refs_.resize(total);
   for (uint32_t f = 0; f < faces_.size(); ++f) {
     if (faceDead_[f]) continue;
@@ -1605,6 +1618,15 @@ void GroupQemSimplifier::TallyFloor(double maxErrorSq, GroupQemStats& stats) {
   }
 }
 
+void GroupQemSimplifier::ReleaseLoop() {
+  heap_.release();
+  std::vector<uint32_t>().swap(refs_);
+  std::vector<uint32_t>().swap(start_);
+  std::vector<uint32_t>().swap(count_);
+  std::vector<Quadric>().swap(quadric_);
+  std::vector<uint32_t>().swap(faceMark_);
+}
+
 void GroupQemSimplifier::output(GroupQemResult& out) const {
   out.mesh.positions.clear();
   out.mesh.faces.clear();
@@ -1763,6 +1785,7 @@ Status SimplifyPreservingGroups(const IndexedMesh& mesh, const std::vector<int>&
   GroupQemSimplifier simplifier(mesh, faceGroup, coarserGroups, params, region, attributes, true);
   simplifier.init();
   s = simplifier.run(progress, out.stats);
+  simplifier.ReleaseLoop();
   if (s.ok() || s.code == Status::Code::Cancelled) simplifier.output(out);
   if (s.ok() && progress) progress(100, "Group-preserving QEM: done");
   return s;
