@@ -674,17 +674,20 @@ def meshlab_collapses_say_what_they_keep(c):
     """Issue 26: on a grid with vertex colour and per-face texcoord lists (MeshLab's wedge
     coordinates) the Group-Preserving Quadric Edge Collapse says it interpolated both (and says
     nothing of keeping them); the Feature-Preserving Edge Simplification, whose half-edge collapses
-    keep a kept vertex's or corner's own values, says so in the log (nothing of the colour when it
-    colours the feature vertices itself); on the geometry-only armadillo neither says a thing."""
+    keep a kept corner's own coordinates, says so in the log, and that a kept vertex takes the mean
+    colour of those it took over (nothing of the colour when it colours the feature vertices
+    itself), and its colours are those of `conelod feature-simplify`; on the geometry-only
+    armadillo neither says a thing."""
     src = c.out("attr_wedge.ply")
     write_attribute_grid(src, wedge=True)
     runs = (("group_preserving_quadric_edge_collapse.mlx", {}, False, True),
             ("feature_preserving_edge_simplification.mlx", {"MarkFeatures": False}, True, False),
             ("feature_preserving_edge_simplification.mlx", {"MarkFeatures": True}, False, False))
-    for mlx, values, colour, interpolated in runs:
+    for mlx, values, mean, interpolated in runs:
         _, log = c.meshlab([src], mlx_with(c, mlx, values), c.out("out.ply"))
-        said = "vertex colours: each kept vertex keeps its own colour, not interpolated" in log
-        assert said == colour, (mlx, values, log[-2000:])
+        assert "each kept vertex keeps its own colour" not in log, (mlx, values, log[-2000:])
+        said = "vertex colours: each kept vertex takes the area-weighted mean colour of the vertices" in log
+        assert said == mean, (mlx, values, log[-2000:])
         kept = "wedge texture coordinates: not kept consistent" in log
         assert kept != interpolated, (mlx, log[-2000:])
         said = ("attributes interpolated at each new vertex (attribute weight 0): vertex colours, wedge texture "
@@ -693,6 +696,19 @@ def meshlab_collapses_say_what_they_keep(c):
         _, log = c.meshlab([c.mesh("stanford_armadillo_cgal.ply")], mlx_with(c, mlx), c.out("out.ply"))
         assert "texture coordinates" not in log and "vertex colours" not in log, (mlx, log[-2000:])
         assert "interpolated" not in log, (mlx, log[-2000:])
+    # The feature-preserving filter's colours are the CLI's (per-vertex coordinates: the same vertices).
+    grid = c.out("attr_grid.ply")
+    write_attribute_grid(grid)
+    ml, cli = c.out("ml_feature.ply"), c.out("cli_feature.ply")
+    c.meshlab([grid], mlx_with(c, "feature_preserving_edge_simplification.mlx", TargetFaceNum=450, TargetPerc=0,
+                               MarkFeatures=False), ml, save=("vc", "vt"))
+    c.conelod("feature-simplify", grid, "--target-faces", "450", "-o", cli)
+
+    def coloured(path):
+        verts, faces = ply_records(path)
+        return len(faces), sorted((round(v["x"], 5), round(v["y"], 5), v["red"], v["green"], v["blue"]) for v in verts)
+    (nm, vm), (nc, vc) = coloured(ml), coloured(cli)
+    assert nm == nc and vm == vc, (nm, nc, [a for a in vm if a not in vc][:5], [a for a in vc if a not in vm][:5])
 
 
 @case

@@ -3,10 +3,14 @@
 //
 // The simplification only removes vertices and faces (half-edge collapses and edge swaps never
 // create a vertex), so the surviving vertices and faces keep every attribute they had: colour,
-// quality, normals, texture coordinates per vertex, named attributes.
+// quality, normals, texture coordinates per vertex, named attributes. MeanSurvivorColours then
+// gives each survivor the mean colour of the vertices it took over.
 #pragma once
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include <vcg/complex/complex.h>
@@ -18,6 +22,48 @@ namespace conelod {
 // Name of the per-vertex int attribute holding the VertexClass of each vertex after a
 // feature-preserving simplification (0 = V_K smooth, 1 = V_M feature line, 2 = V_C feature vertex).
 inline const char* VertexClassAttributeName() { return "conelod_vertex_class"; }
+
+// Issue 26. A half-edge collapse keeps the survivor where it was, so its own colour is the input
+// surface's colour at that one point; but each output vertex now stands for the input vertices
+// its collapses took over (FeatureSimplifyResult::survivor). Gives each output vertex the
+// area-weighted mean colour (RGBA, 0-255, rounded) of those input vertices, its own included,
+// each weighted by a third of the area of its input faces; a vertex whose weights sum to zero
+// keeps its colour. Nothing is done when the mesh has no per-vertex colour. Call on the mesh as
+// it was given to ToIndexedMesh (before WriteSimplifiedMesh); only on success. Texture
+// coordinates and normals stay the survivor's own: the texture is sampled at the survivor's
+// exact coordinates, which are right for its unchanged position.
+template <class MeshType>
+void MeanSurvivorColours(MeshType& m, const FeatureSimplifyResult& r) {
+  if (!vcg::tri::HasPerVertexColor(m)) return;
+  using VertexPointer = typename MeshType::VertexPointer;
+  std::vector<VertexPointer> vertexOfIndex;
+  std::vector<uint32_t> indexOfSlot(m.vert.size(), UINT32_MAX);
+  for (auto& v : m.vert)
+    if (!v.IsD()) {
+      indexOfSlot[size_t(&v - &m.vert[0])] = uint32_t(vertexOfIndex.size());
+      vertexOfIndex.push_back(&v);
+    }
+  std::vector<double> area(vertexOfIndex.size(), 0.0);
+  for (auto& f : m.face) {
+    if (f.IsD()) continue;
+    const double third = double(vcg::DoubleArea(f)) / 6.0;
+    for (int k = 0; k < 3; ++k) area[indexOfSlot[size_t(f.V(k) - &m.vert[0])]] += third;
+  }
+  std::vector<std::array<double, 5>> sum(r.inputVertex.size(), std::array<double, 5>{{0, 0, 0, 0, 0}});
+  for (size_t i = 0; i < vertexOfIndex.size() && i < r.survivor.size(); ++i) {
+    const uint32_t o = r.survivor[i];
+    if (o == UINT32_MAX || !(area[i] > 0)) continue;
+    const auto& c = vertexOfIndex[i]->C();
+    for (int k = 0; k < 4; ++k) sum[o][size_t(k)] += area[i] * double(c[k]);
+    sum[o][4] += area[i];
+  }
+  for (size_t o = 0; o < r.inputVertex.size(); ++o) {
+    if (!(sum[o][4] > 0)) continue;
+    auto& c = vertexOfIndex[r.inputVertex[o]]->C();
+    for (int k = 0; k < 4; ++k)
+      c[k] = (unsigned char)std::min(255L, std::max(0L, std::lround(sum[o][size_t(k)] / sum[o][4])));
+  }
+}
 
 // `faceOfIndex` is the map returned by ToIndexedMesh (indexed face -> mesh face); indexed
 // vertices are the mesh's non-deleted vertices in order (as ToIndexedMesh numbers them).

@@ -10,6 +10,7 @@
 #include <set>
 #include <thread>
 
+#include "conelod/simplify_bridge.h"
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"
 #include "test_util.h"
@@ -564,6 +565,75 @@ TEST(FeatureSimplify, FirstPassAheadReportsOnTheCallingThread) {
       EXPECT_TRUE(cancelled.mesh.faces.empty());
     }
   }
+}
+
+// Issue 26: each input vertex ends in one output vertex (FeatureSimplifyResult::survivor), and
+// MeanSurvivorColours gives each output vertex the area-weighted mean colour of the input vertices
+// that ended in it: the mean that minimises the area-weighted squared colour difference between
+// each input vertex and its survivor, so that sum drops from the survivors' own colours; a
+// constant colour stays that colour exactly.
+TEST(FeatureSimplify, SurvivorsTakeTheMeanColourOfWhatTheyReplaced) {
+  const IndexedMesh sphere = test::Sphere(4);
+  FeatureSimplifyParams p;
+  p.targetFaceCount = sphere.faces.size() / 10;
+  FeatureSimplifyResult r;
+  ASSERT_TRUE(FeatureSimplify(sphere, p, r).ok());
+  ASSERT_TRUE(r.targetReached);
+  ASSERT_EQ(r.survivor.size(), sphere.positions.size());
+  std::vector<size_t> members(r.inputVertex.size(), 0);
+  for (uint32_t s : r.survivor) {
+    ASSERT_LT(s, r.inputVertex.size());
+    ++members[s];
+  }
+  for (size_t o = 0; o < r.inputVertex.size(); ++o) EXPECT_EQ(r.survivor[r.inputVertex[o]], o);
+  EXPECT_GT(*std::max_element(members.begin(), members.end()), 1u);
+
+  // Input vertex areas (a third of their faces') and a colour that varies from vertex to vertex.
+  std::vector<double> area(sphere.positions.size(), 0.0);
+  for (const auto& t : sphere.faces) {
+    const auto& a = sphere.positions[t[0]];
+    const double third = double(((sphere.positions[t[1]] - a) ^ (sphere.positions[t[2]] - a)).Norm()) / 6.0;
+    for (uint32_t v : t) area[v] += third;
+  }
+  auto colour = [&](size_t v) {
+    const auto& q = sphere.positions[v];
+    return vcg::Color4b((unsigned char)(128 + 120 * q[0]), (unsigned char)((v * 37) % 256),
+                        (unsigned char)(128 + 100 * std::sin(9 * q[2])), 255);
+  };
+  CMesh m;
+  AppendIndexedMesh(m, sphere);
+  vcg::tri::UpdateBounding<CMesh>::Box(m);
+  for (size_t v = 0; v < m.vert.size(); ++v) m.vert[v].C() = colour(v);
+  MeanSurvivorColours(m, r);
+  double before = 0, after = 0;
+  for (size_t o = 0; o < r.inputVertex.size(); ++o) {
+    double sum[3] = {0, 0, 0}, weight = 0;
+    for (size_t v = 0; v < r.survivor.size(); ++v)
+      if (r.survivor[v] == o) {
+        for (int k = 0; k < 3; ++k) sum[k] += area[v] * colour(v)[k];
+        weight += area[v];
+      }
+    const vcg::Color4b got = m.vert[r.inputVertex[o]].C();
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(got[k], sum[k] / weight, 0.5 + 1e-3) << "output vertex " << o;
+    EXPECT_EQ(got[3], 255);
+  }
+  for (size_t v = 0; v < r.survivor.size(); ++v) {
+    const vcg::Color4b own = colour(r.inputVertex[r.survivor[v]]), mean = m.vert[r.inputVertex[r.survivor[v]]].C();
+    for (int k = 0; k < 3; ++k) {
+      before += area[v] * std::pow(double(colour(v)[k]) - own[k], 2);
+      after += area[v] * std::pow(double(colour(v)[k]) - mean[k], 2);
+    }
+  }
+  EXPECT_LT(after, 0.8 * before) << "area-weighted squared colour difference to the survivor";
+
+  // A constant colour stays exactly that colour; WriteSimplifiedMesh keeps the survivors' colours.
+  for (auto& v : m.vert) v.C() = vcg::Color4b(10, 200, 77, 128);
+  MeanSurvivorColours(m, r);
+  std::vector<size_t> faceOf;
+  ToIndexedMesh(m, &faceOf);
+  WriteSimplifiedMesh(m, faceOf, r, false);
+  ASSERT_EQ(size_t(m.vn), r.inputVertex.size());
+  for (const auto& v : m.vert) EXPECT_EQ(v.C(), vcg::Color4b(10, 200, 77, 128));
 }
 
 }  // namespace
