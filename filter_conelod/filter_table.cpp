@@ -855,8 +855,8 @@ Status ApplyFeatureSimplify(FilterCall& c) {
   if (!mark && mm.hasDataMask(MeshModel::MM_VERTCOLOR)) {
     conelod::MeanSurvivorColours(mm.cm, r);
     c.report.log(
-        "vertex colours: each kept vertex takes the area-weighted mean colour of the vertices its collapses took "
-        "over (as conelod feature-simplify)");
+        "vertex colours: each kept vertex takes the colour that the attribute quadric of the vertices its "
+        "collapses took over gives at its position (as conelod feature-simplify)");
   }
   if (mark) mm.updateDataMask(MeshModel::MM_VERTCOLOR);
   mm.clearDataMask(MeshModel::MM_FACEFACETOPO | MeshModel::MM_VERTFACETOPO);

@@ -674,8 +674,8 @@ def meshlab_collapses_say_what_they_keep(c):
     """Issue 26: on a grid with vertex colour and per-face texcoord lists (MeshLab's wedge
     coordinates) the Group-Preserving Quadric Edge Collapse says it interpolated both (and says
     nothing of keeping them); the Feature-Preserving Edge Simplification, whose half-edge collapses
-    keep a kept corner's own coordinates, says so in the log, and that a kept vertex takes the mean
-    colour of those it took over (nothing of the colour when it colours the feature vertices
+    keep a kept corner's own coordinates, says so in the log, and that a kept vertex takes the colour
+    of the attribute quadric of those it took over (nothing of the colour when it colours the feature vertices
     itself), and its colours are those of `conelod feature-simplify`; on the geometry-only
     armadillo neither says a thing."""
     src = c.out("attr_wedge.ply")
@@ -686,7 +686,7 @@ def meshlab_collapses_say_what_they_keep(c):
     for mlx, values, mean, interpolated in runs:
         _, log = c.meshlab([src], mlx_with(c, mlx, values), c.out("out.ply"))
         assert "each kept vertex keeps its own colour" not in log, (mlx, values, log[-2000:])
-        said = "vertex colours: each kept vertex takes the area-weighted mean colour of the vertices" in log
+        said = "vertex colours: each kept vertex takes the colour that the attribute quadric of the vertices" in log
         assert said == mean, (mlx, values, log[-2000:])
         kept = "wedge texture coordinates: not kept consistent" in log
         assert kept != interpolated, (mlx, log[-2000:])

@@ -4,7 +4,7 @@
 // The simplification only removes vertices and faces (half-edge collapses and edge swaps never
 // create a vertex), so the surviving vertices and faces keep every attribute they had: colour,
 // quality, normals, texture coordinates per vertex, named attributes. MeanSurvivorColours then
-// gives each survivor the mean colour of the vertices it took over.
+// gives each survivor the colour that stands for the vertices it took over.
 #pragma once
 
 #include <algorithm>
@@ -25,13 +25,17 @@ inline const char* VertexClassAttributeName() { return "conelod_vertex_class"; }
 
 // Issue 26. A half-edge collapse keeps the survivor where it was, so its own colour is the input
 // surface's colour at that one point; but each output vertex now stands for the input vertices
-// its collapses took over (FeatureSimplifyResult::survivor). Gives each output vertex the
-// area-weighted mean colour (RGBA, 0-255, rounded) of those input vertices, its own included,
-// each weighted by a third of the area of its input faces; a vertex whose weights sum to zero
-// keeps its colour. Nothing is done when the mesh has no per-vertex colour. Call on the mesh as
-// it was given to ToIndexedMesh (before WriteSimplifiedMesh); only on success. Texture
-// coordinates and normals stay the survivor's own: the texture is sampled at the survivor's
-// exact coordinates, which are right for its unchanged position.
+// its collapses took over (FeatureSimplifyResult::survivor). Gives each output vertex the colour
+// (RGBA, 0-255, rounded and clamped) that Garland & Heckbert's extended quadric of those input
+// vertices gives at its position (as attribute_quadric.h, with positions that do not move): on
+// each input face of each such vertex the colour is linear in position, and the output vertex
+// takes the mean of those linear functions at its position, each face weighted by a third of its
+// area per corner it has in the cluster. A constant colour stays exact, so does a colour linear
+// in position on a flat region. A vertex whose faces all have zero area keeps its colour. Nothing
+// is done when the mesh has no per-vertex colour. Call on the mesh as it was given to
+// ToIndexedMesh (before WriteSimplifiedMesh); only on success. Texture coordinates and normals
+// stay the survivor's own: the texture is sampled at the survivor's exact coordinates, which are
+// right for its unchanged position.
 template <class MeshType>
 void MeanSurvivorColours(MeshType& m, const FeatureSimplifyResult& r) {
   if (!vcg::tri::HasPerVertexColor(m)) return;
@@ -43,19 +47,27 @@ void MeanSurvivorColours(MeshType& m, const FeatureSimplifyResult& r) {
       indexOfSlot[size_t(&v - &m.vert[0])] = uint32_t(vertexOfIndex.size());
       vertexOfIndex.push_back(&v);
     }
-  std::vector<double> area(vertexOfIndex.size(), 0.0);
+  std::vector<std::array<double, 5>> sum(r.inputVertex.size(), std::array<double, 5>{{0, 0, 0, 0, 0}});
   for (auto& f : m.face) {
     if (f.IsD()) continue;
-    const double third = double(vcg::DoubleArea(f)) / 6.0;
-    for (int k = 0; k < 3; ++k) area[indexOfSlot[size_t(f.V(k) - &m.vert[0])]] += third;
-  }
-  std::vector<std::array<double, 5>> sum(r.inputVertex.size(), std::array<double, 5>{{0, 0, 0, 0, 0}});
-  for (size_t i = 0; i < vertexOfIndex.size() && i < r.survivor.size(); ++i) {
-    const uint32_t o = r.survivor[i];
-    if (o == UINT32_MAX || !(area[i] > 0)) continue;
-    const auto& c = vertexOfIndex[i]->C();
-    for (int k = 0; k < 4; ++k) sum[o][size_t(k)] += area[i] * double(c[k]);
-    sum[o][4] += area[i];
+    const vcg::Point3d p0 = vcg::Point3d::Construct(f.V(0)->P()), e1 = vcg::Point3d::Construct(f.V(1)->P()) - p0,
+                       e2 = vcg::Point3d::Construct(f.V(2)->P()) - p0;
+    const vcg::Point3d n = e1 ^ e2;
+    const double n2 = n.SquaredNorm();
+    if (!(n2 > 0)) continue;
+    const double third = std::sqrt(n2) / 6.0;
+    for (int j = 0; j < 3; ++j) {
+      const uint32_t i = indexOfSlot[size_t(f.V(j) - &m.vert[0])];
+      const uint32_t o = i < r.survivor.size() ? r.survivor[i] : UINT32_MAX;
+      if (o == UINT32_MAX) continue;
+      const vcg::Point3d q = vcg::Point3d::Construct(vertexOfIndex[r.inputVertex[o]]->P()) - p0;
+      for (int k = 0; k < 4; ++k) {
+        const double c0 = f.V(0)->C()[k], c1 = f.V(1)->C()[k], c2 = f.V(2)->C()[k];
+        const vcg::Point3d g = ((e2 ^ n) * (c1 - c0) + (n ^ e1) * (c2 - c0)) / n2;
+        sum[o][size_t(k)] += third * (c0 + g * q);
+      }
+      sum[o][4] += third;
+    }
   }
   for (size_t o = 0; o < r.inputVertex.size(); ++o) {
     if (!(sum[o][4] > 0)) continue;
