@@ -48,8 +48,10 @@ const char* kFeatureSimplifyUsage =
     "  bounding-box diagonal). --feature-curvature K: vertices with |K| D^2 >= K are feature\n"
     "  vertices; --curvature-threshold T: vertices with |K| D^2 or |M| D >= T are not removed\n"
     "  (D = diagonal; 0 = off). --mark writes vertex colours (red = feature line, blue = feature\n"
-    "  vertex) and vertex quality = class (0 smooth, 1 line, 2 feature). The report counts the\n"
-    "  output's feature edges lying on the input's feature lines (within PCT % of D [0.5]).\n"
+    "  vertex) and vertex quality = class (0 smooth, 1 line, 2 feature); otherwise a file's vertex\n"
+    "  colour becomes, at each kept vertex, the value there of the attribute quadric of the\n"
+    "  vertices it took over (normals and texture coordinates stay its own). The report counts\n"
+    "  the output's feature edges lying on the input's feature lines (within PCT % of D [0.5]).\n"
     "  --threads N: threads (0 = one per core, at most 8 [0]) for the set-up, the first pass of the\n"
     "  growing bound and the parts; --faces-per-part P [32768; 0: never]: with the growing bound, a\n"
     "  mesh of at least 2P faces is simplified in 2, 4 or 8 parts at the same time, the seams\n"
@@ -108,9 +110,11 @@ int CmdFeatureSimplify(int argc, char** argv) {
   const Status sa = CompareFeatureLines(im, r.mesh, p.featureAngleDeg, lineTolPct / 100.0 * diagonal, agree);
 
   if (a.has("-o")) {
-    WriteSimplifiedMesh(mesh, faceOf, r, a.has("--mark"));
     // The collapses are half-edge collapses: the vertices that stay keep their position and so
-    // their colour, normal and texture coordinates exactly (supplied by the file, written back).
+    // their normal and texture coordinates exactly (supplied by the file, written back); a
+    // file's vertex colour becomes the mean of the vertices each survivor took over.
+    if (loadMask & vcg::tri::io::Mask::IOM_VERTCOLOR) MeanSurvivorColours(mesh, r);
+    WriteSimplifiedMesh(mesh, faceOf, r, a.has("--mark"));
     int extra = AttributeMask(loadMask);
     if (a.has("--mark")) {
       auto cls = vcg::tri::Allocator<CMesh>::FindPerVertexAttribute<int>(mesh, VertexClassAttributeName());

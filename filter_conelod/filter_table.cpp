@@ -850,7 +850,14 @@ Status ApplyFeatureSimplify(FilterCall& c) {
   if (!s.ok()) return s;
   const double seconds = timer.elapsed() / 1000.0;
 
-  LogKeptAttributes(c.report, mm, !mark);  // marking colours the vertices itself
+  // The vertex colour: the marks, or each kept vertex the mean of those it took over.
+  LogKeptAttributes(c.report, mm, false);
+  if (!mark && mm.hasDataMask(MeshModel::MM_VERTCOLOR)) {
+    conelod::MeanSurvivorColours(mm.cm, r);
+    c.report.log(
+        "vertex colours: each kept vertex takes the colour that the attribute quadric of the vertices its "
+        "collapses took over gives at its position (as conelod feature-simplify)");
+  }
   if (mark) mm.updateDataMask(MeshModel::MM_VERTCOLOR);
   mm.clearDataMask(MeshModel::MM_FACEFACETOPO | MeshModel::MM_VERTFACETOPO);
   conelod::WriteSimplifiedMesh(mm.cm, faceOf, r, mark);

@@ -674,17 +674,20 @@ def meshlab_collapses_say_what_they_keep(c):
     """Issue 26: on a grid with vertex colour and per-face texcoord lists (MeshLab's wedge
     coordinates) the Group-Preserving Quadric Edge Collapse says it interpolated both (and says
     nothing of keeping them); the Feature-Preserving Edge Simplification, whose half-edge collapses
-    keep a kept vertex's or corner's own values, says so in the log (nothing of the colour when it
-    colours the feature vertices itself); on the geometry-only armadillo neither says a thing."""
+    keep a kept corner's own coordinates, says so in the log, and that a kept vertex takes the colour
+    of the attribute quadric of those it took over (nothing of the colour when it colours the feature vertices
+    itself), and its colours are those of `conelod feature-simplify`; on the geometry-only
+    armadillo neither says a thing."""
     src = c.out("attr_wedge.ply")
     write_attribute_grid(src, wedge=True)
     runs = (("group_preserving_quadric_edge_collapse.mlx", {}, False, True),
             ("feature_preserving_edge_simplification.mlx", {"MarkFeatures": False}, True, False),
             ("feature_preserving_edge_simplification.mlx", {"MarkFeatures": True}, False, False))
-    for mlx, values, colour, interpolated in runs:
+    for mlx, values, mean, interpolated in runs:
         _, log = c.meshlab([src], mlx_with(c, mlx, values), c.out("out.ply"))
-        said = "vertex colours: each kept vertex keeps its own colour, not interpolated" in log
-        assert said == colour, (mlx, values, log[-2000:])
+        assert "each kept vertex keeps its own colour" not in log, (mlx, values, log[-2000:])
+        said = "vertex colours: each kept vertex takes the colour that the attribute quadric of the vertices" in log
+        assert said == mean, (mlx, values, log[-2000:])
         kept = "wedge texture coordinates: not kept consistent" in log
         assert kept != interpolated, (mlx, log[-2000:])
         said = ("attributes interpolated at each new vertex (attribute weight 0): vertex colours, wedge texture "
@@ -693,6 +696,19 @@ def meshlab_collapses_say_what_they_keep(c):
         _, log = c.meshlab([c.mesh("stanford_armadillo_cgal.ply")], mlx_with(c, mlx), c.out("out.ply"))
         assert "texture coordinates" not in log and "vertex colours" not in log, (mlx, log[-2000:])
         assert "interpolated" not in log, (mlx, log[-2000:])
+    # The feature-preserving filter's colours are the CLI's (per-vertex coordinates: the same vertices).
+    grid = c.out("attr_grid.ply")
+    write_attribute_grid(grid)
+    ml, cli = c.out("ml_feature.ply"), c.out("cli_feature.ply")
+    c.meshlab([grid], mlx_with(c, "feature_preserving_edge_simplification.mlx", TargetFaceNum=450, TargetPerc=0,
+                               MarkFeatures=False), ml, save=("vc", "vt"))
+    c.conelod("feature-simplify", grid, "--target-faces", "450", "-o", cli)
+
+    def coloured(path):
+        verts, faces = ply_records(path)
+        return len(faces), sorted((round(v["x"], 5), round(v["y"], 5), v["red"], v["green"], v["blue"]) for v in verts)
+    (nm, vm), (nc, vc) = coloured(ml), coloured(cli)
+    assert nm == nc and vm == vc, (nm, nc, [a for a in vm if a not in vc][:5], [a for a in vc if a not in vm][:5])
 
 
 @case
@@ -2851,6 +2867,74 @@ def viewer_texture(c):
     print("sign changes of red - blue down the picture (rows): texture %d (%d), level colours %d (%d)" %
           (changes[0] + changes[1]))
     assert changes[0][0] >= 6 and changes[1][0] <= 2, changes
+
+
+def write_png(path, rows):
+    """An 8-bit RGB PNG of rows of (r, g, b) tuples."""
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xffffffff)
+    raw = b"".join(b"\0" + bytes(v for px in row for v in px) for row in rows)
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", len(rows[0]), len(rows), 8, 2, 0, 0, 0))
+                + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+
+
+@case
+def web_ply_page_colours(c):
+    """web/ply.html (scripts/attribute_pictures.sh's page) in headless chromium draws a PLY's vertex
+    colours unlit: write_attribute_grid's grid (red grows with x) as written and after `conelod
+    simplify`, whose per-face group colours the page must not draw instead (texture=none); with
+    the texture their headers name (chart.png: red on the left chart, green on the right one) red
+    turns to green across the model instead; a missing texture is an error the page reports."""
+    src = c.out("grid.ply")
+    write_attribute_grid(src)
+    write_png(c.out("chart.png"), [[(255, 0, 0)] * 2 + [(0, 255, 0)] * 2])
+    c.conelod("simplify", src, "--groups", "cone:auto", "--target-ratio", "0.25", "-o", c.out("grid_simplified.ply"))
+    head = open(c.out("grid_simplified.ply"), "rb").read(2048).split(b"end_header")[0].decode()
+    assert "element face" in head and "property uchar red" in head.split("element face")[1], head
+    os.symlink(os.path.join(c.source, "web", "ply.html"), c.out("ply.html"))
+    os.symlink(os.path.join(c.source, "web", "node_modules"), c.out("node_modules"))
+    log = open(c.out("http.log"), "w")
+    server = subprocess.Popen([sys.executable, "-u", "-m", "http.server", "0", "--bind", "127.0.0.1", "--directory", c.tmp],
+                              stdout=log, stderr=subprocess.STDOUT)
+    try:
+        port = None
+        for _ in range(200):
+            m = re.search(r" port (\d+) ", open(c.out("http.log")).read())
+            if m:
+                port = int(m.group(1))
+                break
+            assert server.poll() is None, "http.server exited: " + open(c.out("http.log")).read()
+            time.sleep(0.05)
+        assert port, "http.server printed no port"
+        url = "http://127.0.0.1:%d/ply.html?eye=0,0,1&ply=" % port
+        pngs = [c.out("ply%d.png" % i) for i in range(5)]
+        pages = shoot(c, (url + "grid.ply&texture=none", pngs[0]), (url + "grid_simplified.ply&texture=none", pngs[1]),
+                      (url + "grid.ply", pngs[2]), (url + "grid_simplified.ply", pngs[3]),
+                      (url + "grid.ply&texture=nothere.png", pngs[4]), expect=2)
+    finally:
+        server.terminate()
+        server.wait(timeout=10)
+        log.close()
+    assert [p["state"] for p in pages] == ["done"] * 4 + ["error"], pages
+    assert "nothere.png" in pages[4]["error"], pages[4]
+    assert pages[0]["colours"] and not pages[0].get("texture") and pages[3]["texture"] == "chart.png", pages
+    stats = [red_green_gradient(png) for png in pngs[:4]]
+    print("red - green across the model: vertex colours %.1f, simplified %.1f; texture %.1f, simplified %.1f" % tuple(stats))
+    # The grid's colour: red - green grows by 0.6 x 255 from x = 0 to 1 (about 120 between the
+    # fifths); face colours (one per group) or grey give no such gradient; the texture -510.
+    assert stats[0] > 60, "vertex colours: red - green grows by %.1f from left to right" % stats[0]
+    assert stats[1] > 60, "simplified, vertex colours: red - green grows by %.1f" % stats[1]
+    # And pixel by pixel: the simplified grid's vertex colours are the grid's (interpolated), its
+    # group colours would not be.
+    (w, h, a), (_, _, b) = read_png(pngs[0]), read_png(pngs[1])
+    bg = a[0][0]
+    inside = [(a[y][x], b[y][x]) for y in range(h) for x in range(w)
+              if max(abs(p - q) for p, q in zip(a[y][x], bg)) > 6 and max(abs(p - q) for p, q in zip(b[y][x], bg)) > 6]
+    diff = sum(abs(p - q) for pa, pb in inside for p, q in zip(pa, pb)) / (3 * len(inside))
+    print("simplified against the grid: mean difference %.1f over %d pixels" % (diff, len(inside)))
+    assert len(inside) > 0.2 * w * h and diff < 10, (diff, len(inside))
+    assert stats[2] < -300 and stats[3] < -300, "texture: red - green grows by %.1f, %.1f from left to right" % tuple(stats[2:])
 
 
 def main():

@@ -154,6 +154,7 @@ class Work {
   std::vector<FaceList> VF;
   std::vector<std::vector<uint32_t>> feat;
   std::vector<char> locked;
+  std::vector<uint32_t> into;  // per vertex: the vertex it was collapsed into (itself while it stays)
   // While the parts' lanes of a mesh simplified in parts run (Simplify): the vertices of faces
   // that span two parts, which no lane moves or collapses into; null otherwise.
   const std::vector<char>* frozen = nullptr;
@@ -322,6 +323,9 @@ Status Work::Build(const IndexedMesh& in, const FeatureSimplifyParams& p) {
   locked.assign(nv, 0);
   diag = BoundingBoxDiagonal(in);
   degenerateArea2 = std::pow(1e-12 * diag * diag, 2);
+
+  into.resize(nv);
+  for (uint32_t v = 0; v < nv; ++v) into[v] = v;
 
   std::vector<uint32_t> valence(nv, 0);
   for (const auto& t : F)
@@ -1122,6 +1126,7 @@ void FeatureSimplifier::Collapse(uint32_t from, uint32_t to, double outErr) {
   }
   w.VF[from].clear();
   w.cls[from] = VertexClass::Unused;
+  w.into[from] = to;  // (lanes collapse different vertices: each writes its own entries)
   if (AheadToDrop()) InvalidateAhead(from, to);
   // ... and for their faces' corners and angles, read by Push after the re-assignment below.
   for (uint32_t x : scratchRing_) PrefetchCurvatureInputs(x);
@@ -1636,6 +1641,18 @@ Status Simplify(Work& w, const FeatureSimplifyParams& p, FeatureSimplifyResult& 
   }
   for (auto& t : out.mesh.faces)
     for (auto& v : t) v = outIndex[v];
+  // Each input vertex's survivor: follow its collapses to the vertex that stays.
+  out.survivor.assign(nv, kNone);
+  for (uint32_t v = 0; v < nv; ++v) {
+    uint32_t s = v;
+    while (w.into[s] != s) s = w.into[s];
+    for (uint32_t x = v; w.into[x] != x;) {  // shorten the chains for the next ones
+      const uint32_t next = w.into[x];
+      w.into[x] = s;
+      x = next;
+    }
+    out.survivor[v] = outIndex[s];
+  }
   for (uint32_t a = 0; a < nv; ++a)
     for (uint32_t b : w.feat[a])
       if (a < b && outIndex[a] != kNone && outIndex[b] != kNone) out.featureEdges.push_back({outIndex[a], outIndex[b]});

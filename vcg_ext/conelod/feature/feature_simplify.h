@@ -121,6 +121,9 @@ struct FeatureSimplifyResult {
   std::vector<uint32_t> inputFace;                    // output face -> input face it descends from
   std::vector<VertexClass> vertexClass;               // per output vertex
   std::vector<std::array<uint32_t, 2>> featureEdges;  // output feature edges (output indices, a < b)
+  // Input vertex -> the output vertex its collapses ended in (an output vertex's own input vertex:
+  // itself); UINT32_MAX where no face used it.
+  std::vector<uint32_t> survivor;
   size_t facesIn = 0, facesOut = 0;
   size_t featureEdgesIn = 0;  // after the extension, incl. border and non-manifold edges
   size_t swapEdges = 0;

@@ -10,6 +10,7 @@
 #include <set>
 #include <thread>
 
+#include "conelod/simplify_bridge.h"
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"
 #include "test_util.h"
@@ -564,6 +565,92 @@ TEST(FeatureSimplify, FirstPassAheadReportsOnTheCallingThread) {
       EXPECT_TRUE(cancelled.mesh.faces.empty());
     }
   }
+}
+
+// Issue 26: each input vertex ends in one output vertex (FeatureSimplifyResult::survivor), and
+// MeanSurvivorColours gives each output vertex the colour of the extended quadric of the input
+// vertices that ended in it, at its position: the area-weighted squared colour difference between
+// each input vertex and its survivor drops against the survivors' own colours; a colour linear in
+// position on a flat grid, and a constant colour, stay exact.
+TEST(FeatureSimplify, SurvivorsTakeTheMeanColourOfWhatTheyReplaced) {
+  const IndexedMesh sphere = test::Sphere(4);
+  FeatureSimplifyParams p;
+  p.targetFaceCount = sphere.faces.size() / 10;
+  FeatureSimplifyResult r;
+  ASSERT_TRUE(FeatureSimplify(sphere, p, r).ok());
+  ASSERT_TRUE(r.targetReached);
+  ASSERT_EQ(r.survivor.size(), sphere.positions.size());
+  std::vector<size_t> members(r.inputVertex.size(), 0);
+  for (uint32_t s : r.survivor) {
+    ASSERT_LT(s, r.inputVertex.size());
+    ++members[s];
+  }
+  for (size_t o = 0; o < r.inputVertex.size(); ++o) EXPECT_EQ(r.survivor[r.inputVertex[o]], o);
+  EXPECT_GT(*std::max_element(members.begin(), members.end()), 1u);
+
+  // Input vertex areas (a third of their faces') and a colour that varies from vertex to vertex.
+  std::vector<double> area(sphere.positions.size(), 0.0);
+  for (const auto& t : sphere.faces) {
+    const auto& a = sphere.positions[t[0]];
+    const double third = double(((sphere.positions[t[1]] - a) ^ (sphere.positions[t[2]] - a)).Norm()) / 6.0;
+    for (uint32_t v : t) area[v] += third;
+  }
+  auto colour = [&](size_t v) {
+    const auto& q = sphere.positions[v];
+    return vcg::Color4b((unsigned char)(128 + 120 * q[0]), (unsigned char)((v * 37) % 256),
+                        (unsigned char)(128 + 100 * std::sin(9 * q[2])), 255);
+  };
+  CMesh m;
+  AppendIndexedMesh(m, sphere);
+  vcg::tri::UpdateBounding<CMesh>::Box(m);
+  for (size_t v = 0; v < m.vert.size(); ++v) m.vert[v].C() = colour(v);
+  MeanSurvivorColours(m, r);
+  double before = 0, after = 0;
+  size_t changed = 0;
+  for (size_t o = 0; o < r.inputVertex.size(); ++o) {
+    changed += m.vert[r.inputVertex[o]].C() != colour(r.inputVertex[o]);
+    EXPECT_EQ(m.vert[r.inputVertex[o]].C()[3], 255);
+  }
+  EXPECT_GT(changed, r.inputVertex.size() / 2);
+  for (size_t v = 0; v < r.survivor.size(); ++v) {
+    const vcg::Color4b own = colour(r.inputVertex[r.survivor[v]]), mean = m.vert[r.inputVertex[r.survivor[v]]].C();
+    for (int k = 0; k < 3; ++k) {
+      before += area[v] * std::pow(double(colour(v)[k]) - own[k], 2);
+      after += area[v] * std::pow(double(colour(v)[k]) - mean[k], 2);
+    }
+  }
+  EXPECT_LT(after, 0.8 * before) << "area-weighted squared colour difference to the survivor";
+
+  // A constant colour stays exactly that colour; WriteSimplifiedMesh keeps the survivors' colours.
+  for (auto& v : m.vert) v.C() = vcg::Color4b(10, 200, 77, 128);
+  MeanSurvivorColours(m, r);
+  std::vector<size_t> faceOf;
+  ToIndexedMesh(m, &faceOf);
+  WriteSimplifiedMesh(m, faceOf, r, false);
+  ASSERT_EQ(size_t(m.vn), r.inputVertex.size());
+  for (const auto& v : m.vert) EXPECT_EQ(v.C(), vcg::Color4b(10, 200, 77, 128));
+
+  // A flat grid whose colour is linear in position: every kept vertex keeps the exact value.
+  const IndexedMesh grid = test::Grid(20);
+  FeatureSimplifyParams gp;
+  gp.targetFaceCount = grid.faces.size() / 8;
+  FeatureSimplifyResult gr;
+  ASSERT_TRUE(FeatureSimplify(grid, gp, gr).ok());
+  CMesh g;
+  AppendIndexedMesh(g, grid);
+  auto linear = [](const vcg::Point3f& q) {
+    return vcg::Color4b((unsigned char)(10 + 3 * q[0] + 5 * q[1]), (unsigned char)(200 - 4 * q[0]),
+                        (unsigned char)(30 + 7 * q[1]), 255);
+  };
+  for (auto& v : g.vert) v.C() = linear(v.P());
+  MeanSurvivorColours(g, gr);
+  size_t tookOver = 0;
+  for (size_t o = 0; o < gr.inputVertex.size(); ++o) {
+    const auto& v = g.vert[gr.inputVertex[o]];
+    EXPECT_EQ(v.C(), linear(v.P())) << "output vertex " << o;
+  }
+  for (size_t v = 0; v < gr.survivor.size(); ++v) tookOver += gr.inputVertex[gr.survivor[v]] != v;
+  EXPECT_GT(tookOver, grid.positions.size() / 2);
 }
 
 }  // namespace
