@@ -118,7 +118,12 @@ int LodBuild(int argc, char** argv) {
   LodAttributes attributes;  // per-vertex colour and normals, carried into the file (version 5)
   bool texCoordsDropped = false;
   Timer timer;
-  {
+  // --memory with more faces than one chunk, geometry only: the PLY is read streaming and its faces
+  // go to chunk files (BuildLodFileFromPly): neither the input's faces nor level 0 are held whole.
+  bool vertexAttributes = false;
+  const bool streamed = params.chunkFaces > 0 && PlyFaceCount(input, &vertexAttributes) > params.chunkFaces &&
+                        (!vertexAttributes || !keepAttributes);
+  if (!streamed) {
     PlyMesh ply;
     const std::string err = ReadPly(input, ply);
     if (!err.empty()) return FailLoad(err);
@@ -138,16 +143,16 @@ int LodBuild(int argc, char** argv) {
     std::vector<std::array<float, 3>>().swap(ply.positions);
     im.faces.swap(ply.triangles);
   }
-  const double loadSeconds = timer.seconds();
+  const double loadSeconds = streamed ? 0.0 : timer.seconds();
   Status s = ValidateParams(params.grouping);
   if (!s.ok()) return Fail(kUsage, s.message);
-  s = RequireValidForFaces(im);
+  if (!streamed) s = RequireValidForFaces(im);
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
   if (texCoordsDropped)
     std::fprintf(stderr, "conelod: %s: texture coordinates are not carried into the .clod file (not yet)\n",
                  input.c_str());
   LodBuildStats st;
-  const size_t inputVertices = im.vertexCount();
+  size_t inputVertices = im.vertexCount();
   // The mesh is handed over (welded in place, it becomes the DAG's level 0). An interrupted build
   // removes its temporary folder (--memory) before it ends as the signal would end it.
   struct SpillSignals {
@@ -165,7 +170,14 @@ int LodBuild(int argc, char** argv) {
   };
   {
     SpillSignals handlers;
-    s = BuildLodFile(std::move(im), params, output, &st, Progress(), attributes.empty() ? nullptr : &attributes);
+    if (streamed) {
+      std::string readError;
+      s = BuildLodFileFromPly(input, params, output, &st, Progress(), &readError);
+      if (!readError.empty()) return FailLoad(readError);
+      inputVertices = st.inputVertices + st.mergedVertices + st.droppedVertices;  // as the file has them
+    } else {
+      s = BuildLodFile(std::move(im), params, output, &st, Progress(), attributes.empty() ? nullptr : &attributes);
+    }
   }
   if (!s.ok() && s.message.compare(0, 14, "cannot write '") == 0) return Fail(kIoError, s.message);
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
@@ -439,8 +451,10 @@ const char* kLodUsage =
     "  --memory SIZE (512M, 2G; at least 16M): an input of more than SIZE / 2048 faces is split\n"
     "  into spatial chunks of at most that many faces, each built with its border locked until\n"
     "  neighbouring chunks merge; each finished level goes to a temporary folder beside OUT\n"
-    "  (removed at the end, also on failure or Ctrl-C) and the file is written from there. The\n"
-    "  input is still read whole, so it is not yet a bound (docs/scale.md gives the peaks).\n"
+    "  (removed at the end, also on failure or Ctrl-C) and the file is written from there. Such an\n"
+    "  input (without colour or normals, or with --no-attributes) is read streaming into one file\n"
+    "  per chunk and level 0 is built chunk by chunk; its positions stay in memory\n"
+    "  (docs/scale.md gives the peaks).\n"
     "  Without it the DAG is built whole, in memory.\n"
     "  Per-vertex colour and normals of IN.ply are carried into every level (interpolated as in\n"
     "  conelod simplify, --attribute-weight W [1]) and stored per node (file version 5; colour\n"
