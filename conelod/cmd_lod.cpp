@@ -95,7 +95,8 @@ int LodBuild(int argc, char** argv) {
     return Fail(kUsage, "--attribute-weight must be >= 0");
   const bool keepAttributes = !a.has("--no-attributes");
   // Without --memory the DAG is built whole, as the Export LOD File filter builds it: the file
-  // does not depend on the machine. The chunks do not bound the peak yet (docs/scale.md).
+  // does not depend on the machine. The chunks and the streamed read lower the peak but do not
+  // bound it yet (docs/scale.md).
   uint64_t memory = 0;
   if (a.has("--memory")) {
     if (!ParseMemory(a.str("--memory"), memory))

@@ -49,7 +49,8 @@ using File = std::unique_ptr<std::FILE, FileCloser>;
 // A centroid as KdChunks computes it.
 template <class P>
 vcg::Point3f Centroid(const P& a, const P& b, const P& c) {
-  const vcg::Point3d p = (vcg::Point3d(a[0], a[1], a[2]) + vcg::Point3d(b[0], b[1], b[2]) + vcg::Point3d(c[0], c[1], c[2])) / 3.0;
+  const vcg::Point3d p =
+      (vcg::Point3d(a[0], a[1], a[2]) + vcg::Point3d(b[0], b[1], b[2]) + vcg::Point3d(c[0], c[1], c[2])) / 3.0;
   return vcg::Point3f::Construct(p);
 }
 
@@ -135,8 +136,7 @@ uint64_t PlyFaceCount(const std::string& path, bool* vertexAttributes) {
 }
 
 Status BuildLodFileFromPly(const std::string& input, const LodBuildParams& params, const std::string& path,
-                           LodBuildStats* stats, const Progress& progress, std::string* readError,
-                           size_t sampleFaces) {
+                           LodBuildStats* stats, const Progress& progress, std::string* readError, size_t sampleFaces) {
   const auto t0 = std::chrono::steady_clock::now();
   if (readError) readError->clear();
   if (params.chunkFaces == 0) return Status::Invalid("internal error: a streamed LOD build needs chunks");
@@ -223,9 +223,7 @@ Status BuildLodFileFromPly(const std::string& input, const LodBuildParams& param
     dropped = V - order.size();
     std::vector<uint8_t>().swap(used);
     const auto& P = ply.positions;
-    auto key = [&](uint32_t v) {
-      return std::array<uint32_t, 4>{{Bits(P[v][0]), Bits(P[v][1]), Bits(P[v][2]), v}};
-    };
+    auto key = [&](uint32_t v) { return std::array<uint32_t, 4>{{Bits(P[v][0]), Bits(P[v][1]), Bits(P[v][2]), v}}; };
     std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
     for (size_t i = 0; i < order.size();) {
       size_t j = i;
