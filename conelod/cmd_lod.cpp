@@ -128,7 +128,8 @@ int LodBuild(int argc, char** argv) {
     return Fail(kUsage, "--attribute-weight must be >= 0");
   const bool keepAttributes = !a.has("--no-attributes");
   // Without --memory the DAG is built whole, as the Export LOD File filter builds it: the file
-  // does not depend on the machine. The chunks do not bound the peak yet (docs/scale.md).
+  // does not depend on the machine. The chunks and the streamed read lower the peak but do not
+  // bound it yet (docs/scale.md).
   uint64_t memory = 0;
   if (a.has("--memory")) {
     if (!ParseMemory(a.str("--memory"), memory))
@@ -151,7 +152,12 @@ int LodBuild(int argc, char** argv) {
   LodAttributes attributes;  // per-vertex colour, normals and UVs, carried into the file (versions 5, 6)
   std::string textureNote;   // why the texture image is not stored, when it is not
   Timer timer;
-  {
+  // --memory with more faces than one chunk, geometry only: the PLY is read streaming and its faces
+  // go to chunk files (BuildLodFileFromPly): neither the input's faces nor level 0 are held whole.
+  bool vertexAttributes = false;
+  const bool streamed = params.chunkFaces > 0 && PlyFaceCount(input, &vertexAttributes) > params.chunkFaces &&
+                        (!vertexAttributes || !keepAttributes);
+  if (!streamed) {
     PlyMesh ply;
     const std::string err = ReadPly(input, ply);
     if (!err.empty()) return FailLoad(err);
@@ -216,16 +222,16 @@ int LodBuild(int argc, char** argv) {
     std::vector<std::array<float, 3>>().swap(ply.positions);
     im.faces.swap(ply.triangles);
   }
-  const double loadSeconds = timer.seconds();
+  const double loadSeconds = streamed ? 0.0 : timer.seconds();
   Status s = ValidateParams(params.grouping);
   if (!s.ok()) return Fail(kUsage, s.message);
-  s = RequireValidForFaces(im);
+  if (!streamed) s = RequireValidForFaces(im);
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
   if (!textureNote.empty())
     std::fprintf(stderr, "conelod: %s: texture coordinates are stored without the image: %s\n", input.c_str(),
                  textureNote.c_str());
   LodBuildStats st;
-  const size_t inputVertices = im.vertexCount();
+  size_t inputVertices = im.vertexCount();
   // The mesh is handed over (welded in place, it becomes the DAG's level 0). An interrupted build
   // removes its temporary folder (--memory) before it ends as the signal would end it.
   struct SpillSignals {
@@ -243,7 +249,14 @@ int LodBuild(int argc, char** argv) {
   };
   {
     SpillSignals handlers;
-    s = BuildLodFile(std::move(im), params, output, &st, Progress(), attributes.empty() ? nullptr : &attributes);
+    if (streamed) {
+      std::string readError;
+      s = BuildLodFileFromPly(input, params, output, &st, Progress(), &readError);
+      if (!readError.empty()) return FailLoad(readError);
+      inputVertices = st.inputVertices + st.mergedVertices + st.droppedVertices;  // as the file has them
+    } else {
+      s = BuildLodFile(std::move(im), params, output, &st, Progress(), attributes.empty() ? nullptr : &attributes);
+    }
   }
   if (!s.ok() && s.message.compare(0, 14, "cannot write '") == 0) return Fail(kIoError, s.message);
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
@@ -582,8 +595,10 @@ const char* kLodUsage =
     "  --memory SIZE (512M, 2G; at least 16M): an input of more than SIZE / 2048 faces is split\n"
     "  into spatial chunks of at most that many faces, each built with its border locked until\n"
     "  neighbouring chunks merge; each finished level goes to a temporary folder beside OUT\n"
-    "  (removed at the end, also on failure or Ctrl-C) and the file is written from there. The\n"
-    "  input is still read whole, so it is not yet a bound (docs/scale.md gives the peaks).\n"
+    "  (removed at the end, also on failure or Ctrl-C) and the file is written from there. Such an\n"
+    "  input (without colour or normals, or with --no-attributes) is read streaming into one file\n"
+    "  per chunk and level 0 is built chunk by chunk; its positions stay in memory\n"
+    "  (docs/scale.md gives the peaks).\n"
     "  Without it the DAG is built whole, in memory.\n"
     "  Per-vertex colour, normals and texture coordinates (per vertex or per face corner) of\n"
     "  IN.ply are carried into every level (interpolated as in conelod simplify,\n"

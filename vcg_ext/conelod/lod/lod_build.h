@@ -140,4 +140,24 @@ Status BuildLodFile(IndexedMesh&& mesh, const LodBuildParams& params, const std:
                     LodBuildStats* stats = nullptr, const Progress& progress = Progress(),
                     const LodAttributes* attributes = nullptr);
 
+// `conelod lod build --memory` from a PLY file (docs/scale.md; lod_stream.cpp): BuildLodFile of
+// the geometry ReadPly reads, with params.chunkFaces, without the input's faces or level 0 ever
+// whole in memory: the PLY is read streaming (its positions held: 12 bytes a vertex), welded as
+// BuildLodFile welds, and its faces are written to one file per kd chunk in the temporary folder
+// beside `path`; each chunk's level 0 and the part of level 1 it makes are built from its file
+// (BuildLodDagFromChunks), then the levels above as BuildLodFile builds them. The kd split planes
+// come from a sample of the face centroids (every s-th face, s = ceil(faces / sampleFaces); 0:
+// min(2^20, 16 chunkFaces)), so the chunks hold about chunkFaces faces; with every face in the
+// sample the chunks are KdChunks's and the file is BuildLodFile's with the same params byte for
+// byte (when its level 0 shrinks under the chunks' borders, as it does but on tiny chunks). An
+// input of one chunk is read back whole and takes BuildLodFile. Vertex attributes are not read
+// (a caller that keeps them uses BuildLodFile). `readError`: set to the reader's message when the
+// input could not be read as a PLY (nothing else is then wrong).
+Status BuildLodFileFromPly(const std::string& input, const LodBuildParams& params, const std::string& path,
+                           LodBuildStats* stats = nullptr, const Progress& progress = Progress(),
+                           std::string* readError = nullptr, size_t sampleFaces = 0);
+// The face count a PLY file's header declares (0 when it cannot be read); vertexAttributes: set when
+// its vertex element has colour, normals or texture coordinates.
+uint64_t PlyFaceCount(const std::string& path, bool* vertexAttributes = nullptr);
+
 }  // namespace conelod

@@ -28,7 +28,9 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <queue>
 #include <unordered_map>
@@ -681,62 +683,13 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
   out.distance = std::sqrt(worst2);
 }
 
-// BuildLodDag; with `owned` (== &mesh) the mesh's positions and faces are moved into the DAG; with
-// `spill` each finished level is written there (lod_spill.h).
-Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParams& params, LodDag& dag,
-                const Progress& progress, size_t* chunks, LodSpill* spill, const LodAttributes* attributes) {
-  dag = LodDag();
-  if (chunks) *chunks = 1;
-  Status s = RequireValidForFaces(mesh);
-  if (!s.ok()) return s;
-  if (attributes) {
-    const std::string bad = attributes->Check(mesh.positions.size());
-    if (!bad.empty()) return Status::Invalid(bad);
-    if (!(params.attributeWeight >= 0) || !std::isfinite(params.attributeWeight))
-      return Status::Invalid("the attribute weight must be >= 0");
-  }
-  {
-    GroupQemParams q = params.simplification.qem;
-    q.targetFaces = 1;  // set per group
-    s = ValidateParams(q);
-  }
-  if (!s.ok()) return s;
-  if (!(params.simplification.levelRatio > 0 && params.simplification.levelRatio < 1))
-    return Status::Invalid("the level ratio must lie in (0, 1)");
-  if (params.clusterFaces < 4 || params.clusterFaces > 65536)
-    return Status::Invalid("cluster faces must lie in [4, 65536]");
-  if (params.groupClusters < 2 || params.groupClusters > 64)
-    return Status::Invalid("group clusters must lie in [2, 64]");
-  if (params.fineGroupClusters != 0 && (params.fineGroupClusters < 2 || params.fineGroupClusters > 64))
-    return Status::Invalid("fine group clusters must be 0 or lie in [2, 64]");
-  if (!(params.maxGroupError > 0 && params.maxGroupError <= 1))
-    return Status::Invalid("the largest group error must lie in (0, 1] (a fraction of the diagonal)");
-  if (!(params.grouping.coneThresholdDeg > 0) || !(params.grouping.thresholdGrowth >= 1))
-    return Status::Invalid("the cone threshold must be > 0 and its growth >= 1");
+// The levels above `firstK` (dag.levels[firstK] built, its clusters in the kd chunks `clusterNode`
+// at kd depth `depth`, the leaves at `leafDepth`): BuildDag's steps 2-5 up to the top.
+Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSpill* spill, size_t inputFaces,
+                   double diagonal, unsigned threads, int firstK, int leafDepth, int depth,
+                   std::vector<uint32_t>& clusterNode, LodDag& dag) {
   const double kDeg = NormalCone::kPi / 180;
-  const vcg::Box3d box = UsedVertexBox(mesh);
-  const double diagonal = box.IsNull() ? 0.0 : box.Diag();
-  const size_t inputFaces = mesh.faces.size();
-  const unsigned threads = unsigned(std::max(1, SimplificationThreads(params.simplification)));
-  // Chunks (params.chunkFaces): clusterNode holds each cluster's kd chunk at depth `depth`.
-  std::vector<uint32_t> clusterNode;
-  int depth = 0;
-  std::vector<uint32_t> leaf;
-  if (params.chunkFaces > 0) {
-    depth = KdChunks(mesh, params.chunkFaces, leaf);
-    if (chunks) *chunks = size_t(1) << depth;
-  }
-  dag.levels.emplace_back();
-  if (owned) {  // `mesh` is *owned: not used below
-    dag.positions = std::move(owned->positions);
-    dag.levels[0].faces = std::move(owned->faces);
-    *owned = IndexedMesh();
-  } else {
-    dag.positions = mesh.positions;
-    dag.levels[0].faces = mesh.faces;
-  }
-  dag.inputVertices = dag.positions.size();
-  if (attributes) dag.attributes = *attributes;
+  Status s;
   // Texture seams: the ids of one position are one place for the topology (clusters, groups,
   // frozen borders); the faces by place (a copy) where the ids would split them.
   std::vector<uint32_t>& place = dag.attributes.place;
@@ -747,59 +700,9 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
       for (uint32_t& v : f) v = place[v];
     return t;
   };
-  {
-    if (depth > 0) {  // each chunk's level-0 clusters on its own, chunks side by side
-      const uint32_t leaves = 1u << depth;
-      std::vector<uint32_t> start(leaves + 1, 0), members(inputFaces), at;
-      for (uint32_t l : leaf) ++start[l + 1];
-      std::partial_sum(start.begin(), start.end(), start.begin());
-      at.assign(start.begin(), start.end() - 1);
-      for (uint32_t f = 0; f < inputFaces; ++f) members[at[leaf[f]]++] = f;
-      std::vector<uint32_t>().swap(leaf);
-      std::vector<uint32_t>().swap(at);
-      const std::vector<Face>& inFaces = dag.levels[0].faces;
-      std::vector<std::vector<uint32_t>> local(leaves);
-      std::vector<uint32_t> count(leaves, 0);
-      std::atomic<uint32_t> next(0);
-      RunThreads(std::min(threads, leaves), [&](unsigned) {
-        std::vector<Face> faces;
-        for (uint32_t l = next++; l < leaves; l = next++) {
-          faces.clear();
-          for (uint32_t j = start[l]; j < start[l + 1]; ++j) {
-            faces.push_back(inFaces[members[j]]);
-            if (wedges)
-              for (uint32_t& v : faces.back()) v = place[v];
-          }
-          count[l] = GrowClusters(faces, dag.positions, params.clusterFaces,
-                                  std::min(90.0, params.grouping.coneThresholdDeg) * kDeg, local[l]);
-        }
-      });
-      LodDag::Level& L0 = dag.levels[0];
-      L0.faceCluster.assign(inputFaces, 0);
-      uint32_t base = 0;
-      for (uint32_t l = 0; l < leaves; ++l) {
-        for (uint32_t j = start[l]; j < start[l + 1]; ++j) L0.faceCluster[members[j]] = base + local[l][j - start[l]];
-        clusterNode.insert(clusterNode.end(), count[l], l);
-        base += count[l];
-        std::vector<uint32_t>().swap(local[l]);
-      }
-      L0.clusterGroup.assign(base, -1);
-      L0.clusterCreator.assign(base, -1);
-      L0.clusterError.assign(base, 0.f);
-    }
-  }
-  if (depth == 0) {
-    LodDag::Level& L0 = dag.levels[0];
-    const uint32_t C = GrowClusters(wedges ? byPlace(L0.faces) : L0.faces, dag.positions, params.clusterFaces,
-                                    std::min(90.0, params.grouping.coneThresholdDeg) * kDeg, L0.faceCluster);
-    L0.clusterGroup.assign(C, -1);
-    L0.clusterCreator.assign(C, -1);
-    L0.clusterError.assign(C, 0.f);
-  }
   // Sibling chunks merge one kd depth per level (level k groups within the chunks at depth
   // leafDepth - k - sooner), and one more each time a level no longer shrinks under their locked
   // borders.
-  const int leafDepth = depth;
   int sooner = 0;
   // The top. When a level no longer shrinks (the locked borders between groups leave no collapse
   // under the cap), each connected part of the mesh of at most 4 groups' clusters becomes one
@@ -811,7 +714,7 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
   double cap = params.maxGroupError;  // 0: no cap
   bool wholeParts = false;
   const size_t wholeUpTo = size_t(4 * params.groupClusters);
-  for (int k = 0; size_t(k + 2) < 64; ++k) {
+  for (int k = firstK; size_t(k + 2) < 64; ++k) {
     if (progress && !progress(std::min(95, 10 + 8 * k), "LOD: simplifying groups")) {
       dag = LodDag();
       return Status::Cancelled();
@@ -959,11 +862,267 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
       }
     }
   }
+  return Status::Ok();
+}
+
+// BuildLodDag; with `owned` (== &mesh) the mesh's positions and faces are moved into the DAG; with
+// `spill` each finished level is written there (lod_spill.h).
+Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParams& params, LodDag& dag,
+                const Progress& progress, size_t* chunks, LodSpill* spill, const LodAttributes* attributes) {
+  dag = LodDag();
+  if (chunks) *chunks = 1;
+  Status s = RequireValidForFaces(mesh);
+  if (!s.ok()) return s;
+  if (attributes) {
+    const std::string bad = attributes->Check(mesh.positions.size());
+    if (!bad.empty()) return Status::Invalid(bad);
+    if (!(params.attributeWeight >= 0) || !std::isfinite(params.attributeWeight))
+      return Status::Invalid("the attribute weight must be >= 0");
+  }
+  {
+    GroupQemParams q = params.simplification.qem;
+    q.targetFaces = 1;  // set per group
+    s = ValidateParams(q);
+  }
+  if (!s.ok()) return s;
+  if (!(params.simplification.levelRatio > 0 && params.simplification.levelRatio < 1))
+    return Status::Invalid("the level ratio must lie in (0, 1)");
+  if (params.clusterFaces < 4 || params.clusterFaces > 65536)
+    return Status::Invalid("cluster faces must lie in [4, 65536]");
+  if (params.groupClusters < 2 || params.groupClusters > 64)
+    return Status::Invalid("group clusters must lie in [2, 64]");
+  if (params.fineGroupClusters != 0 && (params.fineGroupClusters < 2 || params.fineGroupClusters > 64))
+    return Status::Invalid("fine group clusters must be 0 or lie in [2, 64]");
+  if (!(params.maxGroupError > 0 && params.maxGroupError <= 1))
+    return Status::Invalid("the largest group error must lie in (0, 1] (a fraction of the diagonal)");
+  if (!(params.grouping.coneThresholdDeg > 0) || !(params.grouping.thresholdGrowth >= 1))
+    return Status::Invalid("the cone threshold must be > 0 and its growth >= 1");
+  const double kDeg = NormalCone::kPi / 180;
+  const vcg::Box3d box = UsedVertexBox(mesh);
+  const double diagonal = box.IsNull() ? 0.0 : box.Diag();
+  const size_t inputFaces = mesh.faces.size();
+  const unsigned threads = unsigned(std::max(1, SimplificationThreads(params.simplification)));
+  // Chunks (params.chunkFaces): clusterNode holds each cluster's kd chunk at depth `depth`.
+  std::vector<uint32_t> clusterNode;
+  int depth = 0;
+  std::vector<uint32_t> leaf;
+  if (params.chunkFaces > 0) {
+    depth = KdChunks(mesh, params.chunkFaces, leaf);
+    if (chunks) *chunks = size_t(1) << depth;
+  }
+  dag.levels.emplace_back();
+  if (owned) {  // `mesh` is *owned: not used below
+    dag.positions = std::move(owned->positions);
+    dag.levels[0].faces = std::move(owned->faces);
+    *owned = IndexedMesh();
+  } else {
+    dag.positions = mesh.positions;
+    dag.levels[0].faces = mesh.faces;
+  }
+  dag.inputVertices = dag.positions.size();
+  if (attributes) dag.attributes = *attributes;
+  // Texture seams: the ids of one position are one place for the topology (clusters, groups,
+  // frozen borders); the faces by place (a copy) where the ids would split them.
+  std::vector<uint32_t>& place = dag.attributes.place;
+  const bool wedges = !place.empty();
+  auto byPlace = [&](const std::vector<Face>& faces) {
+    std::vector<Face> t(faces);
+    for (Face& f : t)
+      for (uint32_t& v : f) v = place[v];
+    return t;
+  };
+  {
+    if (depth > 0) {  // each chunk's level-0 clusters on its own, chunks side by side
+      const uint32_t leaves = 1u << depth;
+      std::vector<uint32_t> start(leaves + 1, 0), members(inputFaces), at;
+      for (uint32_t l : leaf) ++start[l + 1];
+      std::partial_sum(start.begin(), start.end(), start.begin());
+      at.assign(start.begin(), start.end() - 1);
+      for (uint32_t f = 0; f < inputFaces; ++f) members[at[leaf[f]]++] = f;
+      std::vector<uint32_t>().swap(leaf);
+      std::vector<uint32_t>().swap(at);
+      const std::vector<Face>& inFaces = dag.levels[0].faces;
+      std::vector<std::vector<uint32_t>> local(leaves);
+      std::vector<uint32_t> count(leaves, 0);
+      std::atomic<uint32_t> next(0);
+      RunThreads(std::min(threads, leaves), [&](unsigned) {
+        std::vector<Face> faces;
+        for (uint32_t l = next++; l < leaves; l = next++) {
+          faces.clear();
+          for (uint32_t j = start[l]; j < start[l + 1]; ++j) {
+            faces.push_back(inFaces[members[j]]);
+            if (wedges)
+              for (uint32_t& v : faces.back()) v = place[v];
+          }
+          count[l] = GrowClusters(faces, dag.positions, params.clusterFaces,
+                                  std::min(90.0, params.grouping.coneThresholdDeg) * kDeg, local[l]);
+        }
+      });
+      LodDag::Level& L0 = dag.levels[0];
+      L0.faceCluster.assign(inputFaces, 0);
+      uint32_t base = 0;
+      for (uint32_t l = 0; l < leaves; ++l) {
+        for (uint32_t j = start[l]; j < start[l + 1]; ++j) L0.faceCluster[members[j]] = base + local[l][j - start[l]];
+        clusterNode.insert(clusterNode.end(), count[l], l);
+        base += count[l];
+        std::vector<uint32_t>().swap(local[l]);
+      }
+      L0.clusterGroup.assign(base, -1);
+      L0.clusterCreator.assign(base, -1);
+      L0.clusterError.assign(base, 0.f);
+    }
+  }
+  if (depth == 0) {
+    LodDag::Level& L0 = dag.levels[0];
+    const uint32_t C = GrowClusters(wedges ? byPlace(L0.faces) : L0.faces, dag.positions, params.clusterFaces,
+                                    std::min(90.0, params.grouping.coneThresholdDeg) * kDeg, L0.faceCluster);
+    L0.clusterGroup.assign(C, -1);
+    L0.clusterCreator.assign(C, -1);
+    L0.clusterError.assign(C, 0.f);
+  }
+  s = BuildLevels(params, progress, spill, inputFaces, diagonal, threads, 0, depth, depth, clusterNode, dag);
+  if (!s.ok()) return s;
   if (progress) progress(100, "LOD: DAG built");
   return Status::Ok();
 }
 
 }  // namespace
+
+Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, LodDag& dag, const Progress& progress,
+                             LodSpill& spill) {
+  dag = LodDag();
+  const size_t leaves = in.chunkFaces.size();
+  if (in.depth < 1 || leaves != size_t(1) << in.depth || in.border.size() != in.positions.size())
+    return Status::Invalid("internal error: bad LOD chunks");
+  const double kDeg = NormalCone::kPi / 180;
+  const double diagonal = in.box.IsNull() ? 0.0 : in.box.Diag();
+  const size_t inputFaces = in.inputFaces;
+  const unsigned threads = unsigned(std::max(1, SimplificationThreads(params.simplification)));
+  const size_t V0 = in.positions.size();
+  dag.positions = std::move(in.positions);
+  dag.inputVertices = V0;
+  // Per input vertex: 2 when two chunks use it (frozen for good at level 0), 1 while two groups
+  // of the chunk being built use it.
+  std::vector<uint8_t> shared = std::move(in.border);
+  for (uint8_t& b : shared) b = b ? 2 : 0;
+  std::vector<int> owner(V0, -1);
+  dag.levels.resize(2);
+  LodDag::Level& L0 = dag.levels[0];
+  LodDag::Level& N = dag.levels[1];
+  std::vector<uint32_t> nextNode;
+  const int per = params.fineGroupClusters > 0 ? params.fineGroupClusters : params.groupClusters;  // level 0
+  const double angle0 = std::min(90.0, params.grouping.coneThresholdDeg) * kDeg;
+  const double angle1 =
+      std::min(90.0, params.grouping.coneThresholdDeg * std::pow(params.grouping.thresholdGrowth, 1)) * kDeg;
+  LodDag::Level sub;  // the chunk's level 0 (clusters numbered within the chunk)
+  std::vector<int> group;
+  std::vector<uint32_t> globalCluster, clusterOfFace;
+  for (size_t l = 0; l < leaves; ++l) {
+    if (progress && !progress(int(10 * l / leaves), "LOD: level 0 chunk by chunk")) {
+      dag = LodDag();
+      return Status::Cancelled();
+    }
+    const size_t F = size_t(in.chunkFaces[l]);
+    if (F == 0) continue;
+    sub = LodDag::Level();
+    sub.faces.resize(F);
+    {
+      std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(spill.chunk(l).c_str(), "rb"), &std::fclose);
+      if (!f || std::fread(sub.faces.data(), sizeof(Face), F, f.get()) != F)
+        return Status::Invalid("cannot read '" + spill.chunk(l) + "' (the temporary folder of --memory)");
+    }
+    std::remove(spill.chunk(l).c_str());
+    for (const Face& t : sub.faces)
+      for (uint32_t v : t)
+        if (v >= V0) return Status::Invalid("internal error: bad LOD chunk file");
+    const uint32_t C = GrowClusters(sub.faces, dag.positions, params.clusterFaces, angle0, sub.faceCluster);
+    sub.clusterGroup.assign(C, -1);
+    const int G = GroupClusters(sub, per, 0, group);
+    const uint32_t clusterBase = uint32_t(L0.clusterGroup.size());
+    const int groupBase = int(L0.groupError.size());
+    for (uint32_t c = 0; c < C; ++c) {
+      L0.clusterGroup.push_back(groupBase + group[c]);
+      L0.clusterCreator.push_back(-1);
+      L0.clusterError.push_back(0.f);
+    }
+    std::vector<std::vector<uint32_t>> groupFaces(static_cast<size_t>(G));
+    for (uint32_t f = 0; f < F; ++f) groupFaces[size_t(group[sub.faceCluster[f]])].push_back(f);
+    for (uint32_t f = 0; f < F; ++f) {
+      const int g = group[sub.faceCluster[f]];
+      for (uint32_t v : sub.faces[f]) {
+        if (owner[v] < 0)
+          owner[v] = g;
+        else if (owner[v] != g)
+          shared[v] |= 1;
+      }
+    }
+    std::vector<GroupResult> results(static_cast<size_t>(G));
+    {
+      std::atomic<int> next(0);
+      RunThreads(std::min<unsigned>(threads, unsigned(G)), [&](unsigned) {
+        for (int g = next++; g < G; g = next++)
+          SimplifyGroup(sub.faces, groupFaces[size_t(g)], dag.positions, shared, params, params.maxGroupError, diagonal,
+                        false, dag.attributes, results[size_t(g)]);
+      });
+    }
+    for (uint32_t f = 0; f < F; ++f)
+      for (uint32_t v : sub.faces[f]) {
+        owner[v] = -1;
+        shared[v] &= 2;
+      }
+    std::vector<std::vector<uint32_t>>().swap(groupFaces);
+    for (int g = 0; g < G; ++g) {
+      GroupResult& r = results[size_t(g)];
+      const uint32_t V = uint32_t(r.localToGlobal.size());
+      const uint32_t firstNew = uint32_t(dag.positions.size());
+      dag.positions.insert(dag.positions.end(), r.newPositions.begin(), r.newPositions.end());
+      std::vector<Face> faces;
+      faces.reserve(r.faces.size());
+      for (const auto& t : r.faces) {
+        Face u;
+        for (int i = 0; i < 3; ++i)
+          u[size_t(i)] = t[size_t(i)] < V ? r.localToGlobal[t[size_t(i)]] : firstNew + (t[size_t(i)] - V);
+        faces.push_back(u);
+      }
+      // As BuildLevels: the error grows strictly (level 0's clusters have error 0).
+      float ef = float(r.distance);
+      if (!(ef > 0.f)) ef = std::nextafter(0.f, std::numeric_limits<float>::infinity());
+      L0.groupError.push_back(ef);
+      const uint32_t NC = GrowClusters(faces, dag.positions, params.clusterFaces, angle1, clusterOfFace);
+      const uint32_t base = uint32_t(N.clusterCount());
+      for (size_t f = 0; f < faces.size(); ++f) {
+        N.faces.push_back(faces[f]);
+        N.faceCluster.push_back(base + clusterOfFace[f]);
+      }
+      for (uint32_t c = 0; c < NC; ++c) {
+        N.clusterGroup.push_back(-1);
+        N.clusterCreator.push_back(groupBase + g);
+        N.clusterError.push_back(ef);
+        nextNode.push_back(uint32_t(l));
+      }
+      r = GroupResult();
+    }
+    globalCluster.resize(F);
+    for (uint32_t f = 0; f < F; ++f) globalCluster[f] = clusterBase + sub.faceCluster[f];
+    Status s = spill.append(0, sub.faces, globalCluster, dag.positions);
+    if (!s.ok()) {
+      dag = LodDag();
+      return s;
+    }
+  }
+  sub = LodDag::Level();
+  std::vector<int>().swap(owner);
+  std::vector<uint8_t>().swap(shared);
+  Status s = spill.finish(0);
+  if (!s.ok()) {
+    dag = LodDag();
+    return s;
+  }
+  s = BuildLevels(params, progress, &spill, inputFaces, diagonal, threads, 1, in.depth, in.depth, nextNode, dag);
+  if (!s.ok()) return s;
+  if (progress) progress(100, "LOD: DAG built");
+  return Status::Ok();
+}
 
 Status BuildLodDag(const IndexedMesh& mesh, const LodBuildParams& params, LodDag& out, const Progress& progress,
                    size_t* chunks, const LodAttributes* attributes) {

@@ -21,6 +21,27 @@ namespace {
 // while one is registered is removed by its destructor only).
 char g_folder[4096];
 std::atomic<int> g_registered(0);
+std::atomic<size_t> g_chunks(0);  // chunk files K0 .. K(n-1) of the streamed build
+
+void Name(char* out, const char* folder, char prefix, size_t i, bool number) {  // FOLDER/Xi, no snprintf
+  size_t n = 0;
+  while (folder[n]) {
+    out[n] = folder[n];
+    ++n;
+  }
+  out[n++] = '/';
+  out[n++] = prefix;
+  if (number) {
+    char digits[24];
+    int d = 0;
+    do {
+      digits[d++] = char('0' + i % 10);
+      i /= 10;
+    } while (i);
+    while (d) out[n++] = digits[--d];
+  }
+  out[n] = 0;
+}
 
 void LevelName(char* out, const char* folder, int k) {  // FOLDER/Lkk, without snprintf
   size_t n = 0;
@@ -46,9 +67,18 @@ struct FileCloser {
 void RemoveLodSpillsOnSignal() {
   int one = 1;
   if (!g_registered.compare_exchange_strong(one, 0)) return;
-  char name[sizeof g_folder + 8];
+  char name[sizeof g_folder + 32];
   for (int k = 0; k < 64; ++k) {
     LevelName(name, g_folder, k);
+    ::unlink(name);
+  }
+  Name(name, g_folder, 'R', 0, false);
+  ::unlink(name);
+  Name(name, g_folder, 'C', 0, false);
+  ::unlink(name);
+  const size_t chunks = g_chunks.load();
+  for (size_t i = 0; i < chunks; ++i) {
+    Name(name, g_folder, 'K', i, true);
     ::unlink(name);
   }
   ::rmdir(g_folder);
@@ -78,10 +108,70 @@ void LodSpill::remove() {
   if (g_registered.load() && folder_ == g_folder) g_registered.store(0);
   for (size_t k = 0; k < faces_.size(); ++k)
     if (faces_[k] != kNone) std::remove(file(k).c_str());
+  std::remove(raw().c_str());
+  std::remove(clusters().c_str());
+  for (size_t i = 0; i < chunks_; ++i) std::remove(chunk(i).c_str());
+  chunks_ = 0;
+  partEnds_.clear();
   ::rmdir(folder_.c_str());
   folder_.clear();
   faces_.clear();
   boxes_.clear();
+}
+
+void LodSpill::setChunks(size_t n) {
+  chunks_ = n;
+  if (g_registered.load() && folder_ == g_folder) g_chunks.store(n);
+}
+
+std::string LodSpill::chunk(size_t i) const { return folder_ + "/K" + std::to_string(i); }
+
+Status LodSpill::append(size_t k, const std::vector<std::array<uint32_t, 3>>& faces,
+                        const std::vector<uint32_t>& faceCluster, const std::vector<vcg::Point3f>& positions) {
+  if (folder_.empty() || k >= 64 || faces.size() != faceCluster.size())
+    return Status::Invalid("internal error: a LOD level cannot be spilled");
+  if (faces_.size() <= k) {
+    faces_.resize(k + 1, kNone);
+    boxes_.resize(k + 1);
+  }
+  if (faces_[k] == kNone) faces_[k] = 0;
+  for (const auto& t : faces)
+    for (uint32_t v : t) boxes_[k].Add(positions[v]);
+  const size_t n = faces.size();
+  const std::string a = file(k), b = clusters();
+  std::unique_ptr<std::FILE, FileCloser> f(std::fopen(a.c_str(), "ab"));
+  bool ok = f != nullptr;
+  if (ok && n) ok = std::fwrite(faces.data(), sizeof faces[0], n, f.get()) == n;
+  if (f && std::fclose(f.release()) != 0) ok = false;
+  if (!ok) return Status::Invalid("cannot write '" + a + "': " + std::strerror(errno));
+  f.reset(std::fopen(b.c_str(), "ab"));
+  ok = f != nullptr;
+  if (ok && n) ok = std::fwrite(faceCluster.data(), sizeof faceCluster[0], n, f.get()) == n;
+  if (f && std::fclose(f.release()) != 0) ok = false;
+  if (!ok) return Status::Invalid("cannot write '" + b + "': " + std::strerror(errno));
+  faces_[k] += n;
+  if (partEnds_.size() <= k) partEnds_.resize(k + 1);
+  if (n) partEnds_[k].push_back(faces_[k]);
+  return Status::Ok();
+}
+
+Status LodSpill::finish(size_t k) {  // level k's file: its faces, then the side file's faceCluster
+  if (!has(k)) return Status::Invalid("internal error: a LOD level was not spilled");
+  const std::string a = file(k), b = clusters();
+  std::unique_ptr<std::FILE, FileCloser> out(std::fopen(a.c_str(), "ab")), in(std::fopen(b.c_str(), "rb"));
+  bool ok = out && (in || faces_[k] == 0);
+  std::vector<char> buf(size_t(1) << 20);
+  while (ok && in) {
+    const size_t n = std::fread(buf.data(), 1, buf.size(), in.get());
+    if (n && std::fwrite(buf.data(), 1, n, out.get()) != n) ok = false;
+    if (n < buf.size()) break;
+  }
+  if (ok && in && std::ferror(in.get())) ok = false;
+  if (out && std::fclose(out.release()) != 0) ok = false;
+  in.reset();
+  std::remove(b.c_str());
+  if (!ok) return Status::Invalid("cannot write '" + a + "': " + std::strerror(errno));
+  return Status::Ok();
 }
 
 std::string LodSpill::file(size_t k) const {
@@ -112,6 +202,25 @@ Status LodSpill::put(size_t k, LodDag::Level& L, const std::vector<vcg::Point3f>
   boxes_[k] = box;
   std::vector<std::array<uint32_t, 3>>().swap(L.faces);
   std::vector<uint32_t>().swap(L.faceCluster);
+  return Status::Ok();
+}
+
+Status LodSpill::get(size_t k, size_t part, std::vector<std::array<uint32_t, 3>>& faces,
+                     std::vector<uint32_t>& faceCluster) const {
+  if (parts(k) == 1 && part == 0) return get(k, faces, faceCluster);
+  if (!has(k) || part >= parts(k)) return Status::Invalid("internal error: a LOD level was not spilled");
+  const uint64_t begin = part ? partEnds_[k][part - 1] : 0, end = partEnds_[k][part], total = faces_[k];
+  const std::string path = file(k);
+  std::unique_ptr<std::FILE, FileCloser> f(std::fopen(path.c_str(), "rb"));
+  const size_t n = size_t(end - begin);
+  faces.resize(n);
+  faceCluster.resize(n);
+  bool ok = f != nullptr;
+  if (ok) ok = fseeko(f.get(), off_t(begin * sizeof faces[0]), SEEK_SET) == 0;
+  if (ok && n) ok = std::fread(faces.data(), sizeof faces[0], n, f.get()) == n;
+  if (ok) ok = fseeko(f.get(), off_t(total * sizeof faces[0] + begin * sizeof faceCluster[0]), SEEK_SET) == 0;
+  if (ok && n) ok = std::fread(faceCluster.data(), sizeof faceCluster[0], n, f.get()) == n;
+  if (!ok) return Status::Invalid("cannot read '" + path + "' (the temporary folder of --memory)");
   return Status::Ok();
 }
 

@@ -40,8 +40,23 @@ class LodSpill {
   bool has(size_t k) const { return k < faces_.size() && faces_[k] != kNone; }
   uint64_t faceCount(size_t k) const { return faces_[k]; }
   const vcg::Box3f& box(size_t k) const { return boxes_[k]; }
-  // Reads level k's faces and faceCluster back.
+  // Reads level k's faces and faceCluster back: all of them, or those of one part (a level
+  // written by put() has one part; one written by append(), a part per call).
   Status get(size_t k, std::vector<std::array<uint32_t, 3>>& faces, std::vector<uint32_t>& faceCluster) const;
+  Status get(size_t k, size_t part, std::vector<std::array<uint32_t, 3>>& faces,
+             std::vector<uint32_t>& faceCluster) const;
+  size_t parts(size_t k) const { return k < partEnds_.size() && !partEnds_[k].empty() ? partEnds_[k].size() : 1; }
+
+  // The streamed build (BuildLodFileFromPly): level k written a part at a time (append, then
+  // finish once before get), and the other files it keeps in the folder: the input's faces as
+  // read (raw()) and one file of faces per kd chunk (chunk(i), i < chunks()).
+  Status append(size_t k, const std::vector<std::array<uint32_t, 3>>& faces, const std::vector<uint32_t>& faceCluster,
+                const std::vector<vcg::Point3f>& positions);
+  Status finish(size_t k);
+  std::string raw() const { return folder_ + "/R"; }
+  void setChunks(size_t n);
+  size_t chunks() const { return chunks_; }
+  std::string chunk(size_t i) const;
 
  private:
   static constexpr uint64_t kNone = ~uint64_t(0);
@@ -49,6 +64,9 @@ class LodSpill {
   std::string folder_;
   std::vector<uint64_t> faces_;
   std::vector<vcg::Box3f> boxes_;
+  size_t chunks_ = 0;
+  std::vector<std::vector<uint64_t>> partEnds_;            // per level written by append(): each part's end
+  std::string clusters() const { return folder_ + "/C"; }  // append's faceCluster side file
 };
 
 // BuildLodDag of a mesh it takes (its positions and faces become the DAG's level 0 without a
@@ -57,6 +75,25 @@ class LodSpill {
 // (with the same `attributes`, per vertex of `mesh`, optional).
 Status BuildLodDagOwned(IndexedMesh&& mesh, const LodBuildParams& params, LodDag& out, const Progress& progress,
                         size_t* chunks, LodSpill* spill, const LodAttributes* attributes = nullptr);
+
+// The streamed build's DAG (BuildLodFileFromPly, lod_stream.cpp): the welded input's faces are in
+// the spill's chunk files (chunk(i): the faces of kd chunk i, global vertex ids, in input order),
+// never whole in memory. Each chunk's level-0 clusters, groups and level-1 faces are made from
+// its file on its own, chunk after chunk (its groups side by side on the threads), and its level
+// 0 goes to the spill; level 1 and above are then built as BuildLodDag builds them. The chunks
+// are kd leaves at one depth, numbered as KdChunks numbers them, so that with the same chunks the
+// DAG is BuildLodDag's with the same chunkFaces (a level 0 that does not shrink is kept, where
+// BuildLodDag would merge the chunks and build it again).
+struct LodChunkedInput {
+  std::vector<vcg::Point3f> positions;  // the welded input's, every one used (taken)
+  std::vector<uint8_t> border;          // per vertex: nonzero when faces of two chunks use it (taken)
+  std::vector<uint64_t> chunkFaces;     // faces per chunk file: 2^depth chunks
+  int depth = 0;
+  size_t inputFaces = 0;
+  vcg::Box3d box;  // of positions
+};
+Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, LodDag& out, const Progress& progress,
+                             LodSpill& spill);
 
 // WriteLodFile of a DAG whose levels may be in `spill` (null: all in the DAG): the same bytes.
 // inputVertices: the DAG's input vertices (all used); box: their box (UsedVertexBox).

@@ -126,14 +126,29 @@ void BucketFaces(const std::vector<uint32_t>& faceCluster, const std::vector<uin
   for (size_t f = 0; f < faceCluster.size(); ++f) faces[at[nodeOfCluster[faceCluster[f]]]++] = uint32_t(f);
 }
 
+// The nodes [n0, n1) of a part of a level (its faces' clusters' nodes, which no other part has).
+void NodeRange(const std::vector<uint32_t>& faceCluster, const std::vector<uint32_t>& nodeOfCluster, uint32_t& n0,
+               uint32_t& n1) {
+  n0 = ~0u;
+  n1 = 0;
+  for (uint32_t c : faceCluster) {
+    n0 = std::min(n0, nodeOfCluster[c]);
+    n1 = std::max(n1, nodeOfCluster[c] + 1);
+  }
+  if (n0 > n1) n0 = n1 = 0;
+}
+
 // A level's faces and faceCluster: the DAG's own, or read back from the spill into `faces` and
 // `faceCluster` (one level at a time).
 class LevelFaces {
  public:
   LevelFaces(const LodDag& dag, const LodSpill* spill) : dag_(dag), spill_(spill) {}
-  Status load(size_t k) {
+  // A level the streamed build spilled a chunk at a time is read back a part (a chunk) at a time:
+  // each part holds whole nodes, and whole groups (LodSpill::append).
+  size_t parts(size_t k) const { return spill_ && spill_->has(k) ? spill_->parts(k) : 1; }
+  Status load(size_t k, size_t part = 0) {
     if (spill_ && spill_->has(k)) {
-      const Status s = spill_->get(k, own_, ownCluster_);
+      const Status s = spill_->get(k, part, own_, ownCluster_);
       faces_ = &own_;
       cluster_ = &ownCluster_;
       return s;
@@ -280,19 +295,21 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
     const LodDag::Level& L = dag.levels[k];
     const std::string bad = "LOD level " + std::to_string(k) + " is inconsistent";
     const size_t C = L.clusterCount();
-    Status s = level.load(k);
-    if (!s.ok()) return s;
-    const auto& faces = level.faces();
-    const auto& faceCluster = level.faceCluster();
-    if (faceCluster.size() != faces.size() || L.clusterCreator.size() != C || L.clusterError.size() != C || C == 0)
-      return Status::Invalid(bad);
-    for (uint32_t c : faceCluster)
-      if (c >= C) return Status::Invalid(bad);
-    for (const auto& t : faces)
-      for (uint32_t v : t)
-        if (v >= dag.positions.size()) return Status::Invalid(bad + " (a bad vertex index)");
-    for (const auto& t : faces)
-      for (uint32_t v : t) span.Add(dag.positions[v]);
+    for (size_t part = 0; part < level.parts(k); ++part) {
+      Status s = level.load(k, part);
+      if (!s.ok()) return s;
+      const auto& faces = level.faces();
+      const auto& faceCluster = level.faceCluster();
+      if (faceCluster.size() != faces.size() || L.clusterCreator.size() != C || L.clusterError.size() != C || C == 0)
+        return Status::Invalid(bad);
+      for (uint32_t c : faceCluster)
+        if (c >= C) return Status::Invalid(bad);
+      for (const auto& t : faces)
+        for (uint32_t v : t)
+          if (v >= dag.positions.size()) return Status::Invalid(bad + " (a bad vertex index)");
+      for (const auto& t : faces)
+        for (uint32_t v : t) span.Add(dag.positions[v]);
+    }
     const size_t groupsBelow = k ? dag.levels[k - 1].groupError.size() : 0;
     for (size_t c = 0; c < C; ++c) {
       if (k == 0 ? L.clusterCreator[c] != -1 : (L.clusterCreator[c] < 0 || size_t(L.clusterCreator[c]) >= groupsBelow))
@@ -369,69 +386,73 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
     for (uint32_t k = 0; k < nodeLevels; ++k) {
       if (progress && !progress(int(30 * k / nodeLevels), "LOD file: node records")) return Status::Cancelled();
       const LodDag::Level& L = dag.levels[k];
-      Status s = level.load(k);
-      if (!s.ok()) return s;
-      const auto& levelFaceList = level.faces();
-      BucketFaces(level.faceCluster(), nodeOfCluster[k], start, faces);
-      levelFaces[k] = levelFaceList.size();
+      levelFaces[k] = level.count(k);
       ListBy(L.clusterCreator, k ? dag.levels[k - 1].groupError.size() : 0, idOfCluster[k], byCreatorStart, byCreator);
       if (k > 0)
         ListBy(dag.levels[k - 1].clusterGroup, dag.levels[k - 1].groupError.size(), idOfCluster[k - 1], byGroupStart,
                byGroup);
       if (k + 1 < nodeLevels)
         ListBy(dag.levels[k + 1].clusterCreator, L.groupError.size(), idOfCluster[k + 1], aboveStart, above);
-      for (uint32_t i = 0; i < clusterOfNode[k].size(); ++i) {
-        const uint32_t c = clusterOfNode[k][i];
-        NodeRecord& R = records[firstId[k] + i];
-        R.level = k;
-        R.error = L.clusterError[c];
-        if (k == 0) {
-          R.siblings.assign(1, uint32_t(firstId[k] + i));
-        } else {
-          const size_t cr = size_t(L.clusterCreator[c]);
-          R.children.assign(byGroup.begin() + byGroupStart[cr], byGroup.begin() + byGroupStart[cr + 1]);
-          R.siblings.assign(byCreator.begin() + byCreatorStart[cr], byCreator.begin() + byCreatorStart[cr + 1]);
-          // A group's clusters have consecutive ids (the node order): the file stores the range.
-          if (R.children.empty() || R.children.back() - R.children.front() + 1 != R.children.size())
-            return Status::Invalid("internal error: the children of a LOD node are not consecutive");
-        }
-        if (L.clusterGroup[c] >= 0) {
-          const size_t g = size_t(L.clusterGroup[c]);
-          R.group = uint32_t(g);
-          R.parentError = L.groupError[g];
-          R.parents.assign(above.begin() + aboveStart[g], above.begin() + aboveStart[g + 1]);
-        } else {
-          R.parentError = std::numeric_limits<float>::infinity();
-        }
-        normals.clear();
-        vcg::Box3f nb;
-        uint32_t vc = 0;
-        for (uint32_t j = start[i]; j < start[i + 1]; ++j) {
-          const auto& t = levelFaceList[faces[j]];
-          const vcg::Point3f r0 = rounded(t[0]), r1 = rounded(t[1]), r2 = rounded(t[2]);
-          const vcg::Point3d a = vcg::Point3d::Construct(r0), b = vcg::Point3d::Construct(r1),
-                             cc = vcg::Point3d::Construct(r2);
-          const vcg::Point3d n = (b - a) ^ (cc - a);
-          const double len = n.Norm();
-          const double scale = std::max({(b - a).SquaredNorm(), (cc - a).SquaredNorm(), (cc - b).SquaredNorm()});
-          if (len > 1e-12 * scale && len > 0) normals.push_back(n / len);
-          for (int q = 0; q < 3; ++q) {
-            const uint32_t v = t[size_t(q)];
-            nb.Add(q == 0 ? r0 : q == 1 ? r1 : r2);
-            if (stamp[v] != i) {
-              stamp[v] = i;
-              ++vc;
+      for (size_t part = 0; part < level.parts(k); ++part) {
+        Status s = level.load(k, part);
+        if (!s.ok()) return s;
+        const auto& levelFaceList = level.faces();
+        BucketFaces(level.faceCluster(), nodeOfCluster[k], start, faces);
+        uint32_t n0 = 0, n1 = uint32_t(clusterOfNode[k].size());
+        if (level.parts(k) > 1) NodeRange(level.faceCluster(), nodeOfCluster[k], n0, n1);
+        for (uint32_t i = n0; i < n1; ++i) {
+          const uint32_t c = clusterOfNode[k][i];
+          NodeRecord& R = records[firstId[k] + i];
+          R.level = k;
+          R.error = L.clusterError[c];
+          if (k == 0) {
+            R.siblings.assign(1, uint32_t(firstId[k] + i));
+          } else {
+            const size_t cr = size_t(L.clusterCreator[c]);
+            R.children.assign(byGroup.begin() + byGroupStart[cr], byGroup.begin() + byGroupStart[cr + 1]);
+            R.siblings.assign(byCreator.begin() + byCreatorStart[cr], byCreator.begin() + byCreatorStart[cr + 1]);
+            // A group's clusters have consecutive ids (the node order): the file stores the range.
+            if (R.children.empty() || R.children.back() - R.children.front() + 1 != R.children.size())
+              return Status::Invalid("internal error: the children of a LOD node are not consecutive");
+          }
+          if (L.clusterGroup[c] >= 0) {
+            const size_t g = size_t(L.clusterGroup[c]);
+            R.group = uint32_t(g);
+            R.parentError = L.groupError[g];
+            R.parents.assign(above.begin() + aboveStart[g], above.begin() + aboveStart[g + 1]);
+          } else {
+            R.parentError = std::numeric_limits<float>::infinity();
+          }
+          normals.clear();
+          vcg::Box3f nb;
+          uint32_t vc = 0;
+          for (uint32_t j = start[i]; j < start[i + 1]; ++j) {
+            const auto& t = levelFaceList[faces[j]];
+            const vcg::Point3f r0 = rounded(t[0]), r1 = rounded(t[1]), r2 = rounded(t[2]);
+            const vcg::Point3d a = vcg::Point3d::Construct(r0), b = vcg::Point3d::Construct(r1),
+                               cc = vcg::Point3d::Construct(r2);
+            const vcg::Point3d n = (b - a) ^ (cc - a);
+            const double len = n.Norm();
+            const double scale = std::max({(b - a).SquaredNorm(), (cc - a).SquaredNorm(), (cc - b).SquaredNorm()});
+            if (len > 1e-12 * scale && len > 0) normals.push_back(n / len);
+            for (int q = 0; q < 3; ++q) {
+              const uint32_t v = t[size_t(q)];
+              nb.Add(q == 0 ? r0 : q == 1 ? r1 : r2);
+              if (stamp[v] != i) {
+                stamp[v] = i;
+                ++vc;
+              }
             }
           }
+          R.cone = normals.empty() ? NormalCone::Empty() : MinimalCone(normals);
+          R.faceCount = start[i + 1] - start[i];
+          R.vertexCount = vc;
+          R.center = nb.IsNull() ? vcg::Point3f(0, 0, 0) : nb.Center();
+          float r2 = 0;
+          for (uint32_t j = start[i]; j < start[i + 1]; ++j)
+            for (uint32_t v : levelFaceList[faces[j]]) r2 = std::max(r2, (rounded(v) - R.center).SquaredNorm());
+          R.radius = std::sqrt(r2) * (1 + 1e-6f);
         }
-        R.cone = normals.empty() ? NormalCone::Empty() : MinimalCone(normals);
-        R.faceCount = start[i + 1] - start[i];
-        R.vertexCount = vc;
-        R.center = nb.IsNull() ? vcg::Point3f(0, 0, 0) : nb.Center();
-        float r2 = 0;
-        for (uint32_t j = start[i]; j < start[i + 1]; ++j)
-          for (uint32_t v : levelFaceList[faces[j]]) r2 = std::max(r2, (rounded(v) - R.center).SquaredNorm());
-        R.radius = std::sqrt(r2) * (1 + 1e-6f);
       }
       std::fill(stamp.begin(), stamp.end(), kNoParent);
     }
@@ -608,156 +629,161 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
       const LodDag::Level& L = dag.levels[size_t(k)];
       const auto& order = clusterOfNode[size_t(k)];
       const size_t nodes = order.size();
-      {
-        const Status s = level.load(size_t(k));
-        if (!s.ok()) return fail(s.message);
-      }
-      const auto& levelFaceList = level.faces();
-      BucketFaces(level.faceCluster(), nodeOfCluster[size_t(k)], start, faces);
-      for (uint32_t u0 = 0; u0 < nodes;) {
-        uint32_t u1 = u0 + 1;
-        while (u1 < nodes && L.clusterGroup[order[u1]] == L.clusterGroup[order[u0]]) ++u1;
-        verts.clear();
-        idx.clear();
-        for (uint32_t j = start[u0]; j < start[u1]; ++j)
-          for (uint32_t v : levelFaceList[faces[j]]) {
-            if (local[v] == kNoParent) {
-              local[v] = uint32_t(verts.size());
-              verts.push_back(v);
+      for (size_t part = 0; part < level.parts(size_t(k)); ++part) {
+        {
+          const Status s = level.load(size_t(k), part);
+          if (!s.ok()) return fail(s.message);
+        }
+        const auto& levelFaceList = level.faces();
+        BucketFaces(level.faceCluster(), nodeOfCluster[size_t(k)], start, faces);
+        uint32_t n0 = 0, n1 = uint32_t(nodes);
+        if (level.parts(size_t(k)) > 1) NodeRange(level.faceCluster(), nodeOfCluster[size_t(k)], n0, n1);
+        for (uint32_t u0 = n0; u0 < n1;) {
+          uint32_t u1 = u0 + 1;
+          while (u1 < n1 && L.clusterGroup[order[u1]] == L.clusterGroup[order[u0]]) ++u1;
+          verts.clear();
+          idx.clear();
+          for (uint32_t j = start[u0]; j < start[u1]; ++j)
+            for (uint32_t v : levelFaceList[faces[j]]) {
+              if (local[v] == kNoParent) {
+                local[v] = uint32_t(verts.size());
+                verts.push_back(v);
+              }
+              idx.push_back(local[v]);
             }
-            idx.push_back(local[v]);
+          for (uint32_t v : verts) local[v] = kNoParent;
+          const size_t vc = verts.size();
+          tmp.resize(idx.size());
+          for (uint32_t i = u0; i < u1; ++i) {  // each node's faces for the vertex cache, in place
+            const size_t a = size_t(start[i] - start[u0]) * 3, n = size_t(start[i + 1] - start[i]) * 3;
+            meshopt_optimizeVertexCache(tmp.data() + a, idx.data() + a, n, vc);
           }
-        for (uint32_t v : verts) local[v] = kNoParent;
-        const size_t vc = verts.size();
-        tmp.resize(idx.size());
-        for (uint32_t i = u0; i < u1; ++i) {  // each node's faces for the vertex cache, in place
-          const size_t a = size_t(start[i] - start[u0]) * 3, n = size_t(start[i + 1] - start[i]) * 3;
-          meshopt_optimizeVertexCache(tmp.data() + a, idx.data() + a, n, vc);
-        }
-        remap.resize(vc);
-        meshopt_optimizeVertexFetchRemap(remap.data(), tmp.data(), tmp.size(), vc);
-        for (size_t j = 0; j < idx.size(); ++j) idx[j] = remap[tmp[j]];
-        tmp.assign(vc, 0);
-        for (size_t v = 0; v < vc; ++v) tmp[remap[v]] = verts[v];
-        verts.swap(tmp);
-        // Quantized positions relative to the unit's smallest corner.
-        uint32_t qmin[3] = {~0u, ~0u, ~0u}, qmax[3] = {0, 0, 0};
-        q32.resize(vc * 3);
-        for (size_t v = 0; v < vc; ++v)
-          for (int c = 0; c < 3; ++c) {
-            const uint32_t q = grid.Quantize(dag.positions[verts[v]][c], c);
-            q32[v * 3 + size_t(c)] = q;
-            qmin[c] = std::min(qmin[c], q);
-            qmax[c] = std::max(qmax[c], q);
+          remap.resize(vc);
+          meshopt_optimizeVertexFetchRemap(remap.data(), tmp.data(), tmp.size(), vc);
+          for (size_t j = 0; j < idx.size(); ++j) idx[j] = remap[tmp[j]];
+          tmp.assign(vc, 0);
+          for (size_t v = 0; v < vc; ++v) tmp[remap[v]] = verts[v];
+          verts.swap(tmp);
+          // Quantized positions relative to the unit's smallest corner.
+          uint32_t qmin[3] = {~0u, ~0u, ~0u}, qmax[3] = {0, 0, 0};
+          q32.resize(vc * 3);
+          for (size_t v = 0; v < vc; ++v)
+            for (int c = 0; c < 3; ++c) {
+              const uint32_t q = grid.Quantize(dag.positions[verts[v]][c], c);
+              q32[v * 3 + size_t(c)] = q;
+              qmin[c] = std::min(qmin[c], q);
+              qmax[c] = std::max(qmax[c], q);
+            }
+          const bool wide = std::max({qmax[0] - qmin[0], qmax[1] - qmin[1], qmax[2] - qmin[2]}) > 0xFFFFu;
+          e.clear();
+          const uint8_t flags = uint8_t((wide ? kGeomWidePositions : 0) | attributeMask);
+          e.raw(&flags, 1);
+          e.uv(firstId[size_t(k)] + u0);  // the unit's nodes
+          e.uv(u1 - u0);
+          for (uint32_t i = u0; i < u1; ++i) e.uv(start[i + 1] - start[i]);
+          e.uv(vc);
+          for (int c = 0; c < 3; ++c) e.uv(qmin[c]);
+          e.uv(globalVertices);  // the first new global id
+          // The triangles are coded first: the positions' predictions walk the faces as the reader
+          // gets them back from the index codec (which may rotate a face's corners).
+          ibuf.resize(meshopt_encodeIndexBufferBound(idx.size(), vc));
+          ibuf.resize(meshopt_encodeIndexBuffer(ibuf.data(), ibuf.size(), idx.data(), idx.size()));
+          if (ibuf.empty()) return fail("internal error: the index codec failed");
+          decoded.resize(idx.size());
+          if (meshopt_decodeIndexBuffer(decoded.data(), decoded.size(), 4, ibuf.data(), ibuf.size()) != 0)
+            return fail("internal error: the index codec failed");
+          // Positions: residuals from the predictions, as running signed bytes (lod_internal.h).
+          const int width = wide ? 4 : 2;
+          const size_t stride = wide ? 12 : 8;
+          const uint64_t valueMask = (uint64_t(1) << (8 * width)) - 1;
+          qrel.resize(vc * 3);
+          residual.resize(vc * 3);
+          for (size_t v = 0; v < vc; ++v)
+            for (int c = 0; c < 3; ++c) qrel[v * 3 + size_t(c)] = q32[v * 3 + size_t(c)] - qmin[c];
+          predictor.Walk(decoded.data(), decoded.size() / 3, vc, qrel.data(), [&](uint32_t v, const uint64_t* pred) {
+            for (size_t c = 0; c < 3; ++c)
+              residual[3 * size_t(v) + c] = (qrel[3 * size_t(v) + c] - pred[c]) & valueMask;
+          });
+          lanes.assign(vc * stride, 0);
+          uint8_t running[12] = {0};
+          for (size_t v = 0; v < vc; ++v) {
+            for (int c = 0; c < 3; ++c) AddResidualBytes(residual[v * 3 + size_t(c)], width, running + width * c);
+            std::memcpy(lanes.data() + v * stride, running, size_t(3 * width));
           }
-        const bool wide = std::max({qmax[0] - qmin[0], qmax[1] - qmin[1], qmax[2] - qmin[2]}) > 0xFFFFu;
-        e.clear();
-        const uint8_t flags = uint8_t((wide ? kGeomWidePositions : 0) | attributeMask);
-        e.raw(&flags, 1);
-        e.uv(firstId[size_t(k)] + u0);  // the unit's nodes
-        e.uv(u1 - u0);
-        for (uint32_t i = u0; i < u1; ++i) e.uv(start[i + 1] - start[i]);
-        e.uv(vc);
-        for (int c = 0; c < 3; ++c) e.uv(qmin[c]);
-        e.uv(globalVertices);  // the first new global id
-        // The triangles are coded first: the positions' predictions walk the faces as the reader
-        // gets them back from the index codec (which may rotate a face's corners).
-        ibuf.resize(meshopt_encodeIndexBufferBound(idx.size(), vc));
-        ibuf.resize(meshopt_encodeIndexBuffer(ibuf.data(), ibuf.size(), idx.data(), idx.size()));
-        if (ibuf.empty()) return fail("internal error: the index codec failed");
-        decoded.resize(idx.size());
-        if (meshopt_decodeIndexBuffer(decoded.data(), decoded.size(), 4, ibuf.data(), ibuf.size()) != 0)
-          return fail("internal error: the index codec failed");
-        // Positions: residuals from the predictions, as running signed bytes (lod_internal.h).
-        const int width = wide ? 4 : 2;
-        const size_t stride = wide ? 12 : 8;
-        const uint64_t valueMask = (uint64_t(1) << (8 * width)) - 1;
-        qrel.resize(vc * 3);
-        residual.resize(vc * 3);
-        for (size_t v = 0; v < vc; ++v)
-          for (int c = 0; c < 3; ++c) qrel[v * 3 + size_t(c)] = q32[v * 3 + size_t(c)] - qmin[c];
-        predictor.Walk(decoded.data(), decoded.size() / 3, vc, qrel.data(), [&](uint32_t v, const uint64_t* pred) {
-          for (size_t c = 0; c < 3; ++c) residual[3 * size_t(v) + c] = (qrel[3 * size_t(v) + c] - pred[c]) & valueMask;
-        });
-        lanes.assign(vc * stride, 0);
-        uint8_t running[12] = {0};
-        for (size_t v = 0; v < vc; ++v) {
-          for (int c = 0; c < 3; ++c) AddResidualBytes(residual[v * 3 + size_t(c)], width, running + width * c);
-          std::memcpy(lanes.data() + v * stride, running, size_t(3 * width));
-        }
-        buf.resize(meshopt_encodeVertexBufferBound(vc, stride));
-        buf.resize(meshopt_encodeVertexBuffer(buf.data(), buf.size(), lanes.data(), vc, stride));
-        if (buf.empty()) return fail("internal error: the vertex codec failed");
-        e.uv(buf.size());
-        e.raw(buf.data(), buf.size());
-        positionBytes += buf.size();
-        e.uv(ibuf.size());
-        e.raw(ibuf.data(), ibuf.size());
-        indexBytes += ibuf.size();
-        mask.assign((vc + 7) / 8, 0);
-        old.clear();
-        for (size_t v = 0; v < vc; ++v) {
-          uint32_t& f = fileId[verts[v]];
-          if (f == kNoParent) {
-            f = uint32_t(globalVertices++);
-            mask[v / 8] = uint8_t(mask[v / 8] | 1u << (v % 8));
-          } else {
-            old.push_back(f);
-          }
-        }
-        e.raw(mask.data(), mask.size());
-        idBytes += mask.size();
-        if (!old.empty()) {
-          buf.resize(meshopt_encodeIndexSequenceBound(old.size(), size_t(globalVertices)));
-          buf.resize(meshopt_encodeIndexSequence(buf.data(), buf.size(), old.data(), old.size()));
-          if (buf.empty()) return fail("internal error: the index sequence codec failed");
+          buf.resize(meshopt_encodeVertexBufferBound(vc, stride));
+          buf.resize(meshopt_encodeVertexBuffer(buf.data(), buf.size(), lanes.data(), vc, stride));
+          if (buf.empty()) return fail("internal error: the vertex codec failed");
           e.uv(buf.size());
           e.raw(buf.data(), buf.size());
-          idBytes += buf.size();
-        }
-        // Attribute streams, 4 bytes a unit vertex each, in the unit's vertex order.
-        auto stream = [&](uint64_t& counter) {
-          buf.resize(meshopt_encodeVertexBufferBound(vc, 4));
-          buf.resize(meshopt_encodeVertexBuffer(buf.data(), buf.size(), attr.data(), vc, 4));
-          if (buf.empty()) return false;
-          e.uv(buf.size());
-          e.raw(buf.data(), buf.size());
-          counter += buf.size();
-          return true;
-        };
-        if (attributeMask & kGeomColors) {
-          attr.resize(vc * 4);
-          for (size_t v = 0; v < vc; ++v) std::memcpy(attr.data() + 4 * v, attributes.colors[verts[v]].data(), 4);
-          if (!stream(colorBytes)) return fail("internal error: the vertex codec failed");
-        }
-        if (attributeMask & kGeomNormals) {
-          attr.resize(vc * 4);
-          for (size_t v = 0; v < vc; ++v)
-            for (int c = 0; c < 2; ++c) {
-              const uint16_t x = attributes.normals[verts[v]][size_t(c)];
-              attr[4 * v + 2 * size_t(c)] = uint8_t(x & 0xFF);
-              attr[4 * v + 2 * size_t(c) + 1] = uint8_t(x >> 8);
+          positionBytes += buf.size();
+          e.uv(ibuf.size());
+          e.raw(ibuf.data(), ibuf.size());
+          indexBytes += ibuf.size();
+          mask.assign((vc + 7) / 8, 0);
+          old.clear();
+          for (size_t v = 0; v < vc; ++v) {
+            uint32_t& f = fileId[verts[v]];
+            if (f == kNoParent) {
+              f = uint32_t(globalVertices++);
+              mask[v / 8] = uint8_t(mask[v / 8] | 1u << (v % 8));
+            } else {
+              old.push_back(f);
             }
-          if (!stream(normalBytes)) return fail("internal error: the vertex codec failed");
+          }
+          e.raw(mask.data(), mask.size());
+          idBytes += mask.size();
+          if (!old.empty()) {
+            buf.resize(meshopt_encodeIndexSequenceBound(old.size(), size_t(globalVertices)));
+            buf.resize(meshopt_encodeIndexSequence(buf.data(), buf.size(), old.data(), old.size()));
+            if (buf.empty()) return fail("internal error: the index sequence codec failed");
+            e.uv(buf.size());
+            e.raw(buf.data(), buf.size());
+            idBytes += buf.size();
+          }
+          // Attribute streams, 4 bytes a unit vertex each, in the unit's vertex order.
+          auto stream = [&](uint64_t& counter) {
+            buf.resize(meshopt_encodeVertexBufferBound(vc, 4));
+            buf.resize(meshopt_encodeVertexBuffer(buf.data(), buf.size(), attr.data(), vc, 4));
+            if (buf.empty()) return false;
+            e.uv(buf.size());
+            e.raw(buf.data(), buf.size());
+            counter += buf.size();
+            return true;
+          };
+          if (attributeMask & kGeomColors) {
+            attr.resize(vc * 4);
+            for (size_t v = 0; v < vc; ++v) std::memcpy(attr.data() + 4 * v, attributes.colors[verts[v]].data(), 4);
+            if (!stream(colorBytes)) return fail("internal error: the vertex codec failed");
+          }
+          if (attributeMask & kGeomNormals) {
+            attr.resize(vc * 4);
+            for (size_t v = 0; v < vc; ++v)
+              for (int c = 0; c < 2; ++c) {
+                const uint16_t x = attributes.normals[verts[v]][size_t(c)];
+                attr[4 * v + 2 * size_t(c)] = uint8_t(x & 0xFF);
+                attr[4 * v + 2 * size_t(c) + 1] = uint8_t(x >> 8);
+              }
+            if (!stream(normalBytes)) return fail("internal error: the vertex codec failed");
+          }
+          if (attributeMask & kGeomTexCoords) {
+            attr.resize(vc * 4);
+            for (size_t v = 0; v < vc; ++v)
+              for (int c = 0; c < 2; ++c) {
+                const uint16_t x = attributes.texCoords[verts[v]][size_t(c)];
+                attr[4 * v + 2 * size_t(c)] = uint8_t(x & 0xFF);
+                attr[4 * v + 2 * size_t(c) + 1] = uint8_t(x >> 8);
+              }
+            if (!stream(texCoordBytes)) return fail("internal error: the vertex codec failed");
+          }
+          const uint64_t at = out.offset();
+          blob(e);
+          for (uint32_t i = u0; i < u1; ++i) {
+            geometryStart[firstId[size_t(k)] + i] = at;
+            geometryEnd[firstId[size_t(k)] + i] = out.offset();
+          }
+          if (globalVertices >= kNoParent) return fail("too many vertices for the file format");
+          u0 = u1;
         }
-        if (attributeMask & kGeomTexCoords) {
-          attr.resize(vc * 4);
-          for (size_t v = 0; v < vc; ++v)
-            for (int c = 0; c < 2; ++c) {
-              const uint16_t x = attributes.texCoords[verts[v]][size_t(c)];
-              attr[4 * v + 2 * size_t(c)] = uint8_t(x & 0xFF);
-              attr[4 * v + 2 * size_t(c) + 1] = uint8_t(x >> 8);
-            }
-          if (!stream(texCoordBytes)) return fail("internal error: the vertex codec failed");
-        }
-        const uint64_t at = out.offset();
-        blob(e);
-        for (uint32_t i = u0; i < u1; ++i) {
-          geometryStart[firstId[size_t(k)] + i] = at;
-          geometryEnd[firstId[size_t(k)] + i] = out.offset();
-        }
-        if (globalVertices >= kNoParent) return fail("too many vertices for the file format");
-        u0 = u1;
       }
       if (!out.ok()) return fail(out.error());
     }

@@ -76,6 +76,7 @@ class Cursor {
  public:
   Cursor(const char* p, const char* end, PlyEncoding e) : p_(p), end_(end), enc_(e) {}
   size_t left() const { return size_t(end_ - p_); }
+  const char* at() const { return p_; }
 
   // One scalar of `type` as a double. False at the end of the data or on a malformed ASCII token.
   bool scalar(int type, double& v) {
@@ -415,7 +416,13 @@ std::string TriangulatePolygon(const std::vector<std::array<float, 3>>& P, const
   return "";
 }
 
-std::string ParsePly(const char* data, size_t size, const std::string& name, PlyMesh& mesh) {
+namespace {
+
+// ParsePly; with `sink`, the triangles go to it in batches (mesh.triangles holds one batch at most;
+// faceQuality and wedgeTexCoords are not kept) and `release` is told every so often how far the
+// records have been read.
+std::string ParsePlyImpl(const char* data, size_t size, const std::string& name, PlyMesh& mesh,
+                         const PlyTriangleSink* sink, const std::function<void(const char*)>* release) {
   mesh = PlyMesh();
   PlyHeader h;
   std::string err = ParsePlyHeader(data, size, h);
@@ -611,8 +618,23 @@ std::string ParsePly(const char* data, size_t size, const std::string& name, Ply
           }
           ++mesh.polygons;
         }
-        if (quality >= 0) mesh.faceQuality.resize(mesh.triangles.size(), q);
+        if (sink) {
+          mesh.wedgeTexCoords.clear();
+          if (mesh.triangles.size() >= kStreamBatch) {
+            err = (*sink)(mesh.triangles);
+            if (!err.empty()) return err;
+            mesh.triangles.clear();
+          }
+        } else if (quality >= 0) {
+          mesh.faceQuality.resize(mesh.triangles.size(), q);
+        }
       }
+      if (release && (r & 0xFFFF) == 0) (*release)(in.at());
+    }
+    if (isFace && sink && !mesh.triangles.empty()) {
+      err = (*sink)(mesh.triangles);
+      if (!err.empty()) return err;
+      mesh.triangles.clear();
     }
     haveVertices |= isVertex;
     haveFaces |= isFace;
@@ -622,7 +644,17 @@ std::string ParsePly(const char* data, size_t size, const std::string& name, Ply
   return "";
 }
 
+}  // namespace
+
+std::string ParsePly(const char* data, size_t size, const std::string& name, PlyMesh& mesh) {
+  return ParsePlyImpl(data, size, name, mesh, nullptr, nullptr);
+}
+
 std::string ReadPly(const std::string& path, PlyMesh& mesh, bool* ioError) {
+  return ReadPlyStreaming(path, mesh, nullptr, ioError);
+}
+
+std::string ReadPlyStreaming(const std::string& path, PlyMesh& mesh, const PlyTriangleSink& sink, bool* ioError) {
   if (ioError) *ioError = false;
   auto fail = [&](const std::string& what) {
     if (ioError) *ioError = true;
@@ -660,7 +692,19 @@ std::string ReadPly(const std::string& path, PlyMesh& mesh, bool* ioError) {
   const int mapErrno = errno;
   ::close(fd);
   if (map == MAP_FAILED) return fail(std::strerror(mapErrno));
-  std::string err = ParsePly(static_cast<const char*>(map), size, path, mesh);
+  // Streaming: the pages read are dropped as the records go by, so that the mapped file does not
+  // stay resident (it would count in the process's memory).
+  const char* base = static_cast<const char*>(map);
+  const size_t page = size_t(::sysconf(_SC_PAGESIZE));
+  size_t dropped = 0;
+  const std::function<void(const char*)> release = [&](const char* at) {
+    const size_t upTo = size_t(at - base) / page * page;
+    if (upTo > dropped + (size_t(2) << 20)) {
+      ::madvise(const_cast<char*>(base) + dropped, upTo - dropped, MADV_DONTNEED);
+      dropped = upTo;
+    }
+  };
+  std::string err = ParsePlyImpl(base, size, path, mesh, sink ? &sink : nullptr, sink ? &release : nullptr);
   munmap(map, size);
   return err;
 }

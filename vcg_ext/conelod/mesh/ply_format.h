@@ -26,6 +26,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -88,6 +89,15 @@ struct PlyMesh {
 // Reads `path`. "" or a message that names the file and what is wrong with it; `ioError` is set
 // when the file could not be opened or read (as opposed to a malformed file).
 std::string ReadPly(const std::string& path, PlyMesh& mesh, bool* ioError = nullptr);
+// ReadPly without the faces in memory: the triangles are handed to `sink` in batches of about
+// kStreamBatch (in the file's order, polygons triangulated as ReadPly does; mesh.triangles is then
+// empty, faceQuality and wedgeTexCoords are not kept) and the file's pages are released from
+// memory as they are read. The vertex element is held as ReadPly holds it. The sink returns "" or
+// a message that stops the reading (returned as it is). Null sink: ReadPly.
+using PlyTriangleSink = std::function<std::string(const std::vector<std::array<uint32_t, 3>>&)>;
+constexpr size_t kStreamBatch = size_t(1) << 16;
+std::string ReadPlyStreaming(const std::string& path, PlyMesh& mesh, const PlyTriangleSink& sink,
+                             bool* ioError = nullptr);
 // The same from bytes in memory (the fuzzer's entry point); `name` is used in messages.
 std::string ParsePly(const char* data, size_t size, const std::string& name, PlyMesh& mesh);
 

@@ -1457,9 +1457,19 @@ size_t InputBorderEdges(const IndexedMesh& m) {
 // Every cut of a watertight mesh, at every eye, budget and priority, with and without culling,
 // is watertight: welded by position, no edge used by one face (crack, T-junction) or by three
 // (overlap); the drawn nodes' border lies along culled nodes only.
-void ExpectCrackFree(Built& b, const std::string& name, const LodBuildParams& params = LodBuildParams()) {
+// With `ply` (b.mesh: that file welded), the file is the streamed build's (BuildLodFileFromPly,
+// `sample` its sampleFaces).
+void ExpectCrackFree(Built& b, const std::string& name, const LodBuildParams& params = LodBuildParams(),
+                     const std::string& ply = "", size_t sample = 0) {
   ASSERT_EQ(InputBorderEdges(b.mesh), 0u) << name << " must be watertight for this test";
-  Build(b, name, params);
+  if (ply.empty()) {
+    Build(b, name, params);
+  } else {
+    b.path = TempPath(name + ".clod");
+    const Status s = BuildLodFileFromPly(ply, params, b.path, &b.stats, Progress(), nullptr, sample);
+    ASSERT_TRUE(s.ok()) << s.message;
+    b.bytes = ReadBytes(b.path);
+  }
   std::unique_ptr<LodReader> r;
   ASSERT_TRUE(LodReader::Open(b.path, r).ok());
   const vcg::Box3f box = r->info().box;
@@ -2436,6 +2446,127 @@ TEST(LodSpill, InPlaceWeldIsTheWeld) {
   bad.faces = {{{0, 0, 5}}};
   EXPECT_FALSE(WeldByPositionInPlace(bad));
   EXPECT_EQ(bad.faces[0][2], 5u);
+}
+
+// --- The streamed build (BuildLodFileFromPly, lod build --memory; docs/scale.md) -------------------
+
+// A PLY file read as `lod build` reads it (ReadPly), welded.
+IndexedMesh ReadWelded(const std::string& path) {
+  PlyMesh ply;
+  EXPECT_EQ(ReadPly(path, ply), "");
+  IndexedMesh m;
+  for (const auto& p : ply.positions) m.positions.emplace_back(p[0], p[1], p[2]);
+  m.faces = ply.triangles;
+  return WeldByPosition(m).mesh;
+}
+
+// With every face in the sample the chunks are KdChunks's: the streamed build's file is the
+// in-memory chunked build's (hence the spilled one's) byte for byte, for 1 and 2 threads; the
+// faces went through chunk files, and only the file is left. A sample of 1,000 faces gives other
+// chunks (another file), the same for 1 and 2 threads.
+TEST(LodStream, FullSampleIsTheChunkedBuildAndSamplesAreDeterministic) {
+  const std::string bunny = test::MeshPath("stanford_bunny_bun_zipper.ply");
+  Built memory;
+  memory.mesh = ReadWelded(bunny);
+  Build(memory, "bunny_chunks_memory", Chunked(4096, 2));
+  ASSERT_FALSE(memory.bytes.empty());
+  const std::string dir = FreshFolder("stream_ok");
+  std::vector<uint8_t> sampled[2];
+  for (int threads : {1, 2}) {
+    SpillWatch watch;
+    watch.dir = dir;
+    const std::string out = dir + "/bunny.clod";
+    LodBuildStats st;
+    Status s = BuildLodFileFromPly(bunny, Chunked(4096, threads), out, &st, watch.progress(), nullptr, 1 << 20);
+    ASSERT_TRUE(s.ok()) << s.message;
+    EXPECT_EQ(st.chunks, 32u);
+    EXPECT_EQ(st.inputFaces, memory.mesh.faces.size());
+    EXPECT_GE(watch.mostLevelFiles, 17u) << "the faces did not go through chunk files";
+    EXPECT_EQ(ReadBytes(out), memory.bytes) << threads << " threads";
+    EXPECT_EQ(Listing(dir), std::vector<std::string>{"bunny.clod"});
+    std::remove(out.c_str());
+    s = BuildLodFileFromPly(bunny, Chunked(4096, threads), out, &st, Progress(), nullptr, 1000);
+    ASSERT_TRUE(s.ok()) << s.message;
+    sampled[threads - 1] = ReadBytes(out);
+    EXPECT_EQ(Listing(dir), std::vector<std::string>{"bunny.clod"});
+    std::remove(out.c_str());
+  }
+  EXPECT_EQ(sampled[0], sampled[1]);
+  EXPECT_NE(sampled[0], memory.bytes);
+  // One chunk: the unchunked path, the file of BuildLodFile without chunks.
+  Built plain;
+  plain.mesh = memory.mesh;
+  Build(plain, "bunny_stream_plain");
+  ASSERT_TRUE(BuildLodFileFromPly(bunny, Chunked(1 << 20), dir + "/one.clod").ok());
+  EXPECT_EQ(ReadBytes(dir + "/one.clod"), plain.bytes);
+  std::remove((dir + "/one.clod").c_str());
+  // Bad input: the reader's message, nothing left behind.
+  {
+    const std::string bad = dir + "/bad.ply";
+    std::ofstream(bad) << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                          "property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n"
+                          "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 7\n";
+    std::string readError;
+    const Status s = BuildLodFileFromPly(bad, Chunked(1), dir + "/bad.clod", nullptr, Progress(), &readError);
+    EXPECT_FALSE(s.ok());
+    EXPECT_NE(readError.find("uses vertex 7"), std::string::npos) << readError;
+    std::remove(bad.c_str());
+  }
+  EXPECT_EQ(Listing(dir), std::vector<std::string>{});
+  rmdir(dir.c_str());
+  std::remove(memory.path.c_str());
+  std::remove(plain.path.c_str());
+}
+
+// Chunks from a sample of the centroids (16 chunks of the armadillo from 2,000 faces): every cut,
+// at every eye, budget and priority, is watertight and the full budget gives the input back.
+TEST(LodStream, SampledChunksCutsAreWatertight) {
+  const std::string path = test::MeshPath("stanford_armadillo_cgal.ply");
+  Built b;
+  b.mesh = ReadWelded(path);
+  const size_t chunk = (b.mesh.faces.size() + 15) / 16;
+  ExpectCrackFree(b, "armadillo_stream", Chunked(chunk), path, 2000);
+  EXPECT_EQ(b.stats.chunks, 16u);
+}
+
+// The dragon streamed in 16 chunks from a sample of 4,096 faces: its cuts have no crack and the
+// full budget gives the welded input back exactly (on the grid).
+TEST(LodStream, DragonCutsAreWatertightAndItsRoundTripExact) {
+  const std::string path = test::MeshPath("stanford_dragon_vrip_binary.ply");
+  Built b;
+  b.mesh = ReadWelded(path);
+  b.path = TempPath("dragon_stream.clod");
+  const size_t F = b.mesh.faces.size();
+  LodBuildStats st;
+  const Status s = BuildLodFileFromPly(path, Chunked((F + 15) / 16, 2), b.path, &st, Progress(), nullptr, 4096);
+  ASSERT_TRUE(s.ok()) << s.message;
+  EXPECT_EQ(st.chunks, 16u);
+  EXPECT_EQ(st.inputFaces, F);
+  EXPECT_EQ(st.inputVertices, b.mesh.positions.size());
+  EXPECT_LT(st.levelFaces.back(), F / 100);
+  std::unique_ptr<LodReader> r;
+  ASSERT_TRUE(LodReader::Open(b.path, r).ok());
+  const EdgeMap input = EdgesByPosition(OnGrid(b.mesh, r->info().grid));
+  const vcg::Point3d c = vcg::Point3d::Construct(r->info().box.Center());
+  const double d = r->info().box.Diag();
+  for (const vcg::Point3d& eye : {vcg::Point3d(0, 0.1, 0.3), c + vcg::Point3d(0.6 * d, 0.2 * d, -0.5 * d)})
+    for (double pct : {5.0, 20.0, 50.0, 100.0}) {
+      LodCut cut;
+      ASSERT_TRUE(RefineLod(*r, Eye(eye[0], eye[1], eye[2], size_t(double(F) * pct / 100)), cut).ok());
+      SCOPED_TRACE("dragon streamed, budget " + std::to_string(pct) + "%");
+      const CrackCount k = CheckCut(b, *r, cut, &input);
+      EXPECT_EQ(k.border, 0u);
+      EXPECT_EQ(k.overused, 0u);
+      EXPECT_EQ(k.drawnBorderNotCulled, 0u);
+      if (pct == 100) {
+        EXPECT_EQ(cut.faces, F);
+        IndexedMesh out;
+        ASSERT_TRUE(ExtractCutMesh(*r, cut, true, out).ok());
+        EXPECT_EQ(SortedFacePositions(out), SortedFacePositions(OnGrid(b.mesh, r->info().grid)));
+        EXPECT_EQ(out.positions.size(), b.mesh.positions.size());
+      }
+    }
+  std::remove(b.path.c_str());
 }
 
 }  // namespace
