@@ -157,7 +157,7 @@ Status BuildLodFileFromPly(const std::string& input, const LodBuildParams& param
                            LodBuildStats* stats = nullptr, const Progress& progress = Progress(),
                            std::string* readError = nullptr, size_t sampleFaces = 0);
 // The face count a PLY file's header declares (0 when it cannot be read); vertexAttributes: set when
-// its vertex element has colour, normals or texture coordinates.
+// its vertex element has colour, normals or texture coordinates, or its faces texcoord lists.
 uint64_t PlyFaceCount(const std::string& path, bool* vertexAttributes = nullptr);
 
 }  // namespace conelod
