@@ -683,6 +683,15 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
   out.distance = std::sqrt(worst2);
 }
 
+// A copy of `faces` with each vertex id replaced by its place (LodAttributes::place: the lowest
+// id at its position), as the DAG's topology sees texture seams.
+std::vector<Face> FacesByPlace(const std::vector<Face>& faces, const std::vector<uint32_t>& place) {
+  std::vector<Face> t(faces);
+  for (Face& f : t)
+    for (uint32_t& v : f) v = place[v];
+  return t;
+}
+
 // The levels above `firstK` (dag.levels[firstK] built, its clusters in the kd chunks `clusterNode`
 // at kd depth `depth`, the leaves at `leafDepth`): BuildDag's steps 2-5 up to the top.
 Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSpill* spill, size_t inputFaces,
@@ -691,15 +700,10 @@ Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSp
   const double kDeg = NormalCone::kPi / 180;
   Status s;
   // Texture seams: the ids of one position are one place for the topology (clusters, groups,
-  // frozen borders); the faces by place (a copy) where the ids would split them.
+  // frozen borders); the faces by place (FacesByPlace) where the ids would split them.
   std::vector<uint32_t>& place = dag.attributes.place;
   const bool wedges = !place.empty();
-  auto byPlace = [&](const std::vector<Face>& faces) {
-    std::vector<Face> t(faces);
-    for (Face& f : t)
-      for (uint32_t& v : f) v = place[v];
-    return t;
-  };
+  auto byPlace = [&](const std::vector<Face>& faces) { return FacesByPlace(faces, place); };
   // Sibling chunks merge one kd depth per level (level k groups within the chunks at depth
   // leafDepth - k - sooner), and one more each time a level no longer shrinks under their locked
   // borders.
@@ -922,15 +926,10 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
   dag.inputVertices = dag.positions.size();
   if (attributes) dag.attributes = *attributes;
   // Texture seams: the ids of one position are one place for the topology (clusters, groups,
-  // frozen borders); the faces by place (a copy) where the ids would split them.
+  // frozen borders); the faces by place (FacesByPlace) where the ids would split them.
   std::vector<uint32_t>& place = dag.attributes.place;
   const bool wedges = !place.empty();
-  auto byPlace = [&](const std::vector<Face>& faces) {
-    std::vector<Face> t(faces);
-    for (Face& f : t)
-      for (uint32_t& v : f) v = place[v];
-    return t;
-  };
+  auto byPlace = [&](const std::vector<Face>& faces) { return FacesByPlace(faces, place); };
   {
     if (depth > 0) {  // each chunk's level-0 clusters on its own, chunks side by side
       const uint32_t leaves = 1u << depth;

@@ -646,6 +646,12 @@ struct LodReader::Impl {
       }
       return positionScratch.data();
     };
+    // Two u16 codes a vertex (normals, texture coordinates), little-endian.
+    auto codePairs = [&](const uint8_t* c, std::vector<std::array<uint16_t, 2>>& out) {
+      out.resize(vc);
+      for (size_t v = 0; v < vc; ++v)
+        for (size_t k = 0; k < 2; ++k) out[v][k] = uint16_t(c[4 * v + 2 * k] | c[4 * v + 2 * k + 1] << 8);
+    };
     std::string why;
     unit.attributes = LodAttributes();
     if (attributeMask & kGeomColors) {
@@ -657,18 +663,12 @@ struct LodReader::Impl {
     if (attributeMask & kGeomNormals) {
       const uint8_t* c = stream("normals", why);
       if (!c) return Status::Invalid(why);
-      unit.attributes.normals.resize(vc);
-      for (size_t v = 0; v < vc; ++v)
-        for (size_t k = 0; k < 2; ++k)
-          unit.attributes.normals[v][k] = uint16_t(c[4 * v + 2 * k] | c[4 * v + 2 * k + 1] << 8);
+      codePairs(c, unit.attributes.normals);
     }
     if (attributeMask & kGeomTexCoords) {
       const uint8_t* c = stream("texture coordinates", why);
       if (!c) return Status::Invalid(why);
-      unit.attributes.texCoords.resize(vc);
-      for (size_t v = 0; v < vc; ++v)
-        for (size_t k = 0; k < 2; ++k)
-          unit.attributes.texCoords[v][k] = uint16_t(c[4 * v + 2 * k] | c[4 * v + 2 * k + 1] << 8);
+      codePairs(c, unit.attributes.texCoords);
     }
     if (d.left() != 0) return Status::Invalid(bad + "its size does not match its contents");
     unit.vertexIds.resize(vc);

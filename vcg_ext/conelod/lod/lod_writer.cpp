@@ -750,29 +750,27 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
             counter += buf.size();
             return true;
           };
+          // Two u16 codes a vertex (normals, texture coordinates), little-endian.
+          auto codePairs = [&](const std::vector<std::array<uint16_t, 2>>& codes) {
+            attr.resize(vc * 4);
+            for (size_t v = 0; v < vc; ++v)
+              for (size_t c = 0; c < 2; ++c) {
+                const uint16_t x = codes[verts[v]][c];
+                attr[4 * v + 2 * c] = uint8_t(x & 0xFF);
+                attr[4 * v + 2 * c + 1] = uint8_t(x >> 8);
+              }
+          };
           if (attributeMask & kGeomColors) {
             attr.resize(vc * 4);
             for (size_t v = 0; v < vc; ++v) std::memcpy(attr.data() + 4 * v, attributes.colors[verts[v]].data(), 4);
             if (!stream(colorBytes)) return fail("internal error: the vertex codec failed");
           }
           if (attributeMask & kGeomNormals) {
-            attr.resize(vc * 4);
-            for (size_t v = 0; v < vc; ++v)
-              for (int c = 0; c < 2; ++c) {
-                const uint16_t x = attributes.normals[verts[v]][size_t(c)];
-                attr[4 * v + 2 * size_t(c)] = uint8_t(x & 0xFF);
-                attr[4 * v + 2 * size_t(c) + 1] = uint8_t(x >> 8);
-              }
+            codePairs(attributes.normals);
             if (!stream(normalBytes)) return fail("internal error: the vertex codec failed");
           }
           if (attributeMask & kGeomTexCoords) {
-            attr.resize(vc * 4);
-            for (size_t v = 0; v < vc; ++v)
-              for (int c = 0; c < 2; ++c) {
-                const uint16_t x = attributes.texCoords[verts[v]][size_t(c)];
-                attr[4 * v + 2 * size_t(c)] = uint8_t(x & 0xFF);
-                attr[4 * v + 2 * size_t(c) + 1] = uint8_t(x >> 8);
-              }
+            codePairs(attributes.texCoords);
             if (!stream(texCoordBytes)) return fail("internal error: the vertex codec failed");
           }
           const uint64_t at = out.offset();
