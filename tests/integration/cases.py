@@ -2718,6 +2718,19 @@ def red_green_gradient(png, covered=0.2):
     return (mean(right, 0) - mean(right, 1)) - (mean(left, 0) - mean(left, 1))
 
 
+def viewer_shots_plain_and_levels(c, clod):
+    """conelod-viewer's pictures of the grid's .clod (refined, 320x240, eye 0.5,0.5,2.2) with the
+    file's attributes and with --color-levels: [(png, stderr)] in that order."""
+    shots = []
+    for extra in ((), ("--color-levels",)):
+        png = c.out("viewer%d.png" % len(shots))
+        rc, out, err = run_viewer(c, clod, "--screenshot", png, "--size", "320x240", "--eye", "0.5,0.5,2.2",
+                                  "--refine", "--budget", "100000", "--no-hud", *extra)
+        assert rc == 0, (rc, err)
+        shots.append((png, err))
+    return shots
+
+
 @case
 def viewer_colours(c):
     """conelod-viewer draws a coloured .clod (write_attribute_grid's grid) with its vertex colours,
@@ -2727,13 +2740,7 @@ def viewer_colours(c):
     write_attribute_grid(src)
     clod = c.out("attr.clod")
     c.conelod("lod", "build", src, "-o", clod)
-    stats = []
-    for extra in ((), ("--color-levels",)):
-        png = c.out("viewer%d.png" % len(stats))
-        rc, out, err = run_viewer(c, clod, "--screenshot", png, "--size", "320x240", "--eye", "0.5,0.5,2.2",
-                                  "--refine", "--budget", "100000", "--no-hud", *extra)
-        assert rc == 0, (rc, err)
-        stats.append(red_green_gradient(png, 0.1))
+    stats = [red_green_gradient(png, 0.1) for png, _ in viewer_shots_plain_and_levels(c, clod)]
     print("red - green across the model: vertex colours %.1f, level colours %.1f" % tuple(stats))
     assert stats[0] > 40 and abs(stats[1]) < 15, stats
 
@@ -2859,11 +2866,7 @@ def viewer_texture(c):
     clod = c.out("tex.clod")
     c.conelod("lod", "build", src, "-o", clod)
     changes = []
-    for extra in ((), ("--color-levels",)):
-        png = c.out("viewer%d.png" % len(changes))
-        rc, out, err = run_viewer(c, clod, "--screenshot", png, "--size", "320x240", "--eye", "0.5,0.5,2.2",
-                                  "--refine", "--budget", "100000", "--no-hud", *extra)
-        assert rc == 0, (rc, err)
+    for png, err in viewer_shots_plain_and_levels(c, clod):
         assert "texture" not in err, err  # decoded and drawn
         changes.append(stripe_changes(png))
     print("sign changes of red - blue down the picture (rows): texture %d (%d), level colours %d (%d)" %

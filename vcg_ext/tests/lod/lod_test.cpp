@@ -1661,6 +1661,36 @@ TEST(LodChunks, FileDoesNotDependOnThreads) {
   for (Built* b : {&one, &three}) std::remove(b->path.c_str());
 }
 
+// The file b.path of the welded dragon b.mesh: cuts from two eyes at 5 / 20 / 50 / 100 % have no
+// crack nor overused edge, and the full budget gives b.mesh back exactly (on the grid). Removes
+// the file.
+void ExpectDragonCutsWatertightAndRoundTripExact(const Built& b, const std::string& label) {
+  const size_t F = b.mesh.faces.size();
+  std::unique_ptr<LodReader> r;
+  ASSERT_TRUE(LodReader::Open(b.path, r).ok());
+  const EdgeMap input = EdgesByPosition(OnGrid(b.mesh, r->info().grid));
+  const vcg::Point3d c = vcg::Point3d::Construct(r->info().box.Center());
+  const double d = r->info().box.Diag();
+  for (const vcg::Point3d& eye : {vcg::Point3d(0, 0.1, 0.3), c + vcg::Point3d(0.6 * d, 0.2 * d, -0.5 * d)})
+    for (double pct : {5.0, 20.0, 50.0, 100.0}) {
+      LodCut cut;
+      ASSERT_TRUE(RefineLod(*r, Eye(eye[0], eye[1], eye[2], size_t(double(F) * pct / 100)), cut).ok());
+      SCOPED_TRACE(label + ", budget " + std::to_string(pct) + "%");
+      const CrackCount k = CheckCut(b, *r, cut, &input);
+      EXPECT_EQ(k.border, 0u);
+      EXPECT_EQ(k.overused, 0u);
+      EXPECT_EQ(k.drawnBorderNotCulled, 0u);
+      if (pct == 100) {
+        EXPECT_EQ(cut.faces, F);
+        IndexedMesh out;
+        ASSERT_TRUE(ExtractCutMesh(*r, cut, true, out).ok());
+        EXPECT_EQ(SortedFacePositions(out), SortedFacePositions(OnGrid(b.mesh, r->info().grid)));
+        EXPECT_EQ(out.positions.size(), b.mesh.positions.size());
+      }
+    }
+  std::remove(b.path.c_str());
+}
+
 // The dragon (871,414 faces, welded as BuildLodFile welds it) in 16 chunks: its cuts have no
 // crack, the full budget gives the welded input back exactly (on the grid), its top is small.
 // No edge is used by more than two faces on the grid either: the collapse keeps its vertices more
@@ -1679,29 +1709,7 @@ TEST(LodChunks, DragonCutsAreWatertightAndItsRoundTripExact) {
   EXPECT_EQ(st.chunks, 16u);
   EXPECT_EQ(st.mergedVertices, 0u);
   EXPECT_LT(st.levelFaces.back(), F / 100);
-  std::unique_ptr<LodReader> r;
-  ASSERT_TRUE(LodReader::Open(b.path, r).ok());
-  const EdgeMap input = EdgesByPosition(OnGrid(b.mesh, r->info().grid));
-  const vcg::Point3d c = vcg::Point3d::Construct(r->info().box.Center());
-  const double d = r->info().box.Diag();
-  for (const vcg::Point3d& eye : {vcg::Point3d(0, 0.1, 0.3), c + vcg::Point3d(0.6 * d, 0.2 * d, -0.5 * d)})
-    for (double pct : {5.0, 20.0, 50.0, 100.0}) {
-      LodCut cut;
-      ASSERT_TRUE(RefineLod(*r, Eye(eye[0], eye[1], eye[2], size_t(double(F) * pct / 100)), cut).ok());
-      SCOPED_TRACE("dragon in chunks, budget " + std::to_string(pct) + "%");
-      const CrackCount k = CheckCut(b, *r, cut, &input);
-      EXPECT_EQ(k.border, 0u);
-      EXPECT_EQ(k.overused, 0u);
-      EXPECT_EQ(k.drawnBorderNotCulled, 0u);
-      if (pct == 100) {
-        EXPECT_EQ(cut.faces, F);
-        IndexedMesh out;
-        ASSERT_TRUE(ExtractCutMesh(*r, cut, true, out).ok());
-        EXPECT_EQ(SortedFacePositions(out), SortedFacePositions(OnGrid(b.mesh, r->info().grid)));
-        EXPECT_EQ(out.positions.size(), b.mesh.positions.size());
-      }
-    }
-  std::remove(b.path.c_str());
+  ExpectDragonCutsWatertightAndRoundTripExact(b, "dragon in chunks");
 }
 
 // --- Attributes (version 5): per-vertex colour and normals through the DAG ---------------------
@@ -2544,29 +2552,7 @@ TEST(LodStream, DragonCutsAreWatertightAndItsRoundTripExact) {
   EXPECT_EQ(st.inputFaces, F);
   EXPECT_EQ(st.inputVertices, b.mesh.positions.size());
   EXPECT_LT(st.levelFaces.back(), F / 100);
-  std::unique_ptr<LodReader> r;
-  ASSERT_TRUE(LodReader::Open(b.path, r).ok());
-  const EdgeMap input = EdgesByPosition(OnGrid(b.mesh, r->info().grid));
-  const vcg::Point3d c = vcg::Point3d::Construct(r->info().box.Center());
-  const double d = r->info().box.Diag();
-  for (const vcg::Point3d& eye : {vcg::Point3d(0, 0.1, 0.3), c + vcg::Point3d(0.6 * d, 0.2 * d, -0.5 * d)})
-    for (double pct : {5.0, 20.0, 50.0, 100.0}) {
-      LodCut cut;
-      ASSERT_TRUE(RefineLod(*r, Eye(eye[0], eye[1], eye[2], size_t(double(F) * pct / 100)), cut).ok());
-      SCOPED_TRACE("dragon streamed, budget " + std::to_string(pct) + "%");
-      const CrackCount k = CheckCut(b, *r, cut, &input);
-      EXPECT_EQ(k.border, 0u);
-      EXPECT_EQ(k.overused, 0u);
-      EXPECT_EQ(k.drawnBorderNotCulled, 0u);
-      if (pct == 100) {
-        EXPECT_EQ(cut.faces, F);
-        IndexedMesh out;
-        ASSERT_TRUE(ExtractCutMesh(*r, cut, true, out).ok());
-        EXPECT_EQ(SortedFacePositions(out), SortedFacePositions(OnGrid(b.mesh, r->info().grid)));
-        EXPECT_EQ(out.positions.size(), b.mesh.positions.size());
-      }
-    }
-  std::remove(b.path.c_str());
+  ExpectDragonCutsWatertightAndRoundTripExact(b, "dragon streamed");
 }
 
 }  // namespace
