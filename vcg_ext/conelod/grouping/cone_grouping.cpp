@@ -43,6 +43,7 @@
 #include "conelod/big_alloc.h"
 #include "conelod/mesh/face_adjacency.h"
 #include "conelod/mesh/mesh_check.h"
+#include "conelod/parallel.h"
 
 namespace conelod {
 
@@ -330,10 +331,34 @@ class BestTree {
   bool deferred_ = false;
 };
 
+// The working memory of one exact cone computation (MakeConeExact): one per thread.
+struct ConeScratch {
+  std::vector<int> faces;
+  std::vector<vcg::Point3d> normals;
+  std::vector<vcg::Point3d> support, trial;
+  // The normals of the unit whose exact cone is being made, in the order of its face list, as
+  // runs: of faceNormal_ from level 2 on (read in place: the scans above need no copy), of
+  // `normals` at level 1 (from l1Normal_ or the mesh). Copied only for Welzl's algorithm.
+  std::vector<std::pair<const vcg::Point3d*, const vcg::Point3d*>> runs;
+  // Calls f on each of those normals in order while it returns true; false: f stopped it.
+  template <class F>
+  bool eachNormal(F f) const {
+    for (const auto& run : runs)
+      for (const vcg::Point3d* n = run.first; n != run.second; ++n)
+        if (!f(*n)) return false;
+    return true;
+  }
+};
+
 class HierarchyBuilder {
  public:
   HierarchyBuilder(const IndexedMesh& m, const ConeGroupingParams& p, const Progress& cb)
-      : mesh_(m), params_(p), progress_(cb), faceCount_(int(m.faces.size())), scale_(NormalizingScale(m)) {}
+      : mesh_(m),
+        params_(p),
+        progress_(cb),
+        faceCount_(int(m.faces.size())),
+        threads_(p.threads > 0 ? unsigned(p.threads) : CoreCount()),
+        scale_(NormalizingScale(m)) {}
 
   Status run(GroupHierarchy& out);
 
@@ -354,8 +379,8 @@ class HierarchyBuilder {
   bool ReportProgress(long mergesSoFar);
   void EmitLevel(double thresholdDeg, GroupHierarchy& out, bool firstLevel);
   void nextLevelUnits();
-  void MakeConeExact(int u);
-  void MakeCone(int u);  // MakeConeExact without the widening for l1Normal_
+  void MakeConeExact(int u, ConeScratch& cs);
+  void MakeCone(int u, ConeScratch& cs);  // MakeConeExact without the widening for l1Normal_
   bool alive(int u) const { return chains_[size_t(u)].tail >= 0; }
   Neighbour* nbBegin(int u) { return arena_.data() + links_[size_t(u)].nbOffset; }
   Neighbour* nbEnd(int u) { return nbBegin(u) + links_[size_t(u)].nbCount; }
@@ -373,6 +398,10 @@ class HierarchyBuilder {
   const ConeGroupingParams& params_;
   const Progress& progress_;
   const int faceCount_;
+  // Threads of the parallel parts (ConeGroupingParams::threads, 0 resolved), >= 1.
+  const unsigned threads_;
+  // Units, groups or faces per piece of parallel work.
+  static constexpr size_t kGroupChunk = 256, kFaceChunk = 1 << 14;
   // The units' spheres and area vectors are in coordinates times scale_ (NormalizingScale), so
   // that their float squares neither overflow nor vanish whatever the model's size: the scores
   // and so the groups do not depend on it. The groups' boxes, spheres and areas are given back in
@@ -411,22 +440,11 @@ class HierarchyBuilder {
   // every normal of the unit lies in it, it is the minimal cone (the minimal cone of a subset
   // that holds them all), found with one scan instead of Welzl's algorithm.
   BigVector<ConeSupport> support_;
-  bool TrySupportCone(int u);
-  bool seededCone(int u);
-  bool RefineCone(int u);  // on scratchSupport_ and normalRuns_
-  std::vector<vcg::Point3d> scratchSupport_, scratchTrial_;
-  // The normals of the unit whose exact cone is being made, in the order of its face list, as
-  // runs: of faceNormal_ from level 2 on (read in place: the scans above need no copy), of
-  // scratchNormals_ at level 1 (from l1Normal_ or the mesh). Copied only for Welzl's algorithm.
-  std::vector<std::pair<const vcg::Point3d*, const vcg::Point3d*>> normalRuns_;
-  // Calls f on each of those normals in order while it returns true; false: f stopped it.
-  template <class F>
-  bool eachNormal(F f) const {
-    for (const auto& run : normalRuns_)
-      for (const vcg::Point3d* n = run.first; n != run.second; ++n)
-        if (!f(*n)) return false;
-    return true;
-  }
+  bool TrySupportCone(int u, ConeScratch& cs);
+  bool seededCone(int u, ConeScratch& cs);
+  bool RefineCone(int u, ConeScratch& cs);  // on cs.support and cs.runs
+  // The scratch of the merges (one thread); EmitLevel's exact cones take one per thread.
+  ConeScratch scratch_;
 
   BigVector<Unit> units_;
   BigVector<Link> links_;
@@ -439,8 +457,6 @@ class HierarchyBuilder {
   std::vector<int> arenaOrder_;
   std::vector<std::pair<int, uint32_t>> appendLog_;  // (unit, offset)
   uint32_t stampCounter_ = 0;
-  std::vector<int> scratchFaces_;
-  std::vector<vcg::Point3d> scratchNormals_;
   std::vector<Neighbour> scratchList_;
   // Found by EmitLevel: the level's group of each unit, the unit of each group.
   std::vector<int> idOfUnit_, rootOfGroup_;
@@ -493,8 +509,8 @@ void HierarchyBuilder::setBest(int u) {
   }
 }
 
-void HierarchyBuilder::MakeConeExact(int u) {
-  MakeCone(u);
+void HierarchyBuilder::MakeConeExact(int u, ConeScratch& cs) {
+  MakeCone(u, cs);
   if (!l1Normal_.empty()) {
     // From normals rounded to float (each off its direction by ~1e-7 rad): widened by 1e-6 rad to
     // stay a bound of the true normals' cone. Emission recomputes every level-1 cone exactly.
@@ -506,71 +522,71 @@ void HierarchyBuilder::MakeConeExact(int u) {
   }
 }
 
-void HierarchyBuilder::MakeCone(int u) {
+void HierarchyBuilder::MakeCone(int u, ConeScratch& cs) {
   const int tail = chains_[size_t(u)].tail;
   int f = tail;
   if (!faceNormal_.empty()) {
     // The list is made of runs of consecutive faces (RenumberFaces): their normals are runs of
     // faceNormal_, in the list's order.
-    normalRuns_.clear();
+    cs.runs.clear();
     int head = faceNext_[size_t(tail)];
     for (;;) {
       int last = head;
       while (last != tail && faceNext_[size_t(last)] == last + 1) ++last;
-      normalRuns_.emplace_back(faceNormal_.data() + head, faceNormal_.data() + last + 1);
+      cs.runs.emplace_back(faceNormal_.data() + head, faceNormal_.data() + last + 1);
       if (last == tail) break;
       head = faceNext_[size_t(last)];
     }
-    if (!support_.empty() && TrySupportCone(u)) return;
+    if (!support_.empty() && TrySupportCone(u, cs)) return;
   } else if (!l1Normal_.empty()) {
-    scratchNormals_.clear();
+    cs.normals.clear();
     do {
       f = faceNext_[size_t(f)];
       vcg::Point3d n = vcg::Point3d::Construct(l1Normal_[size_t(f)]);
       const double len2 = n.SquaredNorm();
       if (len2 > 0) n /= std::sqrt(len2);
-      scratchNormals_.push_back(n);
+      cs.normals.push_back(n);
     } while (f != tail);
-    normalRuns_.assign(1, {scratchNormals_.data(), scratchNormals_.data() + scratchNormals_.size()});
+    cs.runs.assign(1, {cs.normals.data(), cs.normals.data() + cs.normals.size()});
   } else {
     // Walk the list first, then compute the normals: the walk is a chain of dependent loads, the
     // normals are independent of each other and their misses overlap (prefetched ahead).
-    scratchFaces_.clear();
+    cs.faces.clear();
     do {
       f = faceNext_[size_t(f)];
-      scratchFaces_.push_back(f);
+      cs.faces.push_back(f);
     } while (f != tail);
-    const size_t n = scratchFaces_.size();
-    scratchNormals_.resize(n);
+    const size_t n = cs.faces.size();
+    cs.normals.resize(n);
     double area;
     for (size_t i = 0; i < n; ++i) {
-      if (i + 8 < n) Prefetch(&mesh_.faces[size_t(scratchFaces_[i + 8])]);
+      if (i + 8 < n) Prefetch(&mesh_.faces[size_t(cs.faces[i + 8])]);
       if (i + 4 < n)
-        for (const uint32_t v : mesh_.faces[size_t(scratchFaces_[i + 4])]) Prefetch(&mesh_.positions[v]);
-      FaceNormalAndArea(mesh_, size_t(scratchFaces_[i]), scratchNormals_[i], area);
+        for (const uint32_t v : mesh_.faces[size_t(cs.faces[i + 4])]) Prefetch(&mesh_.positions[v]);
+      FaceNormalAndArea(mesh_, size_t(cs.faces[i]), cs.normals[i], area);
     }
-    normalRuns_.assign(1, {scratchNormals_.data(), scratchNormals_.data() + n});
+    cs.runs.assign(1, {cs.normals.data(), cs.normals.data() + n});
   }
-  if (!params_.strictGreedy && seededCone(u)) return;
+  if (!params_.strictGreedy && seededCone(u, cs)) return;
   if (!faceNormal_.empty()) {  // Welzl's algorithm shuffles its input: a copy
-    scratchNormals_.clear();
-    for (const auto& run : normalRuns_) scratchNormals_.insert(scratchNormals_.end(), run.first, run.second);
+    cs.normals.clear();
+    for (const auto& run : cs.runs) cs.normals.insert(cs.normals.end(), run.first, run.second);
   }
   ConeSupport support;
-  units_[size_t(u)].setCone(MinimalCone(scratchNormals_, support));
+  units_[size_t(u)].setCone(MinimalCone(cs.normals, support));
   if (!support_.empty()) support_[size_t(u)] = support;
   chains_[size_t(u)].exactSize = units_[size_t(u)].faceCount;
 }
 
-// MakeConeExact's shortcut (see support_), on the normals in normalRuns_: true when the
+// MakeConeExact's shortcut (see support_), on the normals in cs.runs: true when the
 // unit's cone was set. The guess is the minimal cone of a few normals; the normals outside it
 // join them and the guess is made again (the cone only grows towards the true one), a few times
 // at most before leaving the work to Welzl's algorithm on all the normals.
-bool HierarchyBuilder::TrySupportCone(int u) {
+bool HierarchyBuilder::TrySupportCone(int u, ConeScratch& cs) {
   ConeSupport& support = support_[size_t(u)];
   if (support.count == 0) return false;
-  scratchSupport_.assign(support.normal, support.normal + support.count);
-  return RefineCone(u);
+  cs.support.assign(support.normal, support.normal + support.count);
+  return RefineCone(u, cs);
 }
 
 // Level 1, default mode (no support known): the first guess comes from the normals themselves,
@@ -580,13 +596,13 @@ bool HierarchyBuilder::TrySupportCone(int u) {
 // or uncullable units are left to Welzl. (Before, Welzl ran on all the normals of every level-1
 // exact cone: the bunny's build took 516 M instructions, 485 M since; MinimalCone's share of
 // the dragon's profile went from 6.8% to 1.6%.)
-bool HierarchyBuilder::seededCone(int u) {
+bool HierarchyBuilder::seededCone(int u, ConeScratch& cs) {
   const Unit& unit = units_[size_t(u)];
   if (!(unit.half >= 0 && unit.half < kPi / 2)) return false;
   const vcg::Point3d axis = unit.axis;
   const vcg::Point3d* first = nullptr;
   double lowest = 2;
-  eachNormal([&](const vcg::Point3d& n) {
+  cs.eachNormal([&](const vcg::Point3d& n) {
     // The cheap test first: the zero normals of degenerate faces (dot 0) are rarely the lowest.
     if (n * axis < lowest && n.SquaredNorm() >= 0.5) {
       lowest = n * axis;
@@ -598,7 +614,7 @@ bool HierarchyBuilder::seededCone(int u) {
   const vcg::Point3d far1 = *first;
   const vcg::Point3d* second = first;
   lowest = 2;
-  eachNormal([&](const vcg::Point3d& n) {
+  cs.eachNormal([&](const vcg::Point3d& n) {
     if (n * far1 < lowest && n.SquaredNorm() >= 0.5) {
       lowest = n * far1;
       second = &n;
@@ -619,18 +635,18 @@ bool HierarchyBuilder::seededCone(int u) {
     cosHalf = std::min(axis2 * far1, axis2 * far2);
     if (!(cosHalf > 1e-9)) return false;
   }
-  scratchSupport_.assign({far1, far2});
+  cs.support.assign({far1, far2});
   const double minCos = cosHalf - 1e-10;
   size_t outside = 0;
-  const bool few = eachNormal([&](const vcg::Point3d& n) {
+  const bool few = cs.eachNormal([&](const vcg::Point3d& n) {
     if (!(n * axis2 >= minCos) && n.SquaredNorm() >= 0.5) {
       if (++outside > 256) return false;
-      scratchSupport_.push_back(n);
+      cs.support.push_back(n);
     }
     return true;
   });
   if (!few) return false;
-  if (outside > 0) return RefineCone(u);
+  if (outside > 0) return RefineCone(u, cs);
   NormalCone cone;
   cone.axis = axis2;
   cone.halfAngle = std::acos(std::min(1.0, cosHalf));
@@ -645,22 +661,22 @@ bool HierarchyBuilder::seededCone(int u) {
   return true;
 }
 
-// The guess is the minimal cone of the normals in scratchSupport_; the normals of
-// normalRuns_ outside it join them and the guess is made again (the cone only grows towards
+// The guess is the minimal cone of the normals in cs.support; the normals of
+// cs.runs outside it join them and the guess is made again (the cone only grows towards
 // the true one), a few times at most before leaving the work to Welzl's algorithm on all the
 // normals (false). True: the unit's cone (and support, where kept) was set.
-bool HierarchyBuilder::RefineCone(int u) {
-  std::vector<vcg::Point3d>& chosen = scratchSupport_;
+bool HierarchyBuilder::RefineCone(int u, ConeScratch& cs) {
+  std::vector<vcg::Point3d>& chosen = cs.support;
   ConeSupport found;
   for (int round = 0; round < 4; ++round) {
-    scratchTrial_.assign(chosen.begin(), chosen.end());  // MinimalCone shuffles its input
-    const NormalCone guess = MinimalCone(scratchTrial_, found);
+    cs.trial.assign(chosen.begin(), chosen.end());  // MinimalCone shuffles its input
+    const NormalCone guess = MinimalCone(cs.trial, found);
     if (guess.empty()) return false;
     size_t outside = 0;
     if (guess.cullable()) {
       // The inside test of MinimalCone (normal_cone.cpp): a cosine slack of 1e-10.
       const double minCos = std::cos(guess.halfAngle) - 1e-10;
-      const bool few = eachNormal([&](const vcg::Point3d& n) {
+      const bool few = cs.eachNormal([&](const vcg::Point3d& n) {
         if (!(n * guess.axis >= minCos) && n.SquaredNorm() >= 0.5) {
           if (++outside > 256) return false;
           chosen.push_back(n);
@@ -680,6 +696,7 @@ bool HierarchyBuilder::RefineCone(int u) {
 }
 
 void HierarchyBuilder::MergeUnits(int u, int p) {
+  ConeScratch& cs = scratch_;
   Link& lu = links_[size_t(u)];
   Link& lp = links_[size_t(p)];
   // Room for the merged list with its slack, should it not fit u's slot; made while p is alive.
@@ -727,14 +744,14 @@ void HierarchyBuilder::MergeUnits(int u, int p) {
   if (!support_.empty()) {  // the support of both supports: the guess at u's next exact cone
     ConeSupport& sa = support_[size_t(u)];
     const ConeSupport& sb = support_[size_t(p)];
-    scratchSupport_.assign(sa.normal, sa.normal + sa.count);
-    scratchSupport_.insert(scratchSupport_.end(), sb.normal, sb.normal + sb.count);
-    MinimalCone(scratchSupport_, sa);
+    cs.support.assign(sa.normal, sa.normal + sa.count);
+    cs.support.insert(cs.support.end(), sb.normal, sb.normal + sb.count);
+    MinimalCone(cs.support, sa);
   }
   if (stillExact)
     ac.exactSize = a.faceCount;
   else if (a.faceCount >= int64_t(exactGrowth_) * ac.exactSize)
-    MakeConeExact(u);  // amortized: each face O(log N) times
+    MakeConeExact(u, cs);  // amortized: each face O(log N) times
 
   // The merged unit's list: both lists without u and p, deduplicated, each pair re-scored. It
   // goes back into u's slot when it fits (a unit absorbing a small neighbour rarely gains
@@ -1064,19 +1081,23 @@ void HierarchyBuilder::EmitLevel(double thresholdDeg, GroupHierarchy& out, bool 
   // Exact cones; boxes from the vertices at level 1, from the children's boxes above (min and
   // max do not depend on the order, but for the sign of a zero); tight spheres from the
   // vertices, in face order (which reads the mesh sequentially).
-  for (size_t g = 0; g < groupCount; ++g) {
-    if (chains_[g].exactSize != units_[g].faceCount || (firstLevel && !support_.empty())) MakeConeExact(int(g));
-    Group& grp = level.groups[g];
-    grp.cone = units_[g].cone();
-    grp.faceCount = units_[g].faceCount;
-    grp.box.SetNull();
-  }
-  if (firstLevel) {
-    for (size_t g = 0; g < groupCount; ++g) {
-      vcg::Box3f& box = level.groups[g].box;
-      for (uint32_t i = l1VertBegin_[g]; i < l1VertBegin_[g + 1]; ++i) box.Add(l1Verts_[i]);
+  // Each group's cone depends on its own faces only, and each group writes only its own unit,
+  // chain and support: the groups are shared among the threads, each with its scratch.
+  std::vector<ConeScratch> threadScratch(threads_);
+  ParallelChunks(groupCount, threads_, kGroupChunk, [&](size_t begin, size_t end, unsigned thread) {
+    ConeScratch& cs = threadScratch[thread];
+    for (size_t g = begin; g < end; ++g) {
+      if (chains_[g].exactSize != units_[g].faceCount || (firstLevel && !support_.empty())) MakeConeExact(int(g), cs);
+      Group& grp = level.groups[g];
+      grp.cone = units_[g].cone();
+      grp.faceCount = units_[g].faceCount;
+      grp.box.SetNull();
+      if (firstLevel)
+        for (uint32_t i = l1VertBegin_[g]; i < l1VertBegin_[g + 1]; ++i) grp.box.Add(l1Verts_[i]);
     }
-  } else {
+  });
+  std::vector<ConeScratch>().swap(threadScratch);
+  if (!firstLevel) {
     const auto& prev = out.levels.back().groups;
     for (size_t c = 0; c < childTotal; ++c) level.groups[size_t(childGroup[c])].box.Add(prev[c].box);
   }
@@ -1147,12 +1168,24 @@ void HierarchyBuilder::RenumberFaces() {
   }
   faceNormal_.resize(nf);
   faceArea_.resize(nf);
+  // The normals and areas first, on every thread (face f writes its own normal and the area of
+  // its own mesh face); then the vertices, in group order, on one.
+  ParallelChunks(nf, threads_, kFaceChunk, [&](size_t begin, size_t end, unsigned) {
+    double faceArea;
+    for (size_t f = begin; f < end; ++f) {
+      if (f + 8 < end) Prefetch(&mesh_.faces[size_t(meshFace_[f + 8])]);
+      if (f + 4 < end)
+        for (const uint32_t v : mesh_.faces[size_t(meshFace_[f + 4])]) Prefetch(&mesh_.positions[v]);
+      const size_t mf = size_t(meshFace_[f]);
+      FaceNormalAndArea(mesh_, mf, faceNormal_[f], faceArea);
+      faceArea_[mf] = faceArea;
+    }
+  });
   BigVector<int> seen(mesh_.positions.size(), -1);  // the last group that took the vertex
   l1VertBegin_.resize(groups + 1);
   l1Group_.resize(groups);
   l1Verts_.clear();
   l1Verts_.reserve(mesh_.positions.size() + mesh_.positions.size() / 2);
-  double area;
   size_t f = 0;  // group g's faces are the run of its faceCount faces after group g-1's
   for (size_t g = 0; g < groups; ++g) {
     l1VertBegin_[g] = uint32_t(l1Verts_.size());
@@ -1166,8 +1199,6 @@ void HierarchyBuilder::RenumberFaces() {
           Prefetch(&seen[v]);
         }
       const size_t mf = size_t(meshFace_[f]);
-      FaceNormalAndArea(mesh_, mf, faceNormal_[f], area);
-      faceArea_[mf] = area;
       for (const uint32_t v : mesh_.faces[mf])
         if (seen[v] != int(g)) {
           seen[v] = int(g);
@@ -1226,7 +1257,7 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     {
       BigVector<uint32_t> offsets, neighbours;
       size_t borderEdges, nonManifoldEdges;
-      BuildFaceAdjacencyInto(mesh_, offsets, neighbours, borderEdges, nonManifoldEdges);
+      BuildFaceAdjacencyInto(mesh_, offsets, neighbours, borderEdges, nonManifoldEdges, threads_);
       if (neighbours.size() > size_t(std::numeric_limits<uint32_t>::max() / 2))
         throw std::bad_alloc();  // list offsets are 32-bit
       // The arena's high-water mark is what it costs in memory: a quarter of slack, no more.
@@ -1249,33 +1280,40 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
   const bool scoreNow = !params_.strictGreedy;
   if (scoreNow) setThreshold(std::min(params_.coneThresholdDeg, 180.0));
   prescored_ = scoreNow;
-  for (int f = 0; f < nf; ++f) {
-    Unit& u = units_[size_t(f)];
-    const auto& t = mesh_.faces[size_t(f)];
-    vcg::Point3d n;
-    double area;
-    FaceNormalAndArea(mesh_, size_t(f), n, area);
-    u.setCone(n.SquaredNorm() > 0.5 ? NormalCone::Of(n) : NormalCone::Empty());
-    if (!l1Normal_.empty()) l1Normal_[size_t(f)] = vcg::Point3f::Construct(n);
-    const double scaledArea = area * scale_ * scale_;
-    for (int k = 0; k < 3; ++k) u.vecArea[k] = float(n[k] * scaledArea);
-    u.setSphere(TriangleSphere(vcg::Point3d::Construct(mesh_.positions[t[0]]) * scale_,
-                               vcg::Point3d::Construct(mesh_.positions[t[1]]) * scale_,
-                               vcg::Point3d::Construct(mesh_.positions[t[2]]) * scale_));
-    u.faceCount = 1;
-    faceNext_[size_t(f)] = f;
-    chains_[size_t(f)] = Chain{f, 1, links_[size_t(f)].nbCount};
-    if (scoreNow) {
-      // The pairs with the faces before this one, scored as RunLevel would score them (from the
-      // lower unit), while those faces' units are still in the cache: RunLevel then only picks
-      // each unit's best.
-      for (Neighbour* nb = nbBegin(f); nb != nbEnd(f); ++nb) {
-        const int w = nb->id;
-        if (w >= f) continue;
-        nb->score = evaluate(units_[size_t(w)], u);
-        setEntryScore(w, f, nb->score);
-      }
+  // Each face makes its own unit (on every thread), then scores its pairs with the faces before
+  // it, as RunLevel would score them (from the lower unit), writing the score into both lists:
+  // each entry is written by one face only, with the same arithmetic whatever the thread.
+  ParallelChunks(size_t(nf), threads_, kFaceChunk, [&](size_t begin, size_t end, unsigned) {
+    for (int f = int(begin); f < int(end); ++f) {
+      Unit& u = units_[size_t(f)];
+      const auto& t = mesh_.faces[size_t(f)];
+      vcg::Point3d n;
+      double area;
+      FaceNormalAndArea(mesh_, size_t(f), n, area);
+      u.setCone(n.SquaredNorm() > 0.5 ? NormalCone::Of(n) : NormalCone::Empty());
+      if (!l1Normal_.empty()) l1Normal_[size_t(f)] = vcg::Point3f::Construct(n);
+      const double scaledArea = area * scale_ * scale_;
+      for (int k = 0; k < 3; ++k) u.vecArea[k] = float(n[k] * scaledArea);
+      u.setSphere(TriangleSphere(vcg::Point3d::Construct(mesh_.positions[t[0]]) * scale_,
+                                 vcg::Point3d::Construct(mesh_.positions[t[1]]) * scale_,
+                                 vcg::Point3d::Construct(mesh_.positions[t[2]]) * scale_));
+      u.faceCount = 1;
+      faceNext_[size_t(f)] = f;
+      chains_[size_t(f)] = Chain{f, 1, links_[size_t(f)].nbCount};
     }
+  });
+  if (scoreNow) {
+    ParallelChunks(size_t(nf), threads_, kFaceChunk, [&](size_t begin, size_t end, unsigned) {
+      for (int f = int(begin); f < int(end); ++f) {
+        const Unit& u = units_[size_t(f)];
+        for (Neighbour* nb = nbBegin(f); nb != nbEnd(f); ++nb) {
+          const int w = nb->id;
+          if (w >= f) continue;
+          nb->score = evaluate(units_[size_t(w)], u);
+          setEntryScore(w, f, nb->score);
+        }
+      }
+    });
   }
   if (progress_ && !progress_(0, "grouping faces by normal cones")) return Status::Cancelled();
 
@@ -1303,11 +1341,13 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
 
   // Areas per group, from the faces' areas (RenumberFaces) in face order: the same sums on every
   // run. Level by level: each group's sum still takes its faces in face order.
-  for (auto& lv : out.levels) {
-    Group* groups = lv.groups.data();
-    const int* faceGroup = lv.faceGroup.data();
-    for (size_t f = 0; f < size_t(nf); ++f) groups[faceGroup[f]].area += faceArea_[f];
-  }
+  ParallelChunks(out.levels.size(), threads_, 1, [&](size_t begin, size_t end, unsigned) {
+    for (size_t l = begin; l < end; ++l) {  // one level per piece of work: each its own sums
+      Group* groups = out.levels[l].groups.data();
+      const int* faceGroup = out.levels[l].faceGroup.data();
+      for (size_t f = 0; f < size_t(nf); ++f) groups[faceGroup[f]].area += faceArea_[f];
+    }
+  });
   out.faceCount = nf;
   if (progress_ && !progress_(100, "grouping done")) {
     out = GroupHierarchy();
@@ -1369,6 +1409,7 @@ Status ValidateParams(const ConeGroupingParams& p) {
     return Status::Invalid("ThresholdGrowth must be >= 1 (the limit never shrinks from one level to the next)");
   if (p.maxLevels < 1 || p.maxLevels > 64) return Status::Invalid("MaxLevels must be between 1 and 64");
   if (p.minTopGroups < 1) return Status::Invalid("MinTopGroups must be >= 1");
+  if (p.threads < 0 || p.threads > 1024) return Status::Invalid("threads must be from 0 (one per core) to 1024");
   return Status::Ok();
 }
 

@@ -51,6 +51,11 @@ struct ConeGroupingParams {
   // cones exactly at every doubling (the paper's order; the output of ConeLOD before local
   // maxima, bit for bit; about 1.6-2x slower). false: see "Merge order" above.
   bool strictGreedy = false;
+  // Threads for the parts of the build that run in parallel (the face adjacency, the level-1
+  // units and their first scores, the exact cones and spheres of each level's groups); 0: one
+  // per core. The merges themselves run on one thread, in the order above: the output is the
+  // same, bit for bit, for every thread count.
+  int threads = 1;
 };
 
 // Checks the parameters; Ok or a message naming the bad one.

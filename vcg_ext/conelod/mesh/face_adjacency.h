@@ -6,9 +6,11 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "conelod/mesh/indexed_mesh.h"
+#include "conelod/parallel.h"
 
 namespace conelod {
 namespace detail {
@@ -32,10 +34,12 @@ struct Corner {
 // edge's other face is noted in its face's slot for that edge. The lists are then made face by
 // face from the slots; a face with an edge shared by more than two faces (rare) is made by
 // scanning its rings as before. The slots are kept in `neighbours` (3 per face) and the lists
-// written over them from the front: no memory beyond the lists' own.
+// written over them from the front: no memory beyond the lists' own. The rings are scanned on
+// `threads` threads (the result does not depend on it).
 template <class Alloc>
 void BuildFaceAdjacencyInto(const IndexedMesh& m, std::vector<uint32_t, Alloc>& offsets,
-                            std::vector<uint32_t, Alloc>& neighbours, size_t& borderEdges, size_t& nonManifoldEdges) {
+                            std::vector<uint32_t, Alloc>& neighbours, size_t& borderEdges, size_t& nonManifoldEdges,
+                            unsigned threads = 1) {
   using CornerAlloc = typename std::allocator_traits<Alloc>::template rebind_alloc<detail::Corner>;
   const uint32_t nv = uint32_t(m.positions.size());
   const uint32_t nf = uint32_t(m.faces.size());
@@ -59,40 +63,57 @@ void BuildFaceAdjacencyInto(const IndexedMesh& m, std::vector<uint32_t, Alloc>& 
   constexpr uint32_t kNone = 0xFFFFFFFFu, kMany = 0xFFFFFFFEu;
   neighbours.resize(size_t(nf) * 3);
   uint32_t* slot = neighbours.data();
-  std::vector<uint32_t> ringFace;  // the faces of the ring's corners
   borderEdges = nonManifoldEdges = 0;
-  for (uint32_t a = 0; a < nv; ++a) {
-    const uint32_t ringBegin = vfStart[a], ringSize = vfStart[a + 1] - ringBegin;
-    const detail::Corner* ring = vf.data() + ringBegin;
-    ringFace.resize(ringSize);
-    for (uint32_t i = 0; i < ringSize; ++i) ringFace[i] = ring[i].corner / 3;
-    for (uint32_t i = 0; i < ringSize; ++i) {
-      const uint32_t f = ringFace[i], b = ring[i].other1;
-      if (a == b) {
-        slot[ring[i].corner] = kNone;
-        continue;
+  // Each corner's slot is written from its own vertex's ring only: the rings are scanned in
+  // ranges of vertices on `threads` threads, and the counts (sums) do not depend on the split.
+  auto scanRings = [&](uint32_t aBegin, uint32_t aEnd, size_t& border, size_t& nonManifold) {
+    std::vector<uint32_t> ringFace;  // the faces of the ring's corners
+    for (uint32_t a = aBegin; a < aEnd; ++a) {
+      const uint32_t ringBegin = vfStart[a], ringSize = vfStart[a + 1] - ringBegin;
+      const detail::Corner* ring = vf.data() + ringBegin;
+      ringFace.resize(ringSize);
+      for (uint32_t i = 0; i < ringSize; ++i) ringFace[i] = ring[i].corner / 3;
+      for (uint32_t i = 0; i < ringSize; ++i) {
+        const uint32_t f = ringFace[i], b = ring[i].other1;
+        if (a == b) {
+          slot[ring[i].corner] = kNone;
+          continue;
+        }
+        // Skip f itself, and a face listed twice at a (a degenerate face: its corners are adjacent).
+        uint32_t sharers = 1, lowest = f, other = kNone;
+        uint32_t previous = f;
+        for (uint32_t j = 0; j < ringSize; ++j) {
+          const uint32_t g = ringFace[j];
+          const uint32_t before = previous;
+          previous = g;
+          if (g == f || g == before) continue;
+          if (ring[j].other1 != b && ring[j].other2 != b) continue;
+          ++sharers;
+          lowest = std::min(lowest, g);
+          other = g;
+        }
+        if (lowest == f) {  // count each undirected edge once, at its lowest face
+          if (sharers == 1)
+            ++border;
+          else if (sharers > 2)
+            ++nonManifold;
+        }
+        slot[ring[i].corner] = sharers > 2 ? kMany : other;
       }
-      // Skip f itself, and a face listed twice at a (a degenerate face: its corners are adjacent).
-      uint32_t sharers = 1, lowest = f, other = kNone;
-      uint32_t previous = f;
-      for (uint32_t j = 0; j < ringSize; ++j) {
-        const uint32_t g = ringFace[j];
-        const uint32_t before = previous;
-        previous = g;
-        if (g == f || g == before) continue;
-        if (ring[j].other1 != b && ring[j].other2 != b) continue;
-        ++sharers;
-        lowest = std::min(lowest, g);
-        other = g;
-      }
-      if (lowest == f) {  // count each undirected edge once, at its lowest face
-        if (sharers == 1)
-          ++borderEdges;
-        else if (sharers > 2)
-          ++nonManifoldEdges;
-      }
-      slot[ring[i].corner] = sharers > 2 ? kMany : other;
     }
+  };
+  constexpr uint32_t kRingChunk = 1u << 15;  // vertices per piece of work
+  if (threads <= 1 || nv <= kRingChunk) {
+    scanRings(0, nv, borderEdges, nonManifoldEdges);
+  } else {
+    std::mutex sums;
+    ParallelChunks(nv, threads, kRingChunk, [&](size_t begin, size_t end, unsigned) {
+      size_t border = 0, nonManifold = 0;
+      scanRings(uint32_t(begin), uint32_t(end), border, nonManifold);
+      std::lock_guard<std::mutex> lock(sums);
+      borderEdges += border;
+      nonManifoldEdges += nonManifold;
+    });
   }
 
   // Face f's list is written where its slots were (read first): while every face before it had at

@@ -39,9 +39,9 @@ double NormalizingScale(const IndexedMesh& m) {
   return std::ldexp(1.0, -e);
 }
 
-FaceAdjacency BuildFaceAdjacency(const IndexedMesh& m) {
+FaceAdjacency BuildFaceAdjacency(const IndexedMesh& m, unsigned threads) {
   FaceAdjacency adj;
-  BuildFaceAdjacencyInto(m, adj.offsets, adj.neighbours, adj.borderEdges, adj.nonManifoldEdges);
+  BuildFaceAdjacencyInto(m, adj.offsets, adj.neighbours, adj.borderEdges, adj.nonManifoldEdges, threads);
   return adj;
 }
 

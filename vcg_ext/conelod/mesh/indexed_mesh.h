@@ -102,7 +102,8 @@ struct FaceAdjacency {
 
   size_t degree(uint32_t f) const { return offsets[f + 1] - offsets[f]; }
 };
-FaceAdjacency BuildFaceAdjacency(const IndexedMesh& m);
+// `threads` (>= 1) share the work; the result does not depend on their number.
+FaceAdjacency BuildFaceAdjacency(const IndexedMesh& m, unsigned threads = 1);
 
 // Edge-connected components: per-face component id (0..count-1, numbered by lowest face).
 int ConnectedComponents(const FaceAdjacency& adj, std::vector<int>& componentOfFace);

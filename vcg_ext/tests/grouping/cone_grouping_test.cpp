@@ -321,6 +321,90 @@ TEST(ConeGrouping, ProgressRisesAndCancellationLeavesNothing) {
   EXPECT_EQ(h.levelCount(), 0);
 }
 
+// Every bit of two hierarchies: groups, cones, spheres, boxes, areas, links and face lists.
+void ExpectSameHierarchy(const GroupHierarchy& a, const GroupHierarchy& b, const std::string& what) {
+  ASSERT_EQ(a.faceCount, b.faceCount) << what;
+  ASSERT_EQ(a.levelCount(), b.levelCount()) << what;
+  for (int l = 1; l <= a.levelCount(); ++l) {
+    const GroupLevel& x = a.level(l);
+    const GroupLevel& y = b.level(l);
+    ASSERT_EQ(x.groups.size(), y.groups.size()) << what << ", level " << l;
+    EXPECT_EQ(x.thresholdDeg, y.thresholdDeg);
+    EXPECT_EQ(x.faceGroup, y.faceGroup) << what << ", level " << l;
+    EXPECT_EQ(x.children, y.children) << what << ", level " << l;
+    size_t differing = 0;
+    for (size_t g = 0; g < x.groups.size(); ++g) {
+      const Group &p = x.groups[g], &q = y.groups[g];
+      const bool same = p.cone.axis == q.cone.axis && p.cone.halfAngle == q.cone.halfAngle && p.center == q.center &&
+                        p.radius == q.radius && p.box.min == q.box.min && p.box.max == q.box.max &&
+                        p.faceCount == q.faceCount && p.area == q.area && p.parent == q.parent &&
+                        p.firstChild == q.firstChild && p.childCount == q.childCount;
+      differing += same ? 0 : 1;
+    }
+    EXPECT_EQ(differing, 0u) << what << ", level " << l << ": groups that differ";
+  }
+}
+
+// A sphere of 8 * 4^levels faces with a deterministic bumpy surface (no symmetry, many ties gone).
+IndexedMesh BumpySphere(int levels) {
+  IndexedMesh m = test::Sphere(levels);
+  for (size_t i = 0; i < m.positions.size(); ++i) {
+    const vcg::Point3f p = m.positions[i];
+    const float bump = 1 + 0.05f * std::sin(7 * p[0] + 3 * p[1]) * std::cos(5 * p[2] - 2 * p[0]) +
+                       0.01f * std::sin(31 * p[1] + 17 * p[2]);
+    m.positions[i] = p * bump;
+  }
+  return m;
+}
+
+TEST(ConeGrouping, ThreadCountDoesNotChangeTheGroups) {
+  // The parallel parts (adjacency, level-1 units and scores, exact cones, spheres, areas) must
+  // give the one-thread hierarchy bit for bit, in both merge orders, whatever the thread count;
+  // the meshes are big enough to be cut into several pieces of work (16,384 faces, 256 groups,
+  // 32,768 vertices each).
+  const IndexedMesh bunny = LoadReal("stanford_bunny_bun_zipper.ply");  // 69,451 faces
+  const IndexedMesh sphere = BumpySphere(7);                            // 131,072 faces
+  for (const IndexedMesh* mesh : {&bunny, &sphere}) {
+    for (bool strict : {false, true}) {
+      ConeGroupingParams p;
+      p.strictGreedy = strict;
+      p.threads = 1;
+      GroupHierarchy ref;
+      ASSERT_TRUE(BuildConeHierarchy(*mesh, p, ref).ok());
+      ASSERT_GE(ref.levelCount(), 3);
+      for (int threads : {2, 4, 16, 0}) {
+        const std::string what = std::string(mesh == &bunny ? "bunny" : "bumpy sphere") + (strict ? ", strict" : "") +
+                                 ", threads " + std::to_string(threads);
+        p.threads = threads;
+        GroupHierarchy h;
+        ASSERT_TRUE(BuildConeHierarchy(*mesh, p, h).ok()) << what;
+        ExpectSameHierarchy(ref, h, what);
+      }
+    }
+  }
+  // The adjacency, built on several threads, is the one-thread one too.
+  const FaceAdjacency one = BuildFaceAdjacency(sphere), four = BuildFaceAdjacency(sphere, 4);
+  EXPECT_EQ(one.offsets, four.offsets);
+  EXPECT_EQ(one.neighbours, four.neighbours);
+  EXPECT_EQ(one.borderEdges, four.borderEdges);
+  EXPECT_EQ(one.nonManifoldEdges, four.nonManifoldEdges);
+  const IndexedMesh bad = LoadReal("stanford_bunny_bun_zipper_res4.ply");  // non-manifold edges
+  const FaceAdjacency badOne = BuildFaceAdjacency(bad), badFour = BuildFaceAdjacency(bad, 4);
+  EXPECT_EQ(badOne.neighbours, badFour.neighbours);
+  EXPECT_EQ(badOne.nonManifoldEdges, badFour.nonManifoldEdges);
+}
+
+TEST(ConeGrouping, CancellationWithThreadsLeavesNothing) {
+  const IndexedMesh sphere = test::Sphere(6);
+  ConeGroupingParams p;
+  p.threads = 4;
+  int calls = 0;
+  Progress cancel = [&](int, const char*) { return ++calls < 2; };
+  GroupHierarchy h;
+  EXPECT_EQ(BuildConeHierarchy(sphere, p, h, cancel).code, Status::Code::Cancelled);
+  EXPECT_EQ(h.levelCount(), 0);
+}
+
 TEST(ConeGrouping, BadParametersAreRefusedWithTheirName) {
   const IndexedMesh grid = test::Grid(2);
   GroupHierarchy h;
@@ -338,6 +422,9 @@ TEST(ConeGrouping, BadParametersAreRefusedWithTheirName) {
   p = ConeGroupingParams();
   p.maxLevels = 0;
   EXPECT_NE(BuildConeHierarchy(grid, p, h).message.find("MaxLevels"), std::string::npos);
+  p = ConeGroupingParams();
+  p.threads = -1;
+  EXPECT_NE(BuildConeHierarchy(grid, p, h).message.find("threads"), std::string::npos);
 }
 
 TEST(ConeGrouping, BadInputIsRefused) {
