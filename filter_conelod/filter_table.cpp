@@ -341,6 +341,7 @@ conelod::ConeGroupingParams ReadGroupingParams(const Args& a) {
   p.thresholdGrowth = a.number("ThresholdGrowth");
   p.maxLevels = a.integer("MaxLevels");
   p.minTopGroups = a.integer("MinTopGroups");
+  p.threads = 0;  // every core: the groups are the same for every thread count (cone_grouping.h)
   return p;
 }
 

@@ -492,6 +492,35 @@ def cli_bad_inputs(c):
 
 
 @case
+def cli_group_threads(c):
+    """`conelod group --threads N`: the same output file, byte for byte, and the same figures for
+    1, 2, 4 and 16 threads (and 0, one per core); a bad count is refused and writes nothing."""
+    for mesh in ["stanford_bunny_bun_zipper.ply", "boeing.ply", "stanford_bunny_bun_zipper_res4.ply"]:
+        ref_bytes, ref_json = None, None
+        for threads in ["1", "2", "4", "16", "0"]:
+            out = c.out("grouped_%s_%s.ply" % (mesh, threads))
+            info = json.loads(c.conelod("group", c.mesh(mesh), "-o", out, "--level", "2", "--threads", threads,
+                                        "--json").stdout)
+            assert info["threads"] == int(threads) if threads != "0" else info["threads"] >= 1, info
+            assert all(lv["all_connected"] for lv in info["levels"]), info
+            for key in ["seconds", "faces_per_second", "threads", "output"]:
+                del info[key]
+            data = open(out, "rb").read()
+            if ref_bytes is None:
+                ref_bytes, ref_json = data, info
+                assert len(set(read_ply(out)["quality"])) == info["levels"][1]["groups"], mesh
+            else:
+                assert data == ref_bytes, "%s: --threads %s wrote another file than --threads 1" % (mesh, threads)
+                assert info == ref_json, (mesh, threads, info, ref_json)
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    for bad in ["-1", "1025", "two"]:
+        out = c.out("bad_threads.ply")
+        p = c.conelod("group", bunny, "-o", out, "--threads", bad, expect=1)
+        assert "--threads" in p.stderr.decode(), p.stderr.decode()
+        assert not os.path.exists(out)
+
+
+@case
 def cli_cull_cost_perspective(c):
     bunny = c.mesh("stanford_bunny_bun_zipper.ply")
     ortho = json.loads(c.conelod("cull-cost", bunny, "--views", "200", "--json").stdout)
