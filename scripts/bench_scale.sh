@@ -8,7 +8,7 @@
 #   scripts/bench_scale.sh [CONELOD]   default build/conelod/conelod
 #   SCALE_LEVELS="1 2 3"               subdivisions to run (default: 1 2 3)
 #   SCALE_STEPS="lod"                  any of: lod group simplify (default: lod)
-#   SCALE_THREADS="1 2 0"              lod build --threads values (0: one per core; default 1 2 0)
+#   SCALE_THREADS="1 2 0"              lod build, group and simplify --threads values (0: one per core; default 1 2 0)
 #   CONELOD_TEST_MESHES=...            where stanford_dragon_vrip_binary.ply is (../shared/test_meshes)
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -118,7 +118,9 @@ for k in $LEVELS; do
             "$CONELOD" lod build "$mesh" -o "$OUT/dragon_sub$k.clod" --memory "$memory" --threads "$t"
         done ;;
       group)
-        row "$faces" "group" 1 - "$CONELOD" group "$mesh" -o "$OUT/grouped.ply" ;;
+        for t in $THREADS; do
+          row "$faces" "group" "$t" - "$CONELOD" group "$mesh" -o "$OUT/grouped.ply" --threads "$t"
+        done ;;
       simplify)
         for t in $THREADS; do
           row "$faces" "simplify --groups cone:auto 10 %" "$t" - \
