@@ -3,6 +3,9 @@
 #include <cctype>
 #include <cerrno>
 #include <csignal>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -250,6 +253,13 @@ int LodBuild(int argc, char** argv) {
   {
     SpillSignals handlers;
     if (streamed) {
+#ifdef __GLIBC__
+      // Blocks of 256 KiB and more are mapped on their own, so that what a stage frees goes back to
+      // the system rather than staying in the heap for the next stage (glibc raises its threshold as
+      // large blocks are freed, and a heap only shrinks from its top): the bound of --memory is on
+      // the process's resident memory.
+      mallopt(M_MMAP_THRESHOLD, 256 * 1024);
+#endif
       std::string readError;
       s = BuildLodFileFromPly(input, params, output, &st, Progress(), &readError);
       if (!readError.empty()) return FailLoad(readError);
@@ -597,7 +607,8 @@ const char* kLodUsage =
     "  neighbouring chunks merge; each finished level goes to a temporary folder beside OUT\n"
     "  (removed at the end, also on failure or Ctrl-C) and the file is written from there. Such an\n"
     "  input (without colour or normals, or with --no-attributes) is read streaming into one file\n"
-    "  per chunk and level 0 is built chunk by chunk; its positions stay in memory\n"
+    "  per chunk and every level is built chunk by chunk from the one below in that folder; its\n"
+    "  positions stay in memory\n"
     "  (docs/scale.md gives the peaks).\n"
     "  Without it the DAG is built whole, in memory.\n"
     "  Per-vertex colour, normals and texture coordinates (per vertex or per face corner) of\n"

@@ -81,7 +81,7 @@ grep -q bookworm /etc/os-release || echo "setup.sh: warning: written for Debian 
 PKGS=(meshlab qtbase5-dev libqt5opengl5-dev libeigen3-dev libglew-dev xvfb xauth dpkg-dev
       xz-utils cmake g++ make libgtest-dev libgmock-dev libbenchmark-dev imagemagick xdotool
       python3 gnuplot-nox clang libclang-rt-14-dev clang-format fonts-dejavu-core libmeshoptimizer-dev
-      chromium nodejs)
+      chromium nodejs time)
 
 step "Debian packages"
 apt_install_missing "${PKGS[@]}" || fail "Debian packages"

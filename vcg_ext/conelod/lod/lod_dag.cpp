@@ -869,6 +869,228 @@ Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSp
   return Status::Ok();
 }
 
+// The streamed build's levels from firstK up while its kd chunks have not merged into one
+// (BuildLodDagFromChunks; docs/scale.md). Level k is in the spill, its faces chunk after chunk
+// (the clusters of one chunk consecutive, their faces too), and only its per-cluster fields in the
+// DAG; clusterFaces: per cluster of level k, its face count. Level k is read back a chunk at a
+// time, twice: the first pass marks the vertices two chunks use (two bits a vertex of the DAG);
+// the second groups each chunk's clusters alone and simplifies its groups (side by side on the
+// threads) with every vertex two groups share frozen, those two chunks share included, and
+// appends the chunk's part of level k + 1 to the spill. The DAG is the one BuildLevels builds from
+// the same level (the same groups as GroupClustersByChunk's, the same frozen vertices, new
+// vertices numbered in group order); a level that does not shrink under the chunks' borders is
+// dropped and built again with the chunks one depth coarser, as BuildLevels does. Once the chunks
+// have merged into one, level k is read whole and BuildLevels goes on.
+Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodSpill& spill, size_t inputFaces,
+                    double diagonal, unsigned threads, int firstK, int leafDepth, std::vector<uint32_t>& clusterNode,
+                    std::vector<uint32_t>& clusterFaces, LodDag& dag) {
+  const double kDeg = NormalCone::kPi / 180;
+  const double cap = params.maxGroupError;
+  auto fail = [&](const Status& s) {
+    dag = LodDag();
+    return s;
+  };
+  const Status bad = Status::Invalid("internal error: bad LOD chunks");
+  int sooner = 0, depth = leafDepth;
+  int k = firstK;
+  for (; size_t(k + 2) < 64; ++k) {
+    if (progress && !progress(std::min(95, 10 + 8 * k), "LOD: simplifying groups chunk by chunk"))
+      return fail(Status::Cancelled());
+    const int want = std::max(0, leafDepth - k - sooner);
+    if (want < depth)
+      for (uint32_t& n : clusterNode) n >>= (depth - want);
+    depth = std::min(depth, want);
+    if (depth == 0) {  // one chunk left: level k whole, and the in-memory build goes on
+      LodDag::Level& L = dag.levels[size_t(k)];
+      const Status s = spill.get(size_t(k), L.faces, L.faceCluster);
+      if (!s.ok()) return fail(s);
+      spill.drop(size_t(k));
+      std::vector<uint32_t>().swap(clusterFaces);
+      return BuildLevels(params, progress, &spill, inputFaces, diagonal, threads, k, leafDepth, 0, clusterNode, dag);
+    }
+    const uint64_t F = spill.faceCount(size_t(k));
+    const size_t C = clusterNode.size();
+    if (dag.levels[size_t(k)].clusterCount() != C || clusterFaces.size() != C) return fail(bad);
+    // The chunks: runs of clusters of one kd node, and where their faces end.
+    std::vector<uint32_t> firstCluster;
+    std::vector<uint64_t> faceEnd;
+    {
+      uint64_t at = 0;
+      for (size_t c = 0; c < C; ++c) {
+        if (c > 0 && clusterNode[c] < clusterNode[c - 1]) return fail(bad);
+        if (c == 0 || clusterNode[c] != clusterNode[c - 1]) {
+          if (c > 0) faceEnd.push_back(at);
+          firstCluster.push_back(uint32_t(c));
+        }
+        at += clusterFaces[c];
+      }
+      faceEnd.push_back(at);
+      firstCluster.push_back(uint32_t(C));
+      if (at != F) return fail(bad);
+    }
+    const size_t chunks = faceEnd.size();
+    auto faceBegin = [&](size_t r) { return r ? faceEnd[r - 1] : uint64_t(0); };
+    std::vector<Face> faces;
+    std::vector<uint32_t> faceCluster, verts;
+    auto chunkVertices = [&](const std::vector<Face>& fs) {
+      verts.clear();
+      for (const Face& t : fs) verts.insert(verts.end(), t.begin(), t.end());
+      std::sort(verts.begin(), verts.end());
+      verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+    };
+    // Pass 1: the vertices of two chunks.
+    const size_t P = dag.positions.size();
+    std::vector<uint64_t> border((P + 63) / 64, 0);
+    {
+      std::vector<uint64_t> seen((P + 63) / 64, 0);
+      for (size_t r = 0; r < chunks; ++r) {
+        Status s = spill.get(size_t(k), faceBegin(r), faceEnd[r], faces, faceCluster);
+        if (!s.ok()) return fail(s);
+        chunkVertices(faces);
+        if (!verts.empty() && verts.back() >= P) return fail(bad);
+        for (uint32_t v : verts) {
+          const uint64_t bit = uint64_t(1) << (v & 63);
+          if (seen[v >> 6] & bit)
+            border[v >> 6] |= bit;
+          else
+            seen[v >> 6] |= bit;
+        }
+      }
+    }
+    // Pass 2: each chunk's groups, simplified, and its part of level k + 1.
+    const int per =
+        params.fineGroupClusters > 0 && 8 * F > inputFaces ? params.fineGroupClusters : params.groupClusters;
+    const double angle =
+        std::min(90.0, params.grouping.coneThresholdDeg * std::pow(params.grouping.thresholdGrowth, k + 1)) * kDeg;
+    LodDag::Level& L = dag.levels[size_t(k)];
+    L.clusterGroup.assign(C, -1);
+    L.groupError.clear();
+    LodDag::Level N;  // level k + 1's per-cluster fields (its faces go to the spill)
+    std::vector<uint32_t> nextNode, nextFaces;
+    uint64_t newFaces = 0;
+    LodDag::Level sub;  // the chunk (its clusters numbered within it)
+    std::vector<int> group, owner;
+    std::vector<Face> localFaces, out;
+    std::vector<vcg::Point3f> localPos;
+    std::vector<uint8_t> localShared;
+    std::vector<uint32_t> clusterOfFace, outCluster;
+    for (size_t r = 0; r < chunks; ++r) {
+      if (progress && !progress(std::min(95, 10 + 8 * k), "LOD: simplifying groups chunk by chunk"))
+        return fail(Status::Cancelled());
+      Status s = spill.get(size_t(k), faceBegin(r), faceEnd[r], sub.faces, faceCluster);
+      if (!s.ok()) return fail(s);
+      const uint32_t c0 = firstCluster[r], c1 = firstCluster[r + 1];
+      const size_t CF = sub.faces.size();
+      sub.faceCluster.resize(CF);
+      for (size_t f = 0; f < CF; ++f) {
+        if (faceCluster[f] < c0 || faceCluster[f] >= c1) return fail(bad);
+        sub.faceCluster[f] = faceCluster[f] - c0;
+      }
+      sub.clusterGroup.assign(c1 - c0, -1);
+      const int G = GroupClusters(sub, per, 0, group);
+      const int groupBase = int(L.groupError.size());
+      for (uint32_t c = c0; c < c1; ++c) L.clusterGroup[c] = groupBase + group[c - c0];
+      // The chunk in its own vertex ids (sorted as the global ones): positions, frozen flags.
+      chunkVertices(sub.faces);
+      const size_t V = verts.size();
+      localFaces.resize(CF);
+      for (size_t f = 0; f < CF; ++f)
+        for (size_t i = 0; i < 3; ++i)
+          localFaces[f][i] = uint32_t(std::lower_bound(verts.begin(), verts.end(), sub.faces[f][i]) - verts.begin());
+      localPos.resize(V);
+      localShared.resize(V);
+      for (size_t v = 0; v < V; ++v) {
+        localPos[v] = dag.positions[verts[v]];
+        localShared[v] = (border[verts[v] >> 6] >> (verts[v] & 63)) & 1;
+      }
+      owner.assign(V, -1);
+      std::vector<std::vector<uint32_t>> groupFaces(static_cast<size_t>(G));
+      for (uint32_t f = 0; f < CF; ++f) {
+        const int g = group[sub.faceCluster[f]];
+        groupFaces[size_t(g)].push_back(f);
+        for (uint32_t v : localFaces[f]) {
+          if (owner[v] < 0)
+            owner[v] = g;
+          else if (owner[v] != g)
+            localShared[v] = 1;
+        }
+      }
+      std::vector<GroupResult> results(static_cast<size_t>(G));
+      {
+        std::atomic<int> next(0);
+        RunThreads(std::min<unsigned>(threads, unsigned(G)), [&](unsigned) {
+          for (int g = next++; g < G; g = next++)
+            SimplifyGroup(localFaces, groupFaces[size_t(g)], localPos, localShared, params, cap, diagonal, false,
+                          dag.attributes, results[size_t(g)]);
+        });
+      }
+      std::vector<std::vector<uint32_t>>().swap(groupFaces);
+      std::vector<double> maxChild(static_cast<size_t>(G), 0.0);
+      for (uint32_t c = c0; c < c1; ++c)
+        maxChild[size_t(group[c - c0])] = std::max(maxChild[size_t(group[c - c0])], double(L.clusterError[c]));
+      out.clear();
+      outCluster.clear();
+      for (int g = 0; g < G; ++g) {
+        GroupResult& res = results[size_t(g)];
+        const uint32_t RV = uint32_t(res.localToGlobal.size());
+        const uint32_t firstNew = uint32_t(dag.positions.size());
+        dag.positions.insert(dag.positions.end(), res.newPositions.begin(), res.newPositions.end());
+        faces.clear();
+        for (const auto& t : res.faces) {
+          Face u;
+          for (size_t i = 0; i < 3; ++i) u[i] = t[i] < RV ? verts[res.localToGlobal[t[i]]] : firstNew + (t[i] - RV);
+          faces.push_back(u);
+        }
+        // As BuildLevels: errors grow strictly up the DAG.
+        const double e = maxChild[size_t(g)] + res.distance;
+        float ef = float(e);
+        const float floor = float(maxChild[size_t(g)]);
+        if (!(ef > floor)) ef = std::nextafter(std::max(floor, 0.f), std::numeric_limits<float>::infinity());
+        L.groupError.push_back(ef);
+        const uint32_t NC = GrowClusters(faces, dag.positions, params.clusterFaces, angle, clusterOfFace);
+        const uint32_t base = uint32_t(N.clusterCount());
+        const size_t firstNext = nextFaces.size();
+        nextFaces.resize(firstNext + NC, 0);
+        for (size_t f = 0; f < faces.size(); ++f) {
+          out.push_back(faces[f]);
+          outCluster.push_back(base + clusterOfFace[f]);
+          ++nextFaces[firstNext + clusterOfFace[f]];
+        }
+        for (uint32_t c = 0; c < NC; ++c) {
+          N.clusterGroup.push_back(-1);
+          N.clusterCreator.push_back(groupBase + g);
+          N.clusterError.push_back(ef);
+          nextNode.push_back(clusterNode[c0]);
+        }
+        res = GroupResult();
+      }
+      newFaces += out.size();
+      s = spill.append(size_t(k + 1), out, outCluster, dag.positions);
+      if (!s.ok()) return fail(s);
+    }
+    if (double(newFaces) > 0.97 * double(F)) {  // the chunks' borders hold it: merge them one more depth
+      dag.positions.resize(P);
+      spill.drop(size_t(k + 1));
+      L.clusterGroup.assign(C, -1);
+      L.groupError.clear();
+      ++sooner;
+      --k;
+      continue;
+    }
+    Status s = spill.finish(size_t(k + 1));
+    if (s.ok()) s = spill.setParts(size_t(k), faceEnd);  // a part a chunk: whole groups
+    if (!s.ok()) return fail(s);
+    dag.levels.push_back(std::move(N));
+    clusterNode.swap(nextNode);
+    clusterFaces.swap(nextFaces);
+  }
+  if (spill.has(size_t(k))) {  // (64 levels) the top: one part
+    const Status s = spill.setParts(size_t(k), {spill.faceCount(size_t(k))});
+    if (!s.ok()) return fail(s);
+  }
+  return Status::Ok();
+}
+
 // BuildLodDag; with `owned` (== &mesh) the mesh's positions and faces are moved into the DAG; with
 // `spill` each finished level is written there (lod_spill.h).
 Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParams& params, LodDag& dag,
@@ -1007,8 +1229,10 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
   std::vector<int> owner(V0, -1);
   dag.levels.resize(2);
   LodDag::Level& L0 = dag.levels[0];
-  LodDag::Level& N = dag.levels[1];
-  std::vector<uint32_t> nextNode;
+  LodDag::Level& N = dag.levels[1];  // its per-cluster fields (its faces go to the spill, chunk by chunk)
+  std::vector<uint32_t> nextNode, nextFaces;
+  std::vector<Face> out;
+  std::vector<uint32_t> outCluster;
   const int per = params.fineGroupClusters > 0 ? params.fineGroupClusters : params.groupClusters;  // level 0
   const double angle0 = std::min(90.0, params.grouping.coneThresholdDeg) * kDeg;
   const double angle1 =
@@ -1070,6 +1294,8 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
         shared[v] &= 2;
       }
     std::vector<std::vector<uint32_t>>().swap(groupFaces);
+    out.clear();
+    outCluster.clear();
     for (int g = 0; g < G; ++g) {
       GroupResult& r = results[size_t(g)];
       const uint32_t V = uint32_t(r.localToGlobal.size());
@@ -1089,9 +1315,12 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
       L0.groupError.push_back(ef);
       const uint32_t NC = GrowClusters(faces, dag.positions, params.clusterFaces, angle1, clusterOfFace);
       const uint32_t base = uint32_t(N.clusterCount());
+      const size_t firstNext = nextFaces.size();
+      nextFaces.resize(firstNext + NC, 0);
       for (size_t f = 0; f < faces.size(); ++f) {
-        N.faces.push_back(faces[f]);
-        N.faceCluster.push_back(base + clusterOfFace[f]);
+        out.push_back(faces[f]);
+        outCluster.push_back(base + clusterOfFace[f]);
+        ++nextFaces[firstNext + clusterOfFace[f]];
       }
       for (uint32_t c = 0; c < NC; ++c) {
         N.clusterGroup.push_back(-1);
@@ -1104,6 +1333,7 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
     globalCluster.resize(F);
     for (uint32_t f = 0; f < F; ++f) globalCluster[f] = clusterBase + sub.faceCluster[f];
     Status s = spill.append(0, sub.faces, globalCluster, dag.positions);
+    if (s.ok()) s = spill.append(1, out, outCluster, dag.positions);
     if (!s.ok()) {
       dag = LodDag();
       return s;
@@ -1112,12 +1342,15 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
   sub = LodDag::Level();
   std::vector<int>().swap(owner);
   std::vector<uint8_t>().swap(shared);
+  std::vector<Face>().swap(out);
+  std::vector<uint32_t>().swap(outCluster);
   Status s = spill.finish(0);
+  if (s.ok()) s = spill.finish(1);
   if (!s.ok()) {
     dag = LodDag();
     return s;
   }
-  s = BuildLevels(params, progress, &spill, inputFaces, diagonal, threads, 1, in.depth, in.depth, nextNode, dag);
+  s = StreamLevels(params, progress, spill, inputFaces, diagonal, threads, 1, in.depth, nextNode, nextFaces, dag);
   if (!s.ok()) return s;
   if (progress) progress(100, "LOD: DAG built");
   return Status::Ok();

@@ -3,6 +3,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <csignal>
@@ -74,8 +75,17 @@ void RemoveLodSpillsOnSignal() {
   }
   Name(name, g_folder, 'R', 0, false);
   ::unlink(name);
-  Name(name, g_folder, 'C', 0, false);
-  ::unlink(name);
+  {
+    size_t n = 0;
+    while (name[n]) ++n;
+    name[n] = 'W';  // FOLDER/RW: the welded positions on their way (lod_stream.cpp)
+    name[n + 1] = 0;
+    ::unlink(name);
+  }
+  for (size_t k = 0; k < 64; ++k) {
+    Name(name, g_folder, 'C', k, true);
+    ::unlink(name);
+  }
   const size_t chunks = g_chunks.load();
   for (size_t i = 0; i < chunks; ++i) {
     Name(name, g_folder, 'K', i, true);
@@ -109,7 +119,8 @@ void LodSpill::remove() {
   for (size_t k = 0; k < faces_.size(); ++k)
     if (faces_[k] != kNone) std::remove(file(k).c_str());
   std::remove(raw().c_str());
-  std::remove(clusters().c_str());
+  std::remove((raw() + "W").c_str());
+  for (size_t k = 0; k < faces_.size(); ++k) std::remove(clusters(k).c_str());
   for (size_t i = 0; i < chunks_; ++i) std::remove(chunk(i).c_str());
   chunks_ = 0;
   partEnds_.clear();
@@ -126,6 +137,25 @@ void LodSpill::setChunks(size_t n) {
 
 std::string LodSpill::chunk(size_t i) const { return folder_ + "/K" + std::to_string(i); }
 
+std::string LodSpill::clusters(size_t k) const { return folder_ + "/C" + std::to_string(k); }
+
+Status LodSpill::setParts(size_t k, const std::vector<uint64_t>& ends) {
+  if (!has(k) || ends.empty() || ends.back() != faces_[k] || !std::is_sorted(ends.begin(), ends.end()))
+    return Status::Invalid("internal error: bad parts of a spilled LOD level");
+  if (partEnds_.size() <= k) partEnds_.resize(k + 1);
+  partEnds_[k] = ends;
+  return Status::Ok();
+}
+
+void LodSpill::drop(size_t k) {
+  if (!has(k)) return;
+  std::remove(file(k).c_str());
+  std::remove(clusters(k).c_str());
+  faces_[k] = kNone;
+  boxes_[k] = vcg::Box3f();
+  if (k < partEnds_.size()) partEnds_[k].clear();
+}
+
 Status LodSpill::append(size_t k, const std::vector<std::array<uint32_t, 3>>& faces,
                         const std::vector<uint32_t>& faceCluster, const std::vector<vcg::Point3f>& positions) {
   if (folder_.empty() || k >= 64 || faces.size() != faceCluster.size())
@@ -138,7 +168,7 @@ Status LodSpill::append(size_t k, const std::vector<std::array<uint32_t, 3>>& fa
   for (const auto& t : faces)
     for (uint32_t v : t) boxes_[k].Add(positions[v]);
   const size_t n = faces.size();
-  const std::string a = file(k), b = clusters();
+  const std::string a = file(k), b = clusters(k);
   std::unique_ptr<std::FILE, FileCloser> f(std::fopen(a.c_str(), "ab"));
   bool ok = f != nullptr;
   if (ok && n) ok = std::fwrite(faces.data(), sizeof faces[0], n, f.get()) == n;
@@ -157,7 +187,7 @@ Status LodSpill::append(size_t k, const std::vector<std::array<uint32_t, 3>>& fa
 
 Status LodSpill::finish(size_t k) {  // level k's file: its faces, then the side file's faceCluster
   if (!has(k)) return Status::Invalid("internal error: a LOD level was not spilled");
-  const std::string a = file(k), b = clusters();
+  const std::string a = file(k), b = clusters(k);
   std::unique_ptr<std::FILE, FileCloser> out(std::fopen(a.c_str(), "ab")), in(std::fopen(b.c_str(), "rb"));
   bool ok = out && (in || faces_[k] == 0);
   std::vector<char> buf(size_t(1) << 20);
@@ -200,6 +230,7 @@ Status LodSpill::put(size_t k, LodDag::Level& L, const std::vector<vcg::Point3f>
   faces_[k] = n;  // so that remove() deletes it, whatever happened
   if (!ok) return Status::Invalid("cannot write '" + path + "': " + std::strerror(errno));
   boxes_[k] = box;
+  if (k < partEnds_.size()) partEnds_[k].clear();  // one part
   std::vector<std::array<uint32_t, 3>>().swap(L.faces);
   std::vector<uint32_t>().swap(L.faceCluster);
   return Status::Ok();
@@ -209,7 +240,13 @@ Status LodSpill::get(size_t k, size_t part, std::vector<std::array<uint32_t, 3>>
                      std::vector<uint32_t>& faceCluster) const {
   if (parts(k) == 1 && part == 0) return get(k, faces, faceCluster);
   if (!has(k) || part >= parts(k)) return Status::Invalid("internal error: a LOD level was not spilled");
-  const uint64_t begin = part ? partEnds_[k][part - 1] : 0, end = partEnds_[k][part], total = faces_[k];
+  return get(k, part ? partEnds_[k][part - 1] : 0, partEnds_[k][part], faces, faceCluster);
+}
+
+Status LodSpill::get(size_t k, uint64_t begin, uint64_t end, std::vector<std::array<uint32_t, 3>>& faces,
+                     std::vector<uint32_t>& faceCluster) const {
+  if (!has(k) || begin > end || end > faces_[k]) return Status::Invalid("internal error: a LOD level was not spilled");
+  const uint64_t total = faces_[k];
   const std::string path = file(k);
   std::unique_ptr<std::FILE, FileCloser> f(std::fopen(path.c_str(), "rb"));
   const size_t n = size_t(end - begin);

@@ -53,6 +53,14 @@ class LodSpill {
   Status append(size_t k, const std::vector<std::array<uint32_t, 3>>& faces, const std::vector<uint32_t>& faceCluster,
                 const std::vector<vcg::Point3f>& positions);
   Status finish(size_t k);
+  // Faces [begin, end) of a finished level k, with their faceCluster.
+  Status get(size_t k, uint64_t begin, uint64_t end, std::vector<std::array<uint32_t, 3>>& faces,
+             std::vector<uint32_t>& faceCluster) const;
+  // Redraws level k's parts: their ends (increasing, the last one faceCount(k)), so that each part
+  // holds whole groups (the writer reads a level a part at a time).
+  Status setParts(size_t k, const std::vector<uint64_t>& ends);
+  // Forgets level k and removes its file (the DAG holds it again, or it is built anew).
+  void drop(size_t k);
   std::string raw() const { return folder_ + "/R"; }
   void setChunks(size_t n);
   size_t chunks() const { return chunks_; }
@@ -65,8 +73,8 @@ class LodSpill {
   std::vector<uint64_t> faces_;
   std::vector<vcg::Box3f> boxes_;
   size_t chunks_ = 0;
-  std::vector<std::vector<uint64_t>> partEnds_;            // per level written by append(): each part's end
-  std::string clusters() const { return folder_ + "/C"; }  // append's faceCluster side file
+  std::vector<std::vector<uint64_t>> partEnds_;  // per level written by append(): each part's end
+  std::string clusters(size_t k) const;          // append's faceCluster side file of level k
 };
 
 // BuildLodDag of a mesh it takes (its positions and faces become the DAG's level 0 without a
@@ -80,7 +88,9 @@ Status BuildLodDagOwned(IndexedMesh&& mesh, const LodBuildParams& params, LodDag
 // the spill's chunk files (chunk(i): the faces of kd chunk i, global vertex ids, in input order),
 // never whole in memory. Each chunk's level-0 clusters, groups and level-1 faces are made from
 // its file on its own, chunk after chunk (its groups side by side on the threads), and its level
-// 0 goes to the spill; level 1 and above are then built as BuildLodDag builds them. The chunks
+// 0 and its level 1 go to the spill. Each level above is then built from the spill a kd chunk at a
+// time too (its faces read back, grouped and simplified alone, frozen where another chunk uses
+// them), while the chunks have not merged into one; from there on as BuildLodDag builds them. The chunks
 // are kd leaves at one depth, numbered as KdChunks numbers them, so that with the same chunks the
 // DAG is BuildLodDag's with the same chunkFaces (a level 0 that does not shrink is kept, where
 // BuildLodDag would merge the chunks and build it again).

@@ -610,7 +610,11 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
   {
     Encoder none;
     out.chunk(kGeos, none);  // placeholder for the size
-    std::vector<uint32_t> start, faces, local(dag.positions.size(), kNoParent), verts, idx, tmp, remap, old;
+    std::vector<uint32_t> start, faces, verts, idx, tmp, remap, old;
+    // A unit's vertex ids -> its local ids (in the order its faces first use them): a small
+    // open-addressing table per unit ((id + 1) << 32 | local id; 0: empty), not an array over every
+    // vertex of the DAG (4 bytes a vertex, the out-of-core build's peak).
+    std::vector<uint64_t> slots;
     std::vector<uint32_t> fileId(dag.positions.size(), kNoParent);
     std::vector<uint8_t> buf, mask;
     std::vector<uint32_t> q32, decoded;
@@ -643,15 +647,22 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
           while (u1 < n1 && L.clusterGroup[order[u1]] == L.clusterGroup[order[u0]]) ++u1;
           verts.clear();
           idx.clear();
-          for (uint32_t j = start[u0]; j < start[u1]; ++j)
-            for (uint32_t v : levelFaceList[faces[j]]) {
-              if (local[v] == kNoParent) {
-                local[v] = uint32_t(verts.size());
-                verts.push_back(v);
+          {
+            size_t mask = 63;
+            while (mask + 1 < 6 * size_t(start[u1] - start[u0])) mask = mask << 1 | 1;
+            slots.assign(mask + 1, 0);
+            for (uint32_t j = start[u0]; j < start[u1]; ++j)
+              for (uint32_t v : levelFaceList[faces[j]]) {
+                const uint64_t key = (uint64_t(v) + 1) << 32;
+                size_t h = size_t((uint64_t(v) * 0x9E3779B97F4A7C15ull) >> 32) & mask;
+                while (slots[h] && (slots[h] & ~uint64_t(0xFFFFFFFFu)) != key) h = (h + 1) & mask;
+                if (!slots[h]) {
+                  slots[h] = key | verts.size();
+                  verts.push_back(v);
+                }
+                idx.push_back(uint32_t(slots[h]));
               }
-              idx.push_back(local[v]);
-            }
-          for (uint32_t v : verts) local[v] = kNoParent;
+          }
           const size_t vc = verts.size();
           tmp.resize(idx.size());
           for (uint32_t i = u0; i < u1; ++i) {  // each node's faces for the vertex cache, in place

@@ -2526,6 +2526,28 @@ TEST(LodStream, FullSampleIsTheChunkedBuildAndSamplesAreDeterministic) {
   std::remove(plain.path.c_str());
 }
 
+// Small chunks (the bunny in chunks of 48 to 1,024 faces: 2,048 to 128 chunks, each level built
+// from the spill a kd chunk at a time until they merge, StreamLevels): the file is the in-memory
+// chunked build's (levels above 0 built whole, BuildLevels), byte for byte, on 2 threads.
+TEST(LodStream, SmallChunksAreTheChunkedBuild) {
+  const std::string bunny = test::MeshPath("stanford_bunny_bun_zipper.ply");
+  const std::string dir = FreshFolder("stream_small");
+  for (size_t chunk : {48, 256, 1024}) {
+    Built memory;
+    memory.mesh = ReadWelded(bunny);
+    Build(memory, "bunny_small_chunks", Chunked(chunk, 2));
+    const std::string out = dir + "/bunny.clod";
+    LodBuildStats st;
+    const Status s = BuildLodFileFromPly(bunny, Chunked(chunk, 2), out, &st, Progress(), nullptr, 1 << 20);
+    ASSERT_TRUE(s.ok()) << s.message;
+    EXPECT_EQ(ReadBytes(out), memory.bytes) << chunk << " faces a chunk";
+    std::remove(out.c_str());
+    std::remove(memory.path.c_str());
+  }
+  EXPECT_EQ(Listing(dir), std::vector<std::string>{});
+  rmdir(dir.c_str());
+}
+
 // Chunks from a sample of the centroids (16 chunks of the armadillo from 2,000 faces): every cut,
 // at every eye, budget and priority, is watertight and the full budget gives the input back.
 TEST(LodStream, SampledChunksCutsAreWatertight) {
