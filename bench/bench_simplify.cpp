@@ -73,12 +73,13 @@ bool ResetPeakMemory() {
 // MeshLab 2020.09's filter: QuadricSimplification() with the filter's default parameters.
 size_t RunVcg(QMesh& m, int targetFaces) { return conelod_bench::RunMeshLabQem(m, size_t(targetFaces)); }
 
-size_t RunOurs(QMesh& m, int targetFaces, bool conditions) {
+size_t RunOurs(QMesh& m, int targetFaces, bool conditions, bool passes = false) {
   std::vector<size_t> faceOf;
   const conelod::IndexedMesh im = conelod::ToIndexedMesh(m, &faceOf);
   conelod::GroupQemParams p;
   p.targetFaces = size_t(targetFaces);
   p.condition1 = p.condition2 = conditions;
+  p.passes = passes;
   conelod::GroupQemResult r;
   const conelod::Status s = conelod::SimplifyPreservingGroups(im, g_groups, p, r);
   if (!s.ok()) {
@@ -101,7 +102,8 @@ size_t RunMeshopt(const QMesh& m, int targetFaces) {
 }
 
 // kind: 0 = vcglib, 1 = ours (default: integrity mode), 2 = ours without conditions, 3 = meshopt
-// to the faces that 1 reached (registered after it).
+// to the faces that 1 reached (registered after it), 4 = ours in integrity mode with
+// GroupQemParams::passes, 5 = meshopt to the faces that 4 reached.
 void BM_Simplify(benchmark::State& state, int kind, double ratio, const std::string& name,
                  const std::string& sameFacesAs) {
   int target = int(ratio * g_mesh.fn);
@@ -116,7 +118,9 @@ void BM_Simplify(benchmark::State& state, int kind, double ratio, const std::str
     const size_t rss0 = conelod::ProcessStatusBytes("VmRSS");
     state.ResumeTiming();
     const std::clock_t c0 = std::clock();
-    faces = kind == 0 ? RunVcg(m, target) : kind == 3 ? RunMeshopt(m, target) : RunOurs(m, target, kind == 1);
+    faces = kind == 0                ? RunVcg(m, target)
+            : kind == 3 || kind == 5 ? RunMeshopt(m, target)
+                                     : RunOurs(m, target, kind == 1 || kind == 4, kind == 4);
     cpu += double(std::clock() - c0) / CLOCKS_PER_SEC;
     state.PauseTiming();
     const size_t hwm = conelod::ProcessStatusBytes("VmHWM");
@@ -185,10 +189,13 @@ int main(int argc, char** argv) {
   const double ratios[] = {0.5, 0.1, 0.01};
   for (double r : ratios) {
     const std::string pct = std::to_string(int(r * 100 + 0.5)) + "%";
-    const char* names[] = {"vcglib_quadric/", "ours_integrity/", "ours_no_condition/", "meshopt_simplify/"};
-    for (int kind = 0; kind < 4; ++kind) {
+    const char* names[] = {"vcglib_quadric/",   "ours_integrity/",        "ours_no_condition/",
+                           "meshopt_simplify/", "ours_integrity_passes/", "meshopt_simplify_passes/"};
+    for (int kind = 0; kind < 6; ++kind) {
       const std::string name = names[kind] + pct;
-      const std::string sameFacesAs = kind == 3 ? std::string(names[1]) + pct : std::string();
+      const std::string sameFacesAs = kind == 3   ? std::string(names[1]) + pct
+                                      : kind == 5 ? std::string(names[4]) + pct
+                                                  : std::string();
       benchmark::RegisterBenchmark(name.c_str(), BM_Simplify, kind, r, name, sameFacesAs)
           ->Unit(benchmark::kMillisecond)
           ->Iterations(1);
@@ -219,13 +226,18 @@ int main(int argc, char** argv) {
   for (double r : ratios) {
     const std::string pct = std::to_string(int(r * 100 + 0.5)) + "%";
     std::printf("  target %4s:", pct.c_str());
-    for (const char* k : {"vcglib_quadric/", "ours_integrity/", "meshopt_simplify/"})
+    for (const char* k : {"vcglib_quadric/", "ours_integrity/", "meshopt_simplify/", "ours_integrity_passes/",
+                          "meshopt_simplify_passes/"})
       if (g_peak.count(k + pct))
         std::printf(" %s %.1f MB (%.0f B/face)", k, double(g_peak[k + pct]) / 1e6,
                     double(g_peak[k + pct]) / double(g_mesh.fn));
     const std::string ours = "ours_integrity/" + pct, mo = "meshopt_simplify/" + pct;
     if (g_cpu.count(ours) && g_cpu.count(mo) && g_cpu[mo] > 0)
       std::printf("; time ours / meshopt %.2fx", g_cpu[ours] / g_cpu[mo]);
+    const std::string oursP = "ours_integrity_passes/" + pct, moP = "meshopt_simplify_passes/" + pct;
+    if (g_cpu.count(oursP) && g_cpu.count(moP) && g_cpu[moP] > 0)
+      std::printf("; passes: ours %.3f s (%zu faces) / meshopt %.3f s = %.2fx", g_cpu[oursP], g_faces[oursP],
+                  g_cpu[moP], g_cpu[oursP] / g_cpu[moP]);
     std::printf("\n");
   }
   if (g_cpu.count("ours_hierarchy"))

@@ -70,7 +70,8 @@ const char* kSimplifyUsage =
     "  the faces reached and the level that would (the JSON is still printed, OUT.ply written).\n"
     "options (defaults in brackets): --no-condition1 (with --no-condition2: plain QEM) --lock-boundaries\n"
     "  --quality-thr Q [0.3]  --no-optimal-placement  --preserve-boundary  --boundary-weight W [1]\n"
-    "  --no-preserve-normal (allow face flips)\n"
+    "  --no-preserve-normal (allow face flips)  --passes (experimental: collapse in ranked passes as\n"
+    "  meshoptimizer does, not one greedy queue; other outputs)\n"
     "attributes (per-vertex colour, normals, texture coordinates in IN.ply): kept in OUT.ply and\n"
     "  interpolated at each new vertex (Garland-Heckbert 1998 attribute planes); texture, colour and\n"
     "  normal seams stay where they are. --attribute-weight W [1]: how much an attribute change\n"
@@ -81,11 +82,12 @@ const char* kSimplifyUsage =
     "  sampled Hausdorff distance of each level to the input, N face samples [0: off]\n";
 
 int CmdSimplify(int argc, char** argv) {
-  Args a(argc, argv,
-         {"-o", "--target-faces", "--target-ratio", "--max-error", "--groups", "--quality-thr", "--boundary-weight",
-          "--level-ratio", "--threads", "--faces-per-part", "--samples", "--mode", "--attribute-weight"},
-         {"--json", "--no-condition1", "--no-condition2", "--lock-boundaries", "--no-optimal-placement",
-          "--preserve-boundary", "--no-preserve-normal", "--hierarchy", "--keep-cones", "--keep-components"});
+  Args a(
+      argc, argv,
+      {"-o", "--target-faces", "--target-ratio", "--max-error", "--groups", "--quality-thr", "--boundary-weight",
+       "--level-ratio", "--threads", "--faces-per-part", "--samples", "--mode", "--attribute-weight"},
+      {"--json", "--no-condition1", "--no-condition2", "--lock-boundaries", "--no-optimal-placement",
+       "--preserve-boundary", "--no-preserve-normal", "--hierarchy", "--keep-cones", "--keep-components", "--passes"});
   GroupQemParams p;
   const int targetFaces = a.integer("--target-faces", 0);
   const double targetRatio = a.num("--target-ratio", 0);
@@ -105,6 +107,7 @@ int CmdSimplify(int argc, char** argv) {
   p.preserveNormal = !a.has("--no-preserve-normal");
   p.keepCones = a.has("--keep-cones");
   p.removeComponents = !a.has("--keep-components");
+  p.passes = a.has("--passes");
   const std::string mode = a.str("--mode", "integrity");
   if (mode == "paper")
     p.mode = GroupMode::Paper;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <memory>
 
@@ -281,6 +282,7 @@ class GroupQemSimplifier {
         // Attributes are kept per input vertex and corner: they are renumbered with the mesh
         // (AttributeQuadrics::Renumber) and given back in the input's numbering by output().
         spatialOrder_(spatialOrder && coarser.empty() && !frozen_),
+        passes_(p.passes && !region),
         attributes_(attributes && attributes->active() ? attributes : nullptr) {}
 
   void init();
@@ -384,6 +386,11 @@ class GroupQemSimplifier {
   // Vertices and faces are numbered in a spatial order inside the simplifier (see SpatialOrder);
   // vertexInput_/faceInput_: the input index of each (empty: the input's order).
   const bool spatialOrder_;
+  // GroupQemParams::passes: collapses in ranked passes (CollapseInPasses) instead of the queue.
+  const bool passes_;
+  // The passes' loop: collapses until `target` faces, the error bound or no allowed collapse.
+  Status finish(size_t target, double maxErrorSq, GroupQemStats& stats);  // run()'s end, both loops
+  void CollapseInPasses(const Progress& progress, size_t target, double maxErrorSq, GroupQemStats& stats);
   std::vector<uint32_t> vertexInput_, faceInput_;
   uint32_t inputFace(uint32_t f) const { return faceInput_.empty() ? f : faceInput_[f]; }
   // Fills vertexInput_ and faceInput_ (box: the input's bounding box).
@@ -1358,6 +1365,7 @@ void GroupQemSimplifier::collapse(const Candidate& c) {
       if (vs_[u].mark != stamp_) {
         vs_[u].mark = stamp_;
         vs_[u].touched = epoch_;
+        if (passes_) continue;  // every edge is ranked again by the next pass
         PushLazy(keep, u);
         if (vs_[u].dropped) ring_.push_back(u);
       }
@@ -1368,8 +1376,127 @@ void GroupQemSimplifier::collapse(const Candidate& c) {
   }
 }
 
+// GroupQemParams::passes (the idea of meshoptimizer's simplifier, not its code): each pass ranks
+// every live edge at its lower bound, sorts the ranks (stable radix sort: equal ranks keep the
+// edges' order, so the result is deterministic), and walks them in order. An edge is judged in
+// full (the same judge() as the queue's) when neither endpoint has survived a collapse in this
+// pass (its rank is then still that of its quadrics); it is collapsed when allowed, unless its
+// full priority is over the pass's error goal (1.5x the rank of the collapse the pass would end
+// with if every collapse removed two faces) once a sixth of the pass's goal is done. A pass ends
+// at the target, or at a rank over the goal once that sixth is done. A pass without a collapse:
+// no allowed collapse is left.
+void GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t target, double maxErrorSq,
+                                          GroupQemStats& stats) {
+  struct Ranked {
+    float priority;
+    uint32_t a, b;
+  };
+  std::vector<Ranked> ranked, scratch;
+  std::vector<uint32_t> histogram(3 * 2048);
+  const uint32_t nv = uint32_t(pos_.size());
+  const size_t toRemove = stats.facesIn > target ? stats.facesIn - target : 1;
+  size_t nextReport = 0, checked = 0;
+  const auto report = [&]() {
+    const size_t done = stats.facesIn - liveFaces_;
+    if (!progress || done < nextReport) return true;
+    nextReport = done + std::max<size_t>(toRemove / 100, 1);
+    return progress(5 + int(93.0 * std::min(1.0, double(done) / double(toRemove))), "Group-preserving QEM: collapsing");
+  };
+  float raisedGoal = 0;  // the least error goal (raised after a weak pass)
+  while (liveFaces_ > target) {
+    // Rank every live edge once, from its lower endpoint.
+    ranked.clear();
+    for (uint32_t v = 0; v < nv; ++v) {
+      if (vs_[v].dead || count_[v] == 0 || frozen(v)) continue;
+      ++stamp_;
+      for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f)
+        for (uint32_t u : faces_[*f])
+          if (u > v && vs_[u].mark != stamp_) {
+            vs_[u].mark = stamp_;
+            if (!frozen(u)) ranked.push_back({lowerBound(v, u), v, u});
+          }
+      if (progress && (++checked & 0xffff) == 0 && !report()) {
+        stats.stop = GroupQemStats::Stop::Cancelled;
+        return;
+      }
+    }
+    if (ranked.empty()) return;
+    // Stable LSD radix sort on the rank's bits (non-negative floats order as their bits), 11 bits at a time.
+    scratch.resize(ranked.size());
+    std::fill(histogram.begin(), histogram.end(), 0u);
+    const auto key = [](const Ranked& r) {
+      uint32_t k;
+      std::memcpy(&k, &r.priority, 4);
+      return k;
+    };
+    for (const Ranked& r : ranked) {
+      const uint32_t k = key(r);
+      ++histogram[k & 2047];
+      ++histogram[2048 + ((k >> 11) & 2047)];
+      ++histogram[4096 + (k >> 22)];
+    }
+    for (int d = 0; d < 3; ++d) {
+      uint32_t sum = 0;
+      for (uint32_t* h = histogram.data() + 2048 * d; h != histogram.data() + 2048 * (d + 1); ++h) {
+        const uint32_t n = *h;
+        *h = sum;
+        sum += n;
+      }
+      uint32_t* h = histogram.data() + 2048 * d;
+      for (const Ranked& r : ranked) scratch[h[(key(r) >> (11 * d)) & 2047]++] = r;
+      ranked.swap(scratch);
+    }
+
+    // The pass's goal: what is left to remove, but at least an eighth of the faces (else the last
+    // passes, each ending a sixth of the way to the target, would rank every edge for a few collapses).
+    const size_t faceGoal = std::max(target > 0 ? liveFaces_ - target : liveFaces_, liveFaces_ / 8);
+    const size_t edgeGoal = faceGoal / 2;
+    const float errorGoal = std::max(
+        raisedGoal, edgeGoal < ranked.size() ? 1.5f * ranked[edgeGoal].priority : std::numeric_limits<float>::max());
+    float over = std::numeric_limits<float>::max();  // the least priority over the goal met
+    const uint32_t passStart = epoch_;
+    const size_t facesAtStart = liveFaces_;
+    size_t collapses = 0;
+    for (const Ranked& r : ranked) {
+      if (liveFaces_ <= target) break;
+      if (r.priority > errorGoal) {
+        over = std::min(over, r.priority);
+        break;
+      }
+      const uint32_t a = r.a, b = r.b;
+      if (vs_[a].dead || vs_[b].dead || vs_[a].lastSurvive > passStart || vs_[b].lastSurvive > passStart) continue;
+      if (progress && (++checked & 0xfff) == 0 && !report()) {
+        stats.stop = GroupQemStats::Stop::Cancelled;
+        return;
+      }
+      const Candidate c = evaluate(a, b);
+      if (c.verdict != CollapseVerdict::Allowed) continue;
+      if (float(c.priority) > errorGoal) {  // ranked again by the next pass
+        over = std::min(over, float(c.priority));
+        continue;
+      }
+      if (maxErrorSq >= 0 && c.error > maxErrorSq) continue;
+      collapse(c);
+      ++collapses;
+      ++stats.collapses;
+      stats.maxCollapseError = std::max(stats.maxCollapseError, std::sqrt(c.error) / diag_);
+    }
+    if (collapses == 0 && !(over < std::numeric_limits<float>::max())) return;  // nothing allowed is left
+    // A weak pass (under a sixth of its goal: the allowed collapses are dearer than their ranks
+    // said): the goal at least doubles from now on, admitting the cheapest collapse passed over.
+    if (facesAtStart - liveFaces_ <= faceGoal / 6 && over < std::numeric_limits<float>::max())
+      raisedGoal = std::max(over, 2 * errorGoal);
+  }
+}
+
 Status GroupQemSimplifier::run(const Progress& progress, GroupQemStats& stats) {
   stats.facesIn = mesh_.faces.size();
+  if (passes_) {
+    const double maxErrorSq = p_.maxError > 0 ? (p_.maxError * diag_) * (p_.maxError * diag_) : -1;
+    stats.stop = GroupQemStats::Stop::NoMoreCollapses;
+    CollapseInPasses(progress, p_.targetFaces, maxErrorSq, stats);
+    return finish(p_.targetFaces, maxErrorSq, stats);
+  }
   // Every edge once, from its lower endpoint, at its lower bound.
   heap_.reserve(mesh_.faces.size() * 2);
   const uint32_t nv = uint32_t(pos_.size());
@@ -1461,6 +1588,10 @@ Status GroupQemSimplifier::run(const Progress& progress, GroupQemStats& stats) {
       compactFloor = heap_.size() + heap_.size() / 4 + 1024;
     }
   }
+  return finish(target, maxErrorSq, stats);
+}
+
+Status GroupQemSimplifier::finish(size_t target, double maxErrorSq, GroupQemStats& stats) {
   if (stats.stop != GroupQemStats::Stop::Cancelled && liveFaces_ > target && target > 0) {
     RemoveComponents(target, stats);
     if (liveFaces_ > target) TallyFloor(maxErrorSq, stats);

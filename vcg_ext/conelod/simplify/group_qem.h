@@ -119,6 +119,13 @@ struct GroupQemParams {
   // ones may still land on it). No group is split; the removed groups vanish whole. The CLI and
   // the filter turn it on (--keep-components / KeepComponents refuse it); the LOD builders do not.
   bool removeComponents = false;
+  // Collapse order. false (default): one greedy queue, the cheapest allowed collapse first.
+  // true: in passes, as meshoptimizer's simplifier: every edge ranked at its lower bound and sorted,
+  // then collapsed in that order while neither endpoint has survived a collapse of the same pass
+  // and its full priority stays under 1.5x the rank of the pass's estimated last collapse; the next
+  // pass ranks the edges left again. Every check (groups, topology, geometry) is the same; only the
+  // order, and so the output, differs. Ignored for a GroupQemRegion (the LOD build keeps the queue).
+  bool passes = false;
 };
 
 // Ok, or a message naming the bad parameter.
