@@ -3,7 +3,7 @@
 // filter's defaults) at the same face count.
 //
 //   lod_fidelity MESH.ply [--samples N] [--dag-only] [--cluster-faces N] [--group-clusters N] [--cone DEG]
-//                [--max-faces N] [--max-group-error F] [--fine-group-clusters N] [--cuts P,P,...]
+//                [--max-faces N] [--max-group-error F] [--fine-group-clusters N] [--level-ratio R] [--cuts P,P,...]
 //
 // "tree": the previous .clod levels (BuildConeHierarchy + BuildSimplifiedLevels with the defaults
 // `conelod lod build` used: every level keeps the normal-cone groups of its hierarchy level).
@@ -14,6 +14,7 @@
 // and their ratio. Also the wall seconds of each build (one thread per core). --max-faces N: only
 // the levels of at most N faces are compared (the coarse ones; MeshLab's QEM on a large input is slow).
 // --max-group-error 1: the DAG without the cap on a group's collapse error (as before it had one).
+// --level-ratio R: each group simplified to R of its faces (conelod lod build --level-ratio; 0.5).
 // --file [--precision E]: instead, the DAG's levels against the same levels read back from the .clod
 // file written from it (positions quantized with precision E, default kDefaultLodPrecision): per level
 // the RMS of both and their relative change (quantization and the codecs' round trip).
@@ -99,6 +100,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--group-clusters")) dagParams.groupClusters = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--fine-group-clusters")) dagParams.fineGroupClusters = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--max-group-error")) dagParams.maxGroupError = std::atof(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--level-ratio")) dagParams.simplification.levelRatio = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--max-faces")) maxFaces = size_t(std::atoll(argv[i + 1]));
     if (!std::strcmp(argv[i], "--chunk-faces")) chunkFaces = size_t(std::atoll(argv[i + 1]));
     if (!std::strcmp(argv[i], "--cuts")) {
@@ -168,7 +170,11 @@ int main(int argc, char** argv) {
   }
   if (file) {
     conelod::LodDag dag;
-    if (!conelod::BuildLodDag(input, dagParams, dag).ok()) return 1;
+    const conelod::Status built = conelod::BuildLodDag(input, dagParams, dag);
+    if (!built.ok()) {
+      std::fprintf(stderr, "lod_fidelity: %s\n", built.message.c_str());
+      return 2;
+    }
     const std::string path = std::string(std::getenv("TMPDIR") ? std::getenv("TMPDIR") : "/tmp") + "/lod_fidelity_" +
                              std::to_string(::getpid()) + ".clod";
     conelod::LodBuildStats stats;
@@ -220,7 +226,11 @@ int main(int argc, char** argv) {
   {
     double w = Wall();
     conelod::LodDag dag;
-    if (!conelod::BuildLodDag(input, dagParams, dag).ok()) return 1;
+    const conelod::Status built = conelod::BuildLodDag(input, dagParams, dag);
+    if (!built.ok()) {
+      std::fprintf(stderr, "lod_fidelity: %s\n", built.message.c_str());
+      return 2;
+    }
     std::printf("dag: cluster DAG %.2f s wall\n", Wall() - w);
     if (!cuts.empty()) {
       // Cuts of the file: far eye, by error alone, no culling (scripts/lod_fidelity.py's cuts).
