@@ -424,6 +424,8 @@ int CmdSimplify(int argc, char** argv) {
           .field("faces_after_parts", partition.facesAfterParts)
           .field("final_pass_collapses", partition.finalPassCollapses)
           .field("parts_seconds", partition.partsSeconds)
+          .field("parts_cpu_seconds", partition.partsCpuSeconds)
+          .field("largest_part_cpu_seconds", partition.largestPartCpuSeconds)
           .field("final_pass_seconds", partition.finalSeconds);
     WriteStats(j, r.stats);
     if (a.has("-o")) j.field("output", a.str("-o"));
@@ -434,10 +436,11 @@ int CmdSimplify(int argc, char** argv) {
                 r.mesh.faceCount(), p.targetFaces, ToString(r.stats.stop), seconds, r.stats.collapses);
     if (partition.parts > 1)
       std::printf(
-          "in %d parts (%zu shared vertices held) side by side: %zu faces in %.3f s; final pass: %zu collapses "
-          "in %.3f s\n",
+          "in %d parts (%zu shared vertices held) side by side: %zu faces in %.3f s (CPU %.3f s, largest part "
+          "%.3f s); final pass: %zu collapses in %.3f s\n",
           partition.parts, partition.frozenVertices, partition.facesAfterParts, partition.partsSeconds,
-          partition.finalPassCollapses, partition.finalSeconds);
+          partition.partsCpuSeconds, partition.largestPartCpuSeconds, partition.finalPassCollapses,
+          partition.finalSeconds);
     std::printf("groups (%s): %d before, %d after, %d split, %d vanished: %.2f%% intact\n", source.c_str(),
                 gi.groupsBefore, gi.groupsAfter, gi.groupsSplit, gi.groupsVanished, 100 * gi.intact());
     if (gi.groupsDisconnectedBefore)

@@ -10,6 +10,8 @@
 #include <memory>
 #include <string>
 
+#include <time.h>
+
 #include <vcg/space/box3.h>
 
 #include "conelod/mesh/mesh_check.h"
@@ -20,6 +22,13 @@ namespace conelod {
 namespace {
 
 constexpr uint32_t kNone = UINT32_MAX;
+
+// CPU seconds of the calling thread so far.
+double ThreadCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
 
 double Seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
@@ -59,8 +68,7 @@ std::vector<uint8_t> CutGroupsIntoParts(const IndexedMesh& mesh, const std::vect
       continue;
     }
     vcg::Box3d box;
-    for (size_t i = c.begin; i < c.end; ++i)
-      box.Add(vcg::Point3d(groups[i].at(0), groups[i].at(1), groups[i].at(2)));
+    for (size_t i = c.begin; i < c.end; ++i) box.Add(vcg::Point3d(groups[i].at(0), groups[i].at(1), groups[i].at(2)));
     const vcg::Point3d dim = box.Dim();
     const int axis = dim[0] >= dim[1] && dim[0] >= dim[2] ? 0 : dim[1] >= dim[2] ? 1 : 2;
     std::sort(groups.begin() + long(c.begin), groups.begin() + long(c.end), [axis](const Group& a, const Group& b) {
@@ -85,6 +93,7 @@ struct Part {
   std::vector<uint32_t> vertices;  // indices into the input, increasing
   GroupQemResult result;
   Status status;
+  double cpuSeconds = 0;
   std::atomic<int> percent{0};
 };
 
@@ -93,6 +102,7 @@ struct Part {
 void SimplifyOnePart(const IndexedMesh& mesh, const std::vector<int>& faceGroup, const std::vector<uint8_t>& shared,
                      const uint32_t* faces, size_t faceCount, const GroupQemParams& qem, double diagonal,
                      size_t targetFaces, std::vector<uint32_t>& local, const std::atomic<bool>& cancel, Part& part) {
+  const double cpu = ThreadCpuSeconds();
   try {
     for (size_t i = 0; i < faceCount; ++i)
       for (uint32_t v : mesh.faces[faces[i]])
@@ -131,6 +141,7 @@ void SimplifyOnePart(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
     for (uint32_t v : part.vertices) local[v] = kNone;
     part.status = Status::OutOfMemory("not enough memory to simplify a part of the mesh");
   }
+  part.cpuSeconds = ThreadCpuSeconds() - cpu;
   part.percent.store(100, std::memory_order_relaxed);
 }
 
@@ -206,8 +217,7 @@ Status SimplifyPartitioned(const IndexedMesh& mesh, const std::vector<int>& face
   for (auto& p : part) p.reset(new Part);
   std::atomic<bool> cancel{false};
   std::atomic<int> next{0};
-  const unsigned threads =
-      unsigned(std::min(parts, params.threads > 0 ? params.threads : int(CoreCount())));
+  const unsigned threads = unsigned(std::min(parts, params.threads > 0 ? params.threads : int(CoreCount())));
   const Progress partsProgress = SubProgress(progress, 0, 80);
   RunThreadsWhile(
       threads,
@@ -267,6 +277,8 @@ Status SimplifyPartitioned(const IndexedMesh& mesh, const std::vector<int>& face
         for (int c = 0; c < 3; ++c) face[f][size_t(c)] = p.vertices[r.sourceVertex[r.mesh.faces[k][size_t(c)]]];
       }
       AddStats(total, r.stats);
+      ps.partsCpuSeconds += p.cpuSeconds;
+      ps.largestPartCpuSeconds = std::max(ps.largestPartCpuSeconds, p.cpuSeconds);
     }
     part.clear();
     for (uint32_t v = 0; v < newIndex.size(); ++v)

@@ -37,11 +37,14 @@ constexpr int kMaxPartitions = 64;
 
 // What the partitioned run did (all zero when it ran in one piece).
 struct PartitionStats {
-  int parts = 0;                  // parts simplified side by side (0: one piece)
-  size_t frozenVertices = 0;      // vertices shared by two parts (frozen while the parts run)
-  size_t facesAfterParts = 0;     // faces of the stitched mesh, before the final pass
-  size_t finalPassCollapses = 0;  // collapses of the final pass
-  double partsSeconds = 0, finalSeconds = 0;
+  int parts = 0;                              // parts simplified side by side (0: one piece)
+  size_t frozenVertices = 0;                  // vertices shared by two parts (frozen while the parts run)
+  size_t facesAfterParts = 0;                 // faces of the stitched mesh, before the final pass
+  size_t finalPassCollapses = 0;              // collapses of the final pass
+  double partsSeconds = 0, finalSeconds = 0;  // wall: the parts (with the cut and the stitch), the final pass
+  // CPU seconds of the parts' threads: all parts, and the largest part (on an otherwise idle
+  // machine the parts take about max(partsCpuSeconds / threads, largestPartCpuSeconds)).
+  double partsCpuSeconds = 0, largestPartCpuSeconds = 0;
 };
 
 // The part count SimplifyPartitioned uses for `faces` faces with `params` (1: one piece, serial).
