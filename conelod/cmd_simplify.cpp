@@ -10,6 +10,7 @@
 #include "conelod/simplify/group_integrity.h"
 #include "conelod/simplify/group_qem.h"
 #include "conelod/simplify/hierarchical_simplification.h"
+#include "conelod/simplify/partitioned_simplify.h"
 #include "conelod/mesh/mesh_check.h"
 #include "conelod/pca/pca_partition.h"
 #include "conelod/mesh/sampled_distance.h"
@@ -79,15 +80,21 @@ const char* kSimplifyUsage =
     "with --hierarchy: --level-ratio R [0.5]; --faces-per-part P [100000]: a level of at least 2P\n"
     "  faces is cut into 2-8 parts along group contours, simplified side by side (0: never);\n"
     "  --threads N [0: one per core; the result does not depend on it]; --samples N: also the\n"
-    "  sampled Hausdorff distance of each level to the input, N face samples [0: off]\n";
+    "  sampled Hausdorff distance of each level to the input, N face samples [0: off]\n"
+    "one target, big meshes (docs/group_qem.md, \"Big meshes in parts\"): a mesh of at least\n"
+    "  --partition-above F [2000000; 0: never] faces is cut into parts of about --faces-per-part P\n"
+    "  [1000000] faces along group contours, simplified side by side on --threads N threads [0: one\n"
+    "  per core; the result does not depend on it] with their shared vertices held, then a final\n"
+    "  pass over the whole mesh reaches the target (not with attributes: those run in one piece)\n";
 
 int CmdSimplify(int argc, char** argv) {
-  Args a(
-      argc, argv,
-      {"-o", "--target-faces", "--target-ratio", "--max-error", "--groups", "--quality-thr", "--boundary-weight",
-       "--level-ratio", "--threads", "--faces-per-part", "--samples", "--mode", "--attribute-weight"},
-      {"--json", "--no-condition1", "--no-condition2", "--lock-boundaries", "--no-optimal-placement",
-       "--preserve-boundary", "--no-preserve-normal", "--hierarchy", "--keep-cones", "--keep-components", "--passes"});
+  Args a(argc, argv,
+         {"-o", "--target-faces", "--target-ratio", "--max-error", "--groups", "--quality-thr", "--boundary-weight",
+          "--level-ratio", "--threads", "--faces-per-part", "--samples", "--mode", "--attribute-weight",
+          "--partition-above"},
+         {"--json", "--no-condition1", "--no-condition2", "--lock-boundaries", "--no-optimal-placement",
+          "--preserve-boundary", "--no-preserve-normal", "--hierarchy", "--keep-cones", "--keep-components",
+          "--passes"});
   GroupQemParams p;
   const int targetFaces = a.integer("--target-faces", 0);
   const double targetRatio = a.num("--target-ratio", 0);
@@ -97,7 +104,10 @@ int CmdSimplify(int argc, char** argv) {
   const double levelRatio = a.num("--level-ratio", 0.5);
   const double attributeWeight = a.num("--attribute-weight", 1.0);
   HierarchicalSimplificationParams hp;
+  PartitionParams pp;
+  if (!a.has("--hierarchy") && !a.has("--faces-per-part")) hp.facesPerPart = pp.facesPerPart;
   const std::string partsError = ReadPartsOptions(a, hp);
+  const int partitionAbove = a.integer("--partition-above", int(pp.minFaces));
   const int samples = a.integer("--samples", 0);
   p.condition1 = !a.has("--no-condition1");
   p.condition2 = !a.has("--no-condition2");
@@ -120,12 +130,17 @@ int CmdSimplify(int argc, char** argv) {
   if (targetFaces < 0) return Fail(kUsage, "--target-faces must be >= 0");
   if (!(attributeWeight >= 0)) return Fail(kUsage, "--attribute-weight must be >= 0");
   if (!partsError.empty()) return Fail(kUsage, partsError);
+  if (partitionAbove < 0) return Fail(kUsage, "--partition-above must be a whole number >= 0 (0: never in parts)");
   if (samples < 0 || samples > kMaxFaceSamples)
     return Fail(kUsage, "--samples must be from 0 to " + std::to_string(kMaxFaceSamples));
   if (hierarchy && a.has("--keep-components"))
     return Fail(kUsage, "--hierarchy never removes components: --keep-components goes with one target");
-  if (!hierarchy && (a.has("--threads") || a.has("--faces-per-part") || a.has("--samples")))
-    return Fail(kUsage, "--threads, --faces-per-part and --samples go with --hierarchy");
+  if (!hierarchy && a.has("--samples")) return Fail(kUsage, "--samples goes with --hierarchy");
+  if (hierarchy && a.has("--partition-above"))
+    return Fail(kUsage, "--partition-above goes with one target (--hierarchy cuts levels by --faces-per-part)");
+  pp.threads = hp.threads;
+  pp.facesPerPart = hp.facesPerPart;
+  pp.minFaces = hp.facesPerPart == 0 ? 0 : size_t(partitionAbove);
   if (a.has("--target-ratio") && !(targetRatio > 0 && targetRatio <= 1))
     return Fail(kUsage, "--target-ratio must be in (0, 1]");
   if (!hierarchy && !targetFaces && !a.has("--target-ratio") && !a.has("--max-error"))
@@ -315,7 +330,14 @@ int CmdSimplify(int argc, char** argv) {
     std::vector<std::array<uint32_t, 3>>().swap(inputFaces);
     if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
   }
-  s = SimplifyPreservingGroups(im, groups, p, r, Progress(), {}, nullptr, attributeMask ? &attributes : nullptr);
+  PartitionStats partition;
+  if (attributeMask || PartitionCount(im.faceCount(), p, pp) <= 1) {
+    if (attributeMask && PartitionCount(im.faceCount(), p, pp) > 1)
+      std::fprintf(stderr, "conelod: note: %s has attributes: simplified in one piece, on one thread\n", input.c_str());
+    s = SimplifyPreservingGroups(im, groups, p, r, Progress(), {}, nullptr, attributeMask ? &attributes : nullptr);
+  } else {
+    s = SimplifyPartitioned(im, groups, p, pp, r, Progress(), &partition);
+  }
   const double seconds = timer.seconds();
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
 
@@ -399,6 +421,15 @@ int CmdSimplify(int argc, char** argv) {
           .field("cone_limit_deg", coneLimitDeg)
           .field("cones_over_threshold", conesOver);
     if (!unreachable.empty()) j.field("message", unreachable);
+    if (partition.parts > 1)
+      j.field("parts", partition.parts)
+          .field("frozen_vertices", partition.frozenVertices)
+          .field("faces_after_parts", partition.facesAfterParts)
+          .field("final_pass_collapses", partition.finalPassCollapses)
+          .field("parts_seconds", partition.partsSeconds)
+          .field("parts_cpu_seconds", partition.partsCpuSeconds)
+          .field("largest_part_cpu_seconds", partition.largestPartCpuSeconds)
+          .field("final_pass_seconds", partition.finalSeconds);
     WriteStats(j, r.stats);
     if (a.has("-o")) j.field("output", a.str("-o"));
     j.EndObject();
@@ -406,6 +437,13 @@ int CmdSimplify(int argc, char** argv) {
   } else {
     std::printf("%s: %zu -> %zu faces (target %zu, %s) in %.3f s, %zu collapses\n", input.c_str(), im.faceCount(),
                 r.mesh.faceCount(), p.targetFaces, ToString(r.stats.stop), seconds, r.stats.collapses);
+    if (partition.parts > 1)
+      std::printf(
+          "in %d parts (%zu shared vertices held) side by side: %zu faces in %.3f s (CPU %.3f s, largest part "
+          "%.3f s); final pass: %zu collapses in %.3f s\n",
+          partition.parts, partition.frozenVertices, partition.facesAfterParts, partition.partsSeconds,
+          partition.partsCpuSeconds, partition.largestPartCpuSeconds, partition.finalPassCollapses,
+          partition.finalSeconds);
     std::printf("groups (%s): %d before, %d after, %d split, %d vanished: %.2f%% intact\n", source.c_str(),
                 gi.groupsBefore, gi.groupsAfter, gi.groupsSplit, gi.groupsVanished, 100 * gi.intact());
     if (gi.groupsDisconnectedBefore)

@@ -7,7 +7,8 @@
 # bytes per input face, file bytes per input face, the 1-minute load as the step started. Takes minutes to hours: not part of CI.
 #   scripts/bench_scale.sh [CONELOD]   default build/conelod/conelod
 #   SCALE_LEVELS="1 2 3"               subdivisions to run (default: 1 2 3)
-#   SCALE_STEPS="lod"                  any of: lod group simplify (default: lod)
+#   SCALE_STEPS="lod"                  any of: lod group simplify (default: lod); simplify runs the
+#                                      one-piece peer (--partition-above 0) and then in parts per thread count
 #   SCALE_THREADS="1 2 0"              lod build, group and simplify --threads values (0: one per core; default 1 2 0)
 #   CONELOD_TEST_MESHES=...            where stanford_dragon_vrip_binary.ply is (../shared/test_meshes)
 set -euo pipefail
@@ -122,6 +123,9 @@ for k in $LEVELS; do
           row "$faces" "group" "$t" - "$CONELOD" group "$mesh" -o "$OUT/grouped.ply" --threads "$t"
         done ;;
       simplify)
+        # The peer: the one-piece collapse (--partition-above 0), then in parts on each --threads.
+        row "$faces" "simplify --groups cone:auto 10 % one piece" 1 - \
+          "$CONELOD" simplify "$mesh" --groups cone:auto --target-ratio 0.1 --partition-above 0 -o "$OUT/simplified.ply"
         for t in $THREADS; do
           row "$faces" "simplify --groups cone:auto 10 %" "$t" - \
             "$CONELOD" simplify "$mesh" --groups cone:auto --target-ratio 0.1 --threads "$t" -o "$OUT/simplified.ply"

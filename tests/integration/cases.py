@@ -595,6 +595,39 @@ def cli_simplify_auto_level(c):
 
 
 @case
+def cli_simplify_in_parts(c):
+    """A big simplification in parts (forced on the bunny with a small threshold): the same file on
+    1 and 2 threads, every group whole, the target reached; below the threshold the file is the
+    one-piece run's byte for byte; bad values exit 1."""
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    base = ["simplify", bunny, "--groups", "cone:auto", "--target-ratio", "0.1", "--json"]
+    files = []
+    for threads in ("1", "2"):
+        out = c.out("parts%s.ply" % threads)
+        r = json.loads(c.conelod(*base, "--partition-above", "50000", "--faces-per-part", "10000",
+                                 "--threads", threads, "-o", out).stdout)
+        assert r["parts"] == 8 and r["frozen_vertices"] > 0 and r["faces_after_parts"] > r["target_faces"], r
+        assert r["faces_out"] <= r["target_faces"] and r["target_reached"], r
+        assert r["groups_split"] == 0 and r["groups_vanished"] == 0 and r["integrity"] == 1, r
+        files.append(open(out, "rb").read())
+    assert files[0] == files[1], "the result depends on --threads"
+    # Below the threshold (the default 2,000,000 faces, or 0 = never): the one-piece run.
+    whole = c.out("whole.ply")
+    never = c.out("never.ply")
+    r = json.loads(c.conelod(*base, "-o", whole).stdout)
+    assert "parts" not in r, r
+    c.conelod(*base, "--partition-above", "0", "--threads", "2", "-o", never)
+    assert open(whole, "rb").read() == open(never, "rb").read()
+    assert open(whole, "rb").read() != files[0], "8 parts should differ from one piece"
+    human = c.conelod("simplify", bunny, "--groups", "cone:auto", "--target-ratio", "0.1", "--partition-above", "1",
+                      "--faces-per-part", "20000").stdout.decode()
+    assert "in 4 parts" in human and "100.00% intact" in human, human
+    c.conelod(*base, "--partition-above", "-1", expect=1)
+    c.conelod(*base, "--threads", "-2", expect=1)
+    c.conelod("simplify", bunny, "--hierarchy", "--partition-above", "10", expect=1)
+
+
+@case
 def cli_simplify_bad_inputs(c):
     bunny = c.mesh("stanford_bunny_bun_zipper.ply")
     p = c.conelod("simplify", bunny, "--target-faces", "100", expect=2)  # no quality in the file
@@ -644,8 +677,9 @@ def cli_simplify_hierarchy(c):
         assert 0 < a["hausdorff"] < 0.05 * a["diagonal"], a
     mean = [lv["mean_distance_from_input"] for lv in runs[0]["levels"]]
     assert mean[-1] > 4 * mean[0], mean
-    c.conelod("simplify", c.mesh("stanford_bunny_bun_zipper.ply"), "--target-ratio", "0.5", "--threads", "2",
-              expect=1)  # --threads goes with --hierarchy
+    # --samples goes with --hierarchy (--threads now goes with one target too: issue 27's parts).
+    c.conelod("simplify", c.mesh("stanford_bunny_bun_zipper.ply"), "--groups", "cone:1", "--target-ratio", "0.5",
+              "--samples", "1000", expect=1)
 
 
 def write_attribute_grid(path, n=30, wedge=False):
