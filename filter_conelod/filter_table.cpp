@@ -2,7 +2,10 @@
 #include "filter_table.h"
 
 #include <QElapsedTimer>
+#include <QDir>
+#include <QFile>
 #include <QFileInfo>
+#include <QTemporaryDir>
 #include <QRegularExpression>
 #include <algorithm>
 #include <cmath>
@@ -1237,6 +1240,53 @@ std::vector<ParamSpec> LodExtractSpecs(const MeshDocument*, const MeshModel*) {
   };
 }
 
+// MeshLab 2020.09 reads a layer's texture from a file (kLayersHoldTextureImages): the .clod's image
+// (its TEXR chunk) goes beside the .clod under its stored name when no file has that name there,
+// or is found there when the file there holds the same bytes; else (another file of that name, a
+// folder that cannot be written) into a new folder of the system's temporary folder. Nothing is
+// overwritten. `path`: the image's absolute path; `how`: what was done, for the log.
+Status ProvideLodTextureFile(const QString& clodPath, const conelod::LodTexture& tex, QString& path, QString& how) {
+  const QByteArray bytes(reinterpret_cast<const char*>(tex.bytes.data()), int(tex.bytes.size()));
+  auto write = [&](const QString& target, std::string& err) {
+    conelod::SafeFile out;
+    err = out.open(target.toStdString());
+    if (err.empty() && std::fwrite(bytes.constData(), 1, size_t(bytes.size()), out.file()) != size_t(bytes.size()))
+      err = "cannot write '" + target.toStdString() + "'";
+    if (err.empty()) err = out.commit();
+    return err.empty();
+  };
+  const QString name = QString::fromStdString(tex.name);
+  const QString beside = QFileInfo(clodPath).absoluteDir().absoluteFilePath(name);
+  std::string err;
+  QString why;
+  if (QFileInfo(beside).exists() || QFileInfo(beside).isSymLink()) {
+    QFile existing(beside);
+    if (QFileInfo(beside).isFile() && existing.open(QIODevice::ReadOnly) && existing.readAll() == bytes) {
+      path = beside;
+      how = "found beside the .clod as " + beside + " (the same bytes)";
+      return Status::Ok();
+    }
+    why = beside + " exists with other content and is left as it is";
+  } else if (write(beside, err)) {
+    path = beside;
+    how = "written beside the .clod as " + beside + " (no file had that name)";
+    return Status::Ok();
+  } else {
+    why = "cannot write beside the .clod: " + QString::fromStdString(err);
+  }
+  QTemporaryDir folder(QDir::temp().absoluteFilePath("conelod-texture-XXXXXX"));
+  if (!folder.isValid()) return Invalid("cannot create a folder for the texture image in " + QDir::tempPath());
+  folder.setAutoRemove(false);  // the layer names the image; MeshLab reads it when it draws or saves
+  const QString temp = QDir(folder.path()).absoluteFilePath(name);
+  if (!write(temp, err)) {
+    QDir(folder.path()).removeRecursively();
+    return Invalid("cannot write the texture image: " + QString::fromStdString(err));
+  }
+  path = temp;
+  how = "written to " + temp + " (" + why + ")";
+  return Status::Ok();
+}
+
 Status ApplyLodExtract(FilterCall& c) {
   QString path;
   Status s = RequirePath(c, "FileName", path);
@@ -1284,6 +1334,32 @@ Status ApplyLodExtract(FilterCall& c) {
   conelod::LodAttributes attributes;  // the file's vertex colours and normals (version 5)
   s = conelod::ExtractCutMesh(*reader, cut, !drop, mesh, &faceLevel, nullptr, &attributes);
   if (!s.ok()) return failed(s);
+  // The texture image of a textured file (its TEXR chunk), read, and for MeshLab 2020.09 written
+  // to a file, before the layer is added: a failure leaves the document as it was.
+  const bool textured = !attributes.texCoords.empty();
+  conelod::LodTexture texture;
+  QImage textureImage;
+  QString textureName, textureHow;
+  if (textured && info.textureBytes) {
+    s = reader->LoadTexture(texture);
+    if (!s.ok()) return failed(s);
+    if (kLayersHoldTextureImages) {
+      textureImage = QImage::fromData(texture.bytes.data(), int(texture.bytes.size()));
+      textureName = QString::fromStdString(texture.name);
+      textureHow = textureImage.isNull() ? QString("not given: Qt cannot decode its %1 bytes (%2)")
+                                               .arg(texture.bytes.size())
+                                               .arg(QString::fromStdString(texture.mime))
+                                         : QString(
+                                               "held in memory by the layer (%1 x %2, from the file's %3 bytes; "
+                                               "saving the layer writes it beside the mesh)")
+                                               .arg(textureImage.width())
+                                               .arg(textureImage.height())
+                                               .arg(texture.bytes.size());
+    } else {
+      s = ProvideLodTextureFile(fullPath, texture, textureName, textureHow);
+      if (!s.ok()) return s;
+    }
+  }
   const double seconds = timer.elapsed() / 1000.0;
 
   MeshModel* layer = c.doc.addNewMesh(
@@ -1314,6 +1390,23 @@ Status ApplyLodExtract(FilterCall& c) {
       const vcg::Point3f n = conelod::DecodeLodNormal(attributes.normals[v]);
       layer->cm.vert[v].N() = CMeshO::VertexType::NormalType(n[0], n[1], n[2]);
     }
+  // Texture coordinates per face corner (wedge, as MeshLab's texture filters and its PLY reader
+  // hold them): each corner its vertex's (the file has one vertex per position and UV, so a seam's
+  // corners keep their own chart's), texture 0: the image above.
+  if (textured) {
+    layer->updateDataMask(MeshModel::MM_WEDGTEXCOORD);
+    std::vector<vcg::TexCoord2f> uv(layer->cm.vert.size());
+    for (size_t v = 0; v < uv.size(); ++v) {
+      float t[2];
+      conelod::DecodeLodTexCoord(attributes.texCoords[v], attributes.uvMin, attributes.uvMax, t);
+      uv[v] = vcg::TexCoord2f(t[0], t[1]);
+      uv[v].N() = 0;
+    }
+    for (auto& f : layer->cm.face)
+      for (int k = 0; k < 3; ++k) f.WT(k) = uv[size_t(vcg::tri::Index(layer->cm, f.V(k)))];
+    if (!textureName.isEmpty() && (!kLayersHoldTextureImages || !textureImage.isNull()))
+      AddLayerTexture(*layer, textureName.toStdString(), textureImage);
+  }
   if (c.cb) c.cb(100, "view-dependent LOD: done");
 
   Report& out = c.report;
@@ -1329,6 +1422,11 @@ Status ApplyLodExtract(FilterCall& c) {
   if (info.colors || info.normals)
     out.log("the file's per-vertex %s%s%s given to the layer", info.colors ? "colours" : "",
             info.colors && info.normals ? " and " : "", info.normals ? "normals" : "");
+  if (textured)
+    out.log("the file's texture coordinates given to the layer per face corner (wedge); %s",
+            info.textureBytes
+                ? qUtf8Printable("its texture image " + QString::fromStdString(texture.name) + ": " + textureHow)
+                : "the file stores no texture image");
   for (size_t l = 0; l < facesPerLevel.size(); ++l)
     if (facesPerLevel[l]) out.log("faces at level %d: %d", int(l), int(facesPerLevel[l]));
   out.log("lod_faces %d", int(mesh.faceCount()));
@@ -1493,7 +1591,12 @@ std::vector<FilterSpec> MakeFilters() {
                        "or orthographic along <i>View direction</i>. With <i>Refine back-facing groups last</i>, "
                        "back-facing groups are refined last; with <i>Leave back-facing groups out</i> they are left "
                        "out of the layer. Per-face quality = LOD level of the face (0 = the input's own faces), a "
-                       "distinct colour per level (those of conelod lod extract). <i>LOD file</i> has no default: ") +
+                       "distinct colour per level (those of conelod lod extract). A file with attributes gives "
+                       "the layer its per-vertex colours and normals, and its texture coordinates per face corner "
+                       "with the texture image stored in the file (MeshLab 2022.02 and later: held by the layer; "
+                       "2020.09: written beside the <tt>.clod</tt> when no file has its name there, else into a "
+                       "temporary folder; never over an existing file; the log says where). "
+                       "<i>LOD file</i> has no default: ") +
                    kLodFileHow + QString(". The current mesh is not changed.<br>") + kPaperKamiya,
                "no layer was added", LodExtractSpecs, ApplyLodExtract});
   return t;

@@ -1301,8 +1301,8 @@ def meshlab_lod_extract_colours(c):
                        save=("fq", "fc", "vc", "vn"))
     assert "the file's per-vertex colours and normals given to the layer" in log, log[-1500:]
     verts = [r for name, recs in read_ply_elements(out) if name == "vertex" for r in recs]
-    # One vertex per (position, UV) in the file: the seam's 31 positions twice (the filter does not
-    # give the layer the texture coordinates yet).
+    # One vertex per (position, UV) in the file: the seam's 31 positions twice (each corner keeps
+    # its chart's coordinates: meshlab_lod_extract_texture).
     assert len(verts) == 31 * 31 + 31, len(verts)
     for v in verts:
         i, j = round(v["x"] * 30), round(v["y"] * 30)
@@ -1313,6 +1313,100 @@ def meshlab_lod_extract_colours(c):
     _, log = c.meshlab([c.mesh("stanford_bunny_bun_zipper.ply")],
                        mlx_with(c, "extract_view_dependent_lod.mlx", FileName=plain, FaceBudget=100000), c.out("p.ply"))
     assert "given to the layer" not in log, log[-1500:]
+
+
+def tiny_png(width=4, height=2):
+    """A real RGB PNG (Qt decodes it): a red-to-blue ramp."""
+    import zlib
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+    rows = b"".join(b"\0" + b"".join(bytes((255 * x // (width - 1), 40 * y, 255 - 255 * x // (width - 1)))
+                                      for x in range(width)) for y in range(height))
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)) +
+            chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
+
+
+@case
+def meshlab_lod_extract_texture(c):
+    """Issue 26: Extract View-Dependent LOD gives the layer the file's texture coordinates per face
+    corner (wedge) and its texture image. MeshLab 2020.09 reads a layer's texture from a file: the
+    image of the file's TEXR chunk is written beside the .clod when no file has its name there, used
+    when the file there holds the same bytes, else written into a new folder of $TMPDIR, the other
+    file left as it is. Saved with the layer's wedge coordinates, every face corner has its input
+    coordinates (u = x left of the seam, x + 1 right of it; v = y) within the streams' bounds, each
+    face in one chart, and `comment TextureFile` names the image."""
+    src = c.out("tex.ply")
+    write_attribute_grid(src, wedge=True)
+    image = tiny_png()
+    with open(c.out("chart.png"), "wb") as f:
+        f.write(image)
+    built = c.out("tex.clod")
+    c.conelod("lod", "build", src, "-o", built)
+    info = json.loads(c.conelod("lod", "info", built, "--json").stdout)
+    bound = info["texcoord_error"]
+    moved = c.out("moved")  # the .clod alone, as a user would move it
+    os.makedirs(moved)
+    clod = os.path.join(moved, "tex.clod")
+    with open(clod, "wb") as f:
+        f.write(open(built, "rb").read())
+    bunny = c.mesh("stanford_bunny_bun_zipper_res4.ply")
+    save = ("fq", "fc", "vc", "vn", "wt")
+
+    def extract(path, out):
+        script = mlx_with(c, "extract_view_dependent_lod.mlx", FileName=path, FaceBudget=100000)
+        _, log = c.meshlab([bunny], script, out, save=save)
+        assert "the file's texture coordinates given to the layer per face corner (wedge)" in log, log[-1500:]
+        elements = dict(read_ply_elements(out))
+        verts, faces = elements["vertex"], elements["face"]
+        assert len(faces) == 2 * 30 * 30, len(faces)
+        for f in faces:
+            uv = f["texcoord"]
+            assert len(uv) == 6, f
+            charts = set()
+            for k, u, v in zip(f["vertex_indices"], uv[0::2], uv[1::2]):
+                x, y = verts[k]["x"], verts[k]["y"]
+                chart = round(u - x)
+                # (the positions too are quantized in the file: within 2e-5 of the diagonal)
+                assert chart in (0, 1) and abs(u - x - chart) <= bound + 5e-5 and abs(v - y) <= bound + 5e-5, (f, x, y)
+                charts.add(chart)
+            assert len(charts) == 1, f
+        head = open(out, "rb").read(600).decode(errors="replace")
+        named = re.search(r"comment TextureFile (.*)\n", head)
+        assert named, head
+        return log, named.group(1).strip()
+
+    log, named = extract(clod, c.out("first.ply"))
+    beside = os.path.join(moved, "chart.png")
+    assert "its texture image chart.png: written beside the .clod as %s" % beside in log, log[-1500:]
+    assert open(beside, "rb").read() == image and os.path.abspath(named) == beside, named
+    log, named = extract(clod, c.out("again.ply"))
+    assert "found beside the .clod as %s (the same bytes)" % beside in log, log[-1500:]
+    # Another file of that name beside the .clod: left alone, the image goes to $TMPDIR.
+    other = c.out("other")
+    os.makedirs(other)
+    with open(os.path.join(other, "chart.png"), "wb") as f:
+        f.write(b"not the image")
+    clod2 = os.path.join(other, "tex.clod")
+    with open(clod2, "wb") as f:
+        f.write(open(built, "rb").read())
+    tmp = c.out("tmpdir")
+    os.makedirs(tmp)
+    old = os.environ.get("TMPDIR")
+    os.environ["TMPDIR"] = tmp
+    try:
+        log, named = extract(clod2, c.out("other.ply"))
+    finally:
+        if old is None:
+            del os.environ["TMPDIR"]
+        else:
+            os.environ["TMPDIR"] = old
+    assert open(os.path.join(other, "chart.png"), "rb").read() == b"not the image"
+    assert sorted(os.listdir(other)) == ["chart.png", "tex.clod"], os.listdir(other)
+    assert named.startswith(tmp + "/conelod-texture-") and named.endswith("/chart.png"), named
+    assert open(named, "rb").read() == image
+    assert "written to %s (%s exists with other content and is left as it is)" % (
+        named, os.path.join(other, "chart.png")) in log, log[-1500:]
 
 
 @case
