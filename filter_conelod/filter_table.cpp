@@ -199,12 +199,13 @@ double Diagonal(const MeshModel* m) { return m && !m->cm.bbox.IsNull() ? double(
 // interpolated: a kept vertex's or corner's own attributes stay (conelod simplify interpolates
 // them). colour / wedge: false when the filter colours the vertices itself or interpolates them
 // (Group-Preserving Quadric Edge Collapse: LayerAttributes).
-void LogKeptAttributes(Report& out, const MeshModel& mm, bool colour = true, bool wedge = true) {
+void LogKeptAttributes(Report& out, const MeshModel& mm, bool colour = true, bool wedge = true,
+                       bool vertexTexCoords = true) {
   if (colour && mm.hasDataMask(MeshModel::MM_VERTCOLOR))
     out.log(
         "vertex colours: each kept vertex keeps its own colour, not interpolated (conelod simplify "
         "interpolates colour, normals and texture coordinates)");
-  if (mm.hasDataMask(MeshModel::MM_VERTTEXCOORD))
+  if (vertexTexCoords && mm.hasDataMask(MeshModel::MM_VERTTEXCOORD))
     out.log("vertex texture coordinates: each kept vertex keeps its own, not interpolated");
   if (wedge && mm.hasDataMask(MeshModel::MM_WEDGTEXCOORD))
     out.log(
@@ -846,6 +847,10 @@ Status ApplyFeatureSimplify(FilterCall& c) {
 
   std::vector<size_t> faceOf;
   const conelod::IndexedMesh im = conelod::ToIndexedMesh(mm.cm, &faceOf);
+  // Wedge texture coordinates: their seams are feature lines (a seam vertex goes only along its
+  // seam, junctions and seam ends stay), so that no collapse drags coordinates across a seam.
+  const bool wedges = mm.hasDataMask(MeshModel::MM_WEDGTEXCOORD);
+  if (wedges) params.seamEdges = conelod::WedgeSeamEdges(mm.cm, faceOf, im);
   conelod::FeatureSimplifyResult r;
   QElapsedTimer timer;
   timer.start();
@@ -853,8 +858,29 @@ Status ApplyFeatureSimplify(FilterCall& c) {
   if (!s.ok()) return s;
   const double seconds = timer.elapsed() / 1000.0;
 
+  // The wedge texture coordinates: off the seams each kept vertex the quadric's value at its
+  // position, on them its own side's values.
+  if (wedges) {
+    const size_t seamVertices = conelod::SurvivorWedgeTexCoords(mm.cm, faceOf, r);
+    c.report.log(
+        "wedge texture coordinates: %d seam edges kept as feature lines (never crossed by a collapse); each kept "
+        "vertex off the seams takes the coordinates that the attribute quadric of the vertices its collapses took "
+        "over gives at its position, the %d on a seam keep each side's own",
+        int(params.seamEdges.size()), int(seamVertices));
+  }
+  // Per-vertex texture coordinates (without wedges): as conelod feature-simplify, off the seams
+  // (positions held by two vertices) the quadric's value.
+  const bool vertexTexCoords = !wedges && mm.hasDataMask(MeshModel::MM_VERTTEXCOORD);
+  if (vertexTexCoords) {
+    const size_t kept = conelod::MeanSurvivorNormalsAndTexCoords(mm.cm, r, false, true);
+    c.report.log(
+        "vertex texture coordinates: each kept vertex takes the coordinates that the attribute quadric of the "
+        "vertices its collapses took over gives at its position; the %d on a seam (a position held by two "
+        "vertices) keep their own",
+        int(kept));
+  }
   // The vertex colour: the marks, or each kept vertex the mean of those it took over.
-  LogKeptAttributes(c.report, mm, false);
+  LogKeptAttributes(c.report, mm, false, false, !vertexTexCoords);
   if (!mark && mm.hasDataMask(MeshModel::MM_VERTCOLOR)) {
     conelod::MeanSurvivorColours(mm.cm, r);
     c.report.log(

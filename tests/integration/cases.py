@@ -673,8 +673,8 @@ def write_attribute_grid(path, n=30, wedge=False):
 def meshlab_collapses_say_what_they_keep(c):
     """Issue 26: on a grid with vertex colour and per-face texcoord lists (MeshLab's wedge
     coordinates) the Group-Preserving Quadric Edge Collapse says it interpolated both (and says
-    nothing of keeping them); the Feature-Preserving Edge Simplification, whose half-edge collapses
-    keep a kept corner's own coordinates, says so in the log, and that a kept vertex takes the colour
+    nothing of keeping them); the Feature-Preserving Edge Simplification says that it kept the 30
+    seam edges as feature lines (meshlab_feature_simplify_wedges checks the coordinates), and that a kept vertex takes the colour
     of the attribute quadric of those it took over (nothing of the colour when it colours the feature vertices
     itself), and its colours are those of `conelod feature-simplify`; on the geometry-only
     armadillo neither says a thing."""
@@ -688,8 +688,9 @@ def meshlab_collapses_say_what_they_keep(c):
         assert "each kept vertex keeps its own colour" not in log, (mlx, values, log[-2000:])
         said = "vertex colours: each kept vertex takes the colour that the attribute quadric of the vertices" in log
         assert said == mean, (mlx, values, log[-2000:])
-        kept = "wedge texture coordinates: not kept consistent" in log
-        assert kept != interpolated, (mlx, log[-2000:])
+        assert "wedge texture coordinates: not kept consistent" not in log, (mlx, log[-2000:])
+        seams = re.search(r"wedge texture coordinates: (\d+) seam edges kept as feature lines", log)
+        assert (seams is not None) != interpolated and (interpolated or seams.group(1) == "30"), (mlx, log[-2000:])
         said = ("attributes interpolated at each new vertex (attribute weight 0): vertex colours, wedge texture "
                 "coordinates (seams kept)") in log
         assert said == interpolated, (mlx, log[-2000:])
@@ -709,6 +710,38 @@ def meshlab_collapses_say_what_they_keep(c):
         return len(faces), sorted((round(v["x"], 5), round(v["y"], 5), v["red"], v["green"], v["blue"]) for v in verts)
     (nm, vm), (nc, vc) = coloured(ml), coloured(cli)
     assert nm == nc and vm == vc, (nm, nc, [a for a in vm if a not in vc][:5], [a for a in vc if a not in vm][:5])
+
+
+@case
+def meshlab_feature_simplify_wedges(c):
+    """Issue 26: Feature-Preserving Edge Simplification keeps wedge texture coordinates consistent.
+    On the bumpy grid with per-face texcoord lists (u = x left of the seam at x = 0.5, x + 1 right
+    of it; v = y), to 20 %: no face has corners of both charts, every corner's (u, v) is its vertex's
+    (x + chart, y) within 2e-3 (a corner that kept its old coordinates after a collapse moved it to
+    a neighbour is 1/30 off), the seam's 31 positions are still there (a seam vertex goes only along
+    the seam, its two ends stay)."""
+    src = c.out("wedge.ply")
+    write_attribute_grid(src, wedge=True)
+    out = c.out("wedge_out.ply")
+    _, log = c.meshlab([src], mlx_with(c, "feature_preserving_edge_simplification.mlx", TargetPerc=0.2,
+                                       MarkFeatures=False), out, save=("vc", "wt"))
+    assert "seam edges kept as feature lines" in log, log[-2000:]
+    vertices, faces = ply_records(out)
+    assert len(faces) <= 0.2 * 1800 + 2, len(faces)
+    worst, on_seam = 0.0, set()
+    for f in faces:
+        uv = f["texcoord"]
+        charts = set()
+        for k, u, v in zip(f["vertex_indices"], uv[0::2], uv[1::2]):
+            x, y = vertices[k]["x"], vertices[k]["y"]
+            chart = 1 if u > 1 else 0
+            charts.add(chart)
+            worst = max(worst, abs(u - x - chart), abs(v - y))
+            if abs(x - 0.5) < 1e-6:
+                on_seam.add(round(y * 30))
+        assert len(charts) == 1, f
+    assert worst <= 2e-3, worst
+    assert len(on_seam) >= 2 and {0, 30} <= on_seam, sorted(on_seam)
 
 
 @case
