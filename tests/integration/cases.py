@@ -844,6 +844,54 @@ def cli_simplify_attributes(c):
 
 
 @case
+def cli_simplify_hierarchy_attributes(c):
+    """Issue 26: `simplify --hierarchy` carries colour, normals and texture coordinates as the
+    one-target run does, each level from the one below: on the bumpy grid (colour linear in
+    position, two texture charts, normals (0, 0, 1)) every level's vertices have the linear colour
+    at their position within 2 units and unit normals (0, 0, 1), no face has corners of both charts
+    and u follows x in its chart; with --faces-per-part 200 the levels are cut into parts and keep
+    the same; the geometry-only bunny's levels are written without attributes."""
+    for wedge, parts in ((False, "0"), (True, "0"), (True, "200")):
+        src = c.out("hattr_%d.ply" % wedge)
+        colour = write_attribute_grid(src, wedge=wedge)
+        prefix = c.out("hattr_%d_%s" % (wedge, parts))
+        r = json.loads(c.conelod("simplify", src, "--hierarchy", "--faces-per-part", parts, "-o", prefix,
+                                 "--json").stdout)
+        assert r["attributes"] == "colour, normals, texture coordinates", r
+        assert len(r["levels"]) >= 2 and r["levels"][-1]["faces_out"] < 1800 // 4, r["levels"]
+        for L in r["levels"]:
+            out = "%s_L%d.ply" % (prefix, L["level"])
+            with open(out, "rb") as f:
+                header = f.read(2000).split(b"end_header")[0].decode()
+            assert "comment TextureFile chart.png" in header and "property uchar red" in header, header
+            assert ("property list uchar float texcoord" in header) == wedge, header
+            vertices, faces = ply_records(out)
+            assert len(faces) == L["faces_out"], (len(faces), L)
+            for v in vertices:
+                want = colour(v["x"], v["y"])
+                got = (v["red"], v["green"], v["blue"])
+                assert all(abs(a - b) <= 2 for a, b in zip(got, want)), (out, v, want)
+                assert abs(v["nz"] - 1) < 1e-5, (out, v)
+            for f in faces:
+                xs = [vertices[i]["x"] for i in f["vertex_indices"]]
+                u = f["texcoord"][0::2] if wedge else [vertices[i]["texture_u"] for i in f["vertex_indices"]]
+                charts = set(int(uu >= 1 - 1e-6) for uu in u)
+                assert len(charts) == 1, (out, "a face with corners of both charts", f, u)
+                chart = charts.pop()
+                for uu, x in zip(u, xs):
+                    assert abs(uu - chart - x) < 2e-3, (out, "u does not follow x in its chart", u, xs)
+    # Geometry only: no attribute in any level.
+    prefix = c.out("hbunny")
+    r = json.loads(c.conelod("simplify", c.mesh("stanford_bunny_bun_zipper_res4.ply"), "--hierarchy", "-o", prefix,
+                             "--json").stdout)
+    assert "attributes" not in r, r
+    for L in r["levels"]:
+        with open("%s_L%d.ply" % (prefix, L["level"]), "rb") as f:
+            header = f.read(2000).split(b"end_header")[0].decode()
+        assert "red" not in header.split("element face")[0] and "texture" not in header and "nx" not in header, header
+
+
+@case
 def cli_simplify_pca_groups(c):
     """Group-preserving QEM on the clusters of the PCA partition: every cluster survives whole."""
     bunny = c.mesh("stanford_bunny_bun_zipper.ply")
