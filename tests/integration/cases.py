@@ -892,6 +892,47 @@ def cli_simplify_hierarchy_attributes(c):
 
 
 @case
+def cli_progressive_attributes(c):
+    """Issue 26: `conelod progressive` keeps colour, normals and texture coordinates. On the bumpy
+    grid (colour linear in position, two texture charts, normals (0, 0, 1)), per-vertex and
+    per-corner coordinates: the coarse mesh has the colour linear in position within 2 units at
+    every vertex, unit normals (0, 0, 1), no face with corners of both charts and u following x
+    within 5e-3 (a coarse vertex stands for a large patch of the bumpy grid: the mean of its faces'
+    linear coordinates, extrapolated to its position, drifts by up to 2e-3);
+    a geometry-only input's output has no vertex attributes."""
+    for wedge in (False, True):
+        src = c.out("pattr_%d.ply" % wedge)
+        colour = write_attribute_grid(src, wedge=wedge)
+        out = c.out("pattr_out_%d.ply" % wedge)
+        r = json.loads(c.conelod("progressive", src, "--clusters", "12", "-o", out, "--samples", "0",
+                                 "--json").stdout)
+        with open(out, "rb") as f:
+            header = f.read(2000).split(b"end_header")[0].decode()
+        assert "comment TextureFile chart.png" in header and "property uchar red" in header, header
+        assert ("property list uchar float texcoord" in header) == wedge, header
+        vertices, faces = ply_records(out)
+        assert len(faces) == r["faces"] and len(faces) < 1800 // 3, (len(faces), r)
+        for v in vertices:
+            want = colour(v["x"], v["y"])
+            assert all(abs(a - b) <= 2 for a, b in zip((v["red"], v["green"], v["blue"]), want)), (v, want)
+            assert abs(v["nz"] - 1) < 1e-5, v
+        for f in faces:
+            xs = [vertices[i]["x"] for i in f["vertex_indices"]]
+            u = f["texcoord"][0::2] if wedge else [vertices[i]["texture_u"] for i in f["vertex_indices"]]
+            charts = set(int(uu >= 1 - 1e-6) for uu in u)
+            assert len(charts) == 1, ("a face with corners of both charts", f, u)
+            chart = charts.pop()
+            for uu, x in zip(u, xs):
+                assert abs(uu - chart - x) < 5e-3, ("u does not follow x in its chart", u, xs)
+    plain = c.out("pbunny.ply")
+    c.conelod("progressive", c.mesh("stanford_bunny_bun_zipper_res4.ply"), "--clusters", "40", "-o", plain,
+              "--samples", "0")
+    with open(plain, "rb") as f:
+        header = f.read(2000).split(b"end_header")[0].decode()
+    assert "red" not in header.split("element face")[0] and "texture" not in header and "nx" not in header, header
+
+
+@case
 def cli_simplify_pca_groups(c):
     """Group-preserving QEM on the clusters of the PCA partition: every cluster survives whole."""
     bunny = c.mesh("stanford_bunny_bun_zipper.ply")

@@ -79,14 +79,16 @@ void MeanSurvivorColours(MeshType& m, const FeatureSimplifyResult& r) {
   }
 }
 
-// The extended-quadric mean above for any per-vertex values: for each output vertex o of `r`, the
+// The extended-quadric mean above for any per-vertex values: for each output vertex o (input vertex
+// inputVertex[o]; `survivor`: per input vertex, the output vertex its collapses ended in), the
 // area-weighted mean at its position of the linear functions that the input faces of the input
 // vertices it stands for give to the `C` values get(face, corner, channel) (a vertex's value, or a
 // face corner's: texture coordinates per corner); means[o x C ...] and
 // weight[o] (0: all its faces have zero area, no mean). The faces are the mesh's as given to
 // ToIndexedMesh.
 template <class MeshType, class Get>
-void SurvivorQuadricMeans(const MeshType& m, const FeatureSimplifyResult& r, int C, Get get, std::vector<double>& means,
+void SurvivorQuadricMeans(const MeshType& m, const std::vector<uint32_t>& survivor,
+                          const std::vector<uint32_t>& inputVertex, int C, Get get, std::vector<double>& means,
                           std::vector<double>& weight) {
   using ConstVertexPointer = typename MeshType::ConstVertexPointer;
   std::vector<ConstVertexPointer> vertexOfIndex;
@@ -96,7 +98,7 @@ void SurvivorQuadricMeans(const MeshType& m, const FeatureSimplifyResult& r, int
       indexOfSlot[size_t(&v - &m.vert[0])] = uint32_t(vertexOfIndex.size());
       vertexOfIndex.push_back(&v);
     }
-  const size_t n = r.inputVertex.size();
+  const size_t n = inputVertex.size();
   means.assign(n * size_t(C), 0.0);
   weight.assign(n, 0.0);
   for (const auto& f : m.face) {
@@ -109,9 +111,9 @@ void SurvivorQuadricMeans(const MeshType& m, const FeatureSimplifyResult& r, int
     const double third = std::sqrt(n2) / 6.0;
     for (int j = 0; j < 3; ++j) {
       const uint32_t i = indexOfSlot[size_t(f.cV(j) - &m.vert[0])];
-      const uint32_t o = i < r.survivor.size() ? r.survivor[i] : UINT32_MAX;
+      const uint32_t o = i < survivor.size() ? survivor[i] : UINT32_MAX;
       if (o == UINT32_MAX) continue;
-      const vcg::Point3d q = vcg::Point3d::Construct(vertexOfIndex[r.inputVertex[o]]->cP()) - p0;
+      const vcg::Point3d q = vcg::Point3d::Construct(vertexOfIndex[inputVertex[o]]->cP()) - p0;
       for (int k = 0; k < C; ++k) {
         const double c0 = get(f, 0, k), c1 = get(f, 1, k), c2 = get(f, 2, k);
         const vcg::Point3d g = ((e2 ^ nrm) * (c1 - c0) + (nrm ^ e1) * (c2 - c0)) / n2;
@@ -145,7 +147,8 @@ size_t MeanSurvivorNormalsAndTexCoords(MeshType& m, const FeatureSimplifyResult&
   std::vector<double> means, weight;
   if (normals && vcg::tri::HasPerVertexNormal(m)) {
     SurvivorQuadricMeans(
-        m, r, 3, [](const FaceType& f, int j, int k) { return double(f.cV(j)->cN()[k]); }, means, weight);
+        m, r.survivor, r.inputVertex, 3, [](const FaceType& f, int j, int k) { return double(f.cV(j)->cN()[k]); },
+        means, weight);
     for (size_t o = 0; o < r.inputVertex.size(); ++o) {
       const vcg::Point3d n(means[3 * o], means[3 * o + 1], means[3 * o + 2]);
       const double len = n.Norm();
@@ -168,8 +171,9 @@ size_t MeanSurvivorNormalsAndTexCoords(MeshType& m, const FeatureSimplifyResult&
     for (size_t i = 1; i < order.size(); ++i)
       if (key(order[i]) == key(order[i - 1])) seam[order[i]] = seam[order[i - 1]] = 1;
     SurvivorQuadricMeans(
-        m, r, 2, [](const FaceType& f, int j, int k) { return double(k == 0 ? f.cV(j)->cT().U() : f.cV(j)->cT().V()); },
-        means, weight);
+        m, r.survivor, r.inputVertex, 2,
+        [](const FaceType& f, int j, int k) { return double(k == 0 ? f.cV(j)->cT().U() : f.cV(j)->cT().V()); }, means,
+        weight);
     for (size_t o = 0; o < r.inputVertex.size(); ++o) {
       if (seam[r.inputVertex[o]]) {
         ++seamKept;
@@ -263,8 +267,8 @@ size_t SurvivorWedgeTexCoords(MeshType& m, const std::vector<size_t>& faceOf, co
   }
   std::vector<double> means, weight;
   SurvivorQuadricMeans(
-      m, r, 2, [](const FaceType& f, int j, int k) { return double(k == 0 ? f.cWT(j).U() : f.cWT(j).V()); }, means,
-      weight);
+      m, r.survivor, r.inputVertex, 2,
+      [](const FaceType& f, int j, int k) { return double(k == 0 ? f.cWT(j).U() : f.cWT(j).V()); }, means, weight);
   size_t seamVertices = 0;
   for (size_t o = 0; o < r.inputVertex.size(); ++o) seamVertices += values[r.inputVertex[o]].size() > 1;
   for (size_t i = 0; i < r.mesh.faces.size(); ++i) {
