@@ -50,7 +50,8 @@ const char* kFeatureSimplifyUsage =
     "  (D = diagonal; 0 = off). --mark writes vertex colours (red = feature line, blue = feature\n"
     "  vertex) and vertex quality = class (0 smooth, 1 line, 2 feature); otherwise a file's vertex\n"
     "  colour becomes, at each kept vertex, the value there of the attribute quadric of the\n"
-    "  vertices it took over (normals and texture coordinates stay its own). The report counts\n"
+    "  vertices it took over; so do its normals (normalised) and, away from texture seams, its\n"
+    "  texture coordinates (a seam vertex keeps its own). The report counts\n"
     "  the output's feature edges lying on the input's feature lines (within PCT % of D [0.5]).\n"
     "  --threads N: threads (0 = one per core, at most 8 [0]) for the set-up, the first pass of the\n"
     "  growing bound and the parts; --faces-per-part P [32768; 0: never]: with the growing bound, a\n"
@@ -110,10 +111,14 @@ int CmdFeatureSimplify(int argc, char** argv) {
   const Status sa = CompareFeatureLines(im, r.mesh, p.featureAngleDeg, lineTolPct / 100.0 * diagonal, agree);
 
   if (a.has("-o")) {
-    // The collapses are half-edge collapses: the vertices that stay keep their position and so
-    // their normal and texture coordinates exactly (supplied by the file, written back); a
-    // file's vertex colour becomes the mean of the vertices each survivor took over.
+    // The collapses are half-edge collapses: the vertices that stay keep their position; a
+    // file's vertex colour and normal, and its texture coordinates away from seams, become the
+    // extended quadric's at that position of the vertices each survivor took over (seam vertices
+    // keep their own coordinates).
     if (loadMask & vcg::tri::io::Mask::IOM_VERTCOLOR) MeanSurvivorColours(mesh, r);
+    MeanSurvivorNormalsAndTexCoords(
+        mesh, r, (loadMask & vcg::tri::io::Mask::IOM_VERTNORMAL) != 0,
+        (loadMask & (vcg::tri::io::Mask::IOM_VERTTEXCOORD | vcg::tri::io::Mask::IOM_WEDGTEXCOORD)) != 0);
     WriteSimplifiedMesh(mesh, faceOf, r, a.has("--mark"));
     int extra = AttributeMask(loadMask);
     if (a.has("--mark")) {

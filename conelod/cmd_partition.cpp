@@ -12,6 +12,7 @@
 #include "conelod/pca/pca_partition.h"
 #include "conelod/pca/progressive_cluster_mesh.h"
 #include "conelod/mesh/sampled_distance.h"
+#include "conelod/simplify_bridge.h"
 
 namespace conelod {
 namespace cli {
@@ -36,7 +37,9 @@ const char* kProgressiveUsage =
     "  order of increasing error down to K clusters, and removes every vertex that touches fewer than\n"
     "  3 clusters by a half-edge collapse onto its nearest neighbour along the cluster boundary.\n"
     "  Writes the coarse mesh (per-face quality and colour = cluster) and reports its validity and\n"
-    "  its sampled Hausdorff distance to the input.\n"
+    "  its sampled Hausdorff distance to the input. A file's vertex colour, normals and texture\n"
+    "  coordinates are kept: each coarse vertex takes the attribute quadric's value at its position\n"
+    "  of the vertices it took over (normals normalised; a texture seam's vertex keeps its own).\n"
     "  --max-normal-turn DEG  a collapse may turn a face's normal by less than this [90]\n"
     "  --samples N            face samples per direction for the distance [200000]; 0: skip it\n";
 
@@ -162,7 +165,8 @@ int CmdProgressive(int argc, char** argv) {
   CMesh mesh;
   IndexedMesh im;
   std::vector<size_t> faceOf;
-  std::string err = LoadInput(a.positional()[0], mesh, im, faceOf);
+  int loadMask = 0;
+  std::string err = LoadInput(a.positional()[0], mesh, im, faceOf, &loadMask);
   if (!err.empty()) return FailLoad(err);
 
   Timer timer;
@@ -187,7 +191,31 @@ int CmdProgressive(int argc, char** argv) {
     coarse.face[f].Q() = float(r.faceCluster[f]);
     coarse.face[f].C() = GroupColor(r.faceCluster[f]);
   }
-  err = SavePly(coarse, a.str("-o"));
+  // Issue 26: the file's colour, normals and texture coordinates. The collapses are half-edge
+  // collapses (vertices kept in place), so each coarse vertex takes, as in feature-simplify, the
+  // extended quadric's value at its position of the input vertices whose collapses ended in it
+  // (normals normalised; a texture seam's vertex keeps its own coordinates).
+  const int attributeMask = AttributeMask(loadMask);
+  if (attributeMask) {
+    FeatureSimplifyResult carried;  // what the means read: the survivors and the kept vertices
+    carried.survivor = r.survivor;
+    carried.inputVertex = r.vertexOrigin;
+    if (loadMask & vcg::tri::io::Mask::IOM_VERTCOLOR) MeanSurvivorColours(mesh, carried);
+    MeanSurvivorNormalsAndTexCoords(
+        mesh, carried, (loadMask & vcg::tri::io::Mask::IOM_VERTNORMAL) != 0,
+        (loadMask & (vcg::tri::io::Mask::IOM_VERTTEXCOORD | vcg::tri::io::Mask::IOM_WEDGTEXCOORD)) != 0);
+    std::vector<const CVertex*> vertexOfIndex;
+    for (const auto& v : mesh.vert)
+      if (!v.IsD()) vertexOfIndex.push_back(&v);
+    for (size_t o = 0; o < coarse.vert.size(); ++o) {
+      const CVertex& in = *vertexOfIndex[r.vertexOrigin[o]];
+      coarse.vert[o].C() = in.cC();
+      coarse.vert[o].N() = in.cN();
+      coarse.vert[o].T() = in.cT();
+    }
+    coarse.textures = mesh.textures;
+  }
+  err = SavePly(coarse, a.str("-o"), attributeMask);
   if (!err.empty()) return Fail(kIoError, err);
 
   const double pct = h.diagonal > 0 ? 100 * h.hausdorff / h.diagonal : 0;

@@ -73,8 +73,9 @@ const char* kSimplifyUsage =
     "  --quality-thr Q [0.3]  --no-optimal-placement  --preserve-boundary  --boundary-weight W [1]\n"
     "  --no-preserve-normal (allow face flips)  --passes (experimental: collapse in ranked passes as\n"
     "  meshoptimizer does, not one greedy queue; other outputs)\n"
-    "attributes (per-vertex colour, normals, texture coordinates in IN.ply): kept in OUT.ply and\n"
-    "  interpolated at each new vertex (Garland-Heckbert 1998 attribute planes); texture, colour and\n"
+    "attributes (per-vertex colour, normals, texture coordinates in IN.ply): kept in OUT.ply (and in\n"
+    "  every --hierarchy level, each from the one below) and interpolated at each new vertex\n"
+    "  (Garland-Heckbert 1998 attribute planes); texture, colour and\n"
     "  normal seams stay where they are. --attribute-weight W [1]: how much an attribute change\n"
     "  costs against geometric error (0: the attribute-free collapse order)\n"
     "with --hierarchy: --level-ratio R [0.5]; --faces-per-part P [100000]: a level of at least 2P\n"
@@ -179,14 +180,9 @@ int CmdSimplify(int argc, char** argv) {
   int loadMask = 0;
   std::string err = LoadPlyData(input, ply, &loadMask);
   if (!err.empty()) return FailLoad(err);
-  // Attributes (one target): per face corner, so that texture, colour and normal seams keep their
-  // values (attribute_quadric.h).
-  const int attributeMask = hierarchy ? 0 : AttributeMask(loadMask);
-  if (hierarchy && AttributeMask(loadMask))
-    std::fprintf(stderr,
-                 "conelod: note: --hierarchy does not carry attributes: the levels are written without the "
-                 "colour, normals and texture coordinates of %s\n",
-                 input.c_str());
+  // Attributes: per face corner, so that texture, colour and normal seams keep their values
+  // (attribute_quadric.h); with --hierarchy each level's from the level below's.
+  const int attributeMask = AttributeMask(loadMask);
   VertexAttributes layout;
   if (attributeMask) layout = AttributesOf(ply, attributeMask);
   std::vector<std::array<uint32_t, 3>> inputFaces;  // kept for the corner attributes only
@@ -252,8 +248,16 @@ int CmdSimplify(int argc, char** argv) {
     hp.qem.removeComponents = false;  // each level must keep every group of the level below
     hp.levelRatio = levelRatio;
     std::vector<SimplifiedLevel> levels;
+    HierarchyAttributes levelAttributes;
+    if (attributeMask) {
+      levelAttributes.layout = layout;
+      levelAttributes.layout.values.clear();
+      levelAttributes.inputCorners = CornerAttributes(inputFaces, layout);
+      levelAttributes.weight = attributeWeight;
+      std::vector<std::array<uint32_t, 3>>().swap(inputFaces);
+    }
     Timer timer;
-    s = BuildSimplifiedLevels(im, h, hp, levels);
+    s = BuildSimplifiedLevels(im, h, hp, levels, Progress(), attributeMask ? &levelAttributes : nullptr);
     const double seconds = timer.seconds();
     if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
     Json j;
@@ -263,6 +267,7 @@ int CmdSimplify(int argc, char** argv) {
         .field("seconds", seconds)
         .field("mode", ToString(p.mode))
         .field("keep_cones", p.keepCones);
+    if (attributeMask) j.field("attributes", DescribeAttributes(layout)).field("attribute_weight", attributeWeight);
     j.key("levels").BeginArray();
     if (!json)
       std::printf("%s: %zu faces, %d levels in %.3f s\n%5s %8s %8s %8s %8s %8s %9s%s\n", input.c_str(), im.faceCount(),
@@ -304,9 +309,10 @@ int CmdSimplify(int argc, char** argv) {
         std::vector<uint32_t> sourceVertex = L.sourceVertex;
         MapToRepresentatives(representative, sourceVertex);
         SimplifiedMeshFromPly(ply, L.mesh, L.sourceFace, sourceVertex, copy);
+        if (attributeMask) SetCornerAttributes(copy, layout, L.corner);
         WriteGroupsToFaces(copy, L.faceGroup, true);
         const std::string path = a.str("-o") + "_L" + std::to_string(L.level) + ".ply";
-        err = SavePly(copy, path);
+        err = SavePly(copy, path, attributeMask);
         if (!err.empty()) return Fail(kIoError, err);
       }
     }

@@ -2,7 +2,10 @@
 #include "filter_table.h"
 
 #include <QElapsedTimer>
+#include <QDir>
+#include <QFile>
 #include <QFileInfo>
+#include <QTemporaryDir>
 #include <QRegularExpression>
 #include <algorithm>
 #include <cmath>
@@ -196,12 +199,13 @@ double Diagonal(const MeshModel* m) { return m && !m->cm.bbox.IsNull() ? double(
 // interpolated: a kept vertex's or corner's own attributes stay (conelod simplify interpolates
 // them). colour / wedge: false when the filter colours the vertices itself or interpolates them
 // (Group-Preserving Quadric Edge Collapse: LayerAttributes).
-void LogKeptAttributes(Report& out, const MeshModel& mm, bool colour = true, bool wedge = true) {
+void LogKeptAttributes(Report& out, const MeshModel& mm, bool colour = true, bool wedge = true,
+                       bool vertexTexCoords = true) {
   if (colour && mm.hasDataMask(MeshModel::MM_VERTCOLOR))
     out.log(
         "vertex colours: each kept vertex keeps its own colour, not interpolated (conelod simplify "
         "interpolates colour, normals and texture coordinates)");
-  if (mm.hasDataMask(MeshModel::MM_VERTTEXCOORD))
+  if (vertexTexCoords && mm.hasDataMask(MeshModel::MM_VERTTEXCOORD))
     out.log("vertex texture coordinates: each kept vertex keeps its own, not interpolated");
   if (wedge && mm.hasDataMask(MeshModel::MM_WEDGTEXCOORD))
     out.log(
@@ -844,6 +848,10 @@ Status ApplyFeatureSimplify(FilterCall& c) {
 
   std::vector<size_t> faceOf;
   const conelod::IndexedMesh im = conelod::ToIndexedMesh(mm.cm, &faceOf);
+  // Wedge texture coordinates: their seams are feature lines (a seam vertex goes only along its
+  // seam, junctions and seam ends stay), so that no collapse drags coordinates across a seam.
+  const bool wedges = mm.hasDataMask(MeshModel::MM_WEDGTEXCOORD);
+  if (wedges) params.seamEdges = conelod::WedgeSeamEdges(mm.cm, faceOf, im);
   conelod::FeatureSimplifyResult r;
   QElapsedTimer timer;
   timer.start();
@@ -851,8 +859,29 @@ Status ApplyFeatureSimplify(FilterCall& c) {
   if (!s.ok()) return s;
   const double seconds = timer.elapsed() / 1000.0;
 
+  // The wedge texture coordinates: off the seams each kept vertex the quadric's value at its
+  // position, on them its own side's values.
+  if (wedges) {
+    const size_t seamVertices = conelod::SurvivorWedgeTexCoords(mm.cm, faceOf, r);
+    c.report.log(
+        "wedge texture coordinates: %d seam edges kept as feature lines (never crossed by a collapse); each kept "
+        "vertex off the seams takes the coordinates that the attribute quadric of the vertices its collapses took "
+        "over gives at its position, the %d on a seam keep each side's own",
+        int(params.seamEdges.size()), int(seamVertices));
+  }
+  // Per-vertex texture coordinates (without wedges): as conelod feature-simplify, off the seams
+  // (positions held by two vertices) the quadric's value.
+  const bool vertexTexCoords = !wedges && mm.hasDataMask(MeshModel::MM_VERTTEXCOORD);
+  if (vertexTexCoords) {
+    const size_t kept = conelod::MeanSurvivorNormalsAndTexCoords(mm.cm, r, false, true);
+    c.report.log(
+        "vertex texture coordinates: each kept vertex takes the coordinates that the attribute quadric of the "
+        "vertices its collapses took over gives at its position; the %d on a seam (a position held by two "
+        "vertices) keep their own",
+        int(kept));
+  }
   // The vertex colour: the marks, or each kept vertex the mean of those it took over.
-  LogKeptAttributes(c.report, mm, false);
+  LogKeptAttributes(c.report, mm, false, false, !vertexTexCoords);
   if (!mark && mm.hasDataMask(MeshModel::MM_VERTCOLOR)) {
     conelod::MeanSurvivorColours(mm.cm, r);
     c.report.log(
@@ -1238,6 +1267,53 @@ std::vector<ParamSpec> LodExtractSpecs(const MeshDocument*, const MeshModel*) {
   };
 }
 
+// MeshLab 2020.09 reads a layer's texture from a file (kLayersHoldTextureImages): the .clod's image
+// (its TEXR chunk) goes beside the .clod under its stored name when no file has that name there,
+// or is found there when the file there holds the same bytes; else (another file of that name, a
+// folder that cannot be written) into a new folder of the system's temporary folder. Nothing is
+// overwritten. `path`: the image's absolute path; `how`: what was done, for the log.
+Status ProvideLodTextureFile(const QString& clodPath, const conelod::LodTexture& tex, QString& path, QString& how) {
+  const QByteArray bytes(reinterpret_cast<const char*>(tex.bytes.data()), int(tex.bytes.size()));
+  auto write = [&](const QString& target, std::string& err) {
+    conelod::SafeFile out;
+    err = out.open(target.toStdString());
+    if (err.empty() && std::fwrite(bytes.constData(), 1, size_t(bytes.size()), out.file()) != size_t(bytes.size()))
+      err = "cannot write '" + target.toStdString() + "'";
+    if (err.empty()) err = out.commit();
+    return err.empty();
+  };
+  const QString name = QString::fromStdString(tex.name);
+  const QString beside = QFileInfo(clodPath).absoluteDir().absoluteFilePath(name);
+  std::string err;
+  QString why;
+  if (QFileInfo(beside).exists() || QFileInfo(beside).isSymLink()) {
+    QFile existing(beside);
+    if (QFileInfo(beside).isFile() && existing.open(QIODevice::ReadOnly) && existing.readAll() == bytes) {
+      path = beside;
+      how = "found beside the .clod as " + beside + " (the same bytes)";
+      return Status::Ok();
+    }
+    why = beside + " exists with other content and is left as it is";
+  } else if (write(beside, err)) {
+    path = beside;
+    how = "written beside the .clod as " + beside + " (no file had that name)";
+    return Status::Ok();
+  } else {
+    why = "cannot write beside the .clod: " + QString::fromStdString(err);
+  }
+  QTemporaryDir folder(QDir::temp().absoluteFilePath("conelod-texture-XXXXXX"));
+  if (!folder.isValid()) return Invalid("cannot create a folder for the texture image in " + QDir::tempPath());
+  folder.setAutoRemove(false);  // the layer names the image; MeshLab reads it when it draws or saves
+  const QString temp = QDir(folder.path()).absoluteFilePath(name);
+  if (!write(temp, err)) {
+    QDir(folder.path()).removeRecursively();
+    return Invalid("cannot write the texture image: " + QString::fromStdString(err));
+  }
+  path = temp;
+  how = "written to " + temp + " (" + why + ")";
+  return Status::Ok();
+}
+
 Status ApplyLodExtract(FilterCall& c) {
   QString path;
   Status s = RequirePath(c, "FileName", path);
@@ -1285,6 +1361,32 @@ Status ApplyLodExtract(FilterCall& c) {
   conelod::LodAttributes attributes;  // the file's vertex colours and normals (version 5)
   s = conelod::ExtractCutMesh(*reader, cut, !drop, mesh, &faceLevel, nullptr, &attributes);
   if (!s.ok()) return failed(s);
+  // The texture image of a textured file (its TEXR chunk), read, and for MeshLab 2020.09 written
+  // to a file, before the layer is added: a failure leaves the document as it was.
+  const bool textured = !attributes.texCoords.empty();
+  conelod::LodTexture texture;
+  QImage textureImage;
+  QString textureName, textureHow;
+  if (textured && info.textureBytes) {
+    s = reader->LoadTexture(texture);
+    if (!s.ok()) return failed(s);
+    if (kLayersHoldTextureImages) {
+      textureImage = QImage::fromData(texture.bytes.data(), int(texture.bytes.size()));
+      textureName = QString::fromStdString(texture.name);
+      textureHow = textureImage.isNull() ? QString("not given: Qt cannot decode its %1 bytes (%2)")
+                                               .arg(texture.bytes.size())
+                                               .arg(QString::fromStdString(texture.mime))
+                                         : QString(
+                                               "held in memory by the layer (%1 x %2, from the file's %3 bytes; "
+                                               "saving the layer writes it beside the mesh)")
+                                               .arg(textureImage.width())
+                                               .arg(textureImage.height())
+                                               .arg(texture.bytes.size());
+    } else {
+      s = ProvideLodTextureFile(fullPath, texture, textureName, textureHow);
+      if (!s.ok()) return s;
+    }
+  }
   const double seconds = timer.elapsed() / 1000.0;
 
   MeshModel* layer = c.doc.addNewMesh(
@@ -1315,6 +1417,23 @@ Status ApplyLodExtract(FilterCall& c) {
       const vcg::Point3f n = conelod::DecodeLodNormal(attributes.normals[v]);
       layer->cm.vert[v].N() = CMeshO::VertexType::NormalType(n[0], n[1], n[2]);
     }
+  // Texture coordinates per face corner (wedge, as MeshLab's texture filters and its PLY reader
+  // hold them): each corner its vertex's (the file has one vertex per position and UV, so a seam's
+  // corners keep their own chart's), texture 0: the image above.
+  if (textured) {
+    layer->updateDataMask(MeshModel::MM_WEDGTEXCOORD);
+    std::vector<vcg::TexCoord2f> uv(layer->cm.vert.size());
+    for (size_t v = 0; v < uv.size(); ++v) {
+      float t[2];
+      conelod::DecodeLodTexCoord(attributes.texCoords[v], attributes.uvMin, attributes.uvMax, t);
+      uv[v] = vcg::TexCoord2f(t[0], t[1]);
+      uv[v].N() = 0;
+    }
+    for (auto& f : layer->cm.face)
+      for (int k = 0; k < 3; ++k) f.WT(k) = uv[size_t(vcg::tri::Index(layer->cm, f.V(k)))];
+    if (!textureName.isEmpty() && (!kLayersHoldTextureImages || !textureImage.isNull()))
+      AddLayerTexture(*layer, textureName.toStdString(), textureImage);
+  }
   if (c.cb) c.cb(100, "view-dependent LOD: done");
 
   Report& out = c.report;
@@ -1330,6 +1449,11 @@ Status ApplyLodExtract(FilterCall& c) {
   if (info.colors || info.normals)
     out.log("the file's per-vertex %s%s%s given to the layer", info.colors ? "colours" : "",
             info.colors && info.normals ? " and " : "", info.normals ? "normals" : "");
+  if (textured)
+    out.log("the file's texture coordinates given to the layer per face corner (wedge); %s",
+            info.textureBytes
+                ? qUtf8Printable("its texture image " + QString::fromStdString(texture.name) + ": " + textureHow)
+                : "the file stores no texture image");
   for (size_t l = 0; l < facesPerLevel.size(); ++l)
     if (facesPerLevel[l]) out.log("faces at level %d: %d", int(l), int(facesPerLevel[l]));
   out.log("lod_faces %d", int(mesh.faceCount()));
@@ -1494,7 +1618,12 @@ std::vector<FilterSpec> MakeFilters() {
                        "or orthographic along <i>View direction</i>. With <i>Refine back-facing groups last</i>, "
                        "back-facing groups are refined last; with <i>Leave back-facing groups out</i> they are left "
                        "out of the layer. Per-face quality = LOD level of the face (0 = the input's own faces), a "
-                       "distinct colour per level (those of conelod lod extract). <i>LOD file</i> has no default: ") +
+                       "distinct colour per level (those of conelod lod extract). A file with attributes gives "
+                       "the layer its per-vertex colours and normals, and its texture coordinates per face corner "
+                       "with the texture image stored in the file (MeshLab 2022.02 and later: held by the layer; "
+                       "2020.09: written beside the <tt>.clod</tt> when no file has its name there, else into a "
+                       "temporary folder; never over an existing file; the log says where). "
+                       "<i>LOD file</i> has no default: ") +
                    kLodFileHow + QString(". The current mesh is not changed.<br>") + kPaperKamiya,
                "no layer was added", LodExtractSpecs, ApplyLodExtract});
   return t;

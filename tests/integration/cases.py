@@ -736,8 +736,8 @@ def write_attribute_grid(path, n=30, wedge=False):
 def meshlab_collapses_say_what_they_keep(c):
     """Issue 26: on a grid with vertex colour and per-face texcoord lists (MeshLab's wedge
     coordinates) the Group-Preserving Quadric Edge Collapse says it interpolated both (and says
-    nothing of keeping them); the Feature-Preserving Edge Simplification, whose half-edge collapses
-    keep a kept corner's own coordinates, says so in the log, and that a kept vertex takes the colour
+    nothing of keeping them); the Feature-Preserving Edge Simplification says that it kept the 30
+    seam edges as feature lines (meshlab_feature_simplify_wedges checks the coordinates), and that a kept vertex takes the colour
     of the attribute quadric of those it took over (nothing of the colour when it colours the feature vertices
     itself), and its colours are those of `conelod feature-simplify`; on the geometry-only
     armadillo neither says a thing."""
@@ -751,8 +751,9 @@ def meshlab_collapses_say_what_they_keep(c):
         assert "each kept vertex keeps its own colour" not in log, (mlx, values, log[-2000:])
         said = "vertex colours: each kept vertex takes the colour that the attribute quadric of the vertices" in log
         assert said == mean, (mlx, values, log[-2000:])
-        kept = "wedge texture coordinates: not kept consistent" in log
-        assert kept != interpolated, (mlx, log[-2000:])
+        assert "wedge texture coordinates: not kept consistent" not in log, (mlx, log[-2000:])
+        seams = re.search(r"wedge texture coordinates: (\d+) seam edges kept as feature lines", log)
+        assert (seams is not None) != interpolated and (interpolated or seams.group(1) == "30"), (mlx, log[-2000:])
         said = ("attributes interpolated at each new vertex (attribute weight 0): vertex colours, wedge texture "
                 "coordinates (seams kept)") in log
         assert said == interpolated, (mlx, log[-2000:])
@@ -772,6 +773,38 @@ def meshlab_collapses_say_what_they_keep(c):
         return len(faces), sorted((round(v["x"], 5), round(v["y"], 5), v["red"], v["green"], v["blue"]) for v in verts)
     (nm, vm), (nc, vc) = coloured(ml), coloured(cli)
     assert nm == nc and vm == vc, (nm, nc, [a for a in vm if a not in vc][:5], [a for a in vc if a not in vm][:5])
+
+
+@case
+def meshlab_feature_simplify_wedges(c):
+    """Issue 26: Feature-Preserving Edge Simplification keeps wedge texture coordinates consistent.
+    On the bumpy grid with per-face texcoord lists (u = x left of the seam at x = 0.5, x + 1 right
+    of it; v = y), to 20 %: no face has corners of both charts, every corner's (u, v) is its vertex's
+    (x + chart, y) within 2e-3 (a corner that kept its old coordinates after a collapse moved it to
+    a neighbour is 1/30 off), the seam's 31 positions are still there (a seam vertex goes only along
+    the seam, its two ends stay)."""
+    src = c.out("wedge.ply")
+    write_attribute_grid(src, wedge=True)
+    out = c.out("wedge_out.ply")
+    _, log = c.meshlab([src], mlx_with(c, "feature_preserving_edge_simplification.mlx", TargetPerc=0.2,
+                                       MarkFeatures=False), out, save=("vc", "wt"))
+    assert "seam edges kept as feature lines" in log, log[-2000:]
+    vertices, faces = ply_records(out)
+    assert len(faces) <= 0.2 * 1800 + 2, len(faces)
+    worst, on_seam = 0.0, set()
+    for f in faces:
+        uv = f["texcoord"]
+        charts = set()
+        for k, u, v in zip(f["vertex_indices"], uv[0::2], uv[1::2]):
+            x, y = vertices[k]["x"], vertices[k]["y"]
+            chart = 1 if u > 1 else 0
+            charts.add(chart)
+            worst = max(worst, abs(u - x - chart), abs(v - y))
+            if abs(x - 0.5) < 1e-6:
+                on_seam.add(round(y * 30))
+        assert len(charts) == 1, f
+    assert worst <= 2e-3, worst
+    assert len(on_seam) >= 2 and {0, 30} <= on_seam, sorted(on_seam)
 
 
 @case
@@ -869,6 +902,95 @@ def cli_simplify_attributes(c):
     c.conelod("simplify", c.mesh("stanford_bunny_bun_zipper.ply"), "--groups", "cone:auto", "--target-ratio", "0.1",
               "-o", bunny_out)
     with open(bunny_out, "rb") as f:
+        header = f.read(2000).split(b"end_header")[0].decode()
+    assert "red" not in header.split("element face")[0] and "texture" not in header and "nx" not in header, header
+
+
+@case
+def cli_simplify_hierarchy_attributes(c):
+    """Issue 26: `simplify --hierarchy` carries colour, normals and texture coordinates as the
+    one-target run does, each level from the one below: on the bumpy grid (colour linear in
+    position, two texture charts, normals (0, 0, 1)) every level's vertices have the linear colour
+    at their position within 2 units and unit normals (0, 0, 1), no face has corners of both charts
+    and u follows x in its chart; with --faces-per-part 200 the levels are cut into parts and keep
+    the same; the geometry-only bunny's levels are written without attributes."""
+    for wedge, parts in ((False, "0"), (True, "0"), (True, "200")):
+        src = c.out("hattr_%d.ply" % wedge)
+        colour = write_attribute_grid(src, wedge=wedge)
+        prefix = c.out("hattr_%d_%s" % (wedge, parts))
+        r = json.loads(c.conelod("simplify", src, "--hierarchy", "--faces-per-part", parts, "-o", prefix,
+                                 "--json").stdout)
+        assert r["attributes"] == "colour, normals, texture coordinates", r
+        assert len(r["levels"]) >= 2 and r["levels"][-1]["faces_out"] < 1800 // 4, r["levels"]
+        for L in r["levels"]:
+            out = "%s_L%d.ply" % (prefix, L["level"])
+            with open(out, "rb") as f:
+                header = f.read(2000).split(b"end_header")[0].decode()
+            assert "comment TextureFile chart.png" in header and "property uchar red" in header, header
+            assert ("property list uchar float texcoord" in header) == wedge, header
+            vertices, faces = ply_records(out)
+            assert len(faces) == L["faces_out"], (len(faces), L)
+            for v in vertices:
+                want = colour(v["x"], v["y"])
+                got = (v["red"], v["green"], v["blue"])
+                assert all(abs(a - b) <= 2 for a, b in zip(got, want)), (out, v, want)
+                assert abs(v["nz"] - 1) < 1e-5, (out, v)
+            for f in faces:
+                xs = [vertices[i]["x"] for i in f["vertex_indices"]]
+                u = f["texcoord"][0::2] if wedge else [vertices[i]["texture_u"] for i in f["vertex_indices"]]
+                charts = set(int(uu >= 1 - 1e-6) for uu in u)
+                assert len(charts) == 1, (out, "a face with corners of both charts", f, u)
+                chart = charts.pop()
+                for uu, x in zip(u, xs):
+                    assert abs(uu - chart - x) < 2e-3, (out, "u does not follow x in its chart", u, xs)
+    # Geometry only: no attribute in any level.
+    prefix = c.out("hbunny")
+    r = json.loads(c.conelod("simplify", c.mesh("stanford_bunny_bun_zipper_res4.ply"), "--hierarchy", "-o", prefix,
+                             "--json").stdout)
+    assert "attributes" not in r, r
+    for L in r["levels"]:
+        with open("%s_L%d.ply" % (prefix, L["level"]), "rb") as f:
+            header = f.read(2000).split(b"end_header")[0].decode()
+        assert "red" not in header.split("element face")[0] and "texture" not in header and "nx" not in header, header
+
+
+@case
+def cli_progressive_attributes(c):
+    """Issue 26: `conelod progressive` keeps colour, normals and texture coordinates. On the bumpy
+    grid (colour linear in position, two texture charts, normals (0, 0, 1)), per-vertex and
+    per-corner coordinates: the coarse mesh has the colour linear in position within 2 units at
+    every vertex, unit normals (0, 0, 1), no face with corners of both charts and u following x
+    within 5e-3 (a coarse vertex stands for a large patch of the bumpy grid: the mean of its faces'
+    linear coordinates, extrapolated to its position, drifts by up to 2e-3);
+    a geometry-only input's output has no vertex attributes."""
+    for wedge in (False, True):
+        src = c.out("pattr_%d.ply" % wedge)
+        colour = write_attribute_grid(src, wedge=wedge)
+        out = c.out("pattr_out_%d.ply" % wedge)
+        r = json.loads(c.conelod("progressive", src, "--clusters", "12", "-o", out, "--samples", "0",
+                                 "--json").stdout)
+        with open(out, "rb") as f:
+            header = f.read(2000).split(b"end_header")[0].decode()
+        assert "comment TextureFile chart.png" in header and "property uchar red" in header, header
+        assert ("property list uchar float texcoord" in header) == wedge, header
+        vertices, faces = ply_records(out)
+        assert len(faces) == r["faces"] and len(faces) < 1800 // 3, (len(faces), r)
+        for v in vertices:
+            want = colour(v["x"], v["y"])
+            assert all(abs(a - b) <= 2 for a, b in zip((v["red"], v["green"], v["blue"]), want)), (v, want)
+            assert abs(v["nz"] - 1) < 1e-5, v
+        for f in faces:
+            xs = [vertices[i]["x"] for i in f["vertex_indices"]]
+            u = f["texcoord"][0::2] if wedge else [vertices[i]["texture_u"] for i in f["vertex_indices"]]
+            charts = set(int(uu >= 1 - 1e-6) for uu in u)
+            assert len(charts) == 1, ("a face with corners of both charts", f, u)
+            chart = charts.pop()
+            for uu, x in zip(u, xs):
+                assert abs(uu - chart - x) < 5e-3, ("u does not follow x in its chart", u, xs)
+    plain = c.out("pbunny.ply")
+    c.conelod("progressive", c.mesh("stanford_bunny_bun_zipper_res4.ply"), "--clusters", "40", "-o", plain,
+              "--samples", "0")
+    with open(plain, "rb") as f:
         header = f.read(2000).split(b"end_header")[0].decode()
     assert "red" not in header.split("element face")[0] and "texture" not in header and "nx" not in header, header
 
@@ -1364,8 +1486,8 @@ def meshlab_lod_extract_colours(c):
                        save=("fq", "fc", "vc", "vn"))
     assert "the file's per-vertex colours and normals given to the layer" in log, log[-1500:]
     verts = [r for name, recs in read_ply_elements(out) if name == "vertex" for r in recs]
-    # One vertex per (position, UV) in the file: the seam's 31 positions twice (the filter does not
-    # give the layer the texture coordinates yet).
+    # One vertex per (position, UV) in the file: the seam's 31 positions twice (each corner keeps
+    # its chart's coordinates: meshlab_lod_extract_texture).
     assert len(verts) == 31 * 31 + 31, len(verts)
     for v in verts:
         i, j = round(v["x"] * 30), round(v["y"] * 30)
@@ -1376,6 +1498,100 @@ def meshlab_lod_extract_colours(c):
     _, log = c.meshlab([c.mesh("stanford_bunny_bun_zipper.ply")],
                        mlx_with(c, "extract_view_dependent_lod.mlx", FileName=plain, FaceBudget=100000), c.out("p.ply"))
     assert "given to the layer" not in log, log[-1500:]
+
+
+def tiny_png(width=4, height=2):
+    """A real RGB PNG (Qt decodes it): a red-to-blue ramp."""
+    import zlib
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+    rows = b"".join(b"\0" + b"".join(bytes((255 * x // (width - 1), 40 * y, 255 - 255 * x // (width - 1)))
+                                      for x in range(width)) for y in range(height))
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)) +
+            chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
+
+
+@case
+def meshlab_lod_extract_texture(c):
+    """Issue 26: Extract View-Dependent LOD gives the layer the file's texture coordinates per face
+    corner (wedge) and its texture image. MeshLab 2020.09 reads a layer's texture from a file: the
+    image of the file's TEXR chunk is written beside the .clod when no file has its name there, used
+    when the file there holds the same bytes, else written into a new folder of $TMPDIR, the other
+    file left as it is. Saved with the layer's wedge coordinates, every face corner has its input
+    coordinates (u = x left of the seam, x + 1 right of it; v = y) within the streams' bounds, each
+    face in one chart, and `comment TextureFile` names the image."""
+    src = c.out("tex.ply")
+    write_attribute_grid(src, wedge=True)
+    image = tiny_png()
+    with open(c.out("chart.png"), "wb") as f:
+        f.write(image)
+    built = c.out("tex.clod")
+    c.conelod("lod", "build", src, "-o", built)
+    info = json.loads(c.conelod("lod", "info", built, "--json").stdout)
+    bound = info["texcoord_error"]
+    moved = c.out("moved")  # the .clod alone, as a user would move it
+    os.makedirs(moved)
+    clod = os.path.join(moved, "tex.clod")
+    with open(clod, "wb") as f:
+        f.write(open(built, "rb").read())
+    bunny = c.mesh("stanford_bunny_bun_zipper_res4.ply")
+    save = ("fq", "fc", "vc", "vn", "wt")
+
+    def extract(path, out):
+        script = mlx_with(c, "extract_view_dependent_lod.mlx", FileName=path, FaceBudget=100000)
+        _, log = c.meshlab([bunny], script, out, save=save)
+        assert "the file's texture coordinates given to the layer per face corner (wedge)" in log, log[-1500:]
+        elements = dict(read_ply_elements(out))
+        verts, faces = elements["vertex"], elements["face"]
+        assert len(faces) == 2 * 30 * 30, len(faces)
+        for f in faces:
+            uv = f["texcoord"]
+            assert len(uv) == 6, f
+            charts = set()
+            for k, u, v in zip(f["vertex_indices"], uv[0::2], uv[1::2]):
+                x, y = verts[k]["x"], verts[k]["y"]
+                chart = round(u - x)
+                # (the positions too are quantized in the file: within 2e-5 of the diagonal)
+                assert chart in (0, 1) and abs(u - x - chart) <= bound + 5e-5 and abs(v - y) <= bound + 5e-5, (f, x, y)
+                charts.add(chart)
+            assert len(charts) == 1, f
+        head = open(out, "rb").read(600).decode(errors="replace")
+        named = re.search(r"comment TextureFile (.*)\n", head)
+        assert named, head
+        return log, named.group(1).strip()
+
+    log, named = extract(clod, c.out("first.ply"))
+    beside = os.path.join(moved, "chart.png")
+    assert "its texture image chart.png: written beside the .clod as %s" % beside in log, log[-1500:]
+    assert open(beside, "rb").read() == image and os.path.abspath(named) == beside, named
+    log, named = extract(clod, c.out("again.ply"))
+    assert "found beside the .clod as %s (the same bytes)" % beside in log, log[-1500:]
+    # Another file of that name beside the .clod: left alone, the image goes to $TMPDIR.
+    other = c.out("other")
+    os.makedirs(other)
+    with open(os.path.join(other, "chart.png"), "wb") as f:
+        f.write(b"not the image")
+    clod2 = os.path.join(other, "tex.clod")
+    with open(clod2, "wb") as f:
+        f.write(open(built, "rb").read())
+    tmp = c.out("tmpdir")
+    os.makedirs(tmp)
+    old = os.environ.get("TMPDIR")
+    os.environ["TMPDIR"] = tmp
+    try:
+        log, named = extract(clod2, c.out("other.ply"))
+    finally:
+        if old is None:
+            del os.environ["TMPDIR"]
+        else:
+            os.environ["TMPDIR"] = old
+    assert open(os.path.join(other, "chart.png"), "rb").read() == b"not the image"
+    assert sorted(os.listdir(other)) == ["chart.png", "tex.clod"], os.listdir(other)
+    assert named.startswith(tmp + "/conelod-texture-") and named.endswith("/chart.png"), named
+    assert open(named, "rb").read() == image
+    assert "written to %s (%s exists with other content and is left as it is)" % (
+        named, os.path.join(other, "chart.png")) in log, log[-1500:]
 
 
 @case

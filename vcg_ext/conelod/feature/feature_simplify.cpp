@@ -159,6 +159,7 @@ class Work {
   // that span two parts, which no lane moves or collapses into; null otherwise.
   const std::vector<char>* frozen = nullptr;
   std::unordered_set<uint64_t> swapMade;  // feature edges created by extension swaps
+  std::unordered_set<uint64_t> seam;      // FeatureSimplifyParams::seamEdges: never swapped
   double diag = 0;
   double degenerateArea2 = 0;  // squared |cross| below which a face counts as degenerate
 
@@ -326,6 +327,9 @@ Status Work::Build(const IndexedMesh& in, const FeatureSimplifyParams& p) {
 
   into.resize(nv);
   for (uint32_t v = 0; v < nv; ++v) into[v] = v;
+  seam.clear();
+  for (const auto& e : p.seamEdges)
+    if (e[0] != e[1] && e[0] < nv && e[1] < nv) seam.insert(EdgeKey(e[0], e[1]));
 
   std::vector<uint32_t> valence(nv, 0);
   for (const auto& t : F)
@@ -398,6 +402,10 @@ Status Work::Build(const IndexedMesh& in, const FeatureSimplifyParams& p) {
           ++info.dihedralEdges;
         }
       }
+      if (!seam.empty() && seam.count(he[i].key)) {
+        AddFeature(a, b);
+        ++info.seamEdges;
+      }
     } else {
       AddFeature(a, b);
       locked[a] = locked[b] = 1;
@@ -449,7 +457,7 @@ void Work::ExtendFeatureLines(double featureAngleDeg) {
       const int i = t[0] == c ? 0 : (t[1] == c ? 1 : 2);
       const uint32_t a = t[(i + 1) % 3], b = t[(i + 2) % 3];  // f1 = (a, b, c) up to rotation
       if (a == b || a == c || b == c || locked[a] || locked[b]) continue;
-      if (swapMade.count(EdgeKey(a, b))) continue;
+      if (swapMade.count(EdgeKey(a, b)) || (!seam.empty() && seam.count(EdgeKey(a, b)))) continue;
       uint32_t ef[3];
       if (EdgeFaces(a, b, ef, 3) != 2) continue;
       const uint32_t f2 = ef[0] == f1 ? ef[1] : ef[0];

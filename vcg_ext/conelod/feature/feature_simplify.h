@@ -83,6 +83,12 @@ struct FeatureSimplifyParams {
                                     // The parts depend on the mesh only, not on the threads.
   bool firstPassAhead = true;       // false: the first pass too is evaluated in the queue's order (the
                                     // same output, slower; for checking)
+  // Edges (vertex pairs, either order) that are feature lines whatever their dihedral angle, as a
+  // border is, and never swapped (issue 26: a texture seam of a mesh whose texture coordinates are
+  // per face corner, as MeshLab holds them): a seam vertex goes only along its seam, a vertex where
+  // three or more seam edges meet, or where a seam ends, stays (a feature vertex). Pairs that are
+  // not edges of the mesh are ignored. Empty: none (the paper's features only).
+  std::vector<std::array<uint32_t, 2>> seamEdges;
 };
 
 // Checks the parameters (at least one stop criterion); Ok or a message naming the bad one.
@@ -108,6 +114,7 @@ struct FeatureInfo {
   size_t removedBySwaps = 0;  // dihedral feature edges removed by those swaps (the folds they repair)
   size_t borderEdges = 0;
   size_t nonManifoldEdges = 0;
+  size_t seamEdges = 0;  // interior manifold edges made feature lines by FeatureSimplifyParams::seamEdges
   std::vector<VertexClass> vertexClass;  // per vertex
   std::vector<double> curvatureK;        // raw K = a / S per vertex (0 on border / unused vertices)
   std::vector<double> curvatureM;        // raw M = b / L for V_M vertices, 0 otherwise

@@ -47,6 +47,8 @@ class ClusterMeshSimplifier {
     label_.resize(nf);
     for (uint32_t f = 0; f < nf; ++f) label_[f] = ItemOfFace(f);
     aliveInNode_.assign(tree.nodes.size(), 0);
+    into_.resize(nv);
+    for (uint32_t v = 0; v < nv; ++v) into_[v] = v;
     locked_.assign(nv, 0);
     queued_.assign(nv, 0);
     for (uint32_t v = 0; v < nv; ++v) {
@@ -124,6 +126,18 @@ class ClusterMeshSimplifier {
       if (vf_[v].empty() || locked_[v]) continue;
       analyze(v, ring_);
       if (ring_.clusters + (ring_.border ? 1 : 0) < 3) ++out.blockedVertices;
+    }
+    // Each input vertex's survivor: the end of its chain of collapses, as a coarse vertex.
+    out.survivor.assign(pos_.size(), UINT32_MAX);
+    for (uint32_t v = 0; v < pos_.size(); ++v) {
+      uint32_t w = v;
+      while (into_[w] != w) w = into_[w];
+      for (uint32_t x = v; into_[x] != x;) {  // path compression
+        const uint32_t next = into_[x];
+        into_[x] = w;
+        x = next;
+      }
+      out.survivor[v] = index[w];
     }
   }
 
@@ -334,6 +348,7 @@ class ClusterMeshSimplifier {
     }
     vf_[u].clear();
     vf_[u].shrink_to_fit();
+    into_[u] = v;
   }
 
   const PcaTree& tree_;
@@ -344,6 +359,7 @@ class ClusterMeshSimplifier {
   std::vector<std::vector<uint32_t>> vf_;  // alive faces around each vertex
   std::vector<PcaItem> label_;             // per face: its current cluster
   std::vector<int32_t> aliveInNode_;       // per node: alive faces (while the node is a cluster)
+  std::vector<uint32_t> into_;             // per vertex: the vertex it was collapsed into (itself while kept)
   std::vector<uint8_t> locked_, queued_;
   std::vector<uint32_t> work_, candidates_;
   Ring ring_, ringV_;

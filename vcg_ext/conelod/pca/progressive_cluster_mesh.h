@@ -48,10 +48,13 @@ struct ProgressiveMeshResult {
   std::vector<int> faceCluster;        // per coarse face: index into CutByCount(tree, clusters)
   std::vector<uint32_t> vertexOrigin;  // per coarse vertex: its index in the input mesh
   std::vector<uint32_t> faceOrigin;    // per coarse face: the input face it descends from
-  int clusters = 0;                    // clusters at the end (the target, unless the tree has fewer)
-  size_t collapses = 0;                // half-edge collapses done
-  size_t blockedVertices = 0;          // vertices touching < 3 clusters that no allowed collapse removed
-  size_t lockedVertices = 0;           // vertices never moved (non-manifold in the input)
+  // Per input vertex: the coarse vertex its collapses ended in (a kept vertex: its own);
+  // UINT32_MAX where no face used it. Issue 26: the attributes the coarse vertex stands for.
+  std::vector<uint32_t> survivor;
+  int clusters = 0;            // clusters at the end (the target, unless the tree has fewer)
+  size_t collapses = 0;        // half-edge collapses done
+  size_t blockedVertices = 0;  // vertices touching < 3 clusters that no allowed collapse removed
+  size_t lockedVertices = 0;   // vertices never moved (non-manifold in the input)
 };
 
 // The coarse mesh at params.targetClusters clusters of `tree` (built on `mesh`, to single faces or

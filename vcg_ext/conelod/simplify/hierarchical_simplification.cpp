@@ -9,6 +9,7 @@
 #include <vcg/space/box3.h>
 
 #include "conelod/grouping/cone_grouping.h"
+#include "conelod/simplify/attribute_quadric.h"
 #include "conelod/parallel.h"
 
 namespace conelod {
@@ -84,13 +85,57 @@ struct Part {
   std::vector<uint32_t> faces, vertices;
   GroupQemParams params;
   GroupQemResult result;
+  std::vector<float> corner;  // with attributes: per face corner of `result`
   Status status;
   std::atomic<int> percent{0};
 };
 
+// The level's attributes (HierarchyAttributes): the layout, the weight and the corner values of the
+// mesh being simplified (the level below's).
+struct LevelAttributes {
+  const HierarchyAttributes* attributes = nullptr;
+  const std::vector<float>* belowCorners = nullptr;
+};
+
+// Simplifies `mesh` (one piece or a part) with `la`'s attributes when it has some: the corner values
+// of its faces are those of `belowFace`'s faces (identity when empty), and `corner` gets the
+// result's corners at their vertices' new positions.
+Status SimplifyWithAttributes(const IndexedMesh& mesh, const std::vector<int>& groups, const GroupQemParams& qp,
+                              GroupQemResult& r, const Progress& progress,
+                              const std::vector<const std::vector<int>*>& coarser, const GroupQemRegion* region,
+                              const LevelAttributes& la, const std::vector<uint32_t>& belowFace,
+                              std::vector<float>& corner, size_t* seamVertices = nullptr) {
+  if (!la.attributes) return SimplifyPreservingGroups(mesh, groups, qp, r, progress, coarser, region);
+  const size_t C = size_t(la.attributes->layout.channels());
+  std::vector<float> values;
+  if (belowFace.empty()) {
+    values = *la.belowCorners;
+  } else {
+    values.reserve(3 * belowFace.size() * C);
+    for (uint32_t f : belowFace)
+      values.insert(values.end(), la.belowCorners->begin() + std::ptrdiff_t(3 * f * C),
+                    la.belowCorners->begin() + std::ptrdiff_t(3 * (f + 1) * C));
+  }
+  AttributeQuadrics aq;
+  Status s = aq.Init(mesh, la.attributes->layout, std::move(values), la.attributes->weight);
+  if (!s.ok()) return s;
+  if (seamVertices) *seamVertices = aq.seamVertices();
+  s = SimplifyPreservingGroups(mesh, groups, qp, r, progress, coarser, region, &aq);
+  if (!s.ok()) return s;
+  corner.assign(3 * r.mesh.faces.size() * C, 0.0f);
+  for (size_t f = 0; f < r.mesh.faces.size(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t o = r.mesh.faces[f][size_t(k)];
+      const auto& q = r.mesh.positions[o];
+      aq.Evaluate(r.sourceFace[f], k, r.sourceVertex[o], vcg::Point3d(q[0], q[1], q[2]),
+                  corner.data() + (3 * f + size_t(k)) * C);
+    }
+  return Status::Ok();
+}
+
 void SimplifyPart(const IndexedMesh& below, const std::vector<std::vector<int>>& groups,
                   const std::vector<uint8_t>& partOfFace, const std::vector<uint8_t>& shared, int index, double ratio,
-                  double diagonal, const std::atomic<bool>& cancel, Part& part) {
+                  double diagonal, const std::atomic<bool>& cancel, const LevelAttributes& la, Part& part) {
   try {
     for (uint32_t f = 0; f < partOfFace.size(); ++f)
       if (partOfFace[f] == index) part.faces.push_back(f);
@@ -125,13 +170,13 @@ void SimplifyPart(const IndexedMesh& below, const std::vector<std::vector<int>>&
     region.frozenVertex.resize(part.vertices.size());
     for (size_t i = 0; i < part.vertices.size(); ++i) region.frozenVertex[i] = shared[part.vertices[i]];
     part.params.targetFaces = std::max<size_t>(1, size_t(std::floor(ratio * double(part.faces.size()))));
-    part.status = SimplifyPreservingGroups(
+    part.status = SimplifyWithAttributes(
         sub, subGroups[0], part.params, part.result,
         [&](int percent, const char*) {
           part.percent.store(percent, std::memory_order_relaxed);
           return !cancel.load(std::memory_order_relaxed);
         },
-        coarser, &region);
+        coarser, &region, la, part.faces, part.corner);
   } catch (const std::bad_alloc&) {
     part.status = Status::OutOfMemory("not enough memory to simplify a part of the level");
   } catch (const std::exception& e) {
@@ -142,9 +187,12 @@ void SimplifyPart(const IndexedMesh& below, const std::vector<std::vector<int>>&
 
 // Simplifies `below` in `parts` parts side by side; `out` as SimplifyPreservingGroups would give it
 // for the whole level (indices into `below`, faces and vertices in their order there).
+// With attributes (`la`), `corner` gets the output's corner values, as SimplifyWithAttributes.
 Status SimplifyInParts(const IndexedMesh& below, const std::vector<std::vector<int>>& groups, int parts, int parity,
-                       const HierarchicalSimplificationParams& params, GroupQemResult& out, const Progress& progress) {
+                       const HierarchicalSimplificationParams& params, GroupQemResult& out, const Progress& progress,
+                       const LevelAttributes& la, std::vector<float>& corner) {
   out = GroupQemResult();
+  corner.clear();
   // Cut along the contours of the coarsest level whose groups are small enough for balanced parts
   // (coarse levels can hold a whole connected component in one group).
   size_t cutLayer = 0;
@@ -177,7 +225,7 @@ Status SimplifyInParts(const IndexedMesh& below, const std::vector<std::vector<i
   std::atomic<int> next{0};
   const auto work = [&](unsigned) {
     for (int i; (i = next.fetch_add(1)) < parts;)
-      SimplifyPart(below, groups, partOfFace, shared, i, params.levelRatio, diagonal, cancel, part[size_t(i)]);
+      SimplifyPart(below, groups, partOfFace, shared, i, params.levelRatio, diagonal, cancel, la, part[size_t(i)]);
   };
   // Progress and cancellation from this thread only (MeshLab's callbacks are not thread-safe).
   RunThreadsWhile(unsigned(std::min(SimplificationThreads(params), parts)), work, [&] {
@@ -198,6 +246,8 @@ Status SimplifyInParts(const IndexedMesh& below, const std::vector<std::vector<i
   std::vector<vcg::Point3f> position(below.positions.size());
   std::vector<uint8_t> faceAlive(below.faces.size(), 0);
   std::vector<std::array<uint32_t, 3>> face(below.faces.size());
+  const size_t C = la.attributes ? size_t(la.attributes->layout.channels()) : 0;
+  std::vector<float> faceCorner(3 * below.faces.size() * C);  // per face of `below` that stays
   GroupQemStats& st = out.stats;
   st.stop = GroupQemStats::Stop::TargetReached;
   for (const Part& p : part) {
@@ -211,6 +261,9 @@ Status SimplifyInParts(const IndexedMesh& below, const std::vector<std::vector<i
       const uint32_t f = p.faces[r.sourceFace[i]];
       faceAlive[f] = 1;
       for (int k = 0; k < 3; ++k) face[f][size_t(k)] = p.vertices[r.sourceVertex[r.mesh.faces[i][size_t(k)]]];
+      if (C)
+        std::copy(p.corner.begin() + std::ptrdiff_t(3 * i * C), p.corner.begin() + std::ptrdiff_t(3 * (i + 1) * C),
+                  faceCorner.begin() + std::ptrdiff_t(3 * f * C));
     }
     st.facesIn += r.stats.facesIn;
     st.facesOut += r.stats.facesOut;
@@ -237,6 +290,9 @@ Status SimplifyInParts(const IndexedMesh& below, const std::vector<std::vector<i
     if (faceAlive[f]) {
       out.mesh.faces.push_back({newIndex[face[f][0]], newIndex[face[f][1]], newIndex[face[f][2]]});
       out.sourceFace.push_back(f);
+      if (C)
+        corner.insert(corner.end(), faceCorner.begin() + std::ptrdiff_t(3 * f * C),
+                      faceCorner.begin() + std::ptrdiff_t(3 * (f + 1) * C));
     }
   return Status::Ok();
 }
@@ -249,8 +305,12 @@ int SimplificationThreads(const HierarchicalSimplificationParams& params) {
 
 Status BuildSimplifiedLevels(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
                              const HierarchicalSimplificationParams& params, std::vector<SimplifiedLevel>& out,
-                             const Progress& progress) {
+                             const Progress& progress, const HierarchyAttributes* attributes) {
   out.clear();
+  if (attributes && attributes->layout.empty()) attributes = nullptr;
+  if (attributes && attributes->inputCorners.size() != 3 * mesh.faces.size() * size_t(attributes->layout.channels()))
+    return Status::Invalid("the attributes do not fit the mesh: " + std::to_string(attributes->inputCorners.size()) +
+                           " corner values for " + std::to_string(mesh.faces.size()) + " faces");
   if (!(params.levelRatio > 0 && params.levelRatio <= 1)) return Status::Invalid("the level ratio must be in (0, 1]");
   if (hierarchy.levelCount() == 0) return Status::Invalid("the group hierarchy has no level");
   if (hierarchy.faceCount != int(mesh.faces.size()))
@@ -288,10 +348,16 @@ Status BuildSimplifiedLevels(const IndexedMesh& mesh, const GroupHierarchy& hier
       while (parts < kMaxParts && facesBelow >= 2 * size_t(parts) * params.facesPerPart) parts *= 2;
     GroupQemResult r;
     const Progress levelProgress = SubProgress(progress, 100 * (k - 1) / levels, 100 * k / levels);
+    LevelAttributes la;
+    if (attributes) {
+      la.attributes = attributes;
+      la.belowCorners = k > 1 ? &result[size_t(k - 2)].corner : &attributes->inputCorners;
+    }
     Status s = ValidateParams(qp);
     if (s.ok())
-      s = parts > 1 ? SimplifyInParts(*below, groups, parts, (k - 1) % 2, levelParams, r, levelProgress)
-                    : SimplifyPreservingGroups(*below, groups[0], qp, r, levelProgress, coarser);
+      s = parts > 1 ? SimplifyInParts(*below, groups, parts, (k - 1) % 2, levelParams, r, levelProgress, la, L.corner)
+                    : SimplifyWithAttributes(*below, groups[0], qp, r, levelProgress, coarser, nullptr, la, {},
+                                             L.corner, &L.seamVertices);
     if (!s.ok()) return s;
     L.mesh = std::move(r.mesh);
     L.stats = r.stats;

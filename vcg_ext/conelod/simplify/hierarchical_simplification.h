@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "conelod/grouping/group_hierarchy.h"
+#include "conelod/mesh/attributes.h"
 #include "conelod/simplify/group_qem.h"
 #include "conelod/mesh/indexed_mesh.h"
 #include "conelod/status.h"
@@ -38,6 +39,15 @@ struct HierarchicalSimplificationParams {
                     // same whatever the number.
 };
 
+// Colour, normals and texture coordinates carried through the levels (issue 26): each level is
+// simplified with the attribute quadrics (attribute_quadric.h) of the level below's corner values,
+// so its attributes are interpolated from the one below as a one-target run's are from the input,
+// seams kept (a seam vertex stays or goes along its seam; its corners keep their values).
+struct HierarchyAttributes {
+  VertexAttributes layout;          // the channels (its `values` are not read)
+  std::vector<float> inputCorners;  // per input face corner (3 f + k), layout.channels() values each
+  double weight = 1.0;              // AttributeQuadrics::Init's weight (conelod simplify --attribute-weight)
+};
 struct SimplifiedLevel {
   int level = 0;  // the hierarchy level (1-based) whose groups it preserves
   IndexedMesh mesh;
@@ -46,6 +56,10 @@ struct SimplifiedLevel {
   std::vector<int> faceGroup;          // per face: its group at `level`
   size_t targetFaces = 0;
   GroupQemStats stats;
+  // With HierarchyAttributes: per face corner (3 f + k), the layout's channels at the corner's
+  // vertex (AttributeQuadrics::Evaluate); empty otherwise.
+  std::vector<float> corner;
+  size_t seamVertices = 0;  // with attributes: the level below's seam vertices (AttributeQuadrics)
 };
 
 // The threads the parts of a level run on: params.threads, or one per core when it is 0.
@@ -54,8 +68,10 @@ int SimplificationThreads(const HierarchicalSimplificationParams& params);
 // One SimplifiedLevel per hierarchy level, finest first. Progress is reported on the calling thread. A level's face
 // count is at most the one below it (equal when its groups allow no further collapse). On failure or cancellation `out`
 // is left empty.
+// `attributes` (optional): carried through every level (HierarchyAttributes; the one-piece and the
+// parts' collapses alike).
 Status BuildSimplifiedLevels(const IndexedMesh& mesh, const GroupHierarchy& hierarchy,
                              const HierarchicalSimplificationParams& params, std::vector<SimplifiedLevel>& out,
-                             const Progress& progress = Progress());
+                             const Progress& progress = Progress(), const HierarchyAttributes* attributes = nullptr);
 
 }  // namespace conelod

@@ -653,5 +653,96 @@ TEST(FeatureSimplify, SurvivorsTakeTheMeanColourOfWhatTheyReplaced) {
   EXPECT_GT(tookOver, grid.positions.size() / 2);
 }
 
+// Issue 26: the normals and texture coordinates as the colour above. On a flat grid whose normals
+// tilt by +-0.3 from vertex to vertex (a noisy scan's), every kept vertex that took others over gets
+// a unit normal tilted less than its own, and texture coordinates linear in position stay exact
+// (a kept vertex's own coordinates are right for its unchanged position; the mean gives them back).
+// With noise on the coordinates the kept vertices' move towards the linear ones. The grid cut in
+// two by a seam (the right half's vertices on x = 0.5 repeated, as the CLI reads a texture seam):
+// the seam's kept vertices keep their own coordinates, noise included.
+TEST(FeatureSimplify, SurvivorsTakeTheMeanNormalAndTexCoordsAwayFromSeams) {
+  const IndexedMesh grid = test::Grid(20);
+  FeatureSimplifyParams gp;
+  gp.targetFaceCount = grid.faces.size() / 8;
+  FeatureSimplifyResult gr;
+  ASSERT_TRUE(FeatureSimplify(grid, gp, gr).ok());
+  CMesh g;
+  AppendIndexedMesh(g, grid);
+  vcg::tri::UpdateBounding<CMesh>::Box(g);
+  const float step = g.bbox.DimX() / 20;
+  auto sign = [&](const vcg::Point3f& q) { return (int(std::lround(q[0] / step + q[1] / step)) % 2) ? 1.0f : -1.0f; };
+  auto linearU = [&](const vcg::Point3f& q) { return 0.1f + 0.04f * q[0] / step; };
+  auto linearV = [&](const vcg::Point3f& q) { return 0.9f - 0.03f * q[1] / step; };
+  for (auto& v : g.vert) {
+    v.N() = vcg::Point3f(0.3f * sign(v.P()), 0, 1).Normalize();
+    v.T().U() = linearU(v.P());
+    v.T().V() = linearV(v.P());
+  }
+  EXPECT_EQ(MeanSurvivorNormalsAndTexCoords(g, gr, true, true), 0u);
+  std::vector<size_t> members(gr.inputVertex.size(), 0);
+  for (uint32_t s : gr.survivor) ++members[s];
+  size_t tilted = 0, grouped = 0;
+  for (size_t o = 0; o < gr.inputVertex.size(); ++o) {
+    const auto& v = g.vert[gr.inputVertex[o]];
+    EXPECT_NEAR(v.cN().Norm(), 1.0, 1e-5);
+    EXPECT_NEAR(v.cT().U(), linearU(v.cP()), 1e-5) << o;
+    EXPECT_NEAR(v.cT().V(), linearV(v.cP()), 1e-5) << o;
+    if (members[o] < 3) continue;
+    ++grouped;
+    tilted += std::fabs(v.cN()[0]) < 0.25 * std::fabs(0.3 / std::sqrt(1.09));
+  }
+  EXPECT_GT(grouped, gr.inputVertex.size() / 4);
+  EXPECT_GT(tilted, grouped / 2) << "kept vertices whose normal is nearer the mean (0, 0, 1) than their own";
+
+  // Noise on the coordinates: the kept vertices' come nearer the linear ones; on a seam they stay.
+  auto noisy = [&](const vcg::Point3f& q) { return linearU(q) + 0.01f * sign(q); };
+  for (auto& v : g.vert) v.T().U() = noisy(v.P());
+  MeanSurvivorNormalsAndTexCoords(g, gr, false, true);
+  double before = 0, after = 0;
+  for (size_t o = 0; o < gr.inputVertex.size(); ++o) {
+    if (members[o] < 3) continue;
+    const auto& v = g.vert[gr.inputVertex[o]];
+    before += std::pow(noisy(v.cP()) - linearU(v.cP()), 2);
+    after += std::pow(v.cT().U() - linearU(v.cP()), 2);
+  }
+  EXPECT_LT(after, 0.25 * before);
+
+  // The seam: the faces right of x = 0.5 take copies of the vertices on it.
+  IndexedMesh cut = grid;
+  const float mid = 0.5f * (g.bbox.min[0] + g.bbox.max[0]);
+  std::vector<uint32_t> copy(cut.positions.size(), UINT32_MAX);
+  for (auto& t : cut.faces) {
+    const vcg::Point3f c = (cut.positions[t[0]] + cut.positions[t[1]] + cut.positions[t[2]]) / 3.0f;
+    if (c[0] < mid) continue;
+    for (auto& v : t)
+      if (std::fabs(cut.positions[v][0] - mid) < 1e-6f) {
+        if (copy[v] == UINT32_MAX) {
+          copy[v] = uint32_t(cut.positions.size());
+          cut.positions.push_back(cut.positions[v]);
+        }
+        v = copy[v];
+      }
+  }
+  FeatureSimplifyResult cr;
+  ASSERT_TRUE(FeatureSimplify(cut, gp, cr).ok());
+  CMesh c;
+  AppendIndexedMesh(c, cut);
+  for (auto& v : c.vert) {
+    v.T().U() = noisy(v.P());
+    v.T().V() = linearV(v.P());
+  }
+  size_t onSeam = 0;
+  for (size_t o = 0; o < cr.inputVertex.size(); ++o)
+    onSeam += std::fabs(c.vert[cr.inputVertex[o]].cP()[0] - mid) < 1e-6f;
+  EXPECT_GT(onSeam, 2u);
+  EXPECT_EQ(MeanSurvivorNormalsAndTexCoords(c, cr, false, true), onSeam);
+  for (size_t o = 0; o < cr.inputVertex.size(); ++o) {
+    const auto& v = c.vert[cr.inputVertex[o]];
+    if (std::fabs(v.cP()[0] - mid) < 1e-6f) {
+      EXPECT_EQ(v.cT().U(), noisy(v.cP())) << "seam vertex " << o;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace conelod
