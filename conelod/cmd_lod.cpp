@@ -590,7 +590,7 @@ const char* kLodUsage =
     "  part is simplified as one group. Collapse options (as conelod simplify's, defaults in\n"
     "  brackets): --quality-thr Q [0.3] --no-optimal-placement --preserve-boundary\n"
     "  --boundary-weight W [1] --no-preserve-normal.\n"
-    "  Positions are quantized on one grid: none moves by more than E x the diagonal [2e-5];\n"
+    "  Positions are quantized on one grid: none moves by more than E x the diagonal [5e-6];\n"
     "  the nodes' vertices and triangles are compressed (meshoptimizer's codecs).\n"
     "  --memory SIZE (512M, 2G; at least 16M): an input of more than SIZE / 2048 faces is split\n"
     "  into spatial chunks of at most that many faces, each built with its border locked until\n"

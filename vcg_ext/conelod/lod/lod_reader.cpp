@@ -227,12 +227,21 @@ LodGrid ChooseLodGrid(const vcg::Box3f& box, double precision) {
     g.origin[c] = double(b.min[c]);
     extent = std::max(extent, double(b.max[c]) - double(b.min[c]));
   }
-  // The cell's half diagonal is 0.99 of the bound: the rest covers the float rounding.
-  g.step = 0.99 * 2 * std::max(precision, kMinLodPrecision) * diag / std::sqrt(3.0);
-  g.step = std::max(g.step, extent / double((uint64_t(1) << kMaxGridBits) - 2));
-  const double cells = std::nearbyint(extent / g.step) + 1;  // the largest coordinate, plus a margin
-  g.bits = 1;
-  while (g.bits < kMaxGridBits && double((uint64_t(1) << g.bits) - 1) < cells) ++g.bits;
+  // The cell's half diagonal is 0.99 of the bound: the rest covers the float rounding; where it
+  // does not (a fine precision far from the origin), the cell shrinks by what is missing.
+  const double target = std::max(precision, kMinLodPrecision) * diag;
+  const double floor = extent / double((uint64_t(1) << kMaxGridBits) - 2);
+  g.step = std::max(0.99 * 2 * target / std::sqrt(3.0), floor);
+  auto setBits = [&]() {
+    const double cells = std::nearbyint(extent / g.step) + 1;  // the largest coordinate, plus a margin
+    g.bits = 1;
+    while (g.bits < kMaxGridBits && double((uint64_t(1) << g.bits) - 1) < cells) ++g.bits;
+  };
+  setBits();
+  for (int i = 0; i < 4 && g.ErrorBound() > target && g.step > floor; ++i) {
+    g.step = std::max(g.step - (g.ErrorBound() - target) * 2 / std::sqrt(3.0) * 1.01, floor);
+    setBits();
+  }
   return g;
 }
 
