@@ -59,8 +59,9 @@ build_fuzzer ply_reader_fuzz \
   "$ROOT/vcg_ext/conelod/grouping/cone_grouping.cpp" "$ROOT/vcg_ext/conelod/grouping/normal_cone.cpp"
 
 # Seeds: an octahedron subdivided once and twice (32 and 128 faces, a sphere) and a bumpy variant,
-# with default and two-level hierarchies; the bumpy one also with vertex colour and normals (a
-# version 5 file with attribute streams).
+# with default and two-level hierarchies; the bumpy one also with vertex colour and normals
+# (attribute streams), and a sphere subdivided four times (2,048 faces), whose geometry streams
+# are deflated (version 7). The stored files of the tests (versions 3 to 6) join them.
 python3 - "$OUT/seeds" <<'PY'
 import math, sys
 def sphere(levels, bump):
@@ -85,7 +86,7 @@ def sphere(levels, bump):
 with open(f"{sys.argv[1]}/tex.png", "wb") as o:
     o.write(b"\x89PNG\r\n\x1a\n" + bytes(range(64)))
 for name, lv, bump, attr in (("oct1", 1, 0, 0), ("sphere2", 2, 0, 0), ("bumpy2", 2, 0.2, 0), ("bumpy2c", 2, 0.2, 1),
-                             ("bumpy2t", 2, 0.2, 2)):
+                             ("bumpy2t", 2, 0.2, 2), ("bumpy4", 4, 0.2, 0)):
     p, f = sphere(lv, bump)
     with open(f"{sys.argv[1]}/{name}.ply", "w") as o:
         o.write("ply\nformat ascii 1.0\n" + ("comment TextureFile tex.png\n" if attr == 2 else ""))
@@ -113,6 +114,7 @@ for m in "$OUT"/seeds/*.ply; do
   "$CONELOD" lod build "$m" -o "$OUT/corpus/$b.clod" >/dev/null
   "$CONELOD" lod build "$m" -o "$OUT/corpus/${b}_2levels.clod" --max-levels 2 >/dev/null
 done
+cp "$ROOT"/vcg_ext/tests/lod/data/*.clod "$OUT/corpus/"
 echo "fuzz.sh: $(ls "$OUT/corpus" | wc -l) inputs in the corpus; fuzzing for ${SECONDS_TO_RUN} s"
 run_fuzzer lod_reader_fuzz "$OUT/corpus" "$OUT/crashes" ".clod reader"
 

@@ -1,4 +1,4 @@
-// ConeLOD web viewer — the .clod (versions 3 to 6) reader over HTTP Range requests.
+// ConeLOD web viewer — the .clod (versions 3 to 7) reader over HTTP Range requests.
 //
 // The JavaScript twin of vcg_ext/conelod/lod/lod_reader.cpp; the byte layout is
 // vcg_ext/conelod/lod/lod_format.md. It reads only the byte ranges it needs: the header, the three
@@ -8,7 +8,7 @@
 // ranges. Errors name the problem as the desktop reader's do.
 import { MeshoptDecoder } from './node_modules/meshoptimizer/meshopt_decoder.mjs';
 
-export const VERSION = 6;  // the newest read (6: the compact index; 5: with attribute streams; 4, 3: geometry only)
+export const VERSION = 7;  // the newest read (7: deflated streams; 6: the compact index; 5: with attribute streams; 4, 3: geometry only)
 const OLDEST_VERSION = 3;
 const CHUNK = 24;
 const HEADER_FIXED = 128;
@@ -17,6 +17,8 @@ const INDEX_DATA = 16;
 const IBLOCK_BASE = 16;
 const INDEX_ENTRY = 8;  // versions 3 to 5: u32 recordEnd, u32 geometryEnd
 const COMPACT_INDEX_VERSION = 6;  // varint entries, INDX data listing where each block starts
+const DEFLATE_VERSION = 7;  // each geometry stream deflated when that is smaller
+const MAX_DEFLATE_RATIO = 1032;  // deflate's largest expansion (RFC 1951)
 const RECORD_FIXED = 26;  // the smallest record (version 4 at level 0): CRC, cone, sphere
 const GEOM_MIN = 5;
 const MAX_LEVELS = 64;
@@ -223,6 +225,53 @@ function predictedGrid(raw, vc, wide, corners, fc) {
   return q;
 }
 
+// meshoptimizer's bounds on its codecs' output (meshopt_encodeVertexBufferBound,
+// meshopt_encodeIndexBufferBound, meshopt_encodeIndexSequenceBound), which the desktop reader
+// takes from the library: a deflated stream may not claim more.
+export function vertexBufferBound(count, size) {
+  const block = Math.min(256, Math.floor(8192 / size) & ~15);
+  const blocks = Math.ceil(count / block), header = Math.floor((block / 16 + 3) / 4);
+  return 1 + blocks * size * (header + block) + Math.max(32, size);
+}
+function vertexBits(vertices) {
+  let bits = 1;
+  while (bits < 32 && vertices > 2 ** bits) ++bits;
+  return bits;
+}
+export function indexBufferBound(indices, vertices) {
+  return 1 + Math.floor(indices / 3) * (2 + 3 * Math.floor((vertexBits(vertices) + 1 + 6) / 7)) + 16;
+}
+export function indexSequenceBound(indices, vertices) {
+  return 1 + indices * Math.floor((vertexBits(vertices) + 1 + 1 + 6) / 7) + 4;
+}
+
+// Exactly `rawBytes` from one whole raw deflate stream (the browser's own inflater); null when it
+// is not one, gives more or fewer bytes.
+async function inflateRaw(bytes, rawBytes) {
+  const out = new Uint8Array(rawBytes);
+  let n = 0;
+  try {
+    const ds = new DecompressionStream('deflate-raw');
+    const w = ds.writable.getWriter();
+    w.write(bytes).catch(() => {});
+    w.close().catch(() => {});
+    const r = ds.readable.getReader();
+    for (;;) {
+      const { done, value } = await r.read();
+      if (done) break;
+      if (value.length > rawBytes - n) {
+        r.cancel().catch(() => {});
+        return null;
+      }
+      out.set(value, n);
+      n += value.length;
+    }
+  } catch (e) {
+    return null;
+  }
+  return n === rawBytes ? out : null;
+}
+
 // Byte ranges of a URL, fetched with Range requests; counts what it receives.
 export class RangeSource {
   constructor(url) {
@@ -331,11 +380,11 @@ export class ClodReader {
     if (head.length < CHUNK + 4) throw new ClodError(trunc + 'no version field');
     const version = new Decoder(head, CHUNK).u32();
     if (version === 1)
-      throw new ClodError('this is a .clod version 1 file (written by an older ConeLOD, whose cuts could have cracks): rebuild it with conelod lod build (this reader reads versions 3 to 6)');
+      throw new ClodError('this is a .clod version 1 file (written by an older ConeLOD, whose cuts could have cracks): rebuild it with conelod lod build (this reader reads versions 3 to 7)');
     if (version === 2)
-      throw new ClodError('this is a .clod version 2 file (uncompressed, written by an older ConeLOD): rebuild it with conelod lod build (this reader reads versions 3 to 6)');
+      throw new ClodError('this is a .clod version 2 file (uncompressed, written by an older ConeLOD): rebuild it with conelod lod build (this reader reads versions 3 to 7)');
     if (version < OLDEST_VERSION || version > VERSION)
-      throw new ClodError(`unsupported .clod version ${version} (this reader reads versions 3 to 6)`);
+      throw new ClodError(`unsupported .clod version ${version} (this reader reads versions 3 to 7)`);
     const tail = version >= 5 ? HEADER_ATTRIBUTES : 0;
     // With texture coordinates (bit 8) the UV box and the texture's offset follow (checked below).
     const extra = version >= 5 && h.dataBytes > HEADER_FIXED + tail &&
@@ -799,6 +848,22 @@ export class ClodReader {
     this.unitSizes.delete(offset);
   }
 
+  // A geometry stream's codec bytes (lod_reader.cpp's TakeStream): its size and bytes (versions 3
+  // to 6); version 7: `uv code` (stored bytes x 2 + deflated), then when deflated `uv rawBytes`
+  // (at most `bound` and what deflate can give) and the deflated bytes, inflated. Null when the
+  // stream is truncated, out of bounds or does not inflate to exactly rawBytes.
+  async _stream(d, bound) {
+    const code = d.uv();
+    const v7 = this.info.version >= DEFLATE_VERSION, deflated = v7 && code % 2 === 1;
+    const stored = v7 ? Math.floor(code / 2) : code;
+    const raw = deflated ? d.uv() : stored;
+    if (d.overrun || stored > d.left()) return null;
+    const p = d.take(stored);
+    if (!deflated) return p;
+    if (raw === 0 || raw > bound || raw > stored * MAX_DEFLATE_RATIO + 64) return null;
+    return inflateRaw(p, raw);
+  }
+
   async _decodeUnit(offset, bytes, id) {
     const buf = await this.src.read(offset, bytes, 'node geometry');
     const bad = `corrupt geometry of node ${id}: `;
@@ -814,11 +879,12 @@ export class ClodReader {
     if (d.overrun || first < L.firstId || count === 0 || count > L.nodes || first - L.firstId > L.nodes - count || count > d.left())
       throw new ClodError(bad + 'its geometry blob names other nodes');
     const faceStart = new Array(count + 1).fill(0);
+    const maxFaces = this.info.version >= DEFLATE_VERSION ? bytes * MAX_DEFLATE_RATIO : bytes;
     for (let i = 0; i < count; ++i) {
       const fc = d.uv();
-      if (d.overrun || fc === 0 || fc > bytes) throw new ClodError(bad + 'a face count out of range');
+      if (d.overrun || fc === 0 || fc > maxFaces) throw new ClodError(bad + 'a face count out of range');
       faceStart[i + 1] = faceStart[i] + fc;
-      if (faceStart[i + 1] > bytes) throw new ClodError(bad + 'more faces than its blob can hold');
+      if (faceStart[i + 1] > maxFaces) throw new ClodError(bad + 'more faces than its blob can hold');
     }
     const fc = faceStart[count];
     const vc = d.uv();
@@ -829,21 +895,22 @@ export class ClodReader {
     if (d.overrun || qmin.some((q) => q >= cells) || firstNew > this.info.globalVertices)
       throw new ClodError(bad + 'its grid corner or first vertex id is out of range');
     const stride = wide ? 12 : 8;
-    let n = d.uv();
-    let p = d.overrun || n > d.left() ? null : d.take(n);
+    // The positions' and triangles' streams first (version 7: inflated), the faces checked against
+    // the triangles' codec bytes (at least a byte a face), then decoded, as the desktop reader.
+    let p = await this._stream(d, vertexBufferBound(vc, stride));
+    if (!p) throw new ClodError(bad + 'its positions do not decode');
+    const pt = await this._stream(d, indexBufferBound(fc * 3, vc));
+    if (!pt) throw new ClodError(bad + 'its triangles do not decode');
+    if (fc > pt.length) throw new ClodError(bad + 'more faces than its triangles can hold');
     const raw = new Uint8Array(vc * stride);
     try {
-      if (!p) throw new Error();
       MeshoptDecoder.decodeVertexBuffer(raw, vc, stride, p);
     } catch (e) {
       throw new ClodError(bad + 'its positions do not decode');
     }
-    n = d.uv();
-    p = d.overrun || n > d.left() ? null : d.take(n);
     const corners = new Uint32Array(fc * 3);
     try {
-      if (!p) throw new Error();
-      MeshoptDecoder.decodeIndexBuffer(new Uint8Array(corners.buffer), fc * 3, 4, p);
+      MeshoptDecoder.decodeIndexBuffer(new Uint8Array(corners.buffer), fc * 3, 4, pt);
     } catch (e) {
       throw new ClodError(bad + 'its triangles do not decode');
     }
@@ -864,8 +931,7 @@ export class ClodReader {
     if (fresh > this.info.globalVertices - firstNew) throw new ClodError(bad + 'vertex id out of range');
     const listed = new Uint32Array(vc - fresh);
     if (vc > fresh) {
-      n = d.uv();
-      p = d.overrun || n > d.left() ? null : d.take(n);
+      p = await this._stream(d, indexSequenceBound(vc - fresh, this.info.globalVertices));
       try {
         if (!p) throw new Error();
         MeshoptDecoder.decodeIndexSequence(new Uint8Array(listed.buffer), listed.length, 4, p);
@@ -876,8 +942,7 @@ export class ClodReader {
     const attributes = {};
     for (const s of OPTIONAL_STREAMS) {
       if (!(flags & s.bit)) continue;
-      n = d.uv();
-      p = d.overrun || n > d.left() ? null : d.take(n);
+      p = await this._stream(d, vertexBufferBound(vc, s.stride));
       const out = new Uint8Array(vc * s.stride);
       try {
         if (!p) throw new Error();

@@ -82,7 +82,10 @@ struct LodGrid {
 // be in [1e-9, 0.01] (kMinLodPrecision, kMaxLodPrecision).
 LodGrid ChooseLodGrid(const vcg::Box3f& box, double precision);
 constexpr double kMinLodPrecision = 1e-9, kMaxLodPrecision = 0.01;
-constexpr double kDefaultLodPrecision = 2e-5;  // of the diagonal (the dragon's level 1: 2.5e-3)
+// Of the diagonal: the grid's own RMS (a cell / sqrt(12) across the surface, 1.6e-6) stays far
+// enough below the RMS distance of the finest simplified level to the input (the dragon's level 1:
+// 1.3e-5) that no level's RMS of the dragon, the bunny or the armadillo grows by 1 % (docs/lod_viewer.md).
+constexpr double kDefaultLodPrecision = 5e-6;
 
 // The texture image a textured .clod carries (its TEXR chunk, lod_format.md): the image file's
 // bytes as they were read, its file name (a plain name: no folder, no control character) and

@@ -17,6 +17,8 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstddef>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <unordered_map>
@@ -79,6 +81,62 @@ class MemorySource : public ByteSource {
 
  private:
   std::vector<uint8_t> bytes_;
+};
+
+// Version 7's deflated geometry streams (raw RFC 1951): one z_stream, reset for each stream.
+constexpr size_t kZlibBlockHeader = alignof(std::max_align_t);
+class StreamInflater {
+ public:
+  StreamInflater() = default;
+  ~StreamInflater() { Release(); }
+  // Frees zlib's state (set up again by the next Inflate).
+  void Release() {
+    if (ok_) inflateEnd(&z_);
+    ok_ = false;
+  }
+  StreamInflater(const StreamInflater&) = delete;
+  StreamInflater& operator=(const StreamInflater&) = delete;
+  // True when `in` is one whole deflate stream that gives exactly `out`'s n bytes.
+  bool Inflate(const uint8_t* in, size_t inBytes, uint8_t* out, size_t outBytes) {
+    if (inBytes > 0xFFFFFFFFu || outBytes > 0xFFFFFFFFu) return false;
+    if (!ok_) {
+      z_ = z_stream{};
+      z_.zalloc = &Alloc;
+      z_.zfree = &Free;
+      z_.opaque = &bytes_;
+      ok_ = inflateInit2(&z_, -15) == Z_OK;
+    }
+    if (!ok_ || inflateReset(&z_) != Z_OK) return false;
+    z_.next_in = const_cast<Bytef*>(in);
+    z_.avail_in = uInt(inBytes);
+    z_.next_out = out;
+    z_.avail_out = uInt(outBytes);
+    return inflate(&z_, Z_FINISH) == Z_STREAM_END && z_.avail_in == 0 && z_.avail_out == 0;
+  }
+  // What zlib holds: its state (about 7 KiB) and, once an inflate stopped short, its window.
+  size_t bytes() const { return bytes_; }
+
+ private:
+  // zlib's allocations, counted (each block's size kept in front of it, in an aligned header).
+  static voidpf Alloc(voidpf opaque, uInt items, uInt size) {
+    const size_t n = size_t(items) * size;
+    char* p = static_cast<char*>(std::malloc(n + kZlibBlockHeader));
+    if (!p) return Z_NULL;
+    std::memcpy(p, &n, sizeof n);
+    *static_cast<size_t*>(opaque) += n;
+    return p + kZlibBlockHeader;
+  }
+  static void Free(voidpf opaque, voidpf address) {
+    if (!address) return;
+    char* p = static_cast<char*>(address) - kZlibBlockHeader;
+    size_t n;
+    std::memcpy(&n, p, sizeof n);
+    *static_cast<size_t*>(opaque) -= n;
+    std::free(p);
+  }
+  z_stream z_{};
+  bool ok_ = false;
+  size_t bytes_ = 0;
 };
 
 struct LevelEntry {
@@ -169,12 +227,21 @@ LodGrid ChooseLodGrid(const vcg::Box3f& box, double precision) {
     g.origin[c] = double(b.min[c]);
     extent = std::max(extent, double(b.max[c]) - double(b.min[c]));
   }
-  // The cell's half diagonal is 0.99 of the bound: the rest covers the float rounding.
-  g.step = 0.99 * 2 * std::max(precision, kMinLodPrecision) * diag / std::sqrt(3.0);
-  g.step = std::max(g.step, extent / double((uint64_t(1) << kMaxGridBits) - 2));
-  const double cells = std::nearbyint(extent / g.step) + 1;  // the largest coordinate, plus a margin
-  g.bits = 1;
-  while (g.bits < kMaxGridBits && double((uint64_t(1) << g.bits) - 1) < cells) ++g.bits;
+  // The cell's half diagonal is 0.99 of the bound: the rest covers the float rounding; where it
+  // does not (a fine precision far from the origin), the cell shrinks by what is missing.
+  const double target = std::max(precision, kMinLodPrecision) * diag;
+  const double floor = extent / double((uint64_t(1) << kMaxGridBits) - 2);
+  g.step = std::max(0.99 * 2 * target / std::sqrt(3.0), floor);
+  auto setBits = [&]() {
+    const double cells = std::nearbyint(extent / g.step) + 1;  // the largest coordinate, plus a margin
+    g.bits = 1;
+    while (g.bits < kMaxGridBits && double((uint64_t(1) << g.bits) - 1) < cells) ++g.bits;
+  };
+  setBits();
+  for (int i = 0; i < 4 && g.ErrorBound() > target && g.step > floor; ++i) {
+    g.step = std::max(g.step - (g.ErrorBound() - target) * 2 / std::sqrt(3.0) * 1.01, floor);
+    setBits();
+  }
   return g;
 }
 
@@ -217,6 +284,9 @@ struct LodReader::Impl {
     }
   } unit;
   std::vector<uint8_t> positionScratch;  // reused for decoding
+  // Version 7: the inflated streams (positions and triangles, then ids and attributes), reused.
+  std::vector<uint8_t> streamScratch[2];
+  StreamInflater inflater;
   std::vector<uint64_t> gridScratch, residualScratch;
   PositionPredictor predictor;  // version 6: the positions' predictions
   std::vector<uint32_t> idScratch, localScratch;
@@ -529,6 +599,25 @@ struct LodReader::Impl {
     return Status::Ok();
   }
 
+  // A geometry stream: its size and bytes (versions 3 to 6); version 7: `uv code` (stored bytes
+  // x 2 + deflated), then, when deflated, `uv rawBytes` (at most `bound`, the codec's own bound
+  // for the unit's counts, and what deflate can give from the stored bytes) and the deflated
+  // bytes, inflated into `scratch`. Gives back the codec's bytes and their count `n`; null when
+  // the stream is truncated, out of bounds or does not inflate to exactly rawBytes.
+  const uint8_t* TakeStream(Decoder& d, size_t bound, std::vector<uint8_t>& scratch, size_t& n) {
+    const uint64_t code = d.uv();
+    const bool deflated = info.version >= kDeflateVersion && (code & 1);
+    const uint64_t stored = info.version >= kDeflateVersion ? code >> 1 : code;
+    const uint64_t raw = deflated ? d.uv() : stored;
+    if (d.overrun || stored > d.left()) return nullptr;
+    const uint8_t* p = d.take(size_t(stored));
+    n = size_t(raw);
+    if (!deflated) return p;
+    if (raw == 0 || raw > bound || raw > stored * kMaxDeflateRatio + 64) return nullptr;
+    scratch.resize(size_t(raw));
+    return inflater.Inflate(p, size_t(stored), scratch.data(), size_t(raw)) ? scratch.data() : nullptr;
+  }
+
   // Decodes the geometry blob at [offset, offset + bytes) (node id's) into `unit`.
   Status DecodeUnit(uint64_t offset, uint64_t bytes, uint32_t id) {
     unit.offset = ~uint64_t(0);
@@ -553,11 +642,14 @@ struct LodReader::Impl {
     unit.firstNode = first;
     unit.nodeCount = count;
     unit.faceStart.assign(size_t(count) + 1, 0);
+    // Version 7: the triangles may be deflated (at most kMaxDeflateRatio to 1); their inflated
+    // codec bytes bound the faces again below, before anything of their size is allocated.
+    const uint64_t maxFaces = info.version >= kDeflateVersion ? bytes * kMaxDeflateRatio : bytes;
     for (uint64_t i = 0; i < count; ++i) {
       const uint64_t fc = d.uv();
-      if (d.overrun || fc == 0 || fc > bytes) return Status::Invalid(bad + "a face count out of range");
+      if (d.overrun || fc == 0 || fc > maxFaces) return Status::Invalid(bad + "a face count out of range");
       unit.faceStart[size_t(i) + 1] = unit.faceStart[size_t(i)] + fc;
-      if (unit.faceStart[size_t(i) + 1] > bytes) return Status::Invalid(bad + "more faces than its blob can hold");
+      if (unit.faceStart[size_t(i) + 1] > maxFaces) return Status::Invalid(bad + "more faces than its blob can hold");
     }
     const size_t fc = size_t(unit.faceStart.back());
     if (fc > 0x3FFFFFFF) return Status::Invalid(bad + "more faces than a unit can hold");  // 3 x fc corners: u32
@@ -570,18 +662,20 @@ struct LodReader::Impl {
     const uint64_t firstNew = d.uv();
     if (d.overrun || qmin[0] >= cells || qmin[1] >= cells || qmin[2] >= cells || firstNew > info.globalVertices)
       return Status::Invalid(bad + "its grid corner or first vertex id is out of range");
-    // Positions.
+    // Positions and triangles: their streams first (version 7: inflated), then the faces checked
+    // against the triangles' codec bytes (at least a byte a face), then decoded.
     const size_t stride = wide ? 12 : 8;
-    uint64_t n = d.uv();
-    const uint8_t* p = d.overrun || n > d.left() ? nullptr : d.take(size_t(n));
+    size_t n = 0, nt = 0;
+    const uint8_t* p = TakeStream(d, meshopt_encodeVertexBufferBound(vc, stride), streamScratch[0], n);
+    if (!p) return Status::Invalid(bad + "its positions do not decode");
+    const uint8_t* pt = TakeStream(d, meshopt_encodeIndexBufferBound(fc * 3, vc), streamScratch[1], nt);
+    if (!pt) return Status::Invalid(bad + "its triangles do not decode");
+    if (fc > nt) return Status::Invalid(bad + "more faces than its triangles can hold");
     positionScratch.resize(vc * stride);
-    if (!p || meshopt_decodeVertexBuffer(positionScratch.data(), vc, stride, p, size_t(n)) != 0)
+    if (meshopt_decodeVertexBuffer(positionScratch.data(), vc, stride, p, n) != 0)
       return Status::Invalid(bad + "its positions do not decode");
-    // Triangles.
-    n = d.uv();
-    p = d.overrun || n > d.left() ? nullptr : d.take(size_t(n));
     unit.corners.resize(fc * 3);
-    if (!p || meshopt_decodeIndexBuffer(unit.corners.data(), fc * 3, 4, p, size_t(n)) != 0)
+    if (meshopt_decodeIndexBuffer(unit.corners.data(), fc * 3, 4, pt, nt) != 0)
       return Status::Invalid(bad + "its triangles do not decode");
     for (uint32_t v : unit.corners)
       if (v >= vc) return Status::Invalid(bad + "face index out of range");
@@ -630,17 +724,15 @@ struct LodReader::Impl {
     if (fresh > info.globalVertices - firstNew) return Status::Invalid(bad + "vertex id out of range");
     idScratch.resize(vc - fresh);
     if (vc > fresh) {
-      n = d.uv();
-      p = d.overrun || n > d.left() ? nullptr : d.take(size_t(n));
-      if (!p || meshopt_decodeIndexSequence(idScratch.data(), idScratch.size(), 4, p, size_t(n)) != 0)
+      p = TakeStream(d, meshopt_encodeIndexSequenceBound(vc - fresh, size_t(info.globalVertices)), streamScratch[0], n);
+      if (!p || meshopt_decodeIndexSequence(idScratch.data(), idScratch.size(), 4, p, n) != 0)
         return Status::Invalid(bad + "its vertex ids do not decode");
     }
     // Attribute streams (versions 5, 6): 4 bytes a vertex each.
     auto stream = [&](const char* what, std::string& why) -> const uint8_t* {
-      n = d.uv();
-      p = d.overrun || n > d.left() ? nullptr : d.take(size_t(n));
+      p = TakeStream(d, meshopt_encodeVertexBufferBound(vc, 4), streamScratch[0], n);
       positionScratch.resize(vc * 4);
-      if (!p || meshopt_decodeVertexBuffer(positionScratch.data(), vc, 4, p, size_t(n)) != 0) {
+      if (!p || meshopt_decodeVertexBuffer(positionScratch.data(), vc, 4, p, n) != 0) {
         why = bad + "its " + what + " do not decode";
         return nullptr;
       }
@@ -682,6 +774,11 @@ struct LodReader::Impl {
       }
     }
     localScratch.assign(vc, kNoParent);
+    // The codecs' buffers go too (version 7: the inflated streams and zlib's state).
+    std::vector<uint8_t>().swap(positionScratch);
+    std::vector<uint8_t>().swap(streamScratch[0]);
+    std::vector<uint8_t>().swap(streamScratch[1]);
+    inflater.Release();
     unit.offset = offset;
     return Status::Ok();
   }
@@ -1108,7 +1205,8 @@ const LodAttributes* LodReader::attributes(uint32_t id) const {
 size_t LodReader::residentBytes() const {
   const Impl& m = *impl_;
   size_t b = sizeof(LodReader) + sizeof(Impl) + m.levels.capacity() * sizeof(LevelEntry) + m.roots.capacity() * 4 +
-             m.buffer.capacity() + m.positionScratch.capacity() +
+             m.buffer.capacity() + m.positionScratch.capacity() + m.streamScratch[0].capacity() +
+             m.streamScratch[1].capacity() + m.inflater.bytes() +
              (m.gridScratch.capacity() + m.residualScratch.capacity()) * 8 + m.predictor.bytes() +
              (m.idScratch.capacity() + m.localScratch.capacity()) * 4 + m.unit.bytes() +
              m.indexCache.capacity() * sizeof(IndexEntry) + m.blockStarts.capacity() * 4 +

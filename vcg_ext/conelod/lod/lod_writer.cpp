@@ -22,6 +22,7 @@
 #include <numeric>
 
 #include <meshoptimizer.h>
+#include <zlib.h>
 
 #include "conelod/lod/lod_internal.h"
 #include "conelod/mesh/mesh_check.h"
@@ -35,6 +36,50 @@ using namespace lodfile;
 double Seconds(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
+
+// Version 7's geometry streams: each codec output is deflated (raw RFC 1951, zlib level 9) and
+// stored so when that is smaller, as `uv code` = bytes x 2 + 1, `uv rawBytes`, the deflated bytes;
+// else as it is, `uv code` = bytes x 2, the bytes (lod_format.md, "Geometry"). One z_stream, reset
+// for each stream (its 256 KiB state is allocated once).
+class StreamDeflater {
+ public:
+  StreamDeflater() { ok_ = deflateInit2(&z_, 9, Z_DEFLATED, -15, 9, Z_DEFAULT_STRATEGY) == Z_OK; }
+  ~StreamDeflater() {
+    if (ok_) deflateEnd(&z_);
+  }
+  StreamDeflater(const StreamDeflater&) = delete;
+  StreamDeflater& operator=(const StreamDeflater&) = delete;
+  // Appends the stream to `e`; gives back the bytes it took (its code and size fields not counted).
+  // False: zlib failed (out of memory).
+  bool put(Encoder& e, const std::vector<uint8_t>& data, uint64_t& stored) {
+    if (!ok_ || deflateReset(&z_) != Z_OK) return false;
+    out_.resize(deflateBound(&z_, uLong(data.size())) + 16);
+    z_.next_in = const_cast<Bytef*>(data.data());
+    z_.avail_in = uInt(data.size());
+    z_.next_out = out_.data();
+    z_.avail_out = uInt(out_.size());
+    if (deflate(&z_, Z_FINISH) != Z_STREAM_END) return false;
+    const size_t z = size_t(z_.total_out);
+    Encoder sizes;
+    sizes.uv(uint64_t(data.size()));
+    if (z + sizes.bytes.size() < data.size()) {
+      e.uv(uint64_t(z) * 2 + 1);
+      e.raw(sizes.bytes.data(), sizes.bytes.size());
+      e.raw(out_.data(), z);
+      stored = z;
+    } else {
+      e.uv(uint64_t(data.size()) * 2);
+      e.raw(data.data(), data.size());
+      stored = data.size();
+    }
+    return true;
+  }
+
+ private:
+  z_stream z_{};
+  bool ok_ = false;
+  std::vector<uint8_t> out_;
+};
 
 // Buffered output with absolute-offset patching (FILE* with a large buffer).
 class OutFile {
@@ -621,6 +666,7 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
     std::vector<uint64_t> qrel, residual;
     std::vector<uint8_t> lanes, ibuf;
     PositionPredictor predictor;
+    StreamDeflater deflater;
     std::vector<uint8_t> attr;
     Encoder e;
     meshopt_encodeVertexVersion(kVertexCodecVersion);
@@ -724,12 +770,11 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
           buf.resize(meshopt_encodeVertexBufferBound(vc, stride));
           buf.resize(meshopt_encodeVertexBuffer(buf.data(), buf.size(), lanes.data(), vc, stride));
           if (buf.empty()) return fail("internal error: the vertex codec failed");
-          e.uv(buf.size());
-          e.raw(buf.data(), buf.size());
-          positionBytes += buf.size();
-          e.uv(ibuf.size());
-          e.raw(ibuf.data(), ibuf.size());
-          indexBytes += ibuf.size();
+          uint64_t stored = 0;
+          if (!deflater.put(e, buf, stored)) return fail("internal error: deflate failed");
+          positionBytes += stored;
+          if (!deflater.put(e, ibuf, stored)) return fail("internal error: deflate failed");
+          indexBytes += stored;
           mask.assign((vc + 7) / 8, 0);
           old.clear();
           for (size_t v = 0; v < vc; ++v) {
@@ -747,18 +792,15 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
             buf.resize(meshopt_encodeIndexSequenceBound(old.size(), size_t(globalVertices)));
             buf.resize(meshopt_encodeIndexSequence(buf.data(), buf.size(), old.data(), old.size()));
             if (buf.empty()) return fail("internal error: the index sequence codec failed");
-            e.uv(buf.size());
-            e.raw(buf.data(), buf.size());
-            idBytes += buf.size();
+            if (!deflater.put(e, buf, stored)) return fail("internal error: deflate failed");
+            idBytes += stored;
           }
           // Attribute streams, 4 bytes a unit vertex each, in the unit's vertex order.
           auto stream = [&](uint64_t& counter) {
             buf.resize(meshopt_encodeVertexBufferBound(vc, 4));
             buf.resize(meshopt_encodeVertexBuffer(buf.data(), buf.size(), attr.data(), vc, 4));
-            if (buf.empty()) return false;
-            e.uv(buf.size());
-            e.raw(buf.data(), buf.size());
-            counter += buf.size();
+            if (buf.empty() || !deflater.put(e, buf, stored)) return false;
+            counter += stored;
             return true;
           };
           // Two u16 codes a vertex (normals, texture coordinates), little-endian.

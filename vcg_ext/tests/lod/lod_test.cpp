@@ -246,7 +246,7 @@ TEST_F(TinyLod, HeaderAndNodeStructure) {
   const LodFileInfo& i = r->info();
   const size_t H = b.dag.levels.size();
   ASSERT_GE(H, 3u) << "the tiny sphere should give a DAG of several levels";
-  EXPECT_EQ(i.version, 6u);
+  EXPECT_EQ(i.version, 7u);
   EXPECT_EQ(i.levels, int(H));
   EXPECT_EQ(i.inputFaces, 128u);
   EXPECT_EQ(i.inputVertices, 66u);
@@ -500,9 +500,9 @@ TEST_F(TinyLod, BadFilesAreRefusedWithTheirReason) {
   }
   {  // wrong version (a valid checksum: a file from a future writer)
     std::vector<uint8_t> b = good;
-    b[kChunkHeaderBytes] = 7;
+    b[kChunkHeaderBytes] = 8;
     Rechecksum(b, 0);
-    EXPECT_TRUE(has(OpenError(b), "unsupported .clod version 7")) << OpenError(b);
+    EXPECT_TRUE(has(OpenError(b), "unsupported .clod version 8")) << OpenError(b);
     // Files of the previous versions: named, with what to do.
     b[kChunkHeaderBytes] = 2;
     Rechecksum(b, 0);
@@ -722,16 +722,21 @@ TEST(Lod, Version3FilesStillRead) {
   }
 }
 
-// Version 6 (the compact index) reads as the version 4 and 5 files of the same DAG: every record,
-// every node's geometry and attributes, the header's figures. Both are stored, written by main at
-// 0d3679e (before version 6) with `conelod lod build` of data/sphere512.ply (sphere512_v4b.clod)
-// and of data/sphere512_color.ply, the same sphere with a colour and a normal per vertex
-// (sphere512_color_v5.clod); version 6 is built here the way `conelod lod build` builds it.
+// Version 7 (deflated streams) reads as the version 4, 5 and 6 files of the same DAG: every
+// record, every node's geometry and attributes, the header's figures. They are stored: written by
+// main at 0d3679e (before version 6) with `conelod lod build` of data/sphere512.ply
+// (sphere512_v4b.clod) and of data/sphere512_color.ply, the same sphere with a colour and a normal
+// per vertex (sphere512_color_v5.clod), and by main at 66bfa1b (version 6, before version 7:
+// sphere512_v6.clod, sphere512_color_v6.clod), all at the precision then the default (2e-5);
+// version 7 is built here the way `conelod lod build --precision 2e-5` builds it.
 TEST(Lod, Version4And5FilesStillRead) {
   const std::string dir = std::string(CONELOD_SOURCE_DIR) + "/vcg_ext/tests/lod/data/";
-  for (const std::string name : {"sphere512", "sphere512_color"}) {
-    SCOPED_TRACE(name);
-    const std::string old = dir + (name == "sphere512" ? "sphere512_v4b.clod" : "sphere512_color_v5.clod");
+  for (const std::string file :
+       {"sphere512_v4b.clod", "sphere512_v6.clod", "sphere512_color_v5.clod", "sphere512_color_v6.clod"}) {
+    SCOPED_TRACE(file);
+    const std::string name = file.substr(0, file.rfind("_v"));
+    const uint32_t oldVersion = uint32_t(file[file.rfind("_v") + 2] - '0');
+    const std::string old = dir + file;
     PlyMesh ply;
     ASSERT_EQ(ReadPly(dir + name + ".ply", ply), "");
     IndexedMesh im;
@@ -744,16 +749,19 @@ TEST(Lod, Version4And5FilesStillRead) {
     for (const auto& n : ply.normals) at.normals.push_back(EncodeLodNormal(vcg::Point3f(n[0], n[1], n[2])));
     for (const auto& p : ply.positions) im.positions.emplace_back(p[0], p[1], p[2]);
     im.faces = ply.triangles;
-    const std::string path = TempPath(name + "_v6.clod");
-    ASSERT_TRUE(BuildLodFile(im, LodBuildParams(), path, nullptr, Progress(), at.empty() ? nullptr : &at).ok());
+    const std::string path = TempPath(name + "_v7.clod");
+    LodBuildParams params;
+    params.precision = 2e-5;
+    ASSERT_TRUE(BuildLodFile(im, params, path, nullptr, Progress(), at.empty() ? nullptr : &at).ok());
     std::unique_ptr<LodReader> ro, rn;
     Status s = LodReader::Open(old, ro);
     ASSERT_TRUE(s.ok()) << s.message;
     s = LodReader::Open(path, rn);
     ASSERT_TRUE(s.ok()) << s.message;
     const LodFileInfo &io = ro->info(), &in = rn->info();
-    EXPECT_EQ(io.version, at.empty() ? 4u : 5u);
-    EXPECT_EQ(in.version, 6u);
+    EXPECT_EQ(io.version, oldVersion);
+    EXPECT_EQ(oldVersion, oldVersion == 6 ? 6u : at.empty() ? 4u : 5u);
+    EXPECT_EQ(in.version, 7u);
     EXPECT_EQ(io.colors, in.colors);
     EXPECT_EQ(io.normals, in.normals);
     EXPECT_EQ(in.colors, !at.colors.empty());
@@ -761,10 +769,10 @@ TEST(Lod, Version4And5FilesStillRead) {
     EXPECT_EQ(io.levelFaces, in.levelFaces);
     EXPECT_EQ(io.globalVertices, in.globalVertices);
     EXPECT_EQ(io.grid.step, in.grid.step);
-    // The same bytes but for the header (version, attributes field) and the index, 8 bytes a
-    // node smaller than before.
+    // Version 6: the same bytes but for the header (version, attributes field) and the index, 8
+    // bytes a node smaller than version 4 or 5; version 7: the deflated streams smaller again.
     const size_t oldBytes = ReadBytes(old).size(), newBytes = ReadBytes(path).size();
-    EXPECT_LT(newBytes + 5 * io.nodeCount, oldBytes);
+    EXPECT_LT(newBytes + (oldVersion == 6 ? 0 : 5 * io.nodeCount), oldBytes);
     for (uint32_t id = 0; id < in.nodeCount; ++id) {
       ASSERT_TRUE(ro->LoadNode(id).ok());
       s = rn->LoadNode(id);
@@ -833,9 +841,137 @@ TEST(Lod, PredictedPositionsRoundTripNarrowAndWide) {
   im.faces = ply.triangles;
   LodBuildStats st;
   const std::string path = TempPath("sphere512_predicted.clod");
-  ASSERT_TRUE(BuildLodFile(im, LodBuildParams(), path, &st).ok());
+  LodBuildParams p4;
+  p4.precision = 2e-5;  // the version 4 file's
+  ASSERT_TRUE(BuildLodFile(im, p4, path, &st).ok());
   std::remove(path.c_str());
   EXPECT_LT(st.positionBytes, 4490u);  // the version 4 file's positions (conelod lod build at 0d3679e)
+}
+
+// A geometry blob's streams (lod_format.md, "Geometry"; version 7): where each stream's code
+// lies, whether it is deflated, where its face counts lie.
+struct ParsedBlob {
+  std::vector<size_t> faceCountAt;  // each node's face count (a varint)
+  struct Stream {
+    size_t codeAt, rawAt, dataAt, bytes;  // rawAt: the rawBytes varint (deflated only, else 0)
+    bool deflated;
+  };
+  std::vector<Stream> streams;  // positions, triangles, then (when some vertex is not new) ids
+};
+ParsedBlob ParseBlob(const std::vector<uint8_t>& f, size_t at, size_t bytes) {
+  ParsedBlob x;
+  Decoder d(f.data() + at, bytes);
+  d.u32();
+  const uint8_t flags = uint8_t(d.take(1)[0]);
+  EXPECT_EQ(flags & ~kGeomWidePositions, 0);  // geometry only
+  d.uv();
+  const uint64_t count = d.uv();
+  for (uint64_t i = 0; i < count; ++i) {
+    x.faceCountAt.push_back(at + d.at());
+    d.uv();
+  }
+  const size_t vc = size_t(d.uv());
+  for (int i = 0; i < 4; ++i) d.uv();
+  auto stream = [&]() {
+    ParsedBlob::Stream st{at + d.at(), 0, 0, 0, false};
+    const uint64_t code = d.uv();
+    st.deflated = code & 1;
+    if (st.deflated) {
+      st.rawAt = at + d.at();
+      d.uv();
+    }
+    st.dataAt = at + d.at();
+    st.bytes = size_t(code >> 1);
+    d.take(st.bytes);
+    x.streams.push_back(st);
+  };
+  stream();
+  stream();
+  const uint8_t* mask = d.take((vc + 7) / 8);
+  size_t fresh = 0;
+  for (size_t v = 0; v < vc; ++v) fresh += (mask[v / 8] >> (v % 8)) & 1;
+  if (fresh < vc) stream();
+  EXPECT_EQ(d.left(), 0u);
+  EXPECT_FALSE(d.overrun);
+  return x;
+}
+
+// Version 7's deflated streams: the sphere's file has some (and some left as they are), reads
+// back exactly (the round trip on the grid), and a deflated stream whose sizes lie (each with a
+// valid CRC) is refused by name: rawBytes one off, the deflated flag cleared, a face count past
+// what the triangles' codec bytes can hold.
+TEST(Lod, DeflatedStreamsAreReadAndChecked) {
+  const IndexedMesh m = test::Sphere(5);
+  const std::string path = TempPath("sphere_deflated.clod");
+  LodBuildStats st;
+  ASSERT_TRUE(BuildLodFile(m, LodBuildParams(), path, &st).ok());
+  const std::vector<uint8_t> f = ReadBytes(path);
+  std::remove(path.c_str());
+  ASSERT_EQ(FullReadError(f), "");
+  {
+    std::unique_ptr<LodReader> r = OpenOk(f);
+    LodCut cut;
+    ASSERT_TRUE(RefineLod(*r, Eye(0, 0, 5, size_t(1) << 30, false), cut).ok());
+    IndexedMesh out;
+    ASSERT_TRUE(ExtractCutMesh(*r, cut, true, out).ok());
+    EXPECT_EQ(SortedFacePositions(out), SortedFacePositions(OnGrid(m, r->info().grid)));
+  }
+  const ParsedIndex x = ParseIndex(f);
+  size_t deflated[3] = {0, 0, 0}, streams[3] = {0, 0, 0}, node = 0;
+  std::map<size_t, size_t> blobNode;  // blob -> its first node
+  for (size_t i = 0; i < x.entries.size(); ++i) blobNode.emplace(x.entries[i].geometry, i);
+  for (const auto& b : blobNode) {
+    const ParsedBlob pb = ParseBlob(f, b.first, x.entries[b.second].geometryBytes);
+    for (size_t k = 0; k < pb.streams.size(); ++k) {
+      deflated[k] += pb.streams[k].deflated;
+      ++streams[k];
+    }
+    if (pb.streams[0].deflated && pb.streams[1].deflated && (f[pb.faceCountAt[0]] & 0x80))
+      node = b.second;  // the last such (level 0): both streams deflated, a face count of 2 bytes
+  }
+  std::printf("sphere (8192 faces): %zu units; deflated positions %zu, triangles %zu, ids %zu of %zu, %zu, %zu\n",
+              blobNode.size(), deflated[0], deflated[1], deflated[2], streams[0], streams[1], streams[2]);
+  EXPECT_GT(deflated[0], 0u);
+  EXPECT_GT(deflated[1], streams[1] / 2);
+  ASSERT_GT(node, 0u);
+  const size_t at = x.entries[node].geometry, bytes = x.entries[node].geometryBytes;
+  const ParsedBlob pb = ParseBlob(f, at, bytes);
+  auto geometryError = [&](const std::vector<uint8_t>& b) {
+    std::unique_ptr<LodReader> r = OpenOk(b);
+    Status s = r->LoadNode(uint32_t(node));
+    if (s.ok()) s = r->LoadGeometry(uint32_t(node));
+    return s.message;
+  };
+  for (size_t k = 0; k < 2; ++k) {
+    const char* what = k == 0 ? "its positions do not decode" : "its triangles do not decode";
+    {  // rawBytes one off (its varint's lowest digit changed: the same length)
+      std::vector<uint8_t> b = f;
+      uint8_t& low = b[pb.streams[k].rawAt];
+      low = uint8_t((low & 0x7F) ? low - 1 : low + 1);
+      RechecksumBlob(b, at, bytes);
+      EXPECT_NE(geometryError(b).find(what), std::string::npos) << geometryError(b);
+      b = f;
+      uint8_t& low2 = b[pb.streams[k].rawAt];
+      low2 = uint8_t((low2 & 0x7F) < 0x7F ? low2 + 1 : low2 - 1);
+      RechecksumBlob(b, at, bytes);
+      EXPECT_NE(geometryError(b), "");
+    }
+    {  // the deflated flag cleared: the same bytes read as they are
+      std::vector<uint8_t> b = f;
+      b[pb.streams[k].codeAt] ^= 1;
+      RechecksumBlob(b, at, bytes);
+      EXPECT_NE(geometryError(b), "");
+    }
+  }
+  {  // a face count far past the triangles' codec bytes, within the blob's bound
+    std::vector<uint8_t> b = f;
+    const size_t c = pb.faceCountAt[0];
+    ASSERT_FALSE(b[c + 1] & 0x80);  // two bytes: set the second digit to its largest
+    b[c + 1] = 0x7F;
+    RechecksumBlob(b, at, bytes);
+    const std::string e = geometryError(b);
+    EXPECT_NE(e.find("more faces than its triangles can hold"), std::string::npos) << e;
+  }
 }
 
 // The compact index (version 6): a few bytes a node, random access by block, and hostile entries
@@ -1807,8 +1943,8 @@ TEST(LodAttributes, ColouredRoundTripIsExactAndCoarseLevelsInterpolate) {
   std::unique_ptr<LodReader> r, rp;
   ASSERT_TRUE(LodReader::Open(path, r).ok());
   ASSERT_TRUE(LodReader::Open(plain, rp).ok());
-  EXPECT_EQ(r->info().version, 6u);
-  EXPECT_EQ(rp->info().version, 6u);
+  EXPECT_EQ(r->info().version, 7u);
+  EXPECT_EQ(rp->info().version, 7u);
   EXPECT_TRUE(r->info().colors && r->info().normals);
   EXPECT_FALSE(rp->info().colors || rp->info().normals);
 
@@ -2054,7 +2190,7 @@ TEST(LodTexCoords, UvStreamRoundTripIsExactUpToTheQuantization) {
   std::unique_ptr<LodReader> r;
   ASSERT_TRUE(LodReader::Open(path, r).ok());
   const LodFileInfo& info = r->info();
-  EXPECT_EQ(info.version, 6u);
+  EXPECT_EQ(info.version, 7u);
   EXPECT_TRUE(info.texCoords);
   EXPECT_FALSE(info.colors || info.normals);
   EXPECT_EQ(info.textureName, "atlas.png");
