@@ -89,13 +89,13 @@ const char* kSimplifyUsage =
     "  pass over the whole mesh reaches the target (not with attributes: those run in one piece)\n";
 
 int CmdSimplify(int argc, char** argv) {
-  Args a(argc, argv,
-         {"-o", "--target-faces", "--target-ratio", "--max-error", "--groups", "--quality-thr", "--boundary-weight",
-          "--level-ratio", "--threads", "--faces-per-part", "--samples", "--mode", "--attribute-weight",
-          "--partition-above"},
-         {"--json", "--no-condition1", "--no-condition2", "--lock-boundaries", "--no-optimal-placement",
-          "--preserve-boundary", "--no-preserve-normal", "--hierarchy", "--keep-cones", "--keep-components",
-          "--passes"});
+  Args a(
+      argc, argv,
+      {"-o", "--target-faces", "--target-ratio", "--max-error", "--groups", "--quality-thr", "--boundary-weight",
+       "--level-ratio", "--threads", "--faces-per-part", "--samples", "--mode", "--attribute-weight",
+       "--partition-above"},
+      {"--json", "--no-condition1", "--no-condition2", "--lock-boundaries", "--no-optimal-placement",
+       "--preserve-boundary", "--no-preserve-normal", "--hierarchy", "--keep-cones", "--keep-components", "--passes"});
   GroupQemParams p;
   const int targetFaces = a.integer("--target-faces", 0);
   const double targetRatio = a.num("--target-ratio", 0);
