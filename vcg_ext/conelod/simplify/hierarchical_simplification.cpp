@@ -20,11 +20,10 @@ constexpr uint32_t kNone = UINT32_MAX;
 constexpr int kMaxParts = 8;
 constexpr int kGroupsPerPart = 16;  // no group may hold more than 1/16 of a part's faces
 
-// The part (0..parts-1) of every face of `mesh`: recursive median cuts of the groups' centroids
-// (weighted by their face counts), so that every group lies in one part and the parts have about
-// the same number of faces. `parity` picks the axis of the first cut: 0 the longest extent of the
-// centroids, 1 the second longest (the next cut in each half takes the other one).
-std::vector<uint8_t> CutIntoParts(const IndexedMesh& mesh, const std::vector<int>& faceGroup, int parts, int parity) {
+}  // namespace
+
+std::vector<uint8_t> CutGroupsIntoParts(const IndexedMesh& mesh, const std::vector<int>& faceGroup, int parts,
+                                        int parity) {
   struct Group {
     vcg::Point3d sum{0, 0, 0};
     size_t faces = 0;
@@ -60,7 +59,7 @@ std::vector<uint8_t> CutIntoParts(const IndexedMesh& mesh, const std::vector<int
     const vcg::Point3d dim = box.Dim();
     int order[3] = {0, 1, 2};
     std::sort(order, order + 3, [&](int a, int b) { return dim[a] > dim[b] || (dim[a] == dim[b] && a < b); });
-    const int axis = order[(parity + c.depth) % 2];
+    const int axis = parity < 0 ? order[0] : order[(parity + c.depth) % 2];
     std::sort(groups.begin() + long(c.begin), groups.begin() + long(c.end), [axis](const Group& a, const Group& b) {
       const double ca = a.sum[axis] / double(a.faces), cb = b.sum[axis] / double(b.faces);
       return ca < cb || (ca == cb && a.id < b.id);
@@ -78,6 +77,8 @@ std::vector<uint8_t> CutIntoParts(const IndexedMesh& mesh, const std::vector<int
   for (size_t f = 0; f < part.size(); ++f) part[f] = partOfGroup[size_t(faceGroup[f])];
   return part;
 }
+
+namespace {
 
 // One part of a level: its faces and vertices (indices into the level's input, increasing), the
 // sub-mesh and groups handed to the simplifier, and what it gave back.
@@ -207,7 +208,7 @@ Status SimplifyInParts(const IndexedMesh& below, const std::vector<std::vector<i
       break;
     }
   }
-  const std::vector<uint8_t> partOfFace = CutIntoParts(below, groups[cutLayer], parts, parity);
+  const std::vector<uint8_t> partOfFace = CutGroupsIntoParts(below, groups[cutLayer], parts, parity);
   // A vertex used by faces of two parts is shared: it stays where it is at this level.
   std::vector<uint8_t> firstPart(below.positions.size(), 0xff), shared(below.positions.size(), 0);
   for (size_t f = 0; f < below.faces.size(); ++f)

@@ -16,6 +16,7 @@
 // parts depends on the mesh only, never on the number of threads: the output is deterministic.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "conelod/grouping/group_hierarchy.h"
@@ -61,6 +62,13 @@ struct SimplifiedLevel {
   std::vector<float> corner;
   size_t seamVertices = 0;  // with attributes: the level below's seam vertices (AttributeQuadrics)
 };
+
+// The part (0..parts-1) of every face of `mesh`: recursive median cuts of the groups' centroids
+// (weighted by their face counts), so that every group lies in one part and the parts have about
+// the same number of faces. `parity` picks each cut's axis: -1 the longest extent of the centroids
+// every time; 0 / 1 the longest / the second longest first, the next cut in each half the other one.
+std::vector<uint8_t> CutGroupsIntoParts(const IndexedMesh& mesh, const std::vector<int>& faceGroup, int parts,
+                                        int parity);
 
 // The threads the parts of a level run on: params.threads, or one per core when it is 0.
 int SimplificationThreads(const HierarchicalSimplificationParams& params);

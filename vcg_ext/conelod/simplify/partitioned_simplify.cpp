@@ -15,6 +15,7 @@
 #include <vcg/space/box3.h>
 
 #include "conelod/mesh/mesh_check.h"
+#include "conelod/simplify/hierarchical_simplification.h"
 #include "conelod/parallel.h"
 
 namespace conelod {
@@ -32,61 +33,6 @@ double ThreadCpuSeconds() {
 
 double Seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
-
-// The part (0..parts-1) of every face: recursive median cuts of the groups' centroids, weighted by
-// their face counts, along the longest extent of the centroids of each half, so that every group
-// lies in one part and the parts have about the same number of faces.
-std::vector<uint8_t> CutGroupsIntoParts(const IndexedMesh& mesh, const std::vector<int>& faceGroup, int parts) {
-  struct Group {
-    vcg::Point3d sum{0, 0, 0};
-    size_t faces = 0;
-    int id = 0;
-    double at(int axis) const { return sum[axis] / double(faces); }
-  };
-  const int maxId = faceGroup.empty() ? 0 : *std::max_element(faceGroup.begin(), faceGroup.end());
-  std::vector<Group> groups(size_t(maxId) + 1);
-  for (size_t f = 0; f < mesh.faces.size(); ++f) {
-    const auto& t = mesh.faces[f];
-    Group& g = groups[size_t(faceGroup[f])];
-    g.sum += vcg::Point3d::Construct(mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]) / 3.0;
-    ++g.faces;
-  }
-  for (size_t i = 0; i < groups.size(); ++i) groups[i].id = int(i);
-  groups.erase(std::remove_if(groups.begin(), groups.end(), [](const Group& g) { return g.faces == 0; }), groups.end());
-  std::vector<uint8_t> partOfGroup(size_t(maxId) + 1, 0);
-  struct Cut {
-    size_t begin, end;
-    int parts, firstPart;
-  };
-  std::vector<Cut> todo{{0, groups.size(), parts, 0}};
-  while (!todo.empty()) {
-    const Cut c = todo.back();
-    todo.pop_back();
-    if (c.parts == 1 || c.end - c.begin < 2) {
-      for (size_t i = c.begin; i < c.end; ++i) partOfGroup[size_t(groups[i].id)] = uint8_t(c.firstPart);
-      continue;
-    }
-    vcg::Box3d box;
-    for (size_t i = c.begin; i < c.end; ++i) box.Add(vcg::Point3d(groups[i].at(0), groups[i].at(1), groups[i].at(2)));
-    const vcg::Point3d dim = box.Dim();
-    const int axis = dim[0] >= dim[1] && dim[0] >= dim[2] ? 0 : dim[1] >= dim[2] ? 1 : 2;
-    std::sort(groups.begin() + long(c.begin), groups.begin() + long(c.end), [axis](const Group& a, const Group& b) {
-      const double ca = a.at(axis), cb = b.at(axis);
-      return ca < cb || (ca == cb && a.id < b.id);
-    });
-    size_t total = 0;
-    for (size_t i = c.begin; i < c.end; ++i) total += groups[i].faces;
-    size_t mid = c.begin, acc = 0;
-    while (mid < c.end - 1 && 2 * (acc + groups[mid].faces) <= total) acc += groups[mid++].faces;
-    if (mid == c.begin) ++mid;
-    const int half = c.parts / 2;
-    todo.push_back({c.begin, mid, half, c.firstPart});
-    todo.push_back({mid, c.end, c.parts - half, c.firstPart + half});
-  }
-  std::vector<uint8_t> part(mesh.faces.size());
-  for (size_t f = 0; f < part.size(); ++f) part[f] = partOfGroup[size_t(faceGroup[f])];
-  return part;
 }
 
 struct Part {
@@ -187,7 +133,7 @@ Status SimplifyPartitioned(const IndexedMesh& mesh, const std::vector<int>& face
 
   const auto start = std::chrono::steady_clock::now();
   ps.parts = parts;
-  const std::vector<uint8_t> partOfFace = CutGroupsIntoParts(mesh, faceGroup, parts);
+  const std::vector<uint8_t> partOfFace = CutGroupsIntoParts(mesh, faceGroup, parts, -1);
   // The faces of each part, in input order (a counting sort).
   std::vector<size_t> begin(size_t(parts) + 1, 0);
   for (uint8_t p : partOfFace) ++begin[size_t(p) + 1];
