@@ -446,6 +446,48 @@ double CodeDistance(const Codes& x, const Codes& y) {
   return d;
 }
 
+// The largest normal-cone half-angle of the clusters of level `level` (radians): the grouping's
+// threshold grown once per level, at most 90 degrees.
+double ClusterAngle(const LodBuildParams& params, int level) {
+  return std::min(90.0, params.grouping.coneThresholdDeg * std::pow(params.grouping.thresholdGrowth, level)) *
+         (NormalCone::kPi / 180);
+}
+
+// A group's error: the largest error of the clusters it was made from plus its own distance,
+// strictly above that largest one even in float (a tiny step when the distance is 0), so that
+// errors grow up the DAG.
+float GroupErrorAbove(double maxBelow, double distance) {
+  float ef = float(maxBelow + distance);
+  const float floor = float(maxBelow);
+  if (!(ef > floor)) ef = std::nextafter(std::max(floor, 0.f), std::numeric_limits<float>::infinity());
+  return ef;
+}
+
+// A simplified group's faces (DAG vertex ids) as clusters of the streamed next level: the faces
+// and their clusters go to `out` / `outCluster`, each new cluster's face count to `nextFaces`,
+// and its record to N (created by group `creator`, error `error`, DAG node `node` in `nextNode`).
+void AppendStreamedClusters(const std::vector<Face>& faces, const std::vector<vcg::Point3f>& positions,
+                            const LodBuildParams& params, double angle, int creator, float error, uint32_t node,
+                            std::vector<uint32_t>& clusterOfFace, LodDag::Level& N, std::vector<Face>& out,
+                            std::vector<uint32_t>& outCluster, std::vector<uint32_t>& nextFaces,
+                            std::vector<uint32_t>& nextNode) {
+  const uint32_t NC = GrowClusters(faces, positions, params.clusterFaces, angle, clusterOfFace);
+  const uint32_t base = uint32_t(N.clusterCount());
+  const size_t firstNext = nextFaces.size();
+  nextFaces.resize(firstNext + NC, 0);
+  for (size_t f = 0; f < faces.size(); ++f) {
+    out.push_back(faces[f]);
+    outCluster.push_back(base + clusterOfFace[f]);
+    ++nextFaces[firstNext + clusterOfFace[f]];
+  }
+  for (uint32_t c = 0; c < NC; ++c) {
+    N.clusterGroup.push_back(-1);
+    N.clusterCreator.push_back(creator);
+    N.clusterError.push_back(error);
+    nextNode.push_back(node);
+  }
+}
+
 // A group's faces are in global ids; with places (texture coordinates) one position may carry
 // several ids (wedges: one per UV). The collapse runs on the group welded by place, each face
 // corner carrying its wedge's attributes (so the attribute quadrics see the seams: a seam vertex
@@ -697,7 +739,6 @@ std::vector<Face> FacesByPlace(const std::vector<Face>& faces, const std::vector
 Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSpill* spill, size_t inputFaces,
                    double diagonal, unsigned threads, int firstK, int leafDepth, int depth,
                    std::vector<uint32_t>& clusterNode, LodDag& dag) {
-  const double kDeg = NormalCone::kPi / 180;
   Status s;
   // Texture seams: the ids of one position are one place for the topology (clusters, groups,
   // frozen borders); the faces by place (FacesByPlace) where the ids would split them.
@@ -810,8 +851,7 @@ Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSp
     std::vector<double> maxChild(static_cast<size_t>(G), 0.0);
     for (uint32_t c = 0; c < L.clusterCount(); ++c)
       maxChild[size_t(group[c])] = std::max(maxChild[size_t(group[c])], double(L.clusterError[c]));
-    const double angle =
-        std::min(90.0, params.grouping.coneThresholdDeg * std::pow(params.grouping.thresholdGrowth, k + 1)) * kDeg;
+    const double angle = ClusterAngle(params, k + 1);
     std::vector<uint32_t> clusterOfFace, nextNode;
     for (int g = 0; g < G; ++g) {
       GroupResult& r = results[size_t(g)];
@@ -832,12 +872,7 @@ Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSp
           u[size_t(i)] = t[size_t(i)] < V ? r.localToGlobal[t[size_t(i)]] : firstNew + (t[size_t(i)] - V);
         faces.push_back(u);
       }
-      // Errors grow strictly up the DAG (a tiny relative step when the distance is 0), so that
-      // a group's error is above every error below it even in float.
-      double e = maxChild[size_t(g)] + r.distance;
-      float ef = float(e);
-      const float floor = float(maxChild[size_t(g)]);
-      if (!(ef > floor)) ef = std::nextafter(std::max(floor, 0.f), std::numeric_limits<float>::infinity());
+      const float ef = GroupErrorAbove(maxChild[size_t(g)], r.distance);
       groupError[size_t(g)] = ef;
       const uint32_t C =
           GrowClusters(wedges ? byPlace(faces) : faces, dag.positions, params.clusterFaces, angle, clusterOfFace);
@@ -884,7 +919,6 @@ Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSp
 Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodSpill& spill, size_t inputFaces,
                     double diagonal, unsigned threads, int firstK, int leafDepth, std::vector<uint32_t>& clusterNode,
                     std::vector<uint32_t>& clusterFaces, LodDag& dag) {
-  const double kDeg = NormalCone::kPi / 180;
   const double cap = params.maxGroupError;
   auto fail = [&](const Status& s) {
     dag = LodDag();
@@ -960,8 +994,7 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
     // Pass 2: each chunk's groups, simplified, and its part of level k + 1.
     const int per =
         params.fineGroupClusters > 0 && 8 * F > inputFaces ? params.fineGroupClusters : params.groupClusters;
-    const double angle =
-        std::min(90.0, params.grouping.coneThresholdDeg * std::pow(params.grouping.thresholdGrowth, k + 1)) * kDeg;
+    const double angle = ClusterAngle(params, k + 1);
     LodDag::Level& L = dag.levels[size_t(k)];
     L.clusterGroup.assign(C, -1);
     L.groupError.clear();
@@ -1041,27 +1074,10 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
           for (size_t i = 0; i < 3; ++i) u[i] = t[i] < RV ? verts[res.localToGlobal[t[i]]] : firstNew + (t[i] - RV);
           faces.push_back(u);
         }
-        // As BuildLevels: errors grow strictly up the DAG.
-        const double e = maxChild[size_t(g)] + res.distance;
-        float ef = float(e);
-        const float floor = float(maxChild[size_t(g)]);
-        if (!(ef > floor)) ef = std::nextafter(std::max(floor, 0.f), std::numeric_limits<float>::infinity());
+        const float ef = GroupErrorAbove(maxChild[size_t(g)], res.distance);
         L.groupError.push_back(ef);
-        const uint32_t NC = GrowClusters(faces, dag.positions, params.clusterFaces, angle, clusterOfFace);
-        const uint32_t base = uint32_t(N.clusterCount());
-        const size_t firstNext = nextFaces.size();
-        nextFaces.resize(firstNext + NC, 0);
-        for (size_t f = 0; f < faces.size(); ++f) {
-          out.push_back(faces[f]);
-          outCluster.push_back(base + clusterOfFace[f]);
-          ++nextFaces[firstNext + clusterOfFace[f]];
-        }
-        for (uint32_t c = 0; c < NC; ++c) {
-          N.clusterGroup.push_back(-1);
-          N.clusterCreator.push_back(groupBase + g);
-          N.clusterError.push_back(ef);
-          nextNode.push_back(clusterNode[c0]);
-        }
+        AppendStreamedClusters(faces, dag.positions, params, angle, groupBase + g, ef, clusterNode[c0], clusterOfFace,
+                               N, out, outCluster, nextFaces, nextNode);
         res = GroupResult();
       }
       newFaces += out.size();
@@ -1123,7 +1139,6 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
     return Status::Invalid("the largest group error must lie in (0, 1] (a fraction of the diagonal)");
   if (!(params.grouping.coneThresholdDeg > 0) || !(params.grouping.thresholdGrowth >= 1))
     return Status::Invalid("the cone threshold must be > 0 and its growth >= 1");
-  const double kDeg = NormalCone::kPi / 180;
   const vcg::Box3d box = UsedVertexBox(mesh);
   const double diagonal = box.IsNull() ? 0.0 : box.Diag();
   const size_t inputFaces = mesh.faces.size();
@@ -1175,8 +1190,7 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
             if (wedges)
               for (uint32_t& v : faces.back()) v = place[v];
           }
-          count[l] = GrowClusters(faces, dag.positions, params.clusterFaces,
-                                  std::min(90.0, params.grouping.coneThresholdDeg) * kDeg, local[l]);
+          count[l] = GrowClusters(faces, dag.positions, params.clusterFaces, ClusterAngle(params, 0), local[l]);
         }
       });
       LodDag::Level& L0 = dag.levels[0];
@@ -1196,7 +1210,7 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
   if (depth == 0) {
     LodDag::Level& L0 = dag.levels[0];
     const uint32_t C = GrowClusters(wedges ? byPlace(L0.faces) : L0.faces, dag.positions, params.clusterFaces,
-                                    std::min(90.0, params.grouping.coneThresholdDeg) * kDeg, L0.faceCluster);
+                                    ClusterAngle(params, 0), L0.faceCluster);
     L0.clusterGroup.assign(C, -1);
     L0.clusterCreator.assign(C, -1);
     L0.clusterError.assign(C, 0.f);
@@ -1215,7 +1229,6 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
   const size_t leaves = in.chunkFaces.size();
   if (in.depth < 1 || leaves != size_t(1) << in.depth || in.border.size() != in.positions.size())
     return Status::Invalid("internal error: bad LOD chunks");
-  const double kDeg = NormalCone::kPi / 180;
   const double diagonal = in.box.IsNull() ? 0.0 : in.box.Diag();
   const size_t inputFaces = in.inputFaces;
   const unsigned threads = unsigned(std::max(1, SimplificationThreads(params.simplification)));
@@ -1234,9 +1247,7 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
   std::vector<Face> out;
   std::vector<uint32_t> outCluster;
   const int per = params.fineGroupClusters > 0 ? params.fineGroupClusters : params.groupClusters;  // level 0
-  const double angle0 = std::min(90.0, params.grouping.coneThresholdDeg) * kDeg;
-  const double angle1 =
-      std::min(90.0, params.grouping.coneThresholdDeg * std::pow(params.grouping.thresholdGrowth, 1)) * kDeg;
+  const double angle0 = ClusterAngle(params, 0), angle1 = ClusterAngle(params, 1);
   LodDag::Level sub;  // the chunk's level 0 (clusters numbered within the chunk)
   std::vector<int> group;
   std::vector<uint32_t> globalCluster, clusterOfFace;
@@ -1309,25 +1320,10 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
           u[size_t(i)] = t[size_t(i)] < V ? r.localToGlobal[t[size_t(i)]] : firstNew + (t[size_t(i)] - V);
         faces.push_back(u);
       }
-      // As BuildLevels: the error grows strictly (level 0's clusters have error 0).
-      float ef = float(r.distance);
-      if (!(ef > 0.f)) ef = std::nextafter(0.f, std::numeric_limits<float>::infinity());
+      const float ef = GroupErrorAbove(0.0, r.distance);  // level 0's clusters have error 0
       L0.groupError.push_back(ef);
-      const uint32_t NC = GrowClusters(faces, dag.positions, params.clusterFaces, angle1, clusterOfFace);
-      const uint32_t base = uint32_t(N.clusterCount());
-      const size_t firstNext = nextFaces.size();
-      nextFaces.resize(firstNext + NC, 0);
-      for (size_t f = 0; f < faces.size(); ++f) {
-        out.push_back(faces[f]);
-        outCluster.push_back(base + clusterOfFace[f]);
-        ++nextFaces[firstNext + clusterOfFace[f]];
-      }
-      for (uint32_t c = 0; c < NC; ++c) {
-        N.clusterGroup.push_back(-1);
-        N.clusterCreator.push_back(groupBase + g);
-        N.clusterError.push_back(ef);
-        nextNode.push_back(uint32_t(l));
-      }
+      AppendStreamedClusters(faces, dag.positions, params, angle1, groupBase + g, ef, uint32_t(l), clusterOfFace, N,
+                             out, outCluster, nextFaces, nextNode);
       r = GroupResult();
     }
     globalCluster.resize(F);
