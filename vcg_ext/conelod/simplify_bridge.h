@@ -25,67 +25,11 @@ namespace conelod {
 // feature-preserving simplification (0 = V_K smooth, 1 = V_M feature line, 2 = V_C feature vertex).
 inline const char* VertexClassAttributeName() { return "conelod_vertex_class"; }
 
-// Issue 26. A half-edge collapse keeps the survivor where it was, so its own colour is the input
-// surface's colour at that one point; but each output vertex now stands for the input vertices
-// its collapses took over (FeatureSimplifyResult::survivor). Gives each output vertex the colour
-// (RGBA, 0-255, rounded and clamped) that Garland & Heckbert's extended quadric of those input
-// vertices gives at its position (as attribute_quadric.h, with positions that do not move): on
-// each input face of each such vertex the colour is linear in position, and the output vertex
-// takes the mean of those linear functions at its position, each face weighted by a third of its
-// area per corner it has in the cluster. A constant colour stays exact, so does a colour linear
-// in position on a flat region. A vertex whose faces all have zero area keeps its colour. Nothing
-// is done when the mesh has no per-vertex colour. Call on the mesh as it was given to
-// ToIndexedMesh (before WriteSimplifiedMesh); only on success. Texture coordinates and normals
-// stay the survivor's own: the texture is sampled at the survivor's exact coordinates, which are
-// right for its unchanged position.
-template <class MeshType>
-void MeanSurvivorColours(MeshType& m, const FeatureSimplifyResult& r) {
-  if (!vcg::tri::HasPerVertexColor(m)) return;
-  using VertexPointer = typename MeshType::VertexPointer;
-  std::vector<VertexPointer> vertexOfIndex;
-  std::vector<uint32_t> indexOfSlot(m.vert.size(), UINT32_MAX);
-  for (auto& v : m.vert)
-    if (!v.IsD()) {
-      indexOfSlot[size_t(&v - &m.vert[0])] = uint32_t(vertexOfIndex.size());
-      vertexOfIndex.push_back(&v);
-    }
-  std::vector<std::array<double, 5>> sum(r.inputVertex.size(), std::array<double, 5>{{0, 0, 0, 0, 0}});
-  for (auto& f : m.face) {
-    if (f.IsD()) continue;
-    const vcg::Point3d p0 = vcg::Point3d::Construct(f.V(0)->P()), e1 = vcg::Point3d::Construct(f.V(1)->P()) - p0,
-                       e2 = vcg::Point3d::Construct(f.V(2)->P()) - p0;
-    const vcg::Point3d n = e1 ^ e2;
-    const double n2 = n.SquaredNorm();
-    if (!(n2 > 0)) continue;
-    const double third = std::sqrt(n2) / 6.0;
-    for (int j = 0; j < 3; ++j) {
-      const uint32_t i = indexOfSlot[size_t(f.V(j) - &m.vert[0])];
-      const uint32_t o = i < r.survivor.size() ? r.survivor[i] : UINT32_MAX;
-      if (o == UINT32_MAX) continue;
-      const vcg::Point3d q = vcg::Point3d::Construct(vertexOfIndex[r.inputVertex[o]]->P()) - p0;
-      for (int k = 0; k < 4; ++k) {
-        const double c0 = f.V(0)->C()[k], c1 = f.V(1)->C()[k], c2 = f.V(2)->C()[k];
-        const vcg::Point3d g = ((e2 ^ n) * (c1 - c0) + (n ^ e1) * (c2 - c0)) / n2;
-        sum[o][size_t(k)] += third * (c0 + g * q);
-      }
-      sum[o][4] += third;
-    }
-  }
-  for (size_t o = 0; o < r.inputVertex.size(); ++o) {
-    if (!(sum[o][4] > 0)) continue;
-    auto& c = vertexOfIndex[r.inputVertex[o]]->C();
-    for (int k = 0; k < 4; ++k)
-      c[k] = (unsigned char)std::min(255L, std::max(0L, std::lround(sum[o][size_t(k)] / sum[o][4])));
-  }
-}
-
-// The extended-quadric mean above for any per-vertex values: for each output vertex o (input vertex
-// inputVertex[o]; `survivor`: per input vertex, the output vertex its collapses ended in), the
-// area-weighted mean at its position of the linear functions that the input faces of the input
-// vertices it stands for give to the `C` values get(face, corner, channel) (a vertex's value, or a
-// face corner's: texture coordinates per corner); means[o x C ...] and
-// weight[o] (0: all its faces have zero area, no mean). The faces are the mesh's as given to
-// ToIndexedMesh.
+// The extended-quadric mean of MeanSurvivorColours (below) for any per-vertex values: for each output vertex o (input
+// vertex inputVertex[o]; `survivor`: per input vertex, the output vertex its collapses ended in), the area-weighted
+// mean at its position of the linear functions that the input faces of the input vertices it stands for give to the `C`
+// values get(face, corner, channel) (a vertex's value, or a face corner's: texture coordinates per corner); means[o x C
+// ...] and weight[o] (0: all its faces have zero area, no mean). The faces are the mesh's as given to ToIndexedMesh.
 template <class MeshType, class Get>
 void SurvivorQuadricMeans(const MeshType& m, const std::vector<uint32_t>& survivor,
                           const std::vector<uint32_t>& inputVertex, int C, Get get, std::vector<double>& means,
@@ -125,6 +69,38 @@ void SurvivorQuadricMeans(const MeshType& m, const std::vector<uint32_t>& surviv
   for (size_t o = 0; o < n; ++o)
     if (weight[o] > 0)
       for (int k = 0; k < C; ++k) means[o * size_t(C) + size_t(k)] /= weight[o];
+}
+
+// Issue 26. A half-edge collapse keeps the survivor where it was, so its own colour is the input
+// surface's colour at that one point; but each output vertex now stands for the input vertices
+// its collapses took over (FeatureSimplifyResult::survivor). Gives each output vertex the colour
+// (RGBA, 0-255, rounded and clamped) that Garland & Heckbert's extended quadric of those input
+// vertices gives at its position (as attribute_quadric.h, with positions that do not move): on
+// each input face of each such vertex the colour is linear in position, and the output vertex
+// takes the mean of those linear functions at its position, each face weighted by a third of its
+// area per corner it has in the cluster. A constant colour stays exact, so does a colour linear
+// in position on a flat region. A vertex whose faces all have zero area keeps its colour. Nothing
+// is done when the mesh has no per-vertex colour. Call on the mesh as it was given to
+// ToIndexedMesh (before WriteSimplifiedMesh); only on success. Normals and texture coordinates:
+// MeanSurvivorNormalsAndTexCoords.
+template <class MeshType>
+void MeanSurvivorColours(MeshType& m, const FeatureSimplifyResult& r) {
+  if (!vcg::tri::HasPerVertexColor(m)) return;
+  using VertexPointer = typename MeshType::VertexPointer;
+  using FaceType = typename MeshType::FaceType;
+  std::vector<double> means, weight;
+  SurvivorQuadricMeans(
+      m, r.survivor, r.inputVertex, 4, [](const FaceType& f, int j, int k) { return double(f.cV(j)->cC()[k]); }, means,
+      weight);
+  std::vector<VertexPointer> vertexOfIndex;
+  for (auto& v : m.vert)
+    if (!v.IsD()) vertexOfIndex.push_back(&v);
+  for (size_t o = 0; o < r.inputVertex.size(); ++o) {
+    if (!(weight[o] > 0)) continue;
+    auto& c = vertexOfIndex[r.inputVertex[o]]->C();
+    for (int k = 0; k < 4; ++k)
+      c[k] = (unsigned char)std::min(255L, std::max(0L, std::lround(means[o * 4 + size_t(k)])));
+  }
 }
 
 // Issue 26, the normals and per-vertex texture coordinates as MeanSurvivorColours does the colour:
