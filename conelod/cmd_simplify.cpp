@@ -75,8 +75,9 @@ const char* kSimplifyUsage =
     "  meshoptimizer does, not one greedy queue; other outputs)\n"
     "attributes (per-vertex colour, normals, texture coordinates in IN.ply): kept in OUT.ply (and in\n"
     "  every --hierarchy level, each from the one below) and interpolated at each new vertex\n"
-    "  (Garland-Heckbert 1998 attribute planes); texture, colour and\n"
-    "  normal seams stay where they are. --attribute-weight W [1]: how much an attribute change\n"
+    "  (Garland-Heckbert 1998 attribute planes); a texture, colour or normal seam vertex stays in\n"
+    "  place or goes into another seam vertex, its faces never taking a value from across a seam\n"
+    "  (chart junctions and small charts go at a cost). --attribute-weight W [1]: how much an attribute change\n"
     "  costs against geometric error (0: the attribute-free collapse order)\n"
     "with --hierarchy: --level-ratio R [0.5]; --faces-per-part P [100000]: a level of at least 2P\n"
     "  faces is cut into 2-8 parts along group contours, simplified side by side (0: never);\n"
@@ -254,6 +255,7 @@ int CmdSimplify(int argc, char** argv) {
       levelAttributes.layout.values.clear();
       levelAttributes.inputCorners = CornerAttributes(inputFaces, layout);
       levelAttributes.weight = attributeWeight;
+      levelAttributes.seamMoves = true;
       std::vector<std::array<uint32_t, 3>>().swap(inputFaces);
     }
     Timer timer;
@@ -333,6 +335,7 @@ int CmdSimplify(int argc, char** argv) {
   AttributeQuadrics attributes;
   if (attributeMask) {
     s = attributes.Init(im, layout, CornerAttributes(inputFaces, layout), attributeWeight);
+    attributes.AllowSeamMoves(true);  // junctions and small charts may go (docs/attributes.md)
     std::vector<std::array<uint32_t, 3>>().swap(inputFaces);
     if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
   }

@@ -617,6 +617,7 @@ Status ApplyGroupQem(FilterCall& c) {
     if (!layout.empty()) {
       s = attributes.Init(im, layout, std::move(corner), attributeWeight);
       if (!s.ok()) return s;
+      attributes.AllowSeamMoves(true);  // junctions and small charts may go, as in conelod simplify
     }
   }
   conelod::GroupQemResult r;

@@ -19,6 +19,11 @@ constexpr uint32_t kNoFace = UINT32_MAX;
 // fraction of the diagonal: chosen on the coloured dragon (docs/attributes.md) so that the
 // colour error drops while the geometric error stays within 5 % of the attribute-free run.
 constexpr double kUnitFraction = 0.003;
+// A collapse that leaves some of gone's faces with their own value at keep's place (a chart
+// junction or a small chart degrading; attribute_quadric.h) costs this fraction of the squared
+// distance moved, times the share of gone's faces that do so: chosen on the textured dragon
+// (docs/attributes.md) against MeshLab's texture QEM.
+constexpr double kSeamMove = 0.05;
 }  // namespace
 
 Status AttributeQuadrics::Init(const IndexedMesh& mesh, const VertexAttributes& layout, std::vector<float> cornerValues,
@@ -160,41 +165,65 @@ double AttributeQuadrics::Cost(uint32_t a, uint32_t b, const Point3d& p) const {
   return scale_ * wa * wb / ((wa + wb) * (wa + wb)) * sum;
 }
 
-bool AttributeQuadrics::MayRemove(uint32_t gone, uint32_t keep, uint32_t e0, uint32_t e1,
-                                  const FaceCorners& faces) const {
-  if (!seam(gone)) {
-    // Into a seam vertex: the edge's faces must see one value at it (else the seam runs along
-    // the edge, and the removed vertex's faces would not know their side).
-    return !seam(keep) || e1 == kNoFace || same(valueAt(e0, keep, faces), valueAt(e1, keep, faces));
+double AttributeQuadrics::SeamCost(uint32_t gone, uint32_t keep, uint32_t e0, uint32_t e1, const uint32_t* goneFaces,
+                                   size_t count, const FaceCorners& faces, double moveSq) const {
+  const bool oneAtKeep = e1 == kNoFace || same(valueAt(e0, keep, faces), valueAt(e1, keep, faces));
+  // Into a seam vertex: the edge's faces must see one value at it (else the seam runs along the
+  // edge, and the removed vertex's faces would not know their side).
+  if (!seam(gone)) return !seam(keep) || oneAtKeep ? 0 : -1;
+  if (!seam(keep)) return -1;
+  if (!seamMoves_) {  // along a seam: two wedges at each end, the edge's faces on different wedges at both
+    if (wedges_[gone] != 2 || wedges_[keep] != 2 || e1 == kNoFace) return -1;
+    return !same(valueAt(e0, gone, faces), valueAt(e1, gone, faces)) && !oneAtKeep ? 0 : -1;
   }
-  // Along a seam: two wedges at each end, the edge's faces on different wedges at both.
-  if (!seam(keep) || wedges_[gone] != 2 || wedges_[keep] != 2 || e1 == kNoFace) return false;
-  return !same(valueAt(e0, gone, faces), valueAt(e1, gone, faces)) &&
-         !same(valueAt(e0, keep, faces), valueAt(e1, keep, faces));
+  const float* g0 = valueAt(e0, gone, faces);
+  const float* g1 = e1 == kNoFace ? nullptr : valueAt(e1, gone, faces);
+  if (g1 && same(g0, g1) && !oneAtKeep) return -1;  // one side at gone, two at keep
+  size_t around = 0, own = 0;
+  for (size_t i = 0; i < count; ++i) {
+    const uint32_t f = goneFaces[i];
+    const auto& t = faces(f);
+    if (t[0] == keep || t[1] == keep || t[2] == keep) continue;  // on the edge: removed
+    ++around;
+    const float* v = valueAt(f, gone, faces);
+    own += !same(v, g0) && !(g1 && same(v, g1));
+  }
+  return own == 0 ? 0 : kSeamMove * double(own) / double(around) * moveSq;
 }
 
 void AttributeQuadrics::Collapse(uint32_t keep, uint32_t gone, const uint32_t* goneFaces, size_t count,
                                  const FaceCorners& faces) {
   if (seam(keep)) {
-    // The faces of `gone` take the keeper's value on their side: the side of the edge face whose
-    // value at `gone` they share (one edge face when `gone` is not on the seam).
+    // The faces of `gone` take the keeper's value on their side: that of the edge face whose
+    // value at `gone` they share (all of them, e[0]'s, when `gone` is not on a seam); a face that
+    // shares none (SeamCost's seam move) keeps its own.
     uint32_t e[2] = {kNoFace, kNoFace};
     for (size_t i = 0; i < count; ++i) {
       const auto& t = faces(goneFaces[i]);
-      if (t[0] == keep || t[1] == keep || t[2] == keep) e[e[0] == kNoFace ? 0 : 1] = goneFaces[i];
+      if ((t[0] == keep || t[1] == keep || t[2] == keep) && e[1] == kNoFace) e[e[0] == kNoFace ? 0 : 1] = goneFaces[i];
     }
-    for (size_t i = 0; i < count; ++i) {
+    bool moved = false;
+    for (size_t i = 0; i < count && e[0] != kNoFace; ++i) {
       const uint32_t f = goneFaces[i];
       if (f == e[0] || f == e[1]) continue;
       const auto& t = faces(f);
       if (t[0] == keep || t[1] == keep || t[2] == keep) continue;  // a face on the edge (3+ faces)
-      const uint32_t side =
-          e[1] != kNoFace && seam(gone) && same(valueAt(f, gone, faces), valueAt(e[1], gone, faces)) ? e[1] : e[0];
-      if (side == kNoFace) continue;
+      uint32_t side = e[0];
+      if (seam(gone)) {
+        const float* v = valueAt(f, gone, faces);
+        side = same(v, valueAt(e[0], gone, faces))                      ? e[0]
+               : e[1] != kNoFace && same(v, valueAt(e[1], gone, faces)) ? e[1]
+                                                                        : kNoFace;
+      }
+      if (side == kNoFace) {
+        moved = true;
+        continue;
+      }
       const float* value = valueAt(side, keep, faces);
       float* target = corner(f, t[0] == gone ? 0 : (t[1] == gone ? 1 : 2));
       std::copy(value, value + channels_, target);
     }
+    if (moved && wedges_[keep] < 3) ++wedges_[keep];
   }
   const size_t stride = 1 + 4 * size_t(channels_);
   for (size_t i = 0; i < stride; ++i) model_[keep * stride + i] += model_[gone * stride + i];

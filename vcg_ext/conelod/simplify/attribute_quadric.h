@@ -26,11 +26,21 @@
 // position-welded mesh may carry several values (a texture seam: one position, two texture
 // coordinates; a colour seam; a crease's split normals). A vertex whose corners differ is a seam
 // vertex. It never moves (its corners keep their exact values, and both sides of the seam keep
-// their positions: no crack), and it is removed only along its seam: into the neighbour across a
-// seam edge (both ends seam vertices with two wedges each, the edge's two faces on different
-// wedges at both ends), each of its faces taking the keeper's value on its own side. A vertex that
-// is not on a seam may be removed into a seam vertex when the edge's faces see one value there;
-// its faces then take that value. So a collapse never drags texture coordinates across a seam.
+// their positions: no crack); it is removed only into another seam vertex, and each of its faces
+// then takes a value at the keeper from its own side, never from across a seam:
+//  - along its seam (the edge's two faces on different wedges), or off it where the edge's faces
+//    see one value at both ends, each face whose value at `gone` an edge face shares takes that
+//    edge face's value at `keep`: the seam shortens along itself, exactly (no cost);
+//  - a face whose value at `gone` no edge face shares (a chart junction: three or more wedges, or
+//    a small chart whose vertices are all on its border, crossed by the edge) keeps its own value,
+//    now at keep's place: its chart's texture stretches over the distance d moved (as MeshLab's
+//    texture QEM lets a seam move, at a price). That costs kSeamMove x (the share of gone's faces
+//    that do so) x d^2, added to the collapse's priority, so that junctions go after the collapses
+//    that move no seam of the same error.
+// (Without AllowSeamMoves, only along the seam between two vertices of two wedges each: junctions
+// stay.) A vertex that is not on a seam may be removed into a seam vertex when the edge's faces see one
+// value there; its faces then take that value. So a collapse never drags texture coordinates
+// across a seam; as in meshoptimizer's simplifier, a seam vertex's wedges move together.
 #pragma once
 
 #include <array>
@@ -56,6 +66,12 @@ class AttributeQuadrics {
   // `layout.channels()` values each, laid out as `layout` says (its `values` are not read);
   // weight >= 0 (the CLI's --attribute-weight).
   Status Init(const IndexedMesh& mesh, const VertexAttributes& layout, std::vector<float> cornerValues, double weight);
+  // Off (Init's default): a seam vertex goes only along its seam into a vertex of two wedges, and
+  // chart junctions stay (texture coordinates exactly their chart's at every vertex: the .clod
+  // levels). On: the rules at the top, junctions and small charts included (conelod simplify, the
+  // MeshLab filter).
+  void AllowSeamMoves(bool on) { seamMoves_ = on; }
+  bool seamMoves() const { return seamMoves_; }
   bool active() const { return channels_ > 0; }
   int channels() const { return channels_; }
   bool seam(uint32_t v) const { return wedges_[v] >= 2; }
@@ -63,9 +79,13 @@ class AttributeQuadrics {
 
   // The cost of merging a and b at p (input coordinates), squared length.
   double Cost(uint32_t a, uint32_t b, const vcg::Point3d& p) const;
-  // Whether `gone` may be removed into `keep` (see the top); e0, e1: the faces on the edge (e1 may
-  // be none: UINT32_MAX).
-  bool MayRemove(uint32_t gone, uint32_t keep, uint32_t e0, uint32_t e1, const FaceCorners& faces) const;
+  // Whether `gone` may be removed into `keep` (see the top), and what it costs beyond Cost(), in
+  // squared length: -1 when it may not; 0 when every face of `gone` finds its value at `keep` on its
+  // own side; otherwise the seam-move cost of the faces that keep their own (moveSq: the squared
+  // distance from gone to keep). e0, e1: the faces on the edge (e1 may be none: UINT32_MAX);
+  // goneFaces[count]: the faces of `gone` (those on the edge included).
+  double SeamCost(uint32_t gone, uint32_t keep, uint32_t e0, uint32_t e1, const uint32_t* goneFaces, size_t count,
+                  const FaceCorners& faces, double moveSq) const;
   // The collapse of `gone` into `keep`, before the simplifier replaces `gone` in `goneFaces`' corners:
   // the corner values of those faces (seams) and the models.
   void Collapse(uint32_t keep, uint32_t gone, const uint32_t* goneFaces, size_t count, const FaceCorners& faces);
@@ -90,6 +110,7 @@ class AttributeQuadrics {
   bool same(const float* x, const float* y) const;
 
   int channels_ = 0;
+  bool seamMoves_ = false;
   VertexAttributes layout_;
   std::vector<float> corner_;    // per face corner
   std::vector<uint8_t> wedges_;  // distinct corner values per vertex, saturated at 3

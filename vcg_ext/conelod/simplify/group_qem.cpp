@@ -320,6 +320,9 @@ class GroupQemSimplifier {
   }
   // Where the merged vertex goes (c.keep, c.position); false: both endpoints must stay.
   bool place(uint32_t a, uint32_t b, bool contourEdge, Candidate& c) const;
+  // After place(): whether attribute seams let c.remove go into c.keep (AttributeQuadrics::SeamCost,
+  // into seamCost), turning the collapse of two seam vertices round when that is allowed or cheaper.
+  bool seamCollapse(const uint32_t e[2], Candidate& c, double& seamCost) const;
   double priorityOf(double error, double quality, uint32_t a, uint32_t b) const;
   float lowerBound(uint32_t a, uint32_t b) const;
   void collapse(const Candidate& c);
@@ -767,7 +770,7 @@ bool GroupQemSimplifier::place(uint32_t a, uint32_t b, bool contourEdge, Candida
   Quadric q = quadric_[a];
   q += quadric_[b];
   if (fixedA && fixedB) {
-    // Two attribute-seam vertices may go along their seam (MayRemove), into the cheaper end.
+    // Two attribute-seam vertices may merge (seamCollapse), into the cheaper end.
     if (!attributes_ || fixedVertex(a, false) || fixedVertex(b, false)) return false;
     c.keep = q.error(pos_[a]) <= q.error(pos_[b]) ? a : b;
     c.remove = c.keep == a ? b : a;
@@ -956,9 +959,8 @@ Candidate GroupQemSimplifier::judge(uint32_t a, uint32_t b) {
 
   c.verdict = CollapseVerdict::FixedEndpoints;
   if (!nonManifold && !place(a, b, ne == 2 && faces_[e[0]].group != faces_[e[1]].group, c)) return c;
-  if (attributes_ && (ne > 2 ? attributes_->seam(a) || attributes_->seam(b)
-                             : !attributes_->MayRemove(c.remove, c.keep, e[0], e[1], faceCorners_)))
-    return c;
+  double seamCost = 0;
+  if (attributes_ && (ne > 2 ? attributes_->seam(a) || attributes_->seam(b) : !seamCollapse(e, c, seamCost))) return c;
 
   // Geometry of the faces that survive: no flip, no zero-area face; their worst quality
   // (2 area / longest edge^2, compared squared: no square root per face).
@@ -996,9 +998,35 @@ Candidate GroupQemSimplifier::judge(uint32_t a, uint32_t b) {
     }
 
   c.verdict = CollapseVerdict::Allowed;
-  const double attributeCost = attributes_ ? attributes_->Cost(a, b, inputPosition(c.position)) : 0;
+  const double attributeCost = attributes_ ? attributes_->Cost(a, b, inputPosition(c.position)) + seamCost : 0;
   c.priority = priorityOf(c.error + attributeCost, std::sqrt(minQualitySq), a, b);
   return c;
+}
+
+bool GroupQemSimplifier::seamCollapse(const uint32_t e[2], Candidate& c, double& seamCost) const {
+  const auto cost = [&](uint32_t gone, uint32_t keep) {
+    return attributes_->SeamCost(gone, keep, e[0], e[1], facesBegin(gone), count_[gone], faceCorners_,
+                                 (pos_[gone] - pos_[keep]).SquaredNorm());
+  };
+  seamCost = cost(c.remove, c.keep);
+  // Two seam vertices (place() kept the end of least error): the other way round when only it is
+  // allowed, or it costs less with its seam move.
+  if (attributes_->seamMoves() && attributes_->seam(c.keep) && attributes_->seam(c.remove) &&
+      !fixedVertex(c.keep, false) && !fixedVertex(c.remove, false)) {
+    const double other = cost(c.keep, c.remove);
+    if (other >= 0) {
+      Quadric q = quadric_[c.keep];
+      q += quadric_[c.remove];
+      const double otherError = q.error(pos_[c.remove]);
+      if (seamCost < 0 || otherError + other < c.error + seamCost) {
+        std::swap(c.keep, c.remove);
+        c.position = pos_[c.keep];
+        c.error = otherError;
+        seamCost = other;
+      }
+    }
+  }
+  return seamCost >= 0;
 }
 
 bool GroupQemSimplifier::keepsApart(uint32_t a, uint32_t b, const Point3d& p) {

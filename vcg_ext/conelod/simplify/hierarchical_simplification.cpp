@@ -120,6 +120,7 @@ Status SimplifyWithAttributes(const IndexedMesh& mesh, const std::vector<int>& g
   AttributeQuadrics aq;
   Status s = aq.Init(mesh, la.attributes->layout, std::move(values), la.attributes->weight);
   if (!s.ok()) return s;
+  aq.AllowSeamMoves(la.attributes->seamMoves);
   if (seamVertices) *seamVertices = aq.seamVertices();
   s = SimplifyPreservingGroups(mesh, groups, qp, r, progress, coarser, region, &aq);
   if (!s.ok()) return s;

@@ -48,6 +48,7 @@ struct HierarchyAttributes {
   VertexAttributes layout;          // the channels (its `values` are not read)
   std::vector<float> inputCorners;  // per input face corner (3 f + k), layout.channels() values each
   double weight = 1.0;              // AttributeQuadrics::Init's weight (conelod simplify --attribute-weight)
+  bool seamMoves = false;           // AttributeQuadrics::AllowSeamMoves (conelod simplify: on)
 };
 struct SimplifiedLevel {
   int level = 0;  // the hierarchy level (1-based) whose groups it preserves

@@ -129,6 +129,62 @@ TEST(AttributeQuadric, KeepsTextureSeams) {
   }
 }
 
+// An atlas of small charts: the bent grid cut into 6 x 6 charts of 2 x 2 cells, chart (i, j)'s
+// texture coordinates (x + 2 i, y + 2 j) per face corner, so that every chart's border vertex is
+// on a seam (5 seam lines each way, 105 vertices) and 25 of them are junctions of four charts. Junctions used to stay,
+// and the collapse stopped far above a small target. With AllowSeamMoves they go (and small charts with them) at a
+// cost, and still no face takes a coordinate from another chart: every face's corners lie in one chart's tile [2 i + i
+// / 6, 2 i + (i + 1) / 6] x [2 j + j / 6, ...], i.e. each corner keeps a value of its own chart.
+TEST(AttributeQuadric, ChartJunctionsGoWithoutCrossingSeams) {
+  const IndexedMesh m = BentGrid();
+  constexpr int kCharts = kN / 2;
+  VertexAttributes layout;
+  layout.texCoords = true;
+  std::vector<float> corner;
+  for (const auto& t : m.faces) {
+    const float cx = (m.positions[t[0]][0] + m.positions[t[1]][0] + m.positions[t[2]][0]) / 3;
+    const float cy = (m.positions[t[0]][1] + m.positions[t[1]][1] + m.positions[t[2]][1]) / 3;
+    const int i = int(cx * kCharts), j = int(cy * kCharts);
+    for (uint32_t v : t) {
+      corner.push_back(m.positions[v][0] + 2.0f * float(i));
+      corner.push_back(m.positions[v][1] + 2.0f * float(j));
+    }
+  }
+  GroupQemParams p;
+  p.targetFaces = 24;
+  p.condition1 = false;
+  const std::vector<int> groups(m.faceCount(), 0);
+  const auto run = [&](bool moves, AttributeQuadrics& aq, GroupQemResult& r) {
+    ASSERT_TRUE(aq.Init(m, layout, corner, 1.0).ok());
+    aq.AllowSeamMoves(moves);
+    ASSERT_TRUE(SimplifyPreservingGroups(m, groups, p, r, Progress(), {}, nullptr, &aq).ok());
+  };
+  AttributeQuadrics fixedAq, movingAq;
+  GroupQemResult fixed, moving;
+  run(false, fixedAq, fixed);
+  run(true, movingAq, moving);
+  EXPECT_EQ(fixedAq.seamVertices(), 105u);
+  EXPECT_GT(fixed.mesh.faceCount(), 4 * p.targetFaces) << "the junctions should have stopped it";
+  EXPECT_LE(moving.mesh.faceCount(), p.targetFaces);
+  size_t away = 0;  // corners whose coordinates are not their chart's function of the position
+  for (size_t f = 0; f < moving.mesh.faceCount(); ++f) {
+    int ci = -1, cj = -1;
+    for (int k = 0; k < 3; ++k) {
+      const auto uv = At(movingAq, moving, f, k);
+      const int i = int(std::floor((uv[0] + 0.5f) / 2)), j = int(std::floor((uv[1] + 0.5f) / 2));  // tiles 1 apart
+      if (k == 0) ci = i, cj = j;
+      EXPECT_TRUE(i == ci && j == cj) << "face " << f << " has corners of two charts";
+      const float x = uv[0] - 2.0f * float(i), y = uv[1] - 2.0f * float(j);
+      EXPECT_TRUE(x >= float(i) / kCharts - 1e-5f && x <= float(i + 1) / kCharts + 1e-5f &&
+                  y >= float(j) / kCharts - 1e-5f && y <= float(j + 1) / kCharts + 1e-5f)
+          << "face " << f << ": (" << uv[0] << ", " << uv[1] << ") outside its chart's tile";
+      const auto& q = moving.mesh.positions[moving.mesh.faces[f][size_t(k)]];
+      away += std::fabs(x - q[0]) > 1e-5f || std::fabs(y - q[1]) > 1e-5f;
+    }
+  }
+  EXPECT_GT(away, 0u) << "no junction moved: the test would not see a seam move";
+}
+
 // Weight 0: the collapse is the attribute-free one, vertex for vertex.
 TEST(AttributeQuadric, WeightZeroKeepsTheAttributeFreeCollapse) {
   const IndexedMesh m = BentGrid();
