@@ -8,6 +8,7 @@
 #include <QTemporaryDir>
 #include <QRegularExpression>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
@@ -870,6 +871,13 @@ Status ApplyFeatureSimplify(FilterCall& c) {
         "over gives at its position, the %d on a seam keep each side's own",
         int(params.seamEdges.size()), int(seamVertices));
   }
+  // The vertex normals, as conelod feature-simplify: each kept vertex the normalised quadric mean
+  // of the layer's normals of the vertices it took over (not recomputed from the new faces).
+  conelod::MeanSurvivorNormalsAndTexCoords(mm.cm, r, true, false);
+  c.report.log(
+      "vertex normals: each kept vertex takes the normal (normalised) that the attribute quadric of the vertices "
+      "its collapses took over gives at its position (as conelod feature-simplify); not recomputed from the new "
+      "faces");
   // Per-vertex texture coordinates (without wedges): as conelod feature-simplify, off the seams
   // (positions held by two vertices) the quadric's value.
   const bool vertexTexCoords = !wedges && mm.hasDataMask(MeshModel::MM_VERTTEXCOORD);
@@ -892,7 +900,8 @@ Status ApplyFeatureSimplify(FilterCall& c) {
   if (mark) mm.updateDataMask(MeshModel::MM_VERTCOLOR);
   mm.clearDataMask(MeshModel::MM_FACEFACETOPO | MeshModel::MM_VERTFACETOPO);
   conelod::WriteSimplifiedMesh(mm.cm, faceOf, r, mark);
-  UpdateBoxAndNormals(mm);
+  vcg::tri::UpdateBounding<CMeshO>::Box(mm.cm);  // the face normals only: the vertex normals are the means above
+  vcg::tri::UpdateNormal<CMeshO>::PerFaceNormalized(mm.cm);
 
   Report& out = c.report;
   out.log("Feature-preserving simplification: %d -> %d faces in %.3f s (%d collapses%s)%s", int(r.facesIn),
@@ -1085,6 +1094,96 @@ Status ApplyPcaPartition(FilterCall& c) {
 // ---------------------------------------------------------------------------------------------
 // Cone LOD: Progressive Cluster Mesh
 
+// Issue 26: the source layer's vertex colour, normals and per-vertex texture coordinates given to
+// the progressive mesh's layer as conelod progressive does: its collapses are half-edge collapses
+// (vertices kept in place), so each coarse vertex takes the extended quadric's value at its
+// position of the input vertices whose collapses ended in it (conelod::SurvivorQuadricMeans;
+// normals normalised; a per-vertex texture seam's vertex, a position held by two vertices, keeps
+// its own coordinates; a vertex whose faces have no area keeps its own values). The source layer
+// is not changed. Wedge texture coordinates are not carried (the log says so).
+void CarryProgressiveAttributes(const MeshModel& mm, const conelod::ProgressiveMeshResult& r, MeshModel& layer,
+                                Report& out) {
+  using FaceType = CMeshO::FaceType;
+  const CMeshO& src = mm.cm;
+  std::vector<const CMeshO::VertexType*> vertexOfIndex;
+  for (const auto& v : src.vert)
+    if (!v.IsD()) vertexOfIndex.push_back(&v);
+  CMeshO& dst = layer.cm;
+  if (dst.vert.size() != r.vertexOrigin.size()) return;  // not the layer AppendIndexedMesh made
+  std::vector<double> means, weight;
+  const bool colour = mm.hasDataMask(MeshModel::MM_VERTCOLOR);
+  if (colour) {
+    layer.updateDataMask(MeshModel::MM_VERTCOLOR);
+    conelod::SurvivorQuadricMeans(
+        src, r.survivor, r.vertexOrigin, 4, [](const FaceType& f, int j, int k) { return double(f.cV(j)->cC()[k]); },
+        means, weight);
+    for (size_t o = 0; o < dst.vert.size(); ++o) {
+      auto& c = dst.vert[o].C();
+      c = vertexOfIndex[r.vertexOrigin[o]]->cC();
+      if (weight[o] > 0)
+        for (int k = 0; k < 4; ++k)
+          c[k] = (unsigned char)std::min(255L, std::max(0L, std::lround(means[o * 4 + size_t(k)])));
+    }
+  }
+  conelod::SurvivorQuadricMeans(
+      src, r.survivor, r.vertexOrigin, 3, [](const FaceType& f, int j, int k) { return double(f.cV(j)->cN()[k]); },
+      means, weight);
+  for (size_t o = 0; o < dst.vert.size(); ++o) {
+    const vcg::Point3d n(means[3 * o], means[3 * o + 1], means[3 * o + 2]);
+    const double len = n.Norm();
+    auto& out = dst.vert[o].N();
+    if (weight[o] > 0 && len > 0 && std::isfinite(len))
+      out = CMeshO::VertexType::NormalType(n[0] / len, n[1] / len, n[2] / len);
+    else
+      out = vertexOfIndex[r.vertexOrigin[o]]->cN();
+  }
+  const bool wedges = mm.hasDataMask(MeshModel::MM_WEDGTEXCOORD);
+  const bool vertexTexCoords = !wedges && mm.hasDataMask(MeshModel::MM_VERTTEXCOORD);
+  size_t seamKept = 0;
+  if (vertexTexCoords) {
+    layer.updateDataMask(MeshModel::MM_VERTTEXCOORD);
+    // Seam vertices: positions held by two or more vertices of the source.
+    std::vector<uint32_t> order(vertexOfIndex.size());
+    for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+    auto key = [&](uint32_t i) {
+      const auto& p = vertexOfIndex[i]->cP();
+      return std::array<float, 3>{{float(p[0]), float(p[1]), float(p[2])}};
+    };
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
+    std::vector<char> seam(order.size(), 0);
+    for (size_t i = 1; i < order.size(); ++i)
+      if (key(order[i]) == key(order[i - 1])) seam[order[i]] = seam[order[i - 1]] = 1;
+    conelod::SurvivorQuadricMeans(
+        src, r.survivor, r.vertexOrigin, 2,
+        [](const FaceType& f, int j, int k) { return double(k == 0 ? f.cV(j)->cT().U() : f.cV(j)->cT().V()); }, means,
+        weight);
+    for (size_t o = 0; o < dst.vert.size(); ++o) {
+      auto& t = dst.vert[o].T();
+      t = vertexOfIndex[r.vertexOrigin[o]]->cT();
+      if (seam[r.vertexOrigin[o]]) {
+        ++seamKept;
+        continue;
+      }
+      if (weight[o] > 0 && std::isfinite(means[2 * o]) && std::isfinite(means[2 * o + 1])) {
+        t.U() = float(means[2 * o]);
+        t.V() = float(means[2 * o + 1]);
+      }
+    }
+    dst.textures = src.textures;
+  }
+  out.log("attributes carried to the new layer (as conelod progressive): %s%s%s",
+          colour ? "vertex colours (the attribute quadric's value at each kept vertex), " : "",
+          "vertex normals (the same, normalised)",
+          vertexTexCoords
+              ? (", vertex texture coordinates (the same, " + std::to_string(seamKept) + " on a seam keep their own)")
+                    .c_str()
+              : "");
+  if (wedges)
+    out.log(
+        "wedge texture coordinates: not carried (the new layer has none; conelod progressive reads them as "
+        "vertices split along the seams and keeps them)");
+}
+
 std::vector<ParamSpec> ProgressiveMeshSpecs(const MeshDocument*, const MeshModel*) {
   const conelod::ProgressiveMeshParams d;
   return {IntParam("TargetClusters", d.targetClusters, "Target clusters",
@@ -1124,6 +1223,7 @@ Status ApplyProgressiveMesh(FilterCall& c) {
   }
   vcg::tri::UpdateBounding<CMeshO>::Box(layer->cm);
   vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFaceNormalized(layer->cm);
+  CarryProgressiveAttributes(mm, r, *layer, c.report);
   if (c.cb) c.cb(100, "progressive mesh: done");
 
   Report& out = c.report;

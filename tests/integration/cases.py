@@ -776,6 +776,51 @@ def meshlab_collapses_say_what_they_keep(c):
 
 
 @case
+def meshlab_progressive_and_feature_carry_attributes(c):
+    """Issue 26: MeshLab's Progressive Cluster Mesh gives its new layer the source layer's vertex
+    colours, normals and per-vertex texture coordinates as `conelod progressive` does (on the bumpy
+    grid at 100 clusters: the same faces, and each vertex the CLI's colour, (u, v) within 1e-5 and
+    normal within 1e-4); the grid's normals are all (0, 0, 1) on a bumpy surface, so the interpolated
+    ones stay (0, 0, 1) where normals recomputed from the faces do not. Feature-Preserving
+    Edge Simplification interpolates the normals too (all (0, 0, 1) at 20 %, the log says so). With
+    per-face texcoord lists the progressive filter says that it does not carry them."""
+    grid = c.out("attr_grid.ply")
+    write_attribute_grid(grid)
+    ml, cli = c.out("ml_progressive_attr.ply"), c.out("cli_progressive_attr.ply")
+    _, log = c.meshlab([grid], mlx_with(c, "progressive_cluster_mesh.mlx", TargetClusters=100), ml,
+                       save=("vc", "vn", "vt"))
+    assert "attributes carried to the new layer (as conelod progressive): vertex colours" in log, log[-2000:]
+    c.conelod("progressive", grid, "--clusters", "100", "-o", cli, "--samples", "0")
+
+    def carried(path):
+        verts, faces = ply_records(path)
+        return len(faces), sorted((round(v["x"], 5), round(v["y"], 5), v["red"], v["green"], v["blue"], v["texture_u"],
+                                   v["texture_v"], v["nx"], v["ny"], v["nz"]) for v in verts)
+    (nm, vm), (nc, vc) = carried(ml), carried(cli)
+    assert nm == nc and len(vm) == len(vc), (nm, nc, len(vm), len(vc))
+    for a, b in zip(vm, vc):
+        assert a[:5] == b[:5], (a, b)
+        assert all(abs(x - y) <= 1e-5 for x, y in zip(a[5:7], b[5:7])), (a, b)
+        assert all(abs(x - y) <= 1e-4 for x, y in zip(a[7:], b[7:])), (a, b)
+        assert abs(a[9] - 1) <= 1e-5, ("a normal not interpolated", a)
+    assert len(vm) < 900, len(vm)  # simplified (the grid has 992 vertices)
+
+    out = c.out("feature_normals.ply")
+    _, log = c.meshlab([grid], mlx_with(c, "feature_preserving_edge_simplification.mlx", TargetPerc=0.2,
+                                        MarkFeatures=False), out, save=("vc", "vn", "vt"))
+    assert "vertex normals: each kept vertex takes the normal (normalised)" in log, log[-2000:]
+    verts, faces = ply_records(out)
+    assert len(faces) <= 0.2 * 1800 + 2, len(faces)
+    worst = max(abs(v["nx"]) + abs(v["ny"]) + abs(v["nz"] - 1) for v in verts)
+    assert worst <= 1e-5, worst
+
+    wedge = c.out("attr_wedge.ply")
+    write_attribute_grid(wedge, wedge=True)
+    _, log = c.meshlab([wedge], mlx_with(c, "progressive_cluster_mesh.mlx", TargetClusters=100), c.out("out.ply"))
+    assert "wedge texture coordinates: not carried" in log, log[-2000:]
+
+
+@case
 def meshlab_feature_simplify_wedges(c):
     """Issue 26: Feature-Preserving Edge Simplification keeps wedge texture coordinates consistent.
     On the bumpy grid with per-face texcoord lists (u = x left of the seam at x = 0.5, x + 1 right
