@@ -1519,9 +1519,9 @@ Status GroupQemSimplifier::run(const Progress& progress, GroupQemStats& stats) {
   const size_t target = p_.targetFaces;
   const double maxErrorSq = p_.maxError > 0 ? (p_.maxError * diag_) * (p_.maxError * diag_) : -1;
   stats.stop = GroupQemStats::Stop::NoMoreCollapses;
-  if (!passes_ || CollapseInPasses(progress, target, maxErrorSq, stats)) {
-    if (liveFaces_ > target) CollapseInQueue(progress, target, maxErrorSq, stats);
-  }
+  // (the queue alone runs even at the target, as it always did: its first progress report may cancel)
+  if (!passes_ || CollapseInPasses(progress, target, maxErrorSq, stats))
+    CollapseInQueue(progress, target, maxErrorSq, stats);
   return finish(target, maxErrorSq, stats);
 }
 
