@@ -21,6 +21,8 @@ namespace {
 
 void WriteStats(Json& j, const GroupQemStats& s) {
   j.field("collapses", s.collapses)
+      .field("passes", s.passes)
+      .field("collapses_in_passes", s.collapsesInPasses)
       .field("evaluations", s.evaluations)
       .field("stop", ToString(s.stop))
       .field("max_collapse_error", s.maxCollapseError);
@@ -71,8 +73,10 @@ const char* kSimplifyUsage =
     "  the faces reached and the level that would (the JSON is still printed, OUT.ply written).\n"
     "options (defaults in brackets): --no-condition1 (with --no-condition2: plain QEM) --lock-boundaries\n"
     "  --quality-thr Q [0.3]  --no-optimal-placement  --preserve-boundary  --boundary-weight W [1]\n"
-    "  --no-preserve-normal (allow face flips)  --passes (experimental: collapse in ranked passes as\n"
-    "  meshoptimizer does, not one greedy queue; other outputs)\n"
+    "  --no-preserve-normal (allow face flips)\n"
+    "collapse order (one target): ranked passes as meshoptimizer's, then the greedy queue from\n"
+    "  100000 faces, for the last eighth or after a stalled pass (default; --passes says the same);\n"
+    "  --queue: one greedy queue throughout (the order before issue 25; --hierarchy: unless --passes)\n"
     "attributes (per-vertex colour, normals, texture coordinates in IN.ply): kept in OUT.ply (and in\n"
     "  every --hierarchy level, each from the one below) and interpolated at each new vertex\n"
     "  (Garland-Heckbert 1998 attribute planes); a texture, colour or normal seam vertex stays in\n"
@@ -90,13 +94,13 @@ const char* kSimplifyUsage =
     "  pass over the whole mesh reaches the target (not with attributes: those run in one piece)\n";
 
 int CmdSimplify(int argc, char** argv) {
-  Args a(
-      argc, argv,
-      {"-o", "--target-faces", "--target-ratio", "--max-error", "--groups", "--quality-thr", "--boundary-weight",
-       "--level-ratio", "--threads", "--faces-per-part", "--samples", "--mode", "--attribute-weight",
-       "--partition-above"},
-      {"--json", "--no-condition1", "--no-condition2", "--lock-boundaries", "--no-optimal-placement",
-       "--preserve-boundary", "--no-preserve-normal", "--hierarchy", "--keep-cones", "--keep-components", "--passes"});
+  Args a(argc, argv,
+         {"-o", "--target-faces", "--target-ratio", "--max-error", "--groups", "--quality-thr", "--boundary-weight",
+          "--level-ratio", "--threads", "--faces-per-part", "--samples", "--mode", "--attribute-weight",
+          "--partition-above"},
+         {"--json", "--no-condition1", "--no-condition2", "--lock-boundaries", "--no-optimal-placement",
+          "--preserve-boundary", "--no-preserve-normal", "--hierarchy", "--keep-cones", "--keep-components", "--passes",
+          "--queue"});
   GroupQemParams p;
   const int targetFaces = a.integer("--target-faces", 0);
   const double targetRatio = a.num("--target-ratio", 0);
@@ -119,7 +123,8 @@ int CmdSimplify(int argc, char** argv) {
   p.preserveNormal = !a.has("--no-preserve-normal");
   p.keepCones = a.has("--keep-cones");
   p.removeComponents = !a.has("--keep-components");
-  p.passes = a.has("--passes");
+  // One target: passes, then the queue (issue 25); --hierarchy keeps the queue unless asked.
+  p.passes = a.has("--hierarchy") ? a.has("--passes") : !a.has("--queue");
   const std::string mode = a.str("--mode", "integrity");
   if (mode == "paper")
     p.mode = GroupMode::Paper;
@@ -135,6 +140,8 @@ int CmdSimplify(int argc, char** argv) {
   if (partitionAbove < 0) return Fail(kUsage, "--partition-above must be a whole number >= 0 (0: never in parts)");
   if (samples < 0 || samples > kMaxFaceSamples)
     return Fail(kUsage, "--samples must be from 0 to " + std::to_string(kMaxFaceSamples));
+  if (a.has("--passes") && a.has("--queue"))
+    return Fail(kUsage, "--passes and --queue are two collapse orders: give one");
   if (hierarchy && a.has("--keep-components"))
     return Fail(kUsage, "--hierarchy never removes components: --keep-components goes with one target");
   if (!hierarchy && a.has("--samples")) return Fail(kUsage, "--samples goes with --hierarchy");

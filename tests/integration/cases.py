@@ -595,6 +595,24 @@ def cli_simplify_auto_level(c):
 
 
 @case
+def cli_simplify_collapse_order(c):
+    """Issue 25: ranked passes then the queue by default, --queue for the queue alone. A mesh of at
+    most 100,000 faces runs the queue either way (the same file; res4's floor stays the queue's 56);
+    the JSON says how many passes ran; --passes and --queue together are a usage error."""
+    res4 = c.mesh("stanford_bunny_bun_zipper_res4.ply")
+    outs = []
+    for extra in ([], ["--queue"], ["--passes"]):
+        out = c.out("order%d.ply" % len(outs))
+        r = json.loads(c.conelod("simplify", res4, "--groups", "cone:auto", "--target-ratio", "0.02", "-o", out,
+                                 "--json", *extra).stdout)
+        assert r["passes"] == 0 and r["collapses_in_passes"] == 0, r
+        assert r["faces_out"] == 56 and not r["target_reached"], r
+        outs.append(open(out, "rb").read())
+    assert outs[0] == outs[1] == outs[2]
+    c.conelod("simplify", res4, "--groups", "cone:auto", "--target-ratio", "0.1", "--passes", "--queue", expect=1)
+
+
+@case
 def cli_simplify_in_parts(c):
     """A big simplification in parts (forced on the bunny with a small threshold): the same file on
     1 and 2 threads, every group whole, the target reached; below the threshold the file is the

@@ -282,7 +282,7 @@ class GroupQemSimplifier {
         // Attributes are kept per input vertex and corner: they are renumbered with the mesh
         // (AttributeQuadrics::Renumber) and given back in the input's numbering by output().
         spatialOrder_(spatialOrder && coarser.empty() && !frozen_),
-        passes_(p.passes && !region),
+        passes_(p.passes && (!region || (region->frozenVertex.empty() && !(region->separation > 0)))),
         attributes_(attributes && attributes->active() ? attributes : nullptr) {}
 
   void init();
@@ -389,11 +389,15 @@ class GroupQemSimplifier {
   // Vertices and faces are numbered in a spatial order inside the simplifier (see SpatialOrder);
   // vertexInput_/faceInput_: the input index of each (empty: the input's order).
   const bool spatialOrder_;
-  // GroupQemParams::passes: collapses in ranked passes (CollapseInPasses) instead of the queue.
+  // GroupQemParams::passes: collapses in ranked passes (CollapseInPasses) before the queue.
   const bool passes_;
-  // The passes' loop: collapses until `target` faces, the error bound or no allowed collapse.
+  bool ranking_ = false;  // in a ranked pass: collapse() queues nothing (the next pass ranks every edge)
+  // The passes' loop: collapses until `target` faces, the error bound, or a stall or the target's
+  // approach (returns true: the queue goes on from there; false: done or cancelled).
+  bool CollapseInPasses(const Progress& progress, size_t target, double maxErrorSq, GroupQemStats& stats);
+  // The queue's loop, from the current state: every live edge queued at its lower bound.
+  void CollapseInQueue(const Progress& progress, size_t target, double maxErrorSq, GroupQemStats& stats);
   Status finish(size_t target, double maxErrorSq, GroupQemStats& stats);  // run()'s end, both loops
-  void CollapseInPasses(const Progress& progress, size_t target, double maxErrorSq, GroupQemStats& stats);
   std::vector<uint32_t> vertexInput_, faceInput_;
   uint32_t inputFace(uint32_t f) const { return faceInput_.empty() ? f : faceInput_[f]; }
   // Fills vertexInput_ and faceInput_ (box: the input's bounding box).
@@ -1393,7 +1397,7 @@ void GroupQemSimplifier::collapse(const Candidate& c) {
       if (vs_[u].mark != stamp_) {
         vs_[u].mark = stamp_;
         vs_[u].touched = epoch_;
-        if (passes_) continue;  // every edge is ranked again by the next pass
+        if (ranking_) continue;  // every edge is ranked again by the next pass
         PushLazy(keep, u);
         if (vs_[u].dropped) ring_.push_back(u);
       }
@@ -1412,12 +1416,22 @@ void GroupQemSimplifier::collapse(const Candidate& c) {
 // full priority is over the pass's error goal (1.5x the rank of the collapse the pass would end
 // with if every collapse removed two faces) once a sixth of the pass's goal is done. A pass ends
 // at the target, or at a rank over the goal once that sixth is done. A pass without a collapse:
-// no allowed collapse is left.
-void GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t target, double maxErrorSq,
+// no allowed collapse is left. The passes hand over to the queue (CollapseInQueue, from the state
+// reached) at GroupQemParams::queueFaces live faces (100,000 by default: the queue's heap and the
+// mesh then fit the caches, some 100 bytes a face, and a mesh that small from the start runs the
+// queue alone, as before the passes), when the target is near (at most an eighth of the live faces left to
+// remove: a pass would rank every edge for a few collapses, and the last collapses decide the most
+// error) or when a pass stalls (under a sixth of its goal: the allowed collapses are dearer than
+// their ranks, as where topology or the groups leave little room), so that the run ends, and stops
+// at a floor, as the queue's.
+bool GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t target, double maxErrorSq,
                                           GroupQemStats& stats) {
+  // 8 bytes: the edge is named by a side of a live face (3 f + s: from corner s to s + 1), read
+  // back when the walk reaches it. A face renamed or removed since (in this pass) has an endpoint
+  // that survived a collapse or died, and such an edge is passed over in either reading.
   struct Ranked {
     float priority;
-    uint32_t a, b;
+    uint32_t side;
   };
   std::vector<Ranked> ranked, scratch;
   std::vector<uint32_t> histogram(3 * 2048);
@@ -1430,25 +1444,34 @@ void GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t targe
     nextReport = done + std::max<size_t>(toRemove / 100, 1);
     return progress(5 + int(93.0 * std::min(1.0, double(done) / double(toRemove))), "Group-preserving QEM: collapsing");
   };
-  float raisedGoal = 0;  // the least error goal (raised after a weak pass)
+  ranking_ = true;
+  const auto handOver = [&](bool queue) {
+    ranking_ = false;
+    return queue;
+  };
   while (liveFaces_ > target) {
+    if (liveFaces_ <= p_.queueFaces || (target > 0 && liveFaces_ - target <= liveFaces_ / 8)) return handOver(true);
     // Rank every live edge once, from its lower endpoint.
     ranked.clear();
     for (uint32_t v = 0; v < nv; ++v) {
       if (vs_[v].dead || count_[v] == 0 || frozen(v)) continue;
       ++stamp_;
       for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f)
-        for (uint32_t u : faces_[*f])
+        for (uint32_t k = 0; k < 3; ++k) {
+          const uint32_t u = faces_[*f][k];
           if (u > v && vs_[u].mark != stamp_) {
             vs_[u].mark = stamp_;
-            if (!frozen(u)) ranked.push_back({lowerBound(v, u), v, u});
+            // the side (v, u) or (u, v): u at corner k, v before or after it
+            const uint32_t side = faces_[*f][(k + 2) % 3] == v ? (k + 2) % 3 : k;
+            if (!frozen(u)) ranked.push_back({lowerBound(v, u), 3 * *f + side});
           }
+        }
       if (progress && (++checked & 0xffff) == 0 && !report()) {
         stats.stop = GroupQemStats::Stop::Cancelled;
-        return;
+        return handOver(false);
       }
     }
-    if (ranked.empty()) return;
+    if (ranked.empty()) return handOver(false);
     // Stable LSD radix sort on the rank's bits (non-negative floats order as their bits), 11 bits at a time.
     scratch.resize(ranked.size());
     std::fill(histogram.begin(), histogram.end(), 0u);
@@ -1479,8 +1502,8 @@ void GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t targe
     // passes, each ending a sixth of the way to the target, would rank every edge for a few collapses).
     const size_t faceGoal = std::max(target > 0 ? liveFaces_ - target : liveFaces_, liveFaces_ / 8);
     const size_t edgeGoal = faceGoal / 2;
-    const float errorGoal = std::max(
-        raisedGoal, edgeGoal < ranked.size() ? 1.5f * ranked[edgeGoal].priority : std::numeric_limits<float>::max());
+    const float errorGoal =
+        edgeGoal < ranked.size() ? 1.5f * ranked[edgeGoal].priority : std::numeric_limits<float>::max();
     float over = std::numeric_limits<float>::max();  // the least priority over the goal met
     const uint32_t passStart = epoch_;
     const size_t facesAtStart = liveFaces_;
@@ -1491,11 +1514,12 @@ void GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t targe
         over = std::min(over, r.priority);
         break;
       }
-      const uint32_t a = r.a, b = r.b;
+      const auto& t = faces_[r.side / 3];
+      const uint32_t x = t[r.side % 3], y = t[(r.side % 3 + 1) % 3], a = std::min(x, y), b = std::max(x, y);
       if (vs_[a].dead || vs_[b].dead || vs_[a].lastSurvive > passStart || vs_[b].lastSurvive > passStart) continue;
       if (progress && (++checked & 0xfff) == 0 && !report()) {
         stats.stop = GroupQemStats::Stop::Cancelled;
-        return;
+        return handOver(false);
       }
       const Candidate c = evaluate(a, b);
       if (c.verdict != CollapseVerdict::Allowed) continue;
@@ -1507,28 +1531,37 @@ void GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t targe
       collapse(c);
       ++collapses;
       ++stats.collapses;
+      ++stats.collapsesInPasses;
       stats.maxCollapseError = std::max(stats.maxCollapseError, std::sqrt(c.error) / diag_);
     }
-    if (collapses == 0 && !(over < std::numeric_limits<float>::max())) return;  // nothing allowed is left
-    // A weak pass (under a sixth of its goal: the allowed collapses are dearer than their ranks
-    // said): the goal at least doubles from now on, admitting the cheapest collapse passed over.
-    if (facesAtStart - liveFaces_ <= faceGoal / 6 && over < std::numeric_limits<float>::max())
-      raisedGoal = std::max(over, 2 * errorGoal);
+    ++stats.passes;
+    if (collapses == 0 && !(over < std::numeric_limits<float>::max())) return handOver(false);  // nothing allowed left
+    // A weak pass (under a sixth of its goal): the queue goes on from here.
+    if (facesAtStart - liveFaces_ <= faceGoal / 6) return handOver(true);
   }
+  return handOver(false);
 }
 
 Status GroupQemSimplifier::run(const Progress& progress, GroupQemStats& stats) {
   stats.facesIn = mesh_.faces.size();
-  if (passes_) {
-    const double maxErrorSq = p_.maxError > 0 ? (p_.maxError * diag_) * (p_.maxError * diag_) : -1;
-    stats.stop = GroupQemStats::Stop::NoMoreCollapses;
-    CollapseInPasses(progress, p_.targetFaces, maxErrorSq, stats);
-    return finish(p_.targetFaces, maxErrorSq, stats);
-  }
-  // Every edge once, from its lower endpoint, at its lower bound.
+  const size_t target = p_.targetFaces;
+  const double maxErrorSq = p_.maxError > 0 ? (p_.maxError * diag_) * (p_.maxError * diag_) : -1;
+  stats.stop = GroupQemStats::Stop::NoMoreCollapses;
+  // (the queue alone runs even at the target, as it always did: its first progress report may cancel)
+  if (!passes_ || CollapseInPasses(progress, target, maxErrorSq, stats))
+    CollapseInQueue(progress, target, maxErrorSq, stats);
+  return finish(target, maxErrorSq, stats);
+}
+
+void GroupQemSimplifier::CollapseInQueue(const Progress& progress, size_t target, double maxErrorSq,
+                                         GroupQemStats& stats) {
+  // Every live edge once, from its lower endpoint, at its lower bound (after passes: from the
+  // state they reached, every vertex's collapses queued again).
   heap_.reserve(mesh_.faces.size() * 2);
   const uint32_t nv = uint32_t(pos_.size());
+  const size_t toRemove = stats.facesIn > target ? stats.facesIn - target : 1;
   for (uint32_t v = 0; v < nv; ++v) {
+    vs_[v].dropped = 0;
     ++stamp_;
     for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f)
       for (uint32_t u : faces_[*f])
@@ -1537,24 +1570,24 @@ Status GroupQemSimplifier::run(const Progress& progress, GroupQemStats& stats) {
           if (frozen(v) || frozen(u)) continue;
           heap_.append({lowerBound(v, u), v, u, epoch_ | kLazy});
         }
-    if (progress && (v & 0xffff) == 0 && !progress(int(5.0 * v / nv), "Group-preserving QEM: queueing edges")) {
+    // (after passes the bar stays where they left it)
+    if (progress && (v & 0xffff) == 0 &&
+        !progress(stats.collapses > 0
+                      ? 5 + int(93.0 * std::min(1.0, double(stats.facesIn - liveFaces_) / double(toRemove)))
+                      : int(5.0 * v / nv),
+                  "Group-preserving QEM: queueing edges")) {
       stats.stop = GroupQemStats::Stop::Cancelled;
-      stats.facesOut = liveFaces_;
-      return Status::Cancelled();
+      return;
     }
   }
   heap_.heapify();
 
-  const size_t target = p_.targetFaces;
-  const double maxErrorSq = p_.maxError > 0 ? (p_.maxError * diag_) * (p_.maxError * diag_) : -1;
-  const size_t toRemove = stats.facesIn > target ? stats.facesIn - target : 1;
   size_t nextReport = 0;
   // Superseded entries (an endpoint survived a collapse since: most of those pushed) are dropped
   // in one sequential sweep whenever the heap has grown by a quarter since the last sweep: a
   // sweep costs a few nanoseconds per entry, popping one a walk from the root to a leaf, with a
   // cache miss at each deep level (the dragon at 10 %: 3.3 M pops -> 1.2 M).
   size_t compactFloor = heap_.size() + heap_.size() / 4 + 1024;
-  stats.stop = GroupQemStats::Stop::NoMoreCollapses;
   while (!heap_.empty()) {
     if (liveFaces_ <= target) break;
     const size_t done = stats.facesIn - liveFaces_;
@@ -1616,7 +1649,6 @@ Status GroupQemSimplifier::run(const Progress& progress, GroupQemStats& stats) {
       compactFloor = heap_.size() + heap_.size() / 4 + 1024;
     }
   }
-  return finish(target, maxErrorSq, stats);
 }
 
 Status GroupQemSimplifier::finish(size_t target, double maxErrorSq, GroupQemStats& stats) {

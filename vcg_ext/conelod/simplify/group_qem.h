@@ -119,13 +119,20 @@ struct GroupQemParams {
   // ones may still land on it). No group is split; the removed groups vanish whole. The CLI and
   // the filter turn it on (--keep-components / KeepComponents refuse it); the LOD builders do not.
   bool removeComponents = false;
-  // Collapse order. false (default): one greedy queue, the cheapest allowed collapse first.
-  // true: in passes, as meshoptimizer's simplifier: every edge ranked at its lower bound and sorted,
-  // then collapsed in that order while neither endpoint has survived a collapse of the same pass
-  // and its full priority stays under 1.5x the rank of the pass's estimated last collapse; the next
-  // pass ranks the edges left again. Every check (groups, topology, geometry) is the same; only the
-  // order, and so the output, differs. Ignored for a GroupQemRegion (the LOD build keeps the queue).
+  // Collapse order. false (the struct's default, what the LOD build and the hierarchy keep): one
+  // greedy queue, the cheapest allowed collapse first. true (`conelod simplify`'s and the filter's
+  // default): in passes, as meshoptimizer's simplifier: every edge ranked at its lower bound and
+  // sorted, then collapsed in that order while neither endpoint has survived a collapse of the same
+  // pass and its full priority stays under 1.5x the rank of the pass's estimated last collapse; the
+  // next pass ranks the edges left again. When at most an eighth of the live faces is left to
+  // remove, or a pass stalls (under a sixth of its goal), the queue goes on from the state reached,
+  // so that the run ends, and stops at a floor, as the queue's. Every check (groups, topology,
+  // geometry) is the same; only the order, and so the output, differs. Ignored for a
+  // GroupQemRegion with frozen vertices or a separation (parts and the LOD build keep the queue).
   bool passes = false;
+  // passes: from this many live faces on the queue does the rest (a mesh this small from the
+  // start runs the queue alone, output for output); 0: passes until the target is near or a stall.
+  size_t queueFaces = 100000;
 };
 
 // Ok, or a message naming the bad parameter.
@@ -134,7 +141,8 @@ Status ValidateParams(const GroupQemParams& p);
 struct GroupQemStats {
   size_t facesIn = 0, facesOut = 0;
   size_t collapses = 0;
-  size_t evaluations = 0;  // candidate collapses evaluated (cost of the run)
+  size_t passes = 0, collapsesInPasses = 0;  // GroupQemParams::passes: ranked passes run, and their collapses
+  size_t evaluations = 0;                    // candidate collapses evaluated (cost of the run)
   // Evaluations refused, by the first reason found (one edge may be counted several times).
   size_t refusedTopology = 0;  // non-manifold edge/vertex, link condition, pinch
   size_t refusedCondition1 = 0;

@@ -638,8 +638,9 @@ TEST(Simplify, LockedContoursDoNotChange) {
 }
 
 // GroupQemParams::passes: the same checks in another order. At the automatic level the bunny
-// reaches every target with every group whole, in a different mesh from the queue's, with a
-// largest collapse error of the same size; res2's non-manifold dragon scan reaches 2 % too.
+// (in passes down to the queue's tail: queueFaces 0) reaches every target with every group whole,
+// in a different mesh from the queue's, with a largest collapse error of the same size; res2's
+// non-manifold dragon scan (202,520 faces: passes, then the queue from 100,000) reaches 2 % too.
 TEST(Passes, ReachTheTargetsWithEveryGroupWhole) {
   for (const char* name : {"stanford_bunny_bun_zipper.ply", "stanford_dragon_vrip_res2.ply"}) {
     SCOPED_TRACE(name);
@@ -653,9 +654,14 @@ TEST(Passes, ReachTheTargetsWithEveryGroupWhole) {
       const std::vector<int>& g = h.level(AutoGroupLevel(h, p.targetFaces)).faceGroup;
       GroupQemResult queue, passes;
       ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, queue).ok());
+      EXPECT_EQ(queue.stats.passes, 0u);
       p.passes = true;
+      if (m.faces.size() < p.queueFaces) p.queueFaces = 0;
       ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, passes).ok());
       ExpectValidOutput(m, passes);
+      EXPECT_GT(passes.stats.passes, 0u);
+      EXPECT_GT(passes.stats.collapsesInPasses, 0u);
+      EXPECT_LT(passes.stats.collapsesInPasses, passes.stats.collapses) << "the queue makes the last collapses";
       EXPECT_EQ(passes.stats.stop, GroupQemStats::Stop::TargetReached);
       EXPECT_LE(passes.mesh.faces.size(), p.targetFaces);
       EXPECT_GE(passes.mesh.faces.size() + 2, p.targetFaces);
@@ -669,11 +675,58 @@ TEST(Passes, ReachTheTargetsWithEveryGroupWhole) {
   }
 }
 
+// Issue 25: the passes hand over to the queue, so that a run stops where the queue's stops. A mesh
+// under queueFaces runs the queue alone (the same output, floors included: the non-manifold res4
+// bunny stops at 56 faces for 19, as the queue; the passes alone stopped at 70); a pass that
+// stalls, or the target's approach, hands over with the state reached (boeing at 2 %, no
+// components removed: passes, then the queue, to the queue's floor within a few faces).
+TEST(Passes, HandOverToTheQueueAndStopAtItsFloor) {
+  for (const char* name : {"stanford_bunny_bun_zipper_res4.ply", "boeing.ply"}) {
+    SCOPED_TRACE(name);
+    const IndexedMesh m = LoadReal(name);
+    GroupHierarchy h;
+    ASSERT_TRUE(BuildConeHierarchy(m, ConeGroupingParams(), h).ok());
+    GroupQemParams p;
+    p.targetFaces = size_t(0.02 * double(m.faces.size()));
+    const std::vector<int>& g = h.level(AutoGroupLevel(h, p.targetFaces)).faceGroup;
+    GroupQemResult queue, small, tail;
+    ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, queue).ok());
+    EXPECT_EQ(queue.stats.stop, GroupQemStats::Stop::NoMoreCollapses);
+    p.passes = true;
+    ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, small).ok());
+    EXPECT_EQ(small.stats.passes, 0u);
+    EXPECT_EQ(small.sourceFace, queue.sourceFace);
+    EXPECT_EQ(small.mesh.positions, queue.mesh.positions);
+    p.queueFaces = 0;  // passes from the start
+    ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, tail).ok());
+    ExpectValidOutput(m, tail);
+    EXPECT_GT(tail.stats.passes, 0u);
+    EXPECT_GT(tail.stats.collapsesInPasses, 0u);
+    EXPECT_LT(tail.stats.collapsesInPasses, tail.stats.collapses);
+    EXPECT_EQ(tail.stats.stop, GroupQemStats::Stop::NoMoreCollapses);
+    EXPECT_LE(tail.mesh.faces.size(), queue.mesh.faces.size() + 8);
+    GroupIntegrity gi;
+    ASSERT_TRUE(MeasureGroupIntegrity(m, g, tail.mesh, GroupsAfter(tail, g), gi).ok());
+    EXPECT_EQ(gi.groupsSplit, 0);
+    EXPECT_EQ(gi.groupsVanished, 0);
+  }
+  const IndexedMesh m = LoadReal("stanford_bunny_bun_zipper_res4.ply");
+  GroupHierarchy h;
+  ASSERT_TRUE(BuildConeHierarchy(m, ConeGroupingParams(), h).ok());
+  GroupQemParams p;
+  p.targetFaces = 19;
+  p.passes = true;
+  GroupQemResult r;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, h.level(AutoGroupLevel(h, p.targetFaces)).faceGroup, p, r).ok());
+  EXPECT_EQ(r.mesh.faces.size(), 56u) << "the queue's floor";
+}
+
 TEST(Passes, MaxErrorStopsEarly) {
   const IndexedMesh m = test::Sphere(4);
   const std::vector<int> g(m.faces.size(), 0);
   GroupQemParams p;
   p.passes = true;
+  p.queueFaces = 0;
   p.maxError = 0.005;
   GroupQemResult coarse, fine;
   ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, fine).ok());
