@@ -3,7 +3,8 @@
 // filter's defaults) at the same face count.
 //
 //   lod_fidelity MESH.ply [--samples N] [--dag-only] [--cluster-faces N] [--group-clusters N] [--cone DEG]
-//                [--max-faces N] [--max-group-error F] [--fine-group-clusters N] [--level-ratio R] [--cuts P,P,...]
+//                [--max-faces N] [--max-group-error F] [--fine-group-clusters N] [--level-ratio R]
+//                [--coarse-level-ratio R] [--top-group-clusters N] [--cuts P,P,...]
 //
 // "tree": the previous .clod levels (BuildConeHierarchy + BuildSimplifiedLevels with the defaults
 // `conelod lod build` used: every level keeps the normal-cone groups of its hierarchy level).
@@ -14,7 +15,10 @@
 // and their ratio. Also the wall seconds of each build (one thread per core). --max-faces N: only
 // the levels of at most N faces are compared (the coarse ones; MeshLab's QEM on a large input is slow).
 // --max-group-error 1: the DAG without the cap on a group's collapse error (as before it had one).
-// --level-ratio R: each group simplified to R of its faces (conelod lod build --level-ratio; 0.5).
+// --level-ratio R: each group of the fine levels simplified to R of its faces (conelod lod build
+// --level-ratio; 0.5); --coarse-level-ratio R: LodBuildParams::coarseLevelRatio (0.6; 0: the
+// level ratio at every level); --fine-group-clusters N / --top-group-clusters N: LodBuildParams'
+// (24 / 6; 0: --group-clusters [12] there).
 // --file [--precision E]: instead, the DAG's levels against the same levels read back from the .clod
 // file written from it (positions quantized with precision E, default kDefaultLodPrecision): per level
 // the RMS of both and their relative change (quantization and the codecs' round trip).
@@ -101,6 +105,8 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--fine-group-clusters")) dagParams.fineGroupClusters = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--max-group-error")) dagParams.maxGroupError = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--level-ratio")) dagParams.simplification.levelRatio = std::atof(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--coarse-level-ratio")) dagParams.coarseLevelRatio = std::atof(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--top-group-clusters")) dagParams.topGroupClusters = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--max-faces")) maxFaces = size_t(std::atoll(argv[i + 1]));
     if (!std::strcmp(argv[i], "--chunk-faces")) chunkFaces = size_t(std::atoll(argv[i + 1]));
     if (!std::strcmp(argv[i], "--cuts")) {

@@ -1267,12 +1267,14 @@ std::vector<ParamSpec> LodExportSpecs(const MeshDocument*, const MeshModel*) {
                        "Target faces of a cluster (a node of the file), at every level.", Between(4, 65536)));
   p.push_back(IntParam("GroupClusters", d.groupClusters, "Clusters per group",
                        "Neighbouring clusters gathered into one group, simplified together with its outer "
-                       "border locked and re-cut into the next level's clusters.",
+                       "border locked and re-cut into the next level's clusters (24 on the levels above 3/8 of "
+                       "the input's faces, 6 on the top ones).",
                        Between(2, 64)));
   p.push_back(FloatParam("LevelRatio", d.simplification.levelRatio, "Faces kept per level (0..1)",
-                         "Each group is simplified to this fraction of its faces (so each level has about this "
-                         "fraction of the faces of the level below); a group stops earlier when its locked "
-                         "border leaves no cheap collapse.",
+                         "Each group of the fine levels (above 3/8 of the input's faces) is simplified to this "
+                         "fraction of its faces (so each level has about this fraction of the faces of the level "
+                         "below), those of the coarser levels to at least 0.6 of theirs; a group stops earlier "
+                         "when its locked border leaves no cheap collapse.",
                          Inside(0, 1)));
   AddCollapseOptionParams(p, d.simplification.qem,
                           "Weight of the quadrics that keep mesh borders in place (Preserve Boundary).");

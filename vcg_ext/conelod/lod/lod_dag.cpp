@@ -4,8 +4,10 @@
 // Kawachi (normal-cone groups, so every node keeps a tight cone for back-face culling):
 //   1. level 0: the input cut into clusters of about clusterFaces faces whose normals stay within
 //      a cone (region growing from a seed face, the cone limit growing level by level);
-//   2. neighbouring clusters (sharing the most edges) are gathered into groups of groupClusters;
-//   3. each group is simplified on its own to levelRatio of its faces by the group-preserving
+//   2. neighbouring clusters (sharing the most edges) are gathered into groups of groupClusters
+//      (fineGroupClusters on the fine levels, topGroupClusters on the top ones: GroupClustersOf);
+//   3. each group is simplified on its own to levelRatio of its faces (at least coarseLevelRatio
+//      on the levels of at most 3/8 of the input's faces: LevelRatioOf) by the group-preserving
 //      collapse (group_qem.h) with every vertex it shares with another group frozen
 //      (GroupQemRegion): its outer border keeps its vertices, ids and positions bit for bit;
 //      no collapse costs more than maxGroupError of the diagonal, so a group whose locked border
@@ -488,6 +490,26 @@ void AppendStreamedClusters(const std::vector<Face>& faces, const std::vector<vc
   }
 }
 
+// A level of `faces` faces (the input: `inputFaces`) is coarse when it has at most 3/8 of the
+// input's faces: level 2 (about a quarter of them) and above.
+bool CoarseLevel(uint64_t faces, uint64_t inputFaces) { return 8 * faces <= 3 * inputFaces; }
+
+// The fraction of its faces each group of such a level is simplified to (LodBuildParams).
+double LevelRatioOf(const LodBuildParams& params, uint64_t faces, uint64_t inputFaces) {
+  const double r = params.simplification.levelRatio;
+  return CoarseLevel(faces, inputFaces) ? std::max(r, params.coarseLevelRatio) : r;
+}
+
+// The clusters gathered into one group on such a level (LodBuildParams): fineGroupClusters on the
+// fine levels, topGroupClusters on the top ones (under 6 % of the input's faces, or under the
+// faces of 4 groups of groupClusters clusters), else groupClusters.
+int GroupClustersOf(const LodBuildParams& params, uint64_t faces, uint64_t inputFaces) {
+  if (params.fineGroupClusters > 0 && !CoarseLevel(faces, inputFaces)) return params.fineGroupClusters;
+  const bool top = 50 * faces < 3 * inputFaces || faces < 4 * uint64_t(params.groupClusters) * params.clusterFaces;
+  if (params.topGroupClusters > 0 && top) return params.topGroupClusters;
+  return params.groupClusters;
+}
+
 // A group's faces are in global ids; with places (texture coordinates) one position may carry
 // several ids (wedges: one per UV). The collapse runs on the group welded by place, each face
 // corner carrying its wedge's attributes (so the attribute quadrics see the seams: a seam vertex
@@ -496,7 +518,7 @@ void AppendStreamedClusters(const std::vector<Face>& faces, const std::vector<vc
 // else a new one, the wedges of one new position sharing that position.
 void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32_t>& groupFaces,
                    const std::vector<vcg::Point3f>& positions, const std::vector<uint8_t>& sharedVertex,
-                   const LodBuildParams& params, double maxError, double diagonal, bool keep,
+                   const LodBuildParams& params, double ratio, double maxError, double diagonal, bool keep,
                    const LodAttributes& attributes, GroupResult& out) {
   const bool wedges = !attributes.place.empty();
   IndexedMesh local;                 // welded by place (without places: one vertex per id)
@@ -552,8 +574,7 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
   // that cell 3 or 4 times (LodCracks.DragonCutsAreWatertightOnceWelded at the dragon's seams).
   region.separation = 2.5 * params.precision * diagonal;
   GroupQemParams qem = params.simplification.qem;
-  qem.targetFaces =
-      std::max<size_t>(1, size_t(std::floor(double(local.faces.size()) * params.simplification.levelRatio)));
+  qem.targetFaces = std::max<size_t>(1, size_t(std::floor(double(local.faces.size()) * ratio)));
   qem.lockGroupBoundaries = false;
   if (maxError > 0) qem.maxError = qem.maxError > 0 ? std::min(qem.maxError, maxError) : maxError;
   const std::vector<int> oneGroup(local.faces.size(), 0);
@@ -773,9 +794,8 @@ Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSp
       depth = std::min(depth, want);
     }
     std::vector<int> group;
-    // Groups of fineGroupClusters on the fine levels (above 1/8 of the input's faces).
-    const int per = params.fineGroupClusters > 0 && 8 * L.faces.size() > inputFaces ? params.fineGroupClusters
-                                                                                    : params.groupClusters;
+    const int per = GroupClustersOf(params, L.faces.size(), inputFaces);
+    const double ratio = LevelRatioOf(params, L.faces.size(), inputFaces);
     LodDag::Level topology;  // with places: L's faces by place
     if (wedges) {
       topology.faces = byPlace(L.faces);
@@ -821,7 +841,7 @@ Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSp
       std::atomic<int> next(0);
       RunThreads(std::min<unsigned>(threads, unsigned(G)), [&](unsigned) {
         for (int g = next++; g < G; g = next++)
-          SimplifyGroup(L.faces, groupFaces[size_t(g)], dag.positions, shared, params, cap, diagonal,
+          SimplifyGroup(L.faces, groupFaces[size_t(g)], dag.positions, shared, params, ratio, cap, diagonal,
                         keep[size_t(g)] != 0, dag.attributes, results[size_t(g)]);
       });
     }
@@ -992,8 +1012,8 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
       }
     }
     // Pass 2: each chunk's groups, simplified, and its part of level k + 1.
-    const int per =
-        params.fineGroupClusters > 0 && 8 * F > inputFaces ? params.fineGroupClusters : params.groupClusters;
+    const int per = GroupClustersOf(params, F, inputFaces);
+    const double ratio = LevelRatioOf(params, F, inputFaces);
     const double angle = ClusterAngle(params, k + 1);
     LodDag::Level& L = dag.levels[size_t(k)];
     L.clusterGroup.assign(C, -1);
@@ -1053,7 +1073,7 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
         std::atomic<int> next(0);
         RunThreads(std::min<unsigned>(threads, unsigned(G)), [&](unsigned) {
           for (int g = next++; g < G; g = next++)
-            SimplifyGroup(localFaces, groupFaces[size_t(g)], localPos, localShared, params, cap, diagonal, false,
+            SimplifyGroup(localFaces, groupFaces[size_t(g)], localPos, localShared, params, ratio, cap, diagonal, false,
                           dag.attributes, results[size_t(g)]);
         });
       }
@@ -1129,12 +1149,16 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
   if (!s.ok()) return s;
   if (!(params.simplification.levelRatio > 0 && params.simplification.levelRatio < 1))
     return Status::Invalid("the level ratio must lie in (0, 1)");
+  if (!(params.coarseLevelRatio == 0 || (params.coarseLevelRatio > 0 && params.coarseLevelRatio < 1)))
+    return Status::Invalid("the coarse levels' ratio must be 0 or lie in (0, 1)");
   if (params.clusterFaces < 4 || params.clusterFaces > 65536)
     return Status::Invalid("cluster faces must lie in [4, 65536]");
   if (params.groupClusters < 2 || params.groupClusters > 64)
     return Status::Invalid("group clusters must lie in [2, 64]");
   if (params.fineGroupClusters != 0 && (params.fineGroupClusters < 2 || params.fineGroupClusters > 64))
     return Status::Invalid("fine group clusters must be 0 or lie in [2, 64]");
+  if (params.topGroupClusters != 0 && (params.topGroupClusters < 2 || params.topGroupClusters > 64))
+    return Status::Invalid("top group clusters must be 0 or lie in [2, 64]");
   if (!(params.maxGroupError > 0 && params.maxGroupError <= 1))
     return Status::Invalid("the largest group error must lie in (0, 1] (a fraction of the diagonal)");
   if (!(params.grouping.coneThresholdDeg > 0) || !(params.grouping.thresholdGrowth >= 1))
@@ -1246,7 +1270,8 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
   std::vector<uint32_t> nextNode, nextFaces;
   std::vector<Face> out;
   std::vector<uint32_t> outCluster;
-  const int per = params.fineGroupClusters > 0 ? params.fineGroupClusters : params.groupClusters;  // level 0
+  const int per = GroupClustersOf(params, inputFaces, inputFaces);  // level 0
+  const double ratio = LevelRatioOf(params, inputFaces, inputFaces);
   const double angle0 = ClusterAngle(params, 0), angle1 = ClusterAngle(params, 1);
   LodDag::Level sub;  // the chunk's level 0 (clusters numbered within the chunk)
   std::vector<int> group;
@@ -1295,8 +1320,8 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
       std::atomic<int> next(0);
       RunThreads(std::min<unsigned>(threads, unsigned(G)), [&](unsigned) {
         for (int g = next++; g < G; g = next++)
-          SimplifyGroup(sub.faces, groupFaces[size_t(g)], dag.positions, shared, params, params.maxGroupError, diagonal,
-                        false, dag.attributes, results[size_t(g)]);
+          SimplifyGroup(sub.faces, groupFaces[size_t(g)], dag.positions, shared, params, ratio, params.maxGroupError,
+                        diagonal, false, dag.attributes, results[size_t(g)]);
       });
     }
     for (uint32_t f = 0; f < F; ++f)

@@ -752,6 +752,11 @@ TEST(Lod, Version4And5FilesStillRead) {
     const std::string path = TempPath(name + "_v7.clod");
     LodBuildParams params;
     params.precision = 2e-5;
+    // The stored files' DAG: level ratio 0.5 and groups of 12 clusters at every level (main at
+    // 432a962, before coarseLevelRatio, fineGroupClusters and topGroupClusters were set).
+    params.coarseLevelRatio = 0;
+    params.fineGroupClusters = 0;
+    params.topGroupClusters = 0;
     ASSERT_TRUE(BuildLodFile(im, params, path, nullptr, Progress(), at.empty() ? nullptr : &at).ok());
     std::unique_ptr<LodReader> ro, rn;
     Status s = LodReader::Open(old, ro);
@@ -984,6 +989,11 @@ TEST(Lod, CompactIndexIsSmallAndChecked) {
   b.mesh = ToIndexedMesh(m);
   LodBuildParams p;
   p.clusterFaces = 32;  // more nodes: several index blocks
+  // The corruptions below are tuned to this file's bytes (what a shifted block start lands on):
+  // the DAG of level ratio 0.5 and groups of 12 clusters at every level.
+  p.coarseLevelRatio = 0;
+  p.fineGroupClusters = 0;
+  p.topGroupClusters = 0;
   Build(b, "bunny_index", p);
   const std::vector<uint8_t>& good = b.bytes;
   const ParsedIndex x = ParseIndex(good);
@@ -1243,11 +1253,12 @@ TEST_F(BunnyLod, SmallBudgetsRefineWhereTheEyeLooks) {
 
 // By the error in model units a group too large for what is left of the budget is passed over
 // and smaller ones fill the rest (issue 29: the cut stopped at the first that did not fit, 82 %
-// of a 5 % budget), and the cut stays watertight.
+// of a 5 % budget), and the cut stays watertight. The 2 % cut fills too: the top levels' groups
+// of 6 clusters (LodBuildParams::topGroupClusters) refine in small steps (with 12: 82 %).
 TEST_F(BunnyLod, ObjectErrorCutsFillTheirBudget) {
   auto r = Open();
   ASSERT_TRUE(r);
-  for (double fraction : {0.05, 0.1, 0.25}) {
+  for (double fraction : {0.02, 0.05, 0.1, 0.25}) {
     SCOPED_TRACE(fraction);
     LodView v = Eye(0, 0.1, 100, size_t(fraction * 69451), false);
     v.priority = LodPriority::ObjectError;
@@ -1256,6 +1267,23 @@ TEST_F(BunnyLod, ObjectErrorCutsFillTheirBudget) {
     EXPECT_LE(cut.faces, v.faceBudget);
     EXPECT_GE(cut.faces, v.faceBudget * 98 / 100);
     EXPECT_EQ(CheckCut(*bunny_, *r, cut).overused, 0u);
+  }
+}
+
+// The level ratio per level (LodBuildParams::coarseLevelRatio): levels 1 and 2 keep about half
+// the faces of the level below, the levels from 2 up (at most 3/8 of the input's faces) about
+// 0.6 of theirs (a group stops short only where its locked border leaves no cheap collapse).
+TEST_F(BunnyLod, CoarseLevelsKeepSixTenthsOfTheirFaces) {
+  const auto& L = bunny_->dag.levels;
+  ASSERT_GE(L.size(), 6u);
+  auto ratio = [&](size_t k) { return double(L[k].faces.size()) / double(L[k - 1].faces.size()); };
+  for (size_t k : {1, 2}) {
+    EXPECT_GT(ratio(k), 0.48) << k;
+    EXPECT_LT(ratio(k), 0.53) << k;
+  }
+  for (size_t k : {3, 4, 5}) {
+    EXPECT_GT(ratio(k), 0.58) << k;
+    EXPECT_LT(ratio(k), 0.66) << k;
   }
 }
 
@@ -1391,14 +1419,15 @@ TEST(Lod, WriterRefusesMismatchedInput) {
                    .ok());
 }
 
-// fineGroupClusters: larger groups on the levels above 1/8 of the input's faces only, the cuts
-// still watertight; out of range it is refused.
+// fineGroupClusters (24 by default): larger groups on the levels above 3/8 of the input's faces
+// only, the cuts still watertight; out of range it is refused.
 TEST(Lod, FineGroupClustersGatherLargerGroupsOnTheFineLevels) {
   Built plain, fine;
   plain.mesh = fine.mesh = test::Sphere(5);  // 8192 faces, 64 clusters
-  LodBuildParams p;
-  p.fineGroupClusters = 24;
-  Build(plain, "sphere_plain");
+  LodBuildParams p, q;
+  ASSERT_EQ(p.fineGroupClusters, 24);
+  q.fineGroupClusters = 0;  // groupClusters on every fine level
+  Build(plain, "sphere_plain", q);
   Build(fine, "sphere_fine", p);
   auto groups = [](const LodDag::Level& L) {
     return std::set<int>(L.clusterGroup.begin(), L.clusterGroup.end()).size();
@@ -1424,6 +1453,15 @@ TEST(Lod, FineGroupClustersGatherLargerGroupsOnTheFineLevels) {
   p.fineGroupClusters = 1;
   LodDag dag;
   EXPECT_FALSE(BuildLodDag(fine.mesh, p, dag).ok());
+  // So are a top group size and a coarse levels' ratio out of range.
+  q = LodBuildParams();
+  q.topGroupClusters = 1;
+  EXPECT_FALSE(BuildLodDag(fine.mesh, q, dag).ok());
+  for (double bad : {-0.1, 1.0, std::numeric_limits<double>::quiet_NaN()}) {
+    q = LodBuildParams();
+    q.coarseLevelRatio = bad;
+    EXPECT_FALSE(BuildLodDag(fine.mesh, q, dag).ok()) << bad;
+  }
 }
 
 TEST(Lod, CancellingLeavesNoFile) {
