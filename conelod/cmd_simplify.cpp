@@ -125,6 +125,7 @@ int CmdSimplify(int argc, char** argv) {
   p.removeComponents = !a.has("--keep-components");
   // One target: passes, then the queue (issue 25); --hierarchy keeps the queue unless asked.
   p.passes = a.has("--hierarchy") ? a.has("--passes") : !a.has("--queue");
+  p.flipToUnblock = true;  // only where the target is not reached otherwise
   const std::string mode = a.str("--mode", "integrity");
   if (mode == "paper")
     p.mode = GroupMode::Paper;
@@ -425,7 +426,9 @@ int CmdSimplify(int argc, char** argv) {
         .field("components_removed", r.stats.componentsRemoved)
         .field("groups_removed", r.stats.groupsRemoved)
         .field("faces_removed_with_components", r.stats.facesRemovedWithComponents)
-        .field("keep_components", !p.removeComponents);
+        .field("keep_components", !p.removeComponents)
+        .field("edge_flips", r.stats.edgeFlips)
+        .field("collapses_unblocked", r.stats.collapsesUnblocked);
     if (!floorReason.empty()) j.field("floor", r.mesh.faceCount()).field("floor_reason", floorReason);
     if (attributeMask)
       j.field("attributes", DescribeAttributes(layout))
@@ -470,6 +473,9 @@ int CmdSimplify(int argc, char** argv) {
           "removed %zu whole component(s), %zu faces, with their %zu group(s), smallest first, to reach the "
           "target (--keep-components refuses it)\n",
           r.stats.componentsRemoved, r.stats.facesRemovedWithComponents, r.stats.groupsRemoved);
+    if (r.stats.edgeFlips > 0)
+      std::printf("flipped %zu edge(s) inside groups to unblock %zu collapse(s) refused by the link condition\n",
+                  r.stats.edgeFlips, r.stats.collapsesUnblocked);
     if (!floorReason.empty())
       std::printf("target not reached (floor %zu): %s\n", r.mesh.faceCount(), floorReason.c_str());
     if (coneLevel > 0)

@@ -557,6 +557,7 @@ Status ApplyGroupQem(FilterCall& c) {
   p.keepCones = c.args.flag("KeepCones");
   p.removeComponents = !c.args.flag("KeepComponents");
   p.passes = true;  // ranked passes, then the queue: as `conelod simplify` (issue 25)
+  p.flipToUnblock = true;  // as the CLI: only where the target is not reached otherwise
   const double attributeWeight = c.args.number("AttributeWeight");
   if (!(attributeWeight >= 0) || !std::isfinite(attributeWeight))
     return Invalid(Label(c, "AttributeWeight") + " must be >= 0");
@@ -690,6 +691,9 @@ Status ApplyGroupQem(FilterCall& c) {
           r.stats.componentsRemoved > 0
               ? " (whole components of whole groups, smallest first; KeepComponents refuses it)"
               : "");
+  if (r.stats.edgeFlips > 0)
+    out.log("edge_flips %d collapses_unblocked %d (edges flipped inside groups where the link condition refused)",
+            int(r.stats.edgeFlips), int(r.stats.collapsesUnblocked));
   const std::string floorReason = conelod::DescribeFloor(r.stats, p);
   if (!floorReason.empty()) out.log("target_reached false floor %d: %s", int(r.mesh.faceCount()), floorReason.c_str());
   if (coneSource)

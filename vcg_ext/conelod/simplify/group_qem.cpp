@@ -336,6 +336,18 @@ class GroupQemSimplifier {
   void RemoveComponents(size_t target, GroupQemStats& stats);
   // Stopped above the target: every edge left judged once more (stats.edgesLeftBy).
   void TallyFloor(double maxErrorSq, GroupQemStats& stats);
+  // Stopped above `target` (GroupQemParams::flipToUnblock): collapses refused by the link
+  // condition, unblocked by edge flips, then the collapses that frees, in rounds.
+  void UnblockByFlips(const Progress& progress, size_t target, double maxErrorSq, GroupQemStats& stats);
+  // Flips the edges from a or b to their common neighbours other than the edge's opposite
+  // vertices and collapses (a, b) when it is then allowed; else undoes the flips. True: collapsed.
+  bool TryUnblock(uint32_t a, uint32_t b, double maxErrorSq, GroupQemStats& stats);
+  // The flip of edge (u, w) (its two faces (u, w, p), (w, u, q) become (u, q, p), (w, p, q)):
+  // -1 when not allowed (see flipToUnblock), else the least cosine between a new face normal and
+  // the two old faces' mean normal (1: flat). apply: also flip it (undo_ records the old faces).
+  double FlipEdge(uint32_t u, uint32_t w, bool apply);
+  // Gives face f the corners t (same group), keeping the per-vertex face lists.
+  void SetFace(uint32_t f, const std::array<uint32_t, 3>& t);
   // Integrity mode: after collapsing (a, b) (faces e0, e1 on the edge; n0a, n0b, n1a, n1b: the
   // faces across (a, opp0), (b, opp0), (a, opp1), (b, opp1), kNone where there is none), every
   // group of every grouping is still one piece, as many pieces as before, and not empty.
@@ -397,7 +409,8 @@ class GroupQemSimplifier {
   bool CollapseInPasses(const Progress& progress, size_t target, double maxErrorSq, GroupQemStats& stats);
   // The queue's loop, from the current state: every live edge queued at its lower bound.
   void CollapseInQueue(const Progress& progress, size_t target, double maxErrorSq, GroupQemStats& stats);
-  Status finish(size_t target, double maxErrorSq, GroupQemStats& stats);  // run()'s end, both loops
+  Status finish(const Progress& progress, size_t target, double maxErrorSq,
+                GroupQemStats& stats);  // run()'s end, both loops
   std::vector<uint32_t> vertexInput_, faceInput_;
   uint32_t inputFace(uint32_t f) const { return faceInput_.empty() ? f : faceInput_[f]; }
   // Fills vertexInput_ and faceInput_ (box: the input's bounding box).
@@ -449,6 +462,7 @@ class GroupQemSimplifier {
   std::vector<uint32_t> fanOther_, ring_, fanScratch_, fanParent_, queue_, edgeFaces_, opposite_, nbScratch_,
       ringScratch_;
   std::vector<int> groupScratch_;
+  std::vector<std::pair<uint32_t, std::array<uint32_t, 3>>> undo_;  // TryUnblock: faces before the flips
 };
 
 void GroupQemSimplifier::BuildFaceLists() {
@@ -1550,7 +1564,7 @@ Status GroupQemSimplifier::run(const Progress& progress, GroupQemStats& stats) {
   // (the queue alone runs even at the target, as it always did: its first progress report may cancel)
   if (!passes_ || CollapseInPasses(progress, target, maxErrorSq, stats))
     CollapseInQueue(progress, target, maxErrorSq, stats);
-  return finish(target, maxErrorSq, stats);
+  return finish(progress, target, maxErrorSq, stats);
 }
 
 void GroupQemSimplifier::CollapseInQueue(const Progress& progress, size_t target, double maxErrorSq,
@@ -1651,10 +1665,11 @@ void GroupQemSimplifier::CollapseInQueue(const Progress& progress, size_t target
   }
 }
 
-Status GroupQemSimplifier::finish(size_t target, double maxErrorSq, GroupQemStats& stats) {
+Status GroupQemSimplifier::finish(const Progress& progress, size_t target, double maxErrorSq, GroupQemStats& stats) {
   if (stats.stop != GroupQemStats::Stop::Cancelled && liveFaces_ > target && target > 0) {
     RemoveComponents(target, stats);
-    if (liveFaces_ > target) TallyFloor(maxErrorSq, stats);
+    if (liveFaces_ > target) UnblockByFlips(progress, target, maxErrorSq, stats);
+    if (liveFaces_ > target && stats.stop != GroupQemStats::Stop::Cancelled) TallyFloor(maxErrorSq, stats);
   }
   if (liveFaces_ <= target && stats.stop != GroupQemStats::Stop::Cancelled)
     stats.stop = GroupQemStats::Stop::TargetReached;
@@ -1784,6 +1799,188 @@ void GroupQemSimplifier::RemoveComponents(size_t target, GroupQemStats& stats) {
       vs_[v].dead = 1;
       count_[v] = 0;
     }
+}
+
+void GroupQemSimplifier::SetFace(uint32_t f, const std::array<uint32_t, 3>& t) {
+  const std::array<uint32_t, 3> old = faces_[f];
+  static_cast<std::array<uint32_t, 3>&>(faces_[f]) = t;
+  for (uint32_t v : old)
+    if (!Contains(t, v)) {
+      uint32_t* vb = refs_.data() + start_[v];
+      for (uint32_t i = 0; i < count_[v]; ++i)
+        if (vb[i] == f) {
+          vb[i] = vb[--count_[v]];
+          break;
+        }
+    }
+  for (uint32_t v : t)
+    if (!Contains(old, v)) {
+      if (refs_.size() + count_[v] + 1 > refs_.capacity()) {
+        BuildFaceLists();  // from faces_, which already hold t
+        return;
+      }
+      // v's list moves to the end of refs_, with f.
+      const uint32_t begin = uint32_t(refs_.size()), s = start_[v], n = count_[v];
+      for (uint32_t i = 0; i < n; ++i) refs_.push_back(refs_[s + i]);
+      refs_.push_back(f);
+      start_[v] = begin;
+      count_[v] = n + 1;
+    }
+}
+
+double GroupQemSimplifier::FlipEdge(uint32_t u, uint32_t w, bool apply) {
+  uint32_t f[2] = {kNone, kNone}, n = 0;
+  for (const uint32_t* g = facesBegin(u); g != facesEnd(u); ++g)
+    if (Contains(faces_[*g], w)) {
+      if (n < 2) f[n] = *g;
+      ++n;
+    }
+  if (n != 2) return -1;
+  // f[0] = (u, w, p) and f[1] = (w, u, q) in this orientation.
+  const auto follows = [](const std::array<uint32_t, 3>& t, uint32_t x, uint32_t y) {
+    return (t[0] == x && t[1] == y) || (t[1] == x && t[2] == y) || (t[2] == x && t[0] == y);
+  };
+  if (!follows(faces_[f[0]], u, w)) std::swap(f[0], f[1]);
+  if (!follows(faces_[f[0]], u, w) || !follows(faces_[f[1]], w, u)) return -1;  // inconsistent orientation
+  const uint32_t p = Third(faces_[f[0]], u, w), q = Third(faces_[f[1]], u, w);
+  if (p == q || p == u || p == w || q == u || q == w) return -1;
+  for (const uint32_t* g = facesBegin(p); g != facesEnd(p); ++g)
+    if (Contains(faces_[*g], q)) return -1;  // the new edge exists
+  if (integrity_)
+    for (int layer = -1; layer < int(coarserDense_.size()); ++layer)
+      if (groupIn(layer, f[0]) != groupIn(layer, f[1])) return -1;
+  // No fold: each new normal within acos(kMinNormalCos) of the two faces' (area-weighted) mean
+  // normal; no zero-area face.
+  const Point3d &pu = pos_[u], &pw = pos_[w], &pp = pos_[p], &pq = pos_[q];
+  const Point3d mean = ((pw - pu) ^ (pp - pu)) + ((pu - pw) ^ (pq - pw));
+  const double meanSq = mean.SquaredNorm();
+  if (!(meanSq > 0)) return -1;
+  const Point3d m[2] = {(pq - pu) ^ (pp - pu), (pp - pw) ^ (pq - pw)};
+  const std::array<uint32_t, 3> t[2] = {{u, q, p}, {w, p, q}};
+  double least = 1;
+  for (int i = 0; i < 2; ++i) {
+    const double lenSq = m[i].SquaredNorm();
+    const auto& c = t[i];
+    const double longestSq = std::max({(pos_[c[1]] - pos_[c[0]]).SquaredNorm(), (pos_[c[2]] - pos_[c[1]]).SquaredNorm(),
+                                       (pos_[c[0]] - pos_[c[2]]).SquaredNorm()});
+    if (!(longestSq > 0) || lenSq / (longestSq * longestSq) < kDegenerateQuality * kDegenerateQuality) return -1;
+    const double cosine = (m[i] * mean) / std::sqrt(lenSq * meanSq);
+    if (!(cosine >= kMinNormalCos)) return -1;
+    least = std::min(least, cosine);
+    if (p_.keepCones && !insideCones(f[i], m[i], lenSq)) return -1;
+  }
+  if (!apply) return least;
+  undo_.push_back({f[0], faces_[f[0]]});
+  undo_.push_back({f[1], faces_[f[1]]});
+  SetFace(f[0], t[0]);
+  SetFace(f[1], t[1]);
+  ++epoch_;
+  for (uint32_t v : {u, w, p, q}) {
+    AnalyzeVertex(v);
+    vs_[v].touched = epoch_;
+  }
+  return least;
+}
+
+bool GroupQemSimplifier::TryUnblock(uint32_t a, uint32_t b, double maxErrorSq, GroupQemStats& stats) {
+  // The common neighbours of a and b that are not opposite the edge.
+  opposite_.clear();
+  for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f)
+    if (Contains(faces_[*f], b)) opposite_.push_back(Third(faces_[*f], a, b));
+  if (opposite_.empty()) return false;
+  ++stamp_;
+  for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f)
+    for (uint32_t u : faces_[*f]) vs_[u].mark = stamp_;
+  std::vector<uint32_t> extra;  // (rare: only at a floor)
+  for (const uint32_t* f = facesBegin(b); f != facesEnd(b); ++f)
+    for (uint32_t u : faces_[*f])
+      if (u != a && u != b && vs_[u].mark == stamp_ &&
+          std::find(opposite_.begin(), opposite_.end(), u) == opposite_.end() &&
+          std::find(extra.begin(), extra.end(), u) == extra.end())
+        extra.push_back(u);
+  if (extra.empty() || extra.size() > 2) return false;
+  undo_.clear();
+  bool flipped = true;
+  for (uint32_t x : extra) {
+    // The flatter of the two flips that part x from a or from b.
+    const double viaA = FlipEdge(a, x, false), viaB = FlipEdge(b, x, false);
+    if (viaA < 0 && viaB < 0) {
+      flipped = false;
+      break;
+    }
+    if (viaA >= viaB)
+      FlipEdge(a, x, true);
+    else
+      FlipEdge(b, x, true);
+  }
+  if (flipped) {
+    const Candidate c = judge(a, b);
+    if (c.verdict == CollapseVerdict::Allowed && !(maxErrorSq >= 0 && c.error > maxErrorSq)) {
+      stats.edgeFlips += undo_.size() / 2;
+      ++stats.collapsesUnblocked;
+      collapse(c);
+      ++stats.collapses;
+      stats.maxCollapseError = std::max(stats.maxCollapseError, std::sqrt(c.error) / diag_);
+      undo_.clear();
+      return true;
+    }
+  }
+  // Undo, last flip first.
+  ++epoch_;
+  for (size_t i = undo_.size(); i-- > 0;) {
+    const std::array<uint32_t, 3> now = faces_[undo_[i].first];
+    SetFace(undo_[i].first, undo_[i].second);
+    for (uint32_t v : now) {
+      AnalyzeVertex(v);
+      vs_[v].touched = epoch_;
+    }
+    for (uint32_t v : undo_[i].second) AnalyzeVertex(v);
+  }
+  undo_.clear();
+  return false;
+}
+
+void GroupQemSimplifier::UnblockByFlips(const Progress& progress, size_t target, double maxErrorSq,
+                                        GroupQemStats& stats) {
+  if (!p_.flipToUnblock || p_.mode != GroupMode::Integrity || attributes_ || frozen_) return;
+  struct Blocked {
+    float rank;
+    uint32_t a, b;
+  };
+  std::vector<Blocked> blocked;
+  const uint32_t nv = uint32_t(pos_.size());
+  while (liveFaces_ > target) {
+    // Every live edge refused on topology, cheapest first.
+    blocked.clear();
+    for (uint32_t v = 0; v < nv; ++v) {
+      if (vs_[v].dead || count_[v] == 0) continue;
+      ++stamp_;
+      ringScratch_.clear();
+      for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f)
+        for (uint32_t u : faces_[*f])
+          if (u > v && vs_[u].mark != stamp_) {
+            vs_[u].mark = stamp_;
+            ringScratch_.push_back(u);
+          }
+      for (uint32_t u : ringScratch_)  // (judge() uses the marks too)
+        if (judge(v, u).verdict == CollapseVerdict::Topology) blocked.push_back({lowerBound(v, u), v, u});
+    }
+    std::stable_sort(blocked.begin(), blocked.end(),
+                     [](const Blocked& x, const Blocked& y) { return x.rank < y.rank; });
+    size_t unblocked = 0;
+    for (const Blocked& e : blocked) {
+      if (liveFaces_ <= target) break;
+      if (vs_[e.a].dead || vs_[e.b].dead) continue;
+      unblocked += TryUnblock(e.a, e.b, maxErrorSq, stats);
+    }
+    if (unblocked == 0) return;
+    if (progress && !progress(98, "Group-preserving QEM: unblocking by edge flips")) {
+      stats.stop = GroupQemStats::Stop::Cancelled;
+      return;
+    }
+    CollapseInQueue(progress, target, maxErrorSq, stats);  // the collapses the flips freed, and theirs
+    if (stats.stop == GroupQemStats::Stop::Cancelled) return;
+  }
 }
 
 void GroupQemSimplifier::TallyFloor(double maxErrorSq, GroupQemStats& stats) {

@@ -52,7 +52,9 @@
 // collapse (keepsGroupsWholeAcross). In paper mode these collapses keep the groups whole the same
 // way (the paper's local clauses assume a manifold fan), and group boundaries never go.
 // Whole components: with removeComponents, a run that has no allowed collapse left above the
-// target removes components made of whole groups, smallest first (GroupQemParams).
+// target removes components made of whole groups, smallest first (GroupQemParams); with
+// flipToUnblock, collapses refused by the link condition are then unblocked by edge flips inside
+// one group (GroupQemParams::flipToUnblock).
 //
 // Error and priority follow vcglib's TriEdgeCollapseQuadric (what MeshLab's "Quadric Edge Collapse
 // Decimation" runs): face-plane quadrics (area-weighted) plus border-edge quadrics weighted by
@@ -119,6 +121,15 @@ struct GroupQemParams {
   // ones may still land on it). No group is split; the removed groups vanish whole. The CLI and
   // the filter turn it on (--keep-components / KeepComponents refuse it); the LOD builders do not.
   bool removeComponents = false;
+  // When no allowed collapse is left above targetFaces (after removeComponents): unblock collapses
+  // refused by the link condition by flipping the edge to their extra common neighbour (integrity
+  // mode only; never in paper mode, with attributes or in a GroupQemRegion). A flip only turns the
+  // diagonal of two faces of one group (in every grouping) whose quad is nearly flat (each new
+  // normal within ~78 degrees of each old one), never creates an edge that exists, and is undone
+  // unless the collapse it was made for is then allowed and done; the collapses it frees follow
+  // in the queue. Runs that reach their target are unchanged. The CLI and
+  // the filter turn it on; the LOD builders and the hierarchy do not.
+  bool flipToUnblock = false;
   // Collapse order. false (the struct's default, what the LOD build and the hierarchy keep): one
   // greedy queue, the cheapest allowed collapse first. true (`conelod simplify`'s and the filter's
   // default): in passes, as meshoptimizer's simplifier: every edge ranked at its lower bound and
@@ -158,6 +169,8 @@ struct GroupQemStats {
   // Components that removeComponents could have removed but did not (it is off, or the target
   // was reached first).
   size_t componentsRemovable = 0;
+  // flipToUnblock: edges flipped, and the collapses they unblocked (each with its flips).
+  size_t edgeFlips = 0, collapsesUnblocked = 0;
   // Stopped above targetFaces (the floor: facesOut): every edge left, judged once more, by
   // verdict (index: int(CollapseVerdict)); edgesOverMaxError: allowed but over maxError.
   size_t edgesLeft = 0, edgesLeftBy[9] = {}, edgesOverMaxError = 0;

@@ -516,6 +516,102 @@ TEST(Components, BoeingReachesTwoPercentByDroppingWholeComponents) {
   EXPECT_EQ(size_t(gi.groupsVanished), r.stats.groupsRemoved);
 }
 
+// --- Edge flips at a floor (flipToUnblock) -----------------------------------------------------
+
+// A torus of n x m quads (two faces each; major radius 2, minor 0.8); `quadrants`: 4 groups by the
+// quadrant of a face's first vertex, else one group (Groups() below).
+IndexedMesh Torus(int n, int m) {
+  IndexedMesh t;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) {
+      const double u = 2 * 3.14159265358979 * i / n, v = 2 * 3.14159265358979 * j / m;
+      t.positions.emplace_back(float((2 + 0.8 * std::cos(v)) * std::cos(u)),
+                               float((2 + 0.8 * std::cos(v)) * std::sin(u)), float(0.8 * std::sin(v)));
+    }
+  const auto at = [&](int i, int j) { return uint32_t((i % n) * m + j % m); };
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) {
+      t.faces.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      t.faces.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  return t;
+}
+std::vector<int> Quadrants(const IndexedMesh& t) {
+  std::vector<int> g;
+  for (const auto& f : t.faces) g.push_back(int(t.positions[f[0]][0] > 0) + 2 * int(t.positions[f[0]][1] > 0));
+  return g;
+}
+// A closed manifold surface: no border, no non-manifold edge; its Euler characteristic.
+long long ClosedEuler(const IndexedMesh& m) {
+  const FaceAdjacency adj = BuildFaceAdjacency(m);
+  EXPECT_EQ(adj.borderEdges, 0u);
+  EXPECT_EQ(adj.nonManifoldEdges, 0u);
+  std::set<uint32_t> used;
+  for (const auto& f : m.faces) used.insert(f.begin(), f.end());
+  return (long long)used.size() - (long long)(3 * m.faces.size() / 2) + (long long)m.faces.size();
+}
+
+// The greedy collapse of a 16 x 8 torus stops at 20 faces, where most edges left fail the link
+// condition (two ends with a common neighbour off the edge), above the minimal torus (7 vertices,
+// 14 faces). Flipping the edge to that neighbour unblocks collapses: the target of 14 is reached,
+// still a closed torus, its group whole. Paper mode never flips.
+TEST(Flips, UnblockTheLinkConditionOnATorus) {
+  const IndexedMesh m = Torus(16, 8);
+  const std::vector<int> g(m.faces.size(), 0);
+  GroupQemParams p = Integrity();
+  p.targetFaces = 14;
+  GroupQemResult r;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+  EXPECT_EQ(r.mesh.faces.size(), 20u) << "the floor without flips";
+  EXPECT_EQ(r.stats.edgeFlips, 0u);
+  EXPECT_GT(2 * r.stats.edgesLeftBy[int(CollapseVerdict::Topology)], r.stats.edgesLeft) << "mostly the link condition";
+  p.flipToUnblock = true;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+  ExpectValidOutput(m, r);
+  EXPECT_EQ(r.mesh.faces.size(), 14u);
+  EXPECT_EQ(r.stats.stop, GroupQemStats::Stop::TargetReached);
+  EXPECT_GT(r.stats.edgeFlips, 0u);
+  EXPECT_GT(r.stats.collapsesUnblocked, 0u);
+  EXPECT_EQ(ClosedEuler(r.mesh), 0) << "still a torus";
+  EXPECT_EQ(ClosedEuler(m), 0);
+  p.mode = GroupMode::Paper;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+  EXPECT_EQ(r.stats.edgeFlips, 0u) << "paper mode stays as the paper says";
+  EXPECT_GT(r.mesh.faces.size(), 14u);
+}
+
+// With 4 groups a flip stays inside one group: every group stays whole, and the floor is no
+// higher than without flips. A run that reaches its target never flips: the same output.
+TEST(Flips, KeepEveryGroupWholeAndLeaveRunsThatReachTheTarget) {
+  const IndexedMesh m = Torus(24, 12);
+  const std::vector<int> g = Quadrants(m);
+  GroupQemParams p = Integrity();
+  p.targetFaces = 14;
+  GroupQemResult off, on;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, off).ok());
+  p.flipToUnblock = true;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, on).ok());
+  ExpectValidOutput(m, on);
+  EXPECT_GT(on.stats.edgeFlips, 0u);
+  EXPECT_LT(on.mesh.faces.size(), off.mesh.faces.size());
+  EXPECT_EQ(ClosedEuler(on.mesh), 0);
+  GroupIntegrity gi;
+  ASSERT_TRUE(MeasureGroupIntegrity(m, g, on.mesh, GroupsAfter(on, g), gi).ok());
+  EXPECT_EQ(gi.groupsAfter, 4);
+  EXPECT_DOUBLE_EQ(gi.intact(), 1.0);
+  for (size_t target : {size_t(100), size_t(300)}) {
+    p.targetFaces = target;
+    p.flipToUnblock = false;
+    ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, off).ok());
+    p.flipToUnblock = true;
+    ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, on).ok());
+    EXPECT_EQ(on.mesh.faces.size(), target);
+    EXPECT_EQ(on.stats.edgeFlips, 0u);
+    EXPECT_EQ(on.mesh.faces, off.mesh.faces);
+    EXPECT_EQ(on.mesh.positions, off.mesh.positions);
+  }
+}
+
 TEST(PreserveBoundary, BorderVerticesStay) {
   const IndexedMesh m = test::Grid(kN);
   const std::vector<int> g(m.faces.size(), 0);
