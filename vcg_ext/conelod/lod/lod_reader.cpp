@@ -289,8 +289,9 @@ struct LodReader::Impl {
   std::vector<uint8_t> streamScratch[2];
   StreamInflater inflater;
   std::vector<uint64_t> gridScratch, residualScratch;
-  PositionPredictor predictor;          // versions 6 to 8: the positions' predictions
-  PositionResidualModel residualModel;  // version 8: the residuals' adaptive models
+  PositionPredictor predictor;  // versions 6 to 8: the positions' predictions
+  // Version 8: the residuals' adaptive models (35 KiB), held only while a unit decodes.
+  std::unique_ptr<PositionResidualModel> residualModel;
   std::vector<uint32_t> idScratch, localScratch;
   // The last index block read (a node's children share one most of the time).
   uint64_t cachedIndexBlock = ~uint64_t(0);
@@ -693,13 +694,15 @@ struct LodReader::Impl {
       const uint64_t valueMask = (uint64_t(1) << (8 * width)) - 1;
       RangeDecoder rc(p, n);
       const uint32_t m = rc.Raw(6);
-      residualModel.Reset(m, width);
+      if (!residualModel) residualModel.reset(new PositionResidualModel);
+      residualModel->Reset(m, width);
       bool fine = m <= uint32_t(8 * width);
       predictor.Walk(unit.corners.data(), fc, vc, gridScratch.data(), [&](uint32_t v, const uint64_t* pred) {
         uint64_t r[3] = {0, 0, 0};
-        fine = residualModel.Decode(rc, predictor.kind(), r, width) && fine;
+        fine = residualModel->Decode(rc, predictor.kind(), r, width) && fine;
         for (size_t c = 0; c < 3; ++c) gridScratch[3 * size_t(v) + c] = (pred[c] + r[c]) & valueMask;
       });
+      residualModel.reset();
       if (!fine || !rc.ok()) return Status::Invalid(bad + "its positions do not decode");
     } else if (info.version >= kCompactIndexVersion) {
       residualScratch.resize(vc * 3);

@@ -501,9 +501,9 @@ TEST_F(TinyLod, BadFilesAreRefusedWithTheirReason) {
   }
   {  // wrong version (a valid checksum: a file from a future writer)
     std::vector<uint8_t> b = good;
-    b[kChunkHeaderBytes] = 8;
+    b[kChunkHeaderBytes] = 9;
     Rechecksum(b, 0);
-    EXPECT_TRUE(has(OpenError(b), "unsupported .clod version 8")) << OpenError(b);
+    EXPECT_TRUE(has(OpenError(b), "unsupported .clod version 9")) << OpenError(b);
     // Files of the previous versions: named, with what to do.
     b[kChunkHeaderBytes] = 2;
     Rechecksum(b, 0);
