@@ -618,7 +618,7 @@ const char* kLodUsage =
     "  --attribute-weight W [1]; texture seams kept) and stored per node (colour exact as RGBA8,\n"
     "  normals within 1e-4 rad, UVs as 16 bits over their box), with the texture image its\n"
     "  `comment TextureFile` names (read beside IN.ply, stored as it is: the .clod moves as one\n"
-    "  file); --no-attributes: geometry only. File version 7 (versions 3 to 6 are still read).\n"
+    "  file); --no-attributes: geometry only. File version 8 (versions 3 to 7 are still read).\n"
     "  The file does not depend on N. The other grouping options and --faces-per-part are\n"
     "  accepted for compatibility and not used.\n"
     "  extract: opens the file, refines for a perspective eye at X,Y,Z under a budget of N faces\n"

@@ -1,4 +1,4 @@
-// ConeLOD web viewer — the .clod (versions 3 to 7) reader over HTTP Range requests.
+// ConeLOD web viewer — the .clod (versions 3 to 8) reader over HTTP Range requests.
 //
 // The JavaScript twin of vcg_ext/conelod/lod/lod_reader.cpp; the byte layout is
 // vcg_ext/conelod/lod/lod_format.md. It reads only the byte ranges it needs: the header, the three
@@ -8,7 +8,7 @@
 // ranges. Errors name the problem as the desktop reader's do.
 import { MeshoptDecoder } from './node_modules/meshoptimizer/meshopt_decoder.mjs';
 
-export const VERSION = 7;  // the newest read (7: deflated streams; 6: the compact index; 5: with attribute streams; 4, 3: geometry only)
+export const VERSION = 8;  // the newest read (8: range-coded positions; 7: deflated streams; 6: the compact index; 5: with attribute streams; 4, 3: geometry only)
 const OLDEST_VERSION = 3;
 const CHUNK = 24;
 const HEADER_FIXED = 128;
@@ -18,6 +18,7 @@ const IBLOCK_BASE = 16;
 const INDEX_ENTRY = 8;  // versions 3 to 5: u32 recordEnd, u32 geometryEnd
 const COMPACT_INDEX_VERSION = 6;  // varint entries, INDX data listing where each block starts
 const DEFLATE_VERSION = 7;  // each geometry stream deflated when that is smaller
+const CODED_POSITIONS_VERSION = 8;  // positions' residuals range-coded (lod_entropy.h)
 const MAX_DEFLATE_RATIO = 1032;  // deflate's largest expansion (RFC 1951)
 const RECORD_FIXED = 26;  // the smallest record (version 4 at level 0): CRC, cone, sphere
 const GEOM_MIN = 5;
@@ -171,26 +172,164 @@ function storedGrid(raw, vc, wide) {
   return q;
 }
 
-// Version 6: the residuals of the positions' predictions, stored as running signed bytes, and the
-// predictions walked over the faces as lod_internal.h's PositionPredictor walks them (the same
-// order, the same integer arithmetic modulo 2^(8 x width)).
-function predictedGrid(raw, vc, wide, corners, fc) {
+// Version 8: lod_entropy.h's RangeDecoder (LZMA's range coder: 32-bit range, 11-bit adaptive
+// probabilities), the same integer arithmetic. Never reads outside its bytes; `ok()` is false for
+// a stream that is truncated, has bytes left over, does not start with 0 or holds a value the
+// encoder cannot have written.
+const RANGE_TOP = 2 ** 24;
+class RangeDecoder {
+  constructor(bytes) {
+    this.b = bytes;
+    this.p = 0;
+    this.bad = bytes.length < 5 || bytes[0] !== 0;
+    this.range = 0xffffffff;
+    this.code = 0;
+    for (let i = 0; i < 5; ++i) this.code = ((this.code << 8) | this.next()) >>> 0;
+  }
+  next() {
+    if (this.p < this.b.length) return this.b[this.p++];
+    this.bad = true;
+    return 0;
+  }
+  normalize() {
+    while (this.range < RANGE_TOP) {
+      this.range = (this.range << 8) >>> 0;
+      this.code = ((this.code << 8) | this.next()) >>> 0;
+    }
+  }
+  // One adaptive bit; probs[i] is the probability of a 0 in 1/2048, updated by 1/16 of the way.
+  bit(probs, i) {
+    const p = probs[i], bound = (this.range >>> 11) * p;
+    let bit;
+    if (this.code < bound) {
+      this.range = bound;
+      probs[i] = p + ((2048 - p) >> 4);
+      bit = 0;
+    } else {
+      this.code -= bound;
+      this.range -= bound;
+      probs[i] = p - (p >> 4);
+      bit = 1;
+    }
+    this.normalize();
+    return bit;
+  }
+  // `bits` (1..16) equiprobable bits.
+  raw(bits) {
+    this.range = this.range >>> bits;
+    let v = Math.floor(this.code / this.range);
+    if (v >= 2 ** bits) {
+      this.bad = true;
+      v %= 2 ** bits;
+    }
+    this.code -= v * this.range;
+    this.normalize();
+    return v;
+  }
+  ok() {
+    return !this.bad && this.p === this.b.length;
+  }
+}
+
+// Version 8: a unit's position residuals (lod_entropy.h's PositionResidualModel): per coordinate
+// its zigzagged value's bit length n (six adaptive bits, a binary tree, in the context of the
+// prediction's kind, the axis and for y and z the previous axis's n), then for n >= 2 the bit
+// below the leading one (adaptive, per kind and n) and the n - 2 bits below (16 at a time).
+// The stream starts with m (6 equiprobable bits), and the length trees start from a prior around
+// it (reset).
+const LENGTH_CONTEXTS = 1 + 2 * 34;
+const KIND_OFFSET = [0, 2, 2, 4];
+class PositionResidualModel {
+  constructor() {
+    this.length = new Uint16Array(4 * LENGTH_CONTEXTS * 64);
+    this.high = new Uint16Array(4 * 34);
+  }
+  // Kind k's trees give n the weight 2^(24 - |n - m - offset_k|) (0 above 8 x width), each node's
+  // probability of a 0 floor(2048 x left / (left + right)) within [32, 2016]; high bits one half.
+  reset(m, width) {
+    this.high.fill(1024);
+    const w = new Array(64), tree = new Uint16Array(64);
+    for (let k = 0; k < 4; ++k) {
+      for (let n = 0; n < 64; ++n) {
+        const d = Math.abs(n - m - KIND_OFFSET[k]);
+        w[n] = n > 8 * width ? 0 : 2 ** (d < 24 ? 24 - d : 0);
+      }
+      for (let depth = 0; depth < 6; ++depth)
+        for (let node = 1 << depth; node < 2 << depth; ++node) {
+          const span = 64 >> depth, first = (node - (1 << depth)) * span;
+          let l = 0, r = 0;
+          for (let i = 0; i < span / 2; ++i) l += w[first + i];
+          for (let i = span / 2; i < span; ++i) r += w[first + i];
+          const p = l + r ? Math.floor((l * 2048) / (l + r)) : 1024;
+          tree[node] = Math.min(2016, Math.max(32, p));
+        }
+      for (let c = 0; c < LENGTH_CONTEXTS; ++c) this.length.set(tree.subarray(1), (k * LENGTH_CONTEXTS + c) * 64 + 1);
+    }
+  }
+  // The three residuals (mod 2^(8 x width)) of one vertex into r; false on a length above 8 x width
+  // (at once, as the desktop reader: no model of a longer length exists).
+  decode(rc, kind, r, width) {
+    let previous = 0;
+    for (let c = 0; c < 3; ++c) {
+      const tree = 64 * (kind * LENGTH_CONTEXTS + (c === 0 ? 0 : 1 + (c - 1) * 34 + previous));
+      let node = 1;
+      for (let i = 0; i < 6; ++i) node = node * 2 + rc.bit(this.length, tree + node);
+      const n = node - 64;
+      if (n > 8 * width) return false;
+      let z = n ? 1 : 0;
+      if (n >= 2) {
+        z = z * 2 + rc.bit(this.high, kind * 34 + n);
+        for (let left = n - 2; left > 0;) {
+          const take = Math.min(left, 16);
+          left -= take;
+          z = z * 2 ** take + rc.raw(take);
+        }
+      }
+      // z >> 1 for z even, -(z >> 1) - 1 for z odd, modulo 2^(8 x width)
+      const half = Math.floor(z / 2), modulus = 2 ** (8 * width);
+      r[c] = z % 2 ? (modulus - 1 - half) % modulus : half % modulus;
+      previous = n;
+    }
+    return true;
+  }
+}
+
+// Versions 6 to 8: the residuals of the positions' predictions and the predictions walked over the
+// faces as lod_internal.h's PositionPredictor walks them (the same order, the same integer
+// arithmetic modulo 2^(8 x width)). Version 6, 7 (`raw`): the residuals stored as running signed
+// bytes (meshoptimizer's vertex codec); version 8 (`coded`): range-coded, decoded as the walk
+// visits the vertices, in the context of each prediction's kind (0 parallelogram, 1 midpoint, 2 a
+// neighbour, 3 the vertex visited before). Null when the coded residuals do not decode.
+function predictedGrid(raw, vc, wide, corners, fc, coded = null) {
   const width = wide ? 4 : 2, stride = wide ? 12 : 8, modulus = 2 ** (8 * width);
   const wrap = (x) => ((x % modulus) + modulus) % modulus;
   const r = new Float64Array(vc * 3);
-  for (let v = 0; v < vc; ++v)
-    for (let c = 0; c < 3; ++c) {
-      let x = 0;
-      for (let j = width - 1; j >= 0; --j) {
-        const at = v * stride + width * c + j;
-        const delta = (raw[at] - (v ? raw[at - stride] : 0)) & 0xff;
-        x = x * 256 + (delta >= 128 ? delta - 256 : delta);
+  if (!coded)
+    for (let v = 0; v < vc; ++v)
+      for (let c = 0; c < 3; ++c) {
+        let x = 0;
+        for (let j = width - 1; j >= 0; --j) {
+          const at = v * stride + width * c + j;
+          const delta = (raw[at] - (v ? raw[at - stride] : 0)) & 0xff;
+          x = x * 256 + (delta >= 128 ? delta - 256 : delta);
+        }
+        r[v * 3 + c] = wrap(x);
       }
-      r[v * 3 + c] = wrap(x);
-    }
+  const rc = coded ? new RangeDecoder(coded) : null, model = coded ? new PositionResidualModel() : null;
+  const rv = [0, 0, 0];
+  let fine = true;
+  if (rc) {
+    const m = rc.raw(6);
+    model.reset(m, width);
+    fine = m <= 8 * width;
+  }
   const q = new Float64Array(vc * 3), visited = new Uint8Array(vc), opposite = new Map();
   const last = [0, 0, 0], pred = [0, 0, 0];
-  const visit = (v) => {
+  const visit = (v, kind) => {
+    if (rc) {
+      fine = model.decode(rc, kind, rv, width) && fine;
+      for (let c = 0; c < 3; ++c) r[v * 3 + c] = rv[c];
+    }
     for (let c = 0; c < 3; ++c) last[c] = q[v * 3 + c] = wrap(pred[c] + r[v * 3 + c]);
     visited[v] = 1;
   };
@@ -200,17 +339,21 @@ function predictedGrid(raw, vc, wide, corners, fc) {
       const v = t[k];
       if (visited[v]) continue;
       const a = t[(k + 1) % 3], b = t[(k + 2) % 3];
+      let kind;
       if (visited[a] && visited[b]) {
         const o = opposite.get(b * vc + a);  // a neighbour's edge b -> a
         for (let c = 0; c < 3; ++c)
           pred[c] = o !== undefined ? q[a * 3 + c] + q[b * 3 + c] - q[o * 3 + c] : Math.floor((q[a * 3 + c] + q[b * 3 + c]) / 2);
+        kind = o !== undefined ? 0 : 1;
       } else if (visited[a] || visited[b]) {
         const k2 = visited[a] ? a : b;
         for (let c = 0; c < 3; ++c) pred[c] = q[k2 * 3 + c];
+        kind = 2;
       } else {
         for (let c = 0; c < 3; ++c) pred[c] = last[c];
+        kind = 3;
       }
-      visit(v);
+      visit(v, kind);
     }
     for (let k = 0; k < 3; ++k) {
       const key = t[k] * vc + t[(k + 1) % 3];
@@ -220,9 +363,9 @@ function predictedGrid(raw, vc, wide, corners, fc) {
   for (let v = 0; v < vc; ++v)
     if (!visited[v]) {
       for (let c = 0; c < 3; ++c) pred[c] = last[c];
-      visit(v);
+      visit(v, 3);
     }
-  return q;
+  return rc && !(fine && rc.ok()) ? null : q;
 }
 
 // meshoptimizer's bounds on its codecs' output (meshopt_encodeVertexBufferBound,
@@ -238,6 +381,10 @@ function vertexBits(vertices) {
   while (bits < 32 && vertices > 2 ** bits) ++bits;
   return bits;
 }
+// lod_entropy.h's PositionStreamBound: the most bytes version 8's coded positions take.
+export function positionStreamBound(vertices) {
+  return vertices * 34 + 16;
+}
 export function indexBufferBound(indices, vertices) {
   return 1 + Math.floor(indices / 3) * (2 + 3 * Math.floor((vertexBits(vertices) + 1 + 6) / 7)) + 16;
 }
@@ -246,8 +393,17 @@ export function indexSequenceBound(indices, vertices) {
 }
 
 // Exactly `rawBytes` from one whole raw deflate stream (the browser's own inflater); null when it
-// is not one, gives more or fewer bytes.
+// is not one, gives more or fewer bytes, or has bytes after its end (as the desktop reader, which
+// requires zlib to take every byte). DecompressionStream may ignore bytes after the end (Node's
+// does), so a stream that inflates whole is inflated again without its last byte, which must
+// then fail: a deflate stream's end lies in its last byte.
 async function inflateRaw(bytes, rawBytes) {
+  const out = await inflateWhole(bytes, rawBytes);
+  if (!out || bytes.length === 0) return null;
+  return (await inflateWhole(bytes.subarray(0, bytes.length - 1), rawBytes)) ? null : out;
+}
+// What `bytes` inflate to when they hold one whole stream of exactly rawBytes bytes; else null.
+async function inflateWhole(bytes, rawBytes) {
   const out = new Uint8Array(rawBytes);
   let n = 0;
   try {
@@ -380,11 +536,11 @@ export class ClodReader {
     if (head.length < CHUNK + 4) throw new ClodError(trunc + 'no version field');
     const version = new Decoder(head, CHUNK).u32();
     if (version === 1)
-      throw new ClodError('this is a .clod version 1 file (written by an older ConeLOD, whose cuts could have cracks): rebuild it with conelod lod build (this reader reads versions 3 to 7)');
+      throw new ClodError(`this is a .clod version 1 file (written by an older ConeLOD, whose cuts could have cracks): rebuild it with conelod lod build (this reader reads versions 3 to ${VERSION})`);
     if (version === 2)
-      throw new ClodError('this is a .clod version 2 file (uncompressed, written by an older ConeLOD): rebuild it with conelod lod build (this reader reads versions 3 to 7)');
+      throw new ClodError(`this is a .clod version 2 file (uncompressed, written by an older ConeLOD): rebuild it with conelod lod build (this reader reads versions 3 to ${VERSION})`);
     if (version < OLDEST_VERSION || version > VERSION)
-      throw new ClodError(`unsupported .clod version ${version} (this reader reads versions 3 to 7)`);
+      throw new ClodError(`unsupported .clod version ${version} (this reader reads versions 3 to ${VERSION})`);
     const tail = version >= 5 ? HEADER_ATTRIBUTES : 0;
     // With texture coordinates (bit 8) the UV box and the texture's offset follow (checked below).
     const extra = version >= 5 && h.dataBytes > HEADER_FIXED + tail &&
@@ -897,14 +1053,15 @@ export class ClodReader {
     const stride = wide ? 12 : 8;
     // The positions' and triangles' streams first (version 7: inflated), the faces checked against
     // the triangles' codec bytes (at least a byte a face), then decoded, as the desktop reader.
-    let p = await this._stream(d, vertexBufferBound(vc, stride));
+    const coded = this.info.version >= CODED_POSITIONS_VERSION;
+    let p = await this._stream(d, coded ? positionStreamBound(vc) : vertexBufferBound(vc, stride));
     if (!p) throw new ClodError(bad + 'its positions do not decode');
     const pt = await this._stream(d, indexBufferBound(fc * 3, vc));
     if (!pt) throw new ClodError(bad + 'its triangles do not decode');
     if (fc > pt.length) throw new ClodError(bad + 'more faces than its triangles can hold');
-    const raw = new Uint8Array(vc * stride);
+    const raw = coded ? null : new Uint8Array(vc * stride);
     try {
-      MeshoptDecoder.decodeVertexBuffer(raw, vc, stride, p);
+      if (!coded) MeshoptDecoder.decodeVertexBuffer(raw, vc, stride, p);
     } catch (e) {
       throw new ClodError(bad + 'its positions do not decode');
     }
@@ -915,7 +1072,8 @@ export class ClodReader {
       throw new ClodError(bad + 'its triangles do not decode');
     }
     for (let i = 0; i < corners.length; ++i) if (corners[i] >= vc) throw new ClodError(bad + 'face index out of range');
-    const q = this.info.version >= COMPACT_INDEX_VERSION ? predictedGrid(raw, vc, wide, corners, fc) : storedGrid(raw, vc, wide);
+    const q = this.info.version >= COMPACT_INDEX_VERSION ? predictedGrid(raw, vc, wide, corners, fc, coded ? p : null) : storedGrid(raw, vc, wide);
+    if (!q) throw new ClodError(bad + 'its positions do not decode');
     const positions = new Float32Array(vc * 3);
     for (let v = 0; v < vc; ++v)
       for (let c = 0; c < 3; ++c) {

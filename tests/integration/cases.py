@@ -1755,7 +1755,7 @@ def cli_lod_round_trip(c):
     assert b["file_bytes"] == os.path.getsize(clod), b
     assert all(b["level_faces"][k] <= b["level_faces"][k - 1] for k in range(1, b["levels"])), b
     info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
-    assert info["faces"] == 69451 and info["nodes"] == b["nodes"] and info["version"] == 7, info
+    assert info["faces"] == 69451 and info["nodes"] == b["nodes"] and info["version"] == 8, info
     # Positions on one grid, within the bound asked for (--precision, default 5e-6 of the diagonal).
     assert 0 < b["quantization_error"] == info["quantization_error"] <= 5e-6 * 0.27, (b, info)
     human = c.conelod("lod", "info", clod).stdout.decode()
@@ -2935,7 +2935,7 @@ def cli_lod_attributes(c):
     assert r["attribute_conflicts"] == 0, r  # the seam's repeated vertices agree on colour and normal
     assert b"texture coordinates are stored without the image: cannot read its texture image" in p.stderr, p.stderr
     info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
-    assert info["version"] == 7 and info["colors"] and info["normals"] and info["texcoords"], info
+    assert info["version"] == 8 and info["colors"] and info["normals"] and info["texcoords"], info
     assert info["uv_min"] == [0, 0] and info["uv_max"] == [2, 1] and info["texture_bytes"] == 0, info
     text = c.conelod("lod", "info", clod).stdout.decode()
     assert "attributes per vertex: colour (RGBA8), normals (octahedral 2 x 16 bits)" in text, text
@@ -2988,7 +2988,7 @@ def cli_lod_attributes(c):
     p = c.conelod("lod", "build", src, "-o", noattr, "--no-attributes")
     assert b"texture coordinates" not in p.stderr, p.stderr
     assert open(plain, "rb").read() == open(noattr, "rb").read(), "--no-attributes is not the geometry-only file"
-    assert json.loads(c.conelod("lod", "info", plain, "--json").stdout)["version"] == 7
+    assert json.loads(c.conelod("lod", "info", plain, "--json").stdout)["version"] == 8
     assert os.path.getsize(clod) > os.path.getsize(plain)
     p = c.conelod("lod", "build", src, "-o", c.out("bad.clod"), "--attribute-weight", "-1", expect=1)
     assert b"--attribute-weight must be >= 0" in p.stderr and not os.path.exists(c.out("bad.clod")), p.stderr
@@ -3097,22 +3097,52 @@ def viewer_colours(c):
 @case
 def web_reader_positions(c):
     """web/clod.js decodes every node's positions as the desktop reader does, bit for bit: the
-    version 6 prediction walked over the faces the same way in C++ and JavaScript (tools/
-    lod_node_hash against tests/integration/web_node_hash.mjs: per node, a hash of its sorted
-    positions), on the bunny's file at the default precision (units of u16 coordinates) and at
-    1e-6 (its coarse units need u32), and on the stored version 3, 4 and 5 files."""
+    prediction walked over the faces the same way in C++ and JavaScript, and version 8's
+    range-coded residuals decoded alike (tools/lod_node_hash against tests/integration/
+    web_node_hash.mjs: per node, a hash of its sorted positions), on the bunny's file at the
+    default precision (units of u16 coordinates) and at 1e-6 (its coarse units need u32), and on
+    the stored version 3 to 7 files."""
     tool = os.path.join(c.build, "tools", "lod_node_hash")
     script = os.path.join(c.source, "tests", "integration", "web_node_hash.mjs")
     data = os.path.join(c.source, "vcg_ext", "tests", "lod", "data")
     fine = c.out("bunny_fine.clod")
     c.conelod("lod", "build", c.mesh("stanford_bunny_bun_zipper.ply"), "-o", fine, "--precision", "1e-6")
     files = [build_clod(c, "stanford_bunny_bun_zipper.ply", "bunny.clod"), fine] + [
-        os.path.join(data, n) for n in ("sphere512_v3.clod", "sphere512_v4b.clod", "sphere512_color_v5.clod")]
+        os.path.join(data, n) for n in ("sphere512_v3.clod", "sphere512_v4b.clod", "sphere512_color_v5.clod",
+                                        "sphere512_v6.clod", "sphere512_v7.clod")]
     for f in files:
         desktop = subprocess.run([tool, f], capture_output=True, text=True, check=True).stdout
         web = subprocess.run(["node", script, c.source, f], capture_output=True, text=True, check=True).stdout
         lines = desktop.split("\n")
         assert len(lines) > 20 and desktop == web, (f, [(a, b) for a, b in zip(lines, web.split("\n")) if a != b][:5])
+
+
+@case
+def web_reader_refuses_bad_deflate(c):
+    """web/clod.js refuses a deflated stream that is not exactly one whole deflate stream of the
+    size it claims, as the desktop reader does: in a unit of the bunny's file whose triangles are
+    deflated, bytes after the stream's end (1, 3), its last byte missing and rawBytes one off each
+    give "its triangles do not decode" (tests/integration/web_deflate_check.mjs; the blob's CRC
+    made good), and the same blob rewritten unchanged decodes."""
+    script = os.path.join(c.source, "tests", "integration", "web_deflate_check.mjs")
+    clod = build_clod(c, "stanford_bunny_bun_zipper.ply", "bunny.clod")
+    p = subprocess.run(["node", script, c.source, clod], capture_output=True, text=True)
+    print(p.stdout)
+    assert p.returncode == 0 and p.stdout.count("refused: ") == 5 and "unchanged: decoded" in p.stdout, p.stdout + p.stderr
+
+
+@case
+def web_reader_survives_bad_positions(c):
+    """web/clod.js on hostile version 8 positions: in 9 units of the bunny's file the range-coded
+    positions are rewritten (random bytes changed, the last byte dropped, a byte added; the
+    blob's CRC made good) and each decode ends, decoded or refused by name, within the time
+    limit; the stream rewritten unchanged decodes to the same positions (tests/integration/
+    web_positions_check.mjs)."""
+    script = os.path.join(c.source, "tests", "integration", "web_positions_check.mjs")
+    clod = build_clod(c, "stanford_bunny_bun_zipper.ply", "bunny.clod")
+    p = subprocess.run(["node", script, c.source, clod], capture_output=True, text=True, timeout=120)
+    print(p.stdout)
+    assert p.returncode == 0 and " 0 failures" in p.stdout, p.stdout + p.stderr
 
 
 @case

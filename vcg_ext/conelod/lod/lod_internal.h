@@ -22,17 +22,19 @@ constexpr uint32_t kIndex = FourCC('I', 'N', 'D', 'X');  // the offset index, in
 constexpr uint32_t kIBlock = FourCC('I', 'B', 'L', 'K');
 constexpr uint32_t kTexture = FourCC('T', 'E', 'X', 'R');  // with texture coordinates: the image
 
-// 7: each geometry stream (positions, triangles, vertex ids, attributes) deflated when that is
-// smaller (a code per stream says which); 6: a compact offset index (varint sizes per entry, a table of where each
-// block starts) and the header's attributes field always present (0: geometry only): written; 5: version 4 plus
+// 8: the positions' residuals range-coded with adaptive models (lod_entropy.h) instead of
+// meshoptimizer's vertex codec; 7: each geometry stream (positions, triangles, vertex ids, attributes) deflated when
+// that is smaller (a code per stream says which); 6: a compact offset index (varint sizes per entry, a table of where
+// each block starts) and the header's attributes field always present (0: geometry only): written; 5: version 4 plus
 // per-vertex attribute streams (colour, normals), the attributes field present; 4: a group's
 // parentError and parents in its first record only; 3: quantized, compressed nodes (5, 4, 3 are
 // still read); 2: float positions per level, refused by name; 1: the tree of groups, refused.
-constexpr uint32_t kVersion = 7;              // the newest version read, and the one written
-constexpr uint32_t kDeflateVersion = 7;       // the first whose geometry streams may be deflated
-constexpr uint64_t kMaxDeflateRatio = 1032;   // deflate's largest expansion on inflating (RFC 1951)
-constexpr uint32_t kAttributeVersion = 5;     // the first with the header's attributes field
-constexpr uint32_t kCompactIndexVersion = 6;  // the first with the compact index
+constexpr uint32_t kVersion = 8;                // the newest version read, and the one written
+constexpr uint32_t kCodedPositionsVersion = 8;  // the first with range-coded positions (lod_entropy.h)
+constexpr uint32_t kDeflateVersion = 7;         // the first whose geometry streams may be deflated
+constexpr uint64_t kMaxDeflateRatio = 1032;     // deflate's largest expansion on inflating (RFC 1951)
+constexpr uint32_t kAttributeVersion = 5;       // the first with the header's attributes field
+constexpr uint32_t kCompactIndexVersion = 6;    // the first with the compact index
 constexpr uint32_t kOldestReadVersion = 3;
 constexpr uint32_t kMaxLevels = 64;
 constexpr uint32_t kNoParent = 0xFFFFFFFFu;
@@ -135,11 +137,14 @@ class PositionPredictor {
             }
           for (int i = 0; i < 3; ++i)
             pred[i] = c != kNone ? qa[i] + qb[i] - q[3 * size_t(c) + size_t(i)] : (qa[i] + qb[i]) >> 1;
+          kind_ = c != kNone ? kParallelogram : kMidpoint;
         } else if (visited_[a] || visited_[b]) {
           const uint64_t* qk = visited_[a] ? qa : qb;
           for (int i = 0; i < 3; ++i) pred[i] = qk[i];
+          kind_ = kNeighbour;
         } else {
           for (int i = 0; i < 3; ++i) pred[i] = last[i];
+          kind_ = kPrevious;
         }
         visit(v, pred);
         done(v);
@@ -148,10 +153,14 @@ class PositionPredictor {
     for (uint32_t v = 0; v < vertexCount; ++v)
       if (!visited_[v]) {
         for (int i = 0; i < 3; ++i) pred[i] = last[i];
+        kind_ = kPrevious;
         visit(v, pred);
         done(v);
       }
   }
+  // The kind of the prediction just passed to visit (version 8 codes the residuals by kind).
+  enum Kind { kParallelogram = 0, kMidpoint = 1, kNeighbour = 2, kPrevious = 3 };
+  int kind() const { return kind_; }
   void Release() {  // its buffers (a reader keeps little between units)
     std::vector<uint8_t>().swap(visited_);
     std::vector<uint32_t>().swap(first_);
@@ -170,6 +179,7 @@ class PositionPredictor {
   std::vector<uint8_t> visited_;
   std::vector<uint32_t> first_, fill_;  // per vertex: where its edges start; the next free slot
   std::vector<Edge> edges_;
+  int kind_ = kPrevious;
 };
 
 // The residual r (mod 2^(8 x width)) as signed byte digits added to the running bytes `lane`.

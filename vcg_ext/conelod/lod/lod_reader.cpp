@@ -25,6 +25,7 @@
 
 #include <meshoptimizer.h>
 
+#include "conelod/lod/lod_entropy.h"
 #include "conelod/lod/lod_internal.h"
 
 namespace conelod {
@@ -288,7 +289,9 @@ struct LodReader::Impl {
   std::vector<uint8_t> streamScratch[2];
   StreamInflater inflater;
   std::vector<uint64_t> gridScratch, residualScratch;
-  PositionPredictor predictor;  // version 6: the positions' predictions
+  PositionPredictor predictor;  // versions 6 to 8: the positions' predictions
+  // Version 8: the residuals' adaptive models (35 KiB), held only while a unit decodes.
+  std::unique_ptr<PositionResidualModel> residualModel;
   std::vector<uint32_t> idScratch, localScratch;
   // The last index block read (a node's children share one most of the time).
   uint64_t cachedIndexBlock = ~uint64_t(0);
@@ -666,14 +669,18 @@ struct LodReader::Impl {
     // against the triangles' codec bytes (at least a byte a face), then decoded.
     const size_t stride = wide ? 12 : 8;
     size_t n = 0, nt = 0;
-    const uint8_t* p = TakeStream(d, meshopt_encodeVertexBufferBound(vc, stride), streamScratch[0], n);
+    const bool coded = info.version >= kCodedPositionsVersion;
+    const uint8_t* p = TakeStream(d, coded ? PositionStreamBound(vc) : meshopt_encodeVertexBufferBound(vc, stride),
+                                  streamScratch[0], n);
     if (!p) return Status::Invalid(bad + "its positions do not decode");
     const uint8_t* pt = TakeStream(d, meshopt_encodeIndexBufferBound(fc * 3, vc), streamScratch[1], nt);
     if (!pt) return Status::Invalid(bad + "its triangles do not decode");
     if (fc > nt) return Status::Invalid(bad + "more faces than its triangles can hold");
-    positionScratch.resize(vc * stride);
-    if (meshopt_decodeVertexBuffer(positionScratch.data(), vc, stride, p, n) != 0)
-      return Status::Invalid(bad + "its positions do not decode");
+    if (!coded) {
+      positionScratch.resize(vc * stride);
+      if (meshopt_decodeVertexBuffer(positionScratch.data(), vc, stride, p, n) != 0)
+        return Status::Invalid(bad + "its positions do not decode");
+    }
     unit.corners.resize(fc * 3);
     if (meshopt_decodeIndexBuffer(unit.corners.data(), fc * 3, 4, pt, nt) != 0)
       return Status::Invalid(bad + "its triangles do not decode");
@@ -683,7 +690,21 @@ struct LodReader::Impl {
     // of the predictions as running signed bytes, the faces walked as the writer walked them.
     gridScratch.resize(vc * 3);
     const int width = wide ? 4 : 2;
-    if (info.version >= kCompactIndexVersion) {
+    if (coded) {  // version 8: range-coded residuals, decoded as the walk visits the vertices
+      const uint64_t valueMask = (uint64_t(1) << (8 * width)) - 1;
+      RangeDecoder rc(p, n);
+      const uint32_t m = rc.Raw(6);
+      if (!residualModel) residualModel.reset(new PositionResidualModel);
+      residualModel->Reset(m, width);
+      bool fine = m <= uint32_t(8 * width);
+      predictor.Walk(unit.corners.data(), fc, vc, gridScratch.data(), [&](uint32_t v, const uint64_t* pred) {
+        uint64_t r[3] = {0, 0, 0};
+        fine = residualModel->Decode(rc, predictor.kind(), r, width) && fine;
+        for (size_t c = 0; c < 3; ++c) gridScratch[3 * size_t(v) + c] = (pred[c] + r[c]) & valueMask;
+      });
+      residualModel.reset();
+      if (!fine || !rc.ok()) return Status::Invalid(bad + "its positions do not decode");
+    } else if (info.version >= kCompactIndexVersion) {
       residualScratch.resize(vc * 3);
       static const uint8_t zeros[12] = {0};
       for (size_t v = 0; v < vc; ++v) {

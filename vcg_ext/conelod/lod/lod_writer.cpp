@@ -24,6 +24,7 @@
 #include <meshoptimizer.h>
 #include <zlib.h>
 
+#include "conelod/lod/lod_entropy.h"
 #include "conelod/lod/lod_internal.h"
 #include "conelod/mesh/mesh_check.h"
 #include "conelod/mesh/safe_file.h"
@@ -664,8 +665,9 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
     std::vector<uint8_t> buf, mask;
     std::vector<uint32_t> q32, decoded;
     std::vector<uint64_t> qrel, residual;
-    std::vector<uint8_t> lanes, ibuf;
+    std::vector<uint8_t> kinds, ibuf;
     PositionPredictor predictor;
+    PositionResidualModel residualModel;
     StreamDeflater deflater;
     std::vector<uint8_t> attr;
     Encoder e;
@@ -749,29 +751,31 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
           decoded.resize(idx.size());
           if (meshopt_decodeIndexBuffer(decoded.data(), decoded.size(), 4, ibuf.data(), ibuf.size()) != 0)
             return fail("internal error: the index codec failed");
-          // Positions: residuals from the predictions, as running signed bytes (lod_internal.h).
+          // Positions: the residuals of the predictions, range-coded in the order the prediction
+          // visits the vertices, each in the context of its prediction's kind (lod_entropy.h).
           const int width = wide ? 4 : 2;
-          const size_t stride = wide ? 12 : 8;
           const uint64_t valueMask = (uint64_t(1) << (8 * width)) - 1;
           qrel.resize(vc * 3);
-          residual.resize(vc * 3);
           for (size_t v = 0; v < vc; ++v)
             for (int c = 0; c < 3; ++c) qrel[v * 3 + size_t(c)] = q32[v * 3 + size_t(c)] - qmin[c];
+          residual.clear();
+          kinds.clear();
           predictor.Walk(decoded.data(), decoded.size() / 3, vc, qrel.data(), [&](uint32_t v, const uint64_t* pred) {
-            for (size_t c = 0; c < 3; ++c)
-              residual[3 * size_t(v) + c] = (qrel[3 * size_t(v) + c] - pred[c]) & valueMask;
+            for (size_t c = 0; c < 3; ++c) residual.push_back((qrel[3 * size_t(v) + c] - pred[c]) & valueMask);
+            kinds.push_back(uint8_t(predictor.kind()));
           });
-          lanes.assign(vc * stride, 0);
-          uint8_t running[12] = {0};
-          for (size_t v = 0; v < vc; ++v) {
-            for (int c = 0; c < 3; ++c) AddResidualBytes(residual[v * 3 + size_t(c)], width, running + width * c);
-            std::memcpy(lanes.data() + v * stride, running, size_t(3 * width));
+          buf.clear();
+          {
+            RangeEncoder rc(buf);
+            const uint32_t m = PositionResidualModel::TypicalLength(residual.data(), kinds.data(), vc, width, tmp);
+            rc.Raw(m, 6);
+            residualModel.Reset(m, width);
+            for (size_t i = 0; i < vc; ++i) residualModel.Encode(rc, kinds[i], &residual[3 * i], width);
+            rc.Finish();
           }
-          buf.resize(meshopt_encodeVertexBufferBound(vc, stride));
-          buf.resize(meshopt_encodeVertexBuffer(buf.data(), buf.size(), lanes.data(), vc, stride));
-          if (buf.empty()) return fail("internal error: the vertex codec failed");
-          uint64_t stored = 0;
-          if (!deflater.put(e, buf, stored)) return fail("internal error: deflate failed");
+          uint64_t stored = buf.size();
+          e.uv(stored * 2);  // stored as it is: a range coder's output does not deflate
+          e.raw(buf.data(), buf.size());
           positionBytes += stored;
           if (!deflater.put(e, ibuf, stored)) return fail("internal error: deflate failed");
           indexBytes += stored;

@@ -25,6 +25,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "conelod/lod/lod_entropy.h"
 #include "conelod/lod/lod_internal.h"
 #include "conelod/lod/lod_spill.h"
 #include "conelod/mesh/ply_format.h"
@@ -246,7 +247,7 @@ TEST_F(TinyLod, HeaderAndNodeStructure) {
   const LodFileInfo& i = r->info();
   const size_t H = b.dag.levels.size();
   ASSERT_GE(H, 3u) << "the tiny sphere should give a DAG of several levels";
-  EXPECT_EQ(i.version, 7u);
+  EXPECT_EQ(i.version, 8u);
   EXPECT_EQ(i.levels, int(H));
   EXPECT_EQ(i.inputFaces, 128u);
   EXPECT_EQ(i.inputVertices, 66u);
@@ -500,9 +501,9 @@ TEST_F(TinyLod, BadFilesAreRefusedWithTheirReason) {
   }
   {  // wrong version (a valid checksum: a file from a future writer)
     std::vector<uint8_t> b = good;
-    b[kChunkHeaderBytes] = 8;
+    b[kChunkHeaderBytes] = 9;
     Rechecksum(b, 0);
-    EXPECT_TRUE(has(OpenError(b), "unsupported .clod version 8")) << OpenError(b);
+    EXPECT_TRUE(has(OpenError(b), "unsupported .clod version 9")) << OpenError(b);
     // Files of the previous versions: named, with what to do.
     b[kChunkHeaderBytes] = 2;
     Rechecksum(b, 0);
@@ -722,17 +723,18 @@ TEST(Lod, Version3FilesStillRead) {
   }
 }
 
-// Version 7 (deflated streams) reads as the version 4, 5 and 6 files of the same DAG: every
+// Version 8 (range-coded positions) reads as the version 4 to 7 files of the same DAG: every
 // record, every node's geometry and attributes, the header's figures. They are stored: written by
 // main at 0d3679e (before version 6) with `conelod lod build` of data/sphere512.ply
 // (sphere512_v4b.clod) and of data/sphere512_color.ply, the same sphere with a colour and a normal
-// per vertex (sphere512_color_v5.clod), and by main at 66bfa1b (version 6, before version 7:
-// sphere512_v6.clod, sphere512_color_v6.clod), all at the precision then the default (2e-5);
-// version 7 is built here the way `conelod lod build --precision 2e-5` builds it.
+// per vertex (sphere512_color_v5.clod), by main at 66bfa1b (version 6, before version 7:
+// sphere512_v6.clod, sphere512_color_v6.clod) and by main at 432a962 (version 7, before version
+// 8: sphere512_v7.clod, sphere512_color_v7.clod, `--precision 2e-5`), all at 2e-5; version 8 is
+// built here the way `conelod lod build --precision 2e-5` builds it.
 TEST(Lod, Version4And5FilesStillRead) {
   const std::string dir = std::string(CONELOD_SOURCE_DIR) + "/vcg_ext/tests/lod/data/";
-  for (const std::string file :
-       {"sphere512_v4b.clod", "sphere512_v6.clod", "sphere512_color_v5.clod", "sphere512_color_v6.clod"}) {
+  for (const std::string file : {"sphere512_v4b.clod", "sphere512_v6.clod", "sphere512_v7.clod",
+                                 "sphere512_color_v5.clod", "sphere512_color_v6.clod", "sphere512_color_v7.clod"}) {
     SCOPED_TRACE(file);
     const std::string name = file.substr(0, file.rfind("_v"));
     const uint32_t oldVersion = uint32_t(file[file.rfind("_v") + 2] - '0');
@@ -749,7 +751,7 @@ TEST(Lod, Version4And5FilesStillRead) {
     for (const auto& n : ply.normals) at.normals.push_back(EncodeLodNormal(vcg::Point3f(n[0], n[1], n[2])));
     for (const auto& p : ply.positions) im.positions.emplace_back(p[0], p[1], p[2]);
     im.faces = ply.triangles;
-    const std::string path = TempPath(name + "_v7.clod");
+    const std::string path = TempPath(name + "_v8.clod");
     LodBuildParams params;
     params.precision = 2e-5;
     // The stored files' DAG: level ratio 0.5 and groups of 12 clusters at every level (main at
@@ -765,8 +767,8 @@ TEST(Lod, Version4And5FilesStillRead) {
     ASSERT_TRUE(s.ok()) << s.message;
     const LodFileInfo &io = ro->info(), &in = rn->info();
     EXPECT_EQ(io.version, oldVersion);
-    EXPECT_EQ(oldVersion, oldVersion == 6 ? 6u : at.empty() ? 4u : 5u);
-    EXPECT_EQ(in.version, 7u);
+    EXPECT_EQ(oldVersion, oldVersion >= 6 ? oldVersion : at.empty() ? 4u : 5u);
+    EXPECT_EQ(in.version, 8u);
     EXPECT_EQ(io.colors, in.colors);
     EXPECT_EQ(io.normals, in.normals);
     EXPECT_EQ(in.colors, !at.colors.empty());
@@ -775,9 +777,10 @@ TEST(Lod, Version4And5FilesStillRead) {
     EXPECT_EQ(io.globalVertices, in.globalVertices);
     EXPECT_EQ(io.grid.step, in.grid.step);
     // Version 6: the same bytes but for the header (version, attributes field) and the index, 8
-    // bytes a node smaller than version 4 or 5; version 7: the deflated streams smaller again.
+    // bytes a node smaller than version 4 or 5; version 7: the deflated streams smaller again;
+    // version 8: the coded positions smaller again.
     const size_t oldBytes = ReadBytes(old).size(), newBytes = ReadBytes(path).size();
-    EXPECT_LT(newBytes + (oldVersion == 6 ? 0 : 5 * io.nodeCount), oldBytes);
+    EXPECT_LT(newBytes + (oldVersion >= 6 ? 0 : 5 * io.nodeCount), oldBytes);
     for (uint32_t id = 0; id < in.nodeCount; ++id) {
       ASSERT_TRUE(ro->LoadNode(id).ok());
       s = rn->LoadNode(id);
@@ -901,6 +904,81 @@ ParsedBlob ParseBlob(const std::vector<uint8_t>& f, size_t at, size_t bytes) {
   return x;
 }
 
+// Version 8's position coder (lod_entropy.h): residuals of every size, both widths, every kind,
+// read back exactly; the stream truncated, with a byte more, or not starting with 0 is refused
+// (ok() false), and random bytes never make the decoder read past its stream (ASan builds) nor
+// give a bit length above the width without saying so.
+TEST(Lod, PositionResidualCoderRoundTripsAndRefusesBadStreams) {
+  uint64_t seed = 42;
+  auto next = [&]() {
+    seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+    return seed >> 11;
+  };
+  for (int width : {2, 4}) {
+    SCOPED_TRACE(width);
+    const uint64_t mask = (uint64_t(1) << (8 * width)) - 1;
+    const size_t vertices = 3000;
+    std::vector<uint64_t> r(vertices * 3);
+    std::vector<uint8_t> kinds(vertices);
+    for (size_t v = 0; v < vertices; ++v) {
+      kinds[v] = uint8_t(v < 10 ? v % 4 : next() % 8 == 0 ? next() % 4 : 0);
+      for (int c = 0; c < 3; ++c) {
+        const int bits = v < 40 ? int(v % 20) * width * 8 / 20 : int(next() % 9);  // extremes first
+        const int64_t x = bits ? int64_t(next() % (uint64_t(1) << bits)) - (int64_t(1) << (bits - 1)) : 0;
+        r[3 * v + size_t(c)] = uint64_t(x) & mask;
+      }
+    }
+    r[0] = mask;                                  // -1
+    r[1] = uint64_t(1) << (8 * width - 1);        // the most negative
+    r[2] = (uint64_t(1) << (8 * width - 1)) - 1;  // the most positive
+    std::vector<uint8_t> bytes;
+    std::vector<uint32_t> scratch;
+    PositionResidualModel model;
+    {
+      RangeEncoder rc(bytes);
+      const uint32_t m = PositionResidualModel::TypicalLength(r.data(), kinds.data(), vertices, width, scratch);
+      EXPECT_GE(m, 2u);  // the median length of residuals of 0 to 8 bits, evenly
+      EXPECT_LE(m, 5u);
+      rc.Raw(m, 6);
+      model.Reset(m, width);
+      for (size_t v = 0; v < vertices; ++v) model.Encode(rc, kinds[v], &r[3 * v], width);
+      rc.Finish();
+    }
+    EXPECT_LE(bytes.size(), PositionStreamBound(vertices));
+    std::printf("width %d: %zu residuals of 0 to 9 bits (and extremes) in %.2f bits each\n", width, r.size(),
+                8.0 * double(bytes.size()) / double(r.size()));
+    auto decode = [&](const std::vector<uint8_t>& b, std::vector<uint64_t>& out) {
+      RangeDecoder rc(b.data(), b.size());
+      const uint32_t m = rc.Raw(6);
+      model.Reset(m, width);
+      bool fine = m <= uint32_t(8 * width);
+      out.assign(vertices * 3, 0);
+      for (size_t v = 0; v < vertices; ++v) fine = model.Decode(rc, kinds[v], &out[3 * v], width) && fine;
+      return fine && rc.ok();
+    };
+    std::vector<uint64_t> back;
+    ASSERT_TRUE(decode(bytes, back));
+    EXPECT_EQ(back, r);
+    std::vector<uint8_t> bad(bytes.begin(), bytes.end() - 1);
+    EXPECT_FALSE(decode(bad, back));  // truncated
+    bad = bytes;
+    bad.push_back(0);
+    EXPECT_FALSE(decode(bad, back));  // a byte more
+    bad = bytes;
+    bad[0] = 1;
+    EXPECT_FALSE(decode(bad, back));  // not its first byte
+    size_t refused = 0;
+    for (int k = 0; k < 200; ++k) {  // random bytes: ends, decoded or refused
+      bad.resize(size_t(next() % 64));
+      for (auto& x : bad) x = uint8_t(next());
+      if (!bad.empty()) bad[0] = 0;
+      refused += !decode(bad, back);
+      for (uint64_t x : back) ASSERT_LE(x, mask);
+    }
+    EXPECT_EQ(refused, 200u);
+  }
+}
+
 // Version 7's deflated streams: the sphere's file has some (and some left as they are), reads
 // back exactly (the round trip on the grid), and a deflated stream whose sizes lie (each with a
 // valid CRC) is refused by name: rawBytes one off, the deflated flag cleared, a face count past
@@ -931,12 +1009,12 @@ TEST(Lod, DeflatedStreamsAreReadAndChecked) {
       deflated[k] += pb.streams[k].deflated;
       ++streams[k];
     }
-    if (pb.streams[0].deflated && pb.streams[1].deflated && (f[pb.faceCountAt[0]] & 0x80))
-      node = b.second;  // the last such (level 0): both streams deflated, a face count of 2 bytes
+    if (pb.streams[1].deflated && (f[pb.faceCountAt[0]] & 0x80))
+      node = b.second;  // the last such (level 0): triangles deflated, a face count of 2 bytes
   }
   std::printf("sphere (8192 faces): %zu units; deflated positions %zu, triangles %zu, ids %zu of %zu, %zu, %zu\n",
               blobNode.size(), deflated[0], deflated[1], deflated[2], streams[0], streams[1], streams[2]);
-  EXPECT_GT(deflated[0], 0u);
+  EXPECT_EQ(deflated[0], 0u);  // version 8: range-coded positions, stored as they are
   EXPECT_GT(deflated[1], streams[1] / 2);
   ASSERT_GT(node, 0u);
   const size_t at = x.entries[node].geometry, bytes = x.entries[node].geometryBytes;
@@ -947,8 +1025,8 @@ TEST(Lod, DeflatedStreamsAreReadAndChecked) {
     if (s.ok()) s = r->LoadGeometry(uint32_t(node));
     return s.message;
   };
-  for (size_t k = 0; k < 2; ++k) {
-    const char* what = k == 0 ? "its positions do not decode" : "its triangles do not decode";
+  for (size_t k = 1; k < 2; ++k) {  // the triangles (version 8's positions are not deflated)
+    const char* what = "its triangles do not decode";
     {  // rawBytes one off (its varint's lowest digit changed: the same length)
       std::vector<uint8_t> b = f;
       uint8_t& low = b[pb.streams[k].rawAt];
@@ -1981,8 +2059,8 @@ TEST(LodAttributes, ColouredRoundTripIsExactAndCoarseLevelsInterpolate) {
   std::unique_ptr<LodReader> r, rp;
   ASSERT_TRUE(LodReader::Open(path, r).ok());
   ASSERT_TRUE(LodReader::Open(plain, rp).ok());
-  EXPECT_EQ(r->info().version, 7u);
-  EXPECT_EQ(rp->info().version, 7u);
+  EXPECT_EQ(r->info().version, 8u);
+  EXPECT_EQ(rp->info().version, 8u);
   EXPECT_TRUE(r->info().colors && r->info().normals);
   EXPECT_FALSE(rp->info().colors || rp->info().normals);
 
@@ -2228,7 +2306,7 @@ TEST(LodTexCoords, UvStreamRoundTripIsExactUpToTheQuantization) {
   std::unique_ptr<LodReader> r;
   ASSERT_TRUE(LodReader::Open(path, r).ok());
   const LodFileInfo& info = r->info();
-  EXPECT_EQ(info.version, 7u);
+  EXPECT_EQ(info.version, 8u);
   EXPECT_TRUE(info.texCoords);
   EXPECT_FALSE(info.colors || info.normals);
   EXPECT_EQ(info.textureName, "atlas.png");
