@@ -137,8 +137,9 @@ int LodBuild(int argc, char** argv) {
   if (a.has("--memory")) {
     if (!ParseMemory(a.str("--memory"), memory))
       return Fail(kUsage, "--memory must be a size like 512M or 2G (bytes, or K, M, G, T: powers of 1024)");
-    if (memory < kLodMinMemoryBytes)
-      return Fail(kUsage, "--memory must be at least " + std::to_string(kLodMinMemoryBytes >> 20) + "M");
+    if (memory < kLodMinMemoryBytes)  // a size, but too small: bad input, nothing written
+      return Fail(kBadInput, "--memory " + a.str("--memory") + " is below the minimum budget, " +
+                                 std::to_string(kLodMinMemoryBytes >> 20) + "M");
     params.chunkFaces = LodChunkFacesForMemory(memory);
   }
   const std::string partsError = ReadPartsOptions(a, params.simplification);

@@ -556,7 +556,7 @@ Status ApplyGroupQem(FilterCall& c) {
   p.mode = c.args.integer("Mode") == 1 ? conelod::GroupMode::Paper : conelod::GroupMode::Integrity;
   p.keepCones = c.args.flag("KeepCones");
   p.removeComponents = !c.args.flag("KeepComponents");
-  p.passes = true;  // ranked passes, then the queue: as `conelod simplify` (issue 25)
+  p.passes = true;         // ranked passes, then the queue: as `conelod simplify` (issue 25)
   p.flipToUnblock = true;  // as the CLI: only where the target is not reached otherwise
   const double attributeWeight = c.args.number("AttributeWeight");
   if (!(attributeWeight >= 0) || !std::isfinite(attributeWeight))

@@ -1855,11 +1855,18 @@ def cli_lod_memory(c):
 
     before = b"not a .clod file\n"
     kept = c.out("kept.clod")
-    for value in ("abc", "", "0", "15M", "16383K", "1.5G", "2X", "-1G", "16MB", "99999999999T"):
+    for value in ("abc", "", "1.5G", "2X", "-1G", "16MB", "99999999999T"):
         with open(kept, "wb") as f:
             f.write(before)
         p = c.conelod("lod", "build", bunny, "-o", kept, "--memory", value, expect=1)
         assert b"--memory must" in p.stderr, (value, p.stderr)
+        assert open(kept, "rb").read() == before, value
+    # A size below the minimum budget (16M, docs/scale.md): bad input, exit 2, nothing written.
+    for value in ("0", "1K", "15M", "16383K"):
+        with open(kept, "wb") as f:
+            f.write(before)
+        p = c.conelod("lod", "build", bunny, "-o", kept, "--memory", value, expect=2)
+        assert b"below the minimum budget, 16M" in p.stderr, (value, p.stderr)
         assert open(kept, "rb").read() == before, value
     left = sorted(n for n in os.listdir(c.tmp) if "conelod" in n or n.startswith("."))
     assert not left, left
