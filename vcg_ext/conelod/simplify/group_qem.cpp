@@ -336,6 +336,8 @@ class GroupQemSimplifier {
   void RemoveComponents(size_t target, GroupQemStats& stats);
   // Stopped above the target: every edge left judged once more (stats.edgesLeftBy).
   void TallyFloor(double maxErrorSq, GroupQemStats& stats);
+  // v's neighbours u > v, each once, in ringScratch_ (collected first: judge() uses the marks too).
+  const std::vector<uint32_t>& NeighboursAbove(uint32_t v);
   // Stopped above `target` (GroupQemParams::flipToUnblock): collapses refused by the link
   // condition, unblocked by edge flips, then the collapses that frees, in rounds.
   void UnblockByFlips(const Progress& progress, size_t target, double maxErrorSq, GroupQemStats& stats);
@@ -1954,15 +1956,7 @@ void GroupQemSimplifier::UnblockByFlips(const Progress& progress, size_t target,
     blocked.clear();
     for (uint32_t v = 0; v < nv; ++v) {
       if (vs_[v].dead || count_[v] == 0) continue;
-      ++stamp_;
-      ringScratch_.clear();
-      for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f)
-        for (uint32_t u : faces_[*f])
-          if (u > v && vs_[u].mark != stamp_) {
-            vs_[u].mark = stamp_;
-            ringScratch_.push_back(u);
-          }
-      for (uint32_t u : ringScratch_)  // (judge() uses the marks too)
+      for (uint32_t u : NeighboursAbove(v))
         if (judge(v, u).verdict == CollapseVerdict::Topology) blocked.push_back({lowerBound(v, u), v, u});
     }
     std::stable_sort(blocked.begin(), blocked.end(),
@@ -1983,19 +1977,23 @@ void GroupQemSimplifier::UnblockByFlips(const Progress& progress, size_t target,
   }
 }
 
+const std::vector<uint32_t>& GroupQemSimplifier::NeighboursAbove(uint32_t v) {
+  ++stamp_;
+  ringScratch_.clear();
+  for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f)
+    for (uint32_t u : faces_[*f])
+      if (u > v && vs_[u].mark != stamp_) {
+        vs_[u].mark = stamp_;
+        ringScratch_.push_back(u);
+      }
+  return ringScratch_;
+}
+
 void GroupQemSimplifier::TallyFloor(double maxErrorSq, GroupQemStats& stats) {
   const uint32_t nv = uint32_t(pos_.size());
   for (uint32_t v = 0; v < nv; ++v) {
     if (vs_[v].dead) continue;
-    ++stamp_;
-    ringScratch_.clear();
-    for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f)
-      for (uint32_t u : faces_[*f])
-        if (u > v && vs_[u].mark != stamp_) {
-          vs_[u].mark = stamp_;
-          ringScratch_.push_back(u);
-        }
-    for (uint32_t u : ringScratch_) {  // (judge() uses the marks too)
+    for (uint32_t u : NeighboursAbove(v)) {
       const Candidate c = judge(v, u);
       ++stats.edgesLeft;
       if (c.verdict == CollapseVerdict::Allowed && maxErrorSq >= 0 && c.error > maxErrorSq)
