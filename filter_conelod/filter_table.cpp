@@ -1147,17 +1147,7 @@ void CarryProgressiveAttributes(const MeshModel& mm, const conelod::ProgressiveM
   size_t seamKept = 0;
   if (vertexTexCoords) {
     layer.updateDataMask(MeshModel::MM_VERTTEXCOORD);
-    // Seam vertices: positions held by two or more vertices of the source.
-    std::vector<uint32_t> order(vertexOfIndex.size());
-    for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
-    auto key = [&](uint32_t i) {
-      const auto& p = vertexOfIndex[i]->cP();
-      return std::array<float, 3>{{float(p[0]), float(p[1]), float(p[2])}};
-    };
-    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
-    std::vector<char> seam(order.size(), 0);
-    for (size_t i = 1; i < order.size(); ++i)
-      if (key(order[i]) == key(order[i - 1])) seam[order[i]] = seam[order[i - 1]] = 1;
+    const std::vector<char> seam = conelod::SeamVertices(vertexOfIndex);  // of the source
     conelod::SurvivorQuadricMeans(
         src, r.survivor, r.vertexOrigin, 2,
         [](const FaceType& f, int j, int k) { return double(k == 0 ? f.cV(j)->cT().U() : f.cV(j)->cT().V()); }, means,

@@ -83,6 +83,23 @@ void SurvivorQuadricMeans(const MeshType& m, const std::vector<uint32_t>& surviv
 // is done when the mesh has no per-vertex colour. Call on the mesh as it was given to
 // ToIndexedMesh (before WriteSimplifiedMesh); only on success. Normals and texture coordinates:
 // MeanSurvivorNormalsAndTexCoords.
+// Seam vertices of per-vertex texture coordinates: 1 for each vertex (by index in vertexOfIndex)
+// whose position, in single precision, another vertex holds too.
+template <class VertexPointer>
+std::vector<char> SeamVertices(const std::vector<VertexPointer>& vertexOfIndex) {
+  std::vector<uint32_t> order(vertexOfIndex.size());
+  for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+  auto key = [&](uint32_t i) {
+    const auto& p = vertexOfIndex[i]->cP();
+    return std::array<float, 3>{{float(p[0]), float(p[1]), float(p[2])}};
+  };
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
+  std::vector<char> seam(order.size(), 0);
+  for (size_t i = 1; i < order.size(); ++i)
+    if (key(order[i]) == key(order[i - 1])) seam[order[i]] = seam[order[i - 1]] = 1;
+  return seam;
+}
+
 template <class MeshType>
 void MeanSurvivorColours(MeshType& m, const FeatureSimplifyResult& r) {
   if (!vcg::tri::HasPerVertexColor(m)) return;
@@ -135,17 +152,7 @@ size_t MeanSurvivorNormalsAndTexCoords(MeshType& m, const FeatureSimplifyResult&
   }
   size_t seamKept = 0;
   if (texCoords && vcg::tri::HasPerVertexTexCoord(m)) {
-    // Seam vertices: positions held by two or more vertices.
-    std::vector<uint32_t> order(vertexOfIndex.size());
-    for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
-    auto key = [&](uint32_t i) {
-      const auto& p = vertexOfIndex[i]->cP();
-      return std::array<float, 3>{{float(p[0]), float(p[1]), float(p[2])}};
-    };
-    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
-    std::vector<char> seam(order.size(), 0);
-    for (size_t i = 1; i < order.size(); ++i)
-      if (key(order[i]) == key(order[i - 1])) seam[order[i]] = seam[order[i - 1]] = 1;
+    const std::vector<char> seam = SeamVertices(vertexOfIndex);
     SurvivorQuadricMeans(
         m, r.survivor, r.inputVertex, 2,
         [](const FaceType& f, int j, int k) { return double(k == 0 ? f.cV(j)->cT().U() : f.cV(j)->cT().V()); }, means,
