@@ -5,80 +5,26 @@
 // each must give "its triangles do not decode", and the blob rewritten unchanged must decode.
 // Prints one line a case; exits with 1 when one is not as expected (it_web_reader_refuses_bad_deflate).
 //   node web_deflate_check.mjs SOURCE_DIR FILE.clod
-import { readFileSync } from 'fs';
-import { pathToFileURL } from 'url';
+import { openCrafted, streams, rewrite } from './clod_blob.mjs';
 
 const [source, file] = process.argv.slice(2);
-const { ClodReader, crc32 } = await import(pathToFileURL(`${source}/web/clod.js`).href);
-const { MeshoptDecoder } = await import(pathToFileURL(`${source}/web/node_modules/meshoptimizer/meshopt_decoder.mjs`).href);
-await MeshoptDecoder.ready;
-const bytes = readFileSync(file);
-let crafted = new Uint8Array(0);  // served at the file's end, where no range of the file lies
-const src = { size: bytes.length, bytesFetched: 0, requests: 0,
-  async read(o, n) {
-    if (o >= bytes.length) return crafted.subarray(o - bytes.length, o - bytes.length + n);
-    return new Uint8Array(bytes.buffer, bytes.byteOffset + o, n);
-  } };
-const r = new ClodReader(src);
-await r._open();
-
-function uv(b, at) {  // [value, next offset]
-  let x = 0, mul = 1;
-  for (;;) {
-    const c = b[at++];
-    x += (c & 0x7f) * mul;
-    mul *= 128;
-    if (!(c & 0x80)) return [x, at];
-  }
-}
-function uvBytes(x) {
-  const out = [];
-  do {
-    out.push((x % 128) | (x >= 128 ? 0x80 : 0));
-    x = Math.floor(x / 128);
-  } while (x > 0);
-  return out;
-}
-// Where the triangles' stream of a blob lies: [code offset, rawBytes, data offset, stored bytes, end].
-function triangles(b) {
-  let at = 5, x;
-  [, at] = uv(b, at);  // first node
-  let count;
-  [count, at] = uv(b, at);
-  for (let i = 0; i < count; ++i) [, at] = uv(b, at);
-  for (let i = 0; i < 5; ++i) [, at] = uv(b, at);  // vertex count, qmin, first new id
-  const stream = (from) => {
-    let code, raw = -1, p;
-    [code, p] = uv(b, from);
-    if (code % 2) [raw, p] = uv(b, p);
-    return [from, raw, p, Math.floor(code / 2), p + Math.floor(code / 2)];
-  };
-  const pos = stream(at);
-  return stream(pos[4]);
-}
+const { clod: { crc32 }, r, bytes, craft } = await openCrafted(source, file);
 
 let found = null;
 for (let id = 0; id < r.info.nodeCount && !found; ++id) {
   await r.loadNode(id);
   const n = r.nodes.get(id);
   const blob = bytes.subarray(n.geometry, n.geometry + n.geometryBytes);
-  const t = triangles(blob);
-  if (t[1] >= 0 && t[3] > 8) found = { id, blob, t };
+  const t = streams(blob, 2)[1];
+  if (t.raw >= 0 && t.stored > 8) found = { id, blob, t };
 }
 if (!found) {
   console.log('no unit with deflated triangles');
   process.exit(1);
 }
 const { id, blob, t } = found;
-const [codeAt, raw, dataAt, stored, end] = t;
-const data = blob.subarray(dataAt, end);
-// The blob with the triangles' stream replaced by (deflated bytes, rawBytes), its CRC made good.
-function rewrite(d, rawBytes) {
-  const head = Array.from(blob.subarray(4, codeAt));
-  const out = Uint8Array.from([0, 0, 0, 0, ...head, ...uvBytes(d.length * 2 + 1), ...uvBytes(rawBytes), ...d, ...blob.subarray(end)]);
-  new DataView(out.buffer).setUint32(0, crc32(out, 4, out.length), true);
-  return out;
-}
+const { raw, stored } = t;
+const data = blob.subarray(t.dataAt, t.end);
 const cases = [
   ['unchanged', data, raw, null],
   ['1 byte after its end', Uint8Array.from([...data, 0]), raw, 'its triangles do not decode'],
@@ -89,10 +35,10 @@ const cases = [
 ];
 let failed = 0;
 for (const [name, d, rawBytes, want] of cases) {
-  crafted = rewrite(d, rawBytes);
+  const n = craft(rewrite(blob, t, d, rawBytes, crc32));  // the triangles' stream replaced
   let got = null;
   try {
-    await r._decodeUnit(bytes.length, crafted.length, id);
+    await r._decodeUnit(bytes.length, n, id);
   } catch (e) {
     got = e.message;
   }
