@@ -11,6 +11,7 @@
 #                                      one-piece peer (--partition-above 0) and then in parts per thread count
 #   SCALE_THREADS="1 2 0"              lod build, group and simplify --threads values (0: one per core; default 1 2 0)
 #   CONELOD_TEST_MESHES=...            where stanford_dragon_vrip_binary.ply is (../shared/test_meshes)
+#   SUBDIVIDE=...                      the splitter (default: build/tools/subdivide_ply beside CONELOD)
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 CONELOD="${1:-$ROOT/build/conelod/conelod}"
@@ -23,8 +24,15 @@ mkdir -p "$OUT"
 [ -x "$CONELOD" ] || { echo "bench_scale.sh: $CONELOD not built" >&2; exit 1; }
 [ -x /usr/bin/time ] || { echo "bench_scale.sh: needs GNU time (/usr/bin/time)" >&2; exit 1; }
 
-# dragon_sub{K}.ply: the dragon subdivided K times (each from the previous one).
+# dragon_sub{K}.ply: the dragon subdivided K times (each from the previous one), by
+# build/tools/subdivide_ply when it is built (seconds), else by the same split in Python (minutes;
+# the same bytes).
+SUBDIVIDE="${SUBDIVIDE:-$(dirname "$CONELOD")/../tools/subdivide_ply}"
 subdivide() {  # src dst
+  if [ -x "$SUBDIVIDE" ]; then
+    "$SUBDIVIDE" "$1" "$2"
+    return
+  fi
   python3 - "$1" "$2" <<'PY'
 import sys
 from array import array
