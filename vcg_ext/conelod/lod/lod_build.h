@@ -132,9 +132,10 @@ struct LodBuildStats {
 
 // Writes the file of a DAG built by BuildLodDag from `mesh`, positions quantized with `precision`
 // (LodBuildParams::precision). Streams node by node: the file is never held in memory. On failure
-// no file is left at `path`.
+// no file is left at `path`. The nodes are encoded on `threads` threads (0: one per core; BuildLodFile
+// passes params.simplification.threads): the file is the same byte for byte for every count.
 Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::string& path, LodBuildStats* stats = nullptr,
-                    const Progress& progress = Progress(), double precision = kDefaultLodPrecision);
+                    const Progress& progress = Progress(), double precision = kDefaultLodPrecision, int threads = 0);
 
 // Welds the mesh's vertices by position (WeldByPosition, weld.h: coincident vertices become one,
 // unreferenced ones are left out), builds the DAG of the welded mesh and writes it: level 0 of the
