@@ -376,7 +376,7 @@ Status BuildLodFileFromPly(const std::string& input, const LodBuildParams& param
   if (!s.ok()) return s;
   const double dagSeconds = Seconds(t0);
   s = WriteLodFileFrom(dag, &spill, W, size_t(F), in.box, path, stats, SubProgress(progress, 90, 100), params.precision,
-                       params.simplification.threads);
+                       LodWriterThreads(params));
   if (!s.ok()) return s;
   if (stats) {
     stats->chunks = leaves;

@@ -558,8 +558,12 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
                                  (attributes.texCoords.empty() ? 0u : kGeomTexCoords);
   LevelFaces level(dag, spill);
   if (level.count(0) != inputFaces) return Status::Invalid("the LOD DAG does not match the mesh");
-  // The box of the positions the levels use (the grid's span), found while checking them.
+  // The box of the positions the levels use (the grid's span), found while checking them: the
+  // faces side by side, a box a block of faces, the blocks' boxes added in order (as the faces
+  // were one by one: of equal coordinates, such as 0 and -0, the first stays).
   vcg::Box3f span;
+  constexpr size_t kSpanBlock = size_t(1) << 15;
+  std::vector<vcg::Box3f> blockSpan;
   for (size_t k = 0; k < H; ++k) {
     const LodDag::Level& L = dag.levels[k];
     const std::string bad = "LOD level " + std::to_string(k) + " is inconsistent";
@@ -571,13 +575,23 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
       const auto& faceCluster = level.faceCluster();
       if (faceCluster.size() != faces.size() || L.clusterCreator.size() != C || L.clusterError.size() != C || C == 0)
         return Status::Invalid(bad);
-      for (uint32_t c : faceCluster)
-        if (c >= C) return Status::Invalid(bad);
-      for (const auto& t : faces)
-        for (uint32_t v : t)
-          if (v >= dag.positions.size()) return Status::Invalid(bad + " (a bad vertex index)");
-      for (const auto& t : faces)
-        for (uint32_t v : t) span.Add(dag.positions[v]);
+      std::atomic<bool> badCluster(false), badVertex(false);
+      blockSpan.assign((faces.size() + kSpanBlock - 1) / kSpanBlock, vcg::Box3f());
+      ParallelChunks(faces.size(), threads, kSpanBlock, [&](size_t from, size_t to, unsigned) {
+        vcg::Box3f& box = blockSpan[from / kSpanBlock];
+        for (size_t f = from; f < to; ++f) {
+          if (faceCluster[f] >= C) badCluster = true;
+          for (uint32_t v : faces[f]) {
+            if (v < dag.positions.size())
+              box.Add(dag.positions[v]);
+            else
+              badVertex = true;
+          }
+        }
+      });
+      if (badCluster) return Status::Invalid(bad);
+      if (badVertex) return Status::Invalid(bad + " (a bad vertex index)");
+      for (const vcg::Box3f& b : blockSpan) span.Add(b);
     }
     const size_t groupsBelow = k ? dag.levels[k - 1].groupError.size() : 0;
     for (size_t c = 0; c < C; ++c) {
@@ -653,7 +667,8 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
     std::vector<uint32_t> start, faces;
     struct RecordScratch {
       std::vector<vcg::Point3d> normals;
-      std::vector<uint32_t> used;  // the node's vertices, counted once each
+      // The node's vertices, counted once each: an open-addressing set (id + 1; 0: empty).
+      std::vector<uint32_t> slots;
     };
     std::vector<RecordScratch> scratch(threads);
     std::vector<uint32_t> byGroupStart, byGroup, byCreatorStart, byCreator, aboveStart, above;
@@ -704,7 +719,10 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
               R.parentError = std::numeric_limits<float>::infinity();
             }
             normals.clear();
-            S.used.clear();
+            size_t mask = 63;
+            while (mask + 1 < 6 * size_t(start[i + 1] - start[i])) mask = mask << 1 | 1;
+            S.slots.assign(mask + 1, 0);
+            uint32_t vc = 0;
             vcg::Box3f nb;
             for (uint32_t j = start[i]; j < start[i + 1]; ++j) {
               const auto& t = levelFaceList[faces[j]];
@@ -716,12 +734,16 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
               const double scale = std::max({(b - a).SquaredNorm(), (cc - a).SquaredNorm(), (cc - b).SquaredNorm()});
               if (len > 1e-12 * scale && len > 0) normals.push_back(n / len);
               for (int q = 0; q < 3; ++q) {
-                S.used.push_back(t[size_t(q)]);
+                const uint32_t key = t[size_t(q)] + 1;
+                size_t h = size_t((uint64_t(key) * 0x9E3779B97F4A7C15ull) >> 32) & mask;
+                while (S.slots[h] && S.slots[h] != key) h = (h + 1) & mask;
+                if (!S.slots[h]) {
+                  S.slots[h] = key;
+                  ++vc;
+                }
                 nb.Add(q == 0 ? r0 : q == 1 ? r1 : r2);
               }
             }
-            std::sort(S.used.begin(), S.used.end());
-            const uint32_t vc = uint32_t(std::unique(S.used.begin(), S.used.end()) - S.used.begin());
             R.cone = normals.empty() ? NormalCone::Empty() : MinimalCone(normals);
             R.faceCount = start[i + 1] - start[i];
             R.vertexCount = vc;
@@ -1063,6 +1085,12 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
   return Status::Ok();
 }
 
+int LodWriterThreads(const LodBuildParams& params) {
+  int threads = params.simplification.threads > 0 ? params.simplification.threads : int(CoreCount());
+  if (params.chunkFaces > 0) threads = int(std::max<size_t>(1, std::min<size_t>(threads, params.chunkFaces / 2048)));
+  return threads;
+}
+
 namespace {
 
 // BuildLodFile of the welded mesh `welded` (taken: left empty). With chunks (--memory) the finished
@@ -1084,7 +1112,7 @@ Status BuildWelded(IndexedMesh&& welded, size_t merged, size_t dropped, const Lo
   if (!s.ok()) return s;
   const double dagSeconds = Seconds(t0);
   s = WriteLodFileFrom(dag, params.chunkFaces > 0 ? &spill : nullptr, inputVertices, inputFaces, box, path, stats,
-                       SubProgress(progress, 90, 100), params.precision, params.simplification.threads);
+                       SubProgress(progress, 90, 100), params.precision, LodWriterThreads(params));
   if (!s.ok()) return s;
   if (stats) {
     stats->chunks = chunks;
