@@ -132,9 +132,16 @@ struct LodBuildStats {
 
 // Writes the file of a DAG built by BuildLodDag from `mesh`, positions quantized with `precision`
 // (LodBuildParams::precision). Streams node by node: the file is never held in memory. On failure
-// no file is left at `path`.
+// no file is left at `path`. The nodes are encoded on `threads` threads (0: one per core; BuildLodFile
+// passes LodWriterThreads): the file is the same byte for byte for every count.
 Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::string& path, LodBuildStats* stats = nullptr,
-                    const Progress& progress = Progress(), double precision = kDefaultLodPrecision);
+                    const Progress& progress = Progress(), double precision = kDefaultLodPrecision, int threads = 0);
+
+// The writer's threads in a build: params.simplification.threads (0: one per core); with
+// params.chunkFaces (--memory) at most one per 2,048 faces of a chunk (4 at 16M, 16 at 64M): each
+// thread holds about 0.4 MiB (its codecs' buffers, its share of the window of encoded nodes), so
+// that they take at most a tenth of the budget.
+int LodWriterThreads(const LodBuildParams& params);
 
 // Welds the mesh's vertices by position (WeldByPosition, weld.h: coincident vertices become one,
 // unreferenced ones are left out), builds the DAG of the welded mesh and writes it: level 0 of the

@@ -105,11 +105,11 @@ struct LodChunkedInput {
 Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, LodDag& out, const Progress& progress,
                              LodSpill& spill);
 
-// WriteLodFile of a DAG whose levels may be in `spill` (null: all in the DAG): the same bytes.
-// inputVertices: the DAG's input vertices (all used); box: their box (UsedVertexBox).
+// WriteLodFile of a DAG whose levels may be in `spill` (null: all in the DAG): the same bytes (threads:
+// WriteLodFile's). inputVertices: the DAG's input vertices (all used); box: their box (UsedVertexBox).
 Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVertices, size_t inputFaces,
                         const vcg::Box3d& box, const std::string& path, LodBuildStats* stats, const Progress& progress,
-                        double precision);
+                        double precision, int threads);
 
 // Async-signal-safe: removes the level files and the folder of the spill being used, if any.
 void RemoveLodSpillsOnSignal();

@@ -375,8 +375,8 @@ Status BuildLodFileFromPly(const std::string& input, const LodBuildParams& param
   Status s = BuildLodDagFromChunks(in, params, dag, SubProgress(progress, 0, 90), spill);
   if (!s.ok()) return s;
   const double dagSeconds = Seconds(t0);
-  s = WriteLodFileFrom(dag, &spill, W, size_t(F), in.box, path, stats, SubProgress(progress, 90, 100),
-                       params.precision);
+  s = WriteLodFileFrom(dag, &spill, W, size_t(F), in.box, path, stats, SubProgress(progress, 90, 100), params.precision,
+                       LodWriterThreads(params));
   if (!s.ok()) return s;
   if (stats) {
     stats->chunks = leaves;

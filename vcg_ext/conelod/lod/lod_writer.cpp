@@ -6,12 +6,15 @@
 // node), then streams the geometry level by level, coarsest first, through one reused buffer:
 // besides the DAG it holds only the level's face order and vertex renumbering. Container sizes
 // and the header's offsets are patched in place at the end. With --memory (lod_spill.h) the
-// levels' faces come back from the temporary folder one level at a time (LevelFaces).
+// levels' faces come back from the temporary folder one level at a time (LevelFaces). Both passes
+// run on the build's threads (records node by node; geometry a window of units at a time, written
+// in file order): the bytes do not depend on the thread count.
 #include "conelod/lod/lod_build.h"
 #include "conelod/lod/lod_read.h"
 #include "conelod/lod/lod_spill.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -19,6 +22,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <numeric>
 
 #include <meshoptimizer.h>
@@ -28,6 +32,7 @@
 #include "conelod/lod/lod_internal.h"
 #include "conelod/mesh/mesh_check.h"
 #include "conelod/mesh/safe_file.h"
+#include "conelod/parallel.h"
 
 namespace conelod {
 namespace {
@@ -234,6 +239,223 @@ void ListBy(const std::vector<int>& key, size_t keys, const std::vector<uint32_t
   for (size_t k = 0; k < keys; ++k) std::sort(list.begin() + start[k], list.begin() + start[k + 1]);
 }
 
+// The geometry of one unit (lod_writer's geometry pass): its blob but for what the units before it
+// decide (EncodeUnit), finished once that is known (FinishUnit).
+struct UnitInput {
+  const std::vector<std::array<uint32_t, 3>>& levelFaces;
+  const std::vector<uint32_t>& start;  // BucketFaces: the level's faces node by node
+  const std::vector<uint32_t>& faces;
+  const std::vector<vcg::Point3f>& positions;
+  const LodGrid& grid;
+  const LodAttributes& attributes;
+  uint32_t attributeMask;
+  uint64_t firstId;  // the level's first node id
+};
+
+// A thread's buffers, reused from unit to unit (none carries anything into the next unit's bytes).
+struct UnitScratch {
+  // A unit's vertex ids -> its local ids (in the order its faces first use them): a small
+  // open-addressing table per unit ((id + 1) << 32 | local id; 0: empty), not an array over every
+  // vertex of the DAG (4 bytes a vertex, the out-of-core build's peak).
+  std::vector<uint64_t> slots;
+  std::vector<uint32_t> idx, tmp, remap, q32, decoded;
+  std::vector<uint64_t> qrel, residual;
+  std::vector<uint8_t> kinds, ibuf, buf, attr;
+  PositionPredictor predictor;
+  PositionResidualModel residualModel;
+  StreamDeflater deflater;
+};
+
+struct EncodedUnit {
+  std::vector<uint32_t> verts;  // the unit's vertices in their stored order
+  // The blob's fields before the first new global id, those between it and the vertex mask (the
+  // positions and the triangles), those after the global ids (the attribute streams).
+  Encoder head, mid, tail;
+  std::vector<uint8_t> mask;  // which vertices are new to the file
+  std::vector<uint32_t> old;  // the others' global ids
+  uint64_t firstGlobal = 0, globalAfter = 0;
+  Encoder blob;  // FinishUnit: the whole blob, and its CRC
+  uint32_t crc = 0;
+  uint64_t positionBytes = 0, indexBytes = 0, idBytes = 0, colorBytes = 0, normalBytes = 0, texCoordBytes = 0;
+  const char* error = nullptr;
+};
+
+// Units encoded side by side between two writes: at least 2^16 faces, 2^14 a thread (about 15
+// bytes a face while held: the window's blobs and vertex lists).
+uint64_t WindowFaces(unsigned threads) { return std::max<uint64_t>(uint64_t(1) << 16, uint64_t(threads) << 14); }
+
+void EncodeUnit(const UnitInput& in, uint32_t u0, uint32_t u1, UnitScratch& S, EncodedUnit& U) {
+  const std::vector<uint32_t>& start = in.start;
+  std::vector<uint32_t>& verts = U.verts;
+  std::vector<uint32_t>& idx = S.idx;
+  std::vector<uint32_t>& tmp = S.tmp;
+  verts.clear();
+  idx.clear();
+  {
+    size_t mask = 63;
+    while (mask + 1 < 6 * size_t(start[u1] - start[u0])) mask = mask << 1 | 1;
+    S.slots.assign(mask + 1, 0);
+    for (uint32_t j = start[u0]; j < start[u1]; ++j)
+      for (uint32_t v : in.levelFaces[in.faces[j]]) {
+        const uint64_t key = (uint64_t(v) + 1) << 32;
+        size_t h = size_t((uint64_t(v) * 0x9E3779B97F4A7C15ull) >> 32) & mask;
+        while (S.slots[h] && (S.slots[h] & ~uint64_t(0xFFFFFFFFu)) != key) h = (h + 1) & mask;
+        if (!S.slots[h]) {
+          S.slots[h] = key | verts.size();
+          verts.push_back(v);
+        }
+        idx.push_back(uint32_t(S.slots[h]));
+      }
+  }
+  const size_t vc = verts.size();
+  tmp.resize(idx.size());
+  for (uint32_t i = u0; i < u1; ++i) {  // each node's faces for the vertex cache, in place
+    const size_t a = size_t(start[i] - start[u0]) * 3, n = size_t(start[i + 1] - start[i]) * 3;
+    meshopt_optimizeVertexCache(tmp.data() + a, idx.data() + a, n, vc);
+  }
+  S.remap.resize(vc);
+  meshopt_optimizeVertexFetchRemap(S.remap.data(), tmp.data(), tmp.size(), vc);
+  for (size_t j = 0; j < idx.size(); ++j) idx[j] = S.remap[tmp[j]];
+  tmp.assign(vc, 0);
+  for (size_t v = 0; v < vc; ++v) tmp[S.remap[v]] = verts[v];
+  verts.swap(tmp);
+  // Quantized positions relative to the unit's smallest corner.
+  uint32_t qmin[3] = {~0u, ~0u, ~0u}, qmax[3] = {0, 0, 0};
+  std::vector<uint32_t>& q32 = S.q32;
+  q32.resize(vc * 3);
+  for (size_t v = 0; v < vc; ++v)
+    for (int c = 0; c < 3; ++c) {
+      const uint32_t q = in.grid.Quantize(in.positions[verts[v]][c], c);
+      q32[v * 3 + size_t(c)] = q;
+      qmin[c] = std::min(qmin[c], q);
+      qmax[c] = std::max(qmax[c], q);
+    }
+  const bool wide = std::max({qmax[0] - qmin[0], qmax[1] - qmin[1], qmax[2] - qmin[2]}) > 0xFFFFu;
+  Encoder& e = U.head;
+  const uint8_t flags = uint8_t((wide ? kGeomWidePositions : 0) | in.attributeMask);
+  e.raw(&flags, 1);
+  e.uv(in.firstId + u0);  // the unit's nodes
+  e.uv(u1 - u0);
+  for (uint32_t i = u0; i < u1; ++i) e.uv(start[i + 1] - start[i]);
+  e.uv(vc);
+  for (int c = 0; c < 3; ++c) e.uv(qmin[c]);
+  // (then the first new global id: FinishUnit)
+  // The triangles are coded first: the positions' predictions walk the faces as the reader
+  // gets them back from the index codec (which may rotate a face's corners).
+  std::vector<uint8_t>& ibuf = S.ibuf;
+  ibuf.resize(meshopt_encodeIndexBufferBound(idx.size(), vc));
+  ibuf.resize(meshopt_encodeIndexBuffer(ibuf.data(), ibuf.size(), idx.data(), idx.size()));
+  if (ibuf.empty()) {
+    U.error = "internal error: the index codec failed";
+    return;
+  }
+  S.decoded.resize(idx.size());
+  if (meshopt_decodeIndexBuffer(S.decoded.data(), S.decoded.size(), 4, ibuf.data(), ibuf.size()) != 0) {
+    U.error = "internal error: the index codec failed";
+    return;
+  }
+  // Positions: the residuals of the predictions, range-coded in the order the prediction
+  // visits the vertices, each in the context of its prediction's kind (lod_entropy.h).
+  const int width = wide ? 4 : 2;
+  const uint64_t valueMask = (uint64_t(1) << (8 * width)) - 1;
+  std::vector<uint64_t>& qrel = S.qrel;
+  qrel.resize(vc * 3);
+  for (size_t v = 0; v < vc; ++v)
+    for (int c = 0; c < 3; ++c) qrel[v * 3 + size_t(c)] = q32[v * 3 + size_t(c)] - qmin[c];
+  S.residual.clear();
+  S.kinds.clear();
+  S.predictor.Walk(S.decoded.data(), S.decoded.size() / 3, vc, qrel.data(), [&](uint32_t v, const uint64_t* pred) {
+    for (size_t c = 0; c < 3; ++c) S.residual.push_back((qrel[3 * size_t(v) + c] - pred[c]) & valueMask);
+    S.kinds.push_back(uint8_t(S.predictor.kind()));
+  });
+  std::vector<uint8_t>& buf = S.buf;
+  buf.clear();
+  {
+    RangeEncoder rc(buf);
+    const uint32_t m = PositionResidualModel::TypicalLength(S.residual.data(), S.kinds.data(), vc, width, tmp);
+    rc.Raw(m, 6);
+    S.residualModel.Reset(m, width);
+    for (size_t i = 0; i < vc; ++i) S.residualModel.Encode(rc, S.kinds[i], &S.residual[3 * i], width);
+    rc.Finish();
+  }
+  uint64_t stored = buf.size();
+  U.mid.uv(stored * 2);  // stored as it is: a range coder's output does not deflate
+  U.mid.raw(buf.data(), buf.size());
+  U.positionBytes = stored;
+  if (!S.deflater.put(U.mid, ibuf, stored)) {
+    U.error = "internal error: deflate failed";
+    return;
+  }
+  U.indexBytes = stored;
+  // Attribute streams, 4 bytes a unit vertex each, in the unit's vertex order.
+  std::vector<uint8_t>& attr = S.attr;
+  auto stream = [&](uint64_t& counter) {
+    buf.resize(meshopt_encodeVertexBufferBound(vc, 4));
+    buf.resize(meshopt_encodeVertexBuffer(buf.data(), buf.size(), attr.data(), vc, 4));
+    if (buf.empty() || !S.deflater.put(U.tail, buf, stored)) return false;
+    counter += stored;
+    return true;
+  };
+  // Two u16 codes a vertex (normals, texture coordinates), little-endian.
+  auto codePairs = [&](const std::vector<std::array<uint16_t, 2>>& codes) {
+    attr.resize(vc * 4);
+    for (size_t v = 0; v < vc; ++v)
+      for (size_t c = 0; c < 2; ++c) {
+        const uint16_t x = codes[verts[v]][c];
+        attr[4 * v + 2 * c] = uint8_t(x & 0xFF);
+        attr[4 * v + 2 * c + 1] = uint8_t(x >> 8);
+      }
+  };
+  const LodAttributes& attributes = in.attributes;
+  if (in.attributeMask & kGeomColors) {
+    attr.resize(vc * 4);
+    for (size_t v = 0; v < vc; ++v) std::memcpy(attr.data() + 4 * v, attributes.colors[verts[v]].data(), 4);
+    if (!stream(U.colorBytes)) U.error = "internal error: the vertex codec failed";
+  }
+  if (!U.error && (in.attributeMask & kGeomNormals)) {
+    codePairs(attributes.normals);
+    if (!stream(U.normalBytes)) U.error = "internal error: the vertex codec failed";
+  }
+  if (!U.error && (in.attributeMask & kGeomTexCoords)) {
+    codePairs(attributes.texCoords);
+    if (!stream(U.texCoordBytes)) U.error = "internal error: the vertex codec failed";
+  }
+}
+
+// The blob of a unit whose global ids are known (firstGlobal, mask, old, globalAfter), and its CRC.
+void FinishUnit(EncodedUnit& U, UnitScratch& S) {
+  Encoder& e = U.blob;
+  e.bytes.reserve(U.head.bytes.size() + 10 + U.mid.bytes.size() + U.mask.size() + 4 * U.old.size() + 16 +
+                  U.tail.bytes.size());
+  e.raw(U.head.bytes.data(), U.head.bytes.size());
+  e.uv(U.firstGlobal);  // the first new global id
+  e.raw(U.mid.bytes.data(), U.mid.bytes.size());
+  e.raw(U.mask.data(), U.mask.size());
+  U.idBytes = U.mask.size();
+  if (!U.old.empty()) {
+    std::vector<uint8_t>& buf = S.buf;
+    buf.resize(meshopt_encodeIndexSequenceBound(U.old.size(), size_t(U.globalAfter)));
+    buf.resize(meshopt_encodeIndexSequence(buf.data(), buf.size(), U.old.data(), U.old.size()));
+    if (buf.empty()) {
+      U.error = "internal error: the index sequence codec failed";
+      return;
+    }
+    uint64_t stored = 0;
+    if (!S.deflater.put(e, buf, stored)) {
+      U.error = "internal error: deflate failed";
+      return;
+    }
+    U.idBytes += stored;
+  }
+  e.raw(U.tail.bytes.data(), U.tail.bytes.size());
+  U.crc = Crc32(e.bytes.data(), e.bytes.size());
+  // Only the blob is held until it is written.
+  U.head = U.mid = U.tail = Encoder();
+  U.verts = std::vector<uint32_t>();
+  U.mask = std::vector<uint8_t>();
+  U.old = std::vector<uint32_t>();
+}
+
 }  // namespace
 
 std::string LodAttributes::Check(size_t vertices) const {
@@ -305,19 +527,20 @@ vcg::Point3f DecodeLodNormal(const std::array<uint16_t, 2>& code) {
 }
 
 Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::string& path, LodBuildStats* stats,
-                    const Progress& progress, double precision) {
+                    const Progress& progress, double precision, int threads) {
   if (dag.levels.size() < 1) return Status::Invalid("the LOD DAG has no level");
   if (dag.levels[0].faces != mesh.faces || mesh.faces.empty() || dag.inputVertices != mesh.positions.size() ||
       dag.positions.size() < mesh.positions.size())
     return Status::Invalid("the LOD DAG does not match the mesh");
   return WriteLodFileFrom(dag, nullptr, mesh.positions.size(), mesh.faces.size(), UsedVertexBox(mesh), path, stats,
-                          progress, precision);
+                          progress, precision, threads);
 }
 
 Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVertices, size_t inputFaces,
                         const vcg::Box3d& box, const std::string& path, LodBuildStats* stats, const Progress& progress,
-                        double precision) {
+                        double precision, int threadCount) {
   const auto t0 = std::chrono::steady_clock::now();
+  const unsigned threads = threadCount > 0 ? unsigned(threadCount) : CoreCount();
   const size_t H = dag.levels.size();
   if (H < 1) return Status::Invalid("the LOD DAG has no level");
   if (H > kMaxLevels) return Status::Invalid("too many LOD levels for the file format");
@@ -335,8 +558,12 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
                                  (attributes.texCoords.empty() ? 0u : kGeomTexCoords);
   LevelFaces level(dag, spill);
   if (level.count(0) != inputFaces) return Status::Invalid("the LOD DAG does not match the mesh");
-  // The box of the positions the levels use (the grid's span), found while checking them.
+  // The box of the positions the levels use (the grid's span), found while checking them: the
+  // faces side by side, a box a block of faces, the blocks' boxes added in order (as the faces
+  // were one by one: of equal coordinates, such as 0 and -0, the first stays).
   vcg::Box3f span;
+  constexpr size_t kSpanBlock = size_t(1) << 15;
+  std::vector<vcg::Box3f> blockSpan;
   for (size_t k = 0; k < H; ++k) {
     const LodDag::Level& L = dag.levels[k];
     const std::string bad = "LOD level " + std::to_string(k) + " is inconsistent";
@@ -348,13 +575,23 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
       const auto& faceCluster = level.faceCluster();
       if (faceCluster.size() != faces.size() || L.clusterCreator.size() != C || L.clusterError.size() != C || C == 0)
         return Status::Invalid(bad);
-      for (uint32_t c : faceCluster)
-        if (c >= C) return Status::Invalid(bad);
-      for (const auto& t : faces)
-        for (uint32_t v : t)
-          if (v >= dag.positions.size()) return Status::Invalid(bad + " (a bad vertex index)");
-      for (const auto& t : faces)
-        for (uint32_t v : t) span.Add(dag.positions[v]);
+      std::atomic<bool> badCluster(false), badVertex(false);
+      blockSpan.assign((faces.size() + kSpanBlock - 1) / kSpanBlock, vcg::Box3f());
+      ParallelChunks(faces.size(), threads, kSpanBlock, [&](size_t from, size_t to, unsigned) {
+        vcg::Box3f& box = blockSpan[from / kSpanBlock];
+        for (size_t f = from; f < to; ++f) {
+          if (faceCluster[f] >= C) badCluster = true;
+          for (uint32_t v : faces[f]) {
+            if (v < dag.positions.size())
+              box.Add(dag.positions[v]);
+            else
+              badVertex = true;
+          }
+        }
+      });
+      if (badCluster) return Status::Invalid(bad);
+      if (badVertex) return Status::Invalid(bad + " (a bad vertex index)");
+      for (const vcg::Box3f& b : blockSpan) span.Add(b);
     }
     const size_t groupsBelow = k ? dag.levels[k - 1].groupError.size() : 0;
     for (size_t c = 0; c < C; ++c) {
@@ -422,12 +659,18 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
   // vertex of the DAG at the peak).
   auto rounded = [&](uint32_t v) { return grid.Round(dag.positions[v]); };
 
-  // Pass 1: node records (and the per-level counts).
+  // Pass 1: node records (and the per-level counts), the nodes of a part side by side on `threads`
+  // threads (each writes its own nodes' records).
   std::vector<NodeRecord> records(nodeCount);
   std::vector<uint64_t> levelFaces(nodeLevels, 0);
   {
-    std::vector<uint32_t> start, faces, stamp(dag.positions.size(), kNoParent);
-    std::vector<vcg::Point3d> normals;
+    std::vector<uint32_t> start, faces;
+    struct RecordScratch {
+      std::vector<vcg::Point3d> normals;
+      // The node's vertices, counted once each: an open-addressing set (id + 1; 0: empty).
+      std::vector<uint32_t> slots;
+    };
+    std::vector<RecordScratch> scratch(threads);
     std::vector<uint32_t> byGroupStart, byGroup, byCreatorStart, byCreator, aboveStart, above;
     for (uint32_t k = 0; k < nodeLevels; ++k) {
       if (progress && !progress(int(30 * k / nodeLevels), "LOD file: node records")) return Status::Cancelled();
@@ -446,61 +689,73 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
         BucketFaces(level.faceCluster(), nodeOfCluster[k], start, faces);
         uint32_t n0 = 0, n1 = uint32_t(clusterOfNode[k].size());
         if (level.parts(k) > 1) NodeRange(level.faceCluster(), nodeOfCluster[k], n0, n1);
-        for (uint32_t i = n0; i < n1; ++i) {
-          const uint32_t c = clusterOfNode[k][i];
-          NodeRecord& R = records[firstId[k] + i];
-          R.level = k;
-          R.error = L.clusterError[c];
-          if (k == 0) {
-            R.siblings.assign(1, uint32_t(firstId[k] + i));
-          } else {
-            const size_t cr = size_t(L.clusterCreator[c]);
-            R.children.assign(byGroup.begin() + byGroupStart[cr], byGroup.begin() + byGroupStart[cr + 1]);
-            R.siblings.assign(byCreator.begin() + byCreatorStart[cr], byCreator.begin() + byCreatorStart[cr + 1]);
-            // A group's clusters have consecutive ids (the node order): the file stores the range.
-            if (R.children.empty() || R.children.back() - R.children.front() + 1 != R.children.size())
-              return Status::Invalid("internal error: the children of a LOD node are not consecutive");
-          }
-          if (L.clusterGroup[c] >= 0) {
-            const size_t g = size_t(L.clusterGroup[c]);
-            R.group = uint32_t(g);
-            R.parentError = L.groupError[g];
-            R.parents.assign(above.begin() + aboveStart[g], above.begin() + aboveStart[g + 1]);
-          } else {
-            R.parentError = std::numeric_limits<float>::infinity();
-          }
-          normals.clear();
-          vcg::Box3f nb;
-          uint32_t vc = 0;
-          for (uint32_t j = start[i]; j < start[i + 1]; ++j) {
-            const auto& t = levelFaceList[faces[j]];
-            const vcg::Point3f r0 = rounded(t[0]), r1 = rounded(t[1]), r2 = rounded(t[2]);
-            const vcg::Point3d a = vcg::Point3d::Construct(r0), b = vcg::Point3d::Construct(r1),
-                               cc = vcg::Point3d::Construct(r2);
-            const vcg::Point3d n = (b - a) ^ (cc - a);
-            const double len = n.Norm();
-            const double scale = std::max({(b - a).SquaredNorm(), (cc - a).SquaredNorm(), (cc - b).SquaredNorm()});
-            if (len > 1e-12 * scale && len > 0) normals.push_back(n / len);
-            for (int q = 0; q < 3; ++q) {
-              const uint32_t v = t[size_t(q)];
-              nb.Add(q == 0 ? r0 : q == 1 ? r1 : r2);
-              if (stamp[v] != i) {
-                stamp[v] = i;
-                ++vc;
+        std::atomic<bool> notConsecutive(false);
+        ParallelChunks(n1 - n0, threads, 64, [&](size_t from, size_t to, unsigned thread) {
+          RecordScratch& S = scratch[thread];
+          std::vector<vcg::Point3d>& normals = S.normals;
+          for (uint32_t i = n0 + uint32_t(from); i < n0 + uint32_t(to); ++i) {
+            const uint32_t c = clusterOfNode[k][i];
+            NodeRecord& R = records[firstId[k] + i];
+            R.level = k;
+            R.error = L.clusterError[c];
+            if (k == 0) {
+              R.siblings.assign(1, uint32_t(firstId[k] + i));
+            } else {
+              const size_t cr = size_t(L.clusterCreator[c]);
+              R.children.assign(byGroup.begin() + byGroupStart[cr], byGroup.begin() + byGroupStart[cr + 1]);
+              R.siblings.assign(byCreator.begin() + byCreatorStart[cr], byCreator.begin() + byCreatorStart[cr + 1]);
+              // A group's clusters have consecutive ids (the node order): the file stores the range.
+              if (R.children.empty() || R.children.back() - R.children.front() + 1 != R.children.size()) {
+                notConsecutive = true;
+                return;
               }
             }
+            if (L.clusterGroup[c] >= 0) {
+              const size_t g = size_t(L.clusterGroup[c]);
+              R.group = uint32_t(g);
+              R.parentError = L.groupError[g];
+              R.parents.assign(above.begin() + aboveStart[g], above.begin() + aboveStart[g + 1]);
+            } else {
+              R.parentError = std::numeric_limits<float>::infinity();
+            }
+            normals.clear();
+            size_t mask = 63;
+            while (mask + 1 < 6 * size_t(start[i + 1] - start[i])) mask = mask << 1 | 1;
+            S.slots.assign(mask + 1, 0);
+            uint32_t vc = 0;
+            vcg::Box3f nb;
+            for (uint32_t j = start[i]; j < start[i + 1]; ++j) {
+              const auto& t = levelFaceList[faces[j]];
+              const vcg::Point3f r0 = rounded(t[0]), r1 = rounded(t[1]), r2 = rounded(t[2]);
+              const vcg::Point3d a = vcg::Point3d::Construct(r0), b = vcg::Point3d::Construct(r1),
+                                 cc = vcg::Point3d::Construct(r2);
+              const vcg::Point3d n = (b - a) ^ (cc - a);
+              const double len = n.Norm();
+              const double scale = std::max({(b - a).SquaredNorm(), (cc - a).SquaredNorm(), (cc - b).SquaredNorm()});
+              if (len > 1e-12 * scale && len > 0) normals.push_back(n / len);
+              for (int q = 0; q < 3; ++q) {
+                const uint32_t key = t[size_t(q)] + 1;
+                size_t h = size_t((uint64_t(key) * 0x9E3779B97F4A7C15ull) >> 32) & mask;
+                while (S.slots[h] && S.slots[h] != key) h = (h + 1) & mask;
+                if (!S.slots[h]) {
+                  S.slots[h] = key;
+                  ++vc;
+                }
+                nb.Add(q == 0 ? r0 : q == 1 ? r1 : r2);
+              }
+            }
+            R.cone = normals.empty() ? NormalCone::Empty() : MinimalCone(normals);
+            R.faceCount = start[i + 1] - start[i];
+            R.vertexCount = vc;
+            R.center = nb.IsNull() ? vcg::Point3f(0, 0, 0) : nb.Center();
+            float r2 = 0;
+            for (uint32_t j = start[i]; j < start[i + 1]; ++j)
+              for (uint32_t v : levelFaceList[faces[j]]) r2 = std::max(r2, (rounded(v) - R.center).SquaredNorm());
+            R.radius = std::sqrt(r2) * (1 + 1e-6f);
           }
-          R.cone = normals.empty() ? NormalCone::Empty() : MinimalCone(normals);
-          R.faceCount = start[i + 1] - start[i];
-          R.vertexCount = vc;
-          R.center = nb.IsNull() ? vcg::Point3f(0, 0, 0) : nb.Center();
-          float r2 = 0;
-          for (uint32_t j = start[i]; j < start[i + 1]; ++j)
-            for (uint32_t v : levelFaceList[faces[j]]) r2 = std::max(r2, (rounded(v) - R.center).SquaredNorm());
-          R.radius = std::sqrt(r2) * (1 + 1e-6f);
-        }
+        });
+        if (notConsecutive) return Status::Invalid("internal error: the children of a LOD node are not consecutive");
       }
-      std::fill(stamp.begin(), stamp.end(), kNoParent);
     }
   }
 
@@ -651,26 +906,24 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
   // ordered node by node for the vertex cache), quantized on the grid relative to the unit's
   // smallest corner; then its faces; then which vertices are new to the file (their global ids
   // follow on) and the global ids of the others.
+  // The units are encoded on `threads` threads a window at a time (WindowFaces): each unit's blob
+  // but its global ids side by side (EncodeUnit: no coder's state runs from one unit to the next),
+  // then the global ids unit by unit in file order (the only state that does), then the blobs
+  // finished side by side (FinishUnit) and written in order: the same bytes for every thread
+  // count, with the window's blobs, not the file's, in memory.
   geosOffset = out.offset();
   std::vector<uint64_t> geometryStart(nodeCount);
   {
     Encoder none;
     out.chunk(kGeos, none);  // placeholder for the size
-    std::vector<uint32_t> start, faces, verts, idx, tmp, remap, old;
-    // A unit's vertex ids -> its local ids (in the order its faces first use them): a small
-    // open-addressing table per unit ((id + 1) << 32 | local id; 0: empty), not an array over every
-    // vertex of the DAG (4 bytes a vertex, the out-of-core build's peak).
-    std::vector<uint64_t> slots;
+    std::vector<uint32_t> start, faces, unitStart;
     std::vector<uint32_t> fileId(dag.positions.size(), kNoParent);
-    std::vector<uint8_t> buf, mask;
-    std::vector<uint32_t> q32, decoded;
-    std::vector<uint64_t> qrel, residual;
-    std::vector<uint8_t> kinds, ibuf;
-    PositionPredictor predictor;
-    PositionResidualModel residualModel;
-    StreamDeflater deflater;
-    std::vector<uint8_t> attr;
-    Encoder e;
+    std::vector<std::unique_ptr<UnitScratch>> scratch(threads);
+    auto scratchOf = [&](unsigned thread) -> UnitScratch& {
+      if (!scratch[thread]) scratch[thread].reset(new UnitScratch());
+      return *scratch[thread];
+    };
+    const uint64_t windowFaces = WindowFaces(threads);
     meshopt_encodeVertexVersion(kVertexCodecVersion);
     meshopt_encodeIndexVersion(kIndexCodecVersion);
     for (int k = int(nodeLevels) - 1; k >= 0; --k) {
@@ -690,154 +943,67 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
         BucketFaces(level.faceCluster(), nodeOfCluster[size_t(k)], start, faces);
         uint32_t n0 = 0, n1 = uint32_t(nodes);
         if (level.parts(size_t(k)) > 1) NodeRange(level.faceCluster(), nodeOfCluster[size_t(k)], n0, n1);
+        unitStart.clear();  // the part's units: nodes [unitStart[j], unitStart[j + 1])
         for (uint32_t u0 = n0; u0 < n1;) {
+          unitStart.push_back(u0);
           uint32_t u1 = u0 + 1;
           while (u1 < n1 && L.clusterGroup[order[u1]] == L.clusterGroup[order[u0]]) ++u1;
-          verts.clear();
-          idx.clear();
-          {
-            size_t mask = 63;
-            while (mask + 1 < 6 * size_t(start[u1] - start[u0])) mask = mask << 1 | 1;
-            slots.assign(mask + 1, 0);
-            for (uint32_t j = start[u0]; j < start[u1]; ++j)
-              for (uint32_t v : levelFaceList[faces[j]]) {
-                const uint64_t key = (uint64_t(v) + 1) << 32;
-                size_t h = size_t((uint64_t(v) * 0x9E3779B97F4A7C15ull) >> 32) & mask;
-                while (slots[h] && (slots[h] & ~uint64_t(0xFFFFFFFFu)) != key) h = (h + 1) & mask;
-                if (!slots[h]) {
-                  slots[h] = key | verts.size();
-                  verts.push_back(v);
-                }
-                idx.push_back(uint32_t(slots[h]));
-              }
-          }
-          const size_t vc = verts.size();
-          tmp.resize(idx.size());
-          for (uint32_t i = u0; i < u1; ++i) {  // each node's faces for the vertex cache, in place
-            const size_t a = size_t(start[i] - start[u0]) * 3, n = size_t(start[i + 1] - start[i]) * 3;
-            meshopt_optimizeVertexCache(tmp.data() + a, idx.data() + a, n, vc);
-          }
-          remap.resize(vc);
-          meshopt_optimizeVertexFetchRemap(remap.data(), tmp.data(), tmp.size(), vc);
-          for (size_t j = 0; j < idx.size(); ++j) idx[j] = remap[tmp[j]];
-          tmp.assign(vc, 0);
-          for (size_t v = 0; v < vc; ++v) tmp[remap[v]] = verts[v];
-          verts.swap(tmp);
-          // Quantized positions relative to the unit's smallest corner.
-          uint32_t qmin[3] = {~0u, ~0u, ~0u}, qmax[3] = {0, 0, 0};
-          q32.resize(vc * 3);
-          for (size_t v = 0; v < vc; ++v)
-            for (int c = 0; c < 3; ++c) {
-              const uint32_t q = grid.Quantize(dag.positions[verts[v]][c], c);
-              q32[v * 3 + size_t(c)] = q;
-              qmin[c] = std::min(qmin[c], q);
-              qmax[c] = std::max(qmax[c], q);
-            }
-          const bool wide = std::max({qmax[0] - qmin[0], qmax[1] - qmin[1], qmax[2] - qmin[2]}) > 0xFFFFu;
-          e.clear();
-          const uint8_t flags = uint8_t((wide ? kGeomWidePositions : 0) | attributeMask);
-          e.raw(&flags, 1);
-          e.uv(firstId[size_t(k)] + u0);  // the unit's nodes
-          e.uv(u1 - u0);
-          for (uint32_t i = u0; i < u1; ++i) e.uv(start[i + 1] - start[i]);
-          e.uv(vc);
-          for (int c = 0; c < 3; ++c) e.uv(qmin[c]);
-          e.uv(globalVertices);  // the first new global id
-          // The triangles are coded first: the positions' predictions walk the faces as the reader
-          // gets them back from the index codec (which may rotate a face's corners).
-          ibuf.resize(meshopt_encodeIndexBufferBound(idx.size(), vc));
-          ibuf.resize(meshopt_encodeIndexBuffer(ibuf.data(), ibuf.size(), idx.data(), idx.size()));
-          if (ibuf.empty()) return fail("internal error: the index codec failed");
-          decoded.resize(idx.size());
-          if (meshopt_decodeIndexBuffer(decoded.data(), decoded.size(), 4, ibuf.data(), ibuf.size()) != 0)
-            return fail("internal error: the index codec failed");
-          // Positions: the residuals of the predictions, range-coded in the order the prediction
-          // visits the vertices, each in the context of its prediction's kind (lod_entropy.h).
-          const int width = wide ? 4 : 2;
-          const uint64_t valueMask = (uint64_t(1) << (8 * width)) - 1;
-          qrel.resize(vc * 3);
-          for (size_t v = 0; v < vc; ++v)
-            for (int c = 0; c < 3; ++c) qrel[v * 3 + size_t(c)] = q32[v * 3 + size_t(c)] - qmin[c];
-          residual.clear();
-          kinds.clear();
-          predictor.Walk(decoded.data(), decoded.size() / 3, vc, qrel.data(), [&](uint32_t v, const uint64_t* pred) {
-            for (size_t c = 0; c < 3; ++c) residual.push_back((qrel[3 * size_t(v) + c] - pred[c]) & valueMask);
-            kinds.push_back(uint8_t(predictor.kind()));
-          });
-          buf.clear();
-          {
-            RangeEncoder rc(buf);
-            const uint32_t m = PositionResidualModel::TypicalLength(residual.data(), kinds.data(), vc, width, tmp);
-            rc.Raw(m, 6);
-            residualModel.Reset(m, width);
-            for (size_t i = 0; i < vc; ++i) residualModel.Encode(rc, kinds[i], &residual[3 * i], width);
-            rc.Finish();
-          }
-          uint64_t stored = buf.size();
-          e.uv(stored * 2);  // stored as it is: a range coder's output does not deflate
-          e.raw(buf.data(), buf.size());
-          positionBytes += stored;
-          if (!deflater.put(e, ibuf, stored)) return fail("internal error: deflate failed");
-          indexBytes += stored;
-          mask.assign((vc + 7) / 8, 0);
-          old.clear();
-          for (size_t v = 0; v < vc; ++v) {
-            uint32_t& f = fileId[verts[v]];
-            if (f == kNoParent) {
-              f = uint32_t(globalVertices++);
-              mask[v / 8] = uint8_t(mask[v / 8] | 1u << (v % 8));
-            } else {
-              old.push_back(f);
-            }
-          }
-          e.raw(mask.data(), mask.size());
-          idBytes += mask.size();
-          if (!old.empty()) {
-            buf.resize(meshopt_encodeIndexSequenceBound(old.size(), size_t(globalVertices)));
-            buf.resize(meshopt_encodeIndexSequence(buf.data(), buf.size(), old.data(), old.size()));
-            if (buf.empty()) return fail("internal error: the index sequence codec failed");
-            if (!deflater.put(e, buf, stored)) return fail("internal error: deflate failed");
-            idBytes += stored;
-          }
-          // Attribute streams, 4 bytes a unit vertex each, in the unit's vertex order.
-          auto stream = [&](uint64_t& counter) {
-            buf.resize(meshopt_encodeVertexBufferBound(vc, 4));
-            buf.resize(meshopt_encodeVertexBuffer(buf.data(), buf.size(), attr.data(), vc, 4));
-            if (buf.empty() || !deflater.put(e, buf, stored)) return false;
-            counter += stored;
-            return true;
-          };
-          // Two u16 codes a vertex (normals, texture coordinates), little-endian.
-          auto codePairs = [&](const std::vector<std::array<uint16_t, 2>>& codes) {
-            attr.resize(vc * 4);
-            for (size_t v = 0; v < vc; ++v)
-              for (size_t c = 0; c < 2; ++c) {
-                const uint16_t x = codes[verts[v]][c];
-                attr[4 * v + 2 * c] = uint8_t(x & 0xFF);
-                attr[4 * v + 2 * c + 1] = uint8_t(x >> 8);
-              }
-          };
-          if (attributeMask & kGeomColors) {
-            attr.resize(vc * 4);
-            for (size_t v = 0; v < vc; ++v) std::memcpy(attr.data() + 4 * v, attributes.colors[verts[v]].data(), 4);
-            if (!stream(colorBytes)) return fail("internal error: the vertex codec failed");
-          }
-          if (attributeMask & kGeomNormals) {
-            codePairs(attributes.normals);
-            if (!stream(normalBytes)) return fail("internal error: the vertex codec failed");
-          }
-          if (attributeMask & kGeomTexCoords) {
-            codePairs(attributes.texCoords);
-            if (!stream(texCoordBytes)) return fail("internal error: the vertex codec failed");
-          }
-          const uint64_t at = out.offset();
-          blob(e);
-          for (uint32_t i = u0; i < u1; ++i) {
-            geometryStart[firstId[size_t(k)] + i] = at;
-            geometryEnd[firstId[size_t(k)] + i] = out.offset();
-          }
-          if (globalVertices >= kNoParent) return fail("too many vertices for the file format");
           u0 = u1;
+        }
+        unitStart.push_back(n1);
+        const UnitInput in{levelFaceList, start,      faces,         dag.positions,
+                           grid,          attributes, attributeMask, firstId[size_t(k)]};
+        const size_t units = unitStart.size() - 1;
+        for (size_t w0 = 0; w0 < units;) {
+          size_t w1 = w0;
+          for (uint64_t f = 0; w1 < units && f < windowFaces; ++w1)
+            f += start[unitStart[w1 + 1]] - start[unitStart[w1]];
+          std::vector<EncodedUnit> window(w1 - w0);
+          ParallelChunks(window.size(), threads, 1, [&](size_t b, size_t e, unsigned thread) {
+            for (size_t j = b; j < e; ++j)
+              EncodeUnit(in, unitStart[w0 + j], unitStart[w0 + j + 1], scratchOf(thread), window[j]);
+          });
+          // Which vertices are new to the file, in file order.
+          for (EncodedUnit& U : window) {
+            if (U.error) return fail(U.error);
+            const size_t vc = U.verts.size();
+            U.firstGlobal = globalVertices;
+            U.mask.assign((vc + 7) / 8, 0);
+            for (size_t v = 0; v < vc; ++v) {
+              uint32_t& f = fileId[U.verts[v]];
+              if (f == kNoParent) {
+                f = uint32_t(globalVertices++);
+                U.mask[v / 8] = uint8_t(U.mask[v / 8] | 1u << (v % 8));
+              } else {
+                U.old.push_back(f);
+              }
+            }
+            U.globalAfter = globalVertices;
+            if (globalVertices >= kNoParent) return fail("too many vertices for the file format");
+          }
+          ParallelChunks(window.size(), threads, 1, [&](size_t b, size_t e, unsigned thread) {
+            for (size_t j = b; j < e; ++j) FinishUnit(window[j], scratchOf(thread));
+          });
+          for (size_t j = 0; j < window.size(); ++j) {
+            const EncodedUnit& U = window[j];
+            if (U.error) return fail(U.error);
+            const uint64_t at = out.offset();
+            Encoder c;
+            c.u32(U.crc);
+            out.write(c);
+            out.write(U.blob);
+            for (uint32_t i = unitStart[w0 + j]; i < unitStart[w0 + j + 1]; ++i) {
+              geometryStart[firstId[size_t(k)] + i] = at;
+              geometryEnd[firstId[size_t(k)] + i] = out.offset();
+            }
+            positionBytes += U.positionBytes;
+            indexBytes += U.indexBytes;
+            idBytes += U.idBytes;
+            colorBytes += U.colorBytes;
+            normalBytes += U.normalBytes;
+            texCoordBytes += U.texCoordBytes;
+          }
+          w0 = w1;
         }
       }
       if (!out.ok()) return fail(out.error());
@@ -919,6 +1085,12 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
   return Status::Ok();
 }
 
+int LodWriterThreads(const LodBuildParams& params) {
+  int threads = params.simplification.threads > 0 ? params.simplification.threads : int(CoreCount());
+  if (params.chunkFaces > 0) threads = int(std::max<size_t>(1, std::min<size_t>(threads, params.chunkFaces / 2048)));
+  return threads;
+}
+
 namespace {
 
 // BuildLodFile of the welded mesh `welded` (taken: left empty). With chunks (--memory) the finished
@@ -940,7 +1112,7 @@ Status BuildWelded(IndexedMesh&& welded, size_t merged, size_t dropped, const Lo
   if (!s.ok()) return s;
   const double dagSeconds = Seconds(t0);
   s = WriteLodFileFrom(dag, params.chunkFaces > 0 ? &spill : nullptr, inputVertices, inputFaces, box, path, stats,
-                       SubProgress(progress, 90, 100), params.precision);
+                       SubProgress(progress, 90, 100), params.precision, LodWriterThreads(params));
   if (!s.ok()) return s;
   if (stats) {
     stats->chunks = chunks;

@@ -1271,6 +1271,25 @@ TEST_F(BunnyLod, QuantizationStaysWithinItsBound) {
   }
 }
 
+// The writer encodes the nodes on several threads, a window of units (at least 65,536 faces) at a
+// time, and writes them in file order: the bunny's file (its level 0 in two windows at 1 and 3
+// threads, in one at 5) is the same byte for byte at every thread count.
+TEST_F(BunnyLod, FileDoesNotDependOnWriterThreads) {
+  ASSERT_GT(bunny_->dag.levels[0].faces.size(), size_t(1) << 16);
+  const std::string path = TempPath("bunny_threads.clod");
+  for (int threads : {1, 3, 5}) {
+    SCOPED_TRACE("threads " + std::to_string(threads));
+    LodBuildStats st;
+    const Status s = WriteLodFile(bunny_->mesh, bunny_->dag, path, &st, Progress(), kDefaultLodPrecision, threads);
+    ASSERT_TRUE(s.ok()) << s.message;
+    EXPECT_TRUE(ReadBytes(path) == bunny_->bytes);
+    EXPECT_EQ(st.positionBytes, bunny_->stats.positionBytes);
+    EXPECT_EQ(st.triangleBytes, bunny_->stats.triangleBytes);
+    EXPECT_EQ(st.vertexIdBytes, bunny_->stats.vertexIdBytes);
+  }
+  std::remove(path.c_str());
+}
+
 TEST_F(BunnyLod, SmallBudgetsRefineWhereTheEyeLooks) {
   auto r = Open();
   ASSERT_TRUE(r);
@@ -2438,6 +2457,39 @@ void ExpectTexturedCrackFree(const IndexedMesh& welded, int k, const std::string
       }
   EXPECT_GT(mixed, cuts / 3) << "most cuts should mix levels (else the test proves little)";
   std::remove(b.path.c_str());
+}
+
+// Every stream (colours, normals, texture coordinates, the texture image) at 1 and 3 writer
+// threads, in memory and spilled in chunks: the same bytes.
+TEST(LodTexCoords, AttributeFileDoesNotDependOnWriterThreads) {
+  uv::Textured t = uv::Atlas(Torus(96, 48, 1.f, 0.35f), 3);
+  for (const auto& p : t.mesh.positions) {
+    t.attributes.colors.push_back(attr::ColourAt(t.box, p));
+    t.attributes.normals.push_back(EncodeLodNormal(p.Norm() > 0 ? p / p.Norm() : p));
+  }
+  for (size_t chunkFaces : {size_t(0), size_t(2048)}) {
+    std::vector<uint8_t> bytes[2];
+    uint64_t streams[2] = {0, 0};
+    for (int i = 0; i < 2; ++i) {
+      LodBuildParams p;
+      p.chunkFaces = chunkFaces;
+      p.simplification.threads = i == 0 ? 1 : 3;
+      const std::string path = TempPath("attr_threads.clod");
+      LodBuildStats st;
+      const Status s = BuildLodFile(t.mesh, p, path, &st, Progress(), &t.attributes);
+      ASSERT_TRUE(s.ok()) << s.message;
+      EXPECT_GT(st.colorBytes, 0u);
+      EXPECT_GT(st.normalBytes, 0u);
+      EXPECT_GT(st.texCoordBytes, 0u);
+      EXPECT_GT(st.nodes, 100u);
+      streams[i] = st.colorBytes + st.normalBytes + st.texCoordBytes;
+      bytes[i] = ReadBytes(path);
+      std::remove(path.c_str());
+    }
+    SCOPED_TRACE("chunkFaces " + std::to_string(chunkFaces));
+    EXPECT_TRUE(bytes[0] == bytes[1]);
+    EXPECT_EQ(streams[0], streams[1]);
+  }
 }
 
 TEST(LodTexCoords, TexturedSphereCutsAreWatertight) { ExpectTexturedCrackFree(test::Sphere(5), 3, "tex_sphere"); }
