@@ -1241,29 +1241,28 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
     auto faceBegin = [&](size_t r) { return r ? faceEnd[r - 1] : uint64_t(0); };
     std::vector<Face> faces;
     std::vector<uint32_t> faceCluster, verts;
-    auto chunkVertices = [&](const std::vector<Face>& fs) {
-      verts.clear();
-      for (const Face& t : fs) verts.insert(verts.end(), t.begin(), t.end());
-      std::sort(verts.begin(), verts.end());
-      verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
-    };
     // Pass 1: the vertices of two chunks.
     const size_t P = dag.positions.size();
     std::vector<uint64_t> border((P + 63) / 64, 0);
     {
-      std::vector<uint64_t> seen((P + 63) / 64, 0);
+      // seen: the vertices of the chunks before; here: this chunk's (cleared after it).
+      std::vector<uint64_t> seen((P + 63) / 64, 0), here((P + 63) / 64, 0);
       for (size_t r = 0; r < chunks; ++r) {
         Status s = spill.get(size_t(k), faceBegin(r), faceEnd[r], faces, faceCluster);
         if (!s.ok()) return fail(s);
-        chunkVertices(faces);
-        if (!verts.empty() && verts.back() >= P) return fail(bad);
-        for (uint32_t v : verts) {
-          const uint64_t bit = uint64_t(1) << (v & 63);
-          if (seen[v >> 6] & bit)
-            border[v >> 6] |= bit;
-          else
-            seen[v >> 6] |= bit;
-        }
+        for (const Face& t : faces)
+          for (uint32_t v : t) {
+            if (v >= P) return fail(bad);
+            const uint64_t bit = uint64_t(1) << (v & 63);
+            if (here[v >> 6] & bit) continue;
+            here[v >> 6] |= bit;
+            if (seen[v >> 6] & bit) border[v >> 6] |= bit;
+          }
+        for (const Face& t : faces)
+          for (uint32_t v : t) {
+            seen[v >> 6] |= here[v >> 6];
+            here[v >> 6] = 0;
+          }
       }
     }
     // Pass 2: each chunk's groups, simplified, and its part of level k + 1.
@@ -1281,7 +1280,8 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
     std::vector<Face> out;
     std::vector<vcg::Point3f> localPos;
     std::vector<uint8_t> localShared;
-    std::vector<uint32_t> outCluster;
+    std::vector<uint32_t> outCluster, rank;
+    std::vector<uint64_t> here((P + 63) / 64, 0);  // the chunk's vertices (cleared after it)
     for (size_t r = 0; r < chunks; ++r) {
       if (progress && !progress(std::min(95, 10 + 8 * k), "LOD: simplifying groups chunk by chunk"))
         return fail(Status::Cancelled());
@@ -1295,13 +1295,35 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
         sub.faceCluster[f] = faceCluster[f] - c0;
       }
       sub.clusterGroup.assign(c1 - c0, -1);
-      // The chunk in its own vertex ids (sorted as the global ones, so the groups are the same):
-      // positions, frozen flags.
-      chunkVertices(sub.faces);
+      // The chunk in its own vertex ids, in the order of the global ones (verts: the chunk's
+      // vertices, read from a bitset of the DAG's; a corner's id: its vertex's rank there, from
+      // the words' prefix counts): positions, frozen flags.
+      uint32_t lo = ~0u, hi = 0;
+      for (const Face& t : sub.faces)
+        for (uint32_t v : t) {
+          if (v >= P) return fail(bad);
+          here[v >> 6] |= uint64_t(1) << (v & 63);
+          lo = std::min(lo, v);
+          hi = std::max(hi, v);
+        }
+      verts.clear();
+      const size_t w0 = CF ? lo >> 6 : 0, w1 = CF ? (hi >> 6) + 1 : 0;
+      rank.resize(w1 - w0);
+      for (size_t w = w0; w < w1; ++w) {
+        rank[w - w0] = uint32_t(verts.size());
+        for (uint64_t bits = here[w]; bits; bits &= bits - 1)
+          verts.push_back(uint32_t(64 * w + size_t(__builtin_ctzll(bits))));
+      }
       const size_t V = verts.size();
-      for (size_t f = 0; f < CF; ++f)
-        for (size_t i = 0; i < 3; ++i)
-          sub.faces[f][i] = uint32_t(std::lower_bound(verts.begin(), verts.end(), sub.faces[f][i]) - verts.begin());
+      ParallelChunks(CF, threads, size_t(1) << 12, [&](size_t b, size_t e, unsigned) {
+        for (size_t f = b; f < e; ++f)
+          for (size_t i = 0; i < 3; ++i) {
+            const uint32_t v = sub.faces[f][i];
+            const uint64_t below = here[v >> 6] & ((uint64_t(1) << (v & 63)) - 1);
+            sub.faces[f][i] = rank[(v >> 6) - w0] + uint32_t(__builtin_popcountll(below));
+          }
+      });
+      std::fill(here.begin() + long(w0), here.begin() + long(w1), uint64_t(0));
       const int G = GroupClusters(sub, per, 0, group, nullptr, V, threads);
       const int groupBase = int(L.groupError.size());
       for (uint32_t c = c0; c < c1; ++c) L.clusterGroup[c] = groupBase + group[c - c0];
