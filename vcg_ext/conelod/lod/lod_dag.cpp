@@ -83,8 +83,72 @@ void ForPairsOnSharedEdges(const std::vector<EdgeRecord>& edges, Fn fn) {
   }
 }
 
-// Faces sharing an edge (by vertex ids), CSR; a face appears once per edge it shares.
-void EdgeAdjacency(const std::vector<Face>& faces, std::vector<uint32_t>& offsets, std::vector<uint32_t>& list) {
+// EdgeAdjacency when every vertex id is below V: the edges bucketed by their lower vertex (a
+// counting sort instead of a comparison sort of the 3 x faces records), a bucket's records
+// (higher vertex << 32 | face; 8 bytes where SortedEdgeRecords' take 16) filled in face order and
+// then sorted: the same order, (key, face). The buckets are ordered and read on the threads.
+void EdgeAdjacencyBelow(const std::vector<Face>& faces, uint32_t V, unsigned threads, std::vector<uint32_t>& offsets,
+                        std::vector<uint32_t>& list) {
+  const uint32_t F = uint32_t(faces.size());
+  std::vector<uint32_t> end(size_t(V) + 1, 0);  // end[v + 1]: the end of vertex v's bucket
+  for (const Face& t : faces)
+    for (int i = 0; i < 3; ++i) ++end[size_t(std::min(t[size_t(i)], t[size_t((i + 1) % 3)])) + 1];
+  std::partial_sum(end.begin(), end.end(), end.begin());
+  std::vector<uint64_t> rec(size_t(F) * 3);
+  {
+    std::vector<uint32_t> at(end.begin(), end.end() - 1);
+    for (uint32_t f = 0; f < F; ++f)
+      for (int i = 0; i < 3; ++i) {
+        uint32_t a = faces[f][size_t(i)], b = faces[f][size_t((i + 1) % 3)];
+        if (a > b) std::swap(a, b);
+        rec[at[a]++] = uint64_t(b) << 32 | f;
+      }
+  }
+  // Per bucket: sorted, then each run of one edge gives its ordered pairs of different faces.
+  auto pairs = [&](uint32_t v, uint32_t* count, uint32_t* at) {
+    const auto b = rec.begin() + end[v], e = rec.begin() + end[size_t(v) + 1];
+    for (auto i = b; i < e;) {
+      auto j = i;
+      while (j < e && (*j >> 32) == (*i >> 32)) ++j;
+      for (auto x = i; x < j; ++x)
+        for (auto y = i; y < j; ++y) {
+          const uint32_t f = uint32_t(*x), g = uint32_t(*y);
+          if (f == g) continue;
+          if (count)
+            ++count[size_t(f) + 1];
+          else
+            list[at[f]++] = g;
+        }
+      i = j;
+    }
+  };
+  const size_t step = size_t(1) << 14;
+  ParallelChunks(V, threads, step, [&](size_t b, size_t e, unsigned) {
+    for (size_t v = b; v < e; ++v) {
+      const auto i0 = rec.begin() + end[v], i1 = rec.begin() + end[v + 1];
+      if (i1 - i0 > 32)  // a fan of many faces
+        std::sort(i0, i1);
+      else
+        for (auto i = i0 + (i0 != i1); i < i1; ++i)
+          for (auto j = i; j != i0 && *(j - 1) > *j; --j) std::iter_swap(j - 1, j);
+    }
+  });
+  // (A face's count: from the buckets of its up to three lower vertices, so counted serially.)
+  std::vector<uint32_t> count(size_t(F) + 1, 0);
+  for (uint32_t v = 0; v < V; ++v) pairs(v, count.data(), nullptr);
+  std::partial_sum(count.begin(), count.end(), count.begin());
+  offsets = count;
+  list.assign(offsets.back(), 0);
+  std::vector<uint32_t> at(offsets.begin(), offsets.end() - 1);
+  for (uint32_t v = 0; v < V; ++v) pairs(v, nullptr, at.data());
+}
+
+// Faces sharing an edge (by vertex ids), CSR; a face appears once per edge it shares, in the
+// order of the edges (lower vertex, higher vertex), then of the faces. `V` (0: unknown) bounds
+// the vertex ids: when it is no more than about the faces, EdgeAdjacencyBelow (the same lists).
+void EdgeAdjacency(const std::vector<Face>& faces, size_t V, unsigned threads, std::vector<uint32_t>& offsets,
+                   std::vector<uint32_t>& list) {
+  if (V > 0 && V <= 2 * faces.size() + 1024) return EdgeAdjacencyBelow(faces, uint32_t(V), threads, offsets, list);
   const std::vector<EdgeRecord> edges = SortedEdgeRecords(faces, [](uint32_t f) { return f; });
   std::vector<uint32_t> count(faces.size() + 1, 0);
   ForPairsOnSharedEdges(edges, [&](uint32_t f, uint32_t) { ++count[f + 1]; });
@@ -106,15 +170,18 @@ vcg::Point3d Normal(const std::vector<vcg::Point3f>& pos, const Face& t) {
 // Cuts faces into clusters of about `cap` faces whose normals stay within maxAngle of their seed's
 // (one cluster grown at a time, nearest normal first); clusters under cap/4 then join the
 // neighbouring cluster they share the most edges with. Returns the cluster count.
+// The adjacency and the normals on `threads` threads; the growing itself is serial.
 uint32_t GrowClusters(const std::vector<Face>& faces, const std::vector<vcg::Point3f>& pos, size_t cap, double maxAngle,
-                      std::vector<uint32_t>& cluster) {
+                      std::vector<uint32_t>& cluster, unsigned threads = 1) {
   const uint32_t F = uint32_t(faces.size());
   cluster.assign(F, ~0u);
   if (F == 0) return 0;
   std::vector<uint32_t> off, adj;
-  EdgeAdjacency(faces, off, adj);
+  EdgeAdjacency(faces, pos.size(), threads, off, adj);
   std::vector<vcg::Point3d> n(F);
-  for (uint32_t f = 0; f < F; ++f) n[f] = Normal(pos, faces[f]);
+  ParallelChunks(F, threads, size_t(1) << 14, [&](size_t b, size_t e, unsigned) {
+    for (size_t f = b; f < e; ++f) n[f] = Normal(pos, faces[f]);
+  });
   const double minDot = std::cos(std::min(maxAngle, NormalCone::kPi));
   cap = std::max<size_t>(cap, 1);
   std::vector<uint32_t> size;
@@ -192,32 +259,102 @@ uint32_t GrowClusters(const std::vector<Face>& faces, const std::vector<vcg::Poi
   return next;
 }
 
+// SortedEdgeRecords(L.faces, face's cluster) without the edges whose records all name one cluster
+// (they make no pair in ForPairsOnSharedEdges), when every vertex id is below V: an edge two
+// clusters share has both ends on faces of two clusters, so only such edges are kept (about a
+// tenth of them with clusters of 128 faces), each with all its records.
+std::vector<EdgeRecord> ClusterBorderEdgeRecords(const LodDag::Level& L, size_t V, unsigned threads) {
+  constexpr uint32_t kNone = ~0u, kMany = ~0u - 1;
+  // Per vertex: the cluster of its faces, or kMany (faces side by side: the first to come sets
+  // it, one of another cluster makes it kMany, whatever the order).
+  std::unique_ptr<std::atomic<uint32_t>[]> first(new std::atomic<uint32_t>[V]);
+  const size_t F = L.faces.size(), step = size_t(1) << 14;
+  ParallelChunks(V, threads, step, [&](size_t b, size_t e, unsigned) {
+    for (size_t v = b; v < e; ++v) first[v].store(kNone, std::memory_order_relaxed);
+  });
+  ParallelChunks(F, threads, step, [&](size_t b, size_t e, unsigned) {
+    for (size_t f = b; f < e; ++f) {
+      const uint32_t c = L.faceCluster[f];
+      for (uint32_t v : L.faces[f]) {
+        uint32_t seen = first[v].load(std::memory_order_relaxed);
+        while (seen != c && seen != kMany)
+          if (seen == kNone ? first[v].compare_exchange_weak(seen, c, std::memory_order_relaxed)
+                            : (first[v].store(kMany, std::memory_order_relaxed), true))
+            break;
+      }
+    }
+  });
+  // The kept records, a run of faces at a time, then in order.
+  std::vector<std::vector<EdgeRecord>> part((F + step - 1) / step);
+  ParallelChunks(F, threads, step, [&](size_t b, size_t e, unsigned) {
+    std::vector<EdgeRecord>& out = part[b / step];
+    for (size_t f = b; f < e; ++f)
+      for (int i = 0; i < 3; ++i) {
+        uint32_t a = L.faces[f][size_t(i)], c = L.faces[f][size_t((i + 1) % 3)];
+        if (first[a].load(std::memory_order_relaxed) != kMany || first[c].load(std::memory_order_relaxed) != kMany)
+          continue;
+        if (a > c) std::swap(a, c);
+        out.push_back({uint64_t(a) << 32 | c, L.faceCluster[f]});
+      }
+  });
+  std::vector<EdgeRecord> edges;
+  {
+    size_t n = 0;
+    for (const auto& p : part) n += p.size();
+    edges.reserve(n);
+    for (auto& p : part) {
+      edges.insert(edges.end(), p.begin(), p.end());
+      std::vector<EdgeRecord>().swap(p);
+    }
+  }
+  std::sort(edges.begin(), edges.end(),
+            [](const EdgeRecord& x, const EdgeRecord& y) { return x.key < y.key || (x.key == y.key && x.id < y.id); });
+  return edges;
+}
+
 // Gathers the clusters of a level into groups of about `per` neighbouring clusters (those sharing
 // the most edges first); a connected part of at most `whole` clusters (clusters sharing edges)
 // is one group. Returns the group count.
 // With `node` (per cluster: its kd chunk), clusters of two chunks are no neighbours: a group stays
-// within one chunk.
+// within one chunk. `V` (0: unknown) bounds the vertex ids: then only the edges whose two ends
+// both touch two clusters are sorted (ClusterBorderEdgeRecords, on `threads` threads), which
+// gives the same pairs.
 int GroupClusters(const LodDag::Level& L, int per, size_t whole, std::vector<int>& group,
-                  const std::vector<uint32_t>* node = nullptr) {
+                  const std::vector<uint32_t>* node = nullptr, size_t V = 0, unsigned threads = 1) {
   const uint32_t C = uint32_t(L.clusterCount());
   // Cluster adjacency weighted by shared edges.
-  const std::vector<EdgeRecord> edges = SortedEdgeRecords(L.faces, [&](uint32_t f) { return L.faceCluster[f]; });
-  std::vector<std::pair<uint64_t, uint32_t>> pairs;  // (a << 32 | b, 1) per shared edge, a != b
+  const std::vector<EdgeRecord> edges = V > 0
+                                            ? ClusterBorderEdgeRecords(L, V, threads)
+                                            : SortedEdgeRecords(L.faces, [&](uint32_t f) { return L.faceCluster[f]; });
+  // Per cluster a, its neighbours b in increasing order, each with the edges a and b share: the
+  // pairs (a, b) of the shared edges bucketed by a, each bucket sorted.
+  std::vector<uint32_t> off(C + 1, 0), nb, w, bucket;
+  auto neighbours = [&](uint32_t a, uint32_t b) { return !node || (*node)[a] == (*node)[b]; };
   ForPairsOnSharedEdges(edges, [&](uint32_t a, uint32_t b) {
-    if (!node || (*node)[a] == (*node)[b]) pairs.push_back({uint64_t(a) << 32 | b, 1});
+    if (neighbours(a, b)) ++off[a + 1];
   });
-  std::sort(pairs.begin(), pairs.end());
-  std::vector<uint32_t> off(C + 1, 0), nb, w;
-  for (size_t i = 0; i < pairs.size();) {
-    size_t j = i;
-    while (j < pairs.size() && pairs[j].first == pairs[i].first) ++j;
-    const uint32_t a = uint32_t(pairs[i].first >> 32);
-    ++off[a + 1];
-    nb.push_back(uint32_t(pairs[i].first & 0xFFFFFFFFu));
-    w.push_back(uint32_t(j - i));
-    i = j;
-  }
   std::partial_sum(off.begin(), off.end(), off.begin());
+  bucket.resize(off[C]);
+  {
+    std::vector<uint32_t> at(off.begin(), off.end() - 1);
+    ForPairsOnSharedEdges(edges, [&](uint32_t a, uint32_t b) {
+      if (neighbours(a, b)) bucket[at[a]++] = b;
+    });
+  }
+  for (uint32_t a = 0; a < C; ++a) {
+    const auto b0 = bucket.begin() + off[a], b1 = bucket.begin() + off[a + 1];
+    std::sort(b0, b1);
+    off[a] = uint32_t(nb.size());
+    for (auto i = b0; i < b1;) {
+      auto j = i;
+      while (j < b1 && *j == *i) ++j;
+      nb.push_back(*i);
+      w.push_back(uint32_t(j - i));
+      i = j;
+    }
+  }
+  off[C] = uint32_t(nb.size());
+  std::vector<uint32_t>().swap(bucket);
   group.assign(C, -1);
   int groups = 0;
   // Visit clusters breadth-first (locality); a new group starts at each unassigned cluster.
@@ -385,6 +522,10 @@ struct GroupResult {
   std::vector<uint32_t> newPlace;
   double distance = 0;
   bool ok = false;
+  // The faces re-cut into the next level's clusters (RecutGroup): per face its cluster, numbered
+  // within the group, and their count.
+  std::vector<uint32_t> cluster;
+  uint32_t clusters = 0;
 };
 
 // The attributes of the DAG's vertices as the attribute quadrics' float channels (colour RGBA in
@@ -755,6 +896,71 @@ std::vector<Face> FacesByPlace(const std::vector<Face>& faces, const std::vector
   return t;
 }
 
+// Per thread: what RecutGroup works in, kept from group to group.
+struct RecutScratch {
+  std::vector<uint32_t> corner, ids;
+  std::vector<Face> faces;
+  std::vector<vcg::Point3f> positions;
+};
+
+// A simplified group's faces (r.faces) cut into the next level's clusters, on the group's own
+// vertices, on its thread: topology(x) is the id the DAG's topology will see for the group's
+// vertex x (a place with texture seams) or, for a new vertex, a stand-in that orders as its
+// final id will (any id above the level's vertices plus its index among the group's new ones);
+// positionOf(id) that id's position. The ids renumbered densely in their order keep every edge's
+// key order, so GrowClusters cuts the same clusters as on the DAG's ids once the group's new
+// vertices are numbered (BuildLevels, StreamLevels).
+template <class Topology, class PositionOf>
+void RecutGroup(GroupResult& r, Topology topology, PositionOf positionOf, size_t clusterFaces, double angle,
+                RecutScratch& s) {
+  const size_t F = r.faces.size();
+  s.corner.resize(3 * F);
+  for (size_t f = 0; f < F; ++f)
+    for (size_t i = 0; i < 3; ++i) s.corner[3 * f + i] = topology(r.faces[f][i]);
+  s.ids.assign(s.corner.begin(), s.corner.end());
+  std::sort(s.ids.begin(), s.ids.end());
+  s.ids.erase(std::unique(s.ids.begin(), s.ids.end()), s.ids.end());
+  s.faces.resize(F);
+  for (size_t f = 0; f < F; ++f)
+    for (size_t i = 0; i < 3; ++i)
+      s.faces[f][i] = uint32_t(std::lower_bound(s.ids.begin(), s.ids.end(), s.corner[3 * f + i]) - s.ids.begin());
+  s.positions.resize(s.ids.size());
+  for (size_t j = 0; j < s.ids.size(); ++j) s.positions[j] = positionOf(s.ids[j]);
+  r.clusters = GrowClusters(s.faces, s.positions, clusterFaces, angle, r.cluster);
+}
+
+// Marks in `shared` (V vertices) every vertex that faces of two groups use (vertexOf: a face
+// corner's vertex), the groups side by side: a vertex's owner is the first group to claim it,
+// and one that finds another there marks it shared, whatever the order.
+template <class VertexOf>
+void MarkShared(const std::vector<Face>& faces, const std::vector<std::vector<uint32_t>>& groupFaces, size_t V,
+                VertexOf vertexOf, unsigned threads, std::vector<uint8_t>& shared) {
+  constexpr int kShared = -2;
+  std::unique_ptr<std::atomic<int>[]> owner(new std::atomic<int>[V]);
+  const int G = int(groupFaces.size());
+  ParallelChunks(V, threads, size_t(1) << 16, [&](size_t b, size_t e, unsigned) {
+    for (size_t v = b; v < e; ++v) owner[v].store(-1, std::memory_order_relaxed);
+  });
+  std::atomic<int> next(0);
+  RunThreads(std::min<unsigned>(threads, unsigned(std::max(G, 1))), [&](unsigned) {
+    for (int g = next++; g < G; g = next++)
+      for (uint32_t f : groupFaces[size_t(g)])
+        for (uint32_t w : faces[f]) {
+          std::atomic<int>& o = owner[vertexOf(w)];
+          int seen = o.load(std::memory_order_relaxed);
+          while (seen != g && seen != kShared) {
+            if (seen < 0 ? o.compare_exchange_weak(seen, g, std::memory_order_relaxed)
+                         : (o.store(kShared, std::memory_order_relaxed), true))
+              break;
+          }
+        }
+  });
+  ParallelChunks(V, threads, size_t(1) << 16, [&](size_t b, size_t e, unsigned) {
+    for (size_t v = b; v < e; ++v)
+      if (owner[v].load(std::memory_order_relaxed) == kShared) shared[v] = 1;
+  });
+}
+
 // The levels above `firstK` (dag.levels[firstK] built, its clusters in the kd chunks `clusterNode`
 // at kd depth `depth`, the leaves at `leafDepth`): BuildDag's steps 2-5 up to the top.
 Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSpill* spill, size_t inputFaces,
@@ -804,7 +1010,9 @@ Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSp
     }
     const LodDag::Level& T = wedges ? topology : L;
     int G = depth > 0 && !wholeParts ? GroupClustersByChunk(T, per, clusterNode, threads, group) : -1;
-    if (G < 0) G = GroupClusters(T, per, wholeParts ? wholeUpTo : 0, group, depth > 0 ? &clusterNode : nullptr);
+    if (G < 0)
+      G = GroupClusters(T, per, wholeParts ? wholeUpTo : 0, group, depth > 0 ? &clusterNode : nullptr,
+                        dag.positions.size(), threads);
     std::vector<Face>().swap(topology.faces);
     std::vector<uint32_t> groupNode;
     if (depth > 0) {
@@ -813,19 +1021,19 @@ Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSp
     }
     // Faces per group; vertices shared by two groups stay frozen.
     std::vector<std::vector<uint32_t>> groupFaces(static_cast<size_t>(G));
-    for (uint32_t f = 0; f < L.faces.size(); ++f) groupFaces[size_t(group[L.faceCluster[f]])].push_back(f);
-    std::vector<int> owner(dag.positions.size(), -1);
-    std::vector<uint8_t> shared(dag.positions.size(), 0);
-    for (uint32_t f = 0; f < L.faces.size(); ++f) {
-      const int g = group[L.faceCluster[f]];
-      for (uint32_t w : L.faces[f]) {
-        const uint32_t v = wedges ? place[w] : w;  // (a place: the lowest id at its position)
-        if (owner[v] < 0)
-          owner[v] = g;
-        else if (owner[v] != g)
-          shared[v] = 1;
-      }
+    {
+      std::vector<uint32_t> count(static_cast<size_t>(G), 0);
+      for (uint32_t c : L.faceCluster) ++count[size_t(group[c])];
+      for (int g = 0; g < G; ++g) groupFaces[size_t(g)].reserve(count[size_t(g)]);
     }
+    for (uint32_t f = 0; f < L.faces.size(); ++f) groupFaces[size_t(group[L.faceCluster[f]])].push_back(f);
+    std::vector<uint8_t> shared(dag.positions.size(), 0);
+    if (wedges)  // (a place: the lowest id at its position)
+      MarkShared(
+          L.faces, groupFaces, shared.size(), [&](uint32_t w) { return place[w]; }, threads, shared);
+    else
+      MarkShared(
+          L.faces, groupFaces, shared.size(), [](uint32_t w) { return w; }, threads, shared);
     // A group that is a whole part (no shared vertex) and one cluster stays as it is at the top.
     std::vector<uint8_t> keep(static_cast<size_t>(G), 0);
     if (wholeParts) {
@@ -836,15 +1044,38 @@ Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSp
         for (uint32_t v : L.faces[f])
           if (shared[wedges ? place[v] : v]) keep[size_t(group[L.faceCluster[f]])] = 0;
     }
+    // Each group simplified and re-cut into the next level's clusters (on its own vertices: the
+    // new ones stand in as P0 + their index, below their final ids' order; RecutGroup).
+    const uint32_t P0 = uint32_t(dag.positions.size());
+    const double angle = ClusterAngle(params, k + 1);
     std::vector<GroupResult> results(static_cast<size_t>(G));
     {
       std::atomic<int> next(0);
       RunThreads(std::min<unsigned>(threads, unsigned(G)), [&](unsigned) {
-        for (int g = next++; g < G; g = next++)
+        RecutScratch scratch;
+        for (int g = next++; g < G; g = next++) {
+          GroupResult& r = results[size_t(g)];
           SimplifyGroup(L.faces, groupFaces[size_t(g)], dag.positions, shared, params, ratio, cap, diagonal,
-                        keep[size_t(g)] != 0, dag.attributes, results[size_t(g)]);
+                        keep[size_t(g)] != 0, dag.attributes, r);
+          const uint32_t V = uint32_t(r.localToGlobal.size());
+          auto positionOf = [&](uint32_t id) { return id < P0 ? dag.positions[id] : r.newPositions[id - P0]; };
+          if (wedges)
+            RecutGroup(
+                r,
+                [&](uint32_t x) {
+                  if (x < V) return place[r.localToGlobal[x]];
+                  const uint32_t p = r.newPlace[x - V];
+                  return p < V ? place[r.localToGlobal[p]] : P0 + (p - V);
+                },
+                positionOf, params.clusterFaces, angle, scratch);
+          else
+            RecutGroup(
+                r, [&](uint32_t x) { return x < V ? r.localToGlobal[x] : P0 + (x - V); }, positionOf,
+                params.clusterFaces, angle, scratch);
+        }
       });
     }
+    std::vector<std::vector<uint32_t>>().swap(groupFaces);
     size_t newFaces = 0;
     for (const auto& r : results) newFaces += r.faces.size();
     // (With texture seams a level must shrink by a tenth: the seams and chart junctions stay, and
@@ -865,49 +1096,73 @@ Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSp
       --k;
       continue;
     }
-    // The new level: global ids for the new vertices (group order: deterministic), re-cut clusters.
-    LodDag::Level N;
+    // The new level: global ids for the new vertices (group order: deterministic), the groups'
+    // clusters in group order; each group's part written on its thread.
     std::vector<float> groupError(static_cast<size_t>(G), 0.f);
-    std::vector<double> maxChild(static_cast<size_t>(G), 0.0);
-    for (uint32_t c = 0; c < L.clusterCount(); ++c)
-      maxChild[size_t(group[c])] = std::max(maxChild[size_t(group[c])], double(L.clusterError[c]));
-    const double angle = ClusterAngle(params, k + 1);
-    std::vector<uint32_t> clusterOfFace, nextNode;
+    {
+      std::vector<double> maxChild(static_cast<size_t>(G), 0.0);
+      for (uint32_t c = 0; c < L.clusterCount(); ++c)
+        maxChild[size_t(group[c])] = std::max(maxChild[size_t(group[c])], double(L.clusterError[c]));
+      for (int g = 0; g < G; ++g)
+        groupError[size_t(g)] = GroupErrorAbove(maxChild[size_t(g)], results[size_t(g)].distance);
+    }
+    std::vector<uint32_t> firstNew(size_t(G) + 1), firstFace(size_t(G) + 1), firstCluster(size_t(G) + 1);
+    firstNew[0] = P0;
+    firstFace[0] = firstCluster[0] = 0;
     for (int g = 0; g < G; ++g) {
-      GroupResult& r = results[size_t(g)];
-      const uint32_t V = uint32_t(r.localToGlobal.size());
-      const uint32_t firstNew = uint32_t(dag.positions.size());
-      dag.positions.insert(dag.positions.end(), r.newPositions.begin(), r.newPositions.end());
-      LodAttributes& A = dag.attributes;
-      A.colors.insert(A.colors.end(), r.newAttributes.colors.begin(), r.newAttributes.colors.end());
-      A.normals.insert(A.normals.end(), r.newAttributes.normals.begin(), r.newAttributes.normals.end());
-      A.texCoords.insert(A.texCoords.end(), r.newAttributes.texCoords.begin(), r.newAttributes.texCoords.end());
-      for (uint32_t x : r.newPlace)  // the place of a new vertex: an input one's, or the first new one's
-        place.push_back(x < V ? place[r.localToGlobal[x]] : firstNew + (x - V));
-      std::vector<Face> faces;
-      faces.reserve(r.faces.size());
-      for (const auto& t : r.faces) {
-        Face u;
-        for (int i = 0; i < 3; ++i)
-          u[size_t(i)] = t[size_t(i)] < V ? r.localToGlobal[t[size_t(i)]] : firstNew + (t[size_t(i)] - V);
-        faces.push_back(u);
-      }
-      const float ef = GroupErrorAbove(maxChild[size_t(g)], r.distance);
-      groupError[size_t(g)] = ef;
-      const uint32_t C =
-          GrowClusters(wedges ? byPlace(faces) : faces, dag.positions, params.clusterFaces, angle, clusterOfFace);
-      const uint32_t base = uint32_t(N.clusterCount());
-      for (size_t f = 0; f < faces.size(); ++f) {
-        N.faces.push_back(faces[f]);
-        N.faceCluster.push_back(base + clusterOfFace[f]);
-      }
-      for (uint32_t c = 0; c < C; ++c) {
-        N.clusterGroup.push_back(-1);
-        N.clusterCreator.push_back(g);
-        N.clusterError.push_back(ef);
-        if (depth > 0) nextNode.push_back(groupNode[size_t(g)]);
-      }
-      r = GroupResult();  // free it
+      const GroupResult& r = results[size_t(g)];
+      firstNew[size_t(g) + 1] = firstNew[size_t(g)] + uint32_t(r.newPositions.size());
+      firstFace[size_t(g) + 1] = firstFace[size_t(g)] + uint32_t(r.faces.size());
+      firstCluster[size_t(g) + 1] = firstCluster[size_t(g)] + r.clusters;
+    }
+    LodAttributes& A = dag.attributes;
+    const size_t P1 = firstNew[size_t(G)];
+    dag.positions.resize(P1);
+    if (!A.colors.empty()) A.colors.resize(P1);
+    if (!A.normals.empty()) A.normals.resize(P1);
+    if (!A.texCoords.empty()) A.texCoords.resize(P1);
+    if (wedges) place.resize(P1);
+    LodDag::Level N;
+    const uint32_t NC = firstCluster[size_t(G)];
+    N.faces.resize(firstFace[size_t(G)]);
+    N.faceCluster.resize(N.faces.size());
+    N.clusterGroup.assign(NC, -1);
+    N.clusterCreator.resize(NC);
+    N.clusterError.resize(NC);
+    std::vector<uint32_t> nextNode(depth > 0 ? NC : 0);
+    {
+      std::atomic<int> next(0);
+      RunThreads(std::min<unsigned>(threads, unsigned(G)), [&](unsigned) {
+        for (int g = next++; g < G; g = next++) {
+          GroupResult& r = results[size_t(g)];
+          const uint32_t V = uint32_t(r.localToGlobal.size()), first = firstNew[size_t(g)];
+          std::copy(r.newPositions.begin(), r.newPositions.end(), dag.positions.begin() + first);
+          const LodAttributes& a = r.newAttributes;  // (per new vertex, each stream the DAG carries)
+          if (!a.colors.empty()) std::copy(a.colors.begin(), a.colors.end(), A.colors.begin() + first);
+          if (!a.normals.empty()) std::copy(a.normals.begin(), a.normals.end(), A.normals.begin() + first);
+          if (!a.texCoords.empty()) std::copy(a.texCoords.begin(), a.texCoords.end(), A.texCoords.begin() + first);
+          // The place of a new vertex: an input one's (already there), or the first new one's.
+          for (size_t j = 0; j < r.newPlace.size(); ++j) {
+            const uint32_t x = r.newPlace[j];
+            place[first + j] = x < V ? place[r.localToGlobal[x]] : first + (x - V);
+          }
+          const uint32_t f0 = firstFace[size_t(g)], c0 = firstCluster[size_t(g)];
+          for (size_t f = 0; f < r.faces.size(); ++f) {
+            Face& u = N.faces[f0 + f];
+            for (size_t i = 0; i < 3; ++i) {
+              const uint32_t t = r.faces[f][i];
+              u[i] = t < V ? r.localToGlobal[t] : first + (t - V);
+            }
+            N.faceCluster[f0 + f] = c0 + r.cluster[f];
+          }
+          for (uint32_t c = c0; c < c0 + r.clusters; ++c) {
+            N.clusterCreator[c] = g;
+            N.clusterError[c] = groupError[size_t(g)];
+            if (depth > 0) nextNode[c] = groupNode[size_t(g)];
+          }
+          r = GroupResult();  // free it
+        }
+      });
     }
     L.clusterGroup = group;
     L.groupError = groupError;
@@ -986,29 +1241,28 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
     auto faceBegin = [&](size_t r) { return r ? faceEnd[r - 1] : uint64_t(0); };
     std::vector<Face> faces;
     std::vector<uint32_t> faceCluster, verts;
-    auto chunkVertices = [&](const std::vector<Face>& fs) {
-      verts.clear();
-      for (const Face& t : fs) verts.insert(verts.end(), t.begin(), t.end());
-      std::sort(verts.begin(), verts.end());
-      verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
-    };
     // Pass 1: the vertices of two chunks.
     const size_t P = dag.positions.size();
     std::vector<uint64_t> border((P + 63) / 64, 0);
     {
-      std::vector<uint64_t> seen((P + 63) / 64, 0);
+      // seen: the vertices of the chunks before; here: this chunk's (cleared after it).
+      std::vector<uint64_t> seen((P + 63) / 64, 0), here((P + 63) / 64, 0);
       for (size_t r = 0; r < chunks; ++r) {
         Status s = spill.get(size_t(k), faceBegin(r), faceEnd[r], faces, faceCluster);
         if (!s.ok()) return fail(s);
-        chunkVertices(faces);
-        if (!verts.empty() && verts.back() >= P) return fail(bad);
-        for (uint32_t v : verts) {
-          const uint64_t bit = uint64_t(1) << (v & 63);
-          if (seen[v >> 6] & bit)
-            border[v >> 6] |= bit;
-          else
-            seen[v >> 6] |= bit;
-        }
+        for (const Face& t : faces)
+          for (uint32_t v : t) {
+            if (v >= P) return fail(bad);
+            const uint64_t bit = uint64_t(1) << (v & 63);
+            if (here[v >> 6] & bit) continue;
+            here[v >> 6] |= bit;
+            if (seen[v >> 6] & bit) border[v >> 6] |= bit;
+          }
+        for (const Face& t : faces)
+          for (uint32_t v : t) {
+            seen[v >> 6] |= here[v >> 6];
+            here[v >> 6] = 0;
+          }
       }
     }
     // Pass 2: each chunk's groups, simplified, and its part of level k + 1.
@@ -1022,11 +1276,12 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
     std::vector<uint32_t> nextNode, nextFaces;
     uint64_t newFaces = 0;
     LodDag::Level sub;  // the chunk (its clusters numbered within it)
-    std::vector<int> group, owner;
-    std::vector<Face> localFaces, out;
+    std::vector<int> group;
+    std::vector<Face> out;
     std::vector<vcg::Point3f> localPos;
     std::vector<uint8_t> localShared;
-    std::vector<uint32_t> clusterOfFace, outCluster;
+    std::vector<uint32_t> outCluster, rank;
+    std::vector<uint64_t> here((P + 63) / 64, 0);  // the chunk's vertices (cleared after it)
     for (size_t r = 0; r < chunks; ++r) {
       if (progress && !progress(std::min(95, 10 + 8 * k), "LOD: simplifying groups chunk by chunk"))
         return fail(Status::Cancelled());
@@ -1040,41 +1295,65 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
         sub.faceCluster[f] = faceCluster[f] - c0;
       }
       sub.clusterGroup.assign(c1 - c0, -1);
-      const int G = GroupClusters(sub, per, 0, group);
+      // The chunk in its own vertex ids, in the order of the global ones (verts: the chunk's
+      // vertices, read from a bitset of the DAG's; a corner's id: its vertex's rank there, from
+      // the words' prefix counts): positions, frozen flags.
+      uint32_t lo = ~0u, hi = 0;
+      for (const Face& t : sub.faces)
+        for (uint32_t v : t) {
+          if (v >= P) return fail(bad);
+          here[v >> 6] |= uint64_t(1) << (v & 63);
+          lo = std::min(lo, v);
+          hi = std::max(hi, v);
+        }
+      verts.clear();
+      const size_t w0 = CF ? lo >> 6 : 0, w1 = CF ? (hi >> 6) + 1 : 0;
+      rank.resize(w1 - w0);
+      for (size_t w = w0; w < w1; ++w) {
+        rank[w - w0] = uint32_t(verts.size());
+        for (uint64_t bits = here[w]; bits; bits &= bits - 1)
+          verts.push_back(uint32_t(64 * w + size_t(__builtin_ctzll(bits))));
+      }
+      const size_t V = verts.size();
+      ParallelChunks(CF, threads, size_t(1) << 12, [&](size_t b, size_t e, unsigned) {
+        for (size_t f = b; f < e; ++f)
+          for (size_t i = 0; i < 3; ++i) {
+            const uint32_t v = sub.faces[f][i];
+            const uint64_t below = here[v >> 6] & ((uint64_t(1) << (v & 63)) - 1);
+            sub.faces[f][i] = rank[(v >> 6) - w0] + uint32_t(__builtin_popcountll(below));
+          }
+      });
+      std::fill(here.begin() + long(w0), here.begin() + long(w1), uint64_t(0));
+      const int G = GroupClusters(sub, per, 0, group, nullptr, V, threads);
       const int groupBase = int(L.groupError.size());
       for (uint32_t c = c0; c < c1; ++c) L.clusterGroup[c] = groupBase + group[c - c0];
-      // The chunk in its own vertex ids (sorted as the global ones): positions, frozen flags.
-      chunkVertices(sub.faces);
-      const size_t V = verts.size();
-      localFaces.resize(CF);
-      for (size_t f = 0; f < CF; ++f)
-        for (size_t i = 0; i < 3; ++i)
-          localFaces[f][i] = uint32_t(std::lower_bound(verts.begin(), verts.end(), sub.faces[f][i]) - verts.begin());
       localPos.resize(V);
       localShared.resize(V);
       for (size_t v = 0; v < V; ++v) {
         localPos[v] = dag.positions[verts[v]];
         localShared[v] = (border[verts[v] >> 6] >> (verts[v] & 63)) & 1;
       }
-      owner.assign(V, -1);
       std::vector<std::vector<uint32_t>> groupFaces(static_cast<size_t>(G));
-      for (uint32_t f = 0; f < CF; ++f) {
-        const int g = group[sub.faceCluster[f]];
-        groupFaces[size_t(g)].push_back(f);
-        for (uint32_t v : localFaces[f]) {
-          if (owner[v] < 0)
-            owner[v] = g;
-          else if (owner[v] != g)
-            localShared[v] = 1;
-        }
-      }
+      for (uint32_t f = 0; f < CF; ++f) groupFaces[size_t(group[sub.faceCluster[f]])].push_back(f);
+      MarkShared(
+          sub.faces, groupFaces, V, [](uint32_t v) { return v; }, threads, localShared);
+      // Each group simplified and re-cut into level k + 1's clusters on its thread (its new
+      // vertices stand in as V + their index: above the chunk's, as their global ids; RecutGroup).
       std::vector<GroupResult> results(static_cast<size_t>(G));
       {
         std::atomic<int> next(0);
         RunThreads(std::min<unsigned>(threads, unsigned(G)), [&](unsigned) {
-          for (int g = next++; g < G; g = next++)
-            SimplifyGroup(localFaces, groupFaces[size_t(g)], localPos, localShared, params, ratio, cap, diagonal, false,
-                          dag.attributes, results[size_t(g)]);
+          RecutScratch scratch;
+          for (int g = next++; g < G; g = next++) {
+            GroupResult& res = results[size_t(g)];
+            SimplifyGroup(sub.faces, groupFaces[size_t(g)], localPos, localShared, params, ratio, cap, diagonal, false,
+                          dag.attributes, res);
+            const uint32_t RV = uint32_t(res.localToGlobal.size());
+            RecutGroup(
+                res, [&](uint32_t x) { return x < RV ? res.localToGlobal[x] : uint32_t(V) + (x - RV); },
+                [&](uint32_t id) { return id < V ? localPos[id] : res.newPositions[id - V]; }, params.clusterFaces,
+                angle, scratch);
+          }
         });
       }
       std::vector<std::vector<uint32_t>>().swap(groupFaces);
@@ -1088,16 +1367,25 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
         const uint32_t RV = uint32_t(res.localToGlobal.size());
         const uint32_t firstNew = uint32_t(dag.positions.size());
         dag.positions.insert(dag.positions.end(), res.newPositions.begin(), res.newPositions.end());
-        faces.clear();
-        for (const auto& t : res.faces) {
-          Face u;
-          for (size_t i = 0; i < 3; ++i) u[i] = t[i] < RV ? verts[res.localToGlobal[t[i]]] : firstNew + (t[i] - RV);
-          faces.push_back(u);
-        }
         const float ef = GroupErrorAbove(maxChild[size_t(g)], res.distance);
         L.groupError.push_back(ef);
-        AppendStreamedClusters(faces, dag.positions, params, angle, groupBase + g, ef, clusterNode[c0], clusterOfFace,
-                               N, out, outCluster, nextFaces, nextNode);
+        const uint32_t base = uint32_t(N.clusterCount());
+        const size_t firstNext = nextFaces.size();
+        nextFaces.resize(firstNext + res.clusters, 0);
+        for (size_t f = 0; f < res.faces.size(); ++f) {
+          Face u;
+          for (size_t i = 0; i < 3; ++i) {
+            const uint32_t t = res.faces[f][i];
+            u[i] = t < RV ? verts[res.localToGlobal[t]] : firstNew + (t - RV);
+          }
+          out.push_back(u);
+          outCluster.push_back(base + res.cluster[f]);
+          ++nextFaces[firstNext + res.cluster[f]];
+        }
+        N.clusterGroup.resize(base + res.clusters, -1);
+        N.clusterCreator.resize(base + res.clusters, groupBase + g);
+        N.clusterError.resize(base + res.clusters, ef);
+        nextNode.resize(base + res.clusters, clusterNode[c0]);
         res = GroupResult();
       }
       newFaces += out.size();
@@ -1233,8 +1521,10 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
   }
   if (depth == 0) {
     LodDag::Level& L0 = dag.levels[0];
-    const uint32_t C = GrowClusters(wedges ? byPlace(L0.faces) : L0.faces, dag.positions, params.clusterFaces,
-                                    ClusterAngle(params, 0), L0.faceCluster);
+    std::vector<Face> placed;  // (a conditional of byPlace(...) and L0.faces would copy L0.faces)
+    if (wedges) placed = byPlace(L0.faces);
+    const uint32_t C = GrowClusters(wedges ? placed : L0.faces, dag.positions, params.clusterFaces,
+                                    ClusterAngle(params, 0), L0.faceCluster, threads);
     L0.clusterGroup.assign(C, -1);
     L0.clusterCreator.assign(C, -1);
     L0.clusterError.assign(C, 0.f);

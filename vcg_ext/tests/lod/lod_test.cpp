@@ -2309,6 +2309,40 @@ size_t FacesAcrossCharts(const IndexedMesh& m, const LodAttributes& a, const vcg
 
 }  // namespace uv
 
+// Each level's groups are simplified and re-cut into clusters side by side, their vertices marked
+// and the next level assembled on the threads: the file does not depend on their number, built
+// whole (BuildLevels) and with texture seams (places), the latter in chunks too
+// (GroupClustersByChunk). (LodChunks.FileDoesNotDependOnThreads: the bunny in chunks; LodStream:
+// the streamed build.)
+TEST(LodBuild, FileDoesNotDependOnThreads) {
+  const IndexedMesh torus = Torus(96, 48, 1.f, 0.35f);  // 9216 faces
+  const uv::Textured t = uv::Atlas(torus, 3);
+  std::vector<uint8_t> plain[2], textured[2], chunked[2];
+  const int threads[2] = {1, 3};
+  for (int i = 0; i < 2; ++i) {
+    LodBuildParams p;
+    p.simplification.threads = threads[i];
+    const std::string path = TempPath("threads_" + std::to_string(threads[i]) + ".clod");
+    LodBuildStats st;
+    ASSERT_TRUE(BuildLodFile(torus, p, path, &st).ok());
+    EXPECT_GT(st.levels, 5);
+    plain[i] = ReadBytes(path);
+    ASSERT_TRUE(BuildLodFile(t.mesh, p, path, &st, Progress(), &t.attributes).ok());
+    EXPECT_GT(st.texCoordBytes, 0u);
+    textured[i] = ReadBytes(path);
+    p.chunkFaces = 1200;
+    ASSERT_TRUE(BuildLodFile(t.mesh, p, path, &st, Progress(), &t.attributes).ok());
+    EXPECT_EQ(st.chunks, 8u);
+    chunked[i] = ReadBytes(path);
+    std::remove(path.c_str());
+  }
+  ASSERT_FALSE(plain[0].empty());
+  EXPECT_EQ(plain[0], plain[1]);
+  EXPECT_EQ(textured[0], textured[1]);
+  EXPECT_EQ(chunked[0], chunked[1]);
+  EXPECT_NE(textured[0], chunked[0]);
+}
+
 // The UV stream: a textured torus (27 charts) gives a version 5 file with bit 8 and its texture;
 // at full budget the cut is the input's faces with one vertex per (position, UV), each UV within
 // LodTexCoordErrorBound of the input's; a coarse cut has no face across charts and its UVs are
