@@ -513,18 +513,18 @@ std::string ParsePlyImpl(const char* data, size_t size, const std::string& name,
       float q = 0;
       for (size_t i = 0; i < e.properties.size(); ++i) {
         const PlyProperty& p = e.properties[i];
-        const std::string rec = e.name + " " + std::to_string(r);
+        auto rec = [&] { return e.name + " " + std::to_string(r); };  // for messages only
         double v = 0;
         if (!p.isList) {
           if (!in.scalar(p.type, v))
-            return file + (in.badToken().empty() ? "ends early, in " + rec
-                                                 : rec + ": '" + in.badToken() + "' is not a number");
+            return file + (in.badToken().empty() ? "ends early, in " + rec()
+                                                 : rec() + ": '" + in.badToken() + "' is not a number");
           for (int c = 0; c < 3; ++c)
             if (isVertex && int(i) == xyz[c]) {
               if (std::isfinite(v) && std::fabs(v) > FLT_MAX) {
                 char text[32];
                 std::snprintf(text, sizeof text, "%g", v);
-                return file + rec + " has a coordinate (" + text + ") beyond single precision (3.4e38)";
+                return file + rec() + " has a coordinate (" + text + ") beyond single precision (3.4e38)";
               }
               pos[size_t(c)] = float(v);
             }
@@ -539,14 +539,14 @@ std::string ParsePlyImpl(const char* data, size_t size, const std::string& name,
         }
         double count = 0;
         if (!in.scalar(p.countType, count))
-          return file +
-                 (in.badToken().empty() ? "ends early, in " + rec : rec + ": '" + in.badToken() + "' is not a number");
+          return file + (in.badToken().empty() ? "ends early, in " + rec()
+                                               : rec() + ": '" + in.badToken() + "' is not a number");
         if (count < 0 || count != std::floor(count))
-          return file + rec + ": a list of " + std::to_string(count) + " items";
+          return file + rec() + ": a list of " + std::to_string(count) + " items";
         const uint64_t items = uint64_t(count);
         const uint64_t minBytes =
             h.encoding == PlyEncoding::Ascii ? 2 * items - (items ? 1 : 0) : items * uint64_t(kTypes[p.type].bytes);
-        if (minBytes > in.left()) return file + "ends early: " + rec + " lists " + std::to_string(items) + " items";
+        if (minBytes > in.left()) return file + "ends early: " + rec() + " lists " + std::to_string(items) + " items";
         const bool isCorners = int(i) == indices, isTexcoord = int(i) == texcoord;
         if (isTexcoord) cornerUv.clear();
         if (isCorners) {
@@ -560,8 +560,8 @@ std::string ParsePlyImpl(const char* data, size_t size, const std::string& name,
         }
         for (uint64_t k = 0; k < items; ++k) {
           if (!in.scalar(p.type, v))
-            return file + (in.badToken().empty() ? "ends early, in " + rec
-                                                 : rec + ": '" + in.badToken() + "' is not a number");
+            return file + (in.badToken().empty() ? "ends early, in " + rec()
+                                                 : rec() + ": '" + in.badToken() + "' is not a number");
           if (isTexcoord) cornerUv.push_back(float(v));
           if (!isCorners) continue;
           if (!std::isfinite(v) || v != std::floor(v)) {  // a float index list: 2.7 is no vertex
