@@ -114,7 +114,7 @@ std::vector<Plane> SamplePlanes(std::vector<Sample>& s, int depth) {
 template <class T, class Less>
 void SortOnThreads(std::vector<T>& v, unsigned threads, const Less& less) {
   size_t parts = 1;
-  while (parts < threads && v.size() / (2 * parts) >= (size_t(1) << 15)) parts *= 2;
+  while (parts < threads && v.size() / (2 * parts) >= (size_t(1) << 12)) parts *= 2;
   if (parts == 1) {
     std::sort(v.begin(), v.end(), less);
     return;
