@@ -217,7 +217,7 @@ Status BuildLodFileFromPly(const std::string& input, const LodBuildParams& param
       return "";
     };
     bool ioError = false;
-    const std::string err = ReadPlyStreaming(input, ply, sink, &ioError);
+    const std::string err = ReadPlyStreaming(input, ply, sink, &ioError, threads);
     if (!err.empty()) {
       if (readError) *readError = err;
       return Status::Invalid(err);
