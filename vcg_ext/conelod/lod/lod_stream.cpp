@@ -9,6 +9,9 @@
 // every face in the sample, s = 1, exactly KdChunks's chunks); (4) R is read back, welded, and
 // each face goes to its chunk's file K<i>; a vertex two chunks use is marked as a border; (5) the
 // DAG from the chunk files (BuildLodDagFromChunks) and the file from the spill (WriteLodFileFrom).
+// On --threads: the binary records are read a block at a time side by side (ply_format.cpp), the
+// weld's sort runs in parts, and (4) welds and places a block of faces side by side; what depends
+// on the order (the marks, the chunk files, the sample) is done in input order.
 #include "conelod/lod/lod_build.h"
 #include "conelod/lod/lod_spill.h"
 
