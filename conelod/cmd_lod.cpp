@@ -163,7 +163,7 @@ int LodBuild(int argc, char** argv) {
                         (!vertexAttributes || !keepAttributes);
   if (!streamed) {
     PlyMesh ply;
-    const std::string err = ReadPly(input, ply);
+    const std::string err = ReadPly(input, ply, nullptr, unsigned(SimplificationThreads(params.simplification)));
     if (!err.empty()) return FailLoad(err);
     if (keepAttributes && !ply.wedgeTexCoords.empty())
       SplitWedgeTexCoords(ply);  // per-face texcoord lists: one vertex per (vertex, UV)

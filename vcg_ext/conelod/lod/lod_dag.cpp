@@ -1563,94 +1563,190 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
   const int per = GroupClustersOf(params, inputFaces, inputFaces);  // level 0
   const double ratio = LevelRatioOf(params, inputFaces, inputFaces);
   const double angle0 = ClusterAngle(params, 0), angle1 = ClusterAngle(params, 1);
-  LodDag::Level sub;  // the chunk's level 0 (clusters numbered within the chunk)
-  std::vector<int> group;
-  std::vector<uint32_t> globalCluster, clusterOfFace;
-  for (size_t l = 0; l < leaves; ++l) {
-    if (progress && !progress(int(10 * l / leaves), "LOD: level 0 chunk by chunk")) {
-      dag = LodDag();
-      return Status::Cancelled();
-    }
+  // Chunks are made a wave at a time, the wave's chunks side by side (issue 27): (a) each chunk's
+  // file read, cut into clusters and grouped, its vertices two of its groups use marked (a chunk
+  // per thread); (b) every group of the wave simplified (a group per thread); (c) in chunk order,
+  // the groups' new vertices numbered and their faces put in DAG ids; (d) each simplified group
+  // re-cut into level 1's clusters (a group per thread); (e) in chunk order, the records and the
+  // spill. Only (c) and (e) touch what the chunks share, in the order of the one-chunk-at-a-time
+  // build, so the DAG does not depend on the thread count. A vertex used by one chunk only is
+  // marked by that chunk alone (those two chunks use are frozen already and not marked), so the
+  // wave's chunks mark disjoint entries of owner / shared. A chunk's work is about a tenth of
+  // the budget (docs/scale.md): at most kChunksInFlight of them at once.
+  constexpr size_t kChunksInFlight = 4;
+  struct ChunkWork {
+    size_t chunk = 0;
+    LodDag::Level sub;  // the chunk's level 0 (clusters numbered within the chunk)
+    std::vector<int> group;
+    int groups = 0;
+    std::vector<std::vector<uint32_t>> groupFaces;
+    std::vector<GroupResult> results;
+    std::vector<std::vector<Face>> faces;          // per group: its simplified faces, DAG ids
+    std::vector<std::vector<uint32_t>> clusterOf;  // per group: level 1's cluster of each face
+    std::vector<uint32_t> clusters;                // per group: level 1's clusters in it
+    std::vector<float> error;                      // per group
+    Status status;
+  };
+  auto prepare = [&](ChunkWork& w) {
+    const size_t l = w.chunk;
     const size_t F = size_t(in.chunkFaces[l]);
-    if (F == 0) continue;
-    sub = LodDag::Level();
+    LodDag::Level& sub = w.sub;
     sub.faces.resize(F);
     {
       std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(spill.chunk(l).c_str(), "rb"), &std::fclose);
-      if (!f || std::fread(sub.faces.data(), sizeof(Face), F, f.get()) != F)
-        return Status::Invalid("cannot read '" + spill.chunk(l) + "' (the temporary folder of --memory)");
+      if (!f || std::fread(sub.faces.data(), sizeof(Face), F, f.get()) != F) {
+        w.status = Status::Invalid("cannot read '" + spill.chunk(l) + "' (the temporary folder of --memory)");
+        return;
+      }
     }
     std::remove(spill.chunk(l).c_str());
     for (const Face& t : sub.faces)
       for (uint32_t v : t)
-        if (v >= V0) return Status::Invalid("internal error: bad LOD chunk file");
+        if (v >= V0) {
+          w.status = Status::Invalid("internal error: bad LOD chunk file");
+          return;
+        }
     const uint32_t C = GrowClusters(sub.faces, dag.positions, params.clusterFaces, angle0, sub.faceCluster);
     sub.clusterGroup.assign(C, -1);
-    const int G = GroupClusters(sub, per, 0, group);
-    const uint32_t clusterBase = uint32_t(L0.clusterGroup.size());
-    const int groupBase = int(L0.groupError.size());
-    for (uint32_t c = 0; c < C; ++c) {
-      L0.clusterGroup.push_back(groupBase + group[c]);
-      L0.clusterCreator.push_back(-1);
-      L0.clusterError.push_back(0.f);
-    }
-    std::vector<std::vector<uint32_t>> groupFaces(static_cast<size_t>(G));
-    for (uint32_t f = 0; f < F; ++f) groupFaces[size_t(group[sub.faceCluster[f]])].push_back(f);
+    w.groups = GroupClusters(sub, per, 0, w.group);
+    w.groupFaces.resize(size_t(w.groups));
+    for (uint32_t f = 0; f < F; ++f) w.groupFaces[size_t(w.group[sub.faceCluster[f]])].push_back(f);
     for (uint32_t f = 0; f < F; ++f) {
-      const int g = group[sub.faceCluster[f]];
+      const int g = w.group[sub.faceCluster[f]];
       for (uint32_t v : sub.faces[f]) {
+        if (shared[v] & 2) continue;  // frozen already (and used by another chunk of the wave)
         if (owner[v] < 0)
           owner[v] = g;
         else if (owner[v] != g)
           shared[v] |= 1;
       }
     }
-    std::vector<GroupResult> results(static_cast<size_t>(G));
-    {
-      std::atomic<int> next(0);
-      RunThreads(std::min<unsigned>(threads, unsigned(G)), [&](unsigned) {
-        for (int g = next++; g < G; g = next++)
-          SimplifyGroup(sub.faces, groupFaces[size_t(g)], dag.positions, shared, params, ratio, params.maxGroupError,
-                        diagonal, false, dag.attributes, results[size_t(g)]);
+    w.results.resize(size_t(w.groups));
+  };
+  std::vector<ChunkWork> wave;
+  std::vector<std::pair<size_t, int>> tasks;  // (chunk of the wave, group)
+  std::vector<uint32_t> globalCluster;
+  for (size_t first = 0; first < leaves;) {
+    if (progress && !progress(int(10 * first / leaves), "LOD: level 0 chunk by chunk")) {
+      dag = LodDag();
+      return Status::Cancelled();
+    }
+    wave.clear();
+    for (; first < leaves && wave.size() < std::min<size_t>(threads, kChunksInFlight); ++first)
+      if (in.chunkFaces[first] > 0) {
+        wave.emplace_back();
+        wave.back().chunk = first;
+      }
+    const size_t n = wave.size();
+    if (n == 0) continue;
+    {  // (a)
+      std::atomic<size_t> next(0);
+      RunThreads(unsigned(std::min<size_t>(threads, n)), [&](unsigned) {
+        for (size_t i = next++; i < n; i = next++) prepare(wave[i]);
       });
     }
-    for (uint32_t f = 0; f < F; ++f)
-      for (uint32_t v : sub.faces[f]) {
-        owner[v] = -1;
-        shared[v] &= 2;
+    for (ChunkWork& w : wave)
+      if (!w.status.ok()) {
+        dag = LodDag();
+        return w.status;
       }
-    std::vector<std::vector<uint32_t>>().swap(groupFaces);
-    out.clear();
-    outCluster.clear();
-    for (int g = 0; g < G; ++g) {
-      GroupResult& r = results[size_t(g)];
-      const uint32_t V = uint32_t(r.localToGlobal.size());
-      const uint32_t firstNew = uint32_t(dag.positions.size());
-      dag.positions.insert(dag.positions.end(), r.newPositions.begin(), r.newPositions.end());
-      std::vector<Face> faces;
-      faces.reserve(r.faces.size());
-      for (const auto& t : r.faces) {
-        Face u;
-        for (int i = 0; i < 3; ++i)
-          u[size_t(i)] = t[size_t(i)] < V ? r.localToGlobal[t[size_t(i)]] : firstNew + (t[size_t(i)] - V);
-        faces.push_back(u);
-      }
-      const float ef = GroupErrorAbove(0.0, r.distance);  // level 0's clusters have error 0
-      L0.groupError.push_back(ef);
-      AppendStreamedClusters(faces, dag.positions, params, angle1, groupBase + g, ef, uint32_t(l), clusterOfFace, N,
-                             out, outCluster, nextFaces, nextNode);
-      r = GroupResult();
+    tasks.clear();
+    for (size_t i = 0; i < n; ++i)
+      for (int g = 0; g < wave[i].groups; ++g) tasks.emplace_back(i, g);
+    {  // (b)
+      std::atomic<size_t> next(0);
+      RunThreads(unsigned(std::min<size_t>(threads, tasks.size())), [&](unsigned) {
+        for (size_t t = next++; t < tasks.size(); t = next++) {
+          ChunkWork& w = wave[tasks[t].first];
+          const size_t g = size_t(tasks[t].second);
+          SimplifyGroup(w.sub.faces, w.groupFaces[g], dag.positions, shared, params, ratio, params.maxGroupError,
+                        diagonal, false, dag.attributes, w.results[g]);
+        }
+      });
     }
-    globalCluster.resize(F);
-    for (uint32_t f = 0; f < F; ++f) globalCluster[f] = clusterBase + sub.faceCluster[f];
-    Status s = spill.append(0, sub.faces, globalCluster, dag.positions);
-    if (s.ok()) s = spill.append(1, out, outCluster, dag.positions);
-    if (!s.ok()) {
-      dag = LodDag();
-      return s;
+    for (ChunkWork& w : wave) {  // (c)
+      for (const Face& t : w.sub.faces)
+        for (uint32_t v : t) {
+          owner[v] = -1;
+          shared[v] &= 2;
+        }
+      std::vector<std::vector<uint32_t>>().swap(w.groupFaces);
+      w.faces.resize(size_t(w.groups));
+      w.error.resize(size_t(w.groups));
+      for (int g = 0; g < w.groups; ++g) {
+        GroupResult& r = w.results[size_t(g)];
+        const uint32_t V = uint32_t(r.localToGlobal.size());
+        const uint32_t firstNew = uint32_t(dag.positions.size());
+        dag.positions.insert(dag.positions.end(), r.newPositions.begin(), r.newPositions.end());
+        std::vector<Face>& faces = w.faces[size_t(g)];
+        faces.reserve(r.faces.size());
+        for (const auto& t : r.faces) {
+          Face u;
+          for (int i = 0; i < 3; ++i)
+            u[size_t(i)] = t[size_t(i)] < V ? r.localToGlobal[t[size_t(i)]] : firstNew + (t[size_t(i)] - V);
+          faces.push_back(u);
+        }
+        w.error[size_t(g)] = GroupErrorAbove(0.0, r.distance);  // level 0's clusters have error 0
+        r = GroupResult();
+      }
+      std::vector<GroupResult>().swap(w.results);
+      w.clusterOf.resize(size_t(w.groups));
+      w.clusters.resize(size_t(w.groups));
+    }
+    {  // (d)
+      std::atomic<size_t> next(0);
+      RunThreads(unsigned(std::min<size_t>(threads, tasks.size())), [&](unsigned) {
+        for (size_t t = next++; t < tasks.size(); t = next++) {
+          ChunkWork& w = wave[tasks[t].first];
+          const size_t g = size_t(tasks[t].second);
+          w.clusters[g] = GrowClusters(w.faces[g], dag.positions, params.clusterFaces, angle1, w.clusterOf[g]);
+        }
+      });
+    }
+    for (ChunkWork& w : wave) {  // (e): as AppendStreamedClusters, group after group
+      const size_t F = w.sub.faces.size();
+      const uint32_t clusterBase = uint32_t(L0.clusterGroup.size());
+      const int groupBase = int(L0.groupError.size());
+      for (uint32_t c = 0; c < uint32_t(w.sub.clusterGroup.size()); ++c) {
+        L0.clusterGroup.push_back(groupBase + w.group[c]);
+        L0.clusterCreator.push_back(-1);
+        L0.clusterError.push_back(0.f);
+      }
+      out.clear();
+      outCluster.clear();
+      for (int g = 0; g < w.groups; ++g) {
+        const float ef = w.error[size_t(g)];
+        L0.groupError.push_back(ef);
+        const std::vector<Face>& faces = w.faces[size_t(g)];
+        const std::vector<uint32_t>& clusterOfFace = w.clusterOf[size_t(g)];
+        const uint32_t NC = w.clusters[size_t(g)];
+        const uint32_t base = uint32_t(N.clusterCount());
+        const size_t firstNext = nextFaces.size();
+        nextFaces.resize(firstNext + NC, 0);
+        for (size_t f = 0; f < faces.size(); ++f) {
+          out.push_back(faces[f]);
+          outCluster.push_back(base + clusterOfFace[f]);
+          ++nextFaces[firstNext + clusterOfFace[f]];
+        }
+        for (uint32_t c = 0; c < NC; ++c) {
+          N.clusterGroup.push_back(-1);
+          N.clusterCreator.push_back(groupBase + g);
+          N.clusterError.push_back(ef);
+          nextNode.push_back(uint32_t(w.chunk));
+        }
+      }
+      globalCluster.resize(F);
+      for (uint32_t f = 0; f < F; ++f) globalCluster[f] = clusterBase + w.sub.faceCluster[f];
+      Status s = spill.append(0, w.sub.faces, globalCluster, dag.positions);
+      if (s.ok()) s = spill.append(1, out, outCluster, dag.positions);
+      if (!s.ok()) {
+        dag = LodDag();
+        return s;
+      }
+      w = ChunkWork();
     }
   }
-  sub = LodDag::Level();
+  std::vector<ChunkWork>().swap(wave);
   std::vector<int>().swap(owner);
   std::vector<uint8_t>().swap(shared);
   std::vector<Face>().swap(out);

@@ -9,6 +9,9 @@
 // every face in the sample, s = 1, exactly KdChunks's chunks); (4) R is read back, welded, and
 // each face goes to its chunk's file K<i>; a vertex two chunks use is marked as a border; (5) the
 // DAG from the chunk files (BuildLodDagFromChunks) and the file from the spill (WriteLodFileFrom).
+// On --threads: the binary records are read a block at a time side by side (ply_format.cpp), the
+// weld's sort runs in parts, and (4) welds and places a block of faces side by side; what depends
+// on the order (the marks, the chunk files, the sample) is done in input order.
 #include "conelod/lod/lod_build.h"
 #include "conelod/lod/lod_spill.h"
 
@@ -22,6 +25,8 @@
 
 #include "conelod/mesh/mesh_check.h"
 #include "conelod/mesh/ply_format.h"
+#include "conelod/parallel.h"
+#include "conelod/simplify/hierarchical_simplification.h"
 
 namespace conelod {
 namespace {
@@ -106,6 +111,34 @@ std::vector<Plane> SamplePlanes(std::vector<Sample>& s, int depth) {
   return planes;
 }
 
+// Sorts v by `less`, a strict total order (so the result is the one std::sort gives), on up to
+// `threads` threads: 2^k parts sorted side by side, then merged pairwise side by side, through a
+// buffer of v's size.
+template <class T, class Less>
+void SortOnThreads(std::vector<T>& v, unsigned threads, const Less& less) {
+  size_t parts = 1;
+  while (parts < threads && v.size() / (2 * parts) >= (size_t(1) << 12)) parts *= 2;
+  if (parts == 1) {
+    std::sort(v.begin(), v.end(), less);
+    return;
+  }
+  auto at = [&](size_t part) { return v.begin() + std::ptrdiff_t(v.size() * part / parts); };
+  ParallelChunks(parts, threads, 1, [&](size_t b, size_t e, unsigned) {
+    for (size_t i = b; i < e; ++i) std::sort(at(i), at(i + 1), less);
+  });
+  std::vector<T> merged(v.size());
+  for (size_t width = 1; width < parts; width *= 2) {
+    ParallelChunks(parts / (2 * width), threads, 1, [&](size_t b, size_t e, unsigned) {
+      for (size_t i = b; i < e; ++i) {
+        const size_t lo = 2 * width * i;
+        std::merge(at(lo), at(lo + width), at(lo + width), at(lo + 2 * width), merged.begin() + (at(lo) - v.begin()),
+                   less);
+      }
+    });
+    v.swap(merged);
+  }
+}
+
 std::string ReadHeader(const std::string& path, PlyHeader& h) {
   File f(std::fopen(path.c_str(), "rb"));
   if (!f) return "cannot read '" + path + "': " + std::strerror(errno);
@@ -150,6 +183,7 @@ Status BuildLodFileFromPly(const std::string& input, const LodBuildParams& param
     if (!err.empty()) return Status::Invalid(err);
   }
   const uint64_t headerFaces = PlyFaceCount(input);
+  const unsigned threads = unsigned(std::max(1, SimplificationThreads(params.simplification)));
   if (sampleFaces == 0) sampleFaces = std::min<size_t>(size_t(1) << 20, 16 * params.chunkFaces);
   const uint64_t step = std::max<uint64_t>(1, (headerFaces + sampleFaces - 1) / sampleFaces);
 
@@ -186,7 +220,7 @@ Status BuildLodFileFromPly(const std::string& input, const LodBuildParams& param
       return "";
     };
     bool ioError = false;
-    const std::string err = ReadPlyStreaming(input, ply, sink, &ioError);
+    const std::string err = ReadPlyStreaming(input, ply, sink, &ioError, threads);
     if (!err.empty()) {
       if (readError) *readError = err;
       return Status::Invalid(err);
@@ -229,7 +263,7 @@ Status BuildLodFileFromPly(const std::string& input, const LodBuildParams& param
     std::vector<uint8_t>().swap(used);
     const auto& P = ply.positions;
     auto key = [&](uint32_t v) { return std::array<uint32_t, 4>{{Bits(P[v][0]), Bits(P[v][1]), Bits(P[v][2]), v}}; };
-    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
+    SortOnThreads(order, threads, [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
     for (size_t i = 0; i < order.size();) {
       size_t j = i;
       const auto ki = key(order[i]);
@@ -331,20 +365,30 @@ Status BuildLodFileFromPly(const std::string& input, const LodBuildParams& param
     };
     File raw(std::fopen(spill.raw().c_str(), "rb"));
     if (!raw) return Status::Invalid("cannot read '" + spill.raw() + "' (the temporary folder of --memory)");
+    // A block of faces at a time: welded and given their chunk side by side on the threads, then
+    // marked and buffered in input order.
     std::vector<Face> block(size_t(1) << 16);
+    std::vector<uint32_t> nodeOf(block.size());
     uint64_t f = 0;
     while (f < F) {
       if (progress && !progress(0, "LOD: faces to chunks")) return Status::Cancelled();
       const size_t n = size_t(std::min<uint64_t>(block.size(), F - f));
       if (std::fread(block.data(), sizeof(Face), n, raw.get()) != n)
         return Status::Invalid("cannot read '" + spill.raw() + "' (the temporary folder of --memory)");
+      ParallelChunks(n, threads, size_t(1) << 13, [&](size_t begin, size_t end, unsigned) {
+        for (size_t i = begin; i < end; ++i) {
+          Face& t = block[i];
+          for (uint32_t& v : t) v = map[v];
+          const vcg::Point3f c = Centroid(in.positions[t[0]], in.positions[t[1]], in.positions[t[2]]);
+          uint32_t node = 0;
+          for (int level = 0; level < depth; ++level)
+            node = node << 1 | (planes[(size_t(1) << level) + node].upper(c, uint32_t(f + i)) ? 1u : 0u);
+          nodeOf[i] = node;
+        }
+      });
       for (size_t i = 0; i < n; ++i, ++f) {
-        Face t = block[i];
-        for (uint32_t& v : t) v = map[v];
-        const vcg::Point3f c = Centroid(in.positions[t[0]], in.positions[t[1]], in.positions[t[2]]);
-        uint32_t node = 0;
-        for (int level = 0; level < depth; ++level)
-          node = node << 1 | (planes[(size_t(1) << level) + node].upper(c, uint32_t(f)) ? 1u : 0u);
+        const Face& t = block[i];
+        const uint32_t node = nodeOf[i];
         for (uint32_t v : t) {
           if (chunkOf[v] == kNoChunk)
             chunkOf[v] = node;

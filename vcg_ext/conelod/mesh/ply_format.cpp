@@ -12,6 +12,8 @@
 #include <cstring>
 #include <sstream>
 
+#include "conelod/parallel.h"
+
 #include <fcntl.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
@@ -77,6 +79,9 @@ class Cursor {
   Cursor(const char* p, const char* end, PlyEncoding e) : p_(p), end_(end), enc_(e) {}
   size_t left() const { return size_t(end_ - p_); }
   const char* at() const { return p_; }
+  void skip(size_t n) { p_ += n; }  // n <= left()
+  // Binary data in the host's byte order (the records can be read as they are).
+  bool native() const { return enc_ != PlyEncoding::Ascii && (enc_ == PlyEncoding::BinaryBigEndian) == kBigEndianHost; }
 
   // One scalar of `type` as a double. False at the end of the data or on a malformed ASCII token.
   bool scalar(int type, double& v) {
@@ -418,11 +423,86 @@ std::string TriangulatePolygon(const std::vector<std::array<float, 3>>& P, const
 
 namespace {
 
+// An integer of an integer type code at p, in the host's byte order.
+int64_t NativeInteger(const char* p, int type) {
+  switch (type) {
+    case kInt8: {
+      int8_t x;
+      std::memcpy(&x, p, 1);
+      return x;
+    }
+    case kUint8:
+      return uint8_t(*p);
+    case kInt16: {
+      int16_t x;
+      std::memcpy(&x, p, 2);
+      return x;
+    }
+    case kUint16: {
+      uint16_t x;
+      std::memcpy(&x, p, 2);
+      return x;
+    }
+    case kInt32: {
+      int32_t x;
+      std::memcpy(&x, p, 4);
+      return x;
+    }
+    default: {
+      uint32_t x;
+      std::memcpy(&x, p, 4);
+      return x;
+    }
+  }
+}
+
+// The binary fast path: records of one size, in the host's byte order, read a block at a time
+// side by side. Vertices: scalar properties only, x, y, z float32, no colour, normal or texture
+// coordinate; faces: a vertex_indices list of integers and nothing else, every record a
+// triangle. stride 0: the element has no such layout.
+struct FastLayout {
+  size_t stride = 0;
+  size_t xyz[3] = {0, 0, 0};  // vertices: the coordinates' offsets
+  int countType = 0, indexType = 0;
+};
+constexpr uint64_t kFastBlock = uint64_t(1) << 16;
+
+// Reads the n records at p (n * stride bytes, in the data) of a face element onto the end of
+// `triangles`. False, with `triangles` as it was, when one is not a triangle of vertices below
+// `vertices` (the general reader then reads them, and says what is wrong).
+bool ReadFastFaces(const char* p, uint64_t n, const FastLayout& f, size_t vertices, unsigned threads,
+                   std::vector<std::array<uint32_t, 3>>& triangles) {
+  const size_t first = triangles.size();
+  triangles.resize(first + size_t(n));
+  std::atomic<bool> bad(false);
+  const size_t countBytes = size_t(kTypes[f.countType].bytes), indexBytes = size_t(kTypes[f.indexType].bytes);
+  ParallelChunks(size_t(n), threads, size_t(1) << 13, [&](size_t begin, size_t end, unsigned) {
+    for (size_t i = begin; i < end; ++i) {
+      const char* r = p + i * f.stride;
+      if (NativeInteger(r, f.countType) != 3) {
+        bad = true;
+        return;
+      }
+      for (size_t k = 0; k < 3; ++k) {
+        const int64_t v = NativeInteger(r + countBytes + k * indexBytes, f.indexType);
+        if (v < 0 || uint64_t(v) >= vertices) {
+          bad = true;
+          return;
+        }
+        triangles[first + i][k] = uint32_t(v);
+      }
+    }
+  });
+  if (bad) triangles.resize(first);
+  return !bad;
+}
+
 // ParsePly; with `sink`, the triangles go to it in batches (mesh.triangles holds one batch at most;
 // faceQuality and wedgeTexCoords are not kept) and `release` is told every so often how far the
 // records have been read.
 std::string ParsePlyImpl(const char* data, size_t size, const std::string& name, PlyMesh& mesh,
-                         const PlyTriangleSink* sink, const std::function<void(const char*)>* release) {
+                         const PlyTriangleSink* sink, const std::function<void(const char*)>* release,
+                         unsigned threads) {
   mesh = PlyMesh();
   PlyHeader h;
   std::string err = ParsePlyHeader(data, size, h);
@@ -505,7 +585,54 @@ std::string ParsePlyImpl(const char* data, size_t size, const std::string& name,
     if (isFace) mesh.triangles.reserve(size_t(e.count));
     if (isFace && quality >= 0) mesh.faceQuality.reserve(size_t(e.count));
     std::vector<float> cornerUv;  // this face's texcoord list
+    FastLayout fast;
+    if (in.native() && isVertex && !hasColour && !hasNormal && !hasUv) {
+      bool ok = true;
+      for (size_t i = 0; i < e.properties.size(); ++i) {
+        const PlyProperty& p = e.properties[i];
+        ok = ok && !p.isList;
+        for (int c = 0; c < 3; ++c)
+          if (int(i) == xyz[c]) {
+            ok = ok && p.type == kFloat32;
+            fast.xyz[c] = fast.stride;
+          }
+        fast.stride += size_t(kTypes[p.type].bytes);
+      }
+      if (!ok) fast.stride = 0;
+    }
+    if (in.native() && isFace && e.properties.size() == 1 && indices == 0 && e.properties[0].type < kFloat32) {
+      fast.countType = e.properties[0].countType;
+      fast.indexType = e.properties[0].type;
+      fast.stride = size_t(kTypes[fast.countType].bytes + 3 * kTypes[fast.indexType].bytes);
+    }
     for (uint64_t r = 0; r < e.count; ++r) {
+      if (fast.stride && r % kFastBlock == 0) {  // a block read at once, if its records allow
+        const uint64_t n = std::min(kFastBlock, e.count - r);
+        bool read = n * fast.stride <= in.left();
+        if (read && isVertex) {
+          const char* p = in.at();
+          const size_t first = mesh.positions.size();
+          mesh.positions.resize(first + size_t(n));
+          ParallelChunks(size_t(n), threads, size_t(1) << 13, [&](size_t begin, size_t end, unsigned) {
+            for (size_t i = begin; i < end; ++i)
+              for (int c = 0; c < 3; ++c)
+                std::memcpy(&mesh.positions[first + i][size_t(c)], p + i * fast.stride + fast.xyz[c], 4);
+          });
+        } else if (read) {
+          read = ReadFastFaces(in.at(), n, fast, mesh.positions.size(), threads, mesh.triangles);
+        }
+        if (read) {
+          in.skip(size_t(n * fast.stride));
+          r += n - 1;
+          if (isFace && sink && mesh.triangles.size() >= kStreamBatch) {
+            err = (*sink)(mesh.triangles);
+            if (!err.empty()) return err;
+            mesh.triangles.clear();
+          }
+          if (release) (*release)(in.at());
+          continue;
+        }
+      }
       std::array<float, 3> pos{{0, 0, 0}};
       std::array<float, 4> rgba{{0, 0, 0, 1}};
       std::array<float, 3> nrm{{0, 0, 0}};
@@ -513,18 +640,18 @@ std::string ParsePlyImpl(const char* data, size_t size, const std::string& name,
       float q = 0;
       for (size_t i = 0; i < e.properties.size(); ++i) {
         const PlyProperty& p = e.properties[i];
-        const std::string rec = e.name + " " + std::to_string(r);
+        auto rec = [&] { return e.name + " " + std::to_string(r); };  // for messages only
         double v = 0;
         if (!p.isList) {
           if (!in.scalar(p.type, v))
-            return file + (in.badToken().empty() ? "ends early, in " + rec
-                                                 : rec + ": '" + in.badToken() + "' is not a number");
+            return file + (in.badToken().empty() ? "ends early, in " + rec()
+                                                 : rec() + ": '" + in.badToken() + "' is not a number");
           for (int c = 0; c < 3; ++c)
             if (isVertex && int(i) == xyz[c]) {
               if (std::isfinite(v) && std::fabs(v) > FLT_MAX) {
                 char text[32];
                 std::snprintf(text, sizeof text, "%g", v);
-                return file + rec + " has a coordinate (" + text + ") beyond single precision (3.4e38)";
+                return file + rec() + " has a coordinate (" + text + ") beyond single precision (3.4e38)";
               }
               pos[size_t(c)] = float(v);
             }
@@ -539,14 +666,14 @@ std::string ParsePlyImpl(const char* data, size_t size, const std::string& name,
         }
         double count = 0;
         if (!in.scalar(p.countType, count))
-          return file +
-                 (in.badToken().empty() ? "ends early, in " + rec : rec + ": '" + in.badToken() + "' is not a number");
+          return file + (in.badToken().empty() ? "ends early, in " + rec()
+                                               : rec() + ": '" + in.badToken() + "' is not a number");
         if (count < 0 || count != std::floor(count))
-          return file + rec + ": a list of " + std::to_string(count) + " items";
+          return file + rec() + ": a list of " + std::to_string(count) + " items";
         const uint64_t items = uint64_t(count);
         const uint64_t minBytes =
             h.encoding == PlyEncoding::Ascii ? 2 * items - (items ? 1 : 0) : items * uint64_t(kTypes[p.type].bytes);
-        if (minBytes > in.left()) return file + "ends early: " + rec + " lists " + std::to_string(items) + " items";
+        if (minBytes > in.left()) return file + "ends early: " + rec() + " lists " + std::to_string(items) + " items";
         const bool isCorners = int(i) == indices, isTexcoord = int(i) == texcoord;
         if (isTexcoord) cornerUv.clear();
         if (isCorners) {
@@ -560,8 +687,8 @@ std::string ParsePlyImpl(const char* data, size_t size, const std::string& name,
         }
         for (uint64_t k = 0; k < items; ++k) {
           if (!in.scalar(p.type, v))
-            return file + (in.badToken().empty() ? "ends early, in " + rec
-                                                 : rec + ": '" + in.badToken() + "' is not a number");
+            return file + (in.badToken().empty() ? "ends early, in " + rec()
+                                                 : rec() + ": '" + in.badToken() + "' is not a number");
           if (isTexcoord) cornerUv.push_back(float(v));
           if (!isCorners) continue;
           if (!std::isfinite(v) || v != std::floor(v)) {  // a float index list: 2.7 is no vertex
@@ -647,14 +774,15 @@ std::string ParsePlyImpl(const char* data, size_t size, const std::string& name,
 }  // namespace
 
 std::string ParsePly(const char* data, size_t size, const std::string& name, PlyMesh& mesh) {
-  return ParsePlyImpl(data, size, name, mesh, nullptr, nullptr);
+  return ParsePlyImpl(data, size, name, mesh, nullptr, nullptr, 1);
 }
 
-std::string ReadPly(const std::string& path, PlyMesh& mesh, bool* ioError) {
-  return ReadPlyStreaming(path, mesh, nullptr, ioError);
+std::string ReadPly(const std::string& path, PlyMesh& mesh, bool* ioError, unsigned threads) {
+  return ReadPlyStreaming(path, mesh, nullptr, ioError, threads);
 }
 
-std::string ReadPlyStreaming(const std::string& path, PlyMesh& mesh, const PlyTriangleSink& sink, bool* ioError) {
+std::string ReadPlyStreaming(const std::string& path, PlyMesh& mesh, const PlyTriangleSink& sink, bool* ioError,
+                             unsigned threads) {
   if (ioError) *ioError = false;
   auto fail = [&](const std::string& what) {
     if (ioError) *ioError = true;
@@ -704,7 +832,8 @@ std::string ReadPlyStreaming(const std::string& path, PlyMesh& mesh, const PlyTr
       dropped = upTo;
     }
   };
-  std::string err = ParsePlyImpl(base, size, path, mesh, sink ? &sink : nullptr, sink ? &release : nullptr);
+  std::string err =
+      ParsePlyImpl(base, size, path, mesh, sink ? &sink : nullptr, sink ? &release : nullptr, std::max(1u, threads));
   munmap(map, size);
   return err;
 }

@@ -87,8 +87,10 @@ struct PlyMesh {
 };
 
 // Reads `path`. "" or a message that names the file and what is wrong with it; `ioError` is set
-// when the file could not be opened or read (as opposed to a malformed file).
-std::string ReadPly(const std::string& path, PlyMesh& mesh, bool* ioError = nullptr);
+// when the file could not be opened or read (as opposed to a malformed file). Binary records in
+// the host's byte order (positions only, triangles only) are read a block at a time on `threads`
+// threads; the result and the messages do not depend on their number.
+std::string ReadPly(const std::string& path, PlyMesh& mesh, bool* ioError = nullptr, unsigned threads = 1);
 // ReadPly without the faces in memory: the triangles are handed to `sink` in batches of about
 // kStreamBatch (in the file's order, polygons triangulated as ReadPly does; mesh.triangles is then
 // empty, faceQuality and wedgeTexCoords are not kept) and the file's pages are released from
@@ -97,7 +99,7 @@ std::string ReadPly(const std::string& path, PlyMesh& mesh, bool* ioError = null
 using PlyTriangleSink = std::function<std::string(const std::vector<std::array<uint32_t, 3>>&)>;
 constexpr size_t kStreamBatch = size_t(1) << 16;
 std::string ReadPlyStreaming(const std::string& path, PlyMesh& mesh, const PlyTriangleSink& sink,
-                             bool* ioError = nullptr);
+                             bool* ioError = nullptr, unsigned threads = 1);
 // The same from bytes in memory (the fuzzer's entry point); `name` is used in messages.
 std::string ParsePly(const char* data, size_t size, const std::string& name, PlyMesh& mesh);
 

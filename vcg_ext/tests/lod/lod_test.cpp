@@ -2864,6 +2864,75 @@ TEST(LodStream, FullSampleIsTheChunkedBuildAndSamplesAreDeterministic) {
   std::remove(plain.path.c_str());
 }
 
+// The front of the streamed build on several threads (the weld's sort in 2 to 8 parts, the faces
+// given their chunks a block at a time, level 0 a wave of up to 4 chunks at a time): a generated
+// triangle soup (12,800 faces of a wavy grid, each face with its own three vertices, so that the
+// weld merges 38,400 vertices into 6,561, plus an unused one), binary and ASCII, in 16 chunks, is
+// the in-memory chunked build of the welded grid byte for byte at 1, 2 and 5 threads.
+TEST(LodStream, ThreadsGiveTheChunkedBuildOfASoup) {
+  const int n = 80;
+  IndexedMesh soup;
+  auto at = [&](int i, int j) {
+    return vcg::Point3f(float(i) / n, float(j) / n, 0.05f * std::sin(0.4f * float(i)) * std::cos(0.3f * float(j)));
+  };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {  // two triangles a cell, every corner a vertex of its own
+      for (const auto& t : {std::array<std::array<int, 2>, 3>{{{{i, j}}, {{i + 1, j}}, {{i + 1, j + 1}}}},
+                            std::array<std::array<int, 2>, 3>{{{{i, j}}, {{i + 1, j + 1}}, {{i, j + 1}}}}}) {
+        const uint32_t v = uint32_t(soup.positions.size());
+        for (const auto& c : t) soup.positions.push_back(at(c[0], c[1]));
+        soup.faces.push_back({{v, v + 1, v + 2}});
+      }
+    }
+  soup.positions.push_back(vcg::Point3f(5, 5, 5));  // unused
+  Built memory;
+  memory.mesh = WeldByPosition(soup).mesh;
+  ASSERT_EQ(memory.mesh.positions.size(), size_t((n + 1) * (n + 1)));
+  Build(memory, "soup_chunks_memory", Chunked(1024, 2));
+  ASSERT_FALSE(memory.bytes.empty());
+  const std::string dir = FreshFolder("stream_soup");
+  for (bool ascii : {false, true}) {
+    const std::string ply = dir + (ascii ? "/soup_ascii.ply" : "/soup.ply");
+    {
+      std::ofstream out(ply, std::ios::binary);
+      out << "ply\nformat " << (ascii ? "ascii" : "binary_little_endian") << " 1.0\nelement vertex "
+          << soup.positions.size() << "\nproperty float x\nproperty float y\nproperty float z\nelement face "
+          << soup.faces.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
+      out.precision(9);
+      for (const auto& p : soup.positions) {
+        if (ascii) {
+          out << p[0] << " " << p[1] << " " << p[2] << "\n";
+        } else {
+          out.write(reinterpret_cast<const char*>(&p[0]), 12);
+        }
+      }
+      for (const auto& t : soup.faces) {
+        if (ascii) {
+          out << "3 " << t[0] << " " << t[1] << " " << t[2] << "\n";
+        } else {
+          out.put(3);
+          out.write(reinterpret_cast<const char*>(t.data()), 12);
+        }
+      }
+    }
+    for (int threads : {1, 2, 5}) {
+      const std::string out = dir + "/soup.clod";
+      LodBuildStats st;
+      const Status s = BuildLodFileFromPly(ply, Chunked(1024, threads), out, &st, Progress(), nullptr, 1 << 20);
+      ASSERT_TRUE(s.ok()) << s.message;
+      EXPECT_EQ(st.chunks, 16u);
+      EXPECT_EQ(st.mergedVertices, soup.positions.size() - 1 - memory.mesh.positions.size());
+      EXPECT_EQ(st.droppedVertices, 1u);
+      EXPECT_EQ(ReadBytes(out), memory.bytes) << threads << " threads" << (ascii ? ", ASCII" : "");
+      std::remove(out.c_str());
+    }
+    std::remove(ply.c_str());
+  }
+  EXPECT_EQ(Listing(dir), std::vector<std::string>{});
+  rmdir(dir.c_str());
+  std::remove(memory.path.c_str());
+}
+
 // Small chunks (the bunny in chunks of 48 to 1,024 faces: 2,048 to 128 chunks, each level built
 // from the spill a kd chunk at a time until they merge, StreamLevels): the file is the in-memory
 // chunked build's (levels above 0 built whole, BuildLevels), byte for byte, on 2 threads.

@@ -435,3 +435,90 @@ TEST(PlyFormat, GeometryOnlyHasNoAttributes) {
   EXPECT_FALSE(m.hasAttributes());
   EXPECT_TRUE(m.textureFiles.empty());
 }
+
+// Binary records in the host's byte order are read a block of 65,536 at a time on the threads;
+// a block with a record of another shape (here a quad) or a bad index is read record by record.
+// 70,000 vertices (with a byte after x y z) and 140,001 faces, binary at 1 and 3 threads, are
+// the same ASCII file read record by record, bit for bit; a bad index in the second block gives
+// the record-by-record message.
+TEST(PlyFormat, BinaryBlocksOnThreadsAreTheRecordByRecordRead) {
+  const uint32_t V = 70000, F = 140000;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> coord(-2, 2);
+  std::vector<std::array<float, 3>> pos(V);
+  for (auto& p : pos)
+    for (float& x : p) x = coord(rng);
+  pos[5] = {{-0.f, 0.f, 1e-30f}};
+  std::vector<std::vector<uint32_t>> faces(F);
+  for (auto& f : faces)
+    for (int k = 0; k < 3; ++k) f.push_back(uint32_t(rng() % V));
+  faces.insert(faces.begin() + 70000, std::vector<uint32_t>{0, 1, 2, 3});  // a quad in the second block
+  auto header = [&](const char* format) {
+    return std::string("ply\nformat ") + format + " 1.0\nelement vertex " + std::to_string(V) +
+           "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar flags\nelement face " +
+           std::to_string(faces.size()) + "\nproperty list uchar uint vertex_indices\nend_header\n";
+  };
+  auto files = [&](uint32_t badFace) {
+    std::string ascii = header("ascii"), binary = header("binary_little_endian");
+    char text[64];
+    for (const auto& p : pos) {
+      std::snprintf(text, sizeof text, "%.9g %.9g %.9g 7\n", double(p[0]), double(p[1]), double(p[2]));
+      ascii += text;
+      binary.append(reinterpret_cast<const char*>(p.data()), 12);
+      binary += char(7);
+    }
+    for (uint32_t i = 0; i < faces.size(); ++i) {
+      ascii += std::to_string(faces[i].size());
+      binary += char(faces[i].size());
+      for (uint32_t v : faces[i]) {
+        const uint32_t w = i == badFace ? V : v;
+        ascii += " " + std::to_string(w);
+        binary.append(reinterpret_cast<const char*>(&w), 4);
+      }
+      ascii += "\n";
+    }
+    return std::make_pair(ascii, binary);
+  };
+  const uint16_t one = 1;
+  unsigned char low;
+  std::memcpy(&low, &one, 1);
+  if (low != 1) GTEST_SKIP() << "a big-endian host reads these records one by one";
+  const auto good = files(UINT32_MAX);
+  PlyMesh fromAscii, fromBinary;
+  ASSERT_EQ(Read(good.first, fromAscii), "");
+  ASSERT_EQ(Read(good.second, fromBinary), "");
+  ASSERT_EQ(fromAscii.triangles.size(), size_t(F) + 2);
+  ASSERT_EQ(fromAscii.positions.size(), size_t(V));
+  auto same = [](const PlyMesh& a, const PlyMesh& b) {
+    return a.triangles == b.triangles && a.positions.size() == b.positions.size() &&
+           std::memcmp(a.positions.data(), b.positions.data(), a.positions.size() * 12) == 0;
+  };
+  EXPECT_TRUE(same(fromAscii, fromBinary));
+  const std::string path = ::testing::TempDir() + "conelod_ply_blocks_" + std::to_string(getpid()) + ".ply";
+  {
+    FILE* f = std::fopen(path.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    ASSERT_EQ(std::fwrite(good.second.data(), 1, good.second.size(), f), good.second.size());
+    std::fclose(f);
+  }
+  PlyMesh threaded;
+  ASSERT_EQ(ReadPly(path, threaded, nullptr, 3), "");
+  EXPECT_TRUE(same(fromAscii, threaded));
+  std::vector<std::array<uint32_t, 3>> streamed;  // streamed in batches on 3 threads
+  PlyMesh held;
+  ASSERT_EQ(ReadPlyStreaming(
+                path, held,
+                [&](const std::vector<std::array<uint32_t, 3>>& batch) {
+                  streamed.insert(streamed.end(), batch.begin(), batch.end());
+                  return std::string();
+                },
+                nullptr, 3),
+            "");
+  EXPECT_EQ(streamed, fromAscii.triangles);
+  std::remove(path.c_str());
+  const auto bad = files(100000);
+  PlyMesh m;
+  const std::string expected = "face 100000 uses vertex 70000 but there are 70000 vertices";
+  EXPECT_NE(Read(bad.first, m).find(expected), std::string::npos);
+  EXPECT_NE(Read(bad.second, m).find(expected), std::string::npos);
+}
