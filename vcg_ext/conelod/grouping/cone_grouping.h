@@ -62,9 +62,11 @@ struct ConeGroupingParams {
 Status ValidateParams(const ConeGroupingParams& p);
 
 // Builds the hierarchy. The mesh must pass RequireValidForFaces (checked here too). On failure or
-// cancellation `out` is left empty.
+// cancellation `out` is left empty. `adjacency`: BuildFaceAdjacency(mesh) when the caller has it
+// (for its own checks): read instead of building the same lists again (the output is the same);
+// null: built here, into memory that the build's next arrays reuse (the lower peak).
 Status BuildConeHierarchy(const IndexedMesh& mesh, const ConeGroupingParams& params, GroupHierarchy& out,
-                          const Progress& progress = Progress());
+                          const Progress& progress = Progress(), const FaceAdjacency* adjacency = nullptr);
 
 // The automatic group level for a simplification to `targetFaces`: the finest level of `h` whose
 // groups leave at least kAutoFacesPerGroup faces per group at the target (groups x 8 <= target),

@@ -394,6 +394,35 @@ TEST(ConeGrouping, ThreadCountDoesNotChangeTheGroups) {
   EXPECT_EQ(badOne.nonManifoldEdges, badFour.nonManifoldEdges);
 }
 
+TEST(ConeGrouping, TheCallersAdjacencyGivesTheSameGroups) {
+  // `conelod group` builds the adjacency once, for the build and its connectivity checks: the
+  // hierarchy must be the one the build makes with its own, in both merge orders and on threads.
+  const IndexedMesh sphere = BumpySphere(5);
+  const IndexedMesh bad = LoadReal("stanford_bunny_bun_zipper_res4.ply");  // non-manifold edges
+  for (const IndexedMesh* mesh : {&sphere, &bad}) {
+    const FaceAdjacency adj = BuildFaceAdjacency(*mesh, 3);
+    for (bool strict : {false, true})
+      for (int threads : {1, 3}) {
+        const std::string what = std::string(mesh == &sphere ? "bumpy sphere" : "bunny res4") +
+                                 (strict ? ", strict" : "") + ", threads " + std::to_string(threads);
+        ConeGroupingParams p;
+        p.strictGreedy = strict;
+        p.threads = threads;
+        GroupHierarchy ref, h;
+        ASSERT_TRUE(BuildConeHierarchy(*mesh, p, ref).ok()) << what;
+        ASSERT_TRUE(BuildConeHierarchy(*mesh, p, h, Progress(), &adj).ok()) << what;
+        ASSERT_EQ(ref.levelCount(), h.levelCount()) << what;
+        ExpectSameHierarchy(ref, h, what);
+      }
+  }
+  // Another mesh's adjacency is refused, not read out of bounds.
+  const FaceAdjacency other = BuildFaceAdjacency(bad);
+  GroupHierarchy h;
+  const Status s = BuildConeHierarchy(sphere, ConeGroupingParams(), h, Progress(), &other);
+  EXPECT_FALSE(s.ok());
+  EXPECT_EQ(h.levelCount(), 0);
+}
+
 TEST(ConeGrouping, CancellationWithThreadsLeavesNothing) {
   const IndexedMesh sphere = test::Sphere(6);
   ConeGroupingParams p;
