@@ -93,7 +93,7 @@ int CmdGroup(int argc, char** argv) {
     im = ToIndexedMesh(mesh, &faceOf);
   }
   // A seam the file repeats is no border to the groups (faces keep their order).
-  WeldByPositionInPlace(im);
+  WeldByPositionInPlace(im, nullptr, nullptr, threads);
 
   // BuildConeHierarchy's checks, before the adjacency reads the faces' indices.
   Status s = ValidateParams(params);
@@ -110,13 +110,11 @@ int CmdGroup(int argc, char** argv) {
   if (displayLevel < 1 || displayLevel > h.levelCount())
     return Fail(kUsage, "--level must be between 1 and " + std::to_string(h.levelCount()) + " (levels built)");
 
-  // The output file and each level's connectivity check are independent: shared among the
-  // threads, the file first (the longest).
-  const int levels = h.levelCount();
-  std::vector<char> connected(size_t(levels), 0);
+  // The output file and the levels' connectivity checks are independent: on two threads.
+  std::vector<char> connected;
   std::atomic<int> nextTask(a.has("-o") ? -1 : 0);
-  RunThreads(std::min(threads, unsigned(levels) + 1), [&](unsigned) {
-    for (int task; (task = nextTask.fetch_add(1)) < levels;) {
+  RunThreads(std::min(threads, 2u), [&](unsigned) {
+    for (int task; (task = nextTask.fetch_add(1)) < 1;) {
       if (task < 0) {
         const GroupLevel& shown = h.level(displayLevel);
         if (direct) {  // per face: its group's colour, and its group id as quality (WriteGroupResults)
@@ -134,7 +132,7 @@ int CmdGroup(int argc, char** argv) {
           err = SavePly(mesh, a.str("-o"), attributeMask);  // the mesh as read, with its groups
         }
       } else {
-        connected[size_t(task)] = GroupsAreEdgeConnected(adj, h.level(task + 1).faceGroup) ? 1 : 0;
+        connected = LevelsAreEdgeConnected(adj, h);
       }
     }
   });

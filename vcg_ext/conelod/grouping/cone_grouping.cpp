@@ -1366,6 +1366,52 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
 
 }  // namespace
 
+std::vector<char> LevelsAreEdgeConnected(const FaceAdjacency& adj, const GroupHierarchy& h) {
+  std::vector<char> connected(size_t(h.levelCount()), 0);
+  if (h.levelCount() == 0) return connected;
+  const std::vector<int>& g1 = h.level(1).faceGroup;
+  connected[0] = GroupsAreEdgeConnected(adj, g1) ? 1 : 0;
+  const size_t nf = g1.size();
+  int groups1 = 0;
+  for (const int g : g1) groups1 = std::max(groups1, g + 1);
+  bool graphUsable = connected[0] && adj.offsets.size() == nf + 1;
+  for (const int g : g1) graphUsable &= g >= 0;
+  // The graph of level 1's groups: an edge where faces of two groups share an edge.
+  FaceAdjacency graph;
+  if (graphUsable) {
+    std::vector<std::pair<uint32_t, uint32_t>> pairs;
+    for (size_t f = 0; f < nf; ++f)
+      for (uint32_t i = adj.offsets[f]; i < adj.offsets[f + 1]; ++i) {
+        const int a = g1[f], b = g1[adj.neighbours[i]];
+        if (a != b) pairs.emplace_back(uint32_t(a), uint32_t(b));  // both ways: the lists are symmetric
+      }
+    std::sort(pairs.begin(), pairs.end());
+    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    graph.offsets.assign(size_t(groups1) + 1, 0);
+    for (const auto& e : pairs) ++graph.offsets[e.first + 1];
+    for (size_t g = 0; g < size_t(groups1); ++g) graph.offsets[g + 1] += graph.offsets[g];
+    graph.neighbours.reserve(pairs.size());
+    for (const auto& e : pairs) graph.neighbours.push_back(e.second);
+  }
+  std::vector<int> label(static_cast<size_t>(groups1));
+  for (int l = 2; l <= h.levelCount(); ++l) {
+    const std::vector<int>& gl = h.level(l).faceGroup;
+    // Each level-1 group's group at this level, when all its faces have the same one.
+    bool nested = graphUsable && gl.size() == nf;
+    if (nested) {
+      std::fill(label.begin(), label.end(), -1);
+      for (size_t f = 0; f < nf && nested; ++f) {
+        int& x = label[size_t(g1[f])];
+        if (x < 0) x = gl[f];
+        nested = x == gl[f] && gl[f] >= 0;
+      }
+    }
+    connected[size_t(l - 1)] =
+        (nested ? GroupsAreEdgeConnected(graph, label) : GroupsAreEdgeConnected(adj, gl)) ? 1 : 0;
+  }
+  return connected;
+}
+
 int AutoGroupLevel(const GroupHierarchy& h, size_t targetFaces) {
   for (int k = 1; k <= h.levelCount(); ++k)
     if (h.level(k).groups.size() * size_t(kAutoFacesPerGroup) <= targetFaces) return k;
