@@ -8,6 +8,8 @@
 #include "commands.h"
 #include "conelod/mesh/weld.h"
 #include "conelod/grouping/cone_grouping.h"
+#include "conelod/grouping/group_colors.h"
+#include "conelod/mesh/mesh_check.h"
 #include "conelod/grouping/culling_cost.h"
 #include "conelod/parallel.h"
 #include "conelod/pca/pca_partition.h"
@@ -66,36 +68,71 @@ int CmdGroup(int argc, char** argv) {
   if (a.positional().size() != 1) return Fail(kUsage, std::string("expected one input mesh\n") + kGroupUsage);
   const bool json = a.has("--json");
 
+  // The file's data as read; the vcg mesh only for what vcglib's exporter must write (texture
+  // coordinates): everything else is written straight from the data (SavePlyFaceValues, the same
+  // bytes), without the vcg mesh's copy of the input.
+  PlyMesh ply;
+  int loadMask = 0;
+  std::string err = LoadPlyData(a.positional()[0], ply, &loadMask);
+  if (!err.empty()) return FailLoad(err);
+  const int attributeMask = AttributeMask(loadMask);
+  const bool direct = PlyFaceValuesWritable(ply, attributeMask);
   CMesh mesh;
   IndexedMesh im;
-  std::vector<size_t> faceOf;
-  int loadMask = 0;
-  std::string err = LoadInput(a.positional()[0], mesh, im, faceOf, &loadMask);
-  if (!err.empty()) return FailLoad(err);
-  im = WeldByPosition(im).mesh;  // a seam the file repeats is no border to the groups (faces keep their order)
+  if (direct) {
+    im.positions.resize(ply.positions.size());
+    ParallelChunks(ply.positions.size(), threads, size_t(1) << 16, [&](size_t begin, size_t end, unsigned) {
+      for (size_t v = begin; v < end; ++v)
+        im.positions[v] = vcg::Point3f(ply.positions[v][0], ply.positions[v][1], ply.positions[v][2]);
+    });
+    im.faces = ply.triangles;  // the file's faces, in its order: the groups are per file face
+  } else {
+    MeshFromPlyData(ply, loadMask & vcg::tri::io::Mask::IOM_WEDGTEXCOORD, mesh);
+    ply = PlyMesh();
+    std::vector<size_t> faceOf;  // the identity: a mesh as read has no deleted face
+    im = ToIndexedMesh(mesh, &faceOf);
+  }
+  // A seam the file repeats is no border to the groups (faces keep their order).
+  WeldByPositionInPlace(im, nullptr, nullptr, threads);
 
+  // BuildConeHierarchy's checks, before the adjacency reads the faces' indices.
+  Status s = ValidateParams(params);
+  if (s.ok()) s = RequireValidForFaces(im);
+  if (!s.ok()) return Fail(kBadInput, a.positional()[0] + ": " + s.message);
+  // One face adjacency for the build and the checks after it (timed with the build, which would
+  // make it otherwise).
   GroupHierarchy h;
   Timer timer;
-  const Status s = BuildConeHierarchy(im, params, h);
+  const FaceAdjacency adj = BuildFaceAdjacency(im, threads);
+  s = BuildConeHierarchy(im, params, h, Progress(), &adj);
   const double seconds = timer.seconds();
   if (!s.ok()) return Fail(kBadInput, a.positional()[0] + ": " + s.message);
   if (displayLevel < 1 || displayLevel > h.levelCount())
     return Fail(kUsage, "--level must be between 1 and " + std::to_string(h.levelCount()) + " (levels built)");
 
-  // The adjacency after the hierarchy, not beside it: the build's peak memory stays the peak.
-  const FaceAdjacency adj = BuildFaceAdjacency(im, threads);
-  // The output file and each level's connectivity check are independent: shared among the
-  // threads, the file first (the longest).
-  const int levels = h.levelCount();
-  std::vector<char> connected(size_t(levels), 0);
+  // The output file and the levels' connectivity checks are independent: on two threads.
+  std::vector<char> connected;
   std::atomic<int> nextTask(a.has("-o") ? -1 : 0);
-  RunThreads(std::min(threads, unsigned(levels) + 1), [&](unsigned) {
-    for (int task; (task = nextTask.fetch_add(1)) < levels;) {
+  RunThreads(std::min(threads, 2u), [&](unsigned) {
+    for (int task; (task = nextTask.fetch_add(1)) < 1;) {
       if (task < 0) {
-        WriteGroupResults(mesh, faceOf, h, displayLevel);
-        err = SavePly(mesh, a.str("-o"), AttributeMask(loadMask));  // the mesh as read, with its groups
+        const GroupLevel& shown = h.level(displayLevel);
+        if (direct) {  // per face: its group's colour, and its group id as quality (WriteGroupResults)
+          std::vector<vcg::Color4b> colour(shown.groups.size());
+          std::vector<float> quality(shown.groups.size());
+          for (size_t g = 0; g < shown.groups.size(); ++g) {
+            colour[g] = GroupColor(int(g));
+            quality[g] = float(g);
+          }
+          err = SavePlyFaceValues(ply, attributeMask, shown.faceGroup, colour, quality, a.str("-o"));
+        } else {
+          std::vector<size_t> faceOf(im.faces.size());
+          for (size_t f = 0; f < faceOf.size(); ++f) faceOf[f] = f;
+          WriteGroupResults(mesh, faceOf, h, displayLevel);
+          err = SavePly(mesh, a.str("-o"), attributeMask);  // the mesh as read, with its groups
+        }
       } else {
-        connected[size_t(task)] = GroupsAreEdgeConnected(adj, h.level(task + 1).faceGroup) ? 1 : 0;
+        connected = LevelsAreEdgeConnected(adj, h);
       }
     }
   });

@@ -494,10 +494,10 @@ def cli_bad_inputs(c):
 @case
 def cli_group_threads(c):
     """`conelod group --threads N`: the same output file, byte for byte, and the same figures for
-    1, 2, 4 and 16 threads (and 0, one per core); a bad count is refused and writes nothing."""
+    1, 2, 3, 4 and 16 threads (and 0, one per core); a bad count is refused and writes nothing."""
     for mesh in ["stanford_bunny_bun_zipper.ply", "boeing.ply", "stanford_bunny_bun_zipper_res4.ply"]:
         ref_bytes, ref_json = None, None
-        for threads in ["1", "2", "4", "16", "0"]:
+        for threads in ["1", "2", "3", "4", "16", "0"]:
             out = c.out("grouped_%s_%s.ply" % (mesh, threads))
             info = json.loads(c.conelod("group", c.mesh(mesh), "-o", out, "--level", "2", "--threads", threads,
                                         "--json").stdout)

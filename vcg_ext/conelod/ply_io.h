@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -107,6 +108,9 @@ inline void SplitWedgeTexCoords(PlyMesh& in) {
 // SplitWedgeTexCoords, and m.textures gets the file's texture names). "" or the error; `m` is
 // untouched on error.
 template <class MeshType>
+void MeshFromPlyData(const PlyMesh& in, bool wedge, MeshType& m, int* loadMask = nullptr);
+
+template <class MeshType>
 std::string LoadPlyChecked(MeshType& m, const std::string& path, int* loadMask = nullptr) {
   using VertexType = typename MeshType::VertexType;
   PlyMesh in;
@@ -114,6 +118,16 @@ std::string LoadPlyChecked(MeshType& m, const std::string& path, int* loadMask =
   if (!err.empty()) return err;
   const bool wedge = !in.wedgeTexCoords.empty() && VertexType::HasTexCoord();
   if (wedge) SplitWedgeTexCoords(in);
+  MeshFromPlyData(in, wedge, m, loadMask);
+  return "";
+}
+
+// The part of LoadPlyChecked after the reading: `m` becomes the mesh of `in` (its per-face texture
+// coordinates already split, SplitWedgeTexCoords, when `wedge`), `loadMask` gets its bits. For
+// commands that read with LoadPlyData and need the vcg mesh in some cases only.
+template <class MeshType>
+void MeshFromPlyData(const PlyMesh& in, bool wedge, MeshType& m, int* loadMask) {
+  using VertexType = typename MeshType::VertexType;
   m.Clear();
   auto vi = vcg::tri::Allocator<MeshType>::AddVertices(m, in.positions.size());
   for (const auto& p : in.positions) (vi++)->P() = typename MeshType::CoordType(p[0], p[1], p[2]);
@@ -149,7 +163,6 @@ std::string LoadPlyChecked(MeshType& m, const std::string& path, int* loadMask =
   if (loadMask)
     *loadMask = vcg::tri::io::Mask::IOM_VERTCOORD | vcg::tri::io::Mask::IOM_FACEINDEX |
                 (in.faceQuality.empty() ? 0 : vcg::tri::io::Mask::IOM_FACEQUALITY) | attributeBits;
-  return "";
 }
 
 // Reads `path` as LoadPlyChecked does for a mesh type with per-vertex colour, normal and texture
@@ -245,6 +258,92 @@ std::string WritePlyUncommitted(MeshType& m, const std::string& path, int mask, 
       uint64_t(size) < PlyTriangleFileBytes(h))
     return "cannot write '" + path + "': the file came out incomplete (disk full or file size limit?)";
   return out.sync();
+}
+
+// Whether SavePlyFaceValues can write `in` with `attributeMask`: it holds no texture coordinates
+// (those go through vcglib's exporter) and every attribute the mask names.
+inline bool PlyFaceValuesWritable(const PlyMesh& in, int attributeMask) {
+  using vcg::tri::io::Mask;
+  if (!in.texCoords.empty() || !in.wedgeTexCoords.empty() ||
+      (attributeMask & (Mask::IOM_VERTTEXCOORD | Mask::IOM_WEDGTEXCOORD)))
+    return false;
+  if ((attributeMask & Mask::IOM_VERTCOLOR) && in.colors.size() != in.positions.size()) return false;
+  if ((attributeMask & Mask::IOM_VERTNORMAL) && in.normals.size() != in.positions.size()) return false;
+  return true;
+}
+
+// Writes the mesh `in` (as LoadPlyData gives it; PlyFaceValuesWritable) to `path` with per-face
+// colour valueColor[faceValue[f]] and quality valueQuality[faceValue[f]]: the same bytes as SavePly
+// (vcg_mesh.h) writes for LoadPlyChecked's mesh of the same file with those face colours and
+// qualities and extra mask `attributeMask` (AttributeMask of its load mask: vertex colours and
+// normals), without building that mesh: vcglib's header, then its binary records (vertex: x y z
+// [nx ny nz] [r g b a]; face: 3, three int indices, r g b a, float quality), formatted here into
+// a buffer rather than one fwrite a field. Replaces `path` only when the file is complete
+// (SafeFile). "" or the error.
+inline std::string SavePlyFaceValues(const PlyMesh& in, int attributeMask, const std::vector<int>& faceValue,
+                                     const std::vector<vcg::Color4b>& valueColor,
+                                     const std::vector<float>& valueQuality, const std::string& path) {
+  using vcg::tri::io::Mask;
+  if (!PlyFaceValuesWritable(in, attributeMask) || faceValue.size() != in.triangles.size())
+    return "cannot write '" + path + "': the mesh does not match its attributes (an internal error)";
+  const bool normals = attributeMask & Mask::IOM_VERTNORMAL, colours = attributeMask & Mask::IOM_VERTCOLOR;
+  if (in.positions.size() > size_t(std::numeric_limits<int>::max()) ||
+      in.triangles.size() > size_t(std::numeric_limits<int>::max()))
+    return "cannot write '" + path + "': too many vertices or faces for a PLY of 32-bit indices";
+  for (const int v : faceValue)
+    if (v < 0 || size_t(v) >= valueColor.size() || size_t(v) >= valueQuality.size())
+      return "cannot write '" + path + "': a face value out of range (an internal error)";
+  SafeFile out;
+  std::string err = out.open(path);
+  if (!err.empty()) return err;
+  std::string header = "ply\nformat binary_little_endian 1.0\ncomment VCGLIB generated\nelement vertex " +
+                       std::to_string(in.positions.size()) + "\nproperty float x\nproperty float y\nproperty float z\n";
+  if (normals) header += "property float nx\nproperty float ny\nproperty float nz\n";
+  if (colours) header += "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n";
+  header += "element face " + std::to_string(in.triangles.size()) +
+            "\nproperty list uchar int vertex_indices\nproperty uchar red\nproperty uchar green\nproperty uchar "
+            "blue\nproperty uchar alpha\nproperty float quality\nend_header\n";
+  std::FILE* f = out.file();
+  std::fwrite(header.data(), 1, header.size(), f);
+  // Records are little-endian floats and ints as in memory (vcglib writes them so; x86 and ARM).
+  std::vector<unsigned char> buffer;
+  constexpr size_t kBufferBytes = size_t(1) << 20;
+  buffer.reserve(kBufferBytes + 64);
+  auto put = [&](const void* p, size_t n) {
+    const unsigned char* b = static_cast<const unsigned char*>(p);
+    buffer.insert(buffer.end(), b, b + n);
+  };
+  auto flush = [&](bool always) {
+    if (buffer.size() >= kBufferBytes || (always && !buffer.empty())) {
+      std::fwrite(buffer.data(), 1, buffer.size(), f);
+      buffer.clear();
+    }
+  };
+  for (size_t v = 0; v < in.positions.size(); ++v) {
+    put(in.positions[v].data(), 12);
+    if (normals) put(in.normals[v].data(), 12);
+    if (colours) {
+      const unsigned char c[4] = {ColorByte(in.colors[v][0]), ColorByte(in.colors[v][1]), ColorByte(in.colors[v][2]),
+                                  ColorByte(in.colors[v][3])};
+      put(c, 4);
+    }
+    flush(false);
+  }
+  for (size_t t = 0; t < in.triangles.size(); ++t) {
+    unsigned char record[21];
+    record[0] = 3;
+    for (size_t k = 0; k < 3; ++k) {
+      const int32_t index = int32_t(in.triangles[t][k]);
+      std::memcpy(record + 1 + 4 * k, &index, 4);
+    }
+    const vcg::Color4b& c = valueColor[size_t(faceValue[t])];
+    for (int k = 0; k < 4; ++k) record[13 + k] = c[k];
+    std::memcpy(record + 17, &valueQuality[size_t(faceValue[t])], 4);
+    put(record, sizeof record);
+    flush(false);
+  }
+  flush(true);
+  return out.commit();  // flushes and checks the stream (a short write: "No space left on device")
 }
 
 // WritePlyUncommitted, then the temporary file replaces `path`. "" or the error.

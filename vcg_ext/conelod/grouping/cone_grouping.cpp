@@ -352,10 +352,12 @@ struct ConeScratch {
 
 class HierarchyBuilder {
  public:
-  HierarchyBuilder(const IndexedMesh& m, const ConeGroupingParams& p, const Progress& cb)
+  HierarchyBuilder(const IndexedMesh& m, const ConeGroupingParams& p, const Progress& cb,
+                   const FaceAdjacency* adjacency)
       : mesh_(m),
         params_(p),
         progress_(cb),
+        adjacency_(adjacency),
         faceCount_(int(m.faces.size())),
         threads_(p.threads > 0 ? unsigned(p.threads) : CoreCount()),
         scale_(NormalizingScale(m)) {}
@@ -397,6 +399,7 @@ class HierarchyBuilder {
   const IndexedMesh& mesh_;
   const ConeGroupingParams& params_;
   const Progress& progress_;
+  const FaceAdjacency* const adjacency_;  // the caller's (BuildConeHierarchy), or null: built here
   const int faceCount_;
   // Threads of the parallel parts (ConeGroupingParams::threads, 0 resolved), >= 1.
   const unsigned threads_;
@@ -1254,20 +1257,25 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
   // fresh memory (BigRecycler); what is left is unmapped before the merges.
   {
     BigRecycler recycler;
-    {
-      BigVector<uint32_t> offsets, neighbours;
-      size_t borderEdges, nonManifoldEdges;
-      BuildFaceAdjacencyInto(mesh_, offsets, neighbours, borderEdges, nonManifoldEdges, threads_);
-      if (neighbours.size() > size_t(std::numeric_limits<uint32_t>::max() / 2))
-        throw std::bad_alloc();  // list offsets are 32-bit
+    // The lists, from the caller's adjacency or from one built here (the same lists).
+    auto makeLists = [&](const uint32_t* offsets, const uint32_t* neighbours, size_t count) {
+      if (count > size_t(std::numeric_limits<uint32_t>::max() / 2)) throw std::bad_alloc();  // list offsets are 32-bit
       // The arena's high-water mark is what it costs in memory: a quarter of slack, no more.
-      arena_.reserve(neighbours.size() + neighbours.size() / 4 + 16);
-      Neighbour* list = arena_.data() + arena_.grow(neighbours.size());
-      for (const uint32_t w : neighbours) *list++ = {int(w), kUnscored};
+      arena_.reserve(count + count / 4 + 16);
+      Neighbour* list = arena_.data() + arena_.grow(count);
+      for (size_t i = 0; i < count; ++i) *list++ = {int(neighbours[i]), kUnscored};
       links_.resize(size_t(nf));
       for (int f = 0; f < nf; ++f)
         links_[size_t(f)] = Link{-1, offsets[size_t(f)], int(offsets[size_t(f) + 1] - offsets[size_t(f)]), 0};
       prefixEnd_ = arena_.size();
+    };
+    if (adjacency_) {
+      makeLists(adjacency_->offsets.data(), adjacency_->neighbours.data(), adjacency_->neighbours.size());
+    } else {
+      BigVector<uint32_t> offsets, neighbours;
+      size_t borderEdges, nonManifoldEdges;
+      BuildFaceAdjacencyInto(mesh_, offsets, neighbours, borderEdges, nonManifoldEdges, threads_);
+      makeLists(offsets.data(), neighbours.data(), neighbours.size());
     }
     faceNext_.resize(size_t(nf));
     units_.resize(size_t(nf));
@@ -1358,6 +1366,52 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
 
 }  // namespace
 
+std::vector<char> LevelsAreEdgeConnected(const FaceAdjacency& adj, const GroupHierarchy& h) {
+  std::vector<char> connected(size_t(h.levelCount()), 0);
+  if (h.levelCount() == 0) return connected;
+  const std::vector<int>& g1 = h.level(1).faceGroup;
+  connected[0] = GroupsAreEdgeConnected(adj, g1) ? 1 : 0;
+  const size_t nf = g1.size();
+  int groups1 = 0;
+  for (const int g : g1) groups1 = std::max(groups1, g + 1);
+  bool graphUsable = connected[0] && adj.offsets.size() == nf + 1;
+  for (const int g : g1) graphUsable &= g >= 0;
+  // The graph of level 1's groups: an edge where faces of two groups share an edge.
+  FaceAdjacency graph;
+  if (graphUsable) {
+    std::vector<std::pair<uint32_t, uint32_t>> pairs;
+    for (size_t f = 0; f < nf; ++f)
+      for (uint32_t i = adj.offsets[f]; i < adj.offsets[f + 1]; ++i) {
+        const int a = g1[f], b = g1[adj.neighbours[i]];
+        if (a != b) pairs.emplace_back(uint32_t(a), uint32_t(b));  // both ways: the lists are symmetric
+      }
+    std::sort(pairs.begin(), pairs.end());
+    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    graph.offsets.assign(size_t(groups1) + 1, 0);
+    for (const auto& e : pairs) ++graph.offsets[e.first + 1];
+    for (size_t g = 0; g < size_t(groups1); ++g) graph.offsets[g + 1] += graph.offsets[g];
+    graph.neighbours.reserve(pairs.size());
+    for (const auto& e : pairs) graph.neighbours.push_back(e.second);
+  }
+  std::vector<int> label(static_cast<size_t>(groups1));
+  for (int l = 2; l <= h.levelCount(); ++l) {
+    const std::vector<int>& gl = h.level(l).faceGroup;
+    // Each level-1 group's group at this level, when all its faces have the same one.
+    bool nested = graphUsable && gl.size() == nf;
+    if (nested) {
+      std::fill(label.begin(), label.end(), -1);
+      for (size_t f = 0; f < nf && nested; ++f) {
+        int& x = label[size_t(g1[f])];
+        if (x < 0) x = gl[f];
+        nested = x == gl[f] && gl[f] >= 0;
+      }
+    }
+    connected[size_t(l - 1)] =
+        (nested ? GroupsAreEdgeConnected(graph, label) : GroupsAreEdgeConnected(adj, gl)) ? 1 : 0;
+  }
+  return connected;
+}
+
 int AutoGroupLevel(const GroupHierarchy& h, size_t targetFaces) {
   for (int k = 1; k <= h.levelCount(); ++k)
     if (h.level(k).groups.size() * size_t(kAutoFacesPerGroup) <= targetFaces) return k;
@@ -1414,7 +1468,7 @@ Status ValidateParams(const ConeGroupingParams& p) {
 }
 
 Status BuildConeHierarchy(const IndexedMesh& mesh, const ConeGroupingParams& params, GroupHierarchy& out,
-                          const Progress& progress) {
+                          const Progress& progress, const FaceAdjacency* adjacency) {
   out = GroupHierarchy();
   Status s = ValidateParams(params);
   if (!s.ok()) return s;
@@ -1423,7 +1477,9 @@ Status BuildConeHierarchy(const IndexedMesh& mesh, const ConeGroupingParams& par
   if (mesh.faces.size() >= size_t(std::numeric_limits<int>::max()) / 4)
     return Status::Invalid("the mesh has too many faces for 32-bit group ids");
   try {
-    HierarchyBuilder builder(mesh, params, progress);
+    if (adjacency && adjacency->offsets.size() != mesh.faces.size() + 1)
+      return Status::Invalid("the face adjacency given is not the mesh's");
+    HierarchyBuilder builder(mesh, params, progress, adjacency);
     return builder.run(out);
   } catch (const std::bad_alloc&) {
     out = GroupHierarchy();

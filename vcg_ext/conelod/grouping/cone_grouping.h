@@ -62,9 +62,18 @@ struct ConeGroupingParams {
 Status ValidateParams(const ConeGroupingParams& p);
 
 // Builds the hierarchy. The mesh must pass RequireValidForFaces (checked here too). On failure or
-// cancellation `out` is left empty.
+// cancellation `out` is left empty. `adjacency`: BuildFaceAdjacency(mesh) when the caller has it
+// (for its own checks): read instead of building the same lists again (the output is the same);
+// null: built here, into memory that the build's next arrays reuse (the lower peak).
 Status BuildConeHierarchy(const IndexedMesh& mesh, const ConeGroupingParams& params, GroupHierarchy& out,
-                          const Progress& progress = Progress());
+                          const Progress& progress = Progress(), const FaceAdjacency* adjacency = nullptr);
+
+// Per level of `h` (index 0: level 1): GroupsAreEdgeConnected(adj, faceGroup of the level), `adj`
+// the mesh's BuildFaceAdjacency. Level 1 is checked on the faces; a level above, when level 1's
+// groups are connected and each lies in one group of the level (as the build makes them), on the
+// graph of level 1's groups (a group is connected iff its level-1 groups are, through faces that
+// share an edge), a few hundredths of the faces' work; else on the faces too. The same answers.
+std::vector<char> LevelsAreEdgeConnected(const FaceAdjacency& adj, const GroupHierarchy& h);
 
 // The automatic group level for a simplification to `targetFaces`: the finest level of `h` whose
 // groups leave at least kAutoFacesPerGroup faces per group at the target (groups x 8 <= target),

@@ -5,6 +5,8 @@
 #include <array>
 #include <cstring>
 
+#include "conelod/parallel.h"
+
 namespace conelod {
 namespace {
 
@@ -14,6 +16,34 @@ uint32_t Bits(float x) {
   uint32_t u;
   std::memcpy(&u, &x, 4);
   return u;
+}
+
+// Sorts the keys (distinct: each holds its vertex) as std::sort does: on `threads` threads, a
+// piece each, then the sorted pieces merged pairwise (the order is total, so the result is the
+// same for every thread count).
+void SortKeys(std::vector<std::array<uint32_t, 4>>& keys, unsigned threads) {
+  constexpr size_t kMinPiece = size_t(1) << 15;
+  const size_t pieces = std::max<size_t>(1, std::min<size_t>(threads, keys.size() / kMinPiece));
+  if (pieces <= 1) {
+    std::sort(keys.begin(), keys.end());
+    return;
+  }
+  std::vector<size_t> bound(pieces + 1);
+  for (size_t i = 0; i <= pieces; ++i) bound[i] = keys.size() * i / pieces;
+  ParallelChunks(pieces, unsigned(pieces), 1, [&](size_t begin, size_t end, unsigned) {
+    for (size_t i = begin; i < end; ++i) std::sort(keys.begin() + long(bound[i]), keys.begin() + long(bound[i + 1]));
+  });
+  for (size_t width = 1; width < pieces; width *= 2) {
+    const size_t merges = (pieces + 2 * width - 1) / (2 * width);
+    ParallelChunks(merges, unsigned(std::min<size_t>(threads, merges)), 1, [&](size_t begin, size_t end, unsigned) {
+      for (size_t m = begin; m < end; ++m) {
+        const size_t lo = 2 * width * m, mid = std::min(pieces, lo + width), hi = std::min(pieces, lo + 2 * width);
+        if (mid < hi)
+          std::inplace_merge(keys.begin() + long(bound[lo]), keys.begin() + long(bound[mid]),
+                             keys.begin() + long(bound[hi]));
+      }
+    });
+  }
 }
 
 }  // namespace
@@ -72,7 +102,7 @@ WeldResult WeldByPosition(const IndexedMesh& in) {
   return r;
 }
 
-bool WeldByPositionInPlace(IndexedMesh& mesh, size_t* merged, size_t* dropped) {
+bool WeldByPositionInPlace(IndexedMesh& mesh, size_t* merged, size_t* dropped, unsigned threads) {
   const size_t V = mesh.positions.size();
   if (merged) *merged = 0;
   if (dropped) *dropped = 0;
@@ -94,13 +124,14 @@ bool WeldByPositionInPlace(IndexedMesh& mesh, size_t* merged, size_t* dropped) {
       repOf[v] = 1;
     }
   std::vector<std::array<uint32_t, 4>> keys;  // as WeldByPosition
+  keys.reserve(V);
   for (uint32_t v = 0; v < V; ++v)
     if (repOf[v] == 1) {
       const vcg::Point3f& p = mesh.positions[v];
       keys.push_back({{Bits(p[0]), Bits(p[1]), Bits(p[2]), v}});
     }
   if (dropped) *dropped = V - keys.size();
-  std::sort(keys.begin(), keys.end());
+  SortKeys(keys, threads);
   std::fill(repOf.begin(), repOf.end(), UINT32_MAX);
   size_t mergedCount = 0;
   for (size_t i = 0; i < keys.size();) {

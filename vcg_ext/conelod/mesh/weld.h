@@ -38,7 +38,9 @@ WeldResult WeldByPosition(const IndexedMesh& in);
 
 // WeldByPosition in place: `mesh` becomes WeldResult::mesh without a second copy of the mesh (the
 // out-of-core LOD build's input). Returns false (and leaves `mesh` as it is) where WeldByPosition
-// returns its input as it is; merged / dropped: WeldResult's counts.
-bool WeldByPositionInPlace(IndexedMesh& mesh, size_t* merged = nullptr, size_t* dropped = nullptr);
+// returns its input as it is; merged / dropped: WeldResult's counts. The positions are sorted on
+// `threads` threads (the result is the same for every count).
+bool WeldByPositionInPlace(IndexedMesh& mesh, size_t* merged = nullptr, size_t* dropped = nullptr,
+                           unsigned threads = 1);
 
 }  // namespace conelod

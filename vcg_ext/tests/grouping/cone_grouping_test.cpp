@@ -394,6 +394,86 @@ TEST(ConeGrouping, ThreadCountDoesNotChangeTheGroups) {
   EXPECT_EQ(badOne.nonManifoldEdges, badFour.nonManifoldEdges);
 }
 
+TEST(ConeGrouping, TheCallersAdjacencyGivesTheSameGroups) {
+  // `conelod group` builds the adjacency once, for the build and its connectivity checks: the
+  // hierarchy must be the one the build makes with its own, in both merge orders and on threads.
+  const IndexedMesh sphere = BumpySphere(5);
+  const IndexedMesh bad = LoadReal("stanford_bunny_bun_zipper_res4.ply");  // non-manifold edges
+  for (const IndexedMesh* mesh : {&sphere, &bad}) {
+    const FaceAdjacency adj = BuildFaceAdjacency(*mesh, 3);
+    for (bool strict : {false, true})
+      for (int threads : {1, 3}) {
+        const std::string what = std::string(mesh == &sphere ? "bumpy sphere" : "bunny res4") +
+                                 (strict ? ", strict" : "") + ", threads " + std::to_string(threads);
+        ConeGroupingParams p;
+        p.strictGreedy = strict;
+        p.threads = threads;
+        GroupHierarchy ref, h;
+        ASSERT_TRUE(BuildConeHierarchy(*mesh, p, ref).ok()) << what;
+        ASSERT_TRUE(BuildConeHierarchy(*mesh, p, h, Progress(), &adj).ok()) << what;
+        ASSERT_EQ(ref.levelCount(), h.levelCount()) << what;
+        ExpectSameHierarchy(ref, h, what);
+      }
+  }
+  // Another mesh's adjacency is refused, not read out of bounds.
+  const FaceAdjacency other = BuildFaceAdjacency(bad);
+  GroupHierarchy h;
+  const Status s = BuildConeHierarchy(sphere, ConeGroupingParams(), h, Progress(), &other);
+  EXPECT_FALSE(s.ok());
+  EXPECT_EQ(h.levelCount(), 0);
+}
+
+TEST(ConeGrouping, LevelsAreEdgeConnectedAnswersAsEachLevelsFaces) {
+  // The check on level 1's group graph must give GroupsAreEdgeConnected's answer for every level,
+  // for a hierarchy as built and for broken ones: a level-2 group made of two level-1 groups that
+  // do not touch (nested, not connected), a face moved to another group at level 3 (not nested),
+  // and a face moved at level 1 (level 1 broken: every level on the faces).
+  const IndexedMesh mesh = BumpySphere(4);
+  const FaceAdjacency adj = BuildFaceAdjacency(mesh);
+  GroupHierarchy built;
+  ASSERT_TRUE(BuildConeHierarchy(mesh, ConeGroupingParams(), built).ok());
+  ASSERT_GE(built.levelCount(), 3);
+  auto each = [&](const GroupHierarchy& h) {
+    std::vector<char> r;
+    for (int l = 1; l <= h.levelCount(); ++l) r.push_back(GroupsAreEdgeConnected(adj, h.level(l).faceGroup) ? 1 : 0);
+    return r;
+  };
+  const std::vector<char> all(size_t(built.levelCount()), 1);
+  EXPECT_EQ(LevelsAreEdgeConnected(adj, built), all);
+  EXPECT_EQ(each(built), all);
+
+  // Two level-1 groups with no face of one next to a face of the other, far apart: one group at level 2.
+  GroupHierarchy split = built;
+  std::vector<int>& l1 = split.levels[0].faceGroup;
+  std::vector<int>& l2 = split.levels[1].faceGroup;
+  const int a = l1[0];
+  int b = -1;
+  for (size_t f = 0; f < l1.size() && b < 0; ++f) {
+    bool touches = false;
+    for (size_t g = 0; g < l1.size(); ++g)
+      if (l1[g] == a)
+        for (uint32_t i = adj.offsets[g]; i < adj.offsets[g + 1]; ++i) touches |= l1[adj.neighbours[i]] == l1[f];
+    if (l1[f] != a && !touches && l2[f] != l2[0]) b = l1[f];
+  }
+  ASSERT_GE(b, 0);
+  const int fresh = int(split.levels[1].groups.size());
+  for (size_t f = 0; f < l1.size(); ++f)
+    if (l1[f] == a || l1[f] == b) l2[f] = fresh;
+  EXPECT_EQ(LevelsAreEdgeConnected(adj, split), each(split));
+  EXPECT_EQ(LevelsAreEdgeConnected(adj, split)[1], 0);
+
+  GroupHierarchy moved3 = built;
+  std::vector<int>& l3 = moved3.levels[2].faceGroup;
+  l3[0] = l3[0] == 0 ? 1 : 0;
+  EXPECT_EQ(LevelsAreEdgeConnected(adj, moved3), each(moved3));
+
+  GroupHierarchy moved1 = built;
+  std::vector<int>& m1 = moved1.levels[0].faceGroup;
+  m1[0] = m1[m1.size() / 2] != m1[0] ? m1[m1.size() / 2] : m1[m1.size() - 1];
+  EXPECT_EQ(LevelsAreEdgeConnected(adj, moved1), each(moved1));
+  EXPECT_EQ(LevelsAreEdgeConnected(adj, moved1)[0], 0);
+}
+
 TEST(ConeGrouping, CancellationWithThreadsLeavesNothing) {
   const IndexedMesh sphere = test::Sphere(6);
   ConeGroupingParams p;

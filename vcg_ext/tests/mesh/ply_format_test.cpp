@@ -1,6 +1,9 @@
 // Tests of the checked PLY reader (ply_format.h): small inline files with exact expectations.
 #include "conelod/mesh/ply_format.h"
 
+#include "conelod/grouping/group_colors.h"
+#include "conelod/vcg_mesh.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -521,4 +524,90 @@ TEST(PlyFormat, BinaryBlocksOnThreadsAreTheRecordByRecordRead) {
   const std::string expected = "face 100000 uses vertex 70000 but there are 70000 vertices";
   EXPECT_NE(Read(bad.first, m).find(expected), std::string::npos);
   EXPECT_NE(Read(bad.second, m).find(expected), std::string::npos);
+
+namespace {
+std::string FileBytes(const std::string& path) {
+  std::string bytes;
+  if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
+    char buffer[4096];
+    for (size_t n; (n = std::fread(buffer, 1, sizeof buffer, f)) > 0;) bytes.append(buffer, n);
+    std::fclose(f);
+  }
+  return bytes;
+}
+}  // namespace
+
+// `conelod group` writes its output straight from the file's data (SavePlyFaceValues): the same
+// bytes as vcglib's exporter writes for the vcg mesh of the same data (SavePly), with every
+// attribute that path takes (vertex colours as uchar, ushort or float, with and without alpha;
+// normals), an unreferenced vertex, a polygon and a face quality of the input (replaced).
+TEST(PlyFormat, FaceValuesWriterWritesWhatVcglibWrites) {
+  char folder[] = "/tmp/conelod_facevalues_XXXXXX";
+  ASSERT_NE(mkdtemp(folder), nullptr);
+  const std::string mine = std::string(folder) + "/mine.ply", theirs = std::string(folder) + "/vcg.ply";
+  struct Variant {
+    const char* name;
+    const char* vertexProperties;
+    const char* vertexValues[5];
+  };
+  const Variant variants[] = {
+      {"geometry", "", {"", "", "", "", ""}},
+      {"rgb",
+       "property uchar red\nproperty uchar green\nproperty uchar blue\n",
+       {" 10 200 30", " 0 0 0", " 255 255 255", " 1 2 3", " 9 8 7"}},
+      {"rgba+normals",
+       "property float nx\nproperty float ny\nproperty float nz\nproperty uchar red\nproperty uchar green\n"
+       "property uchar blue\nproperty uchar alpha\n",
+       {" 0 0 1 10 200 30 128", " 0.6 0 0.8 0 0 0 0", " 0 1 0 255 255 255 255", " 1 0 0 1 2 3 4", " 0 0 -1 9 8 7 6"}},
+      {"float colour",
+       "property float red\nproperty float green\nproperty float blue\n",
+       {" 0.5 0.25 1", " 0 0.003 0.999", " 1 1 1", " 0.1 0.2 0.3", " 0.7 0.8 0.9"}},
+      {"normals",
+       "property float nx\nproperty float ny\nproperty float nz\n",
+       {" 0 0 1", " 1 0 0", " 0 1 0", " 0 0 -1", " 0.25 0.5 1e-7"}}};
+  const char* const positions[5] = {"0 0 0", "1 0 0", "1 1 0.5", "0 1 0", "7 7 7"};  // vertex 4: unused
+  for (const Variant& v : variants) {
+    std::string file = std::string("ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\n") +
+                       "property float z\n" + v.vertexProperties +
+                       "element face 2\nproperty list uchar int vertex_indices\nproperty float quality\nend_header\n";
+    for (int i = 0; i < 5; ++i) file += std::string(positions[i]) + v.vertexValues[i] + "\n";
+    file += "4 0 1 2 3 0.5\n3 2 1 0 7\n";  // a quad (two triangles) and a triangle
+    PlyMesh in;
+    ASSERT_EQ(Read(file, in), "") << v.name;
+    ASSERT_EQ(in.triangles.size(), 3u);
+    const int mask = AttributeMask(PlyLoadMask(in, false));
+    ASSERT_TRUE(PlyFaceValuesWritable(in, mask)) << v.name;
+    const std::vector<int> faceValue = {2, 0, 2};
+    const std::vector<vcg::Color4b> colour = {GroupColor(0), GroupColor(1), GroupColor(2)};
+    const std::vector<float> quality = {0, 1, 2.5f};
+    ASSERT_EQ(SavePlyFaceValues(in, mask, faceValue, colour, quality, mine), "") << v.name;
+    CMesh m;
+    MeshFromPlyData(in, false, m);
+    for (size_t f = 0; f < m.face.size(); ++f) {
+      m.face[f].Q() = quality[size_t(faceValue[f])];
+      m.face[f].C() = colour[size_t(faceValue[f])];
+    }
+    ASSERT_EQ(SavePly(m, theirs, mask), "") << v.name;
+    const std::string a = FileBytes(mine), b = FileBytes(theirs);
+    EXPECT_GT(a.size(), 200u) << v.name;
+    EXPECT_TRUE(a == b) << v.name << ": " << a.size() << " bytes, vcglib's " << b.size();
+  }
+  // Texture coordinates are not written this way (vcglib's exporter writes them), nor values out
+  // of range: refused, nothing written.
+  PlyMesh tex;
+  ASSERT_EQ(Read("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                 "property float s\nproperty float t\nelement face 1\nproperty list uchar int vertex_indices\n"
+                 "end_header\n0 0 0 0 0\n1 0 0 1 0\n0 1 0 0 1\n3 0 1 2\n",
+                 tex),
+            "");
+  EXPECT_FALSE(PlyFaceValuesWritable(tex, AttributeMask(PlyLoadMask(tex, false))));
+  const std::string refused = std::string(folder) + "/refused.ply";
+  EXPECT_NE(SavePlyFaceValues(tex, 0, {0}, {GroupColor(0)}, {0.f}, refused), "");
+  PlyMesh plain;
+  ASSERT_EQ(Read(std::string(kTriangleHeader) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", plain), "");
+  EXPECT_NE(SavePlyFaceValues(plain, 0, {1}, {GroupColor(0)}, {0.f}, refused), "");
+  EXPECT_EQ(FileBytes(refused), "");
+  std::remove(mine.c_str());
+  std::remove(theirs.c_str());
+  rmdir(folder);
 }

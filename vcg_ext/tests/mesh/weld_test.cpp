@@ -130,5 +130,33 @@ TEST(Weld, TheDragonIsClosedOnceWelded) {
   EXPECT_EQ(w.mergedVertices, 2100u);
 }
 
+TEST(Weld, InPlaceOnThreadsIsTheOneThreadWeld) {
+  // Enough vertices for several sorted pieces (32,768 keys each at least): every 7th vertex of a
+  // grid repeated (the copies at x = -0 where the grid has +0) and named by every third face
+  // instead of the original; an unreferenced vertex at the end.
+  IndexedMesh m = test::Grid(400);  // 160,801 vertices
+  const size_t V = m.positions.size();
+  for (size_t v = 0; v < V; v += 7) {
+    vcg::Point3f p = m.positions[v];
+    if (p[0] == 0) p[0] = -0.0f;
+    m.positions.push_back(p);
+  }
+  for (size_t f = 0; f < m.faces.size(); f += 3)
+    for (uint32_t& i : m.faces[f])
+      if (i % 7 == 0) i = uint32_t(V + i / 7);
+  m.positions.push_back(vcg::Point3f(5, 5, 5));
+  const WeldResult ref = WeldByPosition(m);
+  ASSERT_GT(ref.mergedVertices, 1000u);
+  for (unsigned threads : {1u, 2u, 3u, 8u}) {
+    IndexedMesh w = m;
+    size_t merged = 0, dropped = 0;
+    ASSERT_TRUE(WeldByPositionInPlace(w, &merged, &dropped, threads)) << threads;
+    EXPECT_EQ(merged, ref.mergedVertices) << threads;
+    EXPECT_EQ(dropped, ref.droppedVertices) << threads;
+    EXPECT_TRUE(w.positions == ref.mesh.positions) << threads;
+    EXPECT_TRUE(w.faces == ref.mesh.faces) << threads;
+  }
+}
+
 }  // namespace
 }  // namespace conelod
