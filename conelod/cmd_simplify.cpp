@@ -2,6 +2,9 @@
 // Kawachi §6), one target or one simplified mesh per level of the normal-cone hierarchy (--hierarchy).
 #include <cstdio>
 #include <cstdlib>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include "cli_common.h"
 #include "commands.h"
@@ -337,6 +340,11 @@ int CmdSimplify(int argc, char** argv) {
   const size_t levelGroups = coneLevel > 0 ? h.level(coneLevel).groups.size() : 0;
   const int wouldLevel = coneLevel > 0 ? AutoGroupLevel(h, p.targetFaces) : 0;
   h = GroupHierarchy();
+#if defined(__GLIBC__)
+  // What the grouping freed goes back to the system, rather than staying resident in the heap
+  // under the collapse's arrays (the dragon: 66 -> 30 MB resident here, peak 3-4 MB lower).
+  malloc_trim(0);
+#endif
 
   GroupQemResult r;
   Timer timer;
