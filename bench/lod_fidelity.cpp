@@ -4,7 +4,8 @@
 //
 //   lod_fidelity MESH.ply [--samples N] [--dag-only] [--cluster-faces N] [--group-clusters N] [--cone DEG]
 //                [--max-faces N] [--max-group-error F] [--fine-group-clusters N] [--level-ratio R]
-//                [--coarse-level-ratio R] [--top-group-clusters N] [--cuts P,P,...]
+//                [--coarse-level-ratio R] [--top-group-clusters N] [--cuts P,P,...] [--no-peers]
+//                [--min-faces N]
 //
 // "tree": the previous .clod levels (BuildConeHierarchy + BuildSimplifiedLevels with the defaults
 // `conelod lod build` used: every level keeps the normal-cone groups of its hierarchy level).
@@ -13,7 +14,8 @@
 // sampled distance between it and the input (larger of both ways, Metro-like, sampled_distance.h)
 // as a fraction of the diagonal, the same for vcglib's QEM run on the input to that face count,
 // and their ratio. Also the wall seconds of each build (one thread per core). --max-faces N: only
-// the levels of at most N faces are compared (the coarse ones; MeshLab's QEM on a large input is slow).
+// the levels of at most N faces are compared (the coarse ones; MeshLab's QEM on a large input is slow);
+// --min-faces N: only those of at least N faces (the fine ones, in another run).
 // --max-group-error 1: the DAG without the cap on a group's collapse error (as before it had one).
 // --level-ratio R: each group of the fine levels simplified to R of its faces (conelod lod build
 // --level-ratio; 0.5); --coarse-level-ratio R: LodBuildParams::coarseLevelRatio (0.6; 0: the
@@ -26,7 +28,9 @@
 // cone:auto`): where a level as a whole loses against it. --cuts P,...: instead of the levels,
 // cuts of the file at these budgets (% of the input's faces; far eye, error in model units, no
 // culling: scripts/lod_fidelity.py's cuts, measured here in-process) beside both, with the faces
-// the cut takes from each level: where the cut loses against its levels.
+// the cut takes from each level: where the cut loses against its levels; the header line gives
+// every level's faces. --no-peers: the cuts alone (their faces and RMS; no static collapse, no
+// MeshLab QEM: quick on the dragon).
 // --chunk-faces N: instead, the DAG built in spatial chunks of at most N faces (conelod lod build
 // --memory; LodBuildParams::chunkFaces) against the DAG built whole: per level of the chunked DAG
 // its faces and RMS, and the whole DAG's RMS at the same face count (interpolated in log-log
@@ -91,13 +95,16 @@ int main(int argc, char** argv) {
   }
   int samples = 200000;
   size_t maxFaces = 0;    // 0: every level
+  size_t minFaces = 0;    // --min-faces N: only the levels of at least N faces (with --max-faces: a range)
   size_t chunkFaces = 0;  // --chunk-faces N: chunked against whole
   bool tree = true, file = false;
+  bool peers = true;  // --no-peers: the cuts alone (no static collapse, no MeshLab QEM)
   conelod::LodBuildParams dagParams;
   std::vector<double> cuts;  // --cuts P,...: cuts at these budgets (% of the input's faces) instead of levels
   for (int i = 2; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--dag-only")) tree = false;
     if (!std::strcmp(argv[i], "--file")) file = true;
+    if (!std::strcmp(argv[i], "--no-peers")) peers = false;
     if (i + 1 >= argc) break;
     if (!std::strcmp(argv[i], "--samples")) samples = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--cluster-faces")) dagParams.clusterFaces = size_t(std::atoi(argv[i + 1]));
@@ -108,6 +115,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--coarse-level-ratio")) dagParams.coarseLevelRatio = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--top-group-clusters")) dagParams.topGroupClusters = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--max-faces")) maxFaces = size_t(std::atoll(argv[i + 1]));
+    if (!std::strcmp(argv[i], "--min-faces")) minFaces = size_t(std::atoll(argv[i + 1]));
     if (!std::strcmp(argv[i], "--chunk-faces")) chunkFaces = size_t(std::atoll(argv[i + 1]));
     if (!std::strcmp(argv[i], "--cuts")) {
       tree = false;
@@ -247,11 +255,14 @@ int main(int argc, char** argv) {
       if (!conelod::LodReader::Open(path, reader).ok()) return 1;
       std::remove(path.c_str());
       conelod::GroupHierarchy h;
-      if (!conelod::BuildConeHierarchy(input, conelod::ConeGroupingParams(), h).ok()) return 1;
+      if (peers && !conelod::BuildConeHierarchy(input, conelod::ConeGroupingParams(), h).ok()) return 1;
+      std::string levelFaces;  // faces per level, finest first (where the cuts can stop)
+      for (const auto& L : dag.levels) levelFaces += (levelFaces.empty() ? "" : " ") + std::to_string(L.faces.size());
       std::printf(
-          "%s: %zu bytes, %zu levels\n| budget | cut faces | fill | RMS cut | static | MeshLab | cut/static | "
+          "%s: %zu bytes, %zu levels (faces: %s)\n| budget | cut faces | fill | RMS cut | static | MeshLab | "
+          "cut/static | "
           "cut/MeshLab | faces per level |\n|---|---|---|---|---|---|---|---|---|\n",
-          argv[1], size_t(st.fileBytes), dag.levels.size());
+          argv[1], size_t(st.fileBytes), dag.levels.size(), levelFaces.c_str());
       for (double pct : cuts) {
         conelod::LodView v;
         v.eye = box.Center() + vcg::Point3d(0, 0, 100 * diag);
@@ -271,11 +282,13 @@ int main(int argc, char** argv) {
           if (perLevel[l])
             levels += (levels.empty() ? "" : " ") + std::to_string(l) + ":" + std::to_string(perLevel[l]);
         const double ours = Rms(m, input, samples, diag);
-        const double stat = Rms(Ours(input, h, m.faces.size()), input, samples, diag);
-        const double ref = Rms(Vcg(qm, m.faces.size()), input, samples, diag);
-        std::printf("| %g %% | %zu | %.1f %% | %.4f | %.4f | %.4f | %.2f | %.2f | %s |\n", pct, m.faces.size(),
-                    100.0 * double(m.faces.size()) / double(v.faceBudget), 100 * ours, 100 * stat, 100 * ref,
-                    ours / stat, ours / ref, levels.c_str());
+        const double stat = peers ? Rms(Ours(input, h, m.faces.size()), input, samples, diag) : NAN;
+        const double ref = peers ? Rms(Vcg(qm, m.faces.size()), input, samples, diag) : NAN;
+        char peer[128] = " | | |";  // (--no-peers: blank)
+        if (peers)
+          std::snprintf(peer, sizeof peer, "%.4f | %.4f | %.2f | %.2f", 100 * stat, 100 * ref, ours / stat, ours / ref);
+        std::printf("| %g %% | %zu | %.1f %% | %.4f | %s | %s |\n", pct, m.faces.size(),
+                    100.0 * double(m.faces.size()) / double(v.faceBudget), 100 * ours, peer, levels.c_str());
         std::fflush(stdout);
       }
       return 0;
@@ -300,7 +313,7 @@ int main(int argc, char** argv) {
         run.first.c_str());
     for (size_t k = 0; k < run.second.size(); ++k) {
       const conelod::IndexedMesh& m = run.second[k];
-      if (maxFaces > 0 && m.faces.size() > maxFaces) {
+      if ((maxFaces > 0 && m.faces.size() > maxFaces) || m.faces.size() < minFaces) {
         std::printf("| %zu | %zu | | | |\n", k + 1, m.faces.size());
         continue;
       }
