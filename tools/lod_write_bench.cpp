@@ -50,7 +50,8 @@ std::vector<char> ReadBytes(const std::string& path) {
 
 int main(int argc, char** argv) {
   if (argc < 3 || (argc - 3) % 2 != 0) {
-    std::fprintf(stderr, "usage: lod_write_bench IN.ply OUT.clod [--memory SIZE_MB] [--rounds R] [--threads 1,2,...]\n");
+    std::fprintf(stderr,
+                 "usage: lod_write_bench IN.ply OUT.clod [--memory SIZE_MB] [--rounds R] [--threads 1,2,...]\n");
     return 2;
   }
   const std::string input = argv[1], output = argv[2];
@@ -106,8 +107,8 @@ int main(int argc, char** argv) {
   }
   LodDag dag;
   size_t chunks = 1;
-  Status s = BuildLodDagOwned(std::move(welded), params, dag, Progress(), &chunks,
-                              params.chunkFaces > 0 ? &spill : nullptr);
+  Status s =
+      BuildLodDagOwned(std::move(welded), params, dag, Progress(), &chunks, params.chunkFaces > 0 ? &spill : nullptr);
   if (!s.ok()) {
     std::fprintf(stderr, "lod_write_bench: %s\n", s.message.c_str());
     return 1;
