@@ -524,6 +524,7 @@ TEST(PlyFormat, BinaryBlocksOnThreadsAreTheRecordByRecordRead) {
   const std::string expected = "face 100000 uses vertex 70000 but there are 70000 vertices";
   EXPECT_NE(Read(bad.first, m).find(expected), std::string::npos);
   EXPECT_NE(Read(bad.second, m).find(expected), std::string::npos);
+}
 
 namespace {
 std::string FileBytes(const std::string& path) {
