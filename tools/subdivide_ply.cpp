@@ -37,8 +37,9 @@ bool Read(const char* path, std::vector<float>& pos, std::vector<uint32_t>& tri)
     if (a == "element" && b == "face") ls >> nf;
     if (line == "end_header") break;
   }
-  const char* want[] = {"format binary_little_endian 1.0\n", "property float x\nproperty float y\nproperty float z\n"
-                                                             "element face"};
+  const char* want[] = {"format binary_little_endian 1.0\n",
+                        "property float x\nproperty float y\nproperty float z\n"
+                        "element face"};
   for (const char* w : want)
     if (header.find(w) == std::string::npos)
       return Fail(std::string(path) + ": not a binary little-endian PLY of x y z floats only");
@@ -83,7 +84,7 @@ int main(int argc, char** argv) {
     edges[c] = {a << 32 | b, uint32_t(c)};
   }
   std::sort(edges.begin(), edges.end());
-  std::vector<uint32_t> firstCorner(3 * nf);      // per corner: the first corner of its edge
+  std::vector<uint32_t> firstCorner(3 * nf);  // per corner: the first corner of its edge
   std::vector<uint8_t> isFirst(3 * nf, 0);
   for (size_t i = 0; i < edges.size();) {
     size_t j = i;
@@ -99,8 +100,7 @@ int main(int argc, char** argv) {
     if (isFirst[c]) {
       mid[c] = next++;
       const uint32_t a = tri[c], b = tri[c - c % 3 + (c + 1) % 3];
-      for (int i = 0; i < 3; ++i)
-        pos.push_back(float((double(pos[3 * a + i]) + double(pos[3 * b + i])) / 2));
+      for (int i = 0; i < 3; ++i) pos.push_back(float((double(pos[3 * a + i]) + double(pos[3 * b + i])) / 2));
     }
   const std::string part = std::string(argv[2]) + ".part";
   FILE* out = std::fopen(part.c_str(), "wb");
