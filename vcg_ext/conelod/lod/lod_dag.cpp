@@ -606,31 +606,6 @@ float GroupErrorAbove(double maxBelow, double distance) {
   return ef;
 }
 
-// A simplified group's faces (DAG vertex ids) as clusters of the streamed next level: the faces
-// and their clusters go to `out` / `outCluster`, each new cluster's face count to `nextFaces`,
-// and its record to N (created by group `creator`, error `error`, DAG node `node` in `nextNode`).
-void AppendStreamedClusters(const std::vector<Face>& faces, const std::vector<vcg::Point3f>& positions,
-                            const LodBuildParams& params, double angle, int creator, float error, uint32_t node,
-                            std::vector<uint32_t>& clusterOfFace, LodDag::Level& N, std::vector<Face>& out,
-                            std::vector<uint32_t>& outCluster, std::vector<uint32_t>& nextFaces,
-                            std::vector<uint32_t>& nextNode) {
-  const uint32_t NC = GrowClusters(faces, positions, params.clusterFaces, angle, clusterOfFace);
-  const uint32_t base = uint32_t(N.clusterCount());
-  const size_t firstNext = nextFaces.size();
-  nextFaces.resize(firstNext + NC, 0);
-  for (size_t f = 0; f < faces.size(); ++f) {
-    out.push_back(faces[f]);
-    outCluster.push_back(base + clusterOfFace[f]);
-    ++nextFaces[firstNext + clusterOfFace[f]];
-  }
-  for (uint32_t c = 0; c < NC; ++c) {
-    N.clusterGroup.push_back(-1);
-    N.clusterCreator.push_back(creator);
-    N.clusterError.push_back(error);
-    nextNode.push_back(node);
-  }
-}
-
 // A level of `faces` faces (the input: `inputFaces`) is coarse when it has at most 3/8 of the
 // input's faces: level 2 (about a quarter of them) and above.
 bool CoarseLevel(uint64_t faces, uint64_t inputFaces) { return 8 * faces <= 3 * inputFaces; }
@@ -1703,7 +1678,7 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
         }
       });
     }
-    for (ChunkWork& w : wave) {  // (e): as AppendStreamedClusters, group after group
+    for (ChunkWork& w : wave) {  // (e): group after group
       const size_t F = w.sub.faces.size();
       const uint32_t clusterBase = uint32_t(L0.clusterGroup.size());
       const int groupBase = int(L0.groupError.size());
