@@ -916,9 +916,8 @@ void MarkShared(const std::vector<Face>& faces, const std::vector<std::vector<ui
   ParallelChunks(V, threads, size_t(1) << 16, [&](size_t b, size_t e, unsigned) {
     for (size_t v = b; v < e; ++v) owner[v].store(-1, std::memory_order_relaxed);
   });
-  std::atomic<int> next(0);
-  RunThreads(std::min<unsigned>(threads, unsigned(std::max(G, 1))), [&](unsigned) {
-    for (int g = next++; g < G; g = next++)
+  ParallelChunks(size_t(G), threads, 1, [&](size_t b, size_t e, unsigned) {
+    for (int g = int(b); g < int(e); ++g)
       for (uint32_t f : groupFaces[size_t(g)])
         for (uint32_t w : faces[f]) {
           std::atomic<int>& o = owner[vertexOf(w)];
@@ -1106,9 +1105,8 @@ Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSp
     N.clusterError.resize(NC);
     std::vector<uint32_t> nextNode(depth > 0 ? NC : 0);
     {
-      std::atomic<int> next(0);
-      RunThreads(std::min<unsigned>(threads, unsigned(G)), [&](unsigned) {
-        for (int g = next++; g < G; g = next++) {
+      ParallelChunks(size_t(G), threads, 1, [&](size_t b, size_t e, unsigned) {
+        for (int g = int(b); g < int(e); ++g) {
           GroupResult& r = results[size_t(g)];
           const uint32_t V = uint32_t(r.localToGlobal.size()), first = firstNew[size_t(g)];
           std::copy(r.newPositions.begin(), r.newPositions.end(), dag.positions.begin() + first);
@@ -1615,9 +1613,8 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
     const size_t n = wave.size();
     if (n == 0) continue;
     {  // (a)
-      std::atomic<size_t> next(0);
-      RunThreads(unsigned(std::min<size_t>(threads, n)), [&](unsigned) {
-        for (size_t i = next++; i < n; i = next++) prepare(wave[i]);
+      ParallelChunks(n, threads, 1, [&](size_t b, size_t e, unsigned) {
+        for (size_t i = b; i < e; ++i) prepare(wave[i]);
       });
     }
     for (ChunkWork& w : wave)
@@ -1629,9 +1626,8 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
     for (size_t i = 0; i < n; ++i)
       for (int g = 0; g < wave[i].groups; ++g) tasks.emplace_back(i, g);
     {  // (b)
-      std::atomic<size_t> next(0);
-      RunThreads(unsigned(std::min<size_t>(threads, tasks.size())), [&](unsigned) {
-        for (size_t t = next++; t < tasks.size(); t = next++) {
+      ParallelChunks(tasks.size(), threads, 1, [&](size_t b, size_t e, unsigned) {
+        for (size_t t = b; t < e; ++t) {
           ChunkWork& w = wave[tasks[t].first];
           const size_t g = size_t(tasks[t].second);
           SimplifyGroup(w.sub.faces, w.groupFaces[g], dag.positions, shared, params, ratio, params.maxGroupError,
@@ -1669,9 +1665,8 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
       w.clusters.resize(size_t(w.groups));
     }
     {  // (d)
-      std::atomic<size_t> next(0);
-      RunThreads(unsigned(std::min<size_t>(threads, tasks.size())), [&](unsigned) {
-        for (size_t t = next++; t < tasks.size(); t = next++) {
+      ParallelChunks(tasks.size(), threads, 1, [&](size_t b, size_t e, unsigned) {
+        for (size_t t = b; t < e; ++t) {
           ChunkWork& w = wave[tasks[t].first];
           const size_t g = size_t(tasks[t].second);
           w.clusters[g] = GrowClusters(w.faces[g], dag.positions, params.clusterFaces, angle1, w.clusterOf[g]);
