@@ -1955,6 +1955,53 @@ def cli_lod_watertight_cuts(c):
                 assert border == 0 and over == 0, (eye, budget, cull, border, over, r["faces"])
 
 
+@case
+def cli_lod_cracks_tool(c):
+    """tools/lod_cracks (issue 27's crack check for files too large for scripts/lod_cracks.py)
+    counts what the script counts: on the bunny (holes: its border is no crack, its simplified
+    border is) at 5 / 20 / 100 % from one eye, the same cracks and overlaps, in one slab and in
+    many (--memory 64K); a face left out of the full cut gives 1-3 cracks, a face counted twice
+    1-3 overlaps; a truncated file is refused (exit 2)."""
+    tool = os.path.join(c.build, "tools", "lod_cracks")
+    mesh, eye, budgets = c.mesh("stanford_bunny_bun_zipper.ply"), "0,0.1,0.5", [5, 20, 100]
+    p = subprocess.run([sys.executable, os.path.join(c.source, "scripts", "lod_cracks.py"), c.cli, mesh, "--eye", eye,
+                        "--budgets", ",".join(map(str, budgets)), "--tmp", c.tmp],
+                       capture_output=True, text=True, check=True)
+    cells = p.stdout.strip().split("\n")[-1].strip("|").split("|")[2:]
+    script = []
+    for cell in cells:
+        m = re.match(r"\s*([\d,]+)(?: \(\+(\d+) over-used\))?\s*$", cell)
+        assert m, p.stdout
+        script.append((int(m.group(1).replace(",", "")), int(m.group(2) or 0)))
+    clod = c.out(os.path.basename(mesh) + ".clod")  # the script's build, defaults
+
+    def run(*args):
+        r = subprocess.run([tool, clod, "--eye", eye] + list(args), capture_output=True, text=True, timeout=300)
+        assert r.returncode == 0, r.stderr
+        lines = [json.loads(l) for l in r.stdout.strip().split("\n")]
+        return lines[:-1], lines[-1]
+
+    for memory in ([], ["--memory", "64K"]):
+        cuts, summary = run("--budgets", ",".join(map(str, budgets)), *memory)
+        got = [(x["cracks"], x["overlaps"]) for x in cuts]
+        print(memory, got, [x["slabs"] for x in cuts], summary)
+        assert got == script, (memory, got, script)
+        assert script[0][0] > 0 and script[-1] == (0, 0), script  # the bunny's simplified border, and none at 100 %
+        assert summary["input_read"] and summary["level0_faces_read"] == summary["input_faces"] == 69451, summary
+        assert (memory == []) == all(x["slabs"] == 1 for x in cuts), cuts
+    for inject, key in (("--remove-face", "cracks"), ("--repeat-face", "overlaps")):
+        cuts, _ = run("--budgets", "100", inject)
+        print(inject, cuts[0])
+        assert 1 <= cuts[0][key] <= 3 and cuts[0]["cracks" if key == "overlaps" else "overlaps"] == 0, cuts
+    bad = c.out("truncated.clod")
+    with open(clod, "rb") as f, open(bad, "wb") as g:
+        g.write(f.read()[: os.path.getsize(clod) // 2])
+    r = subprocess.run([tool, bad], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and "lod_cracks: " in r.stderr and r.stdout == "", (r.returncode, r.stderr)
+    r = subprocess.run([tool, clod, "--budgets", "5,x"], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 1 and "--budgets" in r.stderr, (r.returncode, r.stderr)
+
+
 
 def write_ply(path, positions, faces):
     """A binary little-endian PLY (float32 x y z, uchar/int vertex_indices)."""
