@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # The share of `conelod lod build`'s samples that run outside the threads' work (issue 27; docs/
-# lod_threads.md). Record a build at --threads 1 with a binary whose lod_dag.cpp has debug info
+# scale.md, "Threading"). Record a build at --threads 1 with a binary whose lod_dag.cpp has debug info
 # (inline frames), e.g. a build folder configured with -DCMAKE_CXX_FLAGS=-g:
 #   perf record -F 250 --call-graph dwarf,16384 -o lod.data build-g/conelod/conelod lod build IN.ply \
 #        -o OUT.clod --threads 1 [--memory 128M]

@@ -1,5 +1,5 @@
 // The .clod writer's time and CPU time at several thread counts, on one DAG (built once): the
-// figures of docs/lod_write_threads.md. Each round writes the file once per thread
+// figures of docs/scale.md ("Threading"). Each round writes the file once per thread
 // count (in turn, so that the machine's load falls on each alike) and checks that every file is
 // the first one byte for byte. With --memory SIZE the DAG's levels are spilled to a temporary
 // folder beside OUT (as `conelod lod build --memory` spills them) and the file is written from there.
