@@ -4,9 +4,16 @@
 # committed), through `conelod lod build --memory 1G` (2G at 55.8 M faces) at 1 and 2 threads
 # and on every core, and optionally `conelod group` and `simplify` to 10 %. One table: wall
 # seconds, CPU seconds (user + system), peak resident memory (GNU time's maximum RSS), peak
-# bytes per input face, file bytes per input face, the 1-minute load as the step started. Takes minutes to hours: not part of CI.
+# bytes per input face, file bytes per input face, the 1-minute load as the step started. Then,
+# for each .clod file built, two more tables: the desktop viewer's first image (conelod-viewer
+# --screenshot --json --frames 0 under xvfb-run -a: first_frame_ms from the process's start,
+# open_ms the file's part) and the crack check of its cuts at 5 / 20 / 50 % (build/tools/
+# lod_cracks, the eye of scripts/lod_cracks.py: cracks, overlaps, seconds, peak RSS). Takes
+# minutes to hours: not part of CI.
 #   scripts/bench_scale.sh [CONELOD]   default build/conelod/conelod
 #   SCALE_LEVELS="1 2 3"               subdivisions to run (default: 1 2 3)
+#   SCALE_MEMORY=2G                    lod build --memory for every level (default: 1G, 2G at 55.8 M faces)
+#   SCALE_CHECKS="viewer cracks"       what to check of each built file (default: both; "" none)
 #   SCALE_STEPS="lod"                  any of: lod group simplify (default: lod); simplify runs the
 #                                      one-piece peer (--partition-above 0) and then in parts per thread count
 #   SCALE_THREADS="1 2 0"              lod build, group and simplify --threads values (0: one per core; default 1 2 0)
@@ -19,6 +26,9 @@ MESHES="${CONELOD_TEST_MESHES:-$ROOT/../shared/test_meshes}"
 LEVELS="${SCALE_LEVELS:-1 2 3}"
 STEPS="${SCALE_STEPS:-lod}"
 THREADS="${SCALE_THREADS:-1 2 0}"
+CHECKS="${SCALE_CHECKS-viewer cracks}"
+VIEWER="$(dirname "$CONELOD")/../viewer/conelod-viewer"
+CRACKS="$(dirname "$CONELOD")/../tools/lod_cracks"
 OUT="$ROOT/build/bench_scale"
 mkdir -p "$OUT"
 [ -x "$CONELOD" ] || { echo "bench_scale.sh: $CONELOD not built" >&2; exit 1; }
@@ -119,6 +129,7 @@ for k in $LEVELS; do
   faces=$(faces_of "$mesh")
   memory=1G
   if [ "$k" -ge 3 ]; then memory=2G; fi
+  memory="${SCALE_MEMORY:-$memory}"
   for step in $STEPS; do
     case "$step" in
       lod)
@@ -141,4 +152,66 @@ for k in $LEVELS; do
       *) echo "bench_scale.sh: unknown step $step" >&2; exit 1 ;;
     esac
   done
+done
+
+# The built files: the viewer's first image, and the crack check of the cuts at 5 / 20 / 50 %.
+built=()
+for k in $LEVELS; do
+  case " $STEPS " in *" lod "*) built+=("$k") ;; esac
+done
+for check in $CHECKS; do
+  [ "${#built[@]}" -gt 0 ] || break
+  case "$check" in
+    viewer)
+      if [ ! -x "$VIEWER" ] || ! command -v xvfb-run >/dev/null; then
+        echo "bench_scale.sh: $VIEWER or xvfb-run missing: no first image" >&2
+        continue
+      fi
+      printf "\n| faces | first image ms (process start) | open ms | faces drawn | groups drawn | process RSS MiB | load |\n"
+      printf "|---|---|---|---|---|---|---|\n"
+      for k in "${built[@]}"; do
+        faces=$(faces_of "$OUT/dragon_sub$k.ply")
+        load=$(cut -d' ' -f1 /proc/loadavg)
+        if ! xvfb-run -a "$VIEWER" "$OUT/dragon_sub$k.clod" --screenshot "$OUT/first_image_$k.png" --size 800x600 \
+          --frames 0 --json >"$OUT/viewer.json" 2>"$OUT/log.txt"; then
+          echo "bench_scale.sh: failed: conelod-viewer $OUT/dragon_sub$k.clod" >&2
+          tail -5 "$OUT/log.txt" >&2
+          exit 1
+        fi
+        python3 - "$faces" "$load" "$OUT/viewer.json" <<'PY'
+import json, sys
+j = json.loads(open(sys.argv[3]).read().strip().split("\n")[-1])
+c = j["coarse"]
+print("| %.2f M | %.0f | %.1f | %d | %d | %.0f | %s |" % (int(sys.argv[1]) / 1e6, j["first_frame_ms"], j["open_ms"],
+      c["faces_drawn"], c["groups_drawn"], j["process_rss_bytes"] / 1048576, sys.argv[2]))
+PY
+      done ;;
+    cracks)
+      if [ ! -x "$CRACKS" ]; then
+        echo "bench_scale.sh: $CRACKS not built: no crack check" >&2
+        continue
+      fi
+      printf "\n| faces | cut | cut faces | cracks | overlaps | seconds | peak RSS MiB | load |\n"
+      printf "|---|---|---|---|---|---|---|---|\n"
+      for k in "${built[@]}"; do
+        faces=$(faces_of "$OUT/dragon_sub$k.ply")
+        load=$(cut -d' ' -f1 /proc/loadavg)
+        if ! "$CRACKS" "$OUT/dragon_sub$k.clod" --budgets 5,20,50 >"$OUT/cracks.json" 2>"$OUT/log.txt"; then
+          echo "bench_scale.sh: failed: lod_cracks $OUT/dragon_sub$k.clod" >&2
+          tail -5 "$OUT/log.txt" >&2
+          exit 1
+        fi
+        python3 - "$faces" "$load" "$OUT/cracks.json" <<'PY'
+import json, sys
+lines = [json.loads(l) for l in open(sys.argv[3]) if l.strip()]
+for j in lines[:-1]:
+    print("| %.2f M | %g %% | %d | %d | %d | %.1f | %.0f | %s |" % (int(sys.argv[1]) / 1e6, j["budget_percent"], j["faces"],
+          j["cracks"], j["overlaps"], j["seconds"], j["peak_rss_bytes"] / 1048576, sys.argv[2]))
+s = lines[-1]
+print("| %.2f M | level 0 read: %s | | | | %.1f | %.0f | |" % (int(sys.argv[1]) / 1e6, "yes" if s["input_read"] else "no (no edge to look up)",
+      s["input_seconds"], s["peak_rss_bytes"] / 1048576))
+PY
+      done ;;
+    *) echo "bench_scale.sh: unknown check $check" >&2; exit 1 ;;
+  esac
 done

@@ -267,6 +267,7 @@ Status CountCut(const std::string& path, const LodView& view, uint64_t memory, I
     const float lo = k == 0 ? -std::numeric_limits<float>::infinity() : bounds[k - 1];
     const float hi = k == bounds.size() ? std::numeric_limits<float>::infinity() : bounds[k];
     edges.clear();
+    edges.reserve(size_t(std::min<uint64_t>(uses, perSlab + perSlab / 4)));  // no doubling past the budget
     for (size_t i = 0; i < nodes.size(); ++i) {
       const CutNode& n = nodes[i];
       if (n.hi < lo || n.lo >= hi) continue;
