@@ -191,6 +191,7 @@ struct CutResult {
   double percent = 0;
   size_t budget = 0, faces = 0, nodes = 0, edgeUses = 0, slabs = 0;
   std::vector<Candidate> candidates;
+  size_t once = 0, overused = 0;  // the cut's edges used once, 3+ times (before the input's lookup)
   size_t cracks = 0, overlaps = 0;
   double seconds = 0;
   uint64_t peakRss = 0;
@@ -467,16 +468,17 @@ int main(int argc, char** argv) {
   const double inputSeconds = Now() - t1;
   for (CutResult& r : results) {
     for (const Candidate& c : r.candidates) {
+      ++(c.uses == 1 ? r.once : r.overused);
       const uint32_t in = inputUses[size_t(std::lower_bound(cand.begin(), cand.end(), c.edge) - cand.begin())];
       if (c.uses == 1 && in != 1) ++r.cracks;
       if (c.uses > 2 && in <= 2) ++r.overlaps;
     }
     std::printf(
         "{\"file\":%s,\"eye\":[%.9g,%.9g,%.9g],\"budget_percent\":%g,\"budget\":%zu,\"faces\":%zu,\"nodes\":%zu,"
-        "\"cracks\":%zu,\"overlaps\":%zu,\"edge_uses\":%zu,\"slabs\":%zu,\"seconds\":%.3f,\"peak_rss_bytes\":%" PRIu64
-        "}\n",
+        "\"cracks\":%zu,\"overlaps\":%zu,\"once_edges\":%zu,\"overused_edges\":%zu,\"edge_uses\":%zu,\"slabs\":%zu,"
+        "\"seconds\":%.3f,\"peak_rss_bytes\":%" PRIu64 "}\n",
         JsonString(path).c_str(), r.eye[0], r.eye[1], r.eye[2], r.percent, r.budget, r.faces, r.nodes, r.cracks,
-        r.overlaps, r.edgeUses, r.slabs, r.seconds, r.peakRss);
+        r.overlaps, r.once, r.overused, r.edgeUses, r.slabs, r.seconds, r.peakRss);
   }
   std::printf("{\"file\":%s,\"input_faces\":%" PRIu64 ",\"level0_faces_read\":%" PRIu64
               ",\"cuts\":%zu,\"edges_looked_up\":%zu,\"input_read\":%s,"
