@@ -15,11 +15,12 @@
 // node; with none, level 0 is not read.
 //
 // Memory: the refinement keeps the records of the nodes it visited, not their geometry (evicted
-// every few thousand expansions). The cut's edges are counted in slabs along the box's longest
-// axis: each slab holds at most --memory / 32 edge uses (16 bytes each, sorted in place) of the
-// edges whose lower end lies in it, and reads the geometry of the cut's nodes whose bounding sphere
-// meets it. Every edge use must be counted in exactly one slab (checked: otherwise a bad-input
-// error). Peak RSS: the process's so far (VmHWM), after each cut.
+// after each batch of expansions); the counting reads the cut's records again in a fresh reader.
+// The cut's edges are counted in slabs along the box's longest axis: each slab holds at most
+// --memory / 32 edge uses (16 bytes each, sorted in place) of the edges whose lower end lies in
+// it, and reads the geometry of the cut's nodes whose bounding sphere meets it. Every edge use
+// must be counted in exactly one slab (checked: otherwise a bad-input error). Peak RSS: the
+// process's so far (VmHWM), after each cut.
 //
 //   lod_cracks FILE.clod [--budgets 5,20,50] [--eye X,Y,Z]... [--no-cull] [--memory 256M]
 //              [--remove-face | --repeat-face]
@@ -199,14 +200,18 @@ struct CutResult {
 
 enum class Inject { None, Remove, Repeat };
 
-// The cut of `view`, refined as RefineLod does (the same Steps) but with each batch's geometry
-// evicted: only the node records stay.
+// The cut of `view`, refined as RefineLod does (the same Steps, in batches) but with each batch's
+// geometry evicted: only the node records stay. A batch is 128 expansions or a 64th of the cut's
+// nodes (each batch walks the whole cut: LodRefiner::cut() and the evictions).
 Status RefineWithoutGeometry(LodReader& reader, const LodView& view, LodCut& cut) {
   LodRefiner r(reader);
   Status s = r.Start(view);
+  size_t batch = 128;
   while (s.ok() && !r.Done()) {
-    s = r.Step(2048);
-    for (uint32_t id : r.cut().nodes) reader.EvictGeometry(id);
+    s = r.Step(batch);
+    const std::vector<uint32_t>& nodes = r.cut().nodes;
+    for (uint32_t id : nodes) reader.EvictGeometry(id);
+    batch = std::max<size_t>(128, nodes.size() / 64);
   }
   if (!s.ok()) return s;
   cut = r.cut();
@@ -219,7 +224,7 @@ Status CountCut(const std::string& path, const LodView& view, uint64_t memory, I
   Status s = LodReader::Open(path, reader);
   if (!s.ok()) return s;
   for (uint32_t r : reader->roots()) reader->EvictGeometry(r);
-  const LodFileInfo& info = reader->info();
+  const LodFileInfo info = reader->info();
   LodCut cut;
   s = RefineWithoutGeometry(*reader, view, cut);
   if (!s.ok()) return s;
@@ -238,11 +243,19 @@ Status CountCut(const std::string& path, const LodView& view, uint64_t memory, I
   }
   std::sort(nodes.begin(), nodes.end(), [](const CutNode& x, const CutNode& y) { return x.id < y.id; });
   const uint32_t injectNode = cut.nodes.empty() ? ~0u : cut.nodes[0];
+  const size_t cutFaces = cut.faces;
+  // A fresh reader for the counting: the records of the nodes the refinement visited go (only the
+  // cut's are read again), so that they and the slab's edge uses are not in memory together.
+  cut = LodCut();
+  reader.reset();
+  s = LodReader::Open(path, reader);
+  if (!s.ok()) return s;
+  for (uint32_t r : reader->roots()) reader->EvictGeometry(r);
 
   // Slabs: bounds at the quantiles of the nodes' centres weighted by their faces, so that each
   // holds about `perSlab` edge uses.
   const uint64_t perSlab = std::max<uint64_t>(memory / 32, 1024);
-  const uint64_t uses = uint64_t(cut.faces) * 3 + (inject == Inject::Repeat ? 3 : 0);
+  const uint64_t uses = uint64_t(cutFaces) * 3 + (inject == Inject::Repeat ? 3 : 0);
   const size_t slabs = size_t(std::max<uint64_t>(1, (uses + perSlab - 1) / perSlab));
   std::vector<float> bounds;  // slab k: [bounds[k - 1], bounds[k]), open at both ends
   if (slabs > 1) {
@@ -253,7 +266,7 @@ Status CountCut(const std::string& path, const LodView& view, uint64_t memory, I
     uint64_t seen = 0;
     for (const auto& c : byCenter) {
       seen += c.second;
-      if (seen * slabs >= uint64_t(cut.faces) * (bounds.size() + 1) && bounds.size() + 1 < slabs &&
+      if (seen * slabs >= uint64_t(cutFaces) * (bounds.size() + 1) && bounds.size() + 1 < slabs &&
           (bounds.empty() || c.first > bounds.back()))
         bounds.push_back(c.first);
     }
