@@ -37,6 +37,7 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <malloc.h>
 #include <memory>
 #include <string>
 #include <utility>
@@ -201,8 +202,8 @@ struct CutResult {
 enum class Inject { None, Remove, Repeat };
 
 // The cut of `view`, refined as RefineLod does (the same Steps, in batches) but with each batch's
-// geometry evicted: only the node records stay. A batch is 128 expansions or a 64th of the cut's
-// nodes (each batch walks the whole cut: LodRefiner::cut() and the evictions).
+// geometry evicted: only the node records stay. A batch is a 64th of the cut's nodes, 128 to 512
+// expansions (each batch walks the whole cut: LodRefiner::cut() and the evictions).
 Status RefineWithoutGeometry(LodReader& reader, const LodView& view, LodCut& cut) {
   LodRefiner r(reader);
   Status s = r.Start(view);
@@ -211,7 +212,7 @@ Status RefineWithoutGeometry(LodReader& reader, const LodView& view, LodCut& cut
     s = r.Step(batch);
     const std::vector<uint32_t>& nodes = r.cut().nodes;
     for (uint32_t id : nodes) reader.EvictGeometry(id);
-    batch = std::max<size_t>(128, nodes.size() / 64);
+    batch = std::max<size_t>(128, std::min<size_t>(512, nodes.size() / 64));
   }
   if (!s.ok()) return s;
   cut = r.cut();
@@ -248,6 +249,7 @@ Status CountCut(const std::string& path, const LodView& view, uint64_t memory, I
   // cut's are read again), so that they and the slab's edge uses are not in memory together.
   cut = LodCut();
   reader.reset();
+  malloc_trim(0);  // the freed records' pages back to the system, not under the slabs' peak
   s = LodReader::Open(path, reader);
   if (!s.ok()) return s;
   for (uint32_t r : reader->roots()) reader->EvictGeometry(r);
