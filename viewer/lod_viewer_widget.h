@@ -115,6 +115,7 @@ class LodViewerWidget : public QOpenGLWidget, protected QOpenGLFunctions {
   bool upload(uint32_t node, NodeBuffers& b);
   void renderScene();
   void drawHud();
+  void loadTexture();  // the file's texture image into texture_ (context current)
   QMatrix4x4 viewMatrix() const;
   QMatrix4x4 projectionMatrix() const;
   QVector3D eyeInModel() const;
