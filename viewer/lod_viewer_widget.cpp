@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <unordered_set>
 #include <vector>
 
@@ -98,6 +99,20 @@ LodViewerWidget::LodViewerWidget(LodReader& reader, const std::string& title, co
   connect(&stillTimer_, &QTimer::timeout, this, &LodViewerWidget::viewStill);
   idleTimer_.setInterval(0);
   connect(&idleTimer_, &QTimer::timeout, this, &LodViewerWidget::refineSlice);
+  // The first image is on the window: its time, the process's CPU time so far; the HUD and the
+  // file's texture image, left out of the frames before it, come now (under llvmpipe the HUD's
+  // fonts and Qt's paint engine cost about a sixth of the process's CPU time to the first image,
+  // a 2048 x 2048 texture more than that time again: docs/lod_viewer.md).
+  connect(this, &QOpenGLWidget::frameSwapped, this, [this] {
+    if (firstImageMsecs_ >= 0 || firstFrameMsecs_ < 0) return;
+    firstImageMsecs_ = startClock_.nsecsElapsed() * 1e-6;
+    timespec cpu;
+    if (clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &cpu) == 0) firstImageCpuMsecs_ = cpu.tv_sec * 1e3 + cpu.tv_nsec * 1e-6;
+    makeCurrent();
+    loadTexture();
+    doneCurrent();
+    update();
+  });
   setFocusPolicy(Qt::StrongFocus);
   setWindowTitle(QString("ConeLOD viewer - %1").arg(QString::fromStdString(title_)));
   startClock_.start();
@@ -317,21 +332,25 @@ void LodViewerWidget::initializeGL() {
   if (!program_.addShaderFromSourceCode(QOpenGLShader::Vertex, kVertexShader) ||
       !program_.addShaderFromSourceCode(QOpenGLShader::Fragment, kFragmentShader) || !program_.link())
     error_ = "shader: " + program_.log().toStdString();
-  // The texture image stored in the file, decoded by Qt (v up, as the PLY's coordinates: the
-  // image's rows bottom first). One that does not decode is said on stderr and not drawn.
-  if (reader_.info().texCoords && reader_.info().textureBytes) {
-    conelod::LodTexture tex;
-    const Status s = reader_.LoadTexture(tex);
-    QImage image;
-    if (s.ok() && image.loadFromData(tex.bytes.data(), int(tex.bytes.size()))) {
-      texture_.reset(new QOpenGLTexture(image.mirrored()));
-      texture_->setMinificationFilter(QOpenGLTexture::LinearMipMapLinear);
-      texture_->setMagnificationFilter(QOpenGLTexture::Linear);
-      texture_->setWrapMode(QOpenGLTexture::Repeat);
-    } else {
-      std::fprintf(stderr, "conelod-viewer: the texture image %s is not drawn: %s\n",
-                   reader_.info().textureName.c_str(), s.ok() ? "Qt cannot decode it" : s.message.c_str());
-    }
+}
+
+// The texture image stored in the file, decoded by Qt (v up, as the PLY's coordinates: the
+// image's rows bottom first), with the context current. One that does not decode is said on
+// stderr and not drawn. Called once the first image is on the window (the constructor), as the
+// web viewer reads it beside its first image: until then the model is drawn without it.
+void LodViewerWidget::loadTexture() {
+  if (!reader_.info().texCoords || !reader_.info().textureBytes) return;
+  conelod::LodTexture tex;
+  const Status s = reader_.LoadTexture(tex);
+  QImage image;
+  if (s.ok() && image.loadFromData(tex.bytes.data(), int(tex.bytes.size()))) {
+    texture_.reset(new QOpenGLTexture(image.mirrored()));
+    texture_->setMinificationFilter(QOpenGLTexture::LinearMipMapLinear);
+    texture_->setMagnificationFilter(QOpenGLTexture::Linear);
+    texture_->setWrapMode(QOpenGLTexture::Repeat);
+  } else {
+    std::fprintf(stderr, "conelod-viewer: the texture image %s is not drawn: %s\n", reader_.info().textureName.c_str(),
+                 s.ok() ? "Qt cannot decode it" : s.message.c_str());
   }
 }
 
@@ -490,7 +509,7 @@ void LodViewerWidget::paintGL() {
     if (options_.refineWhenIdle) stillTimer_.start(options_.stillMs);  // the coarsest level is on screen: refine
   }
   if (!benchmarked_) fps_ = 1000.0 / std::max(stats_.renderMs, 1e-3);
-  if (options_.hud) drawHud();
+  if (options_.hud && firstImageMsecs_ >= 0) drawHud();  // not before the first image (above)
 }
 
 double LodViewerWidget::benchmarkFrames(int frames) {

@@ -77,7 +77,14 @@ class LodViewerWidget : public QOpenGLWidget, protected QOpenGLFunctions {
   // milliseconds per frame and shows the resulting frames per second in the HUD from then on.
   double benchmarkFrames(int frames);
   const FrameStats& lastFrame() const { return stats_; }
-  double firstFrameMsecs() const { return firstFrameMsecs_; }  // since the clock given below
+  // The first frame: the roots drawn into the widget's framebuffer and waited for (glFinish),
+  // milliseconds since the clock given below; -1 before it.
+  double firstFrameMsecs() const { return firstFrameMsecs_; }
+  // The first image: that frame composed onto the window and swapped (QOpenGLWidget::frameSwapped),
+  // since the same clock; -1 before it.
+  double firstImageMsecs() const { return firstImageMsecs_; }
+  // The process's CPU time (all its threads, from its start) at the first image; -1 before it.
+  double firstImageCpuMsecs() const { return firstImageCpuMsecs_; }
   void setStartClock(const QElapsedTimer& clock) { startClock_ = clock; }
   size_t gpuBytes() const { return gpuBytes_; }
   const std::string& error() const { return error_; }  // a read error during refinement
@@ -108,6 +115,7 @@ class LodViewerWidget : public QOpenGLWidget, protected QOpenGLFunctions {
   bool upload(uint32_t node, NodeBuffers& b);
   void renderScene();
   void drawHud();
+  void loadTexture();  // the file's texture image into texture_ (context current)
   QMatrix4x4 viewMatrix() const;
   QMatrix4x4 projectionMatrix() const;
   QVector3D eyeInModel() const;
@@ -137,6 +145,8 @@ class LodViewerWidget : public QOpenGLWidget, protected QOpenGLFunctions {
   FrameStats stats_;
   QElapsedTimer startClock_;
   double firstFrameMsecs_ = -1;
+  double firstImageMsecs_ = -1;
+  double firstImageCpuMsecs_ = -1;
   double fps_ = 0;       // 1000 / the last frame's drawing time, or the benchmark's mean
   int benchmarked_ = 0;  // frames of benchmarkFrames behind fps_ (0: fps_ is the last frame's)
 };

@@ -1362,6 +1362,16 @@ def viewer_headless_bunny(c):
     assert s["faces_drawn"] > 0 and s["groups_drawn"] > 0 and s["faces_drawn"] <= s["cut_faces"], coarse
     assert s["cut_faces"] < 69451 and s["max_level"] == coarse["levels"] - 1, coarse  # the roots only
     assert coarse["first_frame_ms"] > 0 and coarse["fps"] > 0 and coarse["resident_bytes"] > 0, coarse
+    # The first image is that frame on the window (swapped), later; the process's CPU time by then.
+    assert coarse["first_image_ms"] >= coarse["first_frame_ms"] and coarse["first_image_cpu_ms"] > 0, coarse
+    # The HUD, left out of the frames before the first image, is in the picture (top left).
+    rc, out, err = run_viewer(c, clod, "--screenshot", c.out("nohud.png"), "--size", "320x240", "--frames", "5",
+                              "--no-hud")
+    assert rc == 0, (rc, out, err)
+    bare = read_png(c.out("nohud.png"))[2]
+    hud = sum(1 for y in range(8, 40) for x in range(8, 160)
+              if max(abs(a - b) for a, b in zip(rows[y][x], bare[y][x])) > 24)
+    assert hud > 200, "the HUD changed only %d pixels top left" % hud
 
     png = c.out("refined.png")
     rc, out, err = run_viewer(c, clod, "--screenshot", png, "--size", "320x240", "--refine", "--frames", "5", "--json",
