@@ -229,6 +229,51 @@ void AttributeQuadrics::Collapse(uint32_t keep, uint32_t gone, const uint32_t* g
   for (size_t i = 0; i < stride; ++i) model_[keep * stride + i] += model_[gone * stride + i];
 }
 
+bool AttributeQuadrics::SlidesAlong(uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, const FaceCorners& faces) const {
+  if (!seamSlides_ || e0 == kNoFace || e1 == kNoFace || wedges_[a] != 2 || wedges_[b] != 2) return false;
+  return !same(valueAt(e0, a, faces), valueAt(e1, a, faces)) && !same(valueAt(e0, b, faces), valueAt(e1, b, faces));
+}
+
+void AttributeQuadrics::Slide(uint32_t keep, uint32_t gone, double t, const uint32_t* keepFaces, size_t keepCount,
+                              const uint32_t* goneFaces, size_t goneCount, const FaceCorners& faces) {
+  // The edge's two faces (among gone's: those that hold keep too).
+  uint32_t e[2] = {kNoFace, kNoFace};
+  for (size_t i = 0; i < goneCount; ++i) {
+    const auto& tr = faces(goneFaces[i]);
+    if ((tr[0] == keep || tr[1] == keep || tr[2] == keep) && e[1] == kNoFace) e[e[0] == kNoFace ? 0 : 1] = goneFaces[i];
+  }
+  if (e[1] == kNoFace) {  // not an edge of two faces: as a half-edge collapse
+    Collapse(keep, gone, goneFaces, goneCount, faces);
+    return;
+  }
+  // Each side's ends and its value at the merged vertex (copied: the edge faces' corners stay).
+  const size_t C = size_t(channels_);
+  std::vector<float> end(4 * C), mid(2 * C);
+  for (int s = 0; s < 2; ++s) {
+    std::copy_n(valueAt(e[s], keep, faces), C, end.data() + (2 * s) * C);
+    std::copy_n(valueAt(e[s], gone, faces), C, end.data() + (2 * s + 1) * C);
+    for (size_t c = 0; c < C; ++c)
+      mid[s * C + c] = float((1 - t) * end[(2 * s) * C + c] + t * end[(2 * s + 1) * C + c]);
+  }
+  for (int pass = 0; pass < 2; ++pass) {
+    const uint32_t v = pass == 0 ? keep : gone, other = pass == 0 ? gone : keep;
+    const uint32_t* list = pass == 0 ? keepFaces : goneFaces;
+    const size_t count = pass == 0 ? keepCount : goneCount;
+    for (size_t i = 0; i < count; ++i) {
+      const uint32_t f = list[i];
+      const auto& tr = faces(f);
+      if (tr[0] == other || tr[1] == other || tr[2] == other) continue;  // on the edge: removed
+      float* target = corner(f, tr[0] == v ? 0 : (tr[1] == v ? 1 : 2));
+      const float* side = same(target, end.data() + (2 * 0 + pass) * C)   ? mid.data()
+                          : same(target, end.data() + (2 * 1 + pass) * C) ? mid.data() + C
+                                                                          : nullptr;
+      if (side) std::copy_n(side, C, target);  // two wedges: always one of the sides
+    }
+  }
+  const size_t stride = 1 + 4 * size_t(channels_);
+  for (size_t i = 0; i < stride; ++i) model_[keep * stride + i] += model_[gone * stride + i];
+}
+
 void AttributeQuadrics::Evaluate(uint32_t f, int k, uint32_t v, const Point3d& p, float* out) const {
   if (seam(v)) {
     std::copy(corner(f, k), corner(f, k) + channels_, out);

@@ -25,9 +25,9 @@
 // Seams, as wedges (Hoppe 1999): the attributes are given per face corner, so one vertex of the
 // position-welded mesh may carry several values (a texture seam: one position, two texture
 // coordinates; a colour seam; a crease's split normals). A vertex whose corners differ is a seam
-// vertex. It never moves (its corners keep their exact values, and both sides of the seam keep
-// their positions: no crack); it is removed only into another seam vertex, and each of its faces
-// then takes a value at the keeper from its own side, never from across a seam:
+// vertex. Its corners keep exact values of their own sides (both sides share the vertex: no
+// crack); it is removed only into another seam vertex, and each of its faces then takes a value
+// at the keeper from its own side, never from across a seam:
 //  - along its seam (the edge's two faces on different wedges), or off it where the edge's faces
 //    see one value at both ends, each face whose value at `gone` an edge face shares takes that
 //    edge face's value at `keep`: the seam shortens along itself, exactly (no cost);
@@ -37,6 +37,13 @@
 //    texture QEM lets a seam move, at a price). That costs kSeamMove x (the share of gone's faces
 //    that do so) x d^2, added to the collapse's priority, so that junctions go after the collapses
 //    that move no seam of the same error.
+// Along a seam between two plain seam points (two wedges each) the merged vertex may also go
+// anywhere on the edge (AllowSeamSlides, Slide): each side's values are interpolated along the
+// edge, from the edge face on its side, so both sides stay on one segment of their charts and the
+// seam keeps its texture; the simplifier puts it at the geometric quadric's minimum on the edge.
+// Where the values of a seam vertex hold is its anchor (group_qem.cpp, seamPlace): without
+// AllowSeamMoves the vertex stays there; with it, the vertex may leave it at a cost (the texture
+// stretched over the distance), its corner values kept.
 // (Without AllowSeamMoves, only along the seam between two vertices of two wedges each: junctions
 // stay.) A vertex that is not on a seam may be removed into a seam vertex when the edge's faces see one
 // value there; its faces then take that value. So a collapse never drags texture coordinates
@@ -72,6 +79,12 @@ class AttributeQuadrics {
   // MeshLab filter).
   void AllowSeamMoves(bool on) { seamMoves_ = on; }
   bool seamMoves() const { return seamMoves_; }
+  // On (Init's default): a collapse along a seam edge whose ends are both plain seam points (two
+  // wedges each, the edge's faces on different wedges at both ends) may place the merged vertex
+  // anywhere on the edge (the simplifier's constrained minimum), each side's values interpolated
+  // along the edge (Slide). Off: such a collapse keeps one end's position (a half-edge collapse).
+  void AllowSeamSlides(bool on) { seamSlides_ = on; }
+  bool seamSlides() const { return seamSlides_; }
   bool active() const { return channels_ > 0; }
   int channels() const { return channels_; }
   bool seam(uint32_t v) const { return wedges_[v] >= 2; }
@@ -89,6 +102,15 @@ class AttributeQuadrics {
   // The collapse of `gone` into `keep`, before the simplifier replaces `gone` in `goneFaces`' corners:
   // the corner values of those faces (seams) and the models.
   void Collapse(uint32_t keep, uint32_t gone, const uint32_t* goneFaces, size_t count, const FaceCorners& faces);
+  // Whether the edge (a, b) with faces e0, e1 runs along a seam between two plain seam points (see
+  // AllowSeamSlides): then the merged vertex may go anywhere on the edge.
+  bool SlidesAlong(uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, const FaceCorners& faces) const;
+  // The collapse of `gone` into `keep` when the merged vertex goes to keep + t (gone - keep), t in
+  // [0, 1], on a seam edge (SlidesAlong), before the simplifier replaces `gone`: every face of keep
+  // and gone off the edge takes, at the merged vertex, its side's values interpolated along the
+  // edge, (1 - t) value(keep) + t value(gone), from the edge face on its side; the models merge.
+  void Slide(uint32_t keep, uint32_t gone, double t, const uint32_t* keepFaces, size_t keepCount,
+             const uint32_t* goneFaces, size_t goneCount, const FaceCorners& faces);
 
   // The attributes of corner k of face f, at vertex v now at p (input coordinates), into
   // out[channels()]: a seam vertex's corner value; otherwise s*(p), colours clamped to [0, 1],
@@ -111,6 +133,7 @@ class AttributeQuadrics {
 
   int channels_ = 0;
   bool seamMoves_ = false;
+  bool seamSlides_ = true;
   VertexAttributes layout_;
   std::vector<float> corner_;    // per face corner
   std::vector<uint8_t> wedges_;  // distinct corner values per vertex, saturated at 3

@@ -27,6 +27,11 @@ constexpr double kDegenerateQuality = 1e-6;
 // merged vertex's fan, a search inside the group looks for a path between them through at most
 // this many faces; a collapse whose path is longer (or missing) is refused.
 constexpr uint32_t kIntegritySearchFaces = 256;
+// With attribute seam moves: a seam vertex may leave the place its corner values belong to (its
+// anchor) at this fraction of the squared distance, added to the collapse's error
+// (GroupQemSimplifier::seamPlace; chosen on the textured dragon, docs/attributes.md).
+constexpr double kSeamDrift = 0.05;
+
 // Meshes from this many faces are simplified in a spatial order (GroupQemSimplifier::SpatialOrder).
 constexpr size_t kSpatialOrderFaces = 4096;
 
@@ -225,6 +230,7 @@ struct Candidate {
   CollapseVerdict verdict = CollapseVerdict::NotAnEdge;
   uint32_t keep = kNone, remove = kNone;
   Point3d position;
+  Point3d anchor;       // with attributes, keep on a seam: where its corner values hold (seamPlace)
   double error = 0;     // mean squared distance
   double priority = 0;  // error / quality penalty
 };
@@ -328,6 +334,16 @@ class GroupQemSimplifier {
   // After place(): whether attribute seams let c.remove go into c.keep (AttributeQuadrics::SeamCost,
   // into seamCost), turning the collapse of two seam vertices round when that is allowed or cheaper.
   bool seamCollapse(const uint32_t e[2], Candidate& c, double& seamCost) const;
+  // After seamCollapse, when c.keep is a seam vertex: its anchor (c.anchor: where its corner values
+  // hold) and position. Along a seam between two plain seam points (AttributeQuadrics::SlidesAlong)
+  // the anchor goes to the quadric's minimum on the anchors' segment, each side's values
+  // interpolated along it (AttributeQuadrics::Slide); else it is keep's. With seam moves
+  // (AttributeQuadrics::seamMoves) the position may leave the anchor, at kSeamDrift x the squared
+  // distance (into seamCost); without, it is the anchor.
+  void seamPlace(uint32_t a, uint32_t b, const uint32_t e[2], Candidate& c, double& seamCost) const;
+  // place() again for an edge judged before (nothing changed since): seamCollapse and seamPlace as
+  // judge() runs them; false when the seams no longer allow it.
+  bool placeAtSeam(uint32_t a, uint32_t b, Candidate& c) const;
   double priorityOf(double error, double quality, uint32_t a, uint32_t b) const;
   float lowerBound(uint32_t a, uint32_t b) const;
   void collapse(const Candidate& c);
@@ -445,6 +461,9 @@ class GroupQemSimplifier {
   double floorError_ = 0;
   std::vector<Point3d> pos_;
   std::vector<Quadric> quadric_;
+  // With attributes: per seam vertex, the position its corner values belong to (its input position,
+  // or a point on a seam edge after a slide); pos_ may drift from it with seam moves (seamPlace).
+  std::vector<Point3d> anchor_;
   // A face with its (primary) group: the judging reads both, in one 16-byte record.
   struct FaceRec : std::array<uint32_t, 3> {
     int group;
@@ -740,6 +759,7 @@ void GroupQemSimplifier::init() {
       faces_[f].group = dense[faceInput_[f]];
     }
   }
+  if (attributes_) anchor_ = pos_;
   if (countGroups_) {
     groupFaces_.assign(1 + coarser_.size(), std::vector<int>());
     groupFaces_[0].assign(size_t(groups), 0);
@@ -1033,6 +1053,7 @@ Candidate GroupQemSimplifier::judge(uint32_t a, uint32_t b) {
   if (!nonManifold && !place(a, b, ne == 2 && faces_[e[0]].group != faces_[e[1]].group, c)) return c;
   double seamCost = 0;
   if (attributes_ && (ne > 2 ? attributes_->seam(a) || attributes_->seam(b) : !seamCollapse(e, c, seamCost))) return c;
+  if (attributes_ && !nonManifold) seamPlace(a, b, e, c, seamCost);
 
   // Geometry of the faces that survive: no flip, no zero-area face; their worst quality
   // (2 area / longest edge^2, compared squared: no square root per face).
@@ -1099,6 +1120,68 @@ bool GroupQemSimplifier::seamCollapse(const uint32_t e[2], Candidate& c, double&
     }
   }
   return seamCost >= 0;
+}
+
+bool GroupQemSimplifier::placeAtSeam(uint32_t a, uint32_t b, Candidate& c) const {
+  uint32_t e[2] = {kNone, kNone};
+  uint32_t ne = 0;
+  for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f)
+    if (Contains(faces_[*f], b)) {
+      if (ne < 2) e[ne] = *f;
+      ++ne;
+    }
+  if (ne == 0 || ne > 2) return false;
+  double seamCost = 0;
+  if (!seamCollapse(e, c, seamCost)) return false;
+  seamPlace(a, b, e, c, seamCost);
+  return true;
+}
+
+void GroupQemSimplifier::seamPlace(uint32_t a, uint32_t b, const uint32_t e[2], Candidate& c, double& seamCost) const {
+  if (!attributes_->seam(c.keep)) return;  // off the seams: place()'s position
+  const uint32_t keep = c.keep, gone = c.remove;
+  c.anchor = anchor_[keep];
+  if (!p_.optimalPlacement) return;
+  // A group contour point stays on its contour: both ends on it and the edge along it, or neither.
+  const bool contourA = contourVertex(a), contourB = contourVertex(b);
+  const bool alongContour = contourA && contourB && e[1] != kNone && faces_[e[0]].group != faces_[e[1]].group;
+  if (contourA != contourB || (contourA && !alongContour)) return;
+  Quadric q = quadric_[a];
+  q += quadric_[b];
+  // Along a seam between two plain seam points: the anchor anywhere on the anchors' segment.
+  if (seamCost == 0 && e[1] != kNone && attributes_->seam(gone) &&
+      attributes_->SlidesAlong(a, b, e[0], e[1], faceCorners_)) {
+    const Point3d s = q.segmentMinimum(anchor_[keep], anchor_[gone]);
+    if (!(s == anchor_[gone])) c.anchor = s;  // at gone's anchor: the other way round is the same
+  }
+  if (!attributes_->seamMoves() || contourA) {  // the vertex stays at its anchor
+    if (c.anchor == anchor_[keep] || !(anchor_[keep] == pos_[keep])) {
+      c.anchor = anchor_[keep];
+      return;
+    }
+    const double error = q.error(c.anchor);
+    if (error < c.error) {
+      c.position = c.anchor;
+      c.error = error;
+    } else {
+      c.anchor = anchor_[keep];
+    }
+    return;
+  }
+  // Off its anchor at a cost (the texture stretched over the distance): the minimum of
+  // error(x) + kSeamDrift |x - anchor|^2, a point quadric added to the geometric one.
+  Quadric d = q;
+  const double k = kSeamDrift * (q.w > 0 ? q.w : 1.0);
+  for (int axis = 0; axis < 3; ++axis) {
+    Point3d n(0, 0, 0);
+    n[axis] = 1;
+    d.addPlane(n, -c.anchor[axis], k);
+  }
+  Point3d x;
+  if (!d.minimum(x)) x = c.anchor;
+  c.position = x;
+  c.error = q.error(x);
+  seamCost += kSeamDrift * (x - c.anchor).SquaredNorm();
 }
 
 bool GroupQemSimplifier::keepsApart(uint32_t a, uint32_t b, const Point3d& p) {
@@ -1401,7 +1484,17 @@ void GroupQemSimplifier::PushEdgesOf(uint32_t v) {
 
 void GroupQemSimplifier::collapse(const Candidate& c) {
   const uint32_t keep = c.keep, gone = c.remove;
-  if (attributes_) attributes_->Collapse(keep, gone, facesBegin(gone), count_[gone], faceCorners_);
+  if (attributes_) {
+    if (attributes_->seam(keep) && attributes_->seam(gone) && !(c.anchor == anchor_[keep])) {  // a slide
+      const Point3d d = anchor_[gone] - anchor_[keep];
+      const double dd = d.SquaredNorm();
+      const double t = dd > 0 ? std::min(1.0, std::max(0.0, ((c.anchor - anchor_[keep]) * d) / dd)) : 0.0;
+      attributes_->Slide(keep, gone, t, facesBegin(keep), count_[keep], facesBegin(gone), count_[gone], faceCorners_);
+    } else {
+      attributes_->Collapse(keep, gone, facesBegin(gone), count_[gone], faceCorners_);
+    }
+    if (attributes_->seam(keep)) anchor_[keep] = c.anchor;
+  }
   // The faces on the edge die and leave the lists of their opposite vertices.
   opposite_.clear();
   for (const uint32_t* f = facesBegin(gone); f != facesEnd(gone); ++f) {
@@ -1707,6 +1800,10 @@ void GroupQemSimplifier::CollapseInQueue(const Progress& progress, size_t target
       }
       c.verdict = CollapseVerdict::Allowed;
       place(a, b, true, c);
+      if (attributes_ && (attributes_->seam(a) || attributes_->seam(b)) && !placeAtSeam(a, b, c)) {
+        vs_[a].dropped = vs_[b].dropped = 1;
+        continue;
+      }
     } else {
       c = evaluate(a, b);
       if (c.verdict == CollapseVerdict::NotAnEdge) continue;

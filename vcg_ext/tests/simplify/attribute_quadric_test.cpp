@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "conelod/mesh/attributes.h"
@@ -183,6 +184,98 @@ TEST(AttributeQuadric, ChartJunctionsGoWithoutCrossingSeams) {
     }
   }
   EXPECT_GT(away, 0u) << "no junction moved: the test would not see a seam move";
+}
+
+// A grid curved along y (z = 0.6 (y - 0.5)^2) cut along x = 0.5 into two charts (u = x left, x + 1
+// right, v = y, per face corner): the seam is a polyline of chords, and the quadric's minimum on a
+// seam edge lies inside it. Without seam moves a collapse along the seam slides the merged vertex
+// there (a seam vertex used to stay at one end): every seam vertex stays on the input's seam and
+// each side's coordinates are its chart's at its place. With seam moves a seam vertex may also
+// leave the seam at a cost (the texture stretched): its coordinates stay its chart's at its anchor.
+IndexedMesh CurvedGrid() {
+  IndexedMesh m = UnitGrid();
+  for (auto& p : m.positions) p[2] = 0.6f * (p[1] - 0.5f) * (p[1] - 0.5f);
+  return m;
+}
+void SimplifyTwoCharts(const IndexedMesh& m, bool moves, AttributeQuadrics& aq, GroupQemResult& r) {
+  VertexAttributes layout;
+  layout.texCoords = true;
+  std::vector<float> corner;
+  for (const auto& t : m.faces) {
+    const float cx = (m.positions[t[0]][0] + m.positions[t[1]][0] + m.positions[t[2]][0]) / 3;
+    for (uint32_t v : t) {
+      corner.push_back(m.positions[v][0] + (cx > 0.5f ? 1 : 0));
+      corner.push_back(m.positions[v][1]);
+    }
+  }
+  ASSERT_TRUE(aq.Init(m, layout, corner, 1.0).ok());
+  aq.AllowSeamMoves(moves);
+  GroupQemParams p;
+  p.targetFaces = 24;
+  p.condition1 = false;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, std::vector<int>(m.faceCount(), 0), p, r, Progress(), {}, nullptr, &aq).ok());
+  ASSERT_LE(r.mesh.faceCount(), p.targetFaces);
+}
+// z of the input's seam polyline (x = 0.5) at y.
+float SeamZ(float y) {
+  const int i = std::min(kN - 1, std::max(0, int(std::floor(y * kN))));
+  const float y0 = float(i) / kN, y1 = float(i + 1) / kN, t = (y - y0) / (y1 - y0);
+  const float z0 = 0.6f * (y0 - 0.5f) * (y0 - 0.5f), z1 = 0.6f * (y1 - 0.5f) * (y1 - 0.5f);
+  return z0 + t * (z1 - z0);
+}
+
+TEST(AttributeQuadric, SeamVerticesSlideAlongTheirSeam) {
+  const IndexedMesh m = CurvedGrid();
+  AttributeQuadrics aq;
+  GroupQemResult r;
+  SimplifyTwoCharts(m, false, aq, r);
+  size_t slid = 0;
+  for (size_t o = 0; o < r.mesh.positions.size(); ++o) {
+    if (!aq.seam(r.sourceVertex[o])) continue;
+    const auto& q = r.mesh.positions[o];
+    EXPECT_NEAR(q[0], 0.5f, 1e-5f) << "a seam vertex left the seam";
+    EXPECT_NEAR(q[2], SeamZ(q[1]), 1e-5f) << "a seam vertex left the seam's chords";
+    slid += std::fabs(q[1] * kN - std::round(q[1] * kN)) > 1e-3f;
+  }
+  EXPECT_GT(slid, 0u) << "no seam vertex between two input vertices: no collapse slid along the seam";
+  for (size_t f = 0; f < r.mesh.faceCount(); ++f) {
+    int right = 0;
+    for (int k = 0; k < 3; ++k) {
+      const auto uv = At(aq, r, f, k);
+      const auto& q = r.mesh.positions[r.mesh.faces[f][size_t(k)]];
+      right += uv[0] >= 1;
+      EXPECT_NEAR(uv[0] - (uv[0] >= 1 ? 1 : 0), q[0], 1e-5) << "u does not follow x in its chart";
+      EXPECT_NEAR(uv[1], q[1], 1e-5) << "v does not follow y";
+    }
+    EXPECT_TRUE(right == 0 || right == 3) << "face " << f << " has corners of both charts";
+  }
+}
+
+TEST(AttributeQuadric, SeamVerticesLeaveTheSeamOnlyWithSeamMoves) {
+  const IndexedMesh m = CurvedGrid();
+  AttributeQuadrics aq;
+  GroupQemResult r;
+  SimplifyTwoCharts(m, true, aq, r);
+  size_t off = 0;
+  for (size_t o = 0; o < r.mesh.positions.size(); ++o) {
+    if (!aq.seam(r.sourceVertex[o])) continue;
+    const auto& q = r.mesh.positions[o];
+    off += std::fabs(q[0] - 0.5f) > 1e-5f || std::fabs(q[2] - SeamZ(q[1])) > 1e-5f;
+  }
+  EXPECT_GT(off, 0u) << "no seam vertex left the seam: the quadric's minimum should have drawn one off";
+  for (size_t f = 0; f < r.mesh.faceCount(); ++f) {
+    int right = 0;
+    for (int k = 0; k < 3; ++k) {
+      const auto uv = At(aq, r, f, k);
+      right += uv[0] >= 1;
+      const float u = uv[0] - (uv[0] >= 1 ? 1 : 0);
+      // Each chart's own coordinates: left u in [0, 0.5], right in [0.5, 1] (after the shift).
+      EXPECT_TRUE(uv[0] >= 1 ? u >= 0.5f - 1e-5f && u <= 1 + 1e-5f : u >= -1e-5f && u <= 0.5f + 1e-5f)
+          << "face " << f << ": u " << uv[0] << " outside its chart";
+      EXPECT_TRUE(uv[1] >= -1e-5f && uv[1] <= 1 + 1e-5f);
+    }
+    EXPECT_TRUE(right == 0 || right == 3) << "face " << f << " has corners of both charts";
+  }
 }
 
 // Weight 0: the collapse is the attribute-free one, vertex for vertex.
