@@ -338,7 +338,7 @@ struct ConeScratch {
   std::vector<vcg::Point3d> support, trial;
   // The normals of the unit whose exact cone is being made, in the order of its face list, as
   // runs: of faceNormal_ from level 2 on (read in place: the scans above need no copy), of
-  // `normals` at level 1 (from l1Normal_ or the mesh). Copied only for Welzl's algorithm.
+  // `normals` at level 1 (from the mesh). Copied only for Welzl's algorithm.
   std::vector<std::pair<const vcg::Point3d*, const vcg::Point3d*>> runs;
   // Calls f on each of those normals in order while it returns true; false: f stopped it.
   template <class F>
@@ -382,7 +382,7 @@ class HierarchyBuilder {
   void EmitLevel(double thresholdDeg, GroupHierarchy& out, bool firstLevel);
   void nextLevelUnits();
   void MakeConeExact(int u, ConeScratch& cs);
-  void MakeCone(int u, ConeScratch& cs);  // MakeConeExact without the widening for l1Normal_
+  void MakeCone(int u, ConeScratch& cs);  // MakeConeExact without the widening for l1Rounded_
   bool alive(int u) const { return chains_[size_t(u)].tail >= 0; }
   Neighbour* nbBegin(int u) { return arena_.data() + links_[size_t(u)].nbOffset; }
   Neighbour* nbEnd(int u) { return nbBegin(u) + links_[size_t(u)].nbCount; }
@@ -417,13 +417,13 @@ class HierarchyBuilder {
   BigVector<int> faceNext_;
   BigVector<int> meshFace_;  // from level 2 on: the mesh face of each renumbered face
   // Face normals of the renumbered faces, from level 2 on. Level 1's arrays leave no room for
-  // these under the memory target (it reads l1Normal_, or the mesh in strict mode); above it,
+  // these under the memory target (its cone refreshes compute them from the mesh); above it,
   // with far fewer units, there is.
   BigVector<vcg::Point3d> faceNormal_;
-  // Level 1, default mode, during the merges only: every face's unit normal rounded to float
-  // (12 bytes a face, where doubles would not fit under the memory target), read by the cone
-  // refreshes instead of recomputing each normal from the scattered mesh.
-  BigVector<vcg::Point3f> l1Normal_;
+  // Level 1, default mode, during the merges only: the cone refreshes take every face's unit
+  // normal rounded to float (as the array of them that this replaces held, 12 bytes a face that
+  // issue 25's memory target leaves no room for), and widen the cone for the rounding.
+  bool l1Rounded_ = false;
   BigVector<double> faceArea_;  // from level 2 on: every mesh face's area (FaceNormalAndArea), by mesh face
   int meshFace(int f) const { return meshFace_.empty() ? f : meshFace_[size_t(f)]; }
   void RenumberFaces();
@@ -449,7 +449,48 @@ class HierarchyBuilder {
   // The scratch of the merges (one thread); EmitLevel's exact cones take one per thread.
   ConeScratch scratch_;
 
+  // Units: units_[u] from level 2 on (and at level 1 in strict mode). Level 1 in the default mode
+  // (sparse_) stores only the units that have merged, in pool_ at slot_[u] (-1: u is still its
+  // face alone): a face's own unit is made from the mesh when read (SingleUnit, bit for bit what
+  // storing it held), so that level 1 does not hold a 64-byte unit per face (issue 25's memory
+  // target: the pool holds at most one unit per two faces, and its slots are reused).
   BigVector<Unit> units_;
+  bool sparse_ = false;
+  BigVector<int> slot_;
+  BigVector<Unit> pool_;
+  std::vector<int> freeSlots_;
+  size_t unitCount() const { return chains_.size(); }
+  void SingleUnit(int f, Unit& u) const;
+  // Unit u as stored, or made into `tmp` (a face alone at level 1).
+  const Unit& unitOf(int u, Unit& tmp) const {
+    if (!sparse_) return units_[size_t(u)];
+    const int s = slot_[size_t(u)];
+    if (s >= 0) return pool_[size_t(s)];
+    SingleUnit(u, tmp);
+    return tmp;
+  }
+  // Unit u, stored first if it was not (pool_ never grows past its reserve: references stay valid).
+  Unit& unit(int u) {
+    if (!sparse_) return units_[size_t(u)];
+    int& s = slot_[size_t(u)];
+    if (s < 0) {
+      if (freeSlots_.empty()) {
+        s = int(pool_.size());
+        pool_.emplace_back();
+      } else {
+        s = freeSlots_.back();
+        freeSlots_.pop_back();
+      }
+      SingleUnit(u, pool_[size_t(s)]);
+    }
+    return pool_[size_t(s)];
+  }
+  void PrefetchUnit(int u) const {
+    if (!sparse_)
+      Prefetch(&units_[size_t(u)]);
+    else
+      Prefetch(&slot_[size_t(u)]);
+  }
   BigVector<Link> links_;
   BigVector<Chain> chains_;
   BestTree tree_;
@@ -474,6 +515,20 @@ class HierarchyBuilder {
   uint8_t* dirty_ = nullptr;
   bool cancelled_ = false;
 };
+
+void HierarchyBuilder::SingleUnit(int f, Unit& u) const {
+  const auto& t = mesh_.faces[size_t(f)];
+  vcg::Point3d n;
+  double area;
+  FaceNormalAndArea(mesh_, size_t(f), n, area);
+  u.setCone(n.SquaredNorm() > 0.5 ? NormalCone::Of(n) : NormalCone::Empty());
+  const double scaledArea = area * scale_ * scale_;
+  for (int k = 0; k < 3; ++k) u.vecArea[k] = float(n[k] * scaledArea);
+  u.setSphere(TriangleSphere(vcg::Point3d::Construct(mesh_.positions[t[0]]) * scale_,
+                             vcg::Point3d::Construct(mesh_.positions[t[1]]) * scale_,
+                             vcg::Point3d::Construct(mesh_.positions[t[2]]) * scale_));
+  u.faceCount = 1;
+}
 
 float HierarchyBuilder::evaluate(const Unit& a, const Unit& b) const {
   double half;
@@ -514,10 +569,10 @@ void HierarchyBuilder::setBest(int u) {
 
 void HierarchyBuilder::MakeConeExact(int u, ConeScratch& cs) {
   MakeCone(u, cs);
-  if (!l1Normal_.empty()) {
+  if (l1Rounded_) {
     // From normals rounded to float (each off its direction by ~1e-7 rad): widened by 1e-6 rad to
     // stay a bound of the true normals' cone. Emission recomputes every level-1 cone exactly.
-    Unit& unit = units_[size_t(u)];
+    Unit& unit = this->unit(u);
     if (unit.half >= 0 && unit.half < kPi / 2) {
       unit.half += 1e-6;
       if (unit.half >= kPi / 2) unit.half = kPi;  // uncullable: stored as pi (setThreshold)
@@ -541,16 +596,6 @@ void HierarchyBuilder::MakeCone(int u, ConeScratch& cs) {
       head = faceNext_[size_t(last)];
     }
     if (!support_.empty() && TrySupportCone(u, cs)) return;
-  } else if (!l1Normal_.empty()) {
-    cs.normals.clear();
-    do {
-      f = faceNext_[size_t(f)];
-      vcg::Point3d n = vcg::Point3d::Construct(l1Normal_[size_t(f)]);
-      const double len2 = n.SquaredNorm();
-      if (len2 > 0) n /= std::sqrt(len2);
-      cs.normals.push_back(n);
-    } while (f != tail);
-    cs.runs.assign(1, {cs.normals.data(), cs.normals.data() + cs.normals.size()});
   } else {
     // Walk the list first, then compute the normals: the walk is a chain of dependent loads, the
     // normals are independent of each other and their misses overlap (prefetched ahead).
@@ -567,6 +612,12 @@ void HierarchyBuilder::MakeCone(int u, ConeScratch& cs) {
       if (i + 4 < n)
         for (const uint32_t v : mesh_.faces[size_t(cs.faces[i + 4])]) Prefetch(&mesh_.positions[v]);
       FaceNormalAndArea(mesh_, size_t(cs.faces[i]), cs.normals[i], area);
+      if (l1Rounded_) {  // rounded to float and made unit again (see l1Rounded_)
+        vcg::Point3d& r = cs.normals[i];
+        r = vcg::Point3d::Construct(vcg::Point3f::Construct(r));
+        const double len2 = r.SquaredNorm();
+        if (len2 > 0) r /= std::sqrt(len2);
+      }
     }
     cs.runs.assign(1, {cs.normals.data(), cs.normals.data() + n});
   }
@@ -576,9 +627,9 @@ void HierarchyBuilder::MakeCone(int u, ConeScratch& cs) {
     for (const auto& run : cs.runs) cs.normals.insert(cs.normals.end(), run.first, run.second);
   }
   ConeSupport support;
-  units_[size_t(u)].setCone(MinimalCone(cs.normals, support));
+  unit(u).setCone(MinimalCone(cs.normals, support));
   if (!support_.empty()) support_[size_t(u)] = support;
-  chains_[size_t(u)].exactSize = units_[size_t(u)].faceCount;
+  chains_[size_t(u)].exactSize = unit(u).faceCount;
 }
 
 // MakeConeExact's shortcut (see support_), on the normals in cs.runs: true when the
@@ -600,7 +651,7 @@ bool HierarchyBuilder::TrySupportCone(int u, ConeScratch& cs) {
 // exact cone: the bunny's build took 516 M instructions, 485 M since; MinimalCone's share of
 // the dragon's profile went from 6.8% to 1.6%.)
 bool HierarchyBuilder::seededCone(int u, ConeScratch& cs) {
-  const Unit& unit = units_[size_t(u)];
+  const Unit& unit = this->unit(u);
   if (!(unit.half >= 0 && unit.half < kPi / 2)) return false;
   const vcg::Point3d axis = unit.axis;
   const vcg::Point3d* first = nullptr;
@@ -653,14 +704,14 @@ bool HierarchyBuilder::seededCone(int u, ConeScratch& cs) {
   NormalCone cone;
   cone.axis = axis2;
   cone.halfAngle = std::acos(std::min(1.0, cosHalf));
-  units_[size_t(u)].setCone(cone);
+  this->unit(u).setCone(cone);
   if (!support_.empty()) {
     ConeSupport& support = support_[size_t(u)];
     support.normal[0] = far1;
     support.normal[1] = far2;
     support.count = cosHalf == 1 ? 1 : 2;
   }
-  chains_[size_t(u)].exactSize = units_[size_t(u)].faceCount;
+  chains_[size_t(u)].exactSize = this->unit(u).faceCount;
   return true;
 }
 
@@ -689,9 +740,9 @@ bool HierarchyBuilder::RefineCone(int u, ConeScratch& cs) {
       if (!few) return false;
     }  // else some of the normals fit in no hemisphere: neither do all of them
     if (outside == 0) {
-      units_[size_t(u)].setCone(guess);
+      unit(u).setCone(guess);
       if (!support_.empty()) support_[size_t(u)] = found;
-      chains_[size_t(u)].exactSize = units_[size_t(u)].faceCount;
+      chains_[size_t(u)].exactSize = unit(u).faceCount;
       return true;
     }
   }
@@ -707,19 +758,20 @@ void HierarchyBuilder::MergeUnits(int u, int p) {
   if (arena_.size() + room > arena_.capacity()) CompactArena(room);
   // A merge is bound by memory latency: ask for every neighbour's state and geometry now, so
   // that the misses overlap each other and the cone arithmetic below.
-  Prefetch(&units_[size_t(p)]);
+  PrefetchUnit(p);
   Prefetch(&chains_[size_t(u)]);
   Prefetch(&chains_[size_t(p)]);
   for (const Link* src : {&lu, &lp}) {
     const Neighbour* list = arena_.data() + src->nbOffset;
     for (int i = 0; i < src->nbCount; ++i) {
       Prefetch(&links_[size_t(list[i].id)]);
-      Prefetch(&units_[size_t(list[i].id)]);
+      PrefetchUnit(list[i].id);
     }
   }
 
-  Unit& a = units_[size_t(u)];
-  const Unit& b = units_[size_t(p)];
+  Unit& a = unit(u);
+  Unit bAlone;
+  const Unit& b = unitOf(p, bAlone);
   Chain& ac = chains_[size_t(u)];
   Chain& bc = chains_[size_t(p)];
   const NormalCone ca = a.cone(), cb = b.cone();
@@ -737,6 +789,10 @@ void HierarchyBuilder::MergeUnits(int u, int p) {
   for (int k = 0; k < 3; ++k) a.vecArea[k] += b.vecArea[k];
   a.setSphere(UnionSphere(a.sphere(), b.sphere()));
   a.faceCount += b.faceCount;
+  if (sparse_ && slot_[size_t(p)] >= 0) {  // p is dead: its slot goes to the next unit stored
+    freeSlots_.push_back(slot_[size_t(p)]);
+    slot_[size_t(p)] = -1;
+  }
   // Splice the circular face lists: u's faces, then p's.
   const int headA = faceNext_[size_t(ac.tail)];
   faceNext_[size_t(ac.tail)] = faceNext_[size_t(bc.tail)];
@@ -780,7 +836,8 @@ void HierarchyBuilder::MergeUnits(int u, int p) {
       lw.stamp = st;
       Prefetch(arena_.data() + lw.nbOffset);  // for the update below, now that its offset is here
       tree_.prefetch(w);
-      scratchList_.push_back({w, evaluate(a, units_[size_t(w)])});
+      Unit wAlone;
+      scratchList_.push_back({w, evaluate(a, unitOf(w, wAlone))});
     }
   }
   const int count = int(scratchList_.size());
@@ -849,7 +906,7 @@ void HierarchyBuilder::CompactArena(size_t room) {
   };
   auto inPrefix = [&](int u) { return alive(u) && links_[size_t(u)].nbOffset < prefixEnd_; };
   if (identity) {
-    for (int u = 0; u < int(units_.size()); ++u)
+    for (int u = 0; u < int(unitCount()); ++u)
       if (inPrefix(u)) slide(u);
   } else {
     const size_t oldCount = arenaOrder_.size();
@@ -875,7 +932,7 @@ bool HierarchyBuilder::ReportProgress(long mergesSoFar) {
 
 bool HierarchyBuilder::RunLevel(double thresholdDeg, bool localMaximaFirst, long& mergesSoFar) {
   setThreshold(thresholdDeg);
-  const size_t n = units_.size();
+  const size_t n = unitCount();
   aliveCount_ = int(n);
   stampCounter_ = 0;
   tree_.reset(n);
@@ -888,7 +945,7 @@ bool HierarchyBuilder::RunLevel(double thresholdDeg, bool localMaximaFirst, long
   for (size_t u = 0; u < n; ++u) {
     if (prefetch && u + kAhead < n)
       for (const Neighbour* nb = nbBegin(int(u + kAhead)); nb != nbEnd(int(u + kAhead)); ++nb) {
-        Prefetch(&units_[size_t(nb->id)]);
+        PrefetchUnit(nb->id);
         Prefetch(&links_[size_t(nb->id)]);
       }
     if (prefetch && scoreOnce && u + kAhead / 2 < n)
@@ -899,10 +956,11 @@ bool HierarchyBuilder::RunLevel(double thresholdDeg, bool localMaximaFirst, long
     float best = kNoPair;
     int partner = -1;
     for (Neighbour* nb = nbBegin(int(u)); nb != nbEnd(int(u)); ++nb) {
+      Unit uAlone, wAlone;
       if (!scoreOnce) {
-        nb->score = evaluate(units_[u], units_[size_t(nb->id)]);
+        nb->score = evaluate(unitOf(int(u), uAlone), unitOf(nb->id, wAlone));
       } else if (std::isnan(nb->score)) {
-        nb->score = evaluate(units_[u], units_[size_t(nb->id)]);
+        nb->score = evaluate(unitOf(int(u), uAlone), unitOf(nb->id, wAlone));
         // The higher unit has not chosen its best yet: its entry takes the score too.
         if (size_t(nb->id) > u) setEntryScore(nb->id, int(u), nb->score);
       }
@@ -957,7 +1015,7 @@ bool HierarchyBuilder::RunLevel(double thresholdDeg, bool localMaximaFirst, long
             const int ahead = links_[size_t(u) + 8].bestPartner;
             if (ahead >= 0) {
               Prefetch(&links_[size_t(ahead)]);
-              Prefetch(&units_[size_t(ahead)]);
+              PrefetchUnit(ahead);
             }
           }
           ok = visit(u);
@@ -990,7 +1048,7 @@ bool HierarchyBuilder::RunLevel(double thresholdDeg, bool localMaximaFirst, long
 }
 
 void HierarchyBuilder::EmitLevel(double thresholdDeg, GroupHierarchy& out, bool firstLevel) {
-  const size_t n = units_.size();
+  const size_t n = unitCount();
   GroupLevel level;
   level.thresholdDeg = thresholdDeg;
   level.faceGroup.resize(size_t(faceCount_));
@@ -1225,7 +1283,8 @@ void HierarchyBuilder::nextLevelUnits() {
   arena.reserve(2 * entries + 16);
   for (size_t id = 0; id < g; ++id) {
     const int u = rootOfGroup_[id];
-    units[id] = units_[size_t(u)];
+    Unit alone;
+    units[id] = unitOf(u, alone);
     chains[id] = chains_[size_t(u)];
     const int count = links_[size_t(u)].nbCount;
     links[id] = Link{-1, uint32_t(arena.grow(size_t(count))), count, 0};
@@ -1239,6 +1298,10 @@ void HierarchyBuilder::nextLevelUnits() {
     support_.swap(support);
   }
   units_.swap(units);
+  sparse_ = false;
+  BigVector<int>().swap(slot_);
+  BigVector<Unit>().swap(pool_);
+  std::vector<int>().swap(freeSlots_);
   links_.swap(links);
   chains_.swap(chains);
   absorbedBy_.resize(g);
@@ -1278,34 +1341,28 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
       makeLists(offsets.data(), neighbours.data(), neighbours.size());
     }
     faceNext_.resize(size_t(nf));
-    units_.resize(size_t(nf));
+    sparse_ = !params_.strictGreedy;
+    if (sparse_)
+      slot_.assign(size_t(nf), -1);
+    else
+      units_.resize(size_t(nf));
     chains_.resize(size_t(nf));
-    if (!params_.strictGreedy) l1Normal_.resize(size_t(nf));
+    l1Rounded_ = !params_.strictGreedy;
   }
 
   // Level-1 units: one per face. In the default mode each pair is scored once, from its lower
   // unit (RunLevel); here already, as soon as both units are made.
   const bool scoreNow = !params_.strictGreedy;
+  if (sparse_) pool_.reserve(size_t(nf) / 2 + 1);  // mapped: only the slots used take memory
   if (scoreNow) setThreshold(std::min(params_.coneThresholdDeg, 180.0));
   prescored_ = scoreNow;
-  // Each face makes its own unit (on every thread), then scores its pairs with the faces before
-  // it, as RunLevel would score them (from the lower unit), writing the score into both lists:
-  // each entry is written by one face only, with the same arithmetic whatever the thread.
+  // Each face makes its own unit (on every thread; in the default mode none is stored: see
+  // sparse_), then scores its pairs with the faces before it, as RunLevel would score them (from
+  // the lower unit), writing the score into both lists: each entry is written by one face only,
+  // with the same arithmetic whatever the thread.
   ParallelChunks(size_t(nf), threads_, kFaceChunk, [&](size_t begin, size_t end, unsigned) {
     for (int f = int(begin); f < int(end); ++f) {
-      Unit& u = units_[size_t(f)];
-      const auto& t = mesh_.faces[size_t(f)];
-      vcg::Point3d n;
-      double area;
-      FaceNormalAndArea(mesh_, size_t(f), n, area);
-      u.setCone(n.SquaredNorm() > 0.5 ? NormalCone::Of(n) : NormalCone::Empty());
-      if (!l1Normal_.empty()) l1Normal_[size_t(f)] = vcg::Point3f::Construct(n);
-      const double scaledArea = area * scale_ * scale_;
-      for (int k = 0; k < 3; ++k) u.vecArea[k] = float(n[k] * scaledArea);
-      u.setSphere(TriangleSphere(vcg::Point3d::Construct(mesh_.positions[t[0]]) * scale_,
-                                 vcg::Point3d::Construct(mesh_.positions[t[1]]) * scale_,
-                                 vcg::Point3d::Construct(mesh_.positions[t[2]]) * scale_));
-      u.faceCount = 1;
+      if (!sparse_) SingleUnit(f, units_[size_t(f)]);
       faceNext_[size_t(f)] = f;
       chains_[size_t(f)] = Chain{f, 1, links_[size_t(f)].nbCount};
     }
@@ -1313,11 +1370,12 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
   if (scoreNow) {
     ParallelChunks(size_t(nf), threads_, kFaceChunk, [&](size_t begin, size_t end, unsigned) {
       for (int f = int(begin); f < int(end); ++f) {
-        const Unit& u = units_[size_t(f)];
+        Unit uAlone, wAlone;
+        const Unit& u = unitOf(f, uAlone);
         for (Neighbour* nb = nbBegin(f); nb != nbEnd(f); ++nb) {
           const int w = nb->id;
           if (w >= f) continue;
-          nb->score = evaluate(units_[size_t(w)], u);
+          nb->score = evaluate(unitOf(w, wAlone), u);
           setEntryScore(w, f, nb->score);
         }
       }
@@ -1335,7 +1393,8 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     exactGrowth_ = params_.strictGreedy ? 2 : (level == 1 ? 8 : 4);
     const bool merged = RunLevel(std::min(threshold, 180.0), level == 1 && !params_.strictGreedy, merges);
     prescored_ = false;
-    BigVector<vcg::Point3f>().swap(l1Normal_);  // before the level's output grows
+    l1Rounded_ = false;
+    tree_.release();  // (the emission reads no score: its arrays go before the level's output grows)
     if (cancelled_) {
       out = GroupHierarchy();
       return Status::Cancelled();

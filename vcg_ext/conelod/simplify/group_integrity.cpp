@@ -63,7 +63,15 @@ Status MeasureGroupIntegrity(const IndexedMesh& before, const std::vector<int>& 
   if (!s.ok()) return s;
   s = CheckIds(after, groupAfter, "after");
   if (!s.ok()) return s;
-  const GroupPieces pb = CountGroupPieces(before, groupBefore), pa = CountGroupPieces(after, groupAfter);
+  return MeasureGroupIntegrity(CountGroupPieces(before, groupBefore), after, groupAfter, out);
+}
+
+Status MeasureGroupIntegrity(const GroupPieces& pb, const IndexedMesh& after, const std::vector<int>& groupAfter,
+                             GroupIntegrity& out) {
+  out = GroupIntegrity();
+  Status s = CheckIds(after, groupAfter, "after");
+  if (!s.ok()) return s;
+  const GroupPieces pa = CountGroupPieces(after, groupAfter);
   const size_t kListed = 20;
   out.groupsBefore = int(pb.ids.size());
   out.groupsAfter = int(pa.ids.size());

@@ -47,6 +47,10 @@ struct GroupIntegrity {
 // when an id list does not have one id >= 0 per face.
 Status MeasureGroupIntegrity(const IndexedMesh& before, const std::vector<int>& groupBefore, const IndexedMesh& after,
                              const std::vector<int>& groupAfter, GroupIntegrity& out);
+// The same, given the groups' pieces before (CountGroupPieces of the mesh before, counted while it
+// was there: `conelod simplify` frees the input during the collapse).
+Status MeasureGroupIntegrity(const GroupPieces& before, const IndexedMesh& after, const std::vector<int>& groupAfter,
+                             GroupIntegrity& out);
 
 // Groups whose faces' normals no longer fit in a cone of half-angle limitDeg (their exact minimal
 // cone, normal_cone.h, is wider by more than 1e-6 rad): after a simplification, the groups of a

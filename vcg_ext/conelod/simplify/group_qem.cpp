@@ -10,6 +10,7 @@
 
 #include <vcg/space/box3.h>
 
+#include "conelod/big_alloc.h"
 #include "conelod/mesh/mesh_check.h"
 
 namespace conelod {
@@ -237,7 +238,8 @@ struct Candidate {
 
 // Dense ids 0..n-1 for group ids >= 0 (in order of first appearance); returns n. `original`, when
 // given, receives the id each dense id stands for.
-int DenseIds(const std::vector<int>& ids, std::vector<int>& dense, std::vector<int>* original = nullptr) {
+template <class Ids>
+int DenseIds(const std::vector<int>& ids, Ids& dense, std::vector<int>* original = nullptr) {
   dense.resize(ids.size());
   if (original) original->clear();
   int n = 0;
@@ -294,7 +296,8 @@ class GroupQemSimplifier {
         passes_(p.passes && (!region || (region->frozenVertex.empty() && !(region->separation > 0)))),
         attributes_(attributes && attributes->active() ? attributes : nullptr) {}
 
-  void init();
+  // `owned` (optional): the input mesh itself, freed (left empty) as soon as init() has its copy.
+  void init(IndexedMesh* owned = nullptr);
   Candidate evaluate(uint32_t a, uint32_t b);  // judge() + counts
   Status run(const Progress& progress, GroupQemStats& stats);
   // Frees what only run() reads (the heap, the face lists, the quadrics, the search marks), so
@@ -310,7 +313,7 @@ class GroupQemSimplifier {
   void BuildFaceLists();
   void AnalyzeVertex(uint32_t v);
   // Per face, the sides that add an edge quadric in init() (bit e: corner e to e + 1).
-  void SideMasks(std::vector<uint8_t>& mask);
+  void SideMasks(BigVector<uint8_t>& mask);
   bool interior(uint32_t v) const { return (vs_[v].info.flags & kClosed) && vs_[v].info.groups == 1; }
   bool interiorIn(uint32_t v, const std::vector<int>& layer) const;
   bool fixedVertex(uint32_t v, bool countSeams = true) const;
@@ -410,7 +413,8 @@ class GroupQemSimplifier {
     return true;
   }
 
-  const IndexedMesh& mesh_;
+  const IndexedMesh& mesh_;  // read by init() only
+  size_t facesIn_ = 0;       // mesh_'s faces
   const std::vector<int>& group_;
   const std::vector<const std::vector<int>*>& coarser_;
   // Every coarser grouping is a union of the primary groups (as the levels of a GroupHierarchy):
@@ -617,7 +621,7 @@ void GroupQemSimplifier::AnalyzeVertex(uint32_t v) {
   if (borderEnds > 0) vi.flags |= kBorderEdge;
 }
 
-void GroupQemSimplifier::SideMasks(std::vector<uint8_t>& mask) {
+void GroupQemSimplifier::SideMasks(BigVector<uint8_t>& mask) {
   const uint32_t nv = uint32_t(pos_.size());
   mask.assign(faces_.size(), 0);
   for (uint32_t u = 0; u < nv; ++u) {
@@ -696,7 +700,9 @@ void GroupQemSimplifier::SpatialOrder(const vcg::Box3<double>& box) {
   const size_t nv = mesh_.positions.size(), nf = mesh_.faces.size();
   const double extent = std::max({box.DimX(), box.DimY(), box.DimZ()});
   const double scale = extent > 0 ? double((1 << 21) - 1) / extent : 0;
-  std::vector<std::pair<uint64_t, uint32_t>> keys(nv);
+  // (The temporaries here and in init() are mapped (BigVector): freed, they go back to the system
+  // instead of leaving holes in the heap under the loop's arrays.)
+  BigVector<std::pair<uint64_t, uint32_t>> keys(nv);
   for (uint32_t v = 0; v < nv; ++v) {
     const Point3d p = Point3d::Construct(mesh_.positions[v]);
     uint64_t code = 0;
@@ -706,13 +712,13 @@ void GroupQemSimplifier::SpatialOrder(const vcg::Box3<double>& box) {
   }
   std::sort(keys.begin(), keys.end());
   vertexInput_.resize(nv);
-  std::vector<uint32_t> internal(nv);
+  BigVector<uint32_t> internal(nv);
   for (uint32_t i = 0; i < nv; ++i) {
     vertexInput_[i] = keys[i].second;
     internal[keys[i].second] = i;
   }
-  std::vector<std::pair<uint64_t, uint32_t>>().swap(keys);
-  std::vector<uint64_t> faceKeys(nf);
+  BigVector<std::pair<uint64_t, uint32_t>>().swap(keys);
+  BigVector<uint64_t> faceKeys(nf);
   for (uint32_t f = 0; f < nf; ++f) {
     const auto& t = mesh_.faces[f];
     faceKeys[f] = uint64_t(std::min({internal[t[0]], internal[t[1]], internal[t[2]]})) << 32 | f;
@@ -722,8 +728,9 @@ void GroupQemSimplifier::SpatialOrder(const vcg::Box3<double>& box) {
   for (size_t f = 0; f < nf; ++f) faceInput_[f] = uint32_t(faceKeys[f]);
 }
 
-void GroupQemSimplifier::init() {
+void GroupQemSimplifier::init(IndexedMesh* owned) {
   const size_t nv = mesh_.positions.size(), nf = mesh_.faces.size();
+  facesIn_ = nf;
   // Work around the bounding-box centre: quadrics lose less precision near the origin.
   vcg::Box3<double> box;
   for (const auto& t : mesh_.faces)
@@ -738,7 +745,7 @@ void GroupQemSimplifier::init() {
   }
   pos_.resize(nv);
   faces_.resize(nf);
-  std::vector<int> dense;
+  BigVector<int> dense;
   const int groups = DenseIds(group_, dense);
   primaryGroups_ = groups;
   if (vertexInput_.empty()) {
@@ -748,7 +755,7 @@ void GroupQemSimplifier::init() {
       faces_[f].group = dense[f];
     }
   } else {
-    std::vector<uint32_t> internal(nv);
+    BigVector<uint32_t> internal(nv);
     for (uint32_t i = 0; i < nv; ++i) {
       internal[vertexInput_[i]] = i;
       pos_[i] = Point3d::Construct(mesh_.positions[vertexInput_[i]]) - center_;
@@ -760,6 +767,7 @@ void GroupQemSimplifier::init() {
     }
   }
   if (attributes_) anchor_ = pos_;
+  if (owned) *owned = IndexedMesh();  // nothing below reads mesh_
   if (countGroups_) {
     groupFaces_.assign(1 + coarser_.size(), std::vector<int>());
     groupFaces_[0].assign(size_t(groups), 0);
@@ -814,7 +822,7 @@ void GroupQemSimplifier::init() {
   // plane through the edge orthogonal to it, so that the line keeps its shape. Which sides do is
   // found vertex by vertex (SideMasks: the faces around a vertex lie together in memory) rather
   // than by a search of a corner's faces for every side (the dragon: a quarter of init()).
-  std::vector<uint8_t> sideMask;
+  BigVector<uint8_t> sideMask;
   if (p_.boundaryWeight > 0) SideMasks(sideMask);
   quadric_.assign(nv, Quadric());
   for (uint32_t f = 0; f < nf; ++f) {
@@ -1594,8 +1602,16 @@ bool GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t targe
     float priority;
     uint32_t side;
   };
-  std::vector<Ranked> ranked, scratch;
+  // Mapped (BigVector), sized for the most edges the live faces can have (three each) and freed at
+  // the end of each pass: only the pages the ranks reach take memory, and the face lists' room,
+  // which the collapses fill pass after pass, does not sit beside the first pass's ranks.
+  BigVector<Ranked> ranked, scratch;
   std::vector<uint32_t> histogram(3 * 2048);
+  const auto key = [](const Ranked& r) {
+    uint32_t k;
+    std::memcpy(&k, &r.priority, 4);
+    return k;
+  };
   const uint32_t nv = uint32_t(pos_.size());
   const size_t toRemove = stats.facesIn > target ? stats.facesIn - target : 1;
   size_t nextReport = 0, checked = 0;
@@ -1613,7 +1629,7 @@ bool GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t targe
   while (liveFaces_ > target) {
     if (liveFaces_ <= p_.queueFaces || (target > 0 && liveFaces_ - target <= liveFaces_ / 8)) return handOver(true);
     // Rank every live edge once, from its lower endpoint.
-    ranked.clear();
+    ranked.reserve(3 * liveFaces_);
     for (uint32_t v = 0; v < nv; ++v) {
       if (vs_[v].dead || count_[v] == 0 || frozen(v)) continue;
       ++stamp_;
@@ -1633,14 +1649,51 @@ bool GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t targe
       }
     }
     if (ranked.empty()) return handOver(false);
-    // Stable LSD radix sort on the rank's bits (non-negative floats order as their bits), 11 bits at a time.
+
+    // The pass's goal: what is left to remove, but at least an eighth of the faces (else the last
+    // passes, each ending a sixth of the way to the target, would rank every edge for a few collapses).
+    const size_t faceGoal = std::max(target > 0 ? liveFaces_ - target : liveFaces_, liveFaces_ / 8);
+    const size_t edgeGoal = faceGoal / 2;
+    // The error goal is 1.5x the rank at position edgeGoal of the ranks in order: found by a radix
+    // selection on the rank's bits (non-negative floats order as their bits), 11 bits at a time,
+    // without sorting.
+    float errorGoal = std::numeric_limits<float>::max();
+    if (edgeGoal < ranked.size()) {
+      size_t k = edgeGoal;
+      uint32_t high = 0;  // the bits found so far, above `shift`
+      for (int shift = 22; shift >= 0; shift -= 11) {
+        std::fill(histogram.begin(), histogram.begin() + 2048, 0u);
+        const uint32_t above = shift == 22 ? 0 : ~((uint32_t(1) << (shift + 11)) - 1);
+        for (const Ranked& r : ranked)
+          if ((key(r) & above) == high) ++histogram[(key(r) >> shift) & 2047];
+        uint32_t digit = 0;
+        while (k >= histogram[digit]) k -= histogram[digit++];
+        high |= digit << shift;
+      }
+      float rank;
+      std::memcpy(&rank, &high, 4);
+      errorGoal = 1.5f * rank;
+    }
+    // The walk, in rank order, ends at the first rank over the goal (if it gets there): the least
+    // such rank's bits are `stop`, and only the ranks below it are ever read. They are kept, in
+    // their order, and sorted alone (the sort's second buffer is that much smaller).
+    uint32_t stop = UINT32_MAX;
+    bool stops = false;
+    for (const Ranked& r : ranked)
+      if (r.priority > errorGoal && (!stops || key(r) < stop)) {
+        stop = key(r);
+        stops = true;
+      }
+    if (stops) {
+      size_t kept = 0;
+      for (const Ranked& r : ranked)
+        if (key(r) < stop) ranked[kept++] = r;
+      ranked.resize(kept);
+    }
+    // Stable LSD radix sort on the rank's bits, 11 bits at a time: equal ranks keep their order.
+    scratch.reserve(ranked.size());
     scratch.resize(ranked.size());
     std::fill(histogram.begin(), histogram.end(), 0u);
-    const auto key = [](const Ranked& r) {
-      uint32_t k;
-      std::memcpy(&k, &r.priority, 4);
-      return k;
-    };
     for (const Ranked& r : ranked) {
       const uint32_t k = key(r);
       ++histogram[k & 2047];
@@ -1658,13 +1711,7 @@ bool GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t targe
       for (const Ranked& r : ranked) scratch[h[(key(r) >> (11 * d)) & 2047]++] = r;
       ranked.swap(scratch);
     }
-
-    // The pass's goal: what is left to remove, but at least an eighth of the faces (else the last
-    // passes, each ending a sixth of the way to the target, would rank every edge for a few collapses).
-    const size_t faceGoal = std::max(target > 0 ? liveFaces_ - target : liveFaces_, liveFaces_ / 8);
-    const size_t edgeGoal = faceGoal / 2;
-    const float errorGoal =
-        edgeGoal < ranked.size() ? 1.5f * ranked[edgeGoal].priority : std::numeric_limits<float>::max();
+    BigVector<Ranked>().swap(scratch);
     float over = std::numeric_limits<float>::max();  // the least priority over the goal met
     const uint32_t passStart = epoch_;
     const size_t facesAtStart = liveFaces_;
@@ -1675,9 +1722,17 @@ bool GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t targe
     // then), their face lists and faces kAhead[2] ahead. The dragon at 10 %: the walk ~10 % faster.
     constexpr size_t kAhead[3] = {24, 16, 8};
     const size_t walkEnd = ranked.size();
-    for (size_t i = 0; i < walkEnd; ++i) {
-      const Ranked& r = ranked[i];
+    for (size_t i = 0; i <= walkEnd; ++i) {
       if (liveFaces_ <= target) break;
+      if (i == walkEnd) {  // the first rank over the goal, if any
+        if (stops) {
+          float r;
+          std::memcpy(&r, &stop, 4);
+          over = std::min(over, r);
+        }
+        break;
+      }
+      const Ranked& r = ranked[i];
       if (r.priority > errorGoal) {
         over = std::min(over, r.priority);
         break;
@@ -1719,6 +1774,7 @@ bool GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t targe
       stats.maxCollapseError = std::max(stats.maxCollapseError, std::sqrt(c.error) / diag_);
     }
     ++stats.passes;
+    BigVector<Ranked>().swap(ranked);
     if (collapses == 0 && !(over < std::numeric_limits<float>::max())) return handOver(false);  // nothing allowed left
     // A weak pass (under a sixth of its goal): the queue goes on from here.
     if (facesAtStart - liveFaces_ <= faceGoal / 6) return handOver(true);
@@ -1727,7 +1783,7 @@ bool GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t targe
 }
 
 Status GroupQemSimplifier::run(const Progress& progress, GroupQemStats& stats) {
-  stats.facesIn = mesh_.faces.size();
+  stats.facesIn = facesIn_;
   const size_t target = p_.targetFaces;
   const double maxErrorSq = p_.maxError > 0 ? (p_.maxError * diag_) * (p_.maxError * diag_) : -1;
   stats.stop = GroupQemStats::Stop::NoMoreCollapses;
@@ -1741,7 +1797,7 @@ void GroupQemSimplifier::CollapseInQueue(const Progress& progress, size_t target
                                          GroupQemStats& stats) {
   // Every live edge once, from its lower endpoint, at its lower bound (after passes: from the
   // state they reached, every vertex's collapses queued again).
-  heap_.reserve(mesh_.faces.size() * 2);
+  heap_.reserve(facesIn_ * 2);
   const uint32_t nv = uint32_t(pos_.size());
   const size_t toRemove = stats.facesIn > target ? stats.facesIn - target : 1;
   for (uint32_t v = 0; v < nv; ++v) {
@@ -2325,10 +2381,13 @@ const char* ToString(CollapseVerdict v) {
   return "?";
 }
 
-Status SimplifyPreservingGroups(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
-                                const GroupQemParams& params, GroupQemResult& out, const Progress& progress,
-                                const std::vector<const std::vector<int>*>& coarserGroups, const GroupQemRegion* region,
-                                AttributeQuadrics* attributes) {
+namespace {
+
+// Both forms of SimplifyPreservingGroups; `owned`: the input, freed once init() has copied it.
+Status Simplify(const IndexedMesh& mesh, IndexedMesh* owned, const std::vector<int>& faceGroup,
+                const GroupQemParams& params, GroupQemResult& out, const Progress& progress,
+                const std::vector<const std::vector<int>*>& coarserGroups, const GroupQemRegion* region,
+                AttributeQuadrics* attributes) {
   out = GroupQemResult();
   Status s = ValidateParams(params);
   if (!s.ok()) return s;
@@ -2342,12 +2401,28 @@ Status SimplifyPreservingGroups(const IndexedMesh& mesh, const std::vector<int>&
   if (region && !(region->separation >= 0 && std::isfinite(region->separation)))
     return Status::Invalid("the region's separation must be finite and >= 0");
   GroupQemSimplifier simplifier(mesh, faceGroup, coarserGroups, params, region, attributes, true);
-  simplifier.init();
+  simplifier.init(owned);
   s = simplifier.run(progress, out.stats);
   simplifier.ReleaseLoop();
   if (s.ok() || s.code == Status::Code::Cancelled) simplifier.output(out);
   if (s.ok() && progress) progress(100, "Group-preserving QEM: done");
   return s;
+}
+
+}  // namespace
+
+Status SimplifyPreservingGroups(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
+                                const GroupQemParams& params, GroupQemResult& out, const Progress& progress,
+                                const std::vector<const std::vector<int>*>& coarserGroups, const GroupQemRegion* region,
+                                AttributeQuadrics* attributes) {
+  return Simplify(mesh, nullptr, faceGroup, params, out, progress, coarserGroups, region, attributes);
+}
+
+Status SimplifyPreservingGroups(IndexedMesh&& mesh, const std::vector<int>& faceGroup, const GroupQemParams& params,
+                                GroupQemResult& out, const Progress& progress) {
+  IndexedMesh owned = std::move(mesh);
+  mesh = IndexedMesh();
+  return Simplify(owned, &owned, faceGroup, params, out, progress, {}, nullptr, nullptr);
 }
 
 CollapseVerdict EvaluateCollapse(const IndexedMesh& mesh, const std::vector<int>& faceGroup,

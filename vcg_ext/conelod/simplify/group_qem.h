@@ -218,6 +218,11 @@ Status SimplifyPreservingGroups(const IndexedMesh& mesh, const std::vector<int>&
                                 const Progress& progress = Progress(),
                                 const std::vector<const std::vector<int>*>& coarserGroups = {},
                                 const GroupQemRegion* region = nullptr, AttributeQuadrics* attributes = nullptr);
+// The same, taking `mesh` over: it is freed once the simplifier has its own copy (before the
+// collapses), so that it does not sit under the collapse's arrays (issue 25's memory target:
+// `conelod simplify` keeps no input mesh through the run). `mesh` is left empty.
+Status SimplifyPreservingGroups(IndexedMesh&& mesh, const std::vector<int>& faceGroup, const GroupQemParams& params,
+                                GroupQemResult& out, const Progress& progress = Progress());
 
 // The verdict on one collapse, as the simplifier would judge it on the unmodified mesh (tests,
 // diagnostics). Checks run in this order: topology, lock, condition 1 (in integrity mode: the

@@ -61,6 +61,17 @@ TEST(MeasureGroupIntegrity, ReportsVanishedSplitAndAlreadyDisconnectedGroups) {
   EXPECT_EQ(gi.groupsDisconnectedBefore, 1);  // 5, reported, and not counted as split
   EXPECT_EQ(gi.groupsDisconnectedAfter, 2);   // 5 and 3
   EXPECT_DOUBLE_EQ(gi.intact(), 0.5);
+  // The same from the pieces counted before (`conelod simplify` frees the input during the collapse).
+  GroupIntegrity fromPieces;
+  ASSERT_TRUE(MeasureGroupIntegrity(CountGroupPieces(before, gb), after, ga, fromPieces).ok());
+  EXPECT_EQ(fromPieces.groupsBefore, gi.groupsBefore);
+  EXPECT_EQ(fromPieces.groupsAfter, gi.groupsAfter);
+  EXPECT_EQ(fromPieces.vanishedIds, gi.vanishedIds);
+  EXPECT_EQ(fromPieces.splitIds, gi.splitIds);
+  EXPECT_EQ(fromPieces.groupsDisconnectedBefore, gi.groupsDisconnectedBefore);
+  EXPECT_EQ(fromPieces.groupsDisconnectedAfter, gi.groupsDisconnectedAfter);
+  EXPECT_EQ(fromPieces.groupsNew, gi.groupsNew);
+  EXPECT_FALSE(MeasureGroupIntegrity(CountGroupPieces(before, gb), after, {1, 2}, fromPieces).ok());
   // The identity is 100% intact.
   ASSERT_TRUE(MeasureGroupIntegrity(before, gb, before, gb, gi).ok());
   EXPECT_DOUBLE_EQ(gi.intact(), 1.0);

@@ -817,6 +817,36 @@ TEST(Passes, HandOverToTheQueueAndStopAtItsFloor) {
   EXPECT_EQ(r.mesh.faces.size(), 56u) << "the queue's floor";
 }
 
+// The form that takes the input over (`conelod simplify`: the input is freed once the simplifier
+// has its copy) gives the same result and leaves the mesh empty; passes from the start, so that the
+// error goal's selection and the sort of the ranks below it run on every pass.
+TEST(Passes, TakingTheInputOverGivesTheSameResult) {
+  const IndexedMesh m = LoadReal("stanford_bunny_bun_zipper_res4.ply");
+  GroupHierarchy h;
+  ASSERT_TRUE(BuildConeHierarchy(m, ConeGroupingParams(), h).ok());
+  for (double ratio : {0.5, 0.1, 0.02}) {
+    SCOPED_TRACE(ratio);
+    GroupQemParams p;
+    p.passes = true;
+    p.queueFaces = 0;
+    p.targetFaces = size_t(ratio * double(m.faces.size()));
+    const std::vector<int>& g = h.level(AutoGroupLevel(h, p.targetFaces)).faceGroup;
+    GroupQemResult kept, taken;
+    ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, kept).ok());
+    IndexedMesh input = m;
+    ASSERT_TRUE(SimplifyPreservingGroups(std::move(input), g, p, taken).ok());
+    EXPECT_TRUE(input.faces.empty() && input.positions.empty());
+    EXPECT_GT(taken.stats.passes, 0u);
+    EXPECT_EQ(taken.stats.passes, kept.stats.passes);
+    EXPECT_EQ(taken.stats.collapsesInPasses, kept.stats.collapsesInPasses);
+    EXPECT_EQ(taken.sourceFace, kept.sourceFace);
+    EXPECT_EQ(taken.sourceVertex, kept.sourceVertex);
+    EXPECT_EQ(taken.mesh.faces, kept.mesh.faces);
+    EXPECT_EQ(taken.mesh.positions, kept.mesh.positions);
+    ExpectValidOutput(m, taken);
+  }
+}
+
 TEST(Passes, MaxErrorStopsEarly) {
   const IndexedMesh m = test::Sphere(4);
   const std::vector<int> g(m.faces.size(), 0);
