@@ -434,7 +434,7 @@ class GroupQemSimplifier {
   const double regionDiagonal_;  // > 0: the whole mesh's diagonal
   const double separationSq_;    // GroupQemRegion::separation squared; 0: no check
   // GroupQemRegion::separation: false when the vertex of collapse (a, b), at p, would lie closer
-  // than it to one of its neighbours or join two neighbours closer than it to each other.
+  // than it to one of its neighbours or join anew two neighbours closer than it to each other.
   bool keepsApart(uint32_t a, uint32_t b, const Point3d& p);
   // Vertices and faces are numbered in a spatial order inside the simplifier (see SpatialOrder);
   // vertexInput_/faceInput_: the input index of each (empty: the input's order).
@@ -1193,27 +1193,36 @@ void GroupQemSimplifier::seamPlace(uint32_t a, uint32_t b, const uint32_t e[2], 
 }
 
 bool GroupQemSimplifier::keepsApart(uint32_t a, uint32_t b, const Point3d& p) {
-  // The neighbours of a and of b (each once), then every pair of one of a's with one of b's.
-  ++stamp_;
+  // The neighbours of a (marked sa), then those of b: one that a has too is marked sb (a common
+  // one), one of b's alone is listed after a's (from onlyB).
+  const uint32_t sa = ++stamp_, sb = ++stamp_;
   nbScratch_.clear();
-  size_t ofA = 0;
-  for (uint32_t v : {a, b}) {
-    for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f)
-      for (uint32_t u : faces_[*f])
-        if (u != a && u != b && vs_[u].mark != stamp_) {
-          vs_[u].mark = stamp_;
-          if ((pos_[u] - p).SquaredNorm() < separationSq_) return false;
-          nbScratch_.push_back(u);
-        }
-    if (v == a) {
-      ofA = nbScratch_.size();
-      ++stamp_;  // b's neighbours are listed even when a has them too
-    }
+  for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f)
+    for (uint32_t u : faces_[*f])
+      if (u != a && u != b && vs_[u].mark != sa) {
+        vs_[u].mark = sa;
+        if ((pos_[u] - p).SquaredNorm() < separationSq_) return false;
+        nbScratch_.push_back(u);
+      }
+  const size_t onlyB = nbScratch_.size();
+  for (const uint32_t* f = facesBegin(b); f != facesEnd(b); ++f)
+    for (uint32_t u : faces_[*f])
+      if (u != a && u != b && vs_[u].mark != sb) {
+        const bool common = vs_[u].mark == sa;
+        vs_[u].mark = sb;
+        if (common) continue;
+        if ((pos_[u] - p).SquaredNorm() < separationSq_) return false;
+        nbScratch_.push_back(u);
+      }
+  // Only the pairs the collapse joins anew: one of a's alone with one of b's alone. Two vertices
+  // both a's neighbours (or both b's) are already joined to one vertex, which the collapse keeps
+  // (its faces but those on the edge (a, b)): such a close pair is carried as it is (issue 27: refusing
+  // it kept every vertex around a fine frozen border of a subdivided input from collapsing).
+  for (size_t i = 0; i < onlyB; ++i) {
+    if (vs_[nbScratch_[i]].mark == sb) continue;  // a common neighbour
+    for (size_t j = onlyB; j < nbScratch_.size(); ++j)
+      if ((pos_[nbScratch_[i]] - pos_[nbScratch_[j]]).SquaredNorm() < separationSq_) return false;
   }
-  for (size_t i = 0; i < ofA; ++i)
-    for (size_t j = ofA; j < nbScratch_.size(); ++j)
-      if (nbScratch_[i] != nbScratch_[j] && (pos_[nbScratch_[i]] - pos_[nbScratch_[j]]).SquaredNorm() < separationSq_)
-        return false;
   return true;
 }
 

@@ -196,7 +196,8 @@ struct GroupQemRegion {
   double diagonal = 0;                // the whole mesh's bounding-box diagonal (errors and ties are
                                       // relative to it); 0: the part's own
   // > 0 (model units): a collapse never makes its vertex a neighbour of two distinct vertices
-  // closer than this to each other, nor places it this close to a neighbour. The LOD build gives
+  // closer than this to each other that were not both neighbours of one of its two endpoints,
+  // nor places it this close to a neighbour. The LOD build gives
   // its file's grid cell (lod_dag.cpp): two vertices in one cell are one vertex once read, and a
   // vertex joined to both would use the edge to that cell 3 or 4 times (the dragon's seams hold
   // distinct vertices 1.7e-6 apart, one cell).

@@ -706,6 +706,54 @@ TEST(Simplify, FrozenVerticesOfARegionStayWhereTheyAre) {
   EXPECT_EQ(SimplifyPreservingGroups(m, g, p, r, Progress(), {}, &bad).code, Status::Code::InvalidInput);
 }
 
+// GroupQemRegion::separation refuses only the collapses that join two close vertices anew: pairs
+// of vertices closer than it that are already neighbours of one vertex (the LOD's frozen borders
+// keep the input's, issue 27) do not stop the collapses around them. A flat grid with 25 frozen
+// pairs 0.002 apart (each a vertex and one inserted next to it in a face of its own), simplified
+// as far as it goes: 161 faces are left (refusing every collapse with one vertex of a pair around
+// each endpoint left 210), and every pair of close vertices around an output vertex is one of
+// those pairs.
+TEST(Simplify, CloseFrozenPairsDoNotStopTheCollapsesAroundThem) {
+  const int n = 24;
+  IndexedMesh m = test::Grid(n);
+  auto id = [n](int x, int y) { return uint32_t(y * (n + 1) + x); };
+  std::vector<std::pair<uint32_t, uint32_t>> pairs;
+  for (int y : {3, 7, 11, 15, 19})
+    for (int x : {3, 7, 11, 15, 19}) {
+      const uint32_t v = id(x, y), a = id(x + 1, y), b = id(x + 1, y + 1);
+      const uint32_t w = uint32_t(m.positions.size());
+      m.positions.emplace_back(float(x) + 0.002f, float(y) + 0.001f, 0.f);
+      auto f = std::find(m.faces.begin(), m.faces.end(), std::array<uint32_t, 3>{{v, a, b}});
+      ASSERT_NE(f, m.faces.end());
+      *f = {v, a, w};
+      m.faces.push_back({a, b, w});
+      m.faces.push_back({b, v, w});
+      pairs.push_back({std::min(v, w), std::max(v, w)});
+    }
+  GroupQemRegion region;
+  region.frozenVertex.assign(m.positions.size(), 0);
+  for (const auto& pr : pairs) region.frozenVertex[pr.first] = region.frozenVertex[pr.second] = 1;
+  region.separation = 0.01;
+  GroupQemParams p;
+  p.targetFaces = 1;
+  GroupQemResult r;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, std::vector<int>(m.faces.size(), 0), p, r, Progress(), {}, &region).ok());
+  ExpectValidOutput(m, r);
+  EXPECT_LE(r.mesh.faces.size(), 180u);
+  // Around every output vertex, two neighbours closer than the separation are a frozen pair.
+  std::vector<std::set<uint32_t>> around(r.mesh.positions.size());
+  for (const auto& t : r.mesh.faces)
+    for (int i = 0; i < 3; ++i) around[t[size_t(i)]].insert({t[size_t((i + 1) % 3)], t[size_t((i + 2) % 3)]});
+  for (const auto& nb : around)
+    for (uint32_t i : nb)
+      for (uint32_t j : nb)
+        if (i < j && (r.mesh.positions[i] - r.mesh.positions[j]).Norm() < region.separation) {
+          const uint32_t si = r.sourceVertex[i], sj = r.sourceVertex[j];
+          EXPECT_TRUE(std::count(pairs.begin(), pairs.end(), std::make_pair(std::min(si, sj), std::max(si, sj))))
+              << "vertices " << si << " and " << sj << " joined anew";
+        }
+}
+
 TEST(Simplify, LockedContoursDoNotChange) {
   const IndexedMesh m = test::Sphere(3);
   std::vector<int> g;
