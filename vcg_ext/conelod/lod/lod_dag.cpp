@@ -1245,6 +1245,11 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
     std::vector<uint8_t> localShared;
     std::vector<uint32_t> outCluster, rank;
     std::vector<uint64_t> here((P + 63) / 64, 0);  // the chunk's vertices (cleared after it)
+    struct GroupPlace {
+      uint32_t firstNew, firstCluster;
+      size_t firstFace;
+    };
+    std::vector<GroupPlace> groupAt;
     for (size_t r = 0; r < chunks; ++r) {
       if (progress && !progress(std::min(95, 10 + 8 * k), "LOD: simplifying groups chunk by chunk"))
         return fail(Status::Cancelled());
@@ -1317,34 +1322,52 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
       std::vector<double> maxChild(static_cast<size_t>(G), 0.0);
       for (uint32_t c = c0; c < c1; ++c)
         maxChild[size_t(group[c - c0])] = std::max(maxChild[size_t(group[c - c0])], double(L.clusterError[c]));
-      out.clear();
-      outCluster.clear();
-      for (int g = 0; g < G; ++g) {
-        GroupResult& res = results[size_t(g)];
-        const uint32_t RV = uint32_t(res.localToGlobal.size());
-        const uint32_t firstNew = uint32_t(dag.positions.size());
-        dag.positions.insert(dag.positions.end(), res.newPositions.begin(), res.newPositions.end());
-        const float ef = GroupErrorAbove(maxChild[size_t(g)], res.distance);
-        L.groupError.push_back(ef);
-        const uint32_t base = uint32_t(N.clusterCount());
-        const size_t firstNext = nextFaces.size();
-        nextFaces.resize(firstNext + res.clusters, 0);
-        for (size_t f = 0; f < res.faces.size(); ++f) {
-          Face u;
-          for (size_t i = 0; i < 3; ++i) {
-            const uint32_t t = res.faces[f][i];
-            u[i] = t < RV ? verts[res.localToGlobal[t]] : firstNew + (t - RV);
-          }
-          out.push_back(u);
-          outCluster.push_back(base + res.cluster[f]);
-          ++nextFaces[firstNext + res.cluster[f]];
+      // The chunk's part of level k + 1 in group order: each group's first new vertex id, first
+      // cluster and first face (prefix sums, with the per-cluster fields), then each group's new
+      // positions and faces written at those places on the threads.
+      groupAt.resize(size_t(G));
+      const size_t firstNext = nextFaces.size();
+      const uint32_t clusterBase = uint32_t(N.clusterCount());
+      {
+        size_t id = dag.positions.size(), face = 0;
+        uint32_t cluster = clusterBase;
+        for (int g = 0; g < G; ++g) {
+          const GroupResult& res = results[size_t(g)];
+          groupAt[size_t(g)] = GroupPlace{uint32_t(id), cluster, face};
+          id += res.newPositions.size();
+          face += res.faces.size();
+          cluster += res.clusters;
+          const float ef = GroupErrorAbove(maxChild[size_t(g)], res.distance);
+          L.groupError.push_back(ef);
+          N.clusterGroup.resize(cluster, -1);
+          N.clusterCreator.resize(cluster, groupBase + g);
+          N.clusterError.resize(cluster, ef);
+          nextNode.resize(cluster, clusterNode[c0]);
         }
-        N.clusterGroup.resize(base + res.clusters, -1);
-        N.clusterCreator.resize(base + res.clusters, groupBase + g);
-        N.clusterError.resize(base + res.clusters, ef);
-        nextNode.resize(base + res.clusters, clusterNode[c0]);
-        res = GroupResult();
+        dag.positions.resize(id);
+        out.resize(face);
+        outCluster.resize(face);
+        nextFaces.resize(firstNext + (cluster - clusterBase), 0);
       }
+      ParallelChunks(size_t(G), threads, 1, [&](size_t b, size_t e, unsigned) {
+        for (size_t g = b; g < e; ++g) {
+          GroupResult& res = results[g];
+          const GroupPlace& at = groupAt[g];
+          const uint32_t RV = uint32_t(res.localToGlobal.size());
+          std::copy(res.newPositions.begin(), res.newPositions.end(), dag.positions.begin() + long(at.firstNew));
+          uint32_t* count = nextFaces.data() + firstNext + (at.firstCluster - clusterBase);
+          for (size_t f = 0; f < res.faces.size(); ++f) {
+            Face& u = out[at.firstFace + f];
+            for (size_t i = 0; i < 3; ++i) {
+              const uint32_t t = res.faces[f][i];
+              u[i] = t < RV ? verts[res.localToGlobal[t]] : at.firstNew + (t - RV);
+            }
+            outCluster[at.firstFace + f] = at.firstCluster + res.cluster[f];
+            ++count[res.cluster[f]];
+          }
+          res = GroupResult();
+        }
+      });
       newFaces += out.size();
       s = spill.append(size_t(k + 1), out, outCluster, dag.positions);
       if (!s.ok()) return fail(s);
