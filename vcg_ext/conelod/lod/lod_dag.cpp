@@ -48,6 +48,54 @@ namespace {
 using Face = std::array<uint32_t, 3>;
 constexpr uint32_t kNoPlace = 0xFFFFFFFFu;
 
+// A map of uint32 keys (below 2^32 - 1) to uint32 values, open addressing with linear probing in
+// one table that doubles when half full (SimplifyGroup's id tables: a few allocations, not one
+// per key as a std::unordered_map makes; `expected` keys fit the first table).
+class IdMap {
+ public:
+  explicit IdMap(size_t expected) {
+    int bits = 4;
+    while ((size_t(1) << bits) < 2 * expected) ++bits;
+    Allocate(bits);
+  }
+  // {the key's value, true} after storing `value` for a new key; {its value, false} for a known one.
+  std::pair<uint32_t, bool> Emplace(uint32_t key, uint32_t value) {
+    const size_t mask = slots_.size() - 1;
+    for (size_t h = Home(key);; h = (h + 1) & mask) {
+      const uint64_t s = slots_[h];
+      if (s == kEmpty) {
+        slots_[h] = uint64_t(key) << 32 | value;
+        if (2 * ++count_ > slots_.size()) Grow();
+        return {value, true};
+      }
+      if (uint32_t(s >> 32) == key) return {uint32_t(s), false};
+    }
+  }
+
+ private:
+  static constexpr uint64_t kEmpty = ~uint64_t(0);
+  size_t Home(uint32_t key) const { return size_t((uint64_t(key) * 0x9E3779B97F4A7C15ull) >> shift_); }
+  void Allocate(int bits) {
+    shift_ = 64 - bits;
+    slots_.assign(size_t(1) << bits, uint64_t(kEmpty));  // (a copy: C++14 would odr-use kEmpty)
+  }
+  void Grow() {
+    std::vector<uint64_t> old;
+    old.swap(slots_);
+    Allocate(64 - shift_ + 1);
+    const size_t mask = slots_.size() - 1;
+    for (uint64_t s : old)
+      if (s != kEmpty) {
+        size_t h = Home(uint32_t(s >> 32));
+        while (slots_[h] != kEmpty) h = (h + 1) & mask;
+        slots_[h] = s;
+      }
+  }
+  std::vector<uint64_t> slots_;
+  size_t count_ = 0;
+  int shift_ = 60;
+};
+
 // One record per edge of every face, carrying an id of that face (the face itself, or its cluster),
 // sorted by edge and then by id: the records of one edge stand together. Works on any vertex id
 // space (it sorts rather than indexing by vertex).
@@ -637,7 +685,9 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
   std::vector<Face> wedgeFaces;      // the same faces in wedge-local ids (localToGlobal)
   std::vector<uint32_t> weldedOf;    // per wedge-local id: its vertex of `local`
   std::vector<uint32_t> firstWedge;  // per vertex of `local`: its first wedge-local id
-  std::unordered_map<uint32_t, uint32_t> toLocal, toWelded;
+  // Global id -> wedge-local id, place -> vertex of `local`.
+  // (A group of F faces has about F / 2 vertices: its borders and seams add some.)
+  IdMap toLocal(groupFaces.size()), toWelded(wedges ? groupFaces.size() : 0);
   out.localToGlobal.clear();
   local.faces.reserve(groupFaces.size());
   wedgeFaces.reserve(groupFaces.size());
@@ -645,18 +695,21 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
     Face t, w;
     for (int i = 0; i < 3; ++i) {
       const uint32_t v = levelFaces[f][size_t(i)];
-      auto ins = toLocal.emplace(v, uint32_t(out.localToGlobal.size()));
+      const std::pair<uint32_t, bool> ins = toLocal.Emplace(v, uint32_t(out.localToGlobal.size()));
       if (ins.second) {
         out.localToGlobal.push_back(v);
-        auto wp = toWelded.emplace(wedges ? attributes.place[v] : v, uint32_t(local.positions.size()));
+        // (without places, one vertex per wedge: a new wedge is a new vertex)
+        const std::pair<uint32_t, bool> wp =
+            wedges ? toWelded.Emplace(attributes.place[v], uint32_t(local.positions.size()))
+                   : std::make_pair(uint32_t(local.positions.size()), true);
         if (wp.second) {
           local.positions.push_back(positions[v]);
-          firstWedge.push_back(ins.first->second);
+          firstWedge.push_back(ins.first);
         }
-        weldedOf.push_back(wp.first->second);
+        weldedOf.push_back(wp.first);
       }
-      w[size_t(i)] = ins.first->second;
-      t[size_t(i)] = weldedOf[ins.first->second];
+      w[size_t(i)] = ins.first;
+      t[size_t(i)] = weldedOf[ins.first];
     }
     local.faces.push_back(t);
     wedgeFaces.push_back(w);
@@ -714,8 +767,16 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
   }
   // Each output corner's attributes at its place, as they will be stored; the distinct values of
   // each output vertex in the order its corners come (without seams: one).
+  // (One flat list: each vertex's values linked in the order they come, from head[o];
+  // cornerVariant: the entry of each corner's value.)
   const size_t O = res.mesh.positions.size();
-  std::vector<std::vector<std::pair<Codes, uint32_t>>> variants(O);
+  struct Variant {
+    Codes codes;
+    uint32_t id, next;
+  };
+  std::vector<Variant> variants;
+  variants.reserve(O);
+  std::vector<uint32_t> head(O, kNoPlace);
   std::vector<uint32_t> cornerVariant(res.mesh.faces.size() * 3, 0);
   {
     std::vector<float> value(std::max<size_t>(1, channels));
@@ -724,17 +785,21 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
         const uint32_t o = res.mesh.faces[f][size_t(k)];
         Codes c;
         if (withAttributes) {
-          if (!wedges && !variants[o].empty()) {  // one value per vertex: its first corner's
-            cornerVariant[3 * f + size_t(k)] = 0;
+          if (!wedges && head[o] != kNoPlace) {  // one value per vertex: its first corner's
+            cornerVariant[3 * f + size_t(k)] = head[o];
             continue;
           }
           const vcg::Point3f& q = res.mesh.positions[o];
           quadrics.Evaluate(res.sourceFace[f], k, res.sourceVertex[o], vcg::Point3d(q[0], q[1], q[2]), value.data());
           c = StoreChannels(value.data(), attributes);
         }
-        uint32_t j = 0;
-        while (j < variants[o].size() && !(variants[o][j].first == c)) ++j;
-        if (j == variants[o].size()) variants[o].push_back({c, 0});
+        uint32_t* link = &head[o];  // (into `variants`: not used after the push_back below)
+        while (*link != kNoPlace && !(variants[*link].codes == c)) link = &variants[*link].next;
+        uint32_t j = *link;
+        if (j == kNoPlace) {
+          j = *link = uint32_t(variants.size());
+          variants.push_back({c, 0, kNoPlace});
+        }
         cornerVariant[3 * f + size_t(k)] = j;
       }
   }
@@ -763,8 +828,9 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
         region.frozenVertex[src] ||
         (std::fabs(p[0] - q[0]) <= still && std::fabs(p[1] - q[1]) <= still && std::fabs(p[2] - q[2]) <= still);
     uint32_t firstNew = kNoPlace;  // a moved vertex's wedges share their new position
-    for (auto& var : variants[o]) {
-      const Codes& c = var.first;
+    for (uint32_t j = head[o]; j != kNoPlace; j = variants[j].next) {
+      Variant& var = variants[j];
+      const Codes& c = var.codes;
       uint32_t id = kNoPlace;
       if (!wedges) {
         if (region.frozenVertex[src] ||
@@ -788,14 +854,12 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
         id = addNew(p, c, firstNew);
         if (firstNew == kNoPlace) firstNew = id;
       }
-      var.second = id;
+      var.id = id;
     }
   }
-  for (size_t f = 0; f < res.mesh.faces.size(); ++f) {
-    Face t;
-    for (size_t k = 0; k < 3; ++k) t[k] = variants[res.mesh.faces[f][k]][cornerVariant[3 * f + k]].second;
-    out.faces.push_back(t);
-  }
+  out.faces.resize(res.mesh.faces.size());
+  for (size_t f = 0; f < res.mesh.faces.size(); ++f)
+    for (size_t k = 0; k < 3; ++k) out.faces[f][k] = variants[cornerVariant[3 * f + k]].id;
   // One-sided distance: every input vertex of the group to the simplified faces. Faces and
   // vertices are visited in Morton order of their position, each vertex scanning the faces
   // outwards from its own place in that order: a near face comes early, and a vertex stops as
