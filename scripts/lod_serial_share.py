@@ -6,7 +6,7 @@
 #        -o OUT.clod --threads 1 [--memory 128M]
 #   scripts/lod_serial_share.py lod.data [N]
 # A sample is the build's when a frame is BuildDag, BuildLodDagFromChunks, BuildLevels or
-# StreamLevels; it is the threads' work when a frame is RunThreads, ParallelChunks or
+# StreamLevels; it is the threads' work when a frame is RunThreads, ParallelChunks, ParallelItems or
 # SimplifyGroup (what runs inside conelod/parallel.h's pools); the others are serial. Prints the
 # two shares and the N [12] most frequent innermost functions of the serial samples.
 import collections
@@ -29,7 +29,7 @@ for sample in out.split('\n\n'):
     if not any(k in text for k in ('BuildLevels', 'StreamLevels', 'BuildDag', 'BuildLodDagFromChunks')):
         count['other'] += 1
         continue
-    threads = any(k in text for k in ('RunThreads', 'ParallelChunks', 'SimplifyGroup'))
+    threads = any(k in text for k in ('RunThreads', 'ParallelChunks', 'ParallelItems', 'SimplifyGroup'))
     count['threads' if threads else 'serial'] += 1
     if not threads:
         names = []

@@ -93,4 +93,24 @@ void ParallelChunks(size_t n, unsigned threads, size_t chunk, const Body& body) 
   });
 }
 
+// Runs body(i, scratch) for each i of [0, n), one item at a time from a shared counter, on up to
+// `threads` threads (thread 0 is this one). Each thread has its own Scratch, made once (default
+// constructed) and kept from one item to the next: buffers a body reuses rather than allocates per
+// item. The bodies must touch disjoint data (apart from their scratch). After an exception the
+// other threads take no new item; it is rethrown here.
+template <class Scratch, class Body>
+void ParallelItems(size_t n, unsigned threads, const Body& body) {
+  threads = unsigned(std::max<size_t>(1, std::min<size_t>(threads, n)));
+  std::atomic<size_t> next(0);
+  RunThreads(threads, [&](unsigned) {
+    Scratch scratch;
+    try {
+      for (size_t i; (i = next.fetch_add(1)) < n;) body(i, scratch);
+    } catch (...) {
+      next = n;
+      throw;
+    }
+  });
+}
+
 }  // namespace conelod

@@ -48,6 +48,54 @@ namespace {
 using Face = std::array<uint32_t, 3>;
 constexpr uint32_t kNoPlace = 0xFFFFFFFFu;
 
+// A map of uint32 keys (below 2^32 - 1) to uint32 values, open addressing with linear probing in
+// one table that doubles when half full (SimplifyGroup's id tables: a few allocations, not one
+// per key as a std::unordered_map makes; `expected` keys fit the first table).
+class IdMap {
+ public:
+  explicit IdMap(size_t expected) {
+    int bits = 4;
+    while ((size_t(1) << bits) < 2 * expected) ++bits;
+    Allocate(bits);
+  }
+  // {the key's value, true} after storing `value` for a new key; {its value, false} for a known one.
+  std::pair<uint32_t, bool> Emplace(uint32_t key, uint32_t value) {
+    const size_t mask = slots_.size() - 1;
+    for (size_t h = Home(key);; h = (h + 1) & mask) {
+      const uint64_t s = slots_[h];
+      if (s == kEmpty) {
+        slots_[h] = uint64_t(key) << 32 | value;
+        if (2 * ++count_ > slots_.size()) Grow();
+        return {value, true};
+      }
+      if (uint32_t(s >> 32) == key) return {uint32_t(s), false};
+    }
+  }
+
+ private:
+  static constexpr uint64_t kEmpty = ~uint64_t(0);
+  size_t Home(uint32_t key) const { return size_t((uint64_t(key) * 0x9E3779B97F4A7C15ull) >> shift_); }
+  void Allocate(int bits) {
+    shift_ = 64 - bits;
+    slots_.assign(size_t(1) << bits, uint64_t(kEmpty));  // (a copy: C++14 would odr-use kEmpty)
+  }
+  void Grow() {
+    std::vector<uint64_t> old;
+    old.swap(slots_);
+    Allocate(64 - shift_ + 1);
+    const size_t mask = slots_.size() - 1;
+    for (uint64_t s : old)
+      if (s != kEmpty) {
+        size_t h = Home(uint32_t(s >> 32));
+        while (slots_[h] != kEmpty) h = (h + 1) & mask;
+        slots_[h] = s;
+      }
+  }
+  std::vector<uint64_t> slots_;
+  size_t count_ = 0;
+  int shift_ = 60;
+};
+
 // One record per edge of every face, carrying an id of that face (the face itself, or its cluster),
 // sorted by edge and then by id: the records of one edge stand together. Works on any vertex id
 // space (it sorts rather than indexing by vertex).
@@ -433,19 +481,15 @@ int GroupClustersByChunk(const LodDag::Level& L, int per, const std::vector<uint
   std::vector<uint32_t>().swap(runOf);
   std::vector<std::vector<int>> local(runs);
   std::vector<int> count(runs, 0);
-  std::atomic<size_t> next(0);
-  RunThreads(unsigned(std::min<size_t>(std::max(1u, threads), runs)), [&](unsigned) {
-    LodDag::Level sub;
-    for (size_t r = next++; r < runs; r = next++) {
-      sub.faces.clear();
-      sub.faceCluster.clear();
-      for (uint32_t j = start[r]; j < start[r + 1]; ++j) {
-        sub.faces.push_back(L.faces[faces[j]]);
-        sub.faceCluster.push_back(L.faceCluster[faces[j]] - first[r]);
-      }
-      sub.clusterGroup.assign(first[r + 1] - first[r], -1);
-      count[r] = GroupClusters(sub, per, 0, local[r]);
+  ParallelItems<LodDag::Level>(runs, threads, [&](size_t r, LodDag::Level& sub) {
+    sub.faces.clear();
+    sub.faceCluster.clear();
+    for (uint32_t j = start[r]; j < start[r + 1]; ++j) {
+      sub.faces.push_back(L.faces[faces[j]]);
+      sub.faceCluster.push_back(L.faceCluster[faces[j]] - first[r]);
     }
+    sub.clusterGroup.assign(first[r + 1] - first[r], -1);
+    count[r] = GroupClusters(sub, per, 0, local[r]);
   });
   group.assign(C, -1);
   int groups = 0;
@@ -641,7 +685,9 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
   std::vector<Face> wedgeFaces;      // the same faces in wedge-local ids (localToGlobal)
   std::vector<uint32_t> weldedOf;    // per wedge-local id: its vertex of `local`
   std::vector<uint32_t> firstWedge;  // per vertex of `local`: its first wedge-local id
-  std::unordered_map<uint32_t, uint32_t> toLocal, toWelded;
+  // Global id -> wedge-local id, place -> vertex of `local`.
+  // (A group of F faces has about F / 2 vertices: its borders and seams add some.)
+  IdMap toLocal(groupFaces.size()), toWelded(wedges ? groupFaces.size() : 0);
   out.localToGlobal.clear();
   local.faces.reserve(groupFaces.size());
   wedgeFaces.reserve(groupFaces.size());
@@ -649,18 +695,21 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
     Face t, w;
     for (int i = 0; i < 3; ++i) {
       const uint32_t v = levelFaces[f][size_t(i)];
-      auto ins = toLocal.emplace(v, uint32_t(out.localToGlobal.size()));
+      const std::pair<uint32_t, bool> ins = toLocal.Emplace(v, uint32_t(out.localToGlobal.size()));
       if (ins.second) {
         out.localToGlobal.push_back(v);
-        auto wp = toWelded.emplace(wedges ? attributes.place[v] : v, uint32_t(local.positions.size()));
+        // (without places, one vertex per wedge: a new wedge is a new vertex)
+        const std::pair<uint32_t, bool> wp =
+            wedges ? toWelded.Emplace(attributes.place[v], uint32_t(local.positions.size()))
+                   : std::make_pair(uint32_t(local.positions.size()), true);
         if (wp.second) {
           local.positions.push_back(positions[v]);
-          firstWedge.push_back(ins.first->second);
+          firstWedge.push_back(ins.first);
         }
-        weldedOf.push_back(wp.first->second);
+        weldedOf.push_back(wp.first);
       }
-      w[size_t(i)] = ins.first->second;
-      t[size_t(i)] = weldedOf[ins.first->second];
+      w[size_t(i)] = ins.first;
+      t[size_t(i)] = weldedOf[ins.first];
     }
     local.faces.push_back(t);
     wedgeFaces.push_back(w);
@@ -718,8 +767,16 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
   }
   // Each output corner's attributes at its place, as they will be stored; the distinct values of
   // each output vertex in the order its corners come (without seams: one).
+  // (One flat list: each vertex's values linked in the order they come, from head[o];
+  // cornerVariant: the entry of each corner's value.)
   const size_t O = res.mesh.positions.size();
-  std::vector<std::vector<std::pair<Codes, uint32_t>>> variants(O);
+  struct Variant {
+    Codes codes;
+    uint32_t id, next;
+  };
+  std::vector<Variant> variants;
+  variants.reserve(O);
+  std::vector<uint32_t> head(O, kNoPlace);
   std::vector<uint32_t> cornerVariant(res.mesh.faces.size() * 3, 0);
   {
     std::vector<float> value(std::max<size_t>(1, channels));
@@ -728,17 +785,21 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
         const uint32_t o = res.mesh.faces[f][size_t(k)];
         Codes c;
         if (withAttributes) {
-          if (!wedges && !variants[o].empty()) {  // one value per vertex: its first corner's
-            cornerVariant[3 * f + size_t(k)] = 0;
+          if (!wedges && head[o] != kNoPlace) {  // one value per vertex: its first corner's
+            cornerVariant[3 * f + size_t(k)] = head[o];
             continue;
           }
           const vcg::Point3f& q = res.mesh.positions[o];
           quadrics.Evaluate(res.sourceFace[f], k, res.sourceVertex[o], vcg::Point3d(q[0], q[1], q[2]), value.data());
           c = StoreChannels(value.data(), attributes);
         }
-        uint32_t j = 0;
-        while (j < variants[o].size() && !(variants[o][j].first == c)) ++j;
-        if (j == variants[o].size()) variants[o].push_back({c, 0});
+        uint32_t* link = &head[o];  // (into `variants`: not used after the push_back below)
+        while (*link != kNoPlace && !(variants[*link].codes == c)) link = &variants[*link].next;
+        uint32_t j = *link;
+        if (j == kNoPlace) {
+          j = *link = uint32_t(variants.size());
+          variants.push_back({c, 0, kNoPlace});
+        }
         cornerVariant[3 * f + size_t(k)] = j;
       }
   }
@@ -767,8 +828,9 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
         region.frozenVertex[src] ||
         (std::fabs(p[0] - q[0]) <= still && std::fabs(p[1] - q[1]) <= still && std::fabs(p[2] - q[2]) <= still);
     uint32_t firstNew = kNoPlace;  // a moved vertex's wedges share their new position
-    for (auto& var : variants[o]) {
-      const Codes& c = var.first;
+    for (uint32_t j = head[o]; j != kNoPlace; j = variants[j].next) {
+      Variant& var = variants[j];
+      const Codes& c = var.codes;
       uint32_t id = kNoPlace;
       if (!wedges) {
         if (region.frozenVertex[src] ||
@@ -792,14 +854,12 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
         id = addNew(p, c, firstNew);
         if (firstNew == kNoPlace) firstNew = id;
       }
-      var.second = id;
+      var.id = id;
     }
   }
-  for (size_t f = 0; f < res.mesh.faces.size(); ++f) {
-    Face t;
-    for (size_t k = 0; k < 3; ++k) t[k] = variants[res.mesh.faces[f][k]][cornerVariant[3 * f + k]].second;
-    out.faces.push_back(t);
-  }
+  out.faces.resize(res.mesh.faces.size());
+  for (size_t f = 0; f < res.mesh.faces.size(); ++f)
+    for (size_t k = 0; k < 3; ++k) out.faces[f][k] = variants[cornerVariant[3 * f + k]].id;
   // One-sided distance: every input vertex of the group to the simplified faces. Faces and
   // vertices are visited in Morton order of their position, each vertex scanning the faces
   // outwards from its own place in that order: a near face comes early, and a vertex stops as
@@ -1023,32 +1083,26 @@ Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSp
     const uint32_t P0 = uint32_t(dag.positions.size());
     const double angle = ClusterAngle(params, k + 1);
     std::vector<GroupResult> results(static_cast<size_t>(G));
-    {
-      std::atomic<int> next(0);
-      RunThreads(std::min<unsigned>(threads, unsigned(G)), [&](unsigned) {
-        RecutScratch scratch;
-        for (int g = next++; g < G; g = next++) {
-          GroupResult& r = results[size_t(g)];
-          SimplifyGroup(L.faces, groupFaces[size_t(g)], dag.positions, shared, params, ratio, cap, diagonal,
-                        keep[size_t(g)] != 0, dag.attributes, r);
-          const uint32_t V = uint32_t(r.localToGlobal.size());
-          auto positionOf = [&](uint32_t id) { return id < P0 ? dag.positions[id] : r.newPositions[id - P0]; };
-          if (wedges)
-            RecutGroup(
-                r,
-                [&](uint32_t x) {
-                  if (x < V) return place[r.localToGlobal[x]];
-                  const uint32_t p = r.newPlace[x - V];
-                  return p < V ? place[r.localToGlobal[p]] : P0 + (p - V);
-                },
-                positionOf, params.clusterFaces, angle, scratch);
-          else
-            RecutGroup(
-                r, [&](uint32_t x) { return x < V ? r.localToGlobal[x] : P0 + (x - V); }, positionOf,
-                params.clusterFaces, angle, scratch);
-        }
-      });
-    }
+    ParallelItems<RecutScratch>(size_t(G), threads, [&](size_t g, RecutScratch& scratch) {
+      GroupResult& r = results[g];
+      SimplifyGroup(L.faces, groupFaces[g], dag.positions, shared, params, ratio, cap, diagonal, keep[g] != 0,
+                    dag.attributes, r);
+      const uint32_t V = uint32_t(r.localToGlobal.size());
+      auto positionOf = [&](uint32_t id) { return id < P0 ? dag.positions[id] : r.newPositions[id - P0]; };
+      if (wedges)
+        RecutGroup(
+            r,
+            [&](uint32_t x) {
+              if (x < V) return place[r.localToGlobal[x]];
+              const uint32_t p = r.newPlace[x - V];
+              return p < V ? place[r.localToGlobal[p]] : P0 + (p - V);
+            },
+            positionOf, params.clusterFaces, angle, scratch);
+      else
+        RecutGroup(
+            r, [&](uint32_t x) { return x < V ? r.localToGlobal[x] : P0 + (x - V); }, positionOf, params.clusterFaces,
+            angle, scratch);
+    });
     std::vector<std::vector<uint32_t>>().swap(groupFaces);
     size_t newFaces = 0;
     for (const auto& r : results) newFaces += r.faces.size();
@@ -1255,6 +1309,11 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
     std::vector<uint8_t> localShared;
     std::vector<uint32_t> outCluster, rank;
     std::vector<uint64_t> here((P + 63) / 64, 0);  // the chunk's vertices (cleared after it)
+    struct GroupPlace {
+      uint32_t firstNew, firstCluster;
+      size_t firstFace;
+    };
+    std::vector<GroupPlace> groupAt;
     for (size_t r = 0; r < chunks; ++r) {
       if (progress && !progress(std::min(95, 10 + 8 * k), "LOD: simplifying groups chunk by chunk"))
         return fail(Status::Cancelled());
@@ -1313,54 +1372,66 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
       // Each group simplified and re-cut into level k + 1's clusters on its thread (its new
       // vertices stand in as V + their index: above the chunk's, as their global ids; RecutGroup).
       std::vector<GroupResult> results(static_cast<size_t>(G));
-      {
-        std::atomic<int> next(0);
-        RunThreads(std::min<unsigned>(threads, unsigned(G)), [&](unsigned) {
-          RecutScratch scratch;
-          for (int g = next++; g < G; g = next++) {
-            GroupResult& res = results[size_t(g)];
-            SimplifyGroup(sub.faces, groupFaces[size_t(g)], localPos, localShared, params, ratio, cap, diagonal, false,
-                          dag.attributes, res);
-            const uint32_t RV = uint32_t(res.localToGlobal.size());
-            RecutGroup(
-                res, [&](uint32_t x) { return x < RV ? res.localToGlobal[x] : uint32_t(V) + (x - RV); },
-                [&](uint32_t id) { return id < V ? localPos[id] : res.newPositions[id - V]; }, params.clusterFaces,
-                angle, scratch);
-          }
-        });
-      }
+      ParallelItems<RecutScratch>(size_t(G), threads, [&](size_t g, RecutScratch& scratch) {
+        GroupResult& res = results[g];
+        SimplifyGroup(sub.faces, groupFaces[g], localPos, localShared, params, ratio, cap, diagonal, false,
+                      dag.attributes, res);
+        const uint32_t RV = uint32_t(res.localToGlobal.size());
+        RecutGroup(
+            res, [&](uint32_t x) { return x < RV ? res.localToGlobal[x] : uint32_t(V) + (x - RV); },
+            [&](uint32_t id) { return id < V ? localPos[id] : res.newPositions[id - V]; }, params.clusterFaces, angle,
+            scratch);
+      });
       std::vector<std::vector<uint32_t>>().swap(groupFaces);
       std::vector<double> maxChild(static_cast<size_t>(G), 0.0);
       for (uint32_t c = c0; c < c1; ++c)
         maxChild[size_t(group[c - c0])] = std::max(maxChild[size_t(group[c - c0])], double(L.clusterError[c]));
-      out.clear();
-      outCluster.clear();
-      for (int g = 0; g < G; ++g) {
-        GroupResult& res = results[size_t(g)];
-        const uint32_t RV = uint32_t(res.localToGlobal.size());
-        const uint32_t firstNew = uint32_t(dag.positions.size());
-        dag.positions.insert(dag.positions.end(), res.newPositions.begin(), res.newPositions.end());
-        const float ef = GroupErrorAbove(maxChild[size_t(g)], res.distance);
-        L.groupError.push_back(ef);
-        const uint32_t base = uint32_t(N.clusterCount());
-        const size_t firstNext = nextFaces.size();
-        nextFaces.resize(firstNext + res.clusters, 0);
-        for (size_t f = 0; f < res.faces.size(); ++f) {
-          Face u;
-          for (size_t i = 0; i < 3; ++i) {
-            const uint32_t t = res.faces[f][i];
-            u[i] = t < RV ? verts[res.localToGlobal[t]] : firstNew + (t - RV);
-          }
-          out.push_back(u);
-          outCluster.push_back(base + res.cluster[f]);
-          ++nextFaces[firstNext + res.cluster[f]];
+      // The chunk's part of level k + 1 in group order: each group's first new vertex id, first
+      // cluster and first face (prefix sums, with the per-cluster fields), then each group's new
+      // positions and faces written at those places on the threads.
+      groupAt.resize(size_t(G));
+      const size_t firstNext = nextFaces.size();
+      const uint32_t clusterBase = uint32_t(N.clusterCount());
+      {
+        size_t id = dag.positions.size(), face = 0;
+        uint32_t cluster = clusterBase;
+        for (int g = 0; g < G; ++g) {
+          const GroupResult& res = results[size_t(g)];
+          groupAt[size_t(g)] = GroupPlace{uint32_t(id), cluster, face};
+          id += res.newPositions.size();
+          face += res.faces.size();
+          cluster += res.clusters;
+          const float ef = GroupErrorAbove(maxChild[size_t(g)], res.distance);
+          L.groupError.push_back(ef);
+          N.clusterGroup.resize(cluster, -1);
+          N.clusterCreator.resize(cluster, groupBase + g);
+          N.clusterError.resize(cluster, ef);
+          nextNode.resize(cluster, clusterNode[c0]);
         }
-        N.clusterGroup.resize(base + res.clusters, -1);
-        N.clusterCreator.resize(base + res.clusters, groupBase + g);
-        N.clusterError.resize(base + res.clusters, ef);
-        nextNode.resize(base + res.clusters, clusterNode[c0]);
-        res = GroupResult();
+        dag.positions.resize(id);
+        out.resize(face);
+        outCluster.resize(face);
+        nextFaces.resize(firstNext + (cluster - clusterBase), 0);
       }
+      ParallelChunks(size_t(G), threads, 1, [&](size_t b, size_t e, unsigned) {
+        for (size_t g = b; g < e; ++g) {
+          GroupResult& res = results[g];
+          const GroupPlace& at = groupAt[g];
+          const uint32_t RV = uint32_t(res.localToGlobal.size());
+          std::copy(res.newPositions.begin(), res.newPositions.end(), dag.positions.begin() + long(at.firstNew));
+          uint32_t* count = nextFaces.data() + firstNext + (at.firstCluster - clusterBase);
+          for (size_t f = 0; f < res.faces.size(); ++f) {
+            Face& u = out[at.firstFace + f];
+            for (size_t i = 0; i < 3; ++i) {
+              const uint32_t t = res.faces[f][i];
+              u[i] = t < RV ? verts[res.localToGlobal[t]] : at.firstNew + (t - RV);
+            }
+            outCluster[at.firstFace + f] = at.firstCluster + res.cluster[f];
+            ++count[res.cluster[f]];
+          }
+          res = GroupResult();
+        }
+      });
       newFaces += out.size();
       s = spill.append(size_t(k + 1), out, outCluster, dag.positions);
       if (!s.ok()) return fail(s);
@@ -1465,18 +1536,14 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
       const std::vector<Face>& inFaces = dag.levels[0].faces;
       std::vector<std::vector<uint32_t>> local(leaves);
       std::vector<uint32_t> count(leaves, 0);
-      std::atomic<uint32_t> next(0);
-      RunThreads(std::min(threads, leaves), [&](unsigned) {
-        std::vector<Face> faces;
-        for (uint32_t l = next++; l < leaves; l = next++) {
-          faces.clear();
-          for (uint32_t j = start[l]; j < start[l + 1]; ++j) {
-            faces.push_back(inFaces[members[j]]);
-            if (wedges)
-              for (uint32_t& v : faces.back()) v = place[v];
-          }
-          count[l] = GrowClusters(faces, dag.positions, params.clusterFaces, ClusterAngle(params, 0), local[l]);
+      ParallelItems<std::vector<Face>>(leaves, threads, [&](size_t l, std::vector<Face>& faces) {
+        faces.clear();
+        for (uint32_t j = start[l]; j < start[l + 1]; ++j) {
+          faces.push_back(inFaces[members[j]]);
+          if (wedges)
+            for (uint32_t& v : faces.back()) v = place[v];
         }
+        count[l] = GrowClusters(faces, dag.positions, params.clusterFaces, ClusterAngle(params, 0), local[l]);
       });
       LodDag::Level& L0 = dag.levels[0];
       L0.faceCluster.assign(inputFaces, 0);
@@ -1539,13 +1606,16 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
   // Chunks are made a wave at a time, the wave's chunks side by side (issue 27): (a) each chunk's
   // file read, cut into clusters and grouped, its vertices two of its groups use marked (a chunk
   // per thread); (b) every group of the wave simplified (a group per thread); (c) in chunk order,
-  // the groups' new vertices numbered and their faces put in DAG ids; (d) each simplified group
-  // re-cut into level 1's clusters (a group per thread); (e) in chunk order, the records and the
-  // spill. Only (c) and (e) touch what the chunks share, in the order of the one-chunk-at-a-time
-  // build, so the DAG does not depend on the thread count. A vertex used by one chunk only is
-  // marked by that chunk alone (those two chunks use are frozen already and not marked), so the
-  // wave's chunks mark disjoint entries of owner / shared. A chunk's work is about a tenth of
-  // the budget (docs/scale.md): at most kChunksInFlight of them at once.
+  // the first DAG id of each group's new vertices (prefix sums) and its chunk's marks cleared (a
+  // chunk per thread); (d) each simplified group's new positions stored at its ids, its faces put
+  // in DAG ids and re-cut into level 1's clusters (a group per thread); (e) in chunk order, the
+  // records and the spill, on one thread while the next wave's (a) runs on the others. Only (c)
+  // and (e) decide what the chunks share, in the order of the one-chunk-at-a-time build, so the
+  // DAG does not depend on the thread count. A vertex used by one chunk only is marked by that
+  // chunk alone (those two chunks use are frozen already and not marked), so the wave's chunks
+  // mark and clear disjoint entries of owner / shared. A chunk's work is about a tenth of the
+  // budget (docs/scale.md): at most kChunksInFlight of them at once (and, on 2 threads or more,
+  // the previous wave's faces until (e) has spilled them).
   constexpr size_t kChunksInFlight = 4;
   struct ChunkWork {
     size_t chunk = 0;
@@ -1555,6 +1625,7 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
     std::vector<std::vector<uint32_t>> groupFaces;
     std::vector<GroupResult> results;
     std::vector<std::vector<Face>> faces;          // per group: its simplified faces, DAG ids
+    std::vector<uint32_t> firstNew;                // per group: the DAG id of its first new vertex
     std::vector<std::vector<uint32_t>> clusterOf;  // per group: level 1's cluster of each face
     std::vector<uint32_t> clusters;                // per group: level 1's clusters in it
     std::vector<float> error;                      // per group
@@ -1596,9 +1667,56 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
     }
     w.results.resize(size_t(w.groups));
   };
-  std::vector<ChunkWork> wave;
-  std::vector<std::pair<size_t, int>> tasks;  // (chunk of the wave, group)
   std::vector<uint32_t> globalCluster;
+  // (e) of one chunk: group after group.
+  auto emit = [&](ChunkWork& w) -> Status {
+    const size_t F = w.sub.faces.size();
+    const uint32_t clusterBase = uint32_t(L0.clusterGroup.size());
+    const int groupBase = int(L0.groupError.size());
+    for (uint32_t c = 0; c < uint32_t(w.sub.clusterGroup.size()); ++c) {
+      L0.clusterGroup.push_back(groupBase + w.group[c]);
+      L0.clusterCreator.push_back(-1);
+      L0.clusterError.push_back(0.f);
+    }
+    out.clear();
+    outCluster.clear();
+    for (int g = 0; g < w.groups; ++g) {
+      const float ef = w.error[size_t(g)];
+      L0.groupError.push_back(ef);
+      const std::vector<Face>& faces = w.faces[size_t(g)];
+      const std::vector<uint32_t>& clusterOfFace = w.clusterOf[size_t(g)];
+      const uint32_t NC = w.clusters[size_t(g)];
+      const uint32_t base = uint32_t(N.clusterCount());
+      const size_t firstNext = nextFaces.size();
+      nextFaces.resize(firstNext + NC, 0);
+      for (size_t f = 0; f < faces.size(); ++f) {
+        out.push_back(faces[f]);
+        outCluster.push_back(base + clusterOfFace[f]);
+        ++nextFaces[firstNext + clusterOfFace[f]];
+      }
+      for (uint32_t c = 0; c < NC; ++c) {
+        N.clusterGroup.push_back(-1);
+        N.clusterCreator.push_back(groupBase + g);
+        N.clusterError.push_back(ef);
+        nextNode.push_back(uint32_t(w.chunk));
+      }
+    }
+    globalCluster.resize(F);
+    for (uint32_t f = 0; f < F; ++f) globalCluster[f] = clusterBase + w.sub.faceCluster[f];
+    Status s = spill.append(0, w.sub.faces, globalCluster, dag.positions);
+    if (s.ok()) s = spill.append(1, out, outCluster, dag.positions);
+    w = ChunkWork();
+    return s;
+  };
+  auto emitAll = [&](std::vector<ChunkWork>& ws) -> Status {
+    Status s;
+    for (ChunkWork& w : ws)
+      if (s.ok()) s = emit(w);
+    ws.clear();
+    return s;
+  };
+  std::vector<ChunkWork> wave, pending;       // pending: the previous wave, waiting for its (e)
+  std::vector<std::pair<size_t, int>> tasks;  // (chunk of the wave, group)
   for (size_t first = 0; first < leaves;) {
     if (progress && !progress(int(10 * first / leaves), "LOD: level 0 chunk by chunk")) {
       dag = LodDag();
@@ -1612,10 +1730,20 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
       }
     const size_t n = wave.size();
     if (n == 0) continue;
-    {  // (a)
-      ParallelChunks(n, threads, 1, [&](size_t b, size_t e, unsigned) {
-        for (size_t i = b; i < e; ++i) prepare(wave[i]);
+    {  // (a), and the previous wave's (e) beside it (item 0)
+      Status emitted;
+      const size_t e = pending.empty() ? 0 : 1;
+      ParallelChunks(n + e, threads, 1, [&](size_t b, size_t end, unsigned) {
+        for (size_t i = b; i < end; ++i)
+          if (i < e)
+            emitted = emitAll(pending);
+          else
+            prepare(wave[i - e]);
       });
+      if (!emitted.ok()) {
+        dag = LodDag();
+        return emitted;
+      }
     }
     for (ChunkWork& w : wave)
       if (!w.status.ok()) {
@@ -1635,85 +1763,70 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
         }
       });
     }
-    for (ChunkWork& w : wave) {  // (c)
-      for (const Face& t : w.sub.faces)
-        for (uint32_t v : t) {
-          owner[v] = -1;
-          shared[v] &= 2;
-        }
-      std::vector<std::vector<uint32_t>>().swap(w.groupFaces);
+    // (c): the new vertices' ids in chunk and group order, as the one-chunk build numbers them.
+    size_t nextId = dag.positions.size();
+    for (ChunkWork& w : wave) {
+      w.firstNew.resize(size_t(w.groups));
+      for (int g = 0; g < w.groups; ++g) {
+        w.firstNew[size_t(g)] = uint32_t(nextId);
+        nextId += w.results[size_t(g)].newPositions.size();
+      }
       w.faces.resize(size_t(w.groups));
       w.error.resize(size_t(w.groups));
-      for (int g = 0; g < w.groups; ++g) {
-        GroupResult& r = w.results[size_t(g)];
-        const uint32_t V = uint32_t(r.localToGlobal.size());
-        const uint32_t firstNew = uint32_t(dag.positions.size());
-        dag.positions.insert(dag.positions.end(), r.newPositions.begin(), r.newPositions.end());
-        std::vector<Face>& faces = w.faces[size_t(g)];
-        faces.reserve(r.faces.size());
-        for (const auto& t : r.faces) {
-          Face u;
-          for (int i = 0; i < 3; ++i)
-            u[size_t(i)] = t[size_t(i)] < V ? r.localToGlobal[t[size_t(i)]] : firstNew + (t[size_t(i)] - V);
-          faces.push_back(u);
-        }
-        w.error[size_t(g)] = GroupErrorAbove(0.0, r.distance);  // level 0's clusters have error 0
-        r = GroupResult();
-      }
-      std::vector<GroupResult>().swap(w.results);
       w.clusterOf.resize(size_t(w.groups));
       w.clusters.resize(size_t(w.groups));
     }
+    dag.positions.resize(nextId);
+    ParallelChunks(n, threads, 1, [&](size_t b, size_t e, unsigned) {
+      for (size_t i = b; i < e; ++i) {
+        ChunkWork& w = wave[i];
+        for (const Face& t : w.sub.faces)
+          for (uint32_t v : t)
+            if (!(shared[v] & 2)) {  // (a frozen vertex is never marked, and other chunks use it)
+              owner[v] = -1;
+              shared[v] = 0;
+            }
+        std::vector<std::vector<uint32_t>>().swap(w.groupFaces);
+      }
+    });
     {  // (d)
       ParallelChunks(tasks.size(), threads, 1, [&](size_t b, size_t e, unsigned) {
         for (size_t t = b; t < e; ++t) {
           ChunkWork& w = wave[tasks[t].first];
           const size_t g = size_t(tasks[t].second);
-          w.clusters[g] = GrowClusters(w.faces[g], dag.positions, params.clusterFaces, angle1, w.clusterOf[g]);
+          GroupResult& r = w.results[g];
+          const uint32_t V = uint32_t(r.localToGlobal.size());
+          const uint32_t firstNew = w.firstNew[g];
+          std::copy(r.newPositions.begin(), r.newPositions.end(), dag.positions.begin() + long(firstNew));
+          std::vector<Face>& faces = w.faces[g];
+          faces.resize(r.faces.size());
+          for (size_t f = 0; f < r.faces.size(); ++f)
+            for (size_t i = 0; i < 3; ++i) {
+              const uint32_t x = r.faces[f][i];
+              faces[f][i] = x < V ? r.localToGlobal[x] : firstNew + (x - V);
+            }
+          w.error[g] = GroupErrorAbove(0.0, r.distance);  // level 0's clusters have error 0
+          r = GroupResult();
+          w.clusters[g] = GrowClusters(faces, dag.positions, params.clusterFaces, angle1, w.clusterOf[g]);
         }
       });
     }
-    for (ChunkWork& w : wave) {  // (e): group after group
-      const size_t F = w.sub.faces.size();
-      const uint32_t clusterBase = uint32_t(L0.clusterGroup.size());
-      const int groupBase = int(L0.groupError.size());
-      for (uint32_t c = 0; c < uint32_t(w.sub.clusterGroup.size()); ++c) {
-        L0.clusterGroup.push_back(groupBase + w.group[c]);
-        L0.clusterCreator.push_back(-1);
-        L0.clusterError.push_back(0.f);
-      }
-      out.clear();
-      outCluster.clear();
-      for (int g = 0; g < w.groups; ++g) {
-        const float ef = w.error[size_t(g)];
-        L0.groupError.push_back(ef);
-        const std::vector<Face>& faces = w.faces[size_t(g)];
-        const std::vector<uint32_t>& clusterOfFace = w.clusterOf[size_t(g)];
-        const uint32_t NC = w.clusters[size_t(g)];
-        const uint32_t base = uint32_t(N.clusterCount());
-        const size_t firstNext = nextFaces.size();
-        nextFaces.resize(firstNext + NC, 0);
-        for (size_t f = 0; f < faces.size(); ++f) {
-          out.push_back(faces[f]);
-          outCluster.push_back(base + clusterOfFace[f]);
-          ++nextFaces[firstNext + clusterOfFace[f]];
-        }
-        for (uint32_t c = 0; c < NC; ++c) {
-          N.clusterGroup.push_back(-1);
-          N.clusterCreator.push_back(groupBase + g);
-          N.clusterError.push_back(ef);
-          nextNode.push_back(uint32_t(w.chunk));
-        }
-      }
-      globalCluster.resize(F);
-      for (uint32_t f = 0; f < F; ++f) globalCluster[f] = clusterBase + w.sub.faceCluster[f];
-      Status s = spill.append(0, w.sub.faces, globalCluster, dag.positions);
-      if (s.ok()) s = spill.append(1, out, outCluster, dag.positions);
+    for (ChunkWork& w : wave) std::vector<GroupResult>().swap(w.results);
+    if (threads > 1) {  // (e) beside the next wave's (a)
+      std::swap(pending, wave);
+    } else {  // (e) now: one chunk's work in memory at a time
+      Status s = emitAll(wave);
       if (!s.ok()) {
         dag = LodDag();
         return s;
       }
-      w = ChunkWork();
+    }
+  }
+  {
+    Status s = emitAll(pending);
+    if (!s.ok()) {
+      dag = LodDag();
+      return s;
     }
   }
   std::vector<ChunkWork>().swap(wave);
