@@ -5,7 +5,7 @@
 //   lod_fidelity MESH.ply [--samples N] [--dag-only] [--cluster-faces N] [--group-clusters N] [--cone DEG]
 //                [--max-faces N] [--max-group-error F] [--fine-group-clusters N] [--level-ratio R]
 //                [--coarse-level-ratio R] [--top-group-clusters N] [--cuts P,P,...] [--no-peers]
-//                [--min-faces N]
+//                [--min-faces N] [--borders] [--locked-border-weight W]
 //
 // "tree": the previous .clod levels (BuildConeHierarchy + BuildSimplifiedLevels with the defaults
 // `conelod lod build` used: every level keeps the normal-cone groups of its hierarchy level).
@@ -20,7 +20,7 @@
 // --level-ratio R: each group of the fine levels simplified to R of its faces (conelod lod build
 // --level-ratio; 0.5); --coarse-level-ratio R: LodBuildParams::coarseLevelRatio (0.6; 0: the
 // level ratio at every level); --fine-group-clusters N / --top-group-clusters N: LodBuildParams'
-// (24 / 6; 0: --group-clusters [12] there).
+// (24 / 6; 0: --group-clusters [12] there); --locked-border-weight W: LodBuildParams::lockedBorderWeight.
 // --file [--precision E]: instead, the DAG's levels against the same levels read back from the .clod
 // file written from it (positions quantized with precision E, default kDefaultLodPrecision): per level
 // the RMS of both and their relative change (quantization and the codecs' round trip).
@@ -31,12 +31,17 @@
 // the cut takes from each level: where the cut loses against its levels; the header line gives
 // every level's faces. --no-peers: the cuts alone (their faces and RMS; no static collapse, no
 // MeshLab QEM: quick on the dragon).
+// --borders: instead, per level k of the DAG its faces, groups and locked vertices (those two of
+// its groups share, frozen while they are simplified), and how many of them were locked at level
+// k - 1 too (a frozen vertex keeps its id, so a border locked twice is the same vertices): where
+// a level's groups follow the borders of the level below instead of straddling them.
 // --chunk-faces N: instead, the DAG built in spatial chunks of at most N faces (conelod lod build
 // --memory; LodBuildParams::chunkFaces) against the DAG built whole: per level of the chunked DAG
 // its faces and RMS, and the whole DAG's RMS at the same face count (interpolated in log-log
 // between its two levels around that count), and their ratio.
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -98,13 +103,15 @@ int main(int argc, char** argv) {
   size_t minFaces = 0;    // --min-faces N: only the levels of at least N faces (with --max-faces: a range)
   size_t chunkFaces = 0;  // --chunk-faces N: chunked against whole
   bool tree = true, file = false;
-  bool peers = true;  // --no-peers: the cuts alone (no static collapse, no MeshLab QEM)
+  bool borders = false;  // --borders: the locked vertices per level
+  bool peers = true;     // --no-peers: the cuts alone (no static collapse, no MeshLab QEM)
   conelod::LodBuildParams dagParams;
   std::vector<double> cuts;  // --cuts P,...: cuts at these budgets (% of the input's faces) instead of levels
   for (int i = 2; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--dag-only")) tree = false;
     if (!std::strcmp(argv[i], "--file")) file = true;
     if (!std::strcmp(argv[i], "--no-peers")) peers = false;
+    if (!std::strcmp(argv[i], "--borders")) borders = true;
     if (i + 1 >= argc) break;
     if (!std::strcmp(argv[i], "--samples")) samples = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--cluster-faces")) dagParams.clusterFaces = size_t(std::atoi(argv[i + 1]));
@@ -114,6 +121,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--level-ratio")) dagParams.simplification.levelRatio = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--coarse-level-ratio")) dagParams.coarseLevelRatio = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--top-group-clusters")) dagParams.topGroupClusters = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--locked-border-weight")) dagParams.lockedBorderWeight = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--max-faces")) maxFaces = size_t(std::atoll(argv[i + 1]));
     if (!std::strcmp(argv[i], "--min-faces")) minFaces = size_t(std::atoll(argv[i + 1]));
     if (!std::strcmp(argv[i], "--chunk-faces")) chunkFaces = size_t(std::atoll(argv[i + 1]));
@@ -179,6 +187,49 @@ int main(int argc, char** argv) {
           std::printf("| %zu | %zu | %.4f | (outside the whole DAG's levels) | |\n", k, m.faces.size(), 100 * rms);
         std::fflush(stdout);
       }
+    }
+    return 0;
+  }
+  if (borders) {
+    conelod::LodDag dag;
+    const double w = Wall();
+    if (!conelod::BuildLodDag(input, dagParams, dag).ok()) return 1;
+    std::printf("%s (%zu faces): DAG %.2f s wall, %zu levels\n", argv[1], input.faces.size(), Wall() - w,
+                dag.levels.size());
+    std::printf(
+        "| level | faces | groups | locked vertices | also locked below | share | of those below, locked again |\n"
+        "|---|---|---|---|---|---|---|\n");
+    std::vector<uint8_t> below;  // per vertex: locked at the level below
+    size_t lockedBelow = 0;
+    for (size_t k = 0; k < dag.levels.size(); ++k) {
+      const conelod::LodDag::Level& L = dag.levels[k];
+      if (L.clusterGroup.empty() || L.clusterGroup[0] < 0) break;  // the top: no groups
+      std::vector<int> owner(dag.positions.size(), -1);
+      std::vector<uint8_t> locked(dag.positions.size(), 0);
+      for (size_t f = 0; f < L.faces.size(); ++f) {
+        const int g = L.clusterGroup[L.faceCluster[f]];
+        for (uint32_t v : L.faces[f]) {
+          if (owner[v] == -1)
+            owner[v] = g;
+          else if (owner[v] != g)
+            locked[v] = 1;
+        }
+      }
+      size_t n = 0, both = 0;
+      for (size_t v = 0; v < locked.size(); ++v) {
+        n += locked[v];
+        both += locked[v] && v < below.size() && below[v];
+      }
+      const int groups = 1 + *std::max_element(L.clusterGroup.begin(), L.clusterGroup.end());
+      if (k == 0)
+        std::printf("| %zu | %zu | %d | %zu | | | |\n", k, L.faces.size(), groups, n);
+      else
+        std::printf("| %zu | %zu | %d | %zu | %zu | %.1f %% | %.1f %% |\n", k, L.faces.size(), groups, n, both,
+                    n ? 100.0 * double(both) / double(n) : 0.0,
+                    lockedBelow ? 100.0 * double(both) / double(lockedBelow) : 0.0);
+      std::fflush(stdout);
+      below.swap(locked);
+      lockedBelow = n;
     }
     return 0;
   }

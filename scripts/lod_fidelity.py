@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Accuracy of .clod cuts per budget (issue 29; scripts/lod_cracks.py is its sibling for cracks).
 For each mesh: `conelod lod build` with the defaults (its seconds and bytes), then for each budget
-(% of the input's faces) a cut of the file from a far eye by error alone (`conelod lod extract
---priority error --no-cull --budget N`), and at the cut's face count the same input simplified
+(% of the input's faces) a cut of the file from a far eye by the error in model units (`conelod lod
+extract --priority error --no-cull --budget N`), and at the cut's face count the same input simplified
 statically by `conelod simplify --groups cone:auto` and by MeshLab's Quadric Edge Collapse
 Decimation (asked again until it lands on the count, scripts/compare_qem.py), and Nexus's cut
 (`nxsedit FILE.nxs -t N -p cut.ply`) when NXSBUILD and NXSEDIT name its tools. Errors as

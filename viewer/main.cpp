@@ -88,10 +88,11 @@ int main(int argc, char** argv) {
   const QCommandLineOption frames("frames", "with --screenshot: frames timed for the fps figure (default 30)", "N",
                                   "30");
   const QCommandLineOption json("json", "with --screenshot: print the figures as one JSON line");
-  const QCommandLineOption priority("priority",
-                                    "what is refined first: screen (the error projected in pixels, default), "
-                                    "error (the error in model units) or fg (the paper's f(g))",
-                                    "P", "screen");
+  const QCommandLineOption priority(
+      "priority",
+      "what is refined first: screen (the error projected in pixels, default), "
+      "error (by the error in model units, what an expansion gains per face) or fg (the paper's f(g))",
+      "P", "screen");
   const QCommandLineOption pixelError("pixel-error",
                                       "with --priority screen: refine while a group's error projects to more "
                                       "than this many pixels (default 1; 0: refine to the budget)",

@@ -52,6 +52,10 @@ struct LodBuildParams {
   // 5 % cuts filled 97.8 / 98.0 % with 12, 98.1 / 99.9 % with 6), and a small mesh's top levels
   // are more than one group each.
   int topGroupClusters = 6;
+  // Grouping a level's clusters, an edge two clusters share weighs this many edges when the two
+  // were made from different groups of the level below (that level's locked border), so that the
+  // groups straddle it and free it; 1: every shared edge alike.
+  double lockedBorderWeight = 1;
   // No collapse in a group costs more than this (RMS distance of its quadric, fraction of the
   // diagonal; the smaller of this and simplification.qem.maxError when that is set): a group
   // whose locked border leaves no cheap collapse stops short of levelRatio rather than fold.

@@ -367,8 +367,11 @@ std::vector<EdgeRecord> ClusterBorderEdgeRecords(const LodDag::Level& L, size_t 
 // within one chunk. `V` (0: unknown) bounds the vertex ids: then only the edges whose two ends
 // both touch two clusters are sorted (ClusterBorderEdgeRecords, on `threads` threads), which
 // gives the same pairs.
+// `across` (> 1; LodBuildParams::lockedBorderWeight): the edges two clusters made from different
+// groups of the level below share (that level's locked border: L.clusterCreator) weigh that many
+// edges, so that the groups grow across it and free it.
 int GroupClusters(const LodDag::Level& L, int per, size_t whole, std::vector<int>& group,
-                  const std::vector<uint32_t>* node = nullptr, size_t V = 0, unsigned threads = 1) {
+                  const std::vector<uint32_t>* node = nullptr, size_t V = 0, unsigned threads = 1, double across = 1) {
   const uint32_t C = uint32_t(L.clusterCount());
   // Cluster adjacency weighted by shared edges.
   const std::vector<EdgeRecord> edges = V > 0
@@ -397,7 +400,10 @@ int GroupClusters(const LodDag::Level& L, int per, size_t whole, std::vector<int
       auto j = i;
       while (j < b1 && *j == *i) ++j;
       nb.push_back(*i);
-      w.push_back(uint32_t(j - i));
+      uint32_t shared = uint32_t(j - i);
+      if (across > 1 && L.clusterCreator.size() == C && L.clusterCreator[a] != L.clusterCreator[*i])
+        shared = uint32_t(std::lround(double(shared) * across));
+      w.push_back(shared);
       i = j;
     }
   }
@@ -458,7 +464,7 @@ int GroupClusters(const LodDag::Level& L, int per, size_t whole, std::vector<int
 // edge records of one chunk at a time instead of the whole level's (48 bytes a face). Chunks side
 // by side on `threads`. Returns -1 when the clusters are not in chunk order.
 int GroupClustersByChunk(const LodDag::Level& L, int per, const std::vector<uint32_t>& node, unsigned threads,
-                         std::vector<int>& group) {
+                         std::vector<int>& group, double across = 1) {
   const size_t C = L.clusterCount();
   std::vector<uint32_t> first;  // first cluster of each run of one chunk, then C
   for (size_t c = 0; c < C; ++c) {
@@ -489,7 +495,10 @@ int GroupClustersByChunk(const LodDag::Level& L, int per, const std::vector<uint
       sub.faceCluster.push_back(L.faceCluster[faces[j]] - first[r]);
     }
     sub.clusterGroup.assign(first[r + 1] - first[r], -1);
-    count[r] = GroupClusters(sub, per, 0, local[r]);
+    sub.clusterCreator.clear();
+    if (L.clusterCreator.size() == C)
+      sub.clusterCreator.assign(L.clusterCreator.begin() + first[r], L.clusterCreator.begin() + first[r + 1]);
+    count[r] = GroupClusters(sub, per, 0, local[r], nullptr, 0, 1, across);
   });
   group.assign(C, -1);
   int groups = 0;
@@ -1041,12 +1050,14 @@ Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSp
       topology.faces = byPlace(L.faces);
       topology.faceCluster = L.faceCluster;
       topology.clusterGroup = L.clusterGroup;
+      topology.clusterCreator = L.clusterCreator;
     }
     const LodDag::Level& T = wedges ? topology : L;
-    int G = depth > 0 && !wholeParts ? GroupClustersByChunk(T, per, clusterNode, threads, group) : -1;
+    const double across = params.lockedBorderWeight;
+    int G = depth > 0 && !wholeParts ? GroupClustersByChunk(T, per, clusterNode, threads, group, across) : -1;
     if (G < 0)
       G = GroupClusters(T, per, wholeParts ? wholeUpTo : 0, group, depth > 0 ? &clusterNode : nullptr,
-                        dag.positions.size(), threads);
+                        dag.positions.size(), threads, across);
     std::vector<Face>().swap(topology.faces);
     std::vector<uint32_t> groupNode;
     if (depth > 0) {
@@ -1356,7 +1367,10 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
           }
       });
       std::fill(here.begin() + long(w0), here.begin() + long(w1), uint64_t(0));
-      const int G = GroupClusters(sub, per, 0, group, nullptr, V, threads);
+      sub.clusterCreator.clear();
+      if (L.clusterCreator.size() == C)
+        sub.clusterCreator.assign(L.clusterCreator.begin() + c0, L.clusterCreator.begin() + c1);
+      const int G = GroupClusters(sub, per, 0, group, nullptr, V, threads, params.lockedBorderWeight);
       const int groupBase = int(L.groupError.size());
       for (uint32_t c = c0; c < c1; ++c) L.clusterGroup[c] = groupBase + group[c - c0];
       localPos.resize(V);

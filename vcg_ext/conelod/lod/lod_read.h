@@ -215,8 +215,10 @@ class LodReader {
 enum class LodPriority {
   ScreenError,  // the group's error projected at its nearest point (in pixels with projectionScale;
                 //   without, error / distance), largest first; stops below maxPixelError
-  ObjectError,  // the group's error in model units, largest first (the same cut wherever the eye is);
-                //   a group that does not fit the budget is passed over for smaller ones that do
+  ObjectError,  // by the error in model units, the same cut wherever the eye is: the group whose
+                //   expansion removes the most squared error per face it adds first (its error
+                //   accumulated by the mean: lod_refine.cpp, ObjectGain; no pixel bound); a group
+                //   that does not fit the budget is passed over for smaller ones that do
   ConeFg        // the paper's f(g) (RefinementPriority) of the group's clusters, largest first
 };
 

@@ -6,8 +6,9 @@
 // of the cut at the same vertices: every cut reached this way is watertight, whatever the order
 // of the expansions. The order is a priority queue of the expandable groups (LodPriority): by
 // default the group's error projected on the screen (Karis et al., "Nanite: a deep dive"; refined
-// while it exceeds about a pixel), or its error in model units, or the paper's f(g) (Kamiya,
-// Suzuki, Kawachi §7). Groups whose clusters all face away from the eye (three-state cone test,
+// while it exceeds about a pixel), or by the error in model units what an expansion gains for the
+// cut's RMS distance per face it adds (ObjectGain), or the paper's f(g) (Kamiya, Suzuki, Kawachi
+// §7). Groups whose clusters all face away from the eye (three-state cone test,
 // normal_cone.h) come after every other group, so a full budget still ends at level 0. A drawn
 // node above the pixel error whose group waits on other groups (some of its clusters not in the
 // cut yet) has those expanded first (Impl::Demand), so that a still cut meets the pixel error
@@ -78,6 +79,8 @@ struct LodRefiner::Impl {
   mutable LodCut cut;
   mutable bool statsDirty = true;
   std::priority_queue<QueueItem> queue;
+  // ObjectError: per group (its first cluster's id), its error accumulated by the mean (MeanError).
+  std::unordered_map<uint32_t, double> meanError;
   bool stopped = false;
   bool started = false;
 
@@ -98,7 +101,7 @@ struct LodRefiner::Impl {
       const LodNode& n = reader.node(s);
       double q = 0;
       switch (view.priority) {
-        case LodPriority::ObjectError:
+        case LodPriority::ObjectError:  // (AddToCut orders these by ObjectGain instead)
           q = n.error;
           break;
         case LodPriority::ConeFg:
@@ -129,6 +132,60 @@ struct LodRefiner::Impl {
       p *= 0.25 + 0.75 * facing;
     }
     return p;
+  }
+
+  // The error of the group node `id` was made from, accumulated up the DAG by the mean instead of
+  // the max: its own distance (its error less the largest error of its clusters: what the bound
+  // grew by when it was simplified) plus the mean of its clusters' (weighted by their radius
+  // squared; 0 at level 0). The file's error adds the largest of its clusters', so a few far
+  // vertices deep below raise every group above them; this one follows the RMS distance of the
+  // levels (docs/lod_viewer.md, "Fidelity of cuts"). Loads the records below `id` (once: kept).
+  Status MeanError(uint32_t id, double& out) {
+    out = 0;
+    if (reader.node(id).level == 0 || reader.node(id).children.empty()) return Status::Ok();
+    const std::vector<uint32_t> children = reader.node(id).children;  // copied: loading records may rehash
+    const uint32_t key = *std::min_element(children.begin(), children.end());
+    const auto it = meanError.find(key);
+    if (it != meanError.end()) {
+      out = it->second;
+      return Status::Ok();
+    }
+    Status s = reader.LoadChildren(id);
+    if (!s.ok()) return s;
+    const double error = reader.node(id).error;
+    double area = 0, sum = 0, plain = 0, largest = 0;
+    for (uint32_t c : children) {
+      const double r2 = double(reader.node(c).radius) * double(reader.node(c).radius);
+      largest = std::max(largest, double(reader.node(c).error));
+      double below = 0;
+      s = MeanError(c, below);
+      if (!s.ok()) return s;
+      area += r2;
+      sum += r2 * below;
+      plain += below;
+    }
+    out = std::max(0.0, error - largest) + (area > 0 ? sum / area : plain / double(children.size()));
+    meanError[key] = out;
+    return Status::Ok();
+  }
+
+  // ObjectError's priority of the group whose clusters are `siblings` (all in the cut): what its
+  // expansion gains for the cut's squared distance, summed over its surface, per face it adds:
+  // MeanError^2 x the sum of its clusters' radius squared / (its children's faces - its clusters').
+  // (The file's error alone, the largest distance accumulated by the max, put the dragon's 2 %
+  // cut at 2.03x our static collapse at its count: docs/lod_viewer.md.)
+  Status ObjectGain(const std::vector<uint32_t>& siblings, double& gain) {
+    double mean = 0;
+    Status s = MeanError(siblings[0], mean);
+    if (!s.ok()) return s;
+    double area = 0, faces = 0;
+    for (uint32_t id : siblings) {
+      area += double(reader.node(id).radius) * double(reader.node(id).radius);
+      faces -= reader.node(id).faceCount;
+    }
+    for (uint32_t c : reader.node(siblings[0]).children) faces += reader.node(c).faceCount;
+    gain = mean * mean * area / std::max(1.0, faces);
+    return Status::Ok();
   }
 
   bool pixelStop() const {
@@ -202,7 +259,14 @@ struct LodRefiner::Impl {
             return Status::Invalid("corrupt file: node " + std::to_string(id) + "'s siblings disagree");
           if (!cut.culled[cutPos[sib]]) allCulled = false;
         }
-        double priority = priorityOf(n.siblings), need = needOf(n.siblings);
+        const std::vector<uint32_t> siblings = n.siblings;  // copied: loading records may rehash
+        double priority = 0, need = needOf(siblings);
+        if (view.priority == LodPriority::ObjectError) {
+          Status gs = ObjectGain(siblings, priority);
+          if (!gs.ok()) return gs;
+        } else {
+          priority = priorityOf(siblings);
+        }
         const auto d = demand.find(key);
         if (d != demand.end()) {
           allCulled = false;  // a visible node waits for it
