@@ -322,6 +322,18 @@ class GroupQemSimplifier {
     return groupConstraints_ && !p_.lockGroupBoundaries && vi.groups == 2 && (vi.flags & kSimpleContour);
   }
   Candidate judge(uint32_t a, uint32_t b);
+  // The faces on the edge (a, b): their count (3+ on a non-manifold edge), the first two in e
+  // (kNone where there are fewer).
+  uint32_t edgeFaces(uint32_t a, uint32_t b, uint32_t e[2]) const {
+    e[0] = e[1] = kNone;
+    uint32_t ne = 0;
+    for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f)
+      if (Contains(faces_[*f], b)) {
+        if (ne < 2) e[ne] = *f;
+        ++ne;
+      }
+    return ne;
+  }
   // g(f): the group of face f; layer: the coarser grouping it reads, null for the primary one.
   template <class GroupOf>
   bool condition1(const GroupOf& g, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a, uint32_t n0b,
@@ -965,13 +977,8 @@ Candidate GroupQemSimplifier::judge(uint32_t a, uint32_t b) {
   Candidate c;
   if (a == b || vs_[a].dead || vs_[b].dead) return c;
   // Faces on the edge.
-  uint32_t e[2] = {kNone, kNone};
-  uint32_t ne = 0;
-  for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f)
-    if (Contains(faces_[*f], b)) {
-      if (ne < 2) e[ne] = *f;
-      ++ne;
-    }
+  uint32_t e[2];
+  const uint32_t ne = edgeFaces(a, b, e);
   if (ne == 0) return c;
   if (frozen(a) || frozen(b)) {  // shared with another part of the mesh
     c.verdict = CollapseVerdict::FixedEndpoints;
@@ -1131,13 +1138,8 @@ bool GroupQemSimplifier::seamCollapse(const uint32_t e[2], Candidate& c, double&
 }
 
 bool GroupQemSimplifier::placeAtSeam(uint32_t a, uint32_t b, Candidate& c) const {
-  uint32_t e[2] = {kNone, kNone};
-  uint32_t ne = 0;
-  for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f)
-    if (Contains(faces_[*f], b)) {
-      if (ne < 2) e[ne] = *f;
-      ++ne;
-    }
+  uint32_t e[2];
+  const uint32_t ne = edgeFaces(a, b, e);
   if (ne == 0 || ne > 2) return false;
   double seamCost = 0;
   if (!seamCollapse(e, c, seamCost)) return false;
@@ -1352,13 +1354,8 @@ bool GroupQemSimplifier::keepsGroupsWholeAcross(uint32_t a, uint32_t b) {
 }
 
 bool GroupQemSimplifier::keepsGroupsWhole(uint32_t a, uint32_t b) {
-  uint32_t e[2] = {kNone, kNone};
-  uint32_t ne = 0;
-  for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f)
-    if (Contains(faces_[*f], b)) {
-      if (ne < 2) e[ne] = *f;
-      ++ne;
-    }
+  uint32_t e[2];
+  const uint32_t ne = edgeFaces(a, b, e);
   if (ne == 0 || ne > 2) return false;
   const uint32_t opp0 = Third(faces_[e[0]], a, b), opp1 = ne == 2 ? Third(faces_[e[1]], a, b) : kNone;
   uint32_t n[4] = {kNone, kNone, kNone, kNone};  // n0a, n0b, n1a, n1b
