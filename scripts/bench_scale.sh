@@ -6,8 +6,8 @@
 # seconds, CPU seconds (user + system), peak resident memory (GNU time's maximum RSS), peak
 # bytes per input face, file bytes per input face, the 1-minute load as the step started. Then,
 # for each .clod file built, two more tables: the desktop viewer's first image (conelod-viewer
-# --screenshot --json --frames 0 under xvfb-run -a: first_frame_ms from the process's start,
-# open_ms the file's part) and the crack check of its cuts at 5 / 20 / 50 % (build/tools/
+# --screenshot --json --frames 0 under xvfb-run -a: first_image_ms from the process's start to
+# the image on the window, open_ms the file's part) and the crack check of its cuts at 5 / 20 / 50 % (build/tools/
 # lod_cracks, the eye of scripts/lod_cracks.py: cracks, overlaps, seconds, peak RSS). Takes
 # minutes to hours: not part of CI.
 #   scripts/bench_scale.sh [CONELOD]   default build/conelod/conelod
@@ -182,7 +182,7 @@ for check in $CHECKS; do
 import json, sys
 j = json.loads(open(sys.argv[3]).read().strip().split("\n")[-1])
 c = j["coarse"]
-print("| %.2f M | %.0f | %.1f | %d | %d | %.0f | %s |" % (int(sys.argv[1]) / 1e6, j["first_frame_ms"], j["open_ms"],
+print("| %.2f M | %.0f | %.1f | %d | %d | %.0f | %s |" % (int(sys.argv[1]) / 1e6, j["first_image_ms"], j["open_ms"],
       c["faces_drawn"], c["groups_drawn"], j["process_rss_bytes"] / 1048576, sys.argv[2]))
 PY
       done ;;
