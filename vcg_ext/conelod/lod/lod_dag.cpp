@@ -41,6 +41,7 @@
 #include "conelod/parallel.h"
 #include "conelod/mesh/mesh_check.h"
 #include "conelod/simplify/attribute_quadric.h"
+#include "conelod/stage_log.h"
 
 namespace conelod {
 namespace {
@@ -1036,6 +1037,7 @@ Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSp
     }
     LodDag::Level& L = dag.levels[size_t(k)];
     if (L.clusterCount() <= 1 && depth == 0) break;
+    StageLog::Scope levelStage("level k, whole", k);
     if (depth > 0) {
       const int want = std::max(0, leafDepth - k - sooner);
       if (want < depth)
@@ -1278,7 +1280,8 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
     const size_t chunks = faceEnd.size();
     auto faceBegin = [&](size_t r) { return r ? faceEnd[r - 1] : uint64_t(0); };
     std::vector<Face> faces;
-    std::vector<uint32_t> faceCluster, verts;
+    std::vector<uint32_t> faceCluster;
+    StageLog::Scope pass1("level k, pass 1 (two chunks' vertices)", k);
     // Pass 1: the vertices of two chunks.
     const size_t P = dag.positions.size();
     std::vector<uint64_t> border((P + 63) / 64, 0);
@@ -1303,7 +1306,16 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
           }
       }
     }
-    // Pass 2: each chunk's groups, simplified, and its part of level k + 1.
+    pass1.Lap();
+    StageLog::Sum sRead("level k, read"), sPrepare("level k, renumber, group, mark"),
+        sSimplify("level k, simplify, recut"), sPlace("level k, place, spill");
+    // Pass 2: each chunk's groups, simplified, and its part of level k + 1, a wave of chunks at a
+    // time (as level 0's, BuildLodDagFromChunks): (a) the wave's chunks read (in order), each put in
+    // its own vertex ids, grouped and its frozen vertices marked (a chunk per thread); (b) every
+    // group of the wave simplified and re-cut (a group per thread); (c) in chunk order, each
+    // chunk's new vertex ids, per-cluster fields and faces, and its part of level k + 1 appended.
+    // Only (c) numbers anything across chunks, in chunk order: the file does not depend on the
+    // wave's size. A chunk of the wave holds its own bitset of the DAG's vertices.
     const int per = GroupClustersOf(params, F, inputFaces);
     const double ratio = LevelRatioOf(params, F, inputFaces);
     const double angle = ClusterAngle(params, k + 1);
@@ -1313,143 +1325,208 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
     LodDag::Level N;  // level k + 1's per-cluster fields (its faces go to the spill)
     std::vector<uint32_t> nextNode, nextFaces;
     uint64_t newFaces = 0;
-    LodDag::Level sub;  // the chunk (its clusters numbered within it)
-    std::vector<int> group;
     std::vector<Face> out;
-    std::vector<vcg::Point3f> localPos;
-    std::vector<uint8_t> localShared;
-    std::vector<uint32_t> outCluster, rank;
-    std::vector<uint64_t> here((P + 63) / 64, 0);  // the chunk's vertices (cleared after it)
+    std::vector<uint32_t> outCluster;
     struct GroupPlace {
       uint32_t firstNew, firstCluster;
       size_t firstFace;
     };
     std::vector<GroupPlace> groupAt;
-    for (size_t r = 0; r < chunks; ++r) {
+    struct Slot {
+      size_t r = 0;
+      LodDag::Level sub;  // the chunk (its clusters numbered within it)
+      std::vector<uint32_t> faceCluster, verts, rank;
+      std::vector<uint64_t> here;  // the chunk's vertices (cleared after it)
+      std::vector<int> group;
+      int G = 0;
+      std::vector<vcg::Point3f> localPos;
+      std::vector<uint8_t> localShared;
+      std::vector<std::vector<uint32_t>> groupFaces;
+      std::vector<GroupResult> results;
+      bool bad = false;
+    };
+    // Chunks side by side: one per thread, as many as three quarters of the budget left by the
+    // positions and the bitsets allow, at about 64 bytes a face of the chunk (as level 0's).
+    size_t waveSize = 1;
+    {
+      uint64_t largest = 1;
+      for (size_t r = 0; r < chunks; ++r) largest = std::max<uint64_t>(largest, faceEnd[r] - faceBegin(r));
+      const uint64_t budget = uint64_t(params.chunkFaces) * kLodMemoryBytesPerChunkFace;
+      const uint64_t fixed = uint64_t(12) * P + P / 4, slot = 64 * largest + P / 8;
+      if (budget > fixed) waveSize = size_t(std::max<uint64_t>(1, (budget - fixed) / 4 * 3 / slot));
+      waveSize = std::min<size_t>({waveSize, size_t(threads), chunks});
+    }
+    std::vector<Slot> slots(waveSize);
+    for (Slot& w : slots) w.here.assign((P + 63) / 64, 0);
+    std::vector<std::pair<uint32_t, uint32_t>> tasks;  // (slot, group)
+    for (size_t r0 = 0; r0 < chunks; r0 += waveSize) {
       if (progress && !progress(std::min(95, 10 + 8 * k), "LOD: simplifying groups chunk by chunk"))
         return fail(Status::Cancelled());
-      Status s = spill.get(size_t(k), faceBegin(r), faceEnd[r], sub.faces, faceCluster);
-      if (!s.ok()) return fail(s);
-      const uint32_t c0 = firstCluster[r], c1 = firstCluster[r + 1];
-      const size_t CF = sub.faces.size();
-      sub.faceCluster.resize(CF);
-      for (size_t f = 0; f < CF; ++f) {
-        if (faceCluster[f] < c0 || faceCluster[f] >= c1) return fail(bad);
-        sub.faceCluster[f] = faceCluster[f] - c0;
+      const size_t n = std::min(waveSize, chunks - r0);
+      sRead.Begin();
+      for (size_t i = 0; i < n; ++i) {
+        Slot& w = slots[i];
+        w.r = r0 + i;
+        Status s = spill.get(size_t(k), faceBegin(w.r), faceEnd[w.r], w.sub.faces, w.faceCluster);
+        if (!s.ok()) return fail(s);
       }
-      sub.clusterGroup.assign(c1 - c0, -1);
-      // The chunk in its own vertex ids, in the order of the global ones (verts: the chunk's
-      // vertices, read from a bitset of the DAG's; a corner's id: its vertex's rank there, from
-      // the words' prefix counts): positions, frozen flags.
-      uint32_t lo = ~0u, hi = 0;
-      for (const Face& t : sub.faces)
-        for (uint32_t v : t) {
-          if (v >= P) return fail(bad);
-          here[v >> 6] |= uint64_t(1) << (v & 63);
-          lo = std::min(lo, v);
-          hi = std::max(hi, v);
-        }
-      verts.clear();
-      const size_t w0 = CF ? lo >> 6 : 0, w1 = CF ? (hi >> 6) + 1 : 0;
-      rank.resize(w1 - w0);
-      for (size_t w = w0; w < w1; ++w) {
-        rank[w - w0] = uint32_t(verts.size());
-        for (uint64_t bits = here[w]; bits; bits &= bits - 1)
-          verts.push_back(uint32_t(64 * w + size_t(__builtin_ctzll(bits))));
-      }
-      const size_t V = verts.size();
-      ParallelChunks(CF, threads, size_t(1) << 12, [&](size_t b, size_t e, unsigned) {
-        for (size_t f = b; f < e; ++f)
-          for (size_t i = 0; i < 3; ++i) {
-            const uint32_t v = sub.faces[f][i];
-            const uint64_t below = here[v >> 6] & ((uint64_t(1) << (v & 63)) - 1);
-            sub.faces[f][i] = rank[(v >> 6) - w0] + uint32_t(__builtin_popcountll(below));
+      sRead.End();
+      // (a)
+      sPrepare.Begin();
+      const unsigned inner = unsigned(std::max<size_t>(1, threads / n));
+      ParallelChunks(n, threads, 1, [&](size_t b, size_t e, unsigned) {
+        for (size_t i = b; i < e; ++i) {
+          Slot& w = slots[i];
+          LodDag::Level& sub = w.sub;
+          const uint32_t c0 = firstCluster[w.r], c1 = firstCluster[w.r + 1];
+          const size_t CF = sub.faces.size();
+          sub.faceCluster.resize(CF);
+          for (size_t f = 0; f < CF; ++f) {
+            if (w.faceCluster[f] < c0 || w.faceCluster[f] >= c1) {
+              w.bad = true;
+              return;
+            }
+            sub.faceCluster[f] = w.faceCluster[f] - c0;
           }
+          sub.clusterGroup.assign(c1 - c0, -1);
+          // The chunk in its own vertex ids, in the order of the global ones (verts: the chunk's
+          // vertices, read from a bitset of the DAG's; a corner's id: its vertex's rank there,
+          // from the words' prefix counts): positions, frozen flags.
+          uint32_t lo = ~0u, hi = 0;
+          for (const Face& t : sub.faces)
+            for (uint32_t v : t) {
+              if (v >= P) {
+                w.bad = true;
+                return;
+              }
+              w.here[v >> 6] |= uint64_t(1) << (v & 63);
+              lo = std::min(lo, v);
+              hi = std::max(hi, v);
+            }
+          w.verts.clear();
+          const size_t w0 = CF ? lo >> 6 : 0, w1 = CF ? (hi >> 6) + 1 : 0;
+          w.rank.resize(w1 - w0);
+          for (size_t x = w0; x < w1; ++x) {
+            w.rank[x - w0] = uint32_t(w.verts.size());
+            for (uint64_t bits = w.here[x]; bits; bits &= bits - 1)
+              w.verts.push_back(uint32_t(64 * x + size_t(__builtin_ctzll(bits))));
+          }
+          const size_t V = w.verts.size();
+          ParallelChunks(CF, inner, size_t(1) << 12, [&](size_t fb, size_t fe, unsigned) {
+            for (size_t f = fb; f < fe; ++f)
+              for (size_t c = 0; c < 3; ++c) {
+                const uint32_t v = sub.faces[f][c];
+                const uint64_t below = w.here[v >> 6] & ((uint64_t(1) << (v & 63)) - 1);
+                sub.faces[f][c] = w.rank[(v >> 6) - w0] + uint32_t(__builtin_popcountll(below));
+              }
+          });
+          std::fill(w.here.begin() + long(w0), w.here.begin() + long(w1), uint64_t(0));
+          sub.clusterCreator.clear();
+          if (L.clusterCreator.size() == C)
+            sub.clusterCreator.assign(L.clusterCreator.begin() + c0, L.clusterCreator.begin() + c1);
+          w.G = GroupClusters(sub, per, 0, w.group, nullptr, V, inner, params.lockedBorderWeight);
+          w.localPos.resize(V);
+          w.localShared.resize(V);
+          for (size_t v = 0; v < V; ++v) {
+            w.localPos[v] = dag.positions[w.verts[v]];
+            w.localShared[v] = (border[w.verts[v] >> 6] >> (w.verts[v] & 63)) & 1;
+          }
+          w.groupFaces.assign(static_cast<size_t>(w.G), {});
+          for (uint32_t f = 0; f < CF; ++f) w.groupFaces[size_t(w.group[sub.faceCluster[f]])].push_back(f);
+          MarkShared(
+              sub.faces, w.groupFaces, V, [](uint32_t v) { return v; }, inner, w.localShared);
+          w.results.assign(static_cast<size_t>(w.G), GroupResult());
+        }
       });
-      std::fill(here.begin() + long(w0), here.begin() + long(w1), uint64_t(0));
-      sub.clusterCreator.clear();
-      if (L.clusterCreator.size() == C)
-        sub.clusterCreator.assign(L.clusterCreator.begin() + c0, L.clusterCreator.begin() + c1);
-      const int G = GroupClusters(sub, per, 0, group, nullptr, V, threads, params.lockedBorderWeight);
-      const int groupBase = int(L.groupError.size());
-      for (uint32_t c = c0; c < c1; ++c) L.clusterGroup[c] = groupBase + group[c - c0];
-      localPos.resize(V);
-      localShared.resize(V);
-      for (size_t v = 0; v < V; ++v) {
-        localPos[v] = dag.positions[verts[v]];
-        localShared[v] = (border[verts[v] >> 6] >> (verts[v] & 63)) & 1;
-      }
-      std::vector<std::vector<uint32_t>> groupFaces(static_cast<size_t>(G));
-      for (uint32_t f = 0; f < CF; ++f) groupFaces[size_t(group[sub.faceCluster[f]])].push_back(f);
-      MarkShared(
-          sub.faces, groupFaces, V, [](uint32_t v) { return v; }, threads, localShared);
-      // Each group simplified and re-cut into level k + 1's clusters on its thread (its new
+      sPrepare.End();
+      for (size_t i = 0; i < n; ++i)
+        if (slots[i].bad) return fail(bad);
+      // (b) Each group simplified and re-cut into level k + 1's clusters on its thread (its new
       // vertices stand in as V + their index: above the chunk's, as their global ids; RecutGroup).
-      std::vector<GroupResult> results(static_cast<size_t>(G));
-      ParallelItems<RecutScratch>(size_t(G), threads, [&](size_t g, RecutScratch& scratch) {
-        GroupResult& res = results[g];
-        SimplifyGroup(sub.faces, groupFaces[g], localPos, localShared, params, ratio, cap, diagonal, false,
+      sSimplify.Begin();
+      tasks.clear();
+      for (size_t i = 0; i < n; ++i)
+        for (int g = 0; g < slots[i].G; ++g) tasks.emplace_back(uint32_t(i), uint32_t(g));
+      ParallelItems<RecutScratch>(tasks.size(), threads, [&](size_t t, RecutScratch& scratch) {
+        Slot& w = slots[tasks[t].first];
+        const size_t g = tasks[t].second;
+        const uint32_t V = uint32_t(w.verts.size());
+        GroupResult& res = w.results[g];
+        SimplifyGroup(w.sub.faces, w.groupFaces[g], w.localPos, w.localShared, params, ratio, cap, diagonal, false,
                       dag.attributes, res);
         const uint32_t RV = uint32_t(res.localToGlobal.size());
         RecutGroup(
-            res, [&](uint32_t x) { return x < RV ? res.localToGlobal[x] : uint32_t(V) + (x - RV); },
-            [&](uint32_t id) { return id < V ? localPos[id] : res.newPositions[id - V]; }, params.clusterFaces, angle,
+            res, [&](uint32_t x) { return x < RV ? res.localToGlobal[x] : V + (x - RV); },
+            [&](uint32_t id) { return id < V ? w.localPos[id] : res.newPositions[id - V]; }, params.clusterFaces, angle,
             scratch);
       });
-      std::vector<std::vector<uint32_t>>().swap(groupFaces);
-      std::vector<double> maxChild(static_cast<size_t>(G), 0.0);
-      for (uint32_t c = c0; c < c1; ++c)
-        maxChild[size_t(group[c - c0])] = std::max(maxChild[size_t(group[c - c0])], double(L.clusterError[c]));
-      // The chunk's part of level k + 1 in group order: each group's first new vertex id, first
-      // cluster and first face (prefix sums, with the per-cluster fields), then each group's new
-      // positions and faces written at those places on the threads.
-      groupAt.resize(size_t(G));
-      const size_t firstNext = nextFaces.size();
-      const uint32_t clusterBase = uint32_t(N.clusterCount());
-      {
-        size_t id = dag.positions.size(), face = 0;
-        uint32_t cluster = clusterBase;
-        for (int g = 0; g < G; ++g) {
-          const GroupResult& res = results[size_t(g)];
-          groupAt[size_t(g)] = GroupPlace{uint32_t(id), cluster, face};
-          id += res.newPositions.size();
-          face += res.faces.size();
-          cluster += res.clusters;
-          const float ef = GroupErrorAbove(maxChild[size_t(g)], res.distance);
-          L.groupError.push_back(ef);
-          N.clusterGroup.resize(cluster, -1);
-          N.clusterCreator.resize(cluster, groupBase + g);
-          N.clusterError.resize(cluster, ef);
-          nextNode.resize(cluster, clusterNode[c0]);
-        }
-        dag.positions.resize(id);
-        out.resize(face);
-        outCluster.resize(face);
-        nextFaces.resize(firstNext + (cluster - clusterBase), 0);
-      }
-      ParallelChunks(size_t(G), threads, 1, [&](size_t b, size_t e, unsigned) {
-        for (size_t g = b; g < e; ++g) {
-          GroupResult& res = results[g];
-          const GroupPlace& at = groupAt[g];
-          const uint32_t RV = uint32_t(res.localToGlobal.size());
-          std::copy(res.newPositions.begin(), res.newPositions.end(), dag.positions.begin() + long(at.firstNew));
-          uint32_t* count = nextFaces.data() + firstNext + (at.firstCluster - clusterBase);
-          for (size_t f = 0; f < res.faces.size(); ++f) {
-            Face& u = out[at.firstFace + f];
-            for (size_t i = 0; i < 3; ++i) {
-              const uint32_t t = res.faces[f][i];
-              u[i] = t < RV ? verts[res.localToGlobal[t]] : at.firstNew + (t - RV);
-            }
-            outCluster[at.firstFace + f] = at.firstCluster + res.cluster[f];
-            ++count[res.cluster[f]];
+      sSimplify.End();
+      // (c) In chunk order: the chunk's part of level k + 1 in group order: each group's first new
+      // vertex id, first cluster and first face (prefix sums, with the per-cluster fields), then
+      // each group's new positions and faces written at those places on the threads.
+      sPlace.Begin();
+      for (size_t i = 0; i < n; ++i) {
+        Slot& w = slots[i];
+        const int G = w.G;
+        const uint32_t c0 = firstCluster[w.r], c1 = firstCluster[w.r + 1];
+        std::vector<std::vector<uint32_t>>().swap(w.groupFaces);
+        const int groupBase = int(L.groupError.size());
+        for (uint32_t c = c0; c < c1; ++c) L.clusterGroup[c] = groupBase + w.group[c - c0];
+        std::vector<double> maxChild(static_cast<size_t>(G), 0.0);
+        for (uint32_t c = c0; c < c1; ++c)
+          maxChild[size_t(w.group[c - c0])] = std::max(maxChild[size_t(w.group[c - c0])], double(L.clusterError[c]));
+        groupAt.resize(size_t(G));
+        const size_t firstNext = nextFaces.size();
+        const uint32_t clusterBase = uint32_t(N.clusterCount());
+        {
+          size_t id = dag.positions.size(), face = 0;
+          uint32_t cluster = clusterBase;
+          for (int g = 0; g < G; ++g) {
+            const GroupResult& res = w.results[size_t(g)];
+            groupAt[size_t(g)] = GroupPlace{uint32_t(id), cluster, face};
+            id += res.newPositions.size();
+            face += res.faces.size();
+            cluster += res.clusters;
+            const float ef = GroupErrorAbove(maxChild[size_t(g)], res.distance);
+            L.groupError.push_back(ef);
+            N.clusterGroup.resize(cluster, -1);
+            N.clusterCreator.resize(cluster, groupBase + g);
+            N.clusterError.resize(cluster, ef);
+            nextNode.resize(cluster, clusterNode[c0]);
           }
-          res = GroupResult();
+          dag.positions.resize(id);
+          out.resize(face);
+          outCluster.resize(face);
+          nextFaces.resize(firstNext + (cluster - clusterBase), 0);
         }
-      });
-      newFaces += out.size();
-      s = spill.append(size_t(k + 1), out, outCluster, dag.positions);
-      if (!s.ok()) return fail(s);
+        ParallelChunks(size_t(G), threads, 1, [&](size_t b, size_t e, unsigned) {
+          for (size_t g = b; g < e; ++g) {
+            GroupResult& res = w.results[g];
+            const GroupPlace& at = groupAt[g];
+            const uint32_t RV = uint32_t(res.localToGlobal.size());
+            std::copy(res.newPositions.begin(), res.newPositions.end(), dag.positions.begin() + long(at.firstNew));
+            uint32_t* count = nextFaces.data() + firstNext + (at.firstCluster - clusterBase);
+            for (size_t f = 0; f < res.faces.size(); ++f) {
+              Face& u = out[at.firstFace + f];
+              for (size_t c = 0; c < 3; ++c) {
+                const uint32_t t = res.faces[f][c];
+                u[c] = t < RV ? w.verts[res.localToGlobal[t]] : at.firstNew + (t - RV);
+              }
+              outCluster[at.firstFace + f] = at.firstCluster + res.cluster[f];
+              ++count[res.cluster[f]];
+            }
+            res = GroupResult();
+          }
+        });
+        std::vector<GroupResult>().swap(w.results);
+        newFaces += out.size();
+        Status s = spill.append(size_t(k + 1), out, outCluster, dag.positions);
+        if (!s.ok()) return fail(s);
+      }
+      sPlace.End();
     }
+    std::vector<Slot>().swap(slots);
+    for (StageLog::Sum* sum : {&sRead, &sPrepare, &sSimplify, &sPlace}) sum->Flush(k);
     if (double(newFaces) > 0.97 * double(F)) {  // the chunks' borders hold it: merge them one more depth
       dag.positions.resize(P);
       spill.drop(size_t(k + 1));
@@ -1627,10 +1704,19 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
   // and (e) decide what the chunks share, in the order of the one-chunk-at-a-time build, so the
   // DAG does not depend on the thread count. A vertex used by one chunk only is marked by that
   // chunk alone (those two chunks use are frozen already and not marked), so the wave's chunks
-  // mark and clear disjoint entries of owner / shared. A chunk's work is about a tenth of the
-  // budget (docs/scale.md): at most kChunksInFlight of them at once (and, on 2 threads or more,
-  // the previous wave's faces until (e) has spilled them).
-  constexpr size_t kChunksInFlight = 4;
+  // mark and clear disjoint entries of owner / shared. A wave holds one chunk per thread, as many
+  // as three quarters of the budget left by the arrays per vertex allow: a chunk in flight and its
+  // faces waiting for (e) take about 64 bytes a face of the chunk (docs/scale.md: 28 MiB more a
+  // chunk for chunks of 436 k faces); the positions (12 bytes a vertex, up to about 1.45 vertices
+  // of the DAG an input vertex) and owner / shared (5 bytes an input vertex) stay all along.
+  size_t chunksInFlight = 1;
+  {
+    const uint64_t budget = uint64_t(params.chunkFaces) * kLodMemoryBytesPerChunkFace;
+    const uint64_t fixed = uint64_t(22) * V0;
+    uint64_t largest = 1;
+    for (uint64_t f : in.chunkFaces) largest = std::max<uint64_t>(largest, f);
+    if (budget > fixed) chunksInFlight = size_t(std::max<uint64_t>(1, (budget - fixed) / 4 * 3 / (64 * largest)));
+  }
   struct ChunkWork {
     size_t chunk = 0;
     LodDag::Level sub;  // the chunk's level 0 (clusters numbered within the chunk)
@@ -1731,19 +1817,22 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
   };
   std::vector<ChunkWork> wave, pending;       // pending: the previous wave, waiting for its (e)
   std::vector<std::pair<size_t, int>> tasks;  // (chunk of the wave, group)
+  StageLog::Sum stageA("level 0 (a) read, clusters, groups [+ (e)]"), stageB("level 0 (b) simplify"),
+      stageC("level 0 (c) ids, clear marks"), stageD("level 0 (d) place, recut"), stageE("level 0 (e) records, spill");
   for (size_t first = 0; first < leaves;) {
     if (progress && !progress(int(10 * first / leaves), "LOD: level 0 chunk by chunk")) {
       dag = LodDag();
       return Status::Cancelled();
     }
     wave.clear();
-    for (; first < leaves && wave.size() < std::min<size_t>(threads, kChunksInFlight); ++first)
+    for (; first < leaves && wave.size() < std::min<size_t>(threads, chunksInFlight); ++first)
       if (in.chunkFaces[first] > 0) {
         wave.emplace_back();
         wave.back().chunk = first;
       }
     const size_t n = wave.size();
     if (n == 0) continue;
+    stageA.Begin();
     {  // (a), and the previous wave's (e) beside it (item 0)
       Status emitted;
       const size_t e = pending.empty() ? 0 : 1;
@@ -1764,9 +1853,11 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
         dag = LodDag();
         return w.status;
       }
+    stageA.End();
     tasks.clear();
     for (size_t i = 0; i < n; ++i)
       for (int g = 0; g < wave[i].groups; ++g) tasks.emplace_back(i, g);
+    stageB.Begin();
     {  // (b)
       ParallelChunks(tasks.size(), threads, 1, [&](size_t b, size_t e, unsigned) {
         for (size_t t = b; t < e; ++t) {
@@ -1777,6 +1868,8 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
         }
       });
     }
+    stageB.End();
+    stageC.Begin();
     // (c): the new vertices' ids in chunk and group order, as the one-chunk build numbers them.
     size_t nextId = dag.positions.size();
     for (ChunkWork& w : wave) {
@@ -1803,6 +1896,8 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
         std::vector<std::vector<uint32_t>>().swap(w.groupFaces);
       }
     });
+    stageC.End();
+    stageD.Begin();
     {  // (d)
       ParallelChunks(tasks.size(), threads, 1, [&](size_t b, size_t e, unsigned) {
         for (size_t t = b; t < e; ++t) {
@@ -1826,10 +1921,13 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
       });
     }
     for (ChunkWork& w : wave) std::vector<GroupResult>().swap(w.results);
+    stageD.End();
     if (threads > 1) {  // (e) beside the next wave's (a)
       std::swap(pending, wave);
     } else {  // (e) now: one chunk's work in memory at a time
+      stageE.Begin();
       Status s = emitAll(wave);
+      stageE.End();
       if (!s.ok()) {
         dag = LodDag();
         return s;
@@ -1837,12 +1935,19 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
     }
   }
   {
+    stageE.Begin();
     Status s = emitAll(pending);
+    stageE.End();
     if (!s.ok()) {
       dag = LodDag();
       return s;
     }
   }
+  stageA.Flush();
+  stageB.Flush();
+  stageC.Flush();
+  stageD.Flush();
+  stageE.Flush();
   std::vector<ChunkWork>().swap(wave);
   std::vector<int>().swap(owner);
   std::vector<uint8_t>().swap(shared);

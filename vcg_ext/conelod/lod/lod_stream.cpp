@@ -27,6 +27,7 @@
 #include "conelod/mesh/ply_format.h"
 #include "conelod/parallel.h"
 #include "conelod/simplify/hierarchical_simplification.h"
+#include "conelod/stage_log.h"
 
 namespace conelod {
 namespace {
@@ -175,6 +176,7 @@ uint64_t PlyFaceCount(const std::string& path, bool* vertexAttributes) {
 Status BuildLodFileFromPly(const std::string& input, const LodBuildParams& params, const std::string& path,
                            LodBuildStats* stats, const Progress& progress, std::string* readError, size_t sampleFaces) {
   const auto t0 = std::chrono::steady_clock::now();
+  StageLog::Laps laps;
   if (readError) readError->clear();
   if (params.chunkFaces == 0) return Status::Invalid("internal error: a streamed LOD build needs chunks");
   LodSpill spill;
@@ -228,6 +230,7 @@ Status BuildLodFileFromPly(const std::string& input, const LodBuildParams& param
     if (std::fclose(raw.release()) != 0)
       return Status::Invalid("cannot write '" + spill.raw() + "': " + std::strerror(errno));
   }
+  laps.Mark("read");
   const size_t V = ply.positions.size();
   used.resize(V, 0);
   {
@@ -277,6 +280,7 @@ Status BuildLodFileFromPly(const std::string& input, const LodBuildParams& param
       i = j;
     }
   }
+  laps.Mark("weld");
   LodChunkedInput in;
   {
     uint32_t next = 0;
@@ -316,6 +320,7 @@ Status BuildLodFileFromPly(const std::string& input, const LodBuildParams& param
   }
   const size_t W = in.positions.size();
   in.inputFaces = size_t(F);
+  laps.Mark("welded positions");
 
   // An input of one chunk: the unchunked build, as BuildLodFile builds it (its file byte for byte).
   int depth = 0;
@@ -414,14 +419,17 @@ Status BuildLodFileFromPly(const std::string& input, const LodBuildParams& param
     for (size_t v = 0; v < W; ++v) in.border[v] = chunkOf[v] == kTwoChunks ? 1 : 0;
   }
 
+  laps.Mark("chunk files");
   // (5) The DAG and the file.
   LodDag dag;
   Status s = BuildLodDagFromChunks(in, params, dag, SubProgress(progress, 0, 90), spill);
   if (!s.ok()) return s;
+  laps.Mark("dag");
   const double dagSeconds = Seconds(t0);
   s = WriteLodFileFrom(dag, &spill, W, size_t(F), in.box, path, stats, SubProgress(progress, 90, 100), params.precision,
                        LodWriterThreads(params));
   if (!s.ok()) return s;
+  laps.Mark("write");
   if (stats) {
     stats->chunks = leaves;
     stats->mergedVertices = merged;

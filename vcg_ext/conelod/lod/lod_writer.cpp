@@ -33,6 +33,7 @@
 #include "conelod/mesh/mesh_check.h"
 #include "conelod/mesh/safe_file.h"
 #include "conelod/parallel.h"
+#include "conelod/stage_log.h"
 
 namespace conelod {
 namespace {
@@ -539,6 +540,7 @@ Status WriteLodFile(const IndexedMesh& mesh, const LodDag& dag, const std::strin
 Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVertices, size_t inputFaces,
                         const vcg::Box3d& box, const std::string& path, LodBuildStats* stats, const Progress& progress,
                         double precision, int threadCount) {
+  StageLog::Laps laps;
   const auto t0 = std::chrono::steady_clock::now();
   const unsigned threads = threadCount > 0 ? unsigned(threadCount) : CoreCount();
   const size_t H = dag.levels.size();
@@ -604,6 +606,7 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
   }
   const uint32_t nodeLevels = uint32_t(H);
 
+  laps.Mark("write: check, box");
   // Node order within a level: by group (so a group's clusters, a node's children, are
   // consecutive), then by creator, then by cluster index.
   std::vector<std::vector<uint32_t>> clusterOfNode(H), nodeOfCluster(H);
@@ -630,6 +633,7 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
     if (id >= kNoParent) return Status::Invalid("too many nodes for the file format");
   }
   const uint64_t nodeCount = firstId[nodeLevels];
+  laps.Mark("write: node order");
   // Node ids per cluster, per level.
   std::vector<std::vector<uint32_t>> idOfCluster(H);
   for (size_t k = 0; k < H; ++k) {
@@ -659,6 +663,7 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
   // vertex of the DAG at the peak).
   auto rounded = [&](uint32_t v) { return grid.Round(dag.positions[v]); };
 
+  laps.Mark("write: grid");
   // Pass 1: node records (and the per-level counts), the nodes of a part side by side on `threads`
   // threads (each writes its own nodes' records).
   std::vector<NodeRecord> records(nodeCount);
@@ -767,6 +772,7 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
     return Status::Invalid(why);
   };
 
+  laps.Mark("write: pass 1 records");
   // The root chunk's header and data, rewritten at the end with the final offsets.
   uint64_t hierOffset = 0, geosOffset = 0, indexOffset = 0, globalVertices = 0, textureOffset = 0;
   uint64_t positionBytes = 0, indexBytes = 0, idBytes = 0;  // the codecs' output, for the stats
@@ -837,6 +843,7 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
     return out.write(c) && out.write(e);
   };
 
+  laps.Mark("write: header");
   // Node records, coarsest level first (node id order).
   std::vector<uint64_t> recordEnd(nodeCount), geometryEnd(nodeCount);  // offsets past each blob
   hierOffset = out.offset();
@@ -900,6 +907,7 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
   records.clear();
   records.shrink_to_fit();
 
+  laps.Mark("write: HIER");
   // Geometry, coarsest level first (node id order), one blob per *unit*: the clusters of one group
   // (a node's children, read together when it is refined; consecutive ids) or, at the top, all
   // the roots. A unit's vertices are stored once (in the order its faces first use them, the faces
@@ -1011,6 +1019,7 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
     patchContainer(kGeos, geosOffset);
   }
 
+  laps.Mark("write: GEOS");
   // The offset index (version 6), in blocks of kIndexBlock entries: each block gives the offsets
   // of its first record and its first node's geometry blob, then per entry its record's size and,
   // when the entry starts a new blob (not its unit's previous node), that blob's size, as varints;
@@ -1082,6 +1091,7 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
     stats->quantizationError = grid.ErrorBound();
     stats->writeSeconds = Seconds(t0);
   }
+  laps.Mark("write: index, close");
   return Status::Ok();
 }
 
