@@ -1352,7 +1352,8 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
       uint64_t largest = 1;
       for (size_t r = 0; r < chunks; ++r) largest = std::max<uint64_t>(largest, faceEnd[r] - faceBegin(r));
       const uint64_t budget = uint64_t(params.chunkFaces) * kLodMemoryBytesPerChunkFace;
-      const uint64_t fixed = uint64_t(12) * P + P / 4, slot = 64 * largest + P / 8;
+      const uint64_t fixed = uint64_t(12) * P + P / 4 + (budget >= kLodMinMemoryBytes ? kLodMinMemoryBytes : 0);
+      const uint64_t slot = 64 * largest + P / 8;
       if (budget > fixed) waveSize = size_t(std::max<uint64_t>(1, (budget - fixed) / 4 * 3 / slot));
       waveSize = std::min<size_t>({waveSize, size_t(threads), chunks});
     }
@@ -1708,11 +1709,13 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
   // as three quarters of the budget left by the arrays per vertex allow: a chunk in flight and its
   // faces waiting for (e) take about 64 bytes a face of the chunk (docs/scale.md: 28 MiB more a
   // chunk for chunks of 436 k faces); the positions (12 bytes a vertex, up to about 1.45 vertices
-  // of the DAG an input vertex) and owner / shared (5 bytes an input vertex) stay all along.
+  // of the DAG an input vertex), owner / shared (5 bytes an input vertex) and the rest stay.
   size_t chunksInFlight = 1;
   {
     const uint64_t budget = uint64_t(params.chunkFaces) * kLodMemoryBytesPerChunkFace;
-    const uint64_t fixed = uint64_t(22) * V0;
+    // (what stays, measured: 20-34 bytes an input vertex and the process's few MiB; a budget
+    // below the CLI's smallest, as in the tests, is all chunk work.)
+    const uint64_t fixed = uint64_t(30) * V0 + (budget >= kLodMinMemoryBytes ? kLodMinMemoryBytes : 0);
     uint64_t largest = 1;
     for (uint64_t f : in.chunkFaces) largest = std::max<uint64_t>(largest, f);
     if (budget > fixed) chunksInFlight = size_t(std::max<uint64_t>(1, (budget - fixed) / 4 * 3 / (64 * largest)));
