@@ -22,8 +22,9 @@ constexpr double kUnitFraction = 0.003;
 // A collapse that leaves some of gone's faces with their own value at keep's place (a chart
 // junction or a small chart degrading; attribute_quadric.h) costs this fraction of the squared
 // distance moved, times the share of gone's faces that do so: chosen on the textured dragon
-// (docs/attributes.md) against MeshLab's texture QEM.
-constexpr double kSeamMove = 0.05;
+// (docs/attributes.md) with the drift (group_qem.cpp's kSeamDrift): the geometry nearest the
+// attribute-free run with the texture error below MeshLab's texture QEM.
+constexpr double kSeamMove = 0.01;
 }  // namespace
 
 Status AttributeQuadrics::Init(const IndexedMesh& mesh, const VertexAttributes& layout, std::vector<float> cornerValues,
@@ -272,6 +273,78 @@ void AttributeQuadrics::Slide(uint32_t keep, uint32_t gone, double t, const uint
   }
   const size_t stride = 1 + 4 * size_t(channels_);
   for (size_t i = 0; i < stride; ++i) model_[keep * stride + i] += model_[gone * stride + i];
+}
+
+void AttributeQuadrics::Reparameterize(uint32_t v, const Point3d& from, const Point3d& to, const uint32_t* faceList,
+                                       size_t count, const FaceCorners& faces,
+                                       const std::function<Point3d(uint32_t)>& pos) {
+  if (!layout_.texCoords || count == 0) return;
+  const int o = layout_.texCoordOffset();
+  const Point3d move = to - from;
+  // Wedges by texture coordinates: value, area-weighted gradient sums (u, v), area.
+  struct Wedge {
+    float u, v;
+    Point3d gu, gv;
+    double area;
+  };
+  std::vector<Wedge> wedges;
+  std::vector<uint32_t> wedgeOf(count);
+  for (size_t i = 0; i < count; ++i) {
+    const uint32_t f = faceList[i];
+    const auto& t = faces(f);
+    const int k = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+    const float* x = corner(f, k) + o;
+    size_t w = 0;
+    while (w < wedges.size() && !(wedges[w].u == x[0] && wedges[w].v == x[1])) ++w;
+    if (w == wedges.size()) wedges.push_back({x[0], x[1], Point3d(0, 0, 0), Point3d(0, 0, 0), 0.0});
+    wedgeOf[i] = uint32_t(w);
+    const Point3d p0 = t[0] == v ? from : pos(t[0]), p1 = t[1] == v ? from : pos(t[1]),
+                  p2 = t[2] == v ? from : pos(t[2]);
+    const Point3d e1 = p1 - p0, e2 = p2 - p0, n = e1 ^ e2;
+    const double n2 = n.SquaredNorm();
+    if (!(n2 > 0) || !std::isfinite(n2)) continue;
+    const double area = 0.5 * std::sqrt(n2);
+    const Point3d u1 = (e2 ^ n) / n2, u2 = (n ^ e1) / n2;
+    const float* s0 = corner(f, 0) + o;
+    const float* s1 = corner(f, 1) + o;
+    const float* s2 = corner(f, 2) + o;
+    wedges[w].gu += (u1 * (double(s1[0]) - s0[0]) + u2 * (double(s2[0]) - s0[0])) * area;
+    wedges[w].gv += (u1 * (double(s1[1]) - s0[1]) + u2 * (double(s2[1]) - s0[1])) * area;
+    wedges[w].area += area;
+  }
+  // Each wedge's shift, cut where it would leave the wedge's own faces in texture space (the
+  // chart): the new value stays in the fan of the old one.
+  std::vector<double> du(wedges.size(), 0.0), dv(wedges.size(), 0.0), reach(wedges.size(), 0.0);
+  for (size_t w = 0; w < wedges.size(); ++w)
+    if (wedges[w].area > 0) {
+      du[w] = (wedges[w].gu * move) / wedges[w].area;
+      dv[w] = (wedges[w].gv * move) / wedges[w].area;
+    }
+  for (size_t i = 0; i < count; ++i) {
+    const size_t w = wedgeOf[i];
+    if (du[w] == 0 && dv[w] == 0) continue;
+    const uint32_t f = faceList[i];
+    const auto& t = faces(f);
+    const int k = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+    const float* a = corner(f, k) + o;
+    const float* b = corner(f, (k + 1) % 3) + o;
+    const float* c = corner(f, (k + 2) % 3) + o;
+    const double bx = double(b[0]) - a[0], by = double(b[1]) - a[1], cx = double(c[0]) - a[0], cy = double(c[1]) - a[1];
+    const double det = bx * cy - by * cx;
+    if (!(std::fabs(det) > 0)) continue;
+    const double alpha = (du[w] * cy - dv[w] * cx) / det, beta = (bx * dv[w] - by * du[w]) / det;
+    if (alpha >= 0 && beta >= 0 && alpha + beta > 0) reach[w] = std::max(reach[w], 1.0 / (alpha + beta));
+  }
+  for (size_t i = 0; i < count; ++i) {
+    const size_t w = wedgeOf[i];
+    const double s = std::min(1.0, reach[w]);
+    if (!(s > 0)) continue;
+    const uint32_t f = faceList[i];
+    const auto& t = faces(f);
+    float* x = corner(f, t[0] == v ? 0 : (t[1] == v ? 1 : 2)) + o;
+    x[0] = float(wedges[w].u + s * du[w]);
+    x[1] = float(wedges[w].v + s * dv[w]);
+  }
 }
 
 void AttributeQuadrics::Evaluate(uint32_t f, int k, uint32_t v, const Point3d& p, float* out) const {

@@ -42,8 +42,11 @@
 // edge, from the edge face on its side, so both sides stay on one segment of their charts and the
 // seam keeps its texture; the simplifier puts it at the geometric quadric's minimum on the edge.
 // Where the values of a seam vertex hold is its anchor (group_qem.cpp, seamPlace): without
-// AllowSeamMoves the vertex stays there; with it, the vertex may leave it at a cost (the texture
-// stretched over the distance), its corner values kept.
+// AllowSeamMoves the vertex stays there; with it, the vertex may leave it at a cost (the distance
+// in the tangent plane: along the normal the texture stays where it was), and each of its texture
+// wedges then takes its chart's linear function at the new place, cut where that would leave the
+// wedge's own faces in texture space (Reparameterize: inside the chart the texture follows; across
+// the seam it stretches); the new place is the anchor.
 // (Without AllowSeamMoves, only along the seam between two vertices of two wedges each: junctions
 // stay.) A vertex that is not on a seam may be removed into a seam vertex when the edge's faces see one
 // value there; its faces then take that value. So a collapse never drags texture coordinates
@@ -111,6 +114,13 @@ class AttributeQuadrics {
   // edge, (1 - t) value(keep) + t value(gone), from the edge face on its side; the models merge.
   void Slide(uint32_t keep, uint32_t gone, double t, const uint32_t* keepFaces, size_t keepCount,
              const uint32_t* goneFaces, size_t goneCount, const FaceCorners& faces);
+
+  // Seam vertex v moves from `from` (where its corner values hold) to `to`: each of its texture
+  // wedges (its faces' corners of one (u, v)) moves by the area-weighted gradient of its faces
+  // (positions by `pos`, v's at `from`) times the move, cut where the new value would leave the
+  // wedge's faces in texture space (it stays inside its chart). Colours and normals are kept.
+  void Reparameterize(uint32_t v, const vcg::Point3d& from, const vcg::Point3d& to, const uint32_t* faceList,
+                      size_t count, const FaceCorners& faces, const std::function<vcg::Point3d(uint32_t)>& pos);
 
   // The attributes of corner k of face f, at vertex v now at p (input coordinates), into
   // out[channels()]: a seam vertex's corner value; otherwise s*(p), colours clamped to [0, 1],

@@ -29,8 +29,9 @@ constexpr double kDegenerateQuality = 1e-6;
 // this many faces; a collapse whose path is longer (or missing) is refused.
 constexpr uint32_t kIntegritySearchFaces = 256;
 // With attribute seam moves: a seam vertex may leave the place its corner values belong to (its
-// anchor) at this fraction of the squared distance, added to the collapse's error
-// (GroupQemSimplifier::seamPlace; chosen on the textured dragon, docs/attributes.md).
+// anchor) at this fraction of the squared distance in the tangent plane, added to the collapse's
+// error; its values then follow it inside their charts (GroupQemSimplifier::seamPlace and
+// collapse; chosen on the textured dragon, docs/attributes.md).
 constexpr double kSeamDrift = 0.05;
 
 // Meshes from this many faces are simplified in a spatial order (GroupQemSimplifier::SpatialOrder).
@@ -354,7 +355,8 @@ class GroupQemSimplifier {
   // the anchor goes to the quadric's minimum on the anchors' segment, each side's values
   // interpolated along it (AttributeQuadrics::Slide); else it is keep's. With seam moves
   // (AttributeQuadrics::seamMoves) the position may leave the anchor, at kSeamDrift x the squared
-  // distance (into seamCost); without, it is the anchor.
+  // distance in the tangent plane (into seamCost; collapse() then moves the values and the anchor
+  // with it, AttributeQuadrics::Reparameterize); without, it is the anchor.
   void seamPlace(uint32_t a, uint32_t b, const uint32_t e[2], Candidate& c, double& seamCost) const;
   // place() again for an edge judged before (nothing changed since): seamCollapse and seamPlace as
   // judge() runs them; false when the seams no longer allow it.
@@ -992,6 +994,7 @@ Candidate GroupQemSimplifier::judge(uint32_t a, uint32_t b) {
   const bool nonManifold = ne > 2 || ((ia.flags | ib.flags) & kNonManifold);
   if (nonManifold) {
     if (!nonManifoldCollapse(a, b, ne, c)) return c;
+    if (attributes_) c.anchor = anchor_[c.keep];  // the kept end stays: so do its values (no seamPlace)
   } else {
     if (ne == 2 && (ia.flags & kOpen) && (ib.flags & kOpen)) return c;  // would pinch the surface
     const uint32_t opp0 = Third(faces_[e[0]], a, b), opp1 = ne == 2 ? Third(faces_[e[1]], a, b) : kNone;
@@ -1178,20 +1181,36 @@ void GroupQemSimplifier::seamPlace(uint32_t a, uint32_t b, const uint32_t e[2], 
     }
     return;
   }
-  // Off its anchor at a cost (the texture stretched over the distance): the minimum of
-  // error(x) + kSeamDrift |x - anchor|^2, a point quadric added to the geometric one.
+  // Off its anchor at a cost: the minimum of error(x) + kSeamDrift |x - anchor|_t^2, where |.|_t
+  // is the distance in the tangent plane of the ends' faces (the area-weighted normal's
+  // complement): along the normal the texture does not move on the surface, so that is free.
+  // Point quadrics in the two tangent directions, added to the geometric one.
+  Point3d n(0, 0, 0);
+  for (uint32_t v : {a, b})
+    for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f) {
+      const auto& t = faces_[*f];
+      n += (pos_[t[1]] - pos_[t[0]]) ^ (pos_[t[2]] - pos_[t[0]]);
+    }
+  const double len = n.Norm();
   Quadric d = q;
   const double k = kSeamDrift * (q.w > 0 ? q.w : 1.0);
-  for (int axis = 0; axis < 3; ++axis) {
-    Point3d n(0, 0, 0);
-    n[axis] = 1;
-    d.addPlane(n, -c.anchor[axis], k);
+  Point3d axes[3] = {Point3d(1, 0, 0), Point3d(0, 1, 0), Point3d(0, 0, 1)};
+  int count = 3;  // no normal (a flat fan of degenerate faces): every direction costs
+  if (len > 0 && std::isfinite(len)) {
+    n /= len;
+    axes[0] = std::fabs(n[0]) < 0.9 ? Point3d(1, 0, 0) ^ n : Point3d(0, 1, 0) ^ n;
+    axes[0].Normalize();
+    axes[1] = n ^ axes[0];
+    count = 2;
   }
+  for (int i = 0; i < count; ++i) d.addPlane(axes[i], -(axes[i] * c.anchor), k);
   Point3d x;
   if (!d.minimum(x)) x = c.anchor;
   c.position = x;
   c.error = q.error(x);
-  seamCost += kSeamDrift * (x - c.anchor).SquaredNorm();
+  double tangentSq = 0;
+  for (int i = 0; i < count; ++i) tangentSq += ((x - c.anchor) * axes[i]) * ((x - c.anchor) * axes[i]);
+  seamCost += kSeamDrift * tangentSq;
 }
 
 bool GroupQemSimplifier::keepsApart(uint32_t a, uint32_t b, const Point3d& p) {
@@ -1552,6 +1571,13 @@ void GroupQemSimplifier::collapse(const Candidate& c) {
     count_[gone] = 0;
   }
   vs_[gone].dead = 1;
+  // A seam vertex that leaves its anchor (seamPlace's drift): its corner values follow it inside
+  // their charts (AttributeQuadrics::Reparameterize), and hold there.
+  if (attributes_ && attributes_->seam(keep) && !(c.position == anchor_[keep])) {
+    attributes_->Reparameterize(keep, anchor_[keep], c.position, facesBegin(keep), count_[keep], faceCorners_,
+                                [this](uint32_t v) { return pos_[v]; });
+    anchor_[keep] = c.position;
+  }
   pos_[keep] = c.position;
   quadric_[keep] += quadric_[gone];
   ++epoch_;

@@ -278,6 +278,59 @@ TEST(AttributeQuadric, SeamVerticesLeaveTheSeamOnlyWithSeamMoves) {
   }
 }
 
+// A seam vertex that drifts (seam moves) takes its charts' coordinates at its new place where they
+// stay inside each chart (AttributeQuadrics::Reparameterize): the flat grid cut at x = 0.5 into two
+// charts (u = x left, x + 1 right, v = y), its middle vertex moved. Into the left chart: the left
+// side follows exactly, the right side (the move would leave its faces in texture space) keeps
+// its value. Along the seam: both follow. Farther than its faces reach: cut at their border.
+TEST(AttributeQuadric, ReparameterizeFollowsTheMoveInsideTheChart) {
+  const IndexedMesh m = UnitGrid();
+  const uint32_t mid = uint32_t((kN / 2) * (kN + 1) + kN / 2);
+  ASSERT_FLOAT_EQ(m.positions[mid][0], 0.5f);
+  ASSERT_FLOAT_EQ(m.positions[mid][1], 0.5f);
+  VertexAttributes layout;
+  layout.texCoords = true;
+  std::vector<float> corner;
+  for (const auto& t : m.faces) {
+    const float cx = (m.positions[t[0]][0] + m.positions[t[1]][0] + m.positions[t[2]][0]) / 3;
+    for (uint32_t v : t) {
+      corner.push_back(m.positions[v][0] + (cx > 0.5f ? 1 : 0));
+      corner.push_back(m.positions[v][1]);
+    }
+  }
+  std::vector<uint32_t> fan;
+  for (uint32_t f = 0; f < uint32_t(m.faceCount()); ++f)
+    if (std::find(m.faces[f].begin(), m.faces[f].end(), mid) != m.faces[f].end()) fan.push_back(f);
+  ASSERT_EQ(fan.size(), 6u);
+  const AttributeQuadrics::FaceCorners faces = [&](uint32_t f) -> const std::array<uint32_t, 3>& { return m.faces[f]; };
+  const auto pos = [&](uint32_t v) { return vcg::Point3d::Construct(m.positions[v]); };
+  const vcg::Point3d from = pos(mid);
+  // Moves mid by d; expects (u, v) on the left and right side's corners at mid.
+  const auto check = [&](const vcg::Point3d& d, float lu, float lv, float ru, float rv) {
+    AttributeQuadrics aq;
+    ASSERT_TRUE(aq.Init(m, layout, corner, 1.0).ok());
+    ASSERT_TRUE(aq.seam(mid));
+    aq.Reparameterize(mid, from, from + d, fan.data(), fan.size(), faces, pos);
+    int sides[2] = {0, 0};
+    for (uint32_t f : fan) {
+      const auto& t = m.faces[f];
+      const int k = t[0] == mid ? 0 : (t[1] == mid ? 1 : 2);
+      float uv[2];
+      aq.Evaluate(f, k, mid, from + d, uv);
+      const bool right = corner[(3 * size_t(f) + size_t(k)) * 2] >= 1;  // its side in the input
+      ++sides[right];
+      EXPECT_NEAR(uv[0], right ? ru : lu, 1e-6) << "u, move (" << d[0] << ", " << d[1] << ")";
+      EXPECT_NEAR(uv[1], right ? rv : lv, 1e-6) << "v, move (" << d[0] << ", " << d[1] << ")";
+    }
+    EXPECT_TRUE(sides[0] > 0 && sides[1] > 0);
+  };
+  check(vcg::Point3d(-0.03, 0.02, 0), 0.47f, 0.52f, 1.5f, 0.5f);        // into the left chart
+  check(vcg::Point3d(0.03, -0.02, 0), 0.5f, 0.5f, 1.53f, 0.48f);        // into the right chart
+  check(vcg::Point3d(0, 0.03, 0), 0.5f, 0.53f, 1.5f, 0.53f);            // along the seam
+  check(vcg::Point3d(0, 0, 0.05), 0.5f, 0.5f, 1.5f, 0.5f);              // along the normal
+  check(vcg::Point3d(-0.2, 0, 0), 0.5f - 1.0f / kN, 0.5f, 1.5f, 0.5f);  // cut at the fan's border
+}
+
 // Weight 0: the collapse is the attribute-free one, vertex for vertex.
 TEST(AttributeQuadric, WeightZeroKeepsTheAttributeFreeCollapse) {
   const IndexedMesh m = BentGrid();
