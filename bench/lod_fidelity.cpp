@@ -105,12 +105,14 @@ int main(int argc, char** argv) {
   bool tree = true, file = false;
   bool borders = false;  // --borders: the locked vertices per level
   bool peers = true;     // --no-peers: the cuts alone (no static collapse, no MeshLab QEM)
+  bool meshlab = true;   // --no-meshlab: the levels beside our static collapse only
   conelod::LodBuildParams dagParams;
   std::vector<double> cuts;  // --cuts P,...: cuts at these budgets (% of the input's faces) instead of levels
   for (int i = 2; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--dag-only")) tree = false;
     if (!std::strcmp(argv[i], "--file")) file = true;
     if (!std::strcmp(argv[i], "--no-peers")) peers = false;
+    if (!std::strcmp(argv[i], "--no-meshlab")) meshlab = false;
     if (!std::strcmp(argv[i], "--borders")) borders = true;
     if (i + 1 >= argc) break;
     if (!std::strcmp(argv[i], "--samples")) samples = std::atoi(argv[i + 1]);
@@ -121,6 +123,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--level-ratio")) dagParams.simplification.levelRatio = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--coarse-level-ratio")) dagParams.coarseLevelRatio = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--top-group-clusters")) dagParams.topGroupClusters = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--top-face-share")) dagParams.topFaceShare = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--locked-border-weight")) dagParams.lockedBorderWeight = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--max-faces")) maxFaces = size_t(std::atoll(argv[i + 1]));
     if (!std::strcmp(argv[i], "--min-faces")) minFaces = size_t(std::atoll(argv[i + 1]));
@@ -337,8 +340,8 @@ int main(int argc, char** argv) {
         const double ref = peers ? Rms(Vcg(qm, m.faces.size()), input, samples, diag) : NAN;
         char peer[128] = " | | |";  // (--no-peers: blank)
         if (peers)
-          std::snprintf(peer, sizeof peer, "%.4f | %.4f | %.2f | %.2f", 100 * stat, 100 * ref, ours / stat, ours / ref);
-        std::printf("| %g %% | %zu | %.1f %% | %.4f | %s | %s |\n", pct, m.faces.size(),
+          std::snprintf(peer, sizeof peer, "%.5f | %.5f | %.3f | %.3f", 100 * stat, 100 * ref, ours / stat, ours / ref);
+        std::printf("| %g %% | %zu | %.1f %% | %.5f | %s | %s |\n", pct, m.faces.size(),
                     100.0 * double(m.faces.size()) / double(v.faceBudget), 100 * ours, peer, levels.c_str());
         std::fflush(stdout);
       }
@@ -369,9 +372,9 @@ int main(int argc, char** argv) {
         continue;
       }
       const double ours = Rms(m, input, samples, diag);
-      const double ref = Rms(Vcg(qm, m.faces.size()), input, samples, diag);
+      const double ref = meshlab ? Rms(Vcg(qm, m.faces.size()), input, samples, diag) : NAN;
       const double stat = Rms(Ours(input, hierarchy, m.faces.size()), input, samples, diag);
-      std::printf("| %zu | %zu | %.4f | %.4f | %.2f | %.4f | %.2f |\n", k + 1, m.faces.size(), 100 * ours, 100 * ref,
+      std::printf("| %zu | %zu | %.5f | %.5f | %.3f | %.5f | %.3f |\n", k + 1, m.faces.size(), 100 * ours, 100 * ref,
                   ours / ref, 100 * stat, ours / stat);
       std::fflush(stdout);
     }

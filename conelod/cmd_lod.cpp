@@ -596,7 +596,7 @@ const char* kLodUsage =
     "  clusters whose every cut is watertight: the input is cut into clusters of about C faces\n"
     "  [128] whose normals stay within --threshold T degrees [15] (x --growth F [1.6] per level,\n"
     "  at most 90), G [12] neighbouring clusters are gathered into a group (24 on the levels\n"
-    "  above 3/8 of the input's faces, 6 on those under 6 % of them or under 4 x G x C faces), each\n"
+    "  above 3/8 of the input's faces, 6 on those under 4 x G x C faces), each\n"
     "  group is simplified to R x its faces [0.5] (on the levels of at most 3/8 of the input's\n"
     "  faces: at least 0.6 x) with its border locked, on --threads N threads\n"
     "  [0: one per core], and re-cut into the next level's clusters; at the top each connected\n"

@@ -46,12 +46,19 @@ struct LodBuildParams {
   // collapse at its count with 12 to 1.04-1.08x with 24 (the armadillo and the bunny); their
   // larger steps are taken only by cuts above about a quarter of the input.
   int fineGroupClusters = 24;
-  // Clusters per group on the top levels (under 6 % of the input's faces, or under the faces of
-  // 4 groups of groupClusters clusters: 6,144 by default); 0: groupClusters. Smaller groups there
-  // refine the small cuts in smaller steps, so that they fill their budget (the bunny's 2 % and
-  // 5 % cuts filled 97.8 / 98.0 % with 12, 98.1 / 99.9 % with 6), and a small mesh's top levels
-  // are more than one group each.
+  // Clusters per group on the top levels (under the faces of 4 groups of groupClusters clusters:
+  // 6,144 by default; or under topFaceShare of the input's faces); 0: groupClusters. Smaller
+  // groups there refine the small cuts in smaller steps, so that they fill their budget (the
+  // bunny's 2 % and 5 % cuts filled 97.8 / 98.0 % with 12, 98.1 / 99.9 % with 6), and a small
+  // mesh's top levels are more than one group each.
   int topGroupClusters = 6;
+  // The levels under this fraction of the input's faces are top levels too (in [0, 1]; 0: by the
+  // face count above alone). At 0.06 the dragon's levels from 48,595 faces down (8 of them above
+  // 6,144 faces) were groups of 6: their locked borders a larger share, levels 7-9 1.23-1.31x
+  // our static collapse at their count and the 2 % cut (level 7) 1.29x; by the count alone
+  // (groups of 12 there) the 2 % cut is 1.07x. A mesh of under 102,400 faces has the same top
+  // either way (6 % of it is under 6,144 faces): the bunny's and the armadillo's files are the same.
+  double topFaceShare = 0;
   // Grouping a level's clusters, an edge two clusters share weighs this many edges when the two
   // were made from different groups of the level below (that level's locked border), so that the
   // groups straddle it and free it; 1: every shared edge alike.

@@ -671,11 +671,12 @@ double LevelRatioOf(const LodBuildParams& params, uint64_t faces, uint64_t input
 }
 
 // The clusters gathered into one group on such a level (LodBuildParams): fineGroupClusters on the
-// fine levels, topGroupClusters on the top ones (under 6 % of the input's faces, or under the
-// faces of 4 groups of groupClusters clusters), else groupClusters.
+// fine levels, topGroupClusters on the top ones (under the faces of 4 groups of groupClusters
+// clusters, or under topFaceShare of the input's faces), else groupClusters.
 int GroupClustersOf(const LodBuildParams& params, uint64_t faces, uint64_t inputFaces) {
   if (params.fineGroupClusters > 0 && !CoarseLevel(faces, inputFaces)) return params.fineGroupClusters;
-  const bool top = 50 * faces < 3 * inputFaces || faces < 4 * uint64_t(params.groupClusters) * params.clusterFaces;
+  const bool top = double(faces) < params.topFaceShare * double(inputFaces) ||
+                   faces < 4 * uint64_t(params.groupClusters) * params.clusterFaces;
   if (params.topGroupClusters > 0 && top) return params.topGroupClusters;
   return params.groupClusters;
 }
@@ -1583,6 +1584,8 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
     return Status::Invalid("fine group clusters must be 0 or lie in [2, 64]");
   if (params.topGroupClusters != 0 && (params.topGroupClusters < 2 || params.topGroupClusters > 64))
     return Status::Invalid("top group clusters must be 0 or lie in [2, 64]");
+  if (!(params.topFaceShare >= 0 && params.topFaceShare <= 1))
+    return Status::Invalid("the top levels' share of the input's faces must lie in [0, 1]");
   if (!(params.maxGroupError > 0 && params.maxGroupError <= 1))
     return Status::Invalid("the largest group error must lie in (0, 1] (a fraction of the diagonal)");
   if (!(params.grouping.coneThresholdDeg > 0) || !(params.grouping.thresholdGrowth >= 1))

@@ -1586,11 +1586,57 @@ TEST(Lod, FineGroupClustersGatherLargerGroupsOnTheFineLevels) {
   q = LodBuildParams();
   q.topGroupClusters = 1;
   EXPECT_FALSE(BuildLodDag(fine.mesh, q, dag).ok());
+  for (double bad : {-0.1, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
+    q = LodBuildParams();
+    q.topFaceShare = bad;
+    EXPECT_FALSE(BuildLodDag(fine.mesh, q, dag).ok()) << bad;
+  }
   for (double bad : {-0.1, 1.0, std::numeric_limits<double>::quiet_NaN()}) {
     q = LodBuildParams();
     q.coarseLevelRatio = bad;
     EXPECT_FALSE(BuildLodDag(fine.mesh, q, dag).ok()) << bad;
   }
+}
+
+// The top levels (groups of topGroupClusters = 6) are those under the faces of 4 groups of 12
+// clusters (6,144), whatever the input's size: a sphere of 131,072 faces has groups of more than
+// 6 clusters on each coarse level above 6,144 faces (LodBuildParams::topFaceShare 0). With the top
+// also under 6 % of the input (topFaceShare 0.06, as the dragon's levels of 6,144-52,284 faces
+// were built) its levels of 6,144-7,864 faces are grouped by 6 at most.
+TEST(Lod, TopGroupsAreSmallOnlyUnderAFaceCount) {
+  const IndexedMesh sphere = test::Sphere(7);
+  const size_t F = sphere.faces.size();
+  ASSERT_EQ(F, 131072u);
+  // Per level under 3/8 of the input's faces and of at least 6,144 (and not the top): its faces
+  // and the most clusters of one of its groups.
+  auto largestGroups = [&](const LodBuildParams& p) {
+    LodDag dag;
+    EXPECT_TRUE(BuildLodDag(sphere, p, dag).ok());
+    std::vector<std::pair<size_t, int>> out;
+    for (const LodDag::Level& L : dag.levels) {
+      if (8 * L.faces.size() > 3 * F || L.faces.size() < 6144 || L.clusterGroup.empty() || L.clusterGroup[0] < 0)
+        continue;
+      std::map<int, int> size;
+      for (int g : L.clusterGroup) ++size[g];
+      int most = 0;
+      for (const auto& kv : size) most = std::max(most, kv.second);
+      out.push_back({L.faces.size(), most});
+    }
+    return out;
+  };
+  LodBuildParams p;
+  ASSERT_EQ(p.topFaceShare, 0);
+  const auto byCount = largestGroups(p);
+  ASSERT_GE(byCount.size(), 3u);
+  for (const auto& l : byCount) EXPECT_GT(l.second, 6) << l.first << " faces: groups of 12";
+  p.topFaceShare = 0.06;
+  size_t inWindow = 0;
+  for (const auto& l : largestGroups(p))
+    if (double(l.first) < 0.06 * double(F)) {
+      ++inWindow;
+      EXPECT_LE(l.second, 6) << l.first << " faces, under 6 % of the input: groups of 6";
+    }
+  EXPECT_GE(inWindow, 1u);
 }
 
 TEST(Lod, CancellingLeavesNoFile) {
