@@ -50,7 +50,10 @@
 // condition refuses what would make an edge non-manifold (an edge may keep, never gain, more than
 // two faces) or one face twice; the group test there is a search on the adjacency after the
 // collapse (keepsGroupsWholeAcross). In paper mode these collapses keep the groups whole the same
-// way (the paper's local clauses assume a manifold fan), and group boundaries never go.
+// way (the paper's local clauses assume a manifold fan), and group boundaries never go. Next to a
+// non-manifold vertex a face's quality counts as at least 0.1 in the priority, and in integrity
+// mode the last face of a group (on scans: slivers on non-manifold edges) is exempt from the
+// normal test (docs/group_qem.md, "Slivers and thin faces at non-manifold edges").
 // Whole components: with removeComponents, a run that has no allowed collapse left above the
 // target removes components made of whole groups, smallest first (GroupQemParams); with
 // flipToUnblock, collapses refused by the link condition are then unblocked by edge flips inside

@@ -18,6 +18,7 @@
 #include "conelod/grouping/cone_grouping.h"
 #include "conelod/simplify/group_integrity.h"
 #include "conelod/mesh/mesh_check.h"
+#include "conelod/mesh/sampled_distance.h"
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"
 #include "test_util.h"
@@ -1138,6 +1139,31 @@ TEST(Simplify, AwkwardScansWork) {
     EXPECT_EQ(gi.groupsSplit, 0);
     EXPECT_EQ(gi.groupsVanished, 0);
   }
+}
+
+TEST(Simplify, NonManifoldScanAtTenPercentIsAsAccurateAsMeshoptimizer) {
+  // The vrip dragon at res2 (2,534 non-manifold edges) at 10 %, groups at the automatic level (as
+  // `--groups cone:auto`): 1,632 of its groups are single slivers on or next to non-manifold
+  // edges, which must stay. The RMS distance (both ways, larger one, % of the diagonal) is to be
+  // no more than meshoptimizer's at the same face count measured the same way: 0.0317
+  // (tools/meshopt_simplify, 20,230 faces; issue 25). Holding those slivers to the normal test and
+  // weighing the thin faces next to non-manifold vertices fully gave 0.0340.
+  const IndexedMesh m = LoadReal("stanford_dragon_vrip_res2.ply");
+  GroupQemParams p;
+  p.targetFaces = m.faces.size() / 10;
+  GroupHierarchy h;
+  ASSERT_TRUE(BuildConeHierarchy(m, ConeGroupingParams(), h).ok());
+  const std::vector<int> g = h.level(AutoGroupLevel(h, p.targetFaces)).faceGroup;
+  GroupQemResult r;
+  ASSERT_TRUE(SimplifyPreservingGroups(m, g, p, r).ok());
+  EXPECT_EQ(r.mesh.faces.size(), p.targetFaces);
+  GroupIntegrity gi;
+  ASSERT_TRUE(MeasureGroupIntegrity(m, g, r.mesh, GroupsAfter(r, g), gi).ok());
+  EXPECT_EQ(gi.groupsSplit, 0);
+  EXPECT_EQ(gi.groupsVanished, 0);
+  HausdorffResult d;
+  ASSERT_TRUE(SampledHausdorff(m, r.mesh, 300000, d).ok());
+  EXPECT_LE(100 * std::max(d.ab.rms, d.ba.rms) / d.diagonal, 0.0317);
 }
 
 TEST(Simplify, ZeroAreaFacesAreLeftAlone) {
