@@ -376,7 +376,8 @@ class HierarchyBuilder {
     ConeScratch scratch;
     std::vector<Neighbour> list;  // the merged unit's list being made
     uint32_t stamp = 0;           // the last stamp used (Link::stamp)
-    // pool_'s slots it hands out (the last first).
+    // pool_'s slots it hands out (the last first); when none is left, a block of fresh ones
+    // (freshSlots_).
     std::vector<int> freeSlots;
     // A chunk appends lists to its own region of the arena, [arenaBegin, arenaEnd) (arenaNext:
     // the first free entry), and compacts its own lists (CompactChunk); its units' first lists
@@ -480,7 +481,12 @@ class HierarchyBuilder {
   BigVector<Unit> units_;
   bool sparse_ = false;
   BigVector<int> slot_;
-  BigVector<Unit> pool_;  // sized once; its free slots are MergeState::freeSlots (shared out to chunks)
+  // Sized once (mapped: only the slots used take memory). Never used: [freshSlots_, end), handed
+  // out in blocks of kSlotBlock, lowest first, to whichever MergeState needs them: the slots in use
+  // stay packed at the start whatever the chunks (the slot a unit gets changes no output).
+  BigVector<Unit> pool_;
+  std::atomic<size_t> freshSlots_{0};
+  static constexpr size_t kSlotBlock = 256;
   size_t unitCount() const { return chains_.size(); }
   void SingleUnit(int f, Unit& u) const;
   // Unit u as stored, or made into `tmp` (a face alone at level 1).
@@ -496,7 +502,11 @@ class HierarchyBuilder {
     if (!sparse_) return units_[size_t(u)];
     int& s = slot_[size_t(u)];
     if (s < 0) {
-      assert(!ms.freeSlots.empty());
+      if (ms.freeSlots.empty()) {
+        const size_t block = freshSlots_.fetch_add(kSlotBlock);
+        assert(block + kSlotBlock <= pool_.size());
+        for (size_t k = kSlotBlock; k-- > 0;) ms.freeSlots.push_back(int(block + k));
+      }
       s = ms.freeSlots.back();
       ms.freeSlots.pop_back();
       SingleUnit(u, pool_[size_t(s)]);
@@ -962,14 +972,11 @@ bool HierarchyBuilder::MergeChunks(int round, int minGroups, long mergesSoFar, l
   cut.push_back(int(n));
   const size_t chunks = cut.size() - 1;
   std::vector<MergeState> state(chunks);
-  // Per chunk: its live lists' entries and its units that are a face alone (not stored).
-  std::vector<size_t> entries(chunks, 0), singles(chunks, 0);
+  // Per chunk: its live lists' entries.
+  std::vector<size_t> entries(chunks, 0);
   ParallelChunks(chunks, threads_, 1, [&](size_t c, size_t, unsigned) {
     for (int u = cut[c]; u < cut[c + 1]; ++u)
-      if (alive(u)) {
-        entries[c] += size_t(links_[size_t(u)].nbCount);
-        singles[c] += slot_[size_t(u)] < 0 ? 1 : 0;
-      }
+      if (alive(u)) entries[c] += size_t(links_[size_t(u)].nbCount);
   });
   size_t total = 0;
   for (size_t c = 0; c < chunks; ++c) {
@@ -981,13 +988,15 @@ bool HierarchyBuilder::MergeChunks(int round, int minGroups, long mergesSoFar, l
     ms.listBegin = total;
     total += entries[c];
     ms.listEnd = total;
-    // Slots: each merge of two faces alone stores one unit more; the others store none in net.
-    for (size_t k = singles[c] / 2 + 1; k > 0; --k) {
-      assert(!serial_.freeSlots.empty());
-      ms.freeSlots.push_back(serial_.freeSlots.back());
+  }
+  // The slots freed so far go to the chunks in turn (a block each at most), the lowest first.
+  for (size_t c = 0; c < chunks && !serial_.freeSlots.empty(); ++c) {
+    std::vector<int>& mine = state[c].freeSlots;
+    while (mine.size() < kSlotBlock && !serial_.freeSlots.empty()) {
+      mine.push_back(serial_.freeSlots.back());
       serial_.freeSlots.pop_back();
     }
-    std::reverse(ms.freeSlots.begin(), ms.freeSlots.end());  // (the lowest slots first)
+    std::reverse(mine.begin(), mine.end());
   }
   if (round > 0) {
     // Every list into the order of the units, each chunk's in its room [listBegin, listEnd), by
@@ -1597,11 +1606,11 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
   // unit (RunLevel); here already, as soon as both units are made.
   const bool scoreNow = !params_.strictGreedy;
   if (sparse_) {  // mapped: only the slots used take memory
-    // At most one stored unit per two faces, and one more during a merge; a slot more per chunk
-    // of either round (MergeChunks).
-    pool_.resize(size_t(nf) / 2 + 2 * chunkCount_ + 3);
-    serial_.freeSlots.resize(pool_.size());
-    for (size_t slot = 0; slot < pool_.size(); ++slot) serial_.freeSlots[slot] = int(pool_.size() - 1 - slot);
+    // A slot is taken for a face alone that merges (it never is one again), so at most nf are,
+    // plus the fresh blocks in the hands of the MergeStates (the serial one, the chunks of both
+    // rounds). Mapped: only the slots used take memory, and those are packed at the start.
+    pool_.resize(size_t(nf) + (2 * chunkCount_ + 2) * kSlotBlock);
+    freshSlots_ = 0;
   }
   if (scoreNow) setThreshold(std::min(params_.coneThresholdDeg, 180.0));
   prescored_ = scoreNow;
