@@ -5,7 +5,8 @@
 // merge only changes pairs that involve the merged unit, so only its neighbours are revisited:
 // a neighbour whose best partner was one of the merged units rescans its own neighbours, the
 // others compare their pair with the new unit against their best. At level 1, sweeps in unit
-// order first merge the mutual best pairs (RunLevel; the tree is built after them).
+// order first merge the mutual best pairs (RunLevel; the tree is built after them), first
+// within chunks of consecutive units on the threads (MergeChunks), each with its own MergeState.
 //
 // The loop is bound by memory latency (each merge touches ~20 units scattered over the mesh), so
 // the per-unit state is split by access pattern and packed: the geometry every evaluation reads
@@ -32,6 +33,7 @@
 #include "conelod/grouping/cone_grouping.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cassert>
 #include <cmath>
 #include <cstring>
@@ -179,7 +181,7 @@ class Arena {
     size_ += n;
     return at;
   }
-  void shrink(size_t n) { size_ = n; }
+  void resize(size_t n) { size_ = n; }  // (within the capacity)
   void reserve(size_t n) {
     if (n <= capacity_) return;
     Neighbour* fresh = BigAlloc<Neighbour>().allocate(n);
@@ -367,10 +369,31 @@ class HierarchyBuilder {
  private:
   // Inlined into the first scores and the merges (no call per evaluation).
   __attribute__((always_inline)) inline float evaluate(const Unit& a, const Unit& b) const;
+  // What a run of merges changes besides the units it merges (and the lists of their neighbours):
+  // the merges on one thread use serial_; at level 1 each chunk (MergeChunks) has its own.
+  struct MergeState {
+    int begin = 0, end = 0;  // the units it may mark dirty (dirty_): [begin, end)
+    ConeScratch scratch;
+    std::vector<Neighbour> list;  // the merged unit's list being made
+    uint32_t stamp = 0;           // the last stamp used (Link::stamp)
+    // pool_'s slots it hands out (the last first); when none is left, a block of fresh ones
+    // (freshSlots_).
+    std::vector<int> freeSlots;
+    // A chunk appends lists to its own region of the arena, [arenaBegin, arenaEnd) (arenaNext:
+    // the first free entry), and compacts its own lists (CompactChunk); its units' first lists
+    // are [listBegin, listEnd). Not a chunk: appends go to the end of arena_ (CompactArena).
+    bool chunk = false;
+    size_t arenaBegin = 0, arenaNext = 0, arenaEnd = 0, listBegin = 0, listEnd = 0;
+    std::vector<std::pair<int, uint32_t>> appendLog;  // (unit, offset) of its region's lists
+    long merges = 0;                                  // a chunk's, once done
+  };
   // From the cached scores of u's list. Inlined: it is the core of a merge's neighbour updates.
-  __attribute__((always_inline)) inline void setBest(int u);
-  void MergeUnits(int u, int p);
+  __attribute__((always_inline)) inline void setBest(int u, const MergeState& ms);
+  // False (nothing changed): a chunk's arena region has no room for the merged list.
+  bool MergeUnits(int u, int p, MergeState& ms);
   bool RunLevel(double thresholdDeg, bool localMaximaFirst, long& mergesSoFar);
+  bool MergeChunks(int round, int minGroups, long mergesSoFar, long& merges);
+  void CompactChunk(MergeState& ms);
   void setThreshold(double thresholdDeg) {
     thresholdOn_ = thresholdDeg < 180.0;
     // A cone of pi/2 or more cannot be culled and is stored as pi, above any threshold under 180
@@ -446,8 +469,9 @@ class HierarchyBuilder {
   bool TrySupportCone(int u, ConeScratch& cs);
   bool seededCone(int u, ConeScratch& cs);
   bool RefineCone(int u, ConeScratch& cs);  // on cs.support and cs.runs
-  // The scratch of the merges (one thread); EmitLevel's exact cones take one per thread.
-  ConeScratch scratch_;
+  // The state of the merges on one thread (its scratch included); EmitLevel's exact cones take
+  // a scratch per thread.
+  MergeState serial_;
 
   // Units: units_[u] from level 2 on (and at level 1 in strict mode). Level 1 in the default mode
   // (sparse_) stores only the units that have merged, in pool_ at slot_[u] (-1: u is still its
@@ -457,8 +481,12 @@ class HierarchyBuilder {
   BigVector<Unit> units_;
   bool sparse_ = false;
   BigVector<int> slot_;
+  // Sized once (mapped: only the slots used take memory). Never used: [freshSlots_, end), handed
+  // out in blocks of kSlotBlock, lowest first, to whichever MergeState needs them: the slots in use
+  // stay packed at the start whatever the chunks (the slot a unit gets changes no output).
   BigVector<Unit> pool_;
-  std::vector<int> freeSlots_;
+  std::atomic<size_t> freshSlots_{0};
+  static constexpr size_t kSlotBlock = 256;
   size_t unitCount() const { return chains_.size(); }
   void SingleUnit(int f, Unit& u) const;
   // Unit u as stored, or made into `tmp` (a face alone at level 1).
@@ -469,22 +497,24 @@ class HierarchyBuilder {
     SingleUnit(u, tmp);
     return tmp;
   }
-  // Unit u, stored first if it was not (pool_ never grows past its reserve: references stay valid).
-  Unit& unit(int u) {
+  // Unit u, stored first if it was not, in a slot that `ms` hands out.
+  Unit& unit(int u, MergeState& ms) {
     if (!sparse_) return units_[size_t(u)];
     int& s = slot_[size_t(u)];
     if (s < 0) {
-      if (freeSlots_.empty()) {
-        s = int(pool_.size());
-        pool_.emplace_back();
-      } else {
-        s = freeSlots_.back();
-        freeSlots_.pop_back();
+      if (ms.freeSlots.empty()) {
+        const size_t block = freshSlots_.fetch_add(kSlotBlock);
+        assert(block + kSlotBlock <= pool_.size());
+        for (size_t k = kSlotBlock; k-- > 0;) ms.freeSlots.push_back(int(block + k));
       }
+      s = ms.freeSlots.back();
+      ms.freeSlots.pop_back();
       SingleUnit(u, pool_[size_t(s)]);
     }
     return pool_[size_t(s)];
   }
+  // (Called on stored units only while chunks merge: MergeUnits stores its unit first.)
+  Unit& unit(int u) { return unit(u, serial_); }
   void PrefetchUnit(int u) const {
     if (!sparse_)
       Prefetch(&units_[size_t(u)]);
@@ -500,8 +530,6 @@ class HierarchyBuilder {
   size_t prefixEnd_ = 0;
   std::vector<int> arenaOrder_;
   std::vector<std::pair<int, uint32_t>> appendLog_;  // (unit, offset)
-  uint32_t stampCounter_ = 0;
-  std::vector<Neighbour> scratchList_;
   // Found by EmitLevel: the level's group of each unit, the unit of each group.
   std::vector<int> idOfUnit_, rootOfGroup_;
   double thresholdRad_ = kPi;
@@ -511,6 +539,9 @@ class HierarchyBuilder {
   bool thresholdOn_ = false;
   bool prescored_ = false;  // level 1, default mode: run() scored every pair with the units
   int aliveCount_ = 0;
+  // Level 1, default mode: the chunks of consecutive units that merge on their own first
+  // (MergeChunks); fewer than 2: none.
+  size_t chunkCount_ = 0;
   // During level 1's sweeps: per unit, whether it was marked since its last visit (RunLevel).
   uint8_t* dirty_ = nullptr;
   bool cancelled_ = false;
@@ -553,7 +584,7 @@ float HierarchyBuilder::evaluate(const Unit& a, const Unit& b) const {
   return float(params_.coneWeight * vc + params_.shapeWeight * vs + params_.sizeWeight * vn);
 }
 
-void HierarchyBuilder::setBest(int u) {
+void HierarchyBuilder::setBest(int u, const MergeState& ms) {
   int64_t top = kNoEntry;
   for (const Neighbour* n = nbBegin(u); n != nbEnd(u); ++n) top = std::max(top, PairEntry(*n));
   float best;
@@ -563,7 +594,9 @@ void HierarchyBuilder::setBest(int u) {
   tree_.set(u, best);
   if (dirty_) {
     dirty_[size_t(u)] = 1;
-    if (partner >= 0) dirty_[size_t(partner)] = 1;
+    // (A chunk marks its own units only: the others belong to other threads and get their
+    // visit in the sweeps after the chunks anyway.)
+    if (partner >= ms.begin && partner < ms.end) dirty_[size_t(partner)] = 1;
   }
 }
 
@@ -749,13 +782,18 @@ bool HierarchyBuilder::RefineCone(int u, ConeScratch& cs) {
   return false;
 }
 
-void HierarchyBuilder::MergeUnits(int u, int p) {
-  ConeScratch& cs = scratch_;
+bool HierarchyBuilder::MergeUnits(int u, int p, MergeState& ms) {
+  ConeScratch& cs = ms.scratch;
   Link& lu = links_[size_t(u)];
   Link& lp = links_[size_t(p)];
   // Room for the merged list with its slack, should it not fit u's slot; made while p is alive.
   const size_t room = 2 * (size_t(lu.nbCount) + size_t(lp.nbCount));
-  if (arena_.size() + room > arena_.capacity()) CompactArena(room);
+  if (ms.chunk) {
+    if (ms.arenaNext + room > ms.arenaEnd) CompactChunk(ms);
+    if (ms.arenaNext + room > ms.arenaEnd) return false;
+  } else if (arena_.size() + room > arena_.capacity()) {
+    CompactArena(room);
+  }
   // A merge is bound by memory latency: ask for every neighbour's state and geometry now, so
   // that the misses overlap each other and the cone arithmetic below.
   PrefetchUnit(p);
@@ -769,7 +807,7 @@ void HierarchyBuilder::MergeUnits(int u, int p) {
     }
   }
 
-  Unit& a = unit(u);
+  Unit& a = unit(u, ms);
   Unit bAlone;
   const Unit& b = unitOf(p, bAlone);
   Chain& ac = chains_[size_t(u)];
@@ -790,7 +828,7 @@ void HierarchyBuilder::MergeUnits(int u, int p) {
   a.setSphere(UnionSphere(a.sphere(), b.sphere()));
   a.faceCount += b.faceCount;
   if (sparse_ && slot_[size_t(p)] >= 0) {  // p is dead: its slot goes to the next unit stored
-    freeSlots_.push_back(slot_[size_t(p)]);
+    ms.freeSlots.push_back(slot_[size_t(p)]);
     slot_[size_t(p)] = -1;
   }
   // Splice the circular face lists: u's faces, then p's.
@@ -816,14 +854,15 @@ void HierarchyBuilder::MergeUnits(int u, int p) {
   // goes back into u's slot when it fits (a unit absorbing a small neighbour rarely gains
   // neighbours), else to the end of the arena with room to grow.
   tree_.set(p, kNoPair);
-  --aliveCount_;
+  if (!ms.chunk) --aliveCount_;  // (MergeChunks counts the chunks' merges)
   // Stamps of this merge: st, or st + 1 for a neighbour of both u and p (whose list then names
   // both: the lists are symmetric).
-  stampCounter_ += 2;
-  const uint32_t st = stampCounter_, both = st + 1;
+  ms.stamp += 2;
+  const uint32_t st = ms.stamp, both = st + 1;
   lu.stamp = st;
   lp.stamp = st;
-  scratchList_.clear();
+  std::vector<Neighbour>& mergedList = ms.list;
+  mergedList.clear();
   for (const Link* src : {&lu, &lp}) {
     const Neighbour* list = arena_.data() + src->nbOffset;
     for (int i = 0; i < src->nbCount; ++i) {
@@ -837,24 +876,30 @@ void HierarchyBuilder::MergeUnits(int u, int p) {
       Prefetch(arena_.data() + lw.nbOffset);  // for the update below, now that its offset is here
       tree_.prefetch(w);
       Unit wAlone;
-      scratchList_.push_back({w, evaluate(a, unitOf(w, wAlone))});
+      mergedList.push_back({w, evaluate(a, unitOf(w, wAlone))});
     }
   }
-  const int count = int(scratchList_.size());
+  const int count = int(mergedList.size());
   if (count > ac.capacity) {
     ac.capacity = count + count / 2;
-    lu.nbOffset = uint32_t(arena_.grow(size_t(ac.capacity)));
-    appendLog_.emplace_back(u, lu.nbOffset);
+    if (ms.chunk) {
+      lu.nbOffset = uint32_t(ms.arenaNext);
+      ms.arenaNext += size_t(ac.capacity);
+      ms.appendLog.emplace_back(u, lu.nbOffset);
+    } else {
+      lu.nbOffset = uint32_t(arena_.grow(size_t(ac.capacity)));
+      appendLog_.emplace_back(u, lu.nbOffset);
+    }
   }
   lu.nbCount = count;
   lp.nbCount = 0;
   if (count > 0)  // an empty list may have no storage: memcpy from null is undefined even for 0 bytes
-    std::memcpy(arena_.data() + lu.nbOffset, scratchList_.data(), size_t(count) * sizeof(Neighbour));
-  setBest(u);
+    std::memcpy(arena_.data() + lu.nbOffset, mergedList.data(), size_t(count) * sizeof(Neighbour));
+  setBest(u, ms);
 
   // Each neighbour: its entries for u and p become one entry for u with the new score; pairs not
   // involving u are unchanged, so its best is either kept, replaced by u, or rescanned (cached).
-  for (const Neighbour& e : scratchList_) {
+  for (const Neighbour& e : mergedList) {
     const int w = e.id;
     const float s = e.score;
     Link& lw = links_[size_t(w)];
@@ -875,13 +920,198 @@ void HierarchyBuilder::MergeUnits(int u, int p) {
     lw.nbCount = n;
     const int bp = lw.bestPartner;
     if (bp == u || bp == p) {
-      setBest(w);
+      setBest(w, ms);
     } else if (s != kNoPair && (s > tree_.key(w) || (s == tree_.key(w) && u < bp))) {
       lw.bestPartner = u;
       if (dirty_) dirty_[size_t(w)] = 1;  // (u is marked by its setBest)
       tree_.set(w, s);
     }
   }
+  return true;
+}
+
+// A chunk's arena region is full: its live lists go back to its first lists' room, packed in unit
+// order (they never hold more entries than the chunk's first lists did: a merge drops at least
+// the pair's two entries), which leaves the region empty. The lists of the whole level stay where
+// CompactArena expects them: those in the first lists' room in unit order, the others in
+// appendLog_'s order.
+void HierarchyBuilder::CompactChunk(MergeState& ms) {
+  std::vector<Neighbour>& packed = ms.list;  // (free between merges)
+  packed.clear();
+  for (int u = ms.begin; u < ms.end; ++u)
+    if (alive(u)) packed.insert(packed.end(), nbBegin(u), nbEnd(u));
+  assert(packed.size() <= ms.listEnd - ms.listBegin);
+  size_t write = ms.listBegin;
+  for (int u = ms.begin; u < ms.end; ++u) {
+    if (!alive(u)) continue;
+    Link& l = links_[size_t(u)];
+    l.nbOffset = uint32_t(write);
+    chains_[size_t(u)].capacity = l.nbCount;
+    write += size_t(l.nbCount);
+  }
+  if (!packed.empty()) std::memcpy(arena_.data() + ms.listBegin, packed.data(), packed.size() * sizeof(Neighbour));
+  ms.arenaNext = ms.arenaBegin;
+  ms.appendLog.clear();
+}
+
+// Level 1 before its sweeps over the whole level: the units are cut into chunks of consecutive
+// units (a fixed count, from the face count: the same chunks for every thread count), and each
+// chunk runs the same sweeps on its own, on the threads, merging only pairs whose units have all
+// their neighbours in the chunk (inner units). Such a merge reads and writes the state of its
+// chunk's units only, and the units that a neighbouring chunk could change (its units next to this
+// chunk) never merge here: each chunk's merges are the same whatever ran beside it. Round 0 cuts
+// at multiples of n / chunkCount_; round 1 at the middles of round 0's chunks, where the units
+// that round 0 left at its cuts lie inside a chunk. What is left waits for the sweeps over the
+// whole level (RunLevel), which see every unit again. Neighbouring faces of a scanned mesh have
+// neighbouring indices: few units lie at a cut (docs/cone_grouping.md).
+bool HierarchyBuilder::MergeChunks(int round, int minGroups, long mergesSoFar, long& merges) {
+  const size_t n = unitCount();
+  // Chunk c is [cut[c], cut[c + 1]): cuts at k n / (2 chunkCount_), k even in round 0, odd in 1.
+  std::vector<int> cut(1, 0);
+  for (size_t k = 2 - size_t(round); k < 2 * chunkCount_; k += 2) cut.push_back(int(k * n / (2 * chunkCount_)));
+  cut.push_back(int(n));
+  const size_t chunks = cut.size() - 1;
+  std::vector<MergeState> state(chunks);
+  // Per chunk: its live lists' entries.
+  std::vector<size_t> entries(chunks, 0);
+  ParallelChunks(chunks, threads_, 1, [&](size_t c, size_t, unsigned) {
+    for (int u = cut[c]; u < cut[c + 1]; ++u)
+      if (alive(u)) entries[c] += size_t(links_[size_t(u)].nbCount);
+  });
+  size_t total = 0;
+  for (size_t c = 0; c < chunks; ++c) {
+    MergeState& ms = state[c];
+    ms.begin = cut[c];
+    ms.end = cut[c + 1];
+    ms.chunk = true;
+    ms.stamp = serial_.stamp;
+    ms.listBegin = total;
+    total += entries[c];
+    ms.listEnd = total;
+  }
+  // The slots freed so far go to the chunks in turn (a block each at most), the lowest first.
+  for (size_t c = 0; c < chunks && !serial_.freeSlots.empty(); ++c) {
+    std::vector<int>& mine = state[c].freeSlots;
+    while (mine.size() < kSlotBlock && !serial_.freeSlots.empty()) {
+      mine.push_back(serial_.freeSlots.back());
+      serial_.freeSlots.pop_back();
+    }
+    std::reverse(mine.begin(), mine.end());
+  }
+  if (round > 0) {
+    // Every list into the order of the units, each chunk's in its room [listBegin, listEnd), by
+    // way of a copy: as run() made them, and as CompactArena and CompactChunk expect them.
+    BigVector<Neighbour> packed(total);
+    ParallelChunks(chunks, threads_, 1, [&](size_t c, size_t, unsigned) {
+      size_t write = state[c].listBegin;
+      for (int u = cut[c]; u < cut[c + 1]; ++u) {
+        Link& l = links_[size_t(u)];
+        if (!alive(u)) {
+          l.nbCount = 0;
+          continue;
+        }
+        if (l.nbCount > 0) std::memcpy(packed.data() + write, nbBegin(u), size_t(l.nbCount) * sizeof(Neighbour));
+        l.nbOffset = uint32_t(write);
+        chains_[size_t(u)].capacity = l.nbCount;
+        write += size_t(l.nbCount);
+      }
+    });
+    ParallelChunks(chunks, threads_, 1, [&](size_t c, size_t, unsigned) {
+      const MergeState& ms = state[c];
+      if (ms.listEnd > ms.listBegin)
+        std::memcpy(arena_.data() + ms.listBegin, packed.data() + ms.listBegin,
+                    (ms.listEnd - ms.listBegin) * sizeof(Neighbour));
+    });
+    prefixEnd_ = total;
+    std::vector<int>().swap(arenaOrder_);
+    appendLog_.clear();
+  }
+  assert(arenaOrder_.empty() && appendLog_.empty() && prefixEnd_ == total);
+  // Each chunk's region for the lists it appends: a quarter of its lists (in the slack that run()
+  // reserved).
+  size_t region = total;
+  for (MergeState& ms : state) {
+    ms.arenaBegin = ms.arenaNext = region;
+    region += (ms.listEnd - ms.listBegin) / 4 + 16;
+    ms.arenaEnd = region;
+  }
+  assert(region <= arena_.capacity());
+  BigVector<uint8_t> outer(n);  // per unit: a neighbour in another chunk
+  std::atomic<long> done(0);
+  std::atomic<bool> stop(false);
+  std::atomic<size_t> nextChunk(0);
+  auto work = [&](unsigned) {
+    for (size_t c; !stop.load(std::memory_order_relaxed) && (c = nextChunk.fetch_add(1)) < chunks;) {
+      MergeState& ms = state[c];
+      int units = 0;  // alive in the chunk
+      for (int u = ms.begin; u < ms.end; ++u) {
+        if (!alive(u)) continue;
+        ++units;
+        outer[size_t(u)] = 0;
+        for (const Neighbour* nb = nbBegin(u); nb != nbEnd(u); ++nb)
+          if (nb->id < ms.begin || nb->id >= ms.end) {
+            outer[size_t(u)] = 1;
+            break;
+          }
+      }
+      long merges = 0;
+      bool room = true;
+      // As RunLevel's visit, on the chunk's inner units.
+      auto visit = [&](int u) {
+        dirty_[size_t(u)] = 0;
+        while (room && alive(u) && !outer[size_t(u)] && units > minGroups) {
+          const int b = links_[size_t(u)].bestPartner;
+          if (b < 0 || links_[size_t(b)].bestPartner != u || outer[size_t(b)]) break;
+          room = MergeUnits(u, b, ms);
+          if (!room) break;
+          --units;
+          if ((++merges & 0xFFF) == 0) {
+            done.fetch_add(0x1000, std::memory_order_relaxed);
+            if (stop.load(std::memory_order_relaxed)) room = false;
+          }
+        }
+      };
+      for (long before = -1; room && before != merges;) {
+        const bool first = before < 0;
+        before = merges;
+        for (int u = ms.begin; room && u < ms.end; ++u) {
+          if (first && u + 8 < ms.end) {
+            const int ahead = links_[size_t(u) + 8].bestPartner;
+            if (ahead >= 0) {
+              Prefetch(&links_[size_t(ahead)]);
+              PrefetchUnit(ahead);
+            }
+          }
+          if (first || dirty_[size_t(u)]) visit(u);
+        }
+      }
+      done.fetch_add(merges & 0xFFF, std::memory_order_relaxed);
+      ms.merges = merges;
+      ms.scratch = ConeScratch();
+      ms.list = std::vector<Neighbour>();
+    }
+  };
+  if (progress_) {
+    RunThreadsWhile(threads_, work, [&] {
+      if (!stop.load() && !ReportProgress((mergesSoFar + merges + done.load()) & ~0x3FFFL)) stop = true;
+    });
+  } else {
+    RunThreads(threads_, work);
+  }
+  if (stop.load()) return false;
+  // The level goes on from here on one thread: the chunks' slots, stamps and appended lists
+  // become the serial state's.
+  long chunkMerges = 0;
+  for (MergeState& ms : state) {
+    chunkMerges += ms.merges;
+    serial_.stamp = std::max(serial_.stamp, ms.stamp);
+    serial_.freeSlots.insert(serial_.freeSlots.end(), ms.freeSlots.rbegin(), ms.freeSlots.rend());
+    appendLog_.insert(appendLog_.end(), ms.appendLog.begin(), ms.appendLog.end());
+  }
+  arena_.resize(region);
+  aliveCount_ -= int(chunkMerges);
+  merges += chunkMerges;
+  return true;
 }
 
 // Slides the live lists down over the dead ones, in arena order (no copy of the arena), and makes
@@ -916,7 +1146,7 @@ void HierarchyBuilder::CompactArena(size_t room) {
   for (const auto& e : appendLog_)
     if (alive(e.first) && links_[size_t(e.first)].nbOffset == e.second) slide(e.first);
   arenaOrder_.resize(kept);
-  arena_.shrink(write);
+  arena_.resize(write);
   prefixEnd_ = write;
   appendLog_.clear();
   if (write + room > arena_.capacity()) arena_.reserve(write + room + write / 2);
@@ -934,7 +1164,9 @@ bool HierarchyBuilder::RunLevel(double thresholdDeg, bool localMaximaFirst, long
   setThreshold(thresholdDeg);
   const size_t n = unitCount();
   aliveCount_ = int(n);
-  stampCounter_ = 0;
+  serial_.stamp = 0;
+  serial_.begin = 0;
+  serial_.end = int(n);
   tree_.reset(n);
   // Every pair is scored from both of its units in strict mode (the former arithmetic, bit for
   // bit); else once, from its lower unit, which writes the score into the higher unit's entry
@@ -942,7 +1174,19 @@ bool HierarchyBuilder::RunLevel(double thresholdDeg, bool localMaximaFirst, long
   const bool scoreOnce = !params_.strictGreedy;
   constexpr size_t kAhead = 16;       // units ahead whose neighbours' data is asked for (then lists at half)
   const bool prefetch = !prescored_;  // nothing to evaluate when run() scored the pairs already
-  for (size_t u = 0; u < n; ++u) {
+  if (prescored_) {                   // each unit reads its own list and writes its own state: on the threads
+    ParallelChunks(n, threads_, kFaceChunk, [&](size_t begin, size_t end, unsigned) {
+      for (size_t u = begin; u < end; ++u) {
+        links_[u].stamp = 0;
+        int64_t top = kNoEntry;
+        for (const Neighbour* nb = nbBegin(int(u)); nb != nbEnd(int(u)); ++nb) top = std::max(top, PairEntry(*nb));
+        float best;
+        BestPair(top, best, links_[u].bestPartner);
+        tree_.setKey(int(u), best);
+      }
+    });
+  }
+  for (size_t u = 0; !prescored_ && u < n; ++u) {
     if (prefetch && u + kAhead < n)
       for (const Neighbour* nb = nbBegin(int(u + kAhead)); nb != nbEnd(int(u + kAhead)); ++nb) {
         PrefetchUnit(nb->id);
@@ -991,13 +1235,18 @@ bool HierarchyBuilder::RunLevel(double thresholdDeg, bool localMaximaFirst, long
     const size_t padded = (n + 7) / 8 * 8;
     BigVector<uint8_t> dirty(padded, 0);
     dirty_ = dirty.data();
+    if (chunkCount_ >= 2 && sparse_ &&
+        !(MergeChunks(0, minGroups, mergesSoFar, merges) && MergeChunks(1, minGroups, mergesSoFar, merges))) {
+      dirty_ = nullptr;
+      return false;
+    }
     // Merges u while its best pair is mutual; false: cancelled.
     auto visit = [&](int u) {
       dirty_[size_t(u)] = 0;
       while (alive(u) && aliveCount_ > minGroups) {
         const int b = links_[size_t(u)].bestPartner;
         if (b < 0 || links_[size_t(b)].bestPartner != u) break;
-        MergeUnits(u, b);
+        MergeUnits(u, b, serial_);
         ++merges;
         if (!ReportProgress(mergesSoFar + merges)) return false;
       }
@@ -1039,7 +1288,7 @@ bool HierarchyBuilder::RunLevel(double thresholdDeg, bool localMaximaFirst, long
   tree_.build();
   while (!tree_.empty() && aliveCount_ > minGroups) {
     const int u = tree_.top();
-    MergeUnits(u, links_[size_t(u)].bestPartner);
+    MergeUnits(u, links_[size_t(u)].bestPartner, serial_);
     ++merges;
     if (!ReportProgress(mergesSoFar + merges)) return false;
   }
@@ -1301,7 +1550,7 @@ void HierarchyBuilder::nextLevelUnits() {
   sparse_ = false;
   BigVector<int>().swap(slot_);
   BigVector<Unit>().swap(pool_);
-  std::vector<int>().swap(freeSlots_);
+  serial_.freeSlots = std::vector<int>();
   links_.swap(links);
   chains_.swap(chains);
   absorbedBy_.resize(g);
@@ -1315,6 +1564,8 @@ void HierarchyBuilder::nextLevelUnits() {
 
 Status HierarchyBuilder::run(GroupHierarchy& out) {
   const int nf = faceCount_;
+  chunkCount_ = params_.strictGreedy || params_.chunkFaces <= 0 ? 0 : size_t(nf) / size_t(params_.chunkFaces);
+  if (chunkCount_ < 2) chunkCount_ = 0;
   // Adjacency first, while nothing else is allocated: it is the largest temporary. Its arrays,
   // freed once level 1's lists are made, become level 1's arena, face lists and chains instead of
   // fresh memory (BigRecycler); what is left is unmapped before the merges.
@@ -1324,7 +1575,8 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     auto makeLists = [&](const uint32_t* offsets, const uint32_t* neighbours, size_t count) {
       if (count > size_t(std::numeric_limits<uint32_t>::max() / 2)) throw std::bad_alloc();  // list offsets are 32-bit
       // The arena's high-water mark is what it costs in memory: a quarter of slack, no more.
-      arena_.reserve(count + count / 4 + 16);
+      // (The chunks' regions, MergeChunks, fit in the slack.)
+      arena_.reserve(count + count / 4 + 16 * (chunkCount_ + 2));
       Neighbour* list = arena_.data() + arena_.grow(count);
       for (size_t i = 0; i < count; ++i) *list++ = {int(neighbours[i]), kUnscored};
       links_.resize(size_t(nf));
@@ -1353,7 +1605,13 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
   // Level-1 units: one per face. In the default mode each pair is scored once, from its lower
   // unit (RunLevel); here already, as soon as both units are made.
   const bool scoreNow = !params_.strictGreedy;
-  if (sparse_) pool_.reserve(size_t(nf) / 2 + 1);  // mapped: only the slots used take memory
+  if (sparse_) {  // mapped: only the slots used take memory
+    // A slot is taken for a face alone that merges (it never is one again), so at most nf are,
+    // plus the fresh blocks in the hands of the MergeStates (the serial one, the chunks of both
+    // rounds). Mapped: only the slots used take memory, and those are packed at the start.
+    pool_.resize(size_t(nf) + (2 * chunkCount_ + 2) * kSlotBlock);
+    freshSlots_ = 0;
+  }
   if (scoreNow) setThreshold(std::min(params_.coneThresholdDeg, 180.0));
   prescored_ = scoreNow;
   // Each face makes its own unit (on every thread; in the default mode none is stored: see
@@ -1523,6 +1781,7 @@ Status ValidateParams(const ConeGroupingParams& p) {
   if (p.maxLevels < 1 || p.maxLevels > 64) return Status::Invalid("MaxLevels must be between 1 and 64");
   if (p.minTopGroups < 1) return Status::Invalid("MinTopGroups must be >= 1");
   if (p.threads < 0 || p.threads > 1024) return Status::Invalid("threads must be from 0 (one per core) to 1024");
+  if (p.chunkFaces < 0) return Status::Invalid("chunkFaces must be >= 0 (0: no chunks)");
   return Status::Ok();
 }
 

@@ -24,7 +24,12 @@
 // level. A mutual best pair is what the best-first order would merge too unless a better pair
 // next to it changed first; the sweeps visit the mesh in memory order, where the best-first
 // order jumps across the whole mesh at every merge (1.6-2x faster on the dragon, same culling
-// cost: docs/cone_grouping.md). Levels above the first keep the best-first order.
+// cost: docs/cone_grouping.md). Levels above the first keep the best-first order. On meshes of
+// at least two chunks (ConeGroupingParams::chunkFaces), the sweeps run first within chunks of
+// consecutive faces, each on its own and on the threads, merging only units with no neighbour
+// outside their chunk; twice, the second time with the cuts moved by half a chunk; then the
+// sweeps over the whole level and the best-first order go on from there (the same culling cost
+// on the dragon: docs/cone_grouping.md).
 //
 // Candidate cones are the exact union of the two units' cones (an upper bound of the merged
 // normals' minimal cone, so the threshold is never exceeded); a group's cone is recomputed
@@ -51,10 +56,15 @@ struct ConeGroupingParams {
   // cones exactly at every doubling (the paper's order; the output of ConeLOD before local
   // maxima, bit for bit; about 1.6-2x slower). false: see "Merge order" above.
   bool strictGreedy = false;
+  // Level 1 (default mode) first merges within chunks of about this many consecutive faces, each
+  // chunk on its own (on the threads), pairs whose units have no neighbour in another chunk; then
+  // the sweeps and the best-first order go on over the whole level. The chunk count is the face
+  // count over this, so the groups do not depend on the thread count. 0, or fewer faces than two
+  // chunks: no chunks (every merge in the order above).
+  int chunkFaces = 50000;
   // Threads for the parts of the build that run in parallel (the face adjacency, the level-1
-  // units and their first scores, the exact cones and spheres of each level's groups); 0: one
-  // per core. The merges themselves run on one thread, in the order above: the output is the
-  // same, bit for bit, for every thread count.
+  // units and their first scores, level 1's chunks, the exact cones and spheres of each level's
+  // groups); 0: one per core. The output is the same, bit for bit, for every thread count.
   int threads = 1;
 };
 
