@@ -74,6 +74,7 @@ double ProcessCpuSeconds() {
 
 void BM_BuildConeHierarchy(benchmark::State& state, Loaded* m, int threads) {
   ConeGroupingParams params;
+  params.chunkFaces = kGroupingChunkFaces;  // as `conelod group`
   params.threads = threads;
   Loaded::Result& r = m->results[threads];
   double seconds = 0, cpu = 0, peak = 0;

@@ -364,6 +364,7 @@ const std::vector<std::string> kGroupingOptions = {"--cone-weight", "--shape-wei
 
 ConeGroupingParams ReadGroupingParams(Args& a) {
   ConeGroupingParams p;
+  p.chunkFaces = kGroupingChunkFaces;
   p.strictGreedy = a.has("--strict-greedy");  // a flag: callers list it among their flag options
   p.coneWeight = a.num("--cone-weight", p.coneWeight);
   p.shapeWeight = a.num("--shape-weight", p.shapeWeight);

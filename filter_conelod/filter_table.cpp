@@ -339,6 +339,7 @@ void AddGroupingParams(std::vector<ParamSpec>& p) {
 
 conelod::ConeGroupingParams ReadGroupingParams(const Args& a) {
   conelod::ConeGroupingParams p;
+  p.chunkFaces = conelod::kGroupingChunkFaces;
   p.coneWeight = a.number("ConeWeight");
   p.shapeWeight = a.number("ShapeWeight");
   p.sizeWeight = a.number("SizeWeight");

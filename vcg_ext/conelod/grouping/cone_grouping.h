@@ -44,6 +44,10 @@
 
 namespace conelod {
 
+// The level-1 chunk size of `conelod group`, the Normal Cone Face Grouping and Cluster Culling
+// Cost filters and `conelod cull-cost` (ConeGroupingParams::chunkFaces).
+constexpr int kGroupingChunkFaces = 50000;
+
 struct ConeGroupingParams {
   double coneWeight = 1.0;         // k_c
   double shapeWeight = 0.5;        // k_s
@@ -60,8 +64,10 @@ struct ConeGroupingParams {
   // chunk on its own (on the threads), pairs whose units have no neighbour in another chunk; then
   // the sweeps and the best-first order go on over the whole level. The chunk count is the face
   // count over this, so the groups do not depend on the thread count. 0, or fewer faces than two
-  // chunks: no chunks (every merge in the order above).
-  int chunkFaces = 50000;
+  // chunks: no chunks (every merge in the order above). The grouping command and filter use
+  // kGroupingChunkFaces; the collapse's own grouping (`--groups cone:auto`, which runs on one
+  // thread) keeps 0, so that its groups and figures are those of the one-order merge.
+  int chunkFaces = 0;
   // Threads for the parts of the build that run in parallel (the face adjacency, the level-1
   // units and their first scores, level 1's chunks, the exact cones and spheres of each level's
   // groups); 0: one per core. The output is the same, bit for bit, for every thread count.

@@ -401,8 +401,8 @@ TEST(ConeGrouping, ThreadCountDoesNotChangeTheGroups) {
     const IndexedMesh* mesh;
     int chunkFaces;
     const char* name;
-  } cases[] = {{&bunny, ConeGroupingParams().chunkFaces, "bunny"},
-               {&sphere, ConeGroupingParams().chunkFaces, "bumpy sphere"},
+  } cases[] = {{&bunny, kGroupingChunkFaces, "bunny"},
+               {&sphere, kGroupingChunkFaces, "bumpy sphere"},
                {&bunny, 5000, "bunny in 13 chunks"}};
   for (const auto& c : cases) {
     const IndexedMesh* mesh = c.mesh;
