@@ -5,7 +5,7 @@
 //   lod_fidelity MESH.ply [--samples N] [--dag-only] [--cluster-faces N] [--group-clusters N] [--cone DEG]
 //                [--max-faces N] [--max-group-error F] [--fine-group-clusters N] [--level-ratio R]
 //                [--coarse-level-ratio R] [--top-group-clusters N] [--cuts P,P,...] [--no-peers]
-//                [--min-faces N] [--borders] [--locked-border-weight W]
+//                [--min-faces N] [--borders] [--locked-border-weight W] [--chunk-faces N] [--shuffle-faces S]
 //
 // "tree": the previous .clod levels (BuildConeHierarchy + BuildSimplifiedLevels with the defaults
 // `conelod lod build` used: every level keeps the normal-cone groups of its hierarchy level).
@@ -38,7 +38,9 @@
 // --chunk-faces N: instead, the DAG built in spatial chunks of at most N faces (conelod lod build
 // --memory; LodBuildParams::chunkFaces) against the DAG built whole: per level of the chunked DAG
 // its faces and RMS, and the whole DAG's RMS at the same face count (interpolated in log-log
-// between its two levels around that count), and their ratio.
+// between its two levels around that count), and their ratio. --shuffle-faces S: the compared DAG
+// built on the input's faces shuffled (seed S; with --chunk-faces, in chunks too): the same surface
+// in another face order, whose ratios to the whole DAG are the noise a single build's levels carry.
 #include <unistd.h>
 
 #include <algorithm>
@@ -48,6 +50,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <memory>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -102,6 +105,7 @@ int main(int argc, char** argv) {
   size_t maxFaces = 0;    // 0: every level
   size_t minFaces = 0;    // --min-faces N: only the levels of at least N faces (with --max-faces: a range)
   size_t chunkFaces = 0;  // --chunk-faces N: chunked against whole
+  unsigned shuffle = 0;   // --shuffle-faces S: the compared build on the faces in another order
   bool tree = true, file = false;
   bool borders = false;  // --borders: the locked vertices per level
   bool peers = true;     // --no-peers: the cuts alone (no static collapse, no MeshLab QEM)
@@ -128,6 +132,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--max-faces")) maxFaces = size_t(std::atoll(argv[i + 1]));
     if (!std::strcmp(argv[i], "--min-faces")) minFaces = size_t(std::atoll(argv[i + 1]));
     if (!std::strcmp(argv[i], "--chunk-faces")) chunkFaces = size_t(std::atoll(argv[i + 1]));
+    if (!std::strcmp(argv[i], "--shuffle-faces")) shuffle = unsigned(std::atoi(argv[i + 1]));
     if (!std::strcmp(argv[i], "--cuts")) {
       tree = false;
       for (const char* c = argv[i + 1]; *c;) {
@@ -150,27 +155,36 @@ int main(int argc, char** argv) {
   const vcg::Box3d box = conelod::UsedVertexBox(input);
   const double diag = box.Diag();
 
-  if (chunkFaces > 0) {
+  if (chunkFaces > 0 || shuffle > 0) {
     std::vector<double> wholeFaces, wholeRms;
     const conelod::IndexedMesh welded = conelod::WeldByPosition(input).mesh;  // as conelod lod build
-    for (size_t chunk : {size_t(0), chunkFaces}) {
+    conelod::IndexedMesh shuffled;  // --shuffle-faces: the same faces in another order
+    if (shuffle > 0) {
+      shuffled = welded;
+      std::mt19937 rng(shuffle);  // (Fisher-Yates on its raw output: the same order with any library)
+      for (size_t i = shuffled.faces.size(); i > 1; --i)
+        std::swap(shuffled.faces[i - 1], shuffled.faces[size_t(rng()) % i]);
+    }
+    for (int compared : {0, 1}) {
+      const size_t chunk = compared ? chunkFaces : 0;
       conelod::LodBuildParams p = dagParams;
       p.chunkFaces = chunk;
       conelod::LodDag dag;
       size_t chunks = 1;
       const double w = Wall();
-      if (!conelod::BuildLodDag(welded, p, dag, conelod::Progress(), &chunks).ok()) return 1;
-      std::printf("\n%s (%zu faces), DAG %s: %zu chunks, %.2f s wall\n", argv[1], input.faces.size(),
-                  chunk ? "in chunks" : "whole", chunks, Wall() - w);
-      std::printf(chunk ? "| level | faces | RMS (chunks) | RMS (whole, same faces) | ratio |\n|---|---|---|---|---|\n"
-                        : "| level | faces | RMS (whole) |\n|---|---|---|\n");
+      if (!conelod::BuildLodDag(compared && shuffle ? shuffled : welded, p, dag, conelod::Progress(), &chunks).ok())
+        return 1;
+      std::printf("\n%s (%zu faces), DAG %s%s: %zu chunks, %.2f s wall\n", argv[1], input.faces.size(),
+                  chunk ? "in chunks" : "whole", compared && shuffle ? ", faces shuffled" : "", chunks, Wall() - w);
+      std::printf(compared ? "| level | faces | RMS | RMS (whole, same faces) | ratio |\n|---|---|---|---|---|\n"
+                           : "| level | faces | RMS (whole) |\n|---|---|---|\n");
       for (size_t k = 1; k < dag.levels.size(); ++k) {
         conelod::IndexedMesh m;
         m.positions = dag.positions;
         m.faces = dag.levels[k].faces;
         if (maxFaces > 0 && m.faces.size() > maxFaces) continue;
         const double rms = Rms(m, input, samples, diag), f = double(m.faces.size());
-        if (!chunk) {
+        if (!compared) {
           wholeFaces.push_back(f);
           wholeRms.push_back(rms);
           std::printf("| %zu | %zu | %.4f |\n", k, m.faces.size(), 100 * rms);
