@@ -871,60 +871,112 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
   out.faces.resize(res.mesh.faces.size());
   for (size_t f = 0; f < res.mesh.faces.size(); ++f)
     for (size_t k = 0; k < 3; ++k) out.faces[f][k] = variants[cornerVariant[3 * f + k]].id;
-  // One-sided distance: every input vertex of the group to the simplified faces. Faces and
-  // vertices are visited in Morton order of their position, each vertex scanning the faces
-  // outwards from its own place in that order: a near face comes early, and a vertex stops as
-  // soon as a face lies within the largest distance found so far (it cannot raise it), so the
-  // result is the exact maximum at a fraction of the pairs.
+  // One-sided distance: every input vertex of the group to the simplified faces, the exact
+  // maximum over the vertices of each one's minimum over the faces (the order the vertices are
+  // taken in and the faces skipped do not change it). Faces are sorted in Morton order of their
+  // centroid; each vertex first takes the minimum over the few faces beside its own place in that
+  // order (an upper bound of its distance), then the vertices are taken from the largest bound
+  // down: once a bound is at most the largest distance found, no vertex left can raise it. A vertex
+  // taken scans the faces outwards from its place, stops as soon as a face lies within the largest
+  // distance found (it cannot raise it), and skips a face whose bounding sphere lies farther than
+  // its nearest face so far.
   auto P = [&](uint32_t id) {
     return vcg::Point3d::Construct(id < V ? local.positions[weldedOf[id]] : out.newPositions[id - V]);
   };
   vcg::Box3d gb;
   for (uint32_t v = 0; v < W; ++v) gb.Add(vcg::Point3d::Construct(local.positions[v]));
   const vcg::Point3d gd = gb.Dim();
+  auto spread = [](uint32_t q) {  // the 10 bits of q to every third bit
+    q = (q | q << 16) & 0x030000FFu;
+    q = (q | q << 8) & 0x0300F00Fu;
+    q = (q | q << 4) & 0x030C30C3u;
+    return (q | q << 2) & 0x09249249u;
+  };
   auto morton = [&](const vcg::Point3d& p) {
     uint32_t code = 0;
     for (int i = 0; i < 3; ++i) {
       const double t = gd[i] > 0 ? (p[i] - gb.min[i]) / gd[i] : 0.0;
-      const uint32_t q = uint32_t(std::min(1023.0, std::max(0.0, t * 1023.0)));
-      for (int b = 0; b < 10; ++b) code |= ((q >> b) & 1u) << (3 * b + i);
+      code |= spread(uint32_t(std::min(1023.0, std::max(0.0, t * 1023.0)))) << i;
     }
     return code;
   };
   struct Tri {
     uint32_t code;
     std::array<vcg::Point3d, 3> p;
+    vcg::Point3d centre;
+    double radius;
   };
-  std::vector<Tri> tri(out.faces.size());
+  // (the faces' codes sorted, then the faces laid out in that order: a Tri is 112 bytes)
+  std::vector<std::pair<uint32_t, uint32_t>> byCode(out.faces.size());
   for (size_t f = 0; f < out.faces.size(); ++f) {
-    tri[f].p = {P(out.faces[f][0]), P(out.faces[f][1]), P(out.faces[f][2])};
-    tri[f].code = morton((tri[f].p[0] + tri[f].p[1] + tri[f].p[2]) / 3.0);
+    const Face& o = out.faces[f];
+    byCode[f] = {morton((P(o[0]) + P(o[1]) + P(o[2])) / 3.0), uint32_t(f)};
   }
-  std::sort(tri.begin(), tri.end(), [](const Tri& a, const Tri& b) { return a.code < b.code; });
-  std::vector<std::pair<uint32_t, uint32_t>> order;  // (code, vertex) of the vertices that can move
-  for (uint32_t v = 0; v < W; ++v)
-    if (!region.frozenVertex[v])
-      order.push_back({morton(vcg::Point3d::Construct(local.positions[v])), v});  // frozen: on the surface
-  std::sort(order.begin(), order.end());
-  double worst2 = 0;
+  std::stable_sort(
+      byCode.begin(), byCode.end(),
+      [](const std::pair<uint32_t, uint32_t>& a, const std::pair<uint32_t, uint32_t>& b) { return a.first < b.first; });
+  std::vector<Tri> tri(out.faces.size());
+  for (size_t i = 0; i < byCode.size(); ++i) {
+    Tri& t = tri[i];
+    const Face& o = out.faces[byCode[i].second];
+    t.p = {P(o[0]), P(o[1]), P(o[2])};
+    t.centre = (t.p[0] + t.p[1] + t.p[2]) / 3.0;
+    t.code = byCode[i].first;
+    // (widened by far more than the rounding of the centre, the radius and the distance to the
+    // centre: the sphere never misses a point of the face)
+    t.radius = std::sqrt(std::max({(t.p[0] - t.centre).SquaredNorm(), (t.p[1] - t.centre).SquaredNorm(),
+                                   (t.p[2] - t.centre).SquaredNorm()})) *
+                   (1 + 1e-9) +
+               1e-7 * gd.Norm() + 1e-13 * t.centre.Norm();
+  }
   const size_t T = tri.size();
-  for (const auto& cv : order) {
-    const vcg::Point3d p = vcg::Point3d::Construct(local.positions[cv.second]);
+  struct Near {
+    double bound;  // the minimum over a few faces beside the vertex's place: at least its distance
+    uint32_t vertex, at;
+  };
+  std::vector<Near> order;  // the vertices that can move (a frozen one is on the surface)
+  order.reserve(W);
+  constexpr size_t kBeside = 2;
+  for (uint32_t v = 0; v < W; ++v) {
+    if (region.frozenVertex[v]) continue;
+    const vcg::Point3d p = vcg::Point3d::Construct(local.positions[v]);
+    const uint32_t code = morton(p);
     const size_t at =
-        size_t(std::lower_bound(tri.begin(), tri.end(), cv.first, [](const Tri& t, uint32_t c) { return t.code < c; }) -
+        size_t(std::lower_bound(tri.begin(), tri.end(), code, [](const Tri& t, uint32_t c) { return t.code < c; }) -
                tri.begin());
     double best = std::numeric_limits<double>::infinity();
+    for (size_t i = at > kBeside ? at - kBeside : 0; i < std::min(T, at + kBeside + 1); ++i) {
+      const auto& t = tri[i].p;
+      best = std::min(best, PointTriangleDistance2(p, t[0], t[1], t[2]));
+    }
+    order.push_back({best, v, uint32_t(at)});
+  }
+  std::sort(order.begin(), order.end(), [](const Near& a, const Near& b) {
+    return a.bound > b.bound || (a.bound == b.bound && a.vertex < b.vertex);
+  });
+  // A face is skipped when its sphere's distance squared exceeds the nearest so far by more than
+  // rounding could (relative and absolute slack: the face's own distance is never below it).
+  const double slack = 1e-12 * gd.SquaredNorm();
+  double worst2 = 0;
+  for (const Near& n : order) {
+    if (T > 0 && n.bound <= worst2) break;  // no vertex left can raise the maximum
+    const vcg::Point3d p = vcg::Point3d::Construct(local.positions[n.vertex]);
+    const size_t at = n.at;
+    double best = n.bound;
+    auto visit = [&](const Tri& t) {
+      const double c = std::sqrt((p - t.centre).SquaredNorm()) - t.radius;
+      if (c > 0 && c * c > best * (1 + 1e-6) + slack) return;
+      best = std::min(best, PointTriangleDistance2(p, t.p[0], t.p[1], t.p[2]));
+    };
     for (size_t d = 0; d <= T; ++d) {
       bool any = false;
       if (at + d < T) {
         any = true;
-        const auto& t = tri[at + d].p;
-        best = std::min(best, PointTriangleDistance2(p, t[0], t[1], t[2]));
+        visit(tri[at + d]);
       }
       if (d > 0 && d <= at) {
         any = true;
-        const auto& t = tri[at - d].p;
-        best = std::min(best, PointTriangleDistance2(p, t[0], t[1], t[2]));
+        visit(tri[at - d]);
       }
       if ((d > 0 && !any) || best <= worst2) break;  // done, or cannot raise the maximum
     }
@@ -944,7 +996,8 @@ std::vector<Face> FacesByPlace(const std::vector<Face>& faces, const std::vector
 
 // Per thread: what RecutGroup works in, kept from group to group.
 struct RecutScratch {
-  std::vector<uint32_t> corner, ids;
+  std::vector<uint32_t> rank, ids;
+  std::vector<uint64_t> keys;
   std::vector<Face> faces;
   std::vector<vcg::Point3f> positions;
 };
@@ -955,21 +1008,33 @@ struct RecutScratch {
 // final id will (any id above the level's vertices plus its index among the group's new ones);
 // positionOf(id) that id's position. The ids renumbered densely in their order keep every edge's
 // key order, so GrowClusters cuts the same clusters as on the DAG's ids once the group's new
-// vertices are numbered (BuildLevels, StreamLevels).
+// vertices are numbered (BuildLevels, StreamLevels). (The group's vertices x used are sorted by
+// their ids, about half a vertex a face, rather than every corner.)
 template <class Topology, class PositionOf>
 void RecutGroup(GroupResult& r, Topology topology, PositionOf positionOf, size_t clusterFaces, double angle,
                 RecutScratch& s) {
   const size_t F = r.faces.size();
-  s.corner.resize(3 * F);
+  const size_t X = r.localToGlobal.size() + r.newPositions.size();  // the group's vertices x
+  s.rank.assign(X, 0);
+  s.keys.clear();
   for (size_t f = 0; f < F; ++f)
-    for (size_t i = 0; i < 3; ++i) s.corner[3 * f + i] = topology(r.faces[f][i]);
-  s.ids.assign(s.corner.begin(), s.corner.end());
-  std::sort(s.ids.begin(), s.ids.end());
-  s.ids.erase(std::unique(s.ids.begin(), s.ids.end()), s.ids.end());
+    for (size_t i = 0; i < 3; ++i) {
+      const uint32_t x = r.faces[f][i];
+      if (s.rank[x] == 0) {
+        s.rank[x] = 1;
+        s.keys.push_back(uint64_t(topology(x)) << 32 | x);
+      }
+    }
+  std::sort(s.keys.begin(), s.keys.end());
+  s.ids.clear();
+  for (const uint64_t key : s.keys) {
+    const uint32_t id = uint32_t(key >> 32);
+    if (s.ids.empty() || s.ids.back() != id) s.ids.push_back(id);
+    s.rank[uint32_t(key)] = uint32_t(s.ids.size() - 1);
+  }
   s.faces.resize(F);
   for (size_t f = 0; f < F; ++f)
-    for (size_t i = 0; i < 3; ++i)
-      s.faces[f][i] = uint32_t(std::lower_bound(s.ids.begin(), s.ids.end(), s.corner[3 * f + i]) - s.ids.begin());
+    for (size_t i = 0; i < 3; ++i) s.faces[f][i] = s.rank[r.faces[f][i]];
   s.positions.resize(s.ids.size());
   for (size_t j = 0; j < s.ids.size(); ++j) s.positions[j] = positionOf(s.ids[j]);
   r.clusters = GrowClusters(s.faces, s.positions, clusterFaces, angle, r.cluster);

@@ -192,14 +192,7 @@ class PositionResidualModel {
     const int64_t s = int64_t(r << shift) >> shift;  // r as a signed W-bit value
     return s >= 0 ? uint64_t(s) << 1 : (uint64_t(-(s + 1)) << 1) | 1;
   }
-  static uint32_t BitLength(uint64_t z) {
-    uint32_t n = 0;
-    while (z) {
-      ++n;
-      z >>= 1;
-    }
-    return n;
-  }
+  static uint32_t BitLength(uint64_t z) { return z ? uint32_t(64 - __builtin_clzll(z)) : 0; }
   // Codes the three coordinates of one vertex.
   void Encode(RangeEncoder& rc, int kind, const uint64_t* r, int width) {
     uint32_t previous = 0;

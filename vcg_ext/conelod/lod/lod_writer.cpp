@@ -672,6 +672,7 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
     std::vector<uint32_t> start, faces;
     struct RecordScratch {
       std::vector<vcg::Point3d> normals;
+      std::vector<vcg::Point3f> corners;  // the node's face corners as they will be read
       // The node's vertices, counted once each: an open-addressing set (id + 1; 0: empty).
       std::vector<uint32_t> slots;
     };
@@ -724,6 +725,7 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
               R.parentError = std::numeric_limits<float>::infinity();
             }
             normals.clear();
+            S.corners.clear();
             size_t mask = 63;
             while (mask + 1 < 6 * size_t(start[i + 1] - start[i])) mask = mask << 1 | 1;
             S.slots.assign(mask + 1, 0);
@@ -732,6 +734,9 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
             for (uint32_t j = start[i]; j < start[i + 1]; ++j) {
               const auto& t = levelFaceList[faces[j]];
               const vcg::Point3f r0 = rounded(t[0]), r1 = rounded(t[1]), r2 = rounded(t[2]);
+              S.corners.push_back(r0);
+              S.corners.push_back(r1);
+              S.corners.push_back(r2);
               const vcg::Point3d a = vcg::Point3d::Construct(r0), b = vcg::Point3d::Construct(r1),
                                  cc = vcg::Point3d::Construct(r2);
               const vcg::Point3d n = (b - a) ^ (cc - a);
@@ -754,8 +759,7 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
             R.vertexCount = vc;
             R.center = nb.IsNull() ? vcg::Point3f(0, 0, 0) : nb.Center();
             float r2 = 0;
-            for (uint32_t j = start[i]; j < start[i + 1]; ++j)
-              for (uint32_t v : levelFaceList[faces[j]]) r2 = std::max(r2, (rounded(v) - R.center).SquaredNorm());
+            for (const vcg::Point3f& r : S.corners) r2 = std::max(r2, (r - R.center).SquaredNorm());
             R.radius = std::sqrt(r2) * (1 + 1e-6f);
           }
         });
