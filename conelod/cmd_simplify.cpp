@@ -509,8 +509,10 @@ int CmdSimplify(int argc, char** argv) {
         r.stats.refusedCondition1, r.stats.refusedCondition2, r.stats.refusedLock, r.stats.refusedFixed,
         r.stats.refusedGeometry, r.stats.refusedCone);
     if (attributeMask)
-      std::printf("attributes: %s, interpolated (weight %g); %zu seam vertices (never moved)\n",
-                  DescribeAttributes(layout).c_str(), attributeWeight, attributes.seamVertices());
+      std::printf(
+          "attributes: %s, interpolated (weight %g); %zu seam vertices (moved at a cost; their texture stays in its "
+          "charts)\n",
+          DescribeAttributes(layout).c_str(), attributeWeight, attributes.seamVertices());
     if (a.has("-o")) std::printf("wrote %s (quality and colour = group)\n", a.str("-o").c_str());
   }
   if (!unreachable.empty()) return Fail(kBadInput, unreachable);

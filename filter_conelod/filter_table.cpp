@@ -707,10 +707,12 @@ Status ApplyGroupQem(FilterCall& c) {
       int(r.stats.refusedCondition2), int(r.stats.refusedLock), int(r.stats.refusedFixed), int(r.stats.refusedGeometry),
       int(r.stats.refusedCone));
   if (!layout.empty())
-    out.log("attributes interpolated at each new vertex (attribute weight %g): %s%s%s; %d seam vertices (never moved)",
-            attributeWeight, layout.colorChannels ? "vertex colours" : "",
-            layout.colorChannels && layout.texCoords ? ", " : "",
-            layout.texCoords ? "wedge texture coordinates (seams kept)" : "", int(attributes.seamVertices()));
+    out.log(
+        "attributes interpolated at each new vertex (attribute weight %g): %s%s%s; %d seam vertices (moved at a cost; "
+        "their texture stays in its charts)",
+        attributeWeight, layout.colorChannels ? "vertex colours" : "",
+        layout.colorChannels && layout.texCoords ? ", " : "",
+        layout.texCoords ? "wedge texture coordinates (seams kept)" : "", int(attributes.seamVertices()));
   LogKeptAttributes(out, mm, layout.colorChannels == 0, !layout.texCoords);
   out.figure("faces_out", double(r.mesh.faceCount()));
   out.figure("groups_before", gi.groupsBefore);
