@@ -670,6 +670,16 @@ double LevelRatioOf(const LodBuildParams& params, uint64_t faces, uint64_t input
   return CoarseLevel(faces, inputFaces) ? std::max(r, params.coarseLevelRatio) : r;
 }
 
+// Chunks built side by side (a wave, `lod build --memory`): as many as three quarters of what the
+// budget leaves after the `fixed` bytes that stay allow, at `perChunk` bytes a chunk in flight; at
+// least 1. The budget's process share (kLodMinMemoryBytes) counts as fixed too, but for a budget
+// below it (the tests'), which is all chunk work.
+size_t ChunksInFlight(const LodBuildParams& params, uint64_t fixed, uint64_t perChunk) {
+  const uint64_t budget = uint64_t(params.chunkFaces) * kLodMemoryBytesPerChunkFace;
+  if (budget >= kLodMinMemoryBytes) fixed += kLodMinMemoryBytes;
+  return budget > fixed ? size_t(std::max<uint64_t>(1, (budget - fixed) / 4 * 3 / perChunk)) : 1;
+}
+
 // The clusters gathered into one group on such a level (LodBuildParams): fineGroupClusters on the
 // fine levels, topGroupClusters on the top ones (under the faces of 4 groups of groupClusters
 // clusters, or under topFaceShare of the input's faces), else groupClusters.
@@ -1411,17 +1421,15 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
       std::vector<GroupResult> results;
       bool bad = false;
     };
-    // Chunks side by side: one per thread, as many as three quarters of the budget left by the
-    // positions and the bitsets allow, at about 64 bytes a face of the chunk (as level 0's).
-    size_t waveSize = 1;
+    // Chunks side by side: one per thread, as many as the budget holds after the positions and
+    // the bitsets (ChunksInFlight), at about 64 bytes a face of the chunk (as level 0's) and its
+    // own bitset.
+    size_t waveSize;
     {
       uint64_t largest = 1;
       for (size_t r = 0; r < chunks; ++r) largest = std::max<uint64_t>(largest, faceEnd[r] - faceBegin(r));
-      const uint64_t budget = uint64_t(params.chunkFaces) * kLodMemoryBytesPerChunkFace;
-      const uint64_t fixed = uint64_t(12) * P + P / 4 + (budget >= kLodMinMemoryBytes ? kLodMinMemoryBytes : 0);
-      const uint64_t slot = 64 * largest + P / 8;
-      if (budget > fixed) waveSize = size_t(std::max<uint64_t>(1, (budget - fixed) / 4 * 3 / slot));
-      waveSize = std::min<size_t>({waveSize, size_t(threads), chunks});
+      waveSize = std::min<size_t>(
+          {ChunksInFlight(params, uint64_t(12) * P + P / 4, 64 * largest + P / 8), size_t(threads), chunks});
     }
     std::vector<Slot> slots(waveSize);
     for (Slot& w : slots) w.here.assign((P + 63) / 64, 0);
@@ -1778,15 +1786,12 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
   // faces waiting for (e) take about 64 bytes a face of the chunk (docs/scale.md: 28 MiB more a
   // chunk for chunks of 436 k faces); the positions (12 bytes a vertex, up to about 1.45 vertices
   // of the DAG an input vertex), owner / shared (5 bytes an input vertex) and the rest stay.
-  size_t chunksInFlight = 1;
+  // (What stays, measured: 20-34 bytes an input vertex and the process's few MiB.)
+  size_t chunksInFlight;
   {
-    const uint64_t budget = uint64_t(params.chunkFaces) * kLodMemoryBytesPerChunkFace;
-    // (what stays, measured: 20-34 bytes an input vertex and the process's few MiB; a budget
-    // below the CLI's smallest, as in the tests, is all chunk work.)
-    const uint64_t fixed = uint64_t(30) * V0 + (budget >= kLodMinMemoryBytes ? kLodMinMemoryBytes : 0);
     uint64_t largest = 1;
     for (uint64_t f : in.chunkFaces) largest = std::max<uint64_t>(largest, f);
-    if (budget > fixed) chunksInFlight = size_t(std::max<uint64_t>(1, (budget - fixed) / 4 * 3 / (64 * largest)));
+    chunksInFlight = ChunksInFlight(params, uint64_t(30) * V0, 64 * largest);
   }
   struct ChunkWork {
     size_t chunk = 0;
@@ -2014,11 +2019,7 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
       return s;
     }
   }
-  stageA.Flush();
-  stageB.Flush();
-  stageC.Flush();
-  stageD.Flush();
-  stageE.Flush();
+  for (StageLog::Sum* sum : {&stageA, &stageB, &stageC, &stageD, &stageE}) sum->Flush();
   std::vector<ChunkWork>().swap(wave);
   std::vector<int>().swap(owner);
   std::vector<uint8_t>().swap(shared);
