@@ -34,6 +34,19 @@ IndexedMesh BentGrid() {
 std::array<float, 3> LinearColour(const vcg::Point3f& p) {
   return {{0.2f + 0.5f * p[0], 0.9f - 0.6f * p[1], 0.1f + 0.3f * p[0] + 0.4f * p[1]}};
 }
+// Per face corner, texture coordinates of two charts cut at x = 0.5: (x, y) left of the cut (by
+// the face's centroid), (x + 1, y) right of it.
+std::vector<float> TwoChartCorners(const IndexedMesh& m) {
+  std::vector<float> corner;
+  for (const auto& t : m.faces) {
+    const float cx = (m.positions[t[0]][0] + m.positions[t[1]][0] + m.positions[t[2]][0]) / 3;
+    for (uint32_t v : t) {
+      corner.push_back(m.positions[v][0] + (cx > 0.5f ? 1 : 0));
+      corner.push_back(m.positions[v][1]);
+    }
+  }
+  return corner;
+}
 // Per face corner, the values of the corner's vertex.
 std::vector<float> Corners(const IndexedMesh& m, const VertexAttributes& a) {
   std::vector<float> c;
@@ -93,14 +106,7 @@ TEST(AttributeQuadric, KeepsTextureSeams) {
   const IndexedMesh m = BentGrid();
   VertexAttributes layout;
   layout.texCoords = true;
-  std::vector<float> corner;
-  for (const auto& t : m.faces) {
-    const float cx = (m.positions[t[0]][0] + m.positions[t[1]][0] + m.positions[t[2]][0]) / 3;
-    for (uint32_t v : t) {
-      corner.push_back(m.positions[v][0] + (cx > 0.5f ? 1 : 0));
-      corner.push_back(m.positions[v][1]);
-    }
-  }
+  const std::vector<float> corner = TwoChartCorners(m);
   AttributeQuadrics aq;
   ASSERT_TRUE(aq.Init(m, layout, corner, 1.0).ok());
   EXPECT_EQ(aq.seamVertices(), size_t(kN + 1));
@@ -200,14 +206,7 @@ IndexedMesh CurvedGrid() {
 void SimplifyTwoCharts(const IndexedMesh& m, bool moves, AttributeQuadrics& aq, GroupQemResult& r) {
   VertexAttributes layout;
   layout.texCoords = true;
-  std::vector<float> corner;
-  for (const auto& t : m.faces) {
-    const float cx = (m.positions[t[0]][0] + m.positions[t[1]][0] + m.positions[t[2]][0]) / 3;
-    for (uint32_t v : t) {
-      corner.push_back(m.positions[v][0] + (cx > 0.5f ? 1 : 0));
-      corner.push_back(m.positions[v][1]);
-    }
-  }
+  const std::vector<float> corner = TwoChartCorners(m);
   ASSERT_TRUE(aq.Init(m, layout, corner, 1.0).ok());
   aq.AllowSeamMoves(moves);
   GroupQemParams p;
@@ -290,14 +289,7 @@ TEST(AttributeQuadric, ReparameterizeFollowsTheMoveInsideTheChart) {
   ASSERT_FLOAT_EQ(m.positions[mid][1], 0.5f);
   VertexAttributes layout;
   layout.texCoords = true;
-  std::vector<float> corner;
-  for (const auto& t : m.faces) {
-    const float cx = (m.positions[t[0]][0] + m.positions[t[1]][0] + m.positions[t[2]][0]) / 3;
-    for (uint32_t v : t) {
-      corner.push_back(m.positions[v][0] + (cx > 0.5f ? 1 : 0));
-      corner.push_back(m.positions[v][1]);
-    }
-  }
+  const std::vector<float> corner = TwoChartCorners(m);
   std::vector<uint32_t> fan;
   for (uint32_t f = 0; f < uint32_t(m.faceCount()); ++f)
     if (std::find(m.faces[f].begin(), m.faces[f].end(), mid) != m.faces[f].end()) fan.push_back(f);
