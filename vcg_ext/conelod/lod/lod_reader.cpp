@@ -269,16 +269,19 @@ struct LodReader::Impl {
   size_t geometryBytes = 0;     // of the loaded geometry (its attributes included)
   std::vector<uint8_t> buffer;  // reused for reads
   // The last unit decoded (the clusters of one group, or the roots: one geometry blob), kept
-  // while its nodes are read one by one.
+  // while its nodes are read one by one, and let go once each of them has been (its size is the
+  // group's, not the cut's).
   struct Unit {
     uint64_t offset = ~uint64_t(0);         // of its blob; ~0: none
     uint64_t firstNode = 0, nodeCount = 0;  // its nodes' ids
-    std::vector<uint64_t> faceStart;        // per node, into corners / 3; nodeCount + 1 entries
-    std::vector<vcg::Point3f> positions;    // per unit vertex
+    std::vector<bool> served;               // per node: its geometry taken out
+    uint64_t servedCount = 0;
+    std::vector<uint64_t> faceStart;      // per node, into corners / 3; nodeCount + 1 entries
+    std::vector<vcg::Point3f> positions;  // per unit vertex
     std::vector<uint32_t> corners, vertexIds;
     LodAttributes attributes;  // per unit vertex (versions 5, 6)
     size_t bytes() const {
-      return faceStart.capacity() * 8 + positions.capacity() * sizeof(vcg::Point3f) +
+      return served.capacity() / 8 + faceStart.capacity() * 8 + positions.capacity() * sizeof(vcg::Point3f) +
              (corners.capacity() + vertexIds.capacity() + attributes.colors.capacity() + attributes.normals.capacity() +
               attributes.texCoords.capacity()) *
                  4;
@@ -644,6 +647,8 @@ struct LodReader::Impl {
       return Status::Invalid(bad + "its geometry blob names other nodes");
     unit.firstNode = first;
     unit.nodeCount = count;
+    unit.served.assign(size_t(count), false);
+    unit.servedCount = 0;
     unit.faceStart.assign(size_t(count) + 1, 0);
     // Version 7: the triangles may be deflated (at most kMaxDeflateRatio to 1); their inflated
     // codec bytes bound the faces again below, before anything of their size is allocated.
@@ -851,6 +856,10 @@ struct LodReader::Impl {
     if (attributeMask) {
       geometryBytes += AttributeBytes(a);
       nodeAttributes[id] = std::move(a);
+    }
+    if (!unit.served[m]) {
+      unit.served[m] = true;
+      if (++unit.servedCount == unit.nodeCount) unit = Unit();  // every node of it read
     }
     return Status::Ok();
   }
