@@ -6,6 +6,7 @@
 //                [--max-faces N] [--max-group-error F] [--fine-group-clusters N] [--level-ratio R]
 //                [--coarse-level-ratio R] [--top-group-clusters N] [--cuts P,P,...] [--no-peers]
 //                [--min-faces N] [--borders] [--locked-border-weight W] [--chunk-faces N] [--shuffle-faces S]
+//                [--no-merge-small-groups]
 //
 // "tree": the previous .clod levels (BuildConeHierarchy + BuildSimplifiedLevels with the defaults
 // `conelod lod build` used: every level keeps the normal-cone groups of its hierarchy level).
@@ -20,7 +21,8 @@
 // --level-ratio R: each group of the fine levels simplified to R of its faces (conelod lod build
 // --level-ratio; 0.5); --coarse-level-ratio R: LodBuildParams::coarseLevelRatio (0.6; 0: the
 // level ratio at every level); --fine-group-clusters N / --top-group-clusters N: LodBuildParams'
-// (24 / 6; 0: --group-clusters [12] there); --locked-border-weight W: LodBuildParams::lockedBorderWeight.
+// (24 / 6; 0: --group-clusters [12] there); --locked-border-weight W: LodBuildParams::lockedBorderWeight;
+// --no-merge-small-groups: LodBuildParams::mergeSmallGroups off.
 // --file [--precision E]: instead, the DAG's levels against the same levels read back from the .clod
 // file written from it (positions quantized with precision E, default kDefaultLodPrecision): per level
 // the RMS of both and their relative change (quantization and the codecs' round trip).
@@ -41,6 +43,8 @@
 // between its two levels around that count), and their ratio. --shuffle-faces S: the compared DAG
 // built on the input's faces shuffled (seed S; with --chunk-faces, in chunks too): the same surface
 // in another face order, whose ratios to the whole DAG are the noise a single build's levels carry.
+// With --cuts, --shuffle-faces S measures everything (the DAG, its cuts, both peers) on the
+// shuffled faces: a few seeds give the spread of one build's cuts.
 #include <unistd.h>
 
 #include <algorithm>
@@ -92,6 +96,13 @@ double Rms(const conelod::IndexedMesh& a, const conelod::IndexedMesh& input, int
   return std::max(h.ab.rms, h.ba.rms) / diag;
 }
 
+// The mesh's faces in another order (seed S; Fisher-Yates on mt19937's raw output: the same order
+// with any standard library).
+void ShuffleFaces(conelod::IndexedMesh& m, unsigned seed) {
+  std::mt19937 rng(seed);
+  for (size_t i = m.faces.size(); i > 1; --i) std::swap(m.faces[i - 1], m.faces[size_t(rng()) % i]);
+}
+
 double Wall() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
 }  // namespace
@@ -118,6 +129,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--no-peers")) peers = false;
     if (!std::strcmp(argv[i], "--no-meshlab")) meshlab = false;
     if (!std::strcmp(argv[i], "--borders")) borders = true;
+    if (!std::strcmp(argv[i], "--no-merge-small-groups")) dagParams.mergeSmallGroups = false;
     if (i + 1 >= argc) break;
     if (!std::strcmp(argv[i], "--samples")) samples = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--cluster-faces")) dagParams.clusterFaces = size_t(std::atoi(argv[i + 1]));
@@ -151,19 +163,18 @@ int main(int argc, char** argv) {
   }
   vcg::tri::Clean<QMesh>::RemoveUnreferencedVertex(qm);
   vcg::tri::Allocator<QMesh>::CompactEveryVector(qm);
-  const conelod::IndexedMesh input = conelod::ToIndexedMesh(qm);
+  conelod::IndexedMesh input = conelod::ToIndexedMesh(qm);
   const vcg::Box3d box = conelod::UsedVertexBox(input);
   const double diag = box.Diag();
+  if (!cuts.empty() && shuffle > 0) ShuffleFaces(input, shuffle);  // the cuts of another build
 
-  if (chunkFaces > 0 || shuffle > 0) {
+  if (cuts.empty() && (chunkFaces > 0 || shuffle > 0)) {
     std::vector<double> wholeFaces, wholeRms;
     const conelod::IndexedMesh welded = conelod::WeldByPosition(input).mesh;  // as conelod lod build
     conelod::IndexedMesh shuffled;  // --shuffle-faces: the same faces in another order
     if (shuffle > 0) {
       shuffled = welded;
-      std::mt19937 rng(shuffle);  // (Fisher-Yates on its raw output: the same order with any library)
-      for (size_t i = shuffled.faces.size(); i > 1; --i)
-        std::swap(shuffled.faces[i - 1], shuffled.faces[size_t(rng()) % i]);
+      ShuffleFaces(shuffled, shuffle);
     }
     for (int compared : {0, 1}) {
       const size_t chunk = compared ? chunkFaces : 0;

@@ -6,6 +6,8 @@
 //      a cone (region growing from a seed face, the cone limit growing level by level);
 //   2. neighbouring clusters (sharing the most edges) are gathered into groups of groupClusters
 //      (fineGroupClusters on the fine levels, topGroupClusters on the top ones: GroupClustersOf);
+//      below the top levels a group left under half of that joins a neighbouring group
+//      (MergeSmallGroups), so that fewer of the level's faces lie on locked borders;
 //   3. each group is simplified on its own to levelRatio of its faces (at least coarseLevelRatio
 //      on the levels of at most 3/8 of the input's faces: LevelRatioOf) by the group-preserving
 //      collapse (group_qem.h) with every vertex it shares with another group frozen
@@ -361,6 +363,54 @@ std::vector<EdgeRecord> ClusterBorderEdgeRecords(const LodDag::Level& L, size_t 
   return edges;
 }
 
+// Greedy growth leaves groups hemmed in by their neighbours well short of `per` clusters (the
+// dragon's level 0 averaged 8 of 24), and a small group locks a larger share of its faces. Each
+// group of under per / 2 clusters, in id order, joins the neighbouring group it shares the most
+// edges with (`off`/`nb`/`w`: the cluster adjacency and shared edges), if the two hold at most
+// 3 / 2 per clusters; a group that grew this way may then join another in its turn. Renumbers the
+// groups that remain in the order of their ids; returns their count.
+int MergeSmallGroups(const std::vector<uint32_t>& off, const std::vector<uint32_t>& nb, const std::vector<uint32_t>& w,
+                     int per, int groups, std::vector<int>& group) {
+  const size_t cap = size_t(per) + size_t(per) / 2;
+  std::vector<std::vector<uint32_t>> members(static_cast<size_t>(groups));
+  for (uint32_t c = 0; c < group.size(); ++c) members[size_t(group[c])].push_back(c);
+  std::vector<int> into(size_t(groups), -1);  // the group it joined
+  auto find = [&](int g) {
+    while (into[size_t(g)] >= 0) g = into[size_t(g)];
+    return g;
+  };
+  std::unordered_map<int, uint64_t> shared;
+  for (int g = 0; g < groups; ++g) {
+    if (2 * members[size_t(g)].size() >= size_t(per)) continue;
+    shared.clear();
+    for (uint32_t c : members[size_t(g)])
+      for (uint32_t i = off[c]; i < off[c + 1]; ++i) {
+        const int h = find(group[nb[i]]);
+        if (h != g) shared[h] += w[i];
+      }
+    int best = -1;
+    uint64_t bestShared = 0;
+    for (const auto& kv : shared) {
+      if (members[size_t(g)].size() + members[size_t(kv.first)].size() > cap) continue;
+      if (kv.second > bestShared || (kv.second == bestShared && kv.first < best)) {
+        best = kv.first;
+        bestShared = kv.second;
+      }
+    }
+    if (best < 0) continue;
+    into[size_t(g)] = best;
+    std::vector<uint32_t>& to = members[size_t(best)];
+    to.insert(to.end(), members[size_t(g)].begin(), members[size_t(g)].end());
+    std::vector<uint32_t>().swap(members[size_t(g)]);
+  }
+  std::vector<int> id(size_t(groups), -1);
+  int count = 0;
+  for (int g = 0; g < groups; ++g)
+    if (into[size_t(g)] < 0) id[size_t(g)] = count++;
+  for (int& g : group) g = id[size_t(find(g))];
+  return count;
+}
+
 // Gathers the clusters of a level into groups of about `per` neighbouring clusters (those sharing
 // the most edges first); a connected part of at most `whole` clusters (clusters sharing edges)
 // is one group. Returns the group count.
@@ -370,9 +420,10 @@ std::vector<EdgeRecord> ClusterBorderEdgeRecords(const LodDag::Level& L, size_t 
 // gives the same pairs.
 // `across` (> 1; LodBuildParams::lockedBorderWeight): the edges two clusters made from different
 // groups of the level below share (that level's locked border: L.clusterCreator) weigh that many
-// edges, so that the groups grow across it and free it.
+// edges, so that the groups grow across it and free it. `merge`: then MergeSmallGroups.
 int GroupClusters(const LodDag::Level& L, int per, size_t whole, std::vector<int>& group,
-                  const std::vector<uint32_t>* node = nullptr, size_t V = 0, unsigned threads = 1, double across = 1) {
+                  const std::vector<uint32_t>* node = nullptr, size_t V = 0, unsigned threads = 1, double across = 1,
+                  bool merge = false) {
   const uint32_t C = uint32_t(L.clusterCount());
   // Cluster adjacency weighted by shared edges.
   const std::vector<EdgeRecord> edges = V > 0
@@ -454,7 +505,7 @@ int GroupClusters(const LodDag::Level& L, int per, size_t whole, std::vector<int
       gain.erase(best);
     }
   }
-  return groups;
+  return merge ? MergeSmallGroups(off, nb, w, per, groups, group) : groups;
 }
 
 // GroupClusters(L, per, 0, group, &node) chunk by chunk, when the clusters of a chunk are
@@ -465,7 +516,7 @@ int GroupClusters(const LodDag::Level& L, int per, size_t whole, std::vector<int
 // edge records of one chunk at a time instead of the whole level's (48 bytes a face). Chunks side
 // by side on `threads`. Returns -1 when the clusters are not in chunk order.
 int GroupClustersByChunk(const LodDag::Level& L, int per, const std::vector<uint32_t>& node, unsigned threads,
-                         std::vector<int>& group, double across = 1) {
+                         std::vector<int>& group, double across = 1, bool merge = false) {
   const size_t C = L.clusterCount();
   std::vector<uint32_t> first;  // first cluster of each run of one chunk, then C
   for (size_t c = 0; c < C; ++c) {
@@ -499,7 +550,7 @@ int GroupClustersByChunk(const LodDag::Level& L, int per, const std::vector<uint
     sub.clusterCreator.clear();
     if (L.clusterCreator.size() == C)
       sub.clusterCreator.assign(L.clusterCreator.begin() + first[r], L.clusterCreator.begin() + first[r + 1]);
-    count[r] = GroupClusters(sub, per, 0, local[r], nullptr, 0, 1, across);
+    count[r] = GroupClusters(sub, per, 0, local[r], nullptr, 0, 1, across, merge);
   });
   group.assign(C, -1);
   int groups = 0;
@@ -680,15 +731,29 @@ size_t ChunksInFlight(const LodBuildParams& params, uint64_t fixed, uint64_t per
   return budget > fixed ? size_t(std::max<uint64_t>(1, (budget - fixed) / 4 * 3 / perChunk)) : 1;
 }
 
-// The clusters gathered into one group on such a level (LodBuildParams): fineGroupClusters on the
-// fine levels, topGroupClusters on the top ones (under the faces of 4 groups of groupClusters
-// clusters, or under topFaceShare of the input's faces), else groupClusters.
-int GroupClustersOf(const LodBuildParams& params, uint64_t faces, uint64_t inputFaces) {
-  if (params.fineGroupClusters > 0 && !CoarseLevel(faces, inputFaces)) return params.fineGroupClusters;
+// Whether such a level is a top one, grouped by topGroupClusters (LodBuildParams): not a fine
+// level, and under the faces of 4 groups of groupClusters clusters or under topFaceShare of the
+// input's faces.
+bool UsesTopGroups(const LodBuildParams& params, uint64_t faces, uint64_t inputFaces) {
+  if (params.fineGroupClusters > 0 && !CoarseLevel(faces, inputFaces)) return false;
   const bool top = double(faces) < params.topFaceShare * double(inputFaces) ||
                    faces < 4 * uint64_t(params.groupClusters) * params.clusterFaces;
-  if (params.topGroupClusters > 0 && top) return params.topGroupClusters;
-  return params.groupClusters;
+  return params.topGroupClusters > 0 && top;
+}
+
+// The clusters gathered into one group on such a level (LodBuildParams): fineGroupClusters on the
+// fine levels, topGroupClusters on the top ones, else groupClusters.
+int GroupClustersOf(const LodBuildParams& params, uint64_t faces, uint64_t inputFaces) {
+  if (params.fineGroupClusters > 0 && !CoarseLevel(faces, inputFaces)) return params.fineGroupClusters;
+  return UsesTopGroups(params, faces, inputFaces) ? params.topGroupClusters : params.groupClusters;
+}
+
+// Whether such a level's small groups join their neighbours (MergeSmallGroups): on the levels of at
+// least 4 full groups, never on the top ones. Where a level holds only a few groups, larger ones
+// would free little border and take the cuts through it in coarser steps (LodBuildParams).
+bool MergesSmallGroups(const LodBuildParams& params, uint64_t faces, uint64_t inputFaces) {
+  return params.mergeSmallGroups && !UsesTopGroups(params, faces, inputFaces) &&
+         faces >= 4 * uint64_t(GroupClustersOf(params, faces, inputFaces)) * params.clusterFaces;
 }
 
 // A group's faces are in global ids; with places (texture coordinates) one position may carry
@@ -1122,6 +1187,7 @@ Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSp
     }
     std::vector<int> group;
     const int per = GroupClustersOf(params, L.faces.size(), inputFaces);
+    const bool merge = MergesSmallGroups(params, L.faces.size(), inputFaces);
     const double ratio = LevelRatioOf(params, L.faces.size(), inputFaces);
     LodDag::Level topology;  // with places: L's faces by place
     if (wedges) {
@@ -1132,10 +1198,10 @@ Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSp
     }
     const LodDag::Level& T = wedges ? topology : L;
     const double across = params.lockedBorderWeight;
-    int G = depth > 0 && !wholeParts ? GroupClustersByChunk(T, per, clusterNode, threads, group, across) : -1;
+    int G = depth > 0 && !wholeParts ? GroupClustersByChunk(T, per, clusterNode, threads, group, across, merge) : -1;
     if (G < 0)
       G = GroupClusters(T, per, wholeParts ? wholeUpTo : 0, group, depth > 0 ? &clusterNode : nullptr,
-                        dag.positions.size(), threads, across);
+                        dag.positions.size(), threads, across, merge);
     std::vector<Face>().swap(topology.faces);
     std::vector<uint32_t> groupNode;
     if (depth > 0) {
@@ -1393,6 +1459,7 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
     // Only (c) numbers anything across chunks, in chunk order: the file does not depend on the
     // wave's size. A chunk of the wave holds its own bitset of the DAG's vertices.
     const int per = GroupClustersOf(params, F, inputFaces);
+    const bool merge = MergesSmallGroups(params, F, inputFaces);
     const double ratio = LevelRatioOf(params, F, inputFaces);
     const double angle = ClusterAngle(params, k + 1);
     LodDag::Level& L = dag.levels[size_t(k)];
@@ -1499,7 +1566,7 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
           sub.clusterCreator.clear();
           if (L.clusterCreator.size() == C)
             sub.clusterCreator.assign(L.clusterCreator.begin() + c0, L.clusterCreator.begin() + c1);
-          w.G = GroupClusters(sub, per, 0, w.group, nullptr, V, inner, params.lockedBorderWeight);
+          w.G = GroupClusters(sub, per, 0, w.group, nullptr, V, inner, params.lockedBorderWeight, merge);
           w.localPos.resize(V);
           w.localShared.resize(V);
           for (size_t v = 0; v < V; ++v) {
@@ -1769,6 +1836,7 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
   std::vector<Face> out;
   std::vector<uint32_t> outCluster;
   const int per = GroupClustersOf(params, inputFaces, inputFaces);  // level 0
+  const bool merge = MergesSmallGroups(params, inputFaces, inputFaces);
   const double ratio = LevelRatioOf(params, inputFaces, inputFaces);
   const double angle0 = ClusterAngle(params, 0), angle1 = ClusterAngle(params, 1);
   // Chunks are made a wave at a time, the wave's chunks side by side (issue 27): (a) each chunk's
@@ -1828,7 +1896,7 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
         }
     const uint32_t C = GrowClusters(sub.faces, dag.positions, params.clusterFaces, angle0, sub.faceCluster);
     sub.clusterGroup.assign(C, -1);
-    w.groups = GroupClusters(sub, per, 0, w.group);
+    w.groups = GroupClusters(sub, per, 0, w.group, nullptr, 0, 1, 1, merge);
     w.groupFaces.resize(size_t(w.groups));
     for (uint32_t f = 0; f < F; ++f) w.groupFaces[size_t(w.group[sub.faceCluster[f]])].push_back(f);
     for (uint32_t f = 0; f < F; ++f) {

@@ -1598,6 +1598,63 @@ TEST(Lod, FineGroupClustersGatherLargerGroupsOnTheFineLevels) {
   }
 }
 
+// Below the top levels, a group that the greedy pass leaves under half the clusters asked joins a
+// neighbouring group (LodBuildParams::mergeSmallGroups): fewer groups and fewer small ones on
+// those levels, none over 3/2 of the clusters asked; the top levels keep groups of at most 6;
+// without it no group is over the clusters asked.
+TEST(Lod, SmallGroupsJoinANeighbourBelowTheTop) {
+  const IndexedMesh sphere = test::Sphere(7);  // 131,072 faces
+  struct Sizes {
+    size_t groups = 0, small = 0;
+    int most = 0;
+  };
+  // Per level: its faces, and its groups' count, the groups under half the clusters asked, the
+  // most clusters of one group.
+  auto levels = [&](const LodBuildParams& p) {
+    LodDag dag;
+    EXPECT_TRUE(BuildLodDag(sphere, p, dag).ok());
+    std::vector<std::pair<size_t, Sizes>> out;
+    for (const LodDag::Level& L : dag.levels) {
+      if (L.clusterGroup.empty() || L.clusterGroup[0] < 0) continue;
+      const int per = 8 * L.faces.size() > 3 * sphere.faces.size() ? p.fineGroupClusters
+                      : L.faces.size() < 6144                      ? p.topGroupClusters
+                                                                   : p.groupClusters;
+      std::map<int, int> size;
+      for (int g : L.clusterGroup) ++size[g];
+      Sizes z;
+      z.groups = size.size();
+      for (const auto& kv : size) {
+        z.small += 2 * kv.second < per;
+        z.most = std::max(z.most, kv.second);
+      }
+      out.push_back({L.faces.size(), z});
+    }
+    return out;
+  };
+  LodBuildParams merged, greedy;
+  ASSERT_TRUE(merged.mergeSmallGroups);
+  greedy.mergeSmallGroups = false;
+  const auto m = levels(merged), g = levels(greedy);
+  ASSERT_GE(m.size(), 4u);
+  // Level 0 is the same clusters either way.
+  ASSERT_EQ(m[0].first, g[0].first);
+  EXPECT_LT(m[0].second.groups, g[0].second.groups);
+  EXPECT_LT(2 * m[0].second.small, g[0].second.small)
+      << m[0].second.small << " small groups merged, " << g[0].second.small << " greedy";
+  for (const auto& l : m) {
+    const bool top = l.first<6144, fine = 8 * l.first> 3 * sphere.faces.size();
+    const int per = fine ? merged.fineGroupClusters : top ? merged.topGroupClusters : merged.groupClusters;
+    EXPECT_LE(l.second.most, top ? per : per + per / 2) << l.first << " faces";
+  }
+  for (const auto& l : g) {
+    const bool top = l.first<6144, fine = 8 * l.first> 3 * sphere.faces.size();
+    EXPECT_LE(l.second.most, fine  ? greedy.fineGroupClusters
+                             : top ? greedy.topGroupClusters
+                                   : greedy.groupClusters)
+        << l.first << " faces";
+  }
+}
+
 // The top levels (groups of topGroupClusters = 6) are those under the faces of 4 groups of 12
 // clusters (6,144), whatever the input's size: a sphere of 131,072 faces has groups of more than
 // 6 clusters on each coarse level above 6,144 faces (LodBuildParams::topFaceShare 0). With the top
