@@ -126,6 +126,8 @@ struct VertexInfo {
   uint8_t flags = kIsolated;
   uint8_t groups = 0;  // distinct groups around, saturated at 255
 };
+// One closed manifold fan, all in one group (no border, contour or non-manifold flag).
+inline bool IsInterior(const VertexInfo& vi) { return vi.flags == kClosed && vi.groups == 1; }
 
 // Heap entries are 16 bytes. The top bit of `tag` says what `priority` is:
 //   kLazy     a lower bound (quadric minimum, best quality): pushed without judging the collapse;
@@ -1531,6 +1533,9 @@ void GroupQemSimplifier::PushEdgesOf(uint32_t v) {
 
 void GroupQemSimplifier::collapse(const Candidate& c) {
   const uint32_t keep = c.keep, gone = c.remove;
+  // Both ends inside one group's closed manifold fan (the common case): the merged vertex is too
+  // (the collapse passed the link condition), so its analysis is known without reading its fan.
+  const bool interiorEnds = IsInterior(vs_[keep].info) && IsInterior(vs_[gone].info);
   if (attributes_) {
     if (attributes_->seam(keep) && attributes_->seam(gone) && !(c.anchor == anchor_[keep])) {  // a slide
       const Point3d d = anchor_[gone] - anchor_[keep];
@@ -1596,10 +1601,14 @@ void GroupQemSimplifier::collapse(const Candidate& c) {
   quadric_[keep] += quadric_[gone];
   ++epoch_;
   vs_[keep].lastSurvive = vs_[keep].touched = epoch_;
-  AnalyzeVertex(keep);
+  if (!interiorEnds) AnalyzeVertex(keep);
   // An opposite vertex lost a face: its groups may have changed, and with them what its edges may do.
+  // One inside one group's closed manifold fan that lost one face keeps its analysis: the two faces
+  // beside the lost one now share the edge to keep (no other face holds o and an end: each edge
+  // of its fan has two faces), its fan is one closed cycle of one face less, in one group.
   for (const uint32_t o : opposite_) {
     const VertexInfo before = vs_[o].info;
+    if (IsInterior(before) && std::count(opposite_.begin(), opposite_.end(), o) == 1) continue;
     AnalyzeVertex(o);
     if (vs_[o].info.flags != before.flags || vs_[o].info.groups != before.groups) vs_[o].dropped = 1;
   }
