@@ -385,6 +385,7 @@ class GroupQemSimplifier {
       __builtin_prefetch(&pos_[v]);
       __builtin_prefetch(&quadric_[v]);
       __builtin_prefetch(reinterpret_cast<const char*>(&quadric_[v]) + 64);
+      __builtin_prefetch(reinterpret_cast<const char*>(&quadric_[v]) + sizeof(Quadric) - 1);  // 88 bytes: up to 3 lines
     }
   }
   void PushEdgesOf(uint32_t v);  // lazy entries for every edge of v, heap order restored
@@ -1773,9 +1774,13 @@ bool GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t targe
     size_t collapses = 0;
     // The walk reads each edge's neighbourhood at random (in rank order): it is fetched ahead in
     // stages, so that the cache misses overlap instead of stalling one after the other: the edge's
-    // face kAhead[0] entries ahead, its vertices' records kAhead[1] ahead (the face has arrived by
-    // then), their face lists and faces kAhead[2] ahead. The dragon at 10 %: the walk ~10 % faster.
-    constexpr size_t kAhead[3] = {24, 16, 8};
+    // face kAhead[0] entries ahead, its vertices' states and list bounds kAhead[1] ahead (the face
+    // has arrived by then), their positions, quadrics and face lists kAhead[2] ahead and their
+    // faces kAhead[3] ahead. The last two only for an edge still live when they run: two thirds
+    // of the edges walked are passed over (an end survived a collapse; the dragon at 10 %: 464 k
+    // walked, 145 k judged in the first pass), and fetching their neighbourhoods too took the
+    // memory's bandwidth from the edges judged (the dragon at 10 %: the whole run ~9 % faster).
+    constexpr size_t kAhead[4] = {32, 24, 16, 8};
     const size_t walkEnd = ranked.size();
     for (size_t i = 0; i <= walkEnd; ++i) {
       if (liveFaces_ <= target) break;
@@ -1796,17 +1801,38 @@ bool GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t targe
       if (i + kAhead[1] < walkEnd) {
         const uint32_t side = ranked[i + kAhead[1]].side;
         const auto& ahead = faces_[side / 3];
-        PrefetchVertices(ahead[side % 3], ahead[(side % 3 + 1) % 3]);
+        for (uint32_t v : {ahead[side % 3], ahead[(side % 3 + 1) % 3]}) {
+          __builtin_prefetch(&vs_[v]);
+          __builtin_prefetch(&start_[v]);
+          __builtin_prefetch(&count_[v]);
+        }
       }
+      // An edge whose end already survived a collapse in this pass is passed over: nothing more.
+      const auto live = [&](uint32_t x, uint32_t y) {
+        return !vs_[x].dead && !vs_[y].dead && vs_[x].lastSurvive <= passStart && vs_[y].lastSurvive <= passStart;
+      };
       if (i + kAhead[2] < walkEnd) {
         const uint32_t side = ranked[i + kAhead[2]].side;
         const auto& ahead = faces_[side / 3];
-        for (uint32_t v : {ahead[side % 3], ahead[(side % 3 + 1) % 3]}) {
-          if (vs_[v].dead) continue;
-          const uint32_t* f = facesBegin(v);
-          __builtin_prefetch(f);
-          for (uint32_t j = 0; j < count_[v]; ++j) __builtin_prefetch(&faces_[f[j]]);
-        }
+        const uint32_t x = ahead[side % 3], y = ahead[(side % 3 + 1) % 3];
+        if (live(x, y))
+          for (uint32_t v : {x, y}) {
+            __builtin_prefetch(&pos_[v]);
+            __builtin_prefetch(&quadric_[v]);
+            __builtin_prefetch(reinterpret_cast<const char*>(&quadric_[v]) + 64);
+            __builtin_prefetch(reinterpret_cast<const char*>(&quadric_[v]) + sizeof(Quadric) - 1);
+            __builtin_prefetch(facesBegin(v));
+          }
+      }
+      if (i + kAhead[3] < walkEnd) {
+        const uint32_t side = ranked[i + kAhead[3]].side;
+        const auto& ahead = faces_[side / 3];
+        const uint32_t x = ahead[side % 3], y = ahead[(side % 3 + 1) % 3];
+        if (live(x, y))
+          for (uint32_t v : {x, y}) {
+            const uint32_t* f = facesBegin(v);
+            for (uint32_t j = 0; j < count_[v]; ++j) __builtin_prefetch(&faces_[f[j]]);
+          }
       }
       const auto& t = faces_[r.side / 3];
       const uint32_t x = t[r.side % 3], y = t[(r.side % 3 + 1) % 3], a = std::min(x, y), b = std::max(x, y);
