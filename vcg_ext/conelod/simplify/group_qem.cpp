@@ -321,7 +321,8 @@ class GroupQemSimplifier {
   const uint32_t* facesEnd(uint32_t v) const { return refs_.data() + start_[v] + count_[v]; }
   void BuildFaceLists();
   void AnalyzeVertex(uint32_t v);
-  // Per face, the sides that add an edge quadric in init() (bit e: corner e to e + 1).
+  // Per face, the sides that add an edge quadric in init() (bit e: corner e to e + 1); after
+  // every vertex's AnalyzeVertex.
   void SideMasks(BigVector<uint8_t>& mask);
   bool interior(uint32_t v) const { return (vs_[v].info.flags & kClosed) && vs_[v].info.groups == 1; }
   bool interiorIn(uint32_t v, const std::vector<int>& layer) const;
@@ -650,6 +651,9 @@ void GroupQemSimplifier::SideMasks(BigVector<uint8_t>& mask) {
   for (uint32_t u = 0; u < nv; ++u) {
     const uint32_t k = count_[u];
     if (k == 0) continue;
+    // One closed manifold fan (AnalyzeVertex, run before): two faces on every edge of u, so no
+    // border-like side, and without group constraints no contour side either.
+    if (!groupConstraints_ && (vs_[u].info.flags & kClosed)) continue;
     const uint32_t* fl = facesBegin(u);
     // The faces of u holding each neighbour x, in x's mark: base + count - 1, saturated at base + 2.
     const uint32_t base = stamp_ + 1;
@@ -725,30 +729,57 @@ void GroupQemSimplifier::SpatialOrder(const vcg::Box3<double>& box) {
   const double scale = extent > 0 ? double((1 << 21) - 1) / extent : 0;
   // (The temporaries here and in init() are mapped (BigVector): freed, they go back to the system
   // instead of leaving holes in the heap under the loop's arrays.)
-  BigVector<std::pair<uint64_t, uint32_t>> keys(nv);
+  // Vertices by (code, input index): a stable LSD radix sort of the codes, 11 bits at a time, from
+  // the input's order (the order a sort of the pairs gives); a digit that every code shares is
+  // skipped.
+  BigVector<uint64_t> code(nv), codeTmp(nv);
+  BigVector<uint32_t> order(nv), orderTmp(nv);
   for (uint32_t v = 0; v < nv; ++v) {
     const Point3d p = Point3d::Construct(mesh_.positions[v]);
-    uint64_t code = 0;
+    uint64_t c = 0;
     if (std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]) && box.IsIn(p))
-      for (int k = 0; k < 3; ++k) code |= SpreadBits(uint64_t((p[k] - box.min[k]) * scale)) << k;
-    keys[v] = {code, v};
+      for (int k = 0; k < 3; ++k) c |= SpreadBits(uint64_t((p[k] - box.min[k]) * scale)) << k;
+    code[v] = c;
+    order[v] = v;
   }
-  std::sort(keys.begin(), keys.end());
-  vertexInput_.resize(nv);
-  BigVector<uint32_t> internal(nv);
-  for (uint32_t i = 0; i < nv; ++i) {
-    vertexInput_[i] = keys[i].second;
-    internal[keys[i].second] = i;
+  std::vector<uint32_t> histogram(2048);
+  for (int shift = 0; shift < 64; shift += 11) {
+    std::fill(histogram.begin(), histogram.end(), 0u);
+    for (uint64_t c : code) ++histogram[(c >> shift) & 2047];
+    if (nv == 0 || histogram[(code[0] >> shift) & 2047] == nv) continue;  // one digit for all
+    uint32_t sum = 0;
+    for (uint32_t& h : histogram) {
+      const uint32_t n = h;
+      h = sum;
+      sum += n;
+    }
+    for (uint32_t i = 0; i < nv; ++i) {
+      const uint32_t to = histogram[(code[i] >> shift) & 2047]++;
+      codeTmp[to] = code[i];
+      orderTmp[to] = order[i];
+    }
+    code.swap(codeTmp);
+    order.swap(orderTmp);
   }
-  BigVector<std::pair<uint64_t, uint32_t>>().swap(keys);
-  BigVector<uint64_t> faceKeys(nf);
+  BigVector<uint64_t>().swap(code);
+  BigVector<uint64_t>().swap(codeTmp);
+  vertexInput_.assign(order.begin(), order.end());
+  BigVector<uint32_t>().swap(order);
+  BigVector<uint32_t>& internal = orderTmp;
+  for (uint32_t i = 0; i < nv; ++i) internal[vertexInput_[i]] = i;
+  // Faces by (first vertex in that order, input index): a counting sort on the first vertex,
+  // filled in the input's order.
+  BigVector<uint32_t> first(nv + 1, 0);
   for (uint32_t f = 0; f < nf; ++f) {
     const auto& t = mesh_.faces[f];
-    faceKeys[f] = uint64_t(std::min({internal[t[0]], internal[t[1]], internal[t[2]]})) << 32 | f;
+    ++first[std::min({internal[t[0]], internal[t[1]], internal[t[2]]}) + 1];
   }
-  std::sort(faceKeys.begin(), faceKeys.end());
+  for (size_t i = 1; i <= nv; ++i) first[i] += first[i - 1];
   faceInput_.resize(nf);
-  for (size_t f = 0; f < nf; ++f) faceInput_[f] = uint32_t(faceKeys[f]);
+  for (uint32_t f = 0; f < nf; ++f) {
+    const auto& t = mesh_.faces[f];
+    faceInput_[first[std::min({internal[t[0]], internal[t[1]], internal[t[2]]})]++] = f;
+  }
 }
 
 void GroupQemSimplifier::init(IndexedMesh* owned) {
@@ -997,7 +1028,7 @@ Candidate GroupQemSimplifier::judge(uint32_t a, uint32_t b) {
   }
   c.verdict = CollapseVerdict::Topology;
   const VertexInfo ia = vs_[a].info, ib = vs_[b].info;
-  uint32_t n0a = kNone, n1a = kNone, n0b = kNone, n1b = kNone;
+  uint32_t n0a = kNone, n1a = kNone, n0b = kNone, n1b = kNone, opposite[2] = {kNone, kNone};
   // A non-manifold neighbourhood (an edge with 3+ faces, several fans, a border through an
   // edge's interior) takes the general path: one end goes into the other, which stays.
   const bool nonManifold = ne > 2 || ((ia.flags | ib.flags) & kNonManifold);
@@ -1008,6 +1039,15 @@ Candidate GroupQemSimplifier::judge(uint32_t a, uint32_t b) {
     if (ne == 2 && (ia.flags & kOpen) && (ib.flags & kOpen)) return c;  // would pinch the surface
     const uint32_t opp0 = Third(faces_[e[0]], a, b), opp1 = ne == 2 ? Third(faces_[e[1]], a, b) : kNone;
     if (opp0 == opp1) return c;
+    // A collapse takes the faces on the edge out of the opposite vertices' lists: their bounds are
+    // asked for now, the lists once allowed (below).
+    opposite[0] = opp0;
+    opposite[1] = opp1;
+    for (uint32_t o : opposite)
+      if (o != kNone) {
+        __builtin_prefetch(&start_[o]);
+        __builtin_prefetch(&count_[o]);
+      }
     // Link condition: a and b have no common neighbour but the opposite vertices, and faces
     // (a, opp0, opp1) and (b, opp0, opp1) do not both exist (a tetrahedron: they would merge).
     // On the way, the faces across the edges (a, opp) and (b, opp), for condition 1.
@@ -1126,6 +1166,8 @@ Candidate GroupQemSimplifier::judge(uint32_t a, uint32_t b) {
     }
 
   c.verdict = CollapseVerdict::Allowed;
+  for (uint32_t o : opposite)
+    if (o != kNone) __builtin_prefetch(facesBegin(o));
   const double attributeCost = attributes_ ? attributes_->Cost(a, b, inputPosition(c.position)) + seamCost : 0;
   c.priority = priorityOf(c.error + attributeCost, std::sqrt(minQualitySq), a, b);
   return c;
