@@ -323,6 +323,16 @@ class GroupQemSimplifier {
   const uint32_t* facesBegin(uint32_t v) const { return refs_.data() + start_[v]; }
   const uint32_t* facesEnd(uint32_t v) const { return refs_.data() + start_[v] + count_[v]; }
   void BuildFaceLists();
+  // Whether n more entries fit in refs_ before the lists are rebuilt (refsBias_: see Compact()).
+  bool listRoom(size_t n) const { return refs_.size() + refsBias_ + n <= refs_.capacity(); }
+  // Renumbers the live vertices and faces densely, each in its order (a monotone renumbering:
+  // every comparison of two indices, the heap's tie order and the face lists' order stay as they
+  // were), in place; dead ones leave the arrays. The lists are packed at the start of refs_, and
+  // refsBias_ keeps the moment of their next rebuild (which orders them by face) where it was.
+  // Only where vertexInput_ and faceInput_ name the input (spatial order) and nothing else is
+  // indexed by vertex or face (no attributes, coarser groupings or frozen vertices).
+  bool compactable() const { return !vertexInput_.empty() && !attributes_ && coarser_.empty() && !frozen_; }
+  void Compact();
   void AnalyzeVertex(uint32_t v);
   // Per face, the sides that add an edge quadric in init() (bit e: corner e to e + 1); after
   // every vertex's AnalyzeVertex.
@@ -510,6 +520,8 @@ class GroupQemSimplifier {
   uint32_t faceStamp_ = 0;
   std::vector<char> faceDead_;
   std::vector<uint32_t> start_, count_, refs_;
+  size_t refsBias_ = 0;    // entries of refs_ before the last Compact() that it packed away
+  size_t verticesIn_ = 0;  // mesh_'s vertices
   // What the loop reads of a vertex, in one 16-byte record (one cache miss, not six).
   struct VertexState {
     uint32_t lastSurvive = 0;  // epoch at which the vertex last survived a collapse
@@ -545,6 +557,7 @@ void GroupQemSimplifier::BuildFaceLists() {
     if (t[2] != t[0] && t[2] != t[1]) ++count_[t[2]];
   }
   uint32_t total = 0;
+  refsBias_ = 0;
   for (size_t v = 0; v < nv; ++v) {
     start_[v] = total;
     total += count_[v];
@@ -813,6 +826,7 @@ void GroupQemSimplifier::SpatialOrder(const vcg::Box3<double>& box) {
 void GroupQemSimplifier::init(IndexedMesh* owned) {
   const size_t nv = mesh_.positions.size(), nf = mesh_.faces.size();
   facesIn_ = nf;
+  verticesIn_ = nv;
   // Work around the bounding-box centre: quadrics lose less precision near the origin.
   vcg::Box3<double> box;
   for (const auto& t : mesh_.faces)
@@ -1636,7 +1650,7 @@ void GroupQemSimplifier::collapse(const Candidate& c) {
       }
   }
   // The survivor's new list goes at the end of refs_ (rebuilt from scratch when full).
-  if (refs_.size() + count_[keep] + count_[gone] > refs_.capacity()) {
+  if (!listRoom(count_[keep] + count_[gone])) {
     for (const uint32_t* f = facesBegin(gone); f != facesEnd(gone); ++f)
       if (!faceDead_[*f])
         for (auto& v : faces_[*f])
@@ -1738,7 +1752,6 @@ bool GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t targe
     std::memcpy(&k, &r.priority, 4);
     return k;
   };
-  const uint32_t nv = uint32_t(pos_.size());
   const size_t toRemove = stats.facesIn > target ? stats.facesIn - target : 1;
   size_t nextReport = 0, checked = 0;
   const auto report = [&]() {
@@ -1754,6 +1767,9 @@ bool GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t targe
   };
   while (liveFaces_ > target) {
     if (liveFaces_ <= p_.queueFaces || (target > 0 && liveFaces_ - target <= liveFaces_ / 8)) return handOver(true);
+    // Half the arrays dead: the next passes work on the live part, packed.
+    if (compactable() && liveFaces_ <= faces_.size() / 2) Compact();
+    const uint32_t nv = uint32_t(pos_.size());
     // Rank every live edge once, from its lower endpoint.
     ranked.reserve(3 * liveFaces_);
     for (uint32_t v = 0; v < nv; ++v) {
@@ -1952,14 +1968,68 @@ bool GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t targe
   return handOver(false);
 }
 
+void GroupQemSimplifier::Compact() {
+  const uint32_t nv = uint32_t(pos_.size()), nf = uint32_t(faces_.size());
+  BigVector<uint32_t> vertexMap(nv), faceMap(nf);  // old index -> new, kNone: dead
+  uint32_t liveVertices = 0, live = 0;
+  for (uint32_t v = 0; v < nv; ++v) vertexMap[v] = vs_[v].dead ? kNone : liveVertices++;
+  for (uint32_t f = 0; f < nf; ++f) faceMap[f] = faceDead_[f] ? kNone : live++;
+  // The lists, packed in their order in refs_ (disjoint: each moves down or stays), faces renamed.
+  std::vector<std::pair<uint32_t, uint32_t>> lists;  // (start, vertex)
+  for (uint32_t v = 0; v < nv; ++v)
+    if (!vs_[v].dead && count_[v] > 0) lists.push_back({start_[v], v});
+  std::sort(lists.begin(), lists.end());
+  uint32_t at = 0;
+  for (const auto& l : lists) {
+    const uint32_t v = l.second, k = count_[v];
+    for (uint32_t i = 0; i < k; ++i) refs_[at + i] = faceMap[refs_[l.first + i]];
+    start_[v] = at;
+    at += k;
+  }
+  refsBias_ += refs_.size() - at;
+  refs_.resize(at);
+  for (uint32_t v = 0; v < nv; ++v) {
+    const uint32_t w = vertexMap[v];
+    if (w == kNone) continue;
+    pos_[w] = pos_[v];
+    quadric_[w] = quadric_[v];
+    vs_[w] = vs_[v];
+    start_[w] = count_[v] > 0 ? start_[v] : 0;
+    count_[w] = count_[v];
+    vertexInput_[w] = vertexInput_[v];
+  }
+  pos_.resize(liveVertices);
+  quadric_.resize(liveVertices);
+  vs_.resize(liveVertices);
+  start_.resize(liveVertices);
+  count_.resize(liveVertices);
+  vertexInput_.resize(liveVertices);
+  for (uint32_t f = 0; f < nf; ++f) {
+    const uint32_t w = faceMap[f];
+    if (w == kNone) continue;
+    FaceRec r = faces_[f];
+    for (uint32_t& v : r) v = vertexMap[v];
+    faces_[w] = r;
+    if (!faceMark_.empty()) faceMark_[w] = faceMark_[f];
+    faceInput_[w] = faceInput_[f];
+  }
+  faces_.resize(live);
+  if (!faceMark_.empty()) faceMark_.resize(live);
+  faceInput_.resize(live);
+  faceDead_.assign(live, 0);
+}
+
 Status GroupQemSimplifier::run(const Progress& progress, GroupQemStats& stats) {
   stats.facesIn = facesIn_;
   const size_t target = p_.targetFaces;
   const double maxErrorSq = p_.maxError > 0 ? (p_.maxError * diag_) * (p_.maxError * diag_) : -1;
   stats.stop = GroupQemStats::Stop::NoMoreCollapses;
   // (the queue alone runs even at the target, as it always did: its first progress report may cancel)
-  if (!passes_ || CollapseInPasses(progress, target, maxErrorSq, stats))
+  if (!passes_ || CollapseInPasses(progress, target, maxErrorSq, stats)) {
+    // The passes leave most of the arrays dead: the queue works on the live part, packed.
+    if (passes_ && compactable() && liveFaces_ < faces_.size()) Compact();
     CollapseInQueue(progress, target, maxErrorSq, stats);
+  }
   return finish(progress, target, maxErrorSq, stats);
 }
 
@@ -2216,7 +2286,7 @@ void GroupQemSimplifier::SetFace(uint32_t f, const std::array<uint32_t, 3>& t) {
     }
   for (uint32_t v : t)
     if (!Contains(old, v)) {
-      if (refs_.size() + count_[v] + 1 > refs_.capacity()) {
+      if (!listRoom(count_[v] + 1)) {
         BuildFaceLists();  // from faces_, which already hold t
         return;
       }
@@ -2419,17 +2489,18 @@ void GroupQemSimplifier::output(GroupQemResult& out) const {
   out.sourceVertex.clear();
   if (attributes_) attributes_->RestoreInputOrder();  // Evaluate reads the input's numbering
   // In the input's order: internal index of each input vertex and face.
-  const auto inverse = [](const std::vector<uint32_t>& input, size_t n) {
-    std::vector<uint32_t> of(n);
-    for (uint32_t i = 0; i < n; ++i) of[input.empty() ? i : input[i]] = i;
+  // (kNone: left the arrays in Compact())
+  const auto inverse = [](const std::vector<uint32_t>& input, size_t internalCount, size_t n) {
+    std::vector<uint32_t> of(n, kNone);
+    for (uint32_t i = 0; i < internalCount; ++i) of[input.empty() ? i : input[i]] = i;
     return of;
   };
   std::vector<uint32_t> remap(pos_.size(), kNone);
   {
-    const std::vector<uint32_t> internal = inverse(vertexInput_, pos_.size());
-    for (uint32_t v = 0; v < pos_.size(); ++v) {
+    const std::vector<uint32_t> internal = inverse(vertexInput_, pos_.size(), verticesIn_);
+    for (uint32_t v = 0; v < verticesIn_; ++v) {
       const uint32_t i = internal[v];
-      if (vs_[i].dead) continue;
+      if (i == kNone || vs_[i].dead) continue;
       remap[i] = uint32_t(out.mesh.positions.size());
       const Point3d p = inputPosition(pos_[i]);
       out.mesh.positions.emplace_back(float(p[0]), float(p[1]), float(p[2]));
@@ -2438,10 +2509,10 @@ void GroupQemSimplifier::output(GroupQemResult& out) const {
   }
   out.mesh.faces.reserve(liveFaces_);
   out.sourceFace.reserve(liveFaces_);
-  const std::vector<uint32_t> internal = inverse(faceInput_, faces_.size());
-  for (uint32_t f = 0; f < faces_.size(); ++f) {
+  const std::vector<uint32_t> internal = inverse(faceInput_, faces_.size(), facesIn_);
+  for (uint32_t f = 0; f < facesIn_; ++f) {
     const uint32_t i = internal[f];
-    if (faceDead_[i]) continue;
+    if (i == kNone || faceDead_[i]) continue;
     const auto& t = faces_[i];
     out.mesh.faces.push_back({remap[t[0]], remap[t[1]], remap[t[2]]});
     out.sourceFace.push_back(f);
