@@ -1974,27 +1974,30 @@ void GroupQemSimplifier::Compact() {
   uint32_t liveVertices = 0, live = 0;
   for (uint32_t v = 0; v < nv; ++v) vertexMap[v] = vs_[v].dead ? kNone : liveVertices++;
   for (uint32_t f = 0; f < nf; ++f) faceMap[f] = faceDead_[f] ? kNone : live++;
-  // The lists, packed in their order in refs_ (disjoint: each moves down or stays), faces renamed.
-  std::vector<std::pair<uint32_t, uint32_t>> lists;  // (start, vertex)
-  for (uint32_t v = 0; v < nv; ++v)
-    if (!vs_[v].dead && count_[v] > 0) lists.push_back({start_[v], v});
-  std::sort(lists.begin(), lists.end());
+  // The lists, packed in vertex order (through a copy: they lie in refs_ in another order), faces
+  // renamed.
+  size_t total = 0;
+  for (uint32_t v = 0; v < nv; ++v) total += vs_[v].dead ? 0 : count_[v];
+  BigVector<uint32_t> packed(total);
   uint32_t at = 0;
-  for (const auto& l : lists) {
-    const uint32_t v = l.second, k = count_[v];
-    for (uint32_t i = 0; i < k; ++i) refs_[at + i] = faceMap[refs_[l.first + i]];
-    start_[v] = at;
+  for (uint32_t v = 0; v < nv; ++v) {
+    if (vs_[v].dead) continue;
+    const uint32_t k = count_[v], s = start_[v];
+    for (uint32_t i = 0; i < k; ++i) packed[at + i] = faceMap[refs_[s + i]];
+    start_[v] = k > 0 ? at : 0;
     at += k;
   }
   refsBias_ += refs_.size() - at;
   refs_.resize(at);
+  std::copy(packed.begin(), packed.end(), refs_.begin());
+  BigVector<uint32_t>().swap(packed);
   for (uint32_t v = 0; v < nv; ++v) {
     const uint32_t w = vertexMap[v];
     if (w == kNone) continue;
     pos_[w] = pos_[v];
     quadric_[w] = quadric_[v];
     vs_[w] = vs_[v];
-    start_[w] = count_[v] > 0 ? start_[v] : 0;
+    start_[w] = start_[v];
     count_[w] = count_[v];
     vertexInput_[w] = vertexInput_[v];
   }
