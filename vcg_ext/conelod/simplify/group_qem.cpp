@@ -1970,34 +1970,60 @@ bool GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t targe
 
 void GroupQemSimplifier::Compact() {
   const uint32_t nv = uint32_t(pos_.size()), nf = uint32_t(faces_.size());
-  BigVector<uint32_t> vertexMap(nv), faceMap(nf);  // old index -> new, kNone: dead
+  // Old index -> new, held meanwhile in the search marks (no array more at this point of the run:
+  // a mark only means something inside one search, against a stamp above every mark; they are
+  // left 0). Faces first renamed, then moved; vertices moved last.
+  BigVector<uint32_t> ownFaceMap;
+  if (faceMark_.empty()) ownFaceMap.resize(nf);
+  uint32_t* faceMap = faceMark_.empty() ? ownFaceMap.data() : faceMark_.data();
   uint32_t liveVertices = 0, live = 0;
-  for (uint32_t v = 0; v < nv; ++v) vertexMap[v] = vs_[v].dead ? kNone : liveVertices++;
+  for (uint32_t v = 0; v < nv; ++v) vs_[v].mark = vs_[v].dead ? kNone : liveVertices++;
   for (uint32_t f = 0; f < nf; ++f) faceMap[f] = faceDead_[f] ? kNone : live++;
-  // The lists, packed in vertex order (through a copy: they lie in refs_ in another order), faces
-  // renamed.
-  size_t total = 0;
-  for (uint32_t v = 0; v < nv; ++v) total += vs_[v].dead ? 0 : count_[v];
-  BigVector<uint32_t> packed(total);
-  uint32_t at = 0;
+  // The lists, packed in place in their order in refs_ (disjoint: each moves down or stays), faces
+  // renamed. That order is found without a sort or a copy: a bit marks where each list starts,
+  // and its first entry holds its vertex meanwhile (the entry itself waits in start_).
+  std::vector<uint64_t> starts(refs_.size() / 64 + 1, 0);
   for (uint32_t v = 0; v < nv; ++v) {
-    if (vs_[v].dead) continue;
-    const uint32_t k = count_[v], s = start_[v];
-    for (uint32_t i = 0; i < k; ++i) packed[at + i] = faceMap[refs_[s + i]];
-    start_[v] = k > 0 ? at : 0;
-    at += k;
+    if (vs_[v].dead || count_[v] == 0) continue;
+    const uint32_t s = start_[v];
+    starts[s / 64] |= uint64_t(1) << (s % 64);
+    start_[v] = refs_[s];
+    refs_[s] = v;
   }
+  uint32_t at = 0;
+  for (size_t word = 0; word < starts.size(); ++word)
+    for (uint64_t bits = starts[word]; bits != 0; bits &= bits - 1) {
+      const uint32_t s = uint32_t(word * 64 + size_t(__builtin_ctzll(bits))), v = refs_[s], k = count_[v];
+      refs_[at] = faceMap[start_[v]];
+      for (uint32_t i = 1; i < k; ++i) refs_[at + i] = faceMap[refs_[s + i]];
+      start_[v] = at;
+      at += k;
+    }
+  std::vector<uint64_t>().swap(starts);
   refsBias_ += refs_.size() - at;
   refs_.resize(at);
-  std::copy(packed.begin(), packed.end(), refs_.begin());
-  BigVector<uint32_t>().swap(packed);
+  for (uint32_t f = 0; f < nf; ++f) {
+    if (faceDead_[f]) continue;
+    const uint32_t w = faceMap[f];  // <= f: read before any move writes it
+    FaceRec r = faces_[f];
+    for (uint32_t& v : r) v = vs_[v].mark;
+    faces_[w] = r;
+    faceMap[w] = 0;
+    faceInput_[w] = faceInput_[f];
+  }
+  faces_.resize(live);
+  if (!faceMark_.empty()) faceMark_.resize(live);
+  BigVector<uint32_t>().swap(ownFaceMap);
+  faceInput_.resize(live);
+  faceDead_.assign(live, 0);
   for (uint32_t v = 0; v < nv; ++v) {
-    const uint32_t w = vertexMap[v];
-    if (w == kNone) continue;
+    if (vs_[v].dead) continue;
+    const uint32_t w = vs_[v].mark;  // <= v
     pos_[w] = pos_[v];
     quadric_[w] = quadric_[v];
     vs_[w] = vs_[v];
-    start_[w] = start_[v];
+    vs_[w].mark = 0;
+    start_[w] = count_[v] > 0 ? start_[v] : 0;
     count_[w] = count_[v];
     vertexInput_[w] = vertexInput_[v];
   }
@@ -2007,19 +2033,6 @@ void GroupQemSimplifier::Compact() {
   start_.resize(liveVertices);
   count_.resize(liveVertices);
   vertexInput_.resize(liveVertices);
-  for (uint32_t f = 0; f < nf; ++f) {
-    const uint32_t w = faceMap[f];
-    if (w == kNone) continue;
-    FaceRec r = faces_[f];
-    for (uint32_t& v : r) v = vertexMap[v];
-    faces_[w] = r;
-    if (!faceMark_.empty()) faceMark_[w] = faceMark_[f];
-    faceInput_[w] = faceInput_[f];
-  }
-  faces_.resize(live);
-  if (!faceMark_.empty()) faceMark_.resize(live);
-  faceInput_.resize(live);
-  faceDead_.assign(live, 0);
 }
 
 Status GroupQemSimplifier::run(const Progress& progress, GroupQemStats& stats) {
