@@ -374,18 +374,15 @@ int MergeSmallGroups(const std::vector<uint32_t>& off, const std::vector<uint32_
   const size_t cap = size_t(per) + size_t(per) / 2;
   std::vector<std::vector<uint32_t>> members(static_cast<size_t>(groups));
   for (uint32_t c = 0; c < group.size(); ++c) members[size_t(group[c])].push_back(c);
-  std::vector<int> into(size_t(groups), -1);  // the group it joined
-  auto find = [&](int g) {
-    while (into[size_t(g)] >= 0) g = into[size_t(g)];
-    return g;
-  };
+  std::vector<uint32_t> into(static_cast<size_t>(groups));  // union-find: the group it joined
+  std::iota(into.begin(), into.end(), 0u);
   std::unordered_map<int, uint64_t> shared;
   for (int g = 0; g < groups; ++g) {
     if (2 * members[size_t(g)].size() >= size_t(per)) continue;
     shared.clear();
     for (uint32_t c : members[size_t(g)])
       for (uint32_t i = off[c]; i < off[c + 1]; ++i) {
-        const int h = find(group[nb[i]]);
+        const int h = int(FindRoot(into, uint32_t(group[nb[i]])));
         if (h != g) shared[h] += w[i];
       }
     int best = -1;
@@ -398,7 +395,7 @@ int MergeSmallGroups(const std::vector<uint32_t>& off, const std::vector<uint32_
       }
     }
     if (best < 0) continue;
-    into[size_t(g)] = best;
+    into[size_t(g)] = uint32_t(best);
     std::vector<uint32_t>& to = members[size_t(best)];
     to.insert(to.end(), members[size_t(g)].begin(), members[size_t(g)].end());
     std::vector<uint32_t>().swap(members[size_t(g)]);
@@ -406,8 +403,8 @@ int MergeSmallGroups(const std::vector<uint32_t>& off, const std::vector<uint32_
   std::vector<int> id(size_t(groups), -1);
   int count = 0;
   for (int g = 0; g < groups; ++g)
-    if (into[size_t(g)] < 0) id[size_t(g)] = count++;
-  for (int& g : group) g = id[size_t(find(g))];
+    if (into[size_t(g)] == uint32_t(g)) id[size_t(g)] = count++;
+  for (int& g : group) g = id[FindRoot(into, uint32_t(g))];
   return count;
 }
 
@@ -961,17 +958,11 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
   vcg::Box3d gb;
   for (uint32_t v = 0; v < W; ++v) gb.Add(vcg::Point3d::Construct(local.positions[v]));
   const vcg::Point3d gd = gb.Dim();
-  auto spread = [](uint32_t q) {  // the 10 bits of q to every third bit
-    q = (q | q << 16) & 0x030000FFu;
-    q = (q | q << 8) & 0x0300F00Fu;
-    q = (q | q << 4) & 0x030C30C3u;
-    return (q | q << 2) & 0x09249249u;
-  };
   auto morton = [&](const vcg::Point3d& p) {
     uint32_t code = 0;
     for (int i = 0; i < 3; ++i) {
       const double t = gd[i] > 0 ? (p[i] - gb.min[i]) / gd[i] : 0.0;
-      code |= spread(uint32_t(std::min(1023.0, std::max(0.0, t * 1023.0)))) << i;
+      code |= SpreadBits10(uint32_t(std::min(1023.0, std::max(0.0, t * 1023.0)))) << i;
     }
     return code;
   };

@@ -9,6 +9,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "conelod/common.h"
 #include "conelod/mesh/mesh_check.h"
 
 namespace conelod {
@@ -273,17 +274,10 @@ struct Moments {
 };
 
 // 30-bit Morton code of a point of the box (10 bits per axis).
-uint32_t SpreadBits(uint32_t x) {  // 10 bits -> every third bit
-  x = (x | (x << 16)) & 0x030000FFu;
-  x = (x | (x << 8)) & 0x0300F00Fu;
-  x = (x | (x << 4)) & 0x030C30C3u;
-  x = (x | (x << 2)) & 0x09249249u;
-  return x;
-}
 uint32_t Morton(const Vec3& p, const Vec3& lo, const Vec3& scale) {
   uint32_t q[3];
   for (int k = 0; k < 3; ++k) q[k] = uint32_t(std::min(1023.0, std::max(0.0, (p[k] - lo[k]) * scale[k])));
-  return (SpreadBits(q[0]) << 2) | (SpreadBits(q[1]) << 1) | SpreadBits(q[2]);
+  return (SpreadBits10(q[0]) << 2) | (SpreadBits10(q[1]) << 1) | SpreadBits10(q[2]);
 }
 
 class TreeBuilder {
