@@ -1608,6 +1608,13 @@ TEST(Lod, SmallGroupsJoinANeighbourBelowTheTop) {
     size_t groups = 0, small = 0;
     int most = 0;
   };
+  // The clusters asked of a group on a level of that many faces (fine, top, else coarse).
+  auto top = [](size_t faces) { return faces < 6144; };
+  auto asked = [&](const LodBuildParams& p, size_t faces) {
+    return 8 * faces > 3 * sphere.faces.size() ? p.fineGroupClusters
+           : top(faces)                        ? p.topGroupClusters
+                                               : p.groupClusters;
+  };
   // Per level: its faces, and its groups' count, the groups under half the clusters asked, the
   // most clusters of one group.
   auto levels = [&](const LodBuildParams& p) {
@@ -1616,9 +1623,7 @@ TEST(Lod, SmallGroupsJoinANeighbourBelowTheTop) {
     std::vector<std::pair<size_t, Sizes>> out;
     for (const LodDag::Level& L : dag.levels) {
       if (L.clusterGroup.empty() || L.clusterGroup[0] < 0) continue;
-      const int per = 8 * L.faces.size() > 3 * sphere.faces.size() ? p.fineGroupClusters
-                      : L.faces.size() < 6144                      ? p.topGroupClusters
-                                                                   : p.groupClusters;
+      const int per = asked(p, L.faces.size());
       std::map<int, int> size;
       for (int g : L.clusterGroup) ++size[g];
       Sizes z;
@@ -1642,17 +1647,10 @@ TEST(Lod, SmallGroupsJoinANeighbourBelowTheTop) {
   EXPECT_LT(2 * m[0].second.small, g[0].second.small)
       << m[0].second.small << " small groups merged, " << g[0].second.small << " greedy";
   for (const auto& l : m) {
-    const bool top = l.first<6144, fine = 8 * l.first> 3 * sphere.faces.size();
-    const int per = fine ? merged.fineGroupClusters : top ? merged.topGroupClusters : merged.groupClusters;
-    EXPECT_LE(l.second.most, top ? per : per + per / 2) << l.first << " faces";
+    const int per = asked(merged, l.first);
+    EXPECT_LE(l.second.most, top(l.first) ? per : per + per / 2) << l.first << " faces";
   }
-  for (const auto& l : g) {
-    const bool top = l.first<6144, fine = 8 * l.first> 3 * sphere.faces.size();
-    EXPECT_LE(l.second.most, fine  ? greedy.fineGroupClusters
-                             : top ? greedy.topGroupClusters
-                                   : greedy.groupClusters)
-        << l.first << " faces";
-  }
+  for (const auto& l : g) EXPECT_LE(l.second.most, asked(greedy, l.first)) << l.first << " faces";
 }
 
 // The top levels (groups of topGroupClusters = 6) are those under the faces of 4 groups of 12
