@@ -1345,13 +1345,17 @@ bool FeatureSimplifier::RunRound(size_t quota, const Progress* progress, size_t 
     queued_[v] = 0;
     (takeK ? popsK_ : popsM_) += 1;
     if ((++iter_ & 1023) == 0) {
+      // Cancelled (here or by the report of another lane on this thread): no further report.
+      if (cancelled) return false;
       if (progress && *progress) {
         const size_t done = facesIn - facesBefore + (removed_ - start) * lanes;
         const int pct = target > 0 ? int(100.0 * double(done) / double(facesIn - target))
                                    : int(100.0 * double(popsK_ + popsM_) / double(nK_ + nM_ + 1));
-        if (!(*progress)(std::min(99, std::max(0, pct)), "feature-preserving simplification")) cancelled = true;
+        if (!(*progress)(std::min(99, std::max(0, pct)), "feature-preserving simplification")) {
+          cancelled = true;
+          return false;
+        }
       }
-      if (cancelled) return false;
     }
     if (!Admitted(v)) continue;
     // The evaluation made ahead in the first pass, if nothing it read has changed since.
@@ -1483,6 +1487,7 @@ bool RunLanes(Work& w, const std::vector<FeatureSimplifier*>& lanes, FeatureSimp
         active.resize(kept);
       }
       auto run = [&](size_t i, bool reporting) {
+        if (cancelled) return;  // a lane not started after a cancel is not started
         FeatureSimplifier& l = *lanes[i];
         if (admit[i]) l.Admit();
         admit[i] = 0;
