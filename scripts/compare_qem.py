@@ -253,7 +253,7 @@ class Comparison:
                 row.update({tool + "_faces": p["faces"], tool + "_exact": p["faces"] == n, tool + "_s": p["s"]})
                 if p["faces"] != n:
                     notes.append("%s reached %d faces, not %d" % (TOOL_LABEL[tool], p["faces"], n))
-            # One measuring run for the results not measured yet (a peer's is shared between levels).
+            # The results not measured yet (a peer's is shared between levels), one run each.
             todo = [("ours", ours, None)] + [(tool, peers[(tool, n)]["path"], peers[(tool, n)])
                                              for tool in ("meshlab", "meshopt")
                                              if "error" not in peers[(tool, n)] and "rms" not in peers[(tool, n)]]
@@ -311,16 +311,20 @@ class Comparison:
         return {"faces": int(j["faces"]), "s": float(j["time_ms"]) / 1000.0, "path": path}
 
     def measure(self, mesh, work, tag, results):
-        """[(RMS, max)] per result: Hausdorff both ways against the input (layer 0), % of the diagonal."""
-        filters = []
-        for i in range(1, len(results) + 1):
-            filters += [hausdorff_filter(i, 0, self.a.samples, sample_edges=True),
-                        hausdorff_filter(0, i, self.a.samples, sample_edges=True)]
-        log, _ = self.meshlab.run([mesh] + results, filters, work, tag)
-        h = hausdorff_results(log)[-2 * len(results):]
-        if len(h) != 2 * len(results):
-            raise CaseError("no Hausdorff figures in %s.log" % tag)
-        return [(max(h[2 * i][2], h[2 * i + 1][2]), max(h[2 * i][0], h[2 * i + 1][0])) for i in range(len(results))]
+        """[(RMS, max)] per result: Hausdorff both ways against the input (layer 0), % of the diagonal.
+        Each result in a meshlabserver run of its own: with the input and three results loaded,
+        MeshLab 2020.09's Hausdorff filter aborts on the dragon."""
+        errors = []
+        for i, result in enumerate(results):
+            filters = [hausdorff_filter(1, 0, self.a.samples, sample_edges=True),
+                       hausdorff_filter(0, 1, self.a.samples, sample_edges=True)]
+            run_tag = tag if len(results) == 1 else "%s_%d" % (tag, i)
+            log, _ = self.meshlab.run([mesh, result], filters, work, run_tag)
+            h = hausdorff_results(log)[-2:]
+            if len(h) != 2:
+                raise CaseError("no Hausdorff figures in %s.log" % run_tag)
+            errors.append((max(h[0][2], h[1][2]), max(h[0][0], h[1][0])))
+        return errors
 
 
 # -- outputs ---------------------------------------------------------------------------------------

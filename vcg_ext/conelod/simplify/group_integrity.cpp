@@ -24,6 +24,9 @@ Status CheckIds(const IndexedMesh& m, const std::vector<int>& ids, const char* w
   return Status::Ok();
 }
 
+// A point or a segment: no piece of surface (the collapse leaves such faces out: GroupQemResult::mesh).
+bool UsesAVertexTwice(const std::array<uint32_t, 3>& t) { return t[0] == t[1] || t[1] == t[2] || t[0] == t[2]; }
+
 }  // namespace
 
 int GroupPieces::piecesOf(int id) const {
@@ -45,13 +48,13 @@ GroupPieces CountGroupPieces(const IndexedMesh& mesh, const std::vector<int>& fa
   for (uint32_t f = 0; f < nf; ++f)
     for (uint32_t i = adj.offsets[f]; i < adj.offsets[f + 1]; ++i) {
       const uint32_t g = adj.neighbours[i];
-      if (faceGroup[g] != faceGroup[f]) continue;
+      if (faceGroup[g] != faceGroup[f] || UsesAVertexTwice(mesh.faces[f]) || UsesAVertexTwice(mesh.faces[g])) continue;
       const uint32_t a = FindRoot(parent, f), b = FindRoot(parent, g);
       if (a != b) parent[std::max(a, b)] = std::min(a, b);
     }
-  // One root per piece.
+  // One root per piece; a face that uses a vertex twice is none.
   for (uint32_t f = 0; f < nf; ++f)
-    if (FindRoot(parent, f) == f)
+    if (FindRoot(parent, f) == f && !UsesAVertexTwice(mesh.faces[f]))
       ++out.pieces[size_t(std::lower_bound(out.ids.begin(), out.ids.end(), faceGroup[f]) - out.ids.begin())];
   return out;
 }
@@ -77,6 +80,7 @@ Status MeasureGroupIntegrity(const GroupPieces& pb, const IndexedMesh& after, co
   out.groupsAfter = int(pa.ids.size());
   for (size_t i = 0; i < pb.ids.size(); ++i) {
     const int id = pb.ids[i], n = pb.pieces[i], m = pa.piecesOf(id);
+    if (n == 0) continue;  // no piece of surface to keep
     if (n > 1) ++out.groupsDisconnectedBefore;
     if (m == 0) {
       ++out.groupsVanished;

@@ -18,7 +18,8 @@ namespace conelod {
 // Number of edge-connected pieces of every group: one {id, pieces} per distinct id, by id.
 struct GroupPieces {
   std::vector<int> ids;        // distinct group ids, increasing
-  std::vector<int> pieces;     // pieces[i]: edge-connected pieces of group ids[i]
+  std::vector<int> pieces;     // pieces[i]: edge-connected pieces of group ids[i] (faces that use a
+                               // vertex twice, points or segments, are no piece: 0 if only those)
   int piecesOf(int id) const;  // 0 when the id has no face
 };
 GroupPieces CountGroupPieces(const IndexedMesh& mesh, const std::vector<int>& faceGroup);

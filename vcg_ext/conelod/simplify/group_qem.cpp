@@ -2530,6 +2530,9 @@ void GroupQemSimplifier::output(GroupQemResult& out) const {
     const uint32_t i = internal[f];
     if (i == kNone || faceDead_[i]) continue;
     const auto& t = faces_[i];
+    // A face that uses a vertex twice (an input face whose corners the weld by position joined) is
+    // a point or a segment: left out, as MeshLab's filters assume there is none.
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
     out.mesh.faces.push_back({remap[t[0]], remap[t[1]], remap[t[2]]});
     out.sourceFace.push_back(f);
   }
@@ -2661,7 +2664,10 @@ Status Simplify(const IndexedMesh& mesh, IndexedMesh* owned, const std::vector<i
   simplifier.init(owned);
   s = simplifier.run(progress, out.stats);
   simplifier.ReleaseLoop();
-  if (s.ok() || s.code == Status::Code::Cancelled) simplifier.output(out);
+  if (s.ok() || s.code == Status::Code::Cancelled) {
+    simplifier.output(out);
+    out.stats.facesOut = out.mesh.faces.size();  // without the faces that use a vertex twice
+  }
   if (s.ok() && progress) progress(100, "Group-preserving QEM: done");
   return s;
 }

@@ -183,7 +183,8 @@ struct GroupQemStats {
 std::string DescribeFloor(const GroupQemStats& s, const GroupQemParams& p);
 
 struct GroupQemResult {
-  IndexedMesh mesh;                    // the simplified mesh (vertices in input order, minus the removed)
+  IndexedMesh mesh;                    // the simplified mesh (vertices in input order, minus the removed;
+                                       // no face that uses a vertex twice, even if the input has some)
   std::vector<uint32_t> sourceFace;    // per output face: the input face it is (collapses only remove faces)
   std::vector<uint32_t> sourceVertex;  // per output vertex: the input vertex kept at it (moved, possibly)
   GroupQemStats stats;

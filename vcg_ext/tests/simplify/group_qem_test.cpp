@@ -19,6 +19,7 @@
 #include "conelod/simplify/group_integrity.h"
 #include "conelod/mesh/mesh_check.h"
 #include "conelod/mesh/sampled_distance.h"
+#include "conelod/mesh/weld.h"
 #include "conelod/vcg_bridge.h"
 #include "conelod/vcg_mesh.h"
 #include "test_util.h"
@@ -1118,6 +1119,40 @@ TEST(Simplify, BunnyAtTheAutomaticLevelReachesTheTargetAndKeepsCones) {
   }
   EXPECT_EQ(AutoGroupLevel(h, 1), h.levelCount()) << "no level fits: the top one";
   EXPECT_EQ(AutoGroupLevel(h, m.faces.size()), 1);
+}
+
+// An input face with two corners at one position (a scan's repeated vertices) uses one vertex twice
+// once welded by position, as the CLI and the filter weld: the result leaves such faces out (MeshLab's
+// Hausdorff filter aborts on them), and counts what it keeps.
+TEST(Simplify, FacesTheWeldJoinedAreLeftOut) {
+  IndexedMesh m = test::Grid(8);
+  const uint32_t a = 4 * 9 + 4, b = a + 1;  // an inner edge of the 8 x 8 grid
+  m.positions.push_back(m.positions[a]);    // a copy of a
+  m.faces.push_back({a, uint32_t(m.positions.size() - 1), b});
+  const IndexedMesh welded = WeldByPosition(m).mesh;
+  ASSERT_EQ(welded.faces.size(), m.faces.size());
+  ASSERT_EQ(welded.faces.back()[0], welded.faces.back()[1]) << "the weld joins the copy with a";
+  for (size_t target : {welded.faces.size() / 2, welded.faces.size() / 10}) {
+    GroupQemParams p;
+    p.targetFaces = target;
+    GroupQemResult r;
+    ASSERT_TRUE(SimplifyPreservingGroups(welded, std::vector<int>(welded.faces.size(), 0), p, r).ok());
+    ExpectValidOutput(welded, r);
+    EXPECT_LE(r.mesh.faces.size(), target);
+    EXPECT_GE(r.mesh.faces.size() + 2, target);
+  }
+  // That face alone in a group: no piece of surface, so no group vanishes when it goes.
+  std::vector<int> groups(welded.faces.size(), 0);
+  groups.back() = 1;
+  GroupQemParams p;
+  p.targetFaces = welded.faces.size() / 2;
+  GroupQemResult r;
+  ASSERT_TRUE(SimplifyPreservingGroups(welded, groups, p, r).ok());
+  EXPECT_EQ(CountGroupPieces(welded, groups).piecesOf(1), 0);
+  GroupIntegrity gi;
+  ASSERT_TRUE(MeasureGroupIntegrity(welded, groups, r.mesh, GroupsAfter(r, groups), gi).ok());
+  EXPECT_EQ(gi.groupsVanished, 0);
+  EXPECT_EQ(gi.groupsSplit, 0);
 }
 
 TEST(Simplify, AwkwardScansWork) {
