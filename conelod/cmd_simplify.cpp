@@ -17,6 +17,7 @@
 #include "conelod/mesh/mesh_check.h"
 #include "conelod/pca/pca_partition.h"
 #include "conelod/mesh/sampled_distance.h"
+#include "conelod/stage_log.h"
 
 namespace conelod {
 namespace cli {
@@ -188,10 +189,12 @@ int CmdSimplify(int argc, char** argv) {
   // Read straight into the indexed mesh (no vcglib mesh beside the collapse's data: `ply` keeps
   // only the face quality and the attributes the output needs; the output's vcglib mesh is made of
   // the simplified mesh alone, SimplifiedMeshFromPly).
+  StageLog::Laps stages;  // CONELOD_STAGES: one line per stage on stderr
   PlyMesh ply;
   int loadMask = 0;
   std::string err = LoadPlyData(input, ply, &loadMask);
   if (!err.empty()) return FailLoad(err);
+  stages.Mark("read");
   // Attributes: per face corner, so that texture, colour and normal seams keep their values
   // (attribute_quadric.h); with --hierarchy each level's from the level below's.
   const int attributeMask = AttributeMask(loadMask);
@@ -220,6 +223,7 @@ int CmdSimplify(int argc, char** argv) {
 #endif
   Status s = RequireValidForFaces(im);
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
+  stages.Mark("weld, check");
 
   // Group ids per face of `im`.
   std::vector<int> groups;
@@ -229,7 +233,11 @@ int CmdSimplify(int argc, char** argv) {
   else
     p.targetFaces = size_t(targetFaces);
   if (coneLevel != 0) {
-    s = BuildConeHierarchy(im, ConeGroupingParams(), h);
+    ConeGroupingParams gp;
+    gp.chunkFaces = kGroupingChunkFaces;                // the groups of `conelod group`
+    gp.threads = hp.threads;                            // the same for every thread count
+    if (autoLevel) gp.autoTargetFaces = p.targetFaces;  // no level above the one chosen
+    s = BuildConeHierarchy(im, gp, h);
     if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
     if (!hierarchy && coneLevel > h.levelCount())
       return Fail(kUsage, "--groups " + source + ": the normal-cone hierarchy of this mesh has " +
@@ -351,6 +359,7 @@ int CmdSimplify(int argc, char** argv) {
   malloc_trim(0);
 #endif
 
+  stages.Mark("groups");
   GroupQemResult r;
   Timer timer;
   AttributeQuadrics attributes;
@@ -377,6 +386,7 @@ int CmdSimplify(int argc, char** argv) {
   }
   const double seconds = timer.seconds();
   if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
+  stages.Mark("simplify");
 
   std::vector<int> groupsAfter(r.sourceFace.size());
   for (size_t f = 0; f < r.sourceFace.size(); ++f) groupsAfter[f] = groups[r.sourceFace[f]];
@@ -403,6 +413,7 @@ int CmdSimplify(int argc, char** argv) {
                                      : std::string("no coarser level has fewer groups per face: try a larger target"));
   }
 
+  stages.Mark("integrity, cones");
   if (a.has("-o")) {
     // Each corner's attributes at its vertex's new position.
     std::vector<float> corner(attributeMask ? 3 * r.mesh.faceCount() * size_t(layout.channels()) : 0);
@@ -420,6 +431,7 @@ int CmdSimplify(int argc, char** argv) {
     WriteGroupsToFaces(mesh, groupsAfter, coneLevel > 0 || pcaClusters > 0);  // quality source: faces keep theirs
     err = SavePly(mesh, a.str("-o"), attributeMask);
     if (!err.empty()) return Fail(kIoError, err);
+    stages.Mark("write");
   }
 
   if (json) {

@@ -73,7 +73,11 @@ int main(int argc, char** argv) {
   q.targetFaces = std::max<size_t>(1, size_t(ratio * double(m.faces.size())));
   q.removeComponents = true;  // as the CLI
   GroupHierarchy h;
-  if (!BuildConeHierarchy(m, ConeGroupingParams(), h).ok()) return 2;
+  ConeGroupingParams gp;  // as the CLI's cone:auto
+  gp.chunkFaces = kGroupingChunkFaces;
+  gp.threads = 0;
+  gp.autoTargetFaces = q.targetFaces;
+  if (!BuildConeHierarchy(m, gp, h).ok()) return 2;
   const int level = AutoGroupLevel(h, q.targetFaces);
   const std::vector<int> groups = h.level(level).faceGroup;
   h = GroupHierarchy();

@@ -392,6 +392,7 @@ class HierarchyBuilder {
   // False (nothing changed): a chunk's arena region has no room for the merged list.
   bool MergeUnits(int u, int p, MergeState& ms);
   bool RunLevel(double thresholdDeg, bool localMaximaFirst, long& mergesSoFar);
+  int MinTopGroups() const { return std::max(1, params_.minTopGroups); }
   bool MergeChunks(int round, int minGroups, long mergesSoFar, long& merges);
   void CompactChunk(MergeState& ms);
   void setThreshold(double thresholdDeg) {
@@ -1216,7 +1217,7 @@ bool HierarchyBuilder::RunLevel(double thresholdDeg, bool localMaximaFirst, long
     l.bestPartner = partner;
     tree_.setKey(int(u), best);
   }
-  const int minGroups = std::max(1, params_.minTopGroups);
+  const int minGroups = MinTopGroups();
   long merges = 0;
   if (localMaximaFirst) {
     // Sweeps in unit order merge every pair that is the best pair of both its units (a local
@@ -1659,8 +1660,11 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     }
     if (!merged && level > 1) break;  // nothing changed: the previous level is the top
     EmitLevel(std::min(threshold, 180.0), out, level == 1);
-    if (int(out.levels.back().groups.size()) <= std::max(1, params_.minTopGroups)) break;
+    if (int(out.levels.back().groups.size()) <= MinTopGroups()) break;
     if (level == params_.maxLevels) break;
+    if (params_.autoTargetFaces > 0 &&
+        out.levels.back().groups.size() * size_t(kAutoFacesPerGroup) <= params_.autoTargetFaces)
+      break;  // AutoGroupLevel's level: the ones above are not needed
     threshold *= params_.thresholdGrowth;
   }
 

@@ -64,14 +64,18 @@ struct ConeGroupingParams {
   // chunk on its own (on the threads), pairs whose units have no neighbour in another chunk; then
   // the sweeps and the best-first order go on over the whole level. The chunk count is the face
   // count over this, so the groups do not depend on the thread count. 0, or fewer faces than two
-  // chunks: no chunks (every merge in the order above). The grouping command and filter use
-  // kGroupingChunkFaces; the collapse's own grouping (`--groups cone:auto`, which runs on one
-  // thread) keeps 0, so that its groups and figures are those of the one-order merge.
+  // chunks: no chunks (every merge in the order above). The grouping command and filter, and the
+  // collapse's own grouping (`--groups cone:L|cone:auto`), use kGroupingChunkFaces: the same groups.
   int chunkFaces = 0;
   // Threads for the parts of the build that run in parallel (the face adjacency, the level-1
   // units and their first scores, level 1's chunks, the exact cones and spheres of each level's
   // groups); 0: one per core. The output is the same, bit for bit, for every thread count.
   int threads = 1;
+  // For a simplification to this many faces (`--groups cone:auto`): the build stops at the level
+  // AutoGroupLevel would choose, the first whose groups x kAutoFacesPerGroup <= autoTargetFaces,
+  // and the levels above it are not built (each level built is that of the whole build, bit for
+  // bit). 0: every level.
+  size_t autoTargetFaces = 0;
 };
 
 // Checks the parameters; Ok or a message naming the bad one.

@@ -1078,7 +1078,8 @@ TEST(Simplify, BunnyWithNormalConeGroupsStaysIntactAt10And1Percent) {
 }
 
 // Integrity mode at the automatic level: every target reached, every group whole, and
-// (keepCones) no group's cone over its level's threshold where the plain run has some.
+// (keepCones) no group's cone over its level's threshold where the plain run has some. A build
+// for the target (autoTargetFaces) ends at that level, its levels those of the whole build.
 TEST(Simplify, BunnyAtTheAutomaticLevelReachesTheTargetAndKeepsCones) {
   const IndexedMesh m = LoadReal("stanford_bunny_bun_zipper.ply");
   GroupHierarchy h;
@@ -1092,6 +1093,18 @@ TEST(Simplify, BunnyAtTheAutomaticLevelReachesTheTargetAndKeepsCones) {
     EXPECT_LE(h.level(level).groups.size() * kAutoFacesPerGroup, p.targetFaces);
     if (level > 1) {
       EXPECT_GT(h.level(level - 1).groups.size() * kAutoFacesPerGroup, p.targetFaces);
+    }
+    // Built for the target (autoTargetFaces), on 2 threads: the same levels, up to this one.
+    ConeGroupingParams gp;
+    gp.autoTargetFaces = p.targetFaces;
+    gp.threads = 2;
+    GroupHierarchy stopped;
+    ASSERT_TRUE(BuildConeHierarchy(m, gp, stopped).ok());
+    ASSERT_EQ(stopped.levelCount(), level);
+    EXPECT_EQ(AutoGroupLevel(stopped, p.targetFaces), level);
+    for (int k = 1; k <= level; ++k) {
+      EXPECT_EQ(stopped.level(k).faceGroup, h.level(k).faceGroup) << "level " << k;
+      EXPECT_EQ(stopped.level(k).thresholdDeg, h.level(k).thresholdDeg);
     }
     const std::vector<int>& g = h.level(level).faceGroup;
     const double limitDeg = h.level(level).thresholdDeg;
