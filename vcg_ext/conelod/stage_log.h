@@ -1,6 +1,6 @@
 // ConeLOD — where a long build's wall time goes: with the environment variable CONELOD_STAGES set,
-// the LOD build prints one line per stage to stderr ("conelod-stage SECONDS_SINCE_START SECONDS
-// NAME"), so that a run on many cores shows which stages do not shrink with the threads
+// the LOD build, the grouping and `conelod simplify` print one line per stage to stderr ("conelod-stage
+// SECONDS_SINCE_START SECONDS NAME"), so that a run on many cores shows which stages do not shrink with the threads
 // (docs/scale.md, "Threading figures"). Without the variable nothing is printed and a mark costs
 // one clock read. Marks are made on the calling thread only.
 #pragma once

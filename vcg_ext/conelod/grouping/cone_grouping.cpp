@@ -46,6 +46,7 @@
 #include "conelod/mesh/face_adjacency.h"
 #include "conelod/mesh/mesh_check.h"
 #include "conelod/parallel.h"
+#include "conelod/stage_log.h"
 
 namespace conelod {
 
@@ -1236,11 +1237,13 @@ bool HierarchyBuilder::RunLevel(double thresholdDeg, bool localMaximaFirst, long
     const size_t padded = (n + 7) / 8 * 8;
     BigVector<uint8_t> dirty(padded, 0);
     dirty_ = dirty.data();
+    StageLog::Laps stages;
     if (chunkCount_ >= 2 && sparse_ &&
         !(MergeChunks(0, minGroups, mergesSoFar, merges) && MergeChunks(1, minGroups, mergesSoFar, merges))) {
       dirty_ = nullptr;
       return false;
     }
+    if (chunkCount_ >= 2 && sparse_) stages.Mark("grouping: level 1's chunks");
     // Merges u while its best pair is mutual; false: cancelled.
     auto visit = [&](int u) {
       dirty_[size_t(u)] = 0;
@@ -1283,6 +1286,7 @@ bool HierarchyBuilder::RunLevel(double thresholdDeg, bool localMaximaFirst, long
     dirty_ = nullptr;
     if (!ok) return false;
     tree_.setDeferred(false);
+    stages.Mark("grouping: sweeps");
   }
   // Best pair first over the whole level: all of it in strict mode, else what the sweeps leave
   // (pairs whose exact ties form cycles, so that none is mutual).
@@ -1564,6 +1568,7 @@ void HierarchyBuilder::nextLevelUnits() {
 }
 
 Status HierarchyBuilder::run(GroupHierarchy& out) {
+  StageLog::Laps stages;  // CONELOD_STAGES: one line per stage on stderr
   const int nf = faceCount_;
   chunkCount_ = params_.strictGreedy || params_.chunkFaces <= 0 ? 0 : size_t(nf) / size_t(params_.chunkFaces);
   if (chunkCount_ < 2) chunkCount_ = 0;
@@ -1602,6 +1607,7 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     chains_.resize(size_t(nf));
     l1Rounded_ = !params_.strictGreedy;
   }
+  stages.Mark("grouping: adjacency, lists");
 
   // Level-1 units: one per face. In the default mode each pair is scored once, from its lower
   // unit (RunLevel); here already, as soon as both units are made.
@@ -1641,6 +1647,7 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     });
   }
   if (progress_ && !progress_(0, "grouping faces by normal cones")) return Status::Cancelled();
+  stages.Mark("grouping: units, first scores");
 
   long merges = 0;
   double threshold = params_.coneThresholdDeg;
@@ -1651,6 +1658,7 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     // (docs/cone_grouping.md). Above it a refresh costs about one scan (support_).
     exactGrowth_ = params_.strictGreedy ? 2 : (level == 1 ? 8 : 4);
     const bool merged = RunLevel(std::min(threshold, 180.0), level == 1 && !params_.strictGreedy, merges);
+    stages.Mark("grouping: merges", level);
     prescored_ = false;
     l1Rounded_ = false;
     tree_.release();  // (the emission reads no score: its arrays go before the level's output grows)
@@ -1660,6 +1668,7 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     }
     if (!merged && level > 1) break;  // nothing changed: the previous level is the top
     EmitLevel(std::min(threshold, 180.0), out, level == 1);
+    stages.Mark("grouping: level out", level);
     if (int(out.levels.back().groups.size()) <= MinTopGroups()) break;
     if (level == params_.maxLevels) break;
     if (params_.autoTargetFaces > 0 &&
