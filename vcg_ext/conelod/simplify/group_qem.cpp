@@ -509,6 +509,10 @@ class GroupQemSimplifier {
   struct FaceRec : std::array<uint32_t, 3> {
     int group;
   };
+  // A face that uses a vertex twice (input corners the weld joined): a point or a segment, no
+  // surface. It stays so until it dies, is no live face of its group (groupFaces_) and is left
+  // out of the result.
+  static bool Flat(const FaceRec& t) { return t[0] == t[1] || t[1] == t[2] || t[0] == t[2]; }
   std::vector<FaceRec> faces_;                  // group: dense ids 0..n-1 (only equality and counts matter)
   std::vector<std::vector<int>> coarserDense_;  // integrity mode: the coarser groupings, dense ids
   std::vector<std::vector<int>> groupFaces_;    // integrity mode: live faces per group; [0] primary
@@ -536,8 +540,8 @@ class GroupQemSimplifier {
   uint32_t stamp_ = 0;
   uint32_t epoch_ = 1;
   EntryHeap heap_;
-  size_t liveFaces_ = 0;
-  GroupQemStats stats_;  // evaluations and refusals counted by evaluate()
+  size_t liveFaces_ = 0;  // live faces but the Flat ones: the result's face count
+  GroupQemStats stats_;   // evaluations and refusals counted by evaluate()
   // Scratch (no allocation in the loop).
   std::vector<uint32_t> fanOther_, ring_, fanScratch_, fanParent_, queue_, edgeFaces_, opposite_, nbScratch_,
       ringScratch_;
@@ -867,12 +871,12 @@ void GroupQemSimplifier::init(IndexedMesh* owned) {
   if (countGroups_) {
     groupFaces_.assign(1 + coarser_.size(), std::vector<int>());
     groupFaces_[0].assign(size_t(groups), 0);
-    for (size_t f = 0; f < nf; ++f) ++groupFaces_[0][size_t(dense[f])];
+    for (size_t f = 0; f < nf; ++f) groupFaces_[0][size_t(dense[f])] += !Flat(faces_[f]);
     coarserDense_.resize(coarser_.size());
     for (size_t l = 0; l < coarser_.size(); ++l) {
       const int n = DenseIds(*coarser_[l], coarserDense_[l]);
       groupFaces_[l + 1].assign(size_t(n), 0);
-      for (size_t f = 0; f < nf; ++f) ++groupFaces_[l + 1][size_t(coarserDense_[l][f])];
+      for (size_t f = 0; f < nf; ++f) groupFaces_[l + 1][size_t(coarserDense_[l][f])] += !Flat(faces_[f]);
     }
     faceMark_.assign(nf, 0);
   }
@@ -893,7 +897,8 @@ void GroupQemSimplifier::init(IndexedMesh* owned) {
   }
   faceDead_.assign(nf, 0);
   vs_.assign(nv, VertexState());
-  liveFaces_ = nf;
+  liveFaces_ = 0;  // what the result would have: faces that are not Flat
+  for (const FaceRec& t : faces_) liveFaces_ += !Flat(t);
   BuildFaceLists();
   for (uint32_t v = 0; v < nv; ++v) AnalyzeVertex(v);
   coarserNested_ = !coarser_.empty();
@@ -1431,8 +1436,8 @@ bool GroupQemSimplifier::keepsGroupsWholeAcross(uint32_t a, uint32_t b) {
       for (size_t j = 0; j < i; ++j) seen |= groupIn(layer, edgeFaces_[j]) == G;
       if (seen) continue;
       int removed = 0;
-      for (uint32_t f : edgeFaces_) removed += groupIn(layer, f) == G;
-      if (count[size_t(G)] <= removed) return false;  // its last faces
+      for (uint32_t f : edgeFaces_) removed += groupIn(layer, f) == G && !Flat(faces_[f]);
+      if (removed > 0 && count[size_t(G)] <= removed) return false;  // its last faces
       // G's faces next to its removed ones.
       ++faceStamp_;
       for (uint32_t f : edgeFaces_) faceMark_[f] = faceStamp_;
@@ -1510,7 +1515,8 @@ bool GroupQemSimplifier::keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint
   for (int pass = 0; pass < 2; ++pass) {
     const int G = pass == 0 ? g0 : g1;
     if (G < 0 || (pass == 1 && G == g0)) continue;
-    if (count[size_t(G)] <= (g0 == G) + (g1 == G)) return false;  // its last faces
+    const int removed = (g0 == G && !Flat(faces_[e0])) + (g1 == G && !Flat(faces_[e1]));
+    if (removed > 0 && count[size_t(G)] <= removed) return false;  // its last faces
     uint32_t nb[4];
     int nn = 0;
     const auto add = [&](uint32_t f) {
@@ -1637,9 +1643,10 @@ void GroupQemSimplifier::collapse(const Candidate& c) {
   for (const uint32_t* f = facesBegin(gone); f != facesEnd(gone); ++f) {
     if (!Contains(faces_[*f], keep)) continue;
     faceDead_[*f] = 1;
-    --liveFaces_;
+    liveFaces_ -= !Flat(faces_[*f]);
     if (countGroups_)
-      for (size_t l = 0; l < groupFaces_.size(); ++l) --groupFaces_[l][size_t(groupIn(int(l) - 1, *f))];
+      for (size_t l = 0; l < groupFaces_.size() && !Flat(faces_[*f]); ++l)
+        --groupFaces_[l][size_t(groupIn(int(l) - 1, *f))];
     const uint32_t o = Third(faces_[*f], keep, gone);
     opposite_.push_back(o);
     uint32_t* ob = refs_.data() + start_[o];
@@ -2273,9 +2280,10 @@ void GroupQemSimplifier::RemoveComponents(size_t target, GroupQemStats& stats) {
   for (uint32_t f = 0; f < nf; ++f) {
     if (faceDead_[f] || !removeComp[compOf[faces_[f][0]]]) continue;
     faceDead_[f] = 1;
-    --liveFaces_;
+    liveFaces_ -= !Flat(faces_[f]);
     ++stats.facesRemovedWithComponents;
-    for (size_t l = 0; l < groupFaces_.size(); ++l) --groupFaces_[l][size_t(groupIn(int(l) - 1, f))];
+    for (size_t l = 0; l < groupFaces_.size() && !Flat(faces_[f]); ++l)
+      --groupFaces_[l][size_t(groupIn(int(l) - 1, f))];
     if (!groupGone[size_t(faces_[f].group)]) {
       groupGone[size_t(faces_[f].group)] = 1;
       ++stats.groupsRemoved;
@@ -2530,9 +2538,7 @@ void GroupQemSimplifier::output(GroupQemResult& out) const {
     const uint32_t i = internal[f];
     if (i == kNone || faceDead_[i]) continue;
     const auto& t = faces_[i];
-    // A face that uses a vertex twice (an input face whose corners the weld by position joined) is
-    // a point or a segment: left out, as MeshLab's filters assume there is none.
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+    if (Flat(t)) continue;  // no surface; MeshLab's filters assume there is no such face
     out.mesh.faces.push_back({remap[t[0]], remap[t[1]], remap[t[2]]});
     out.sourceFace.push_back(f);
   }
@@ -2666,7 +2672,6 @@ Status Simplify(const IndexedMesh& mesh, IndexedMesh* owned, const std::vector<i
   simplifier.ReleaseLoop();
   if (s.ok() || s.code == Status::Code::Cancelled) {
     simplifier.output(out);
-    out.stats.facesOut = out.mesh.faces.size();  // without the faces that use a vertex twice
   }
   if (s.ok() && progress) progress(100, "Group-preserving QEM: done");
   return s;
