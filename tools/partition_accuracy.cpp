@@ -71,7 +71,9 @@ int main(int argc, char** argv) {
   cm.Clear();
   GroupQemParams q;
   q.targetFaces = std::max<size_t>(1, size_t(ratio * double(m.faces.size())));
-  q.removeComponents = true;  // as the CLI
+  q.removeComponents = true;  // as the CLI: components may go, ranked passes, flips to unblock
+  q.passes = true;
+  q.flipToUnblock = true;
   GroupHierarchy h;
   ConeGroupingParams gp;  // as the CLI's cone:auto
   gp.chunkFaces = kGroupingChunkFaces;

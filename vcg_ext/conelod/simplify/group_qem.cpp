@@ -305,7 +305,7 @@ class GroupQemSimplifier {
         // Attributes are kept per input vertex and corner: they are renumbered with the mesh
         // (AttributeQuadrics::Renumber) and given back in the input's numbering by output().
         spatialOrder_(spatialOrder && coarser.empty() && !frozen_),
-        passes_(p.passes && (!region || (region->frozenVertex.empty() && !(region->separation > 0)))),
+        passes_(p.passes && (!region || !(region->separation > 0))),
         attributes_(attributes && attributes->active() ? attributes : nullptr) {}
 
   // `owned` (optional): the input mesh itself, freed (left empty) as soon as init() has its copy.

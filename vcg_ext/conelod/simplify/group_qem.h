@@ -141,8 +141,9 @@ struct GroupQemParams {
   // next pass ranks the edges left again. When at most an eighth of the live faces is left to
   // remove, or a pass stalls (under a sixth of its goal), the queue goes on from the state reached,
   // so that the run ends, and stops at a floor, as the queue's. Every check (groups, topology,
-  // geometry) is the same; only the order, and so the output, differs. Ignored for a
-  // GroupQemRegion with frozen vertices or a separation (parts and the LOD build keep the queue).
+  // geometry) is the same; only the order, and so the output, differs. A frozen vertex's edges are
+  // never ranked (the parts of partitioned_simplify.h run in passes). Ignored for a GroupQemRegion
+  // with a separation (the LOD build keeps the queue).
   bool passes = false;
   // passes: from this many live faces on the queue does the rest (a mesh this small from the
   // start runs the queue alone, output for output); 0: passes until the target is near or a stall.

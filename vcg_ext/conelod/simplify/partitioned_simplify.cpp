@@ -93,6 +93,8 @@ void SimplifyOnePart(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
 
 void AddStats(GroupQemStats& to, const GroupQemStats& s) {
   to.collapses += s.collapses;
+  to.passes += s.passes;
+  to.collapsesInPasses += s.collapsesInPasses;
   to.evaluations += s.evaluations;
   to.refusedTopology += s.refusedTopology;
   to.refusedCondition1 += s.refusedCondition1;
