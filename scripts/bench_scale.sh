@@ -144,7 +144,7 @@ for k in $LEVELS; do
       simplify)
         # The peer: the one-piece collapse (--partition-above 0), then in parts on each --threads.
         row "$faces" "simplify --groups cone:auto 10 % one piece" 1 - \
-          "$CONELOD" simplify "$mesh" --groups cone:auto --target-ratio 0.1 --partition-above 0 -o "$OUT/simplified.ply"
+          "$CONELOD" simplify "$mesh" --groups cone:auto --target-ratio 0.1 --partition-above 0 --threads 1 -o "$OUT/simplified.ply"
         for t in $THREADS; do
           row "$faces" "simplify --groups cone:auto 10 %" "$t" - \
             "$CONELOD" simplify "$mesh" --groups cone:auto --target-ratio 0.1 --threads "$t" -o "$OUT/simplified.ply"
