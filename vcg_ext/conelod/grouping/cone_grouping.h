@@ -63,8 +63,9 @@ struct ConeGroupingParams {
   // Level 1 (default mode) first merges within chunks of about this many consecutive faces, each
   // chunk on its own (on the threads), pairs whose units have no neighbour in another chunk; then
   // the sweeps and the best-first order go on over the whole level. The chunk count is the face
-  // count over this, so the groups do not depend on the thread count. 0, or fewer faces than two
-  // chunks: no chunks (every merge in the order above). The grouping command and filter, and the
+  // count over this, at most 64 (above 64 x chunkFaces faces the chunks grow), so the groups do not
+  // depend on the thread count. 0, or fewer faces than two chunks: no chunks (every merge in the
+  // order above). The grouping command and filter, and the
   // collapse's own grouping (`--groups cone:L|cone:auto`), use kGroupingChunkFaces: the same groups.
   int chunkFaces = 0;
   // Threads for the parts of the build that run in parallel (the face adjacency, the level-1
