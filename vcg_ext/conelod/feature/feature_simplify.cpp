@@ -337,7 +337,7 @@ Status Work::Build(const IndexedMesh& in, const FeatureSimplifyParams& p) {
   for (size_t v = 0; v < nv; ++v) VF[v].reserve(valence[v] + 2);
   for (uint32_t f = 0; f < nf; ++f) {
     const auto& t = F[f];
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
+    if (UsesAVertexTwice(t)) {
       // A face with a repeated vertex has no proper fan: keep it as it is, lock its vertices.
       for (uint32_t v : t) locked[v] = 1;
     }

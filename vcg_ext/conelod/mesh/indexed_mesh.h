@@ -23,6 +23,10 @@ struct IndexedMesh {
   size_t faceCount() const { return faces.size(); }
 };
 
+// A face with a repeated vertex index: a point or a segment, no surface (after a weld by position,
+// an input face whose corners shared a position).
+inline bool UsesAVertexTwice(const std::array<uint32_t, 3>& t) { return t[0] == t[1] || t[1] == t[2] || t[0] == t[2]; }
+
 // The unit normal (zero vector for a zero-area or degenerate face) and the area of face f, in
 // double. Inline and bit-for-bit the same everywhere: the grouping recomputes normals on demand
 // instead of keeping an array of them, and must get exactly the values the array would hold.

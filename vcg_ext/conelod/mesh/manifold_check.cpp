@@ -22,7 +22,7 @@ ManifoldReport CheckManifold(const IndexedMesh& m) {
   halves.reserve(size_t(nf) * 3);
   for (uint32_t f = 0; f < nf; ++f) {
     const auto& t = m.faces[f];
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
+    if (UsesAVertexTwice(t)) {
       ++r.degenerateFaces;
       continue;
     }
@@ -39,7 +39,7 @@ ManifoldReport CheckManifold(const IndexedMesh& m) {
   // one set. Union-find over (vertex, face) corners.
   std::vector<uint32_t> cornerStart(m.positions.size() + 1, 0);
   for (const auto& t : m.faces)
-    if (!(t[0] == t[1] || t[1] == t[2] || t[0] == t[2]))
+    if (!UsesAVertexTwice(t))
       for (uint32_t v : t) ++cornerStart[v + 1];
   for (size_t v = 0; v < m.positions.size(); ++v) cornerStart[v + 1] += cornerStart[v];
   std::vector<uint32_t> cornerFace(cornerStart.back());
@@ -47,7 +47,7 @@ ManifoldReport CheckManifold(const IndexedMesh& m) {
     std::vector<uint32_t> fill(cornerStart.begin(), cornerStart.end() - 1);
     for (uint32_t f = 0; f < nf; ++f) {
       const auto& t = m.faces[f];
-      if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+      if (UsesAVertexTwice(t)) continue;
       for (uint32_t v : t) cornerFace[fill[v]++] = f;
     }
   }

@@ -24,9 +24,6 @@ Status CheckIds(const IndexedMesh& m, const std::vector<int>& ids, const char* w
   return Status::Ok();
 }
 
-// A point or a segment: no piece of surface (the collapse leaves such faces out: GroupQemResult::mesh).
-bool UsesAVertexTwice(const std::array<uint32_t, 3>& t) { return t[0] == t[1] || t[1] == t[2] || t[0] == t[2]; }
-
 }  // namespace
 
 int GroupPieces::piecesOf(int id) const {
@@ -52,7 +49,8 @@ GroupPieces CountGroupPieces(const IndexedMesh& mesh, const std::vector<int>& fa
       const uint32_t a = FindRoot(parent, f), b = FindRoot(parent, g);
       if (a != b) parent[std::max(a, b)] = std::min(a, b);
     }
-  // One root per piece; a face that uses a vertex twice is none.
+  // One root per piece; a face that uses a vertex twice is none (the collapse leaves such faces
+  // out: GroupQemResult::mesh).
   for (uint32_t f = 0; f < nf; ++f)
     if (FindRoot(parent, f) == f && !UsesAVertexTwice(mesh.faces[f]))
       ++out.pieces[size_t(std::lower_bound(out.ids.begin(), out.ids.end(), faceGroup[f]) - out.ids.begin())];

@@ -509,10 +509,8 @@ class GroupQemSimplifier {
   struct FaceRec : std::array<uint32_t, 3> {
     int group;
   };
-  // A face that uses a vertex twice (input corners the weld joined): a point or a segment, no
-  // surface. It stays so until it dies, is no live face of its group (groupFaces_) and is left
-  // out of the result.
-  static bool Flat(const FaceRec& t) { return t[0] == t[1] || t[1] == t[2] || t[0] == t[2]; }
+  // A face that UsesAVertexTwice (input corners the weld joined) stays so until it dies, is no
+  // live face (liveFaces_) nor a face of its group (groupFaces_), and is left out of the result.
   std::vector<FaceRec> faces_;                  // group: dense ids 0..n-1 (only equality and counts matter)
   std::vector<std::vector<int>> coarserDense_;  // integrity mode: the coarser groupings, dense ids
   std::vector<std::vector<int>> groupFaces_;    // integrity mode: live faces per group; [0] primary
@@ -602,7 +600,7 @@ void GroupQemSimplifier::AnalyzeVertex(uint32_t v) {
   bool nonManifold = false;
   for (uint32_t i = 0; i < k; ++i) {
     const auto& t = faces_[fl[i]];
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) nonManifold = true;
+    if (UsesAVertexTwice(t)) nonManifold = true;
     const int j = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
     fanOther_[2 * i] = t[size_t((j + 1) % 3)];
     fanOther_[2 * i + 1] = t[size_t((j + 2) % 3)];
@@ -871,12 +869,12 @@ void GroupQemSimplifier::init(IndexedMesh* owned) {
   if (countGroups_) {
     groupFaces_.assign(1 + coarser_.size(), std::vector<int>());
     groupFaces_[0].assign(size_t(groups), 0);
-    for (size_t f = 0; f < nf; ++f) groupFaces_[0][size_t(dense[f])] += !Flat(faces_[f]);
+    for (size_t f = 0; f < nf; ++f) groupFaces_[0][size_t(dense[f])] += !UsesAVertexTwice(faces_[f]);
     coarserDense_.resize(coarser_.size());
     for (size_t l = 0; l < coarser_.size(); ++l) {
       const int n = DenseIds(*coarser_[l], coarserDense_[l]);
       groupFaces_[l + 1].assign(size_t(n), 0);
-      for (size_t f = 0; f < nf; ++f) groupFaces_[l + 1][size_t(coarserDense_[l][f])] += !Flat(faces_[f]);
+      for (size_t f = 0; f < nf; ++f) groupFaces_[l + 1][size_t(coarserDense_[l][f])] += !UsesAVertexTwice(faces_[f]);
     }
     faceMark_.assign(nf, 0);
   }
@@ -898,7 +896,7 @@ void GroupQemSimplifier::init(IndexedMesh* owned) {
   faceDead_.assign(nf, 0);
   vs_.assign(nv, VertexState());
   liveFaces_ = 0;  // what the result would have: faces that are not Flat
-  for (const FaceRec& t : faces_) liveFaces_ += !Flat(t);
+  for (const FaceRec& t : faces_) liveFaces_ += !UsesAVertexTwice(t);
   BuildFaceLists();
   for (uint32_t v = 0; v < nv; ++v) AnalyzeVertex(v);
   coarserNested_ = !coarser_.empty();
@@ -1359,7 +1357,7 @@ bool GroupQemSimplifier::nonManifoldCollapse(uint32_t a, uint32_t b, uint32_t ne
   for (const uint32_t* f = facesBegin(a); f != facesEnd(a); ++f) {
     const auto& t = faces_[*f];
     if (!Contains(t, b)) continue;
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) return false;  // a degenerate face on the edge
+    if (UsesAVertexTwice(t)) return false;  // a degenerate face on the edge
     edgeFaces_.push_back(*f);
     const uint32_t o = Third(t, a, b);
     if (std::find(opposite_.begin(), opposite_.end(), o) == opposite_.end()) opposite_.push_back(o);
@@ -1436,7 +1434,7 @@ bool GroupQemSimplifier::keepsGroupsWholeAcross(uint32_t a, uint32_t b) {
       for (size_t j = 0; j < i; ++j) seen |= groupIn(layer, edgeFaces_[j]) == G;
       if (seen) continue;
       int removed = 0;
-      for (uint32_t f : edgeFaces_) removed += groupIn(layer, f) == G && !Flat(faces_[f]);
+      for (uint32_t f : edgeFaces_) removed += groupIn(layer, f) == G && !UsesAVertexTwice(faces_[f]);
       if (removed > 0 && count[size_t(G)] <= removed) return false;  // its last faces
       // G's faces next to its removed ones.
       ++faceStamp_;
@@ -1515,7 +1513,7 @@ bool GroupQemSimplifier::keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint
   for (int pass = 0; pass < 2; ++pass) {
     const int G = pass == 0 ? g0 : g1;
     if (G < 0 || (pass == 1 && G == g0)) continue;
-    const int removed = (g0 == G && !Flat(faces_[e0])) + (g1 == G && !Flat(faces_[e1]));
+    const int removed = (g0 == G && !UsesAVertexTwice(faces_[e0])) + (g1 == G && !UsesAVertexTwice(faces_[e1]));
     if (removed > 0 && count[size_t(G)] <= removed) return false;  // its last faces
     uint32_t nb[4];
     int nn = 0;
@@ -1643,10 +1641,10 @@ void GroupQemSimplifier::collapse(const Candidate& c) {
   for (const uint32_t* f = facesBegin(gone); f != facesEnd(gone); ++f) {
     if (!Contains(faces_[*f], keep)) continue;
     faceDead_[*f] = 1;
-    liveFaces_ -= !Flat(faces_[*f]);
-    if (countGroups_)
-      for (size_t l = 0; l < groupFaces_.size() && !Flat(faces_[*f]); ++l)
-        --groupFaces_[l][size_t(groupIn(int(l) - 1, *f))];
+    const bool flat = UsesAVertexTwice(faces_[*f]);
+    liveFaces_ -= !flat;
+    if (countGroups_ && !flat)
+      for (size_t l = 0; l < groupFaces_.size(); ++l) --groupFaces_[l][size_t(groupIn(int(l) - 1, *f))];
     const uint32_t o = Third(faces_[*f], keep, gone);
     opposite_.push_back(o);
     uint32_t* ob = refs_.data() + start_[o];
@@ -2280,10 +2278,10 @@ void GroupQemSimplifier::RemoveComponents(size_t target, GroupQemStats& stats) {
   for (uint32_t f = 0; f < nf; ++f) {
     if (faceDead_[f] || !removeComp[compOf[faces_[f][0]]]) continue;
     faceDead_[f] = 1;
-    liveFaces_ -= !Flat(faces_[f]);
+    const bool flat = UsesAVertexTwice(faces_[f]);
+    liveFaces_ -= !flat;
     ++stats.facesRemovedWithComponents;
-    for (size_t l = 0; l < groupFaces_.size() && !Flat(faces_[f]); ++l)
-      --groupFaces_[l][size_t(groupIn(int(l) - 1, f))];
+    for (size_t l = 0; l < groupFaces_.size() && !flat; ++l) --groupFaces_[l][size_t(groupIn(int(l) - 1, f))];
     if (!groupGone[size_t(faces_[f].group)]) {
       groupGone[size_t(faces_[f].group)] = 1;
       ++stats.groupsRemoved;
@@ -2538,7 +2536,7 @@ void GroupQemSimplifier::output(GroupQemResult& out) const {
     const uint32_t i = internal[f];
     if (i == kNone || faceDead_[i]) continue;
     const auto& t = faces_[i];
-    if (Flat(t)) continue;  // no surface; MeshLab's filters assume there is no such face
+    if (UsesAVertexTwice(t)) continue;  // no surface; MeshLab's filters assume there is no such face
     out.mesh.faces.push_back({remap[t[0]], remap[t[1]], remap[t[2]]});
     out.sourceFace.push_back(f);
   }
