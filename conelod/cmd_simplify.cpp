@@ -233,11 +233,7 @@ int CmdSimplify(int argc, char** argv) {
   else
     p.targetFaces = size_t(targetFaces);
   if (coneLevel != 0) {
-    ConeGroupingParams gp;
-    gp.chunkFaces = kGroupingChunkFaces;                // the groups of `conelod group`
-    gp.threads = hp.threads;                            // the same for every thread count
-    if (autoLevel) gp.autoTargetFaces = p.targetFaces;  // no level above the one chosen
-    s = BuildConeHierarchy(im, gp, h);
+    s = BuildConeHierarchy(im, CollapseGroupingParams(p.targetFaces, autoLevel, hp.threads), h);
     if (!s.ok()) return Fail(kBadInput, input + ": " + s.message);
     if (!hierarchy && coneLevel > h.levelCount())
       return Fail(kUsage, "--groups " + source + ": the normal-cone hierarchy of this mesh has " +

@@ -589,11 +589,9 @@ Status ApplyGroupQem(FilterCall& c) {
   conelod::GroupHierarchy h;
   const bool automatic = coneSource && level == 0;
   if (coneSource) {
-    conelod::ConeGroupingParams gp;
-    gp.chunkFaces = conelod::kGroupingChunkFaces;       // the groups of the grouping filter
-    gp.threads = 0;                                     // every core: the same for every thread count
-    if (automatic) gp.autoTargetFaces = p.targetFaces;  // no level above the one chosen
-    s = conelod::BuildConeHierarchy(im, gp, h, conelod::SubProgress(progress, 0, 30));
+    // Every core: the groups are the same for every thread count.
+    s = conelod::BuildConeHierarchy(im, conelod::CollapseGroupingParams(p.targetFaces, automatic, 0), h,
+                                    conelod::SubProgress(progress, 0, 30));
     if (!s.ok()) return s;
     if (automatic) {
       level = conelod::AutoGroupLevel(h, p.targetFaces);

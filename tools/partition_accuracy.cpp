@@ -75,11 +75,7 @@ int main(int argc, char** argv) {
   q.passes = true;
   q.flipToUnblock = true;
   GroupHierarchy h;
-  ConeGroupingParams gp;  // as the CLI's cone:auto
-  gp.chunkFaces = kGroupingChunkFaces;
-  gp.threads = 0;
-  gp.autoTargetFaces = q.targetFaces;
-  if (!BuildConeHierarchy(m, gp, h).ok()) return 2;
+  if (!BuildConeHierarchy(m, CollapseGroupingParams(q.targetFaces, true, 0), h).ok()) return 2;  // as cone:auto
   const int level = AutoGroupLevel(h, q.targetFaces);
   const std::vector<int> groups = h.level(level).faceGroup;
   h = GroupHierarchy();

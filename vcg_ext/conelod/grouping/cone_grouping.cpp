@@ -1574,8 +1574,9 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
   // one a thin strip, most of whose units touch another chunk and are left to the serial sweeps
   // (13.94 M faces in chunks of 50,000: 3.2 s of chunks, then 11.5 s of sweeps on one thread).
   constexpr size_t kMaxChunks = 64;  // enough for 16 threads
-  const size_t chunkFaces = std::max(size_t(std::max(params_.chunkFaces, 1)), size_t(nf) / kMaxChunks);
-  chunkCount_ = params_.strictGreedy || params_.chunkFaces <= 0 ? 0 : size_t(nf) / chunkFaces;
+  chunkCount_ = 0;
+  if (!params_.strictGreedy && params_.chunkFaces > 0)
+    chunkCount_ = size_t(nf) / std::max(size_t(params_.chunkFaces), size_t(nf) / kMaxChunks);
   if (chunkCount_ < 2) chunkCount_ = 0;
   // Adjacency first, while nothing else is allocated: it is the largest temporary. Its arrays,
   // freed once level 1's lists are made, become level 1's arena, face lists and chains instead of
@@ -1784,6 +1785,14 @@ int GroupLevel::uncullableGroups() const {
   int n = 0;
   for (const auto& g : groups) n += g.cone.cullable() ? 0 : 1;
   return n;
+}
+
+ConeGroupingParams CollapseGroupingParams(size_t targetFaces, bool automatic, int threads) {
+  ConeGroupingParams p;
+  p.chunkFaces = kGroupingChunkFaces;
+  p.threads = threads;
+  if (automatic) p.autoTargetFaces = targetFaces;
+  return p;
 }
 
 Status ValidateParams(const ConeGroupingParams& p) {

@@ -79,6 +79,11 @@ struct ConeGroupingParams {
   size_t autoTargetFaces = 0;
 };
 
+// The grouping of a collapse to `targetFaces` (`--groups cone:L|cone:auto`, the collapse filter):
+// `conelod group`'s (kGroupingChunkFaces, on `threads`; 0: one per core), built only up to
+// AutoGroupLevel's level when `automatic`.
+ConeGroupingParams CollapseGroupingParams(size_t targetFaces, bool automatic, int threads);
+
 // Checks the parameters; Ok or a message naming the bad one.
 Status ValidateParams(const ConeGroupingParams& p);
 
