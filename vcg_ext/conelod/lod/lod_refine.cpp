@@ -14,7 +14,8 @@
 // cut yet) has those expanded first (Impl::Demand), so that a still cut meets the pixel error
 // wherever it is drawn. The refinement stops at the first group whose expansion does not fit the
 // face budget; by the error in model units (ObjectError) that group is passed over instead, and
-// the smaller groups further down the queue that fit fill what is left of the budget. Culling only
+// the smaller groups further down the queue that fit fill what is left of the budget; once none
+// fits, an expansion is undone for a larger one that fits and gains more (Impl::Fill). Culling only
 // flags cut nodes as not drawn: it never changes the selection, so the drawn set is a subset of
 // a watertight cut whose other nodes face away.
 #include "conelod/lod/lod_read.h"
@@ -81,8 +82,16 @@ struct LodRefiner::Impl {
   std::priority_queue<QueueItem> queue;
   // ObjectError: per group (its first cluster's id), its error accumulated by the mean (MeanError).
   std::unordered_map<uint32_t, double> meanError;
+  // ObjectError: the groups expanded, by key, in order (Fill may undo one of them).
+  std::vector<uint32_t> expanded;
+  bool fillDone = false;  // Fill found no swap that brings the cut closer to its budget
   bool stopped = false;
   bool started = false;
+
+  // ObjectError keeps filling its budget once the queue is empty (Fill).
+  bool fillPending() const {
+    return view.priority == LodPriority::ObjectError && !fillDone && cut.faces < view.faceBudget;
+  }
 
   bool culledNode(const LodNode& n) const {
     if (!view.cullBackFacing) return false;
@@ -345,6 +354,111 @@ struct LodRefiner::Impl {
       if (!st.ok()) return st;
     }
     ++cut.refinements;
+    if (view.priority == LodPriority::ObjectError) expanded.push_back(key);
+    return Status::Ok();
+  }
+
+  // Faces an expansion of group `key` adds: its children's less its clusters'.
+  int64_t Added(uint32_t key) const {
+    const LodNode& n = reader.node(key);
+    int64_t added = 0;
+    for (uint32_t s : n.siblings) added -= int64_t(reader.node(s).faceCount);
+    for (uint32_t c : n.children) added += int64_t(reader.node(c).faceCount);
+    return added;
+  }
+
+  // Undoes the expansion of group `key`, whose children are all in the cut: its clusters again.
+  Status Collapse(uint32_t key) {
+    const std::vector<uint32_t> siblings = reader.node(key).siblings;  // copies: loading may rehash
+    const std::vector<uint32_t> children = reader.node(key).children;
+    for (uint32_t c : children) {
+      const LodNode& n = reader.node(c);
+      if (!n.children.empty()) {
+        const auto it = present.find(keyOf(n));
+        if (it != present.end() && --it->second == 0) present.erase(it);
+      }
+      RemoveFromCut(c);
+      state[c] = kBelow;
+    }
+    for (uint32_t s : siblings) {
+      Status st = AddToCut(s);
+      if (!st.ok()) return st;
+    }
+    --cut.refinements;
+    return Status::Ok();
+  }
+
+  // ObjectError, the queue empty below the budget: the cut changes by whole groups, and near the
+  // top a group adds hundreds of faces, so what is left may fit no expansion. One expansion whose
+  // children are all still in the cut is undone for a larger one that then fits and gains more in
+  // all (ObjectGain x the faces it adds): of those pairs, the one that brings the cut closest to
+  // its budget (ties: the smaller keys). The queue then goes on: the larger group's
+  // children may fit what is left. Each swap adds faces, so swaps end; the cut stays one of the
+  // DAG's cuts (watertight), and the choice depends on the file and the budget only.
+  Status Fill(bool& swapped) {
+    swapped = false;
+    const int64_t slack = int64_t(view.faceBudget) - int64_t(cut.faces);
+    if (slack <= 0) return Status::Ok();
+    std::vector<std::pair<int64_t, uint32_t>> open;  // (faces added, key) of the expandable groups
+    std::unordered_map<uint32_t, double> worth;      // key -> what its expansion gains in all
+    auto worthOf = [&](uint32_t key, double& w) {
+      const std::vector<uint32_t> siblings = reader.node(key).siblings;  // copied: loading may rehash
+      Status st = ObjectGain(siblings, w);
+      w *= double(std::max<int64_t>(1, Added(key)));
+      return st;
+    };
+    for (const auto& kv : present) {
+      const LodNode& n = reader.node(kv.first);
+      if (kv.second != n.siblings.size() || state[kv.first] != kInCut) continue;
+      Status st = reader.LoadChildren(kv.first);
+      if (!st.ok()) return st;
+      double w = 0;
+      st = worthOf(kv.first, w);
+      if (!st.ok()) return st;
+      worth[kv.first] = w;
+      open.push_back({Added(kv.first), kv.first});
+    }
+    if (open.empty()) return Status::Ok();
+    std::sort(open.begin(), open.end());
+    std::vector<uint32_t> undoable;
+    for (uint32_t key : expanded) {
+      if (state[key] != kRefined) continue;
+      bool leaf = true;
+      for (uint32_t c : reader.node(key).children) leaf = leaf && state[c] == kInCut;
+      if (leaf) undoable.push_back(key);
+    }
+    std::sort(undoable.begin(), undoable.end());
+    int64_t bestFaces = int64_t(cut.faces);
+    uint32_t bestUndo = 0, bestExpand = 0;
+    for (uint32_t u : undoable) {
+      const int64_t removed = Added(u);
+      double lost = 0;
+      Status st = worthOf(u, lost);
+      if (!st.ok()) return st;
+      const std::vector<uint32_t>& gone = reader.node(u).children;
+      // Groups adding more than `removed` and at most `removed + slack`, largest first.
+      auto hi = std::upper_bound(open.begin(), open.end(), std::make_pair(removed + slack, UINT32_MAX));
+      for (auto it = hi; it != open.begin();) {
+        --it;
+        if (it->first <= removed) break;
+        const int64_t faces = int64_t(cut.faces) - removed + it->first;
+        if (faces <= bestFaces) break;               // the rest add fewer
+        if (worth.at(it->second) <= lost) continue;  // it would gain less than what is undone
+        bool disjoint = true;                        // the group's clusters stay in the cut once u is undone
+        for (uint32_t s : reader.node(it->second).siblings)
+          disjoint = disjoint && std::find(gone.begin(), gone.end(), s) == gone.end();
+        if (!disjoint) continue;
+        bestFaces = faces;
+        bestUndo = u;
+        bestExpand = it->second;
+      }
+    }
+    if (bestFaces == int64_t(cut.faces)) return Status::Ok();
+    Status st = Collapse(bestUndo);
+    if (!st.ok()) return st;
+    st = expand(bestExpand);
+    if (!st.ok()) return st;
+    swapped = true;
     return Status::Ok();
   }
 
@@ -385,6 +499,8 @@ Status LodRefiner::Start(const LodView& view) {
   m.demand.clear();
   m.cut = LodCut();
   m.queue = std::priority_queue<QueueItem>();
+  m.expanded.clear();
+  m.fillDone = false;
   m.stopped = false;
   m.started = true;
   for (uint32_t r : m.reader.roots()) {
@@ -399,7 +515,18 @@ Status LodRefiner::Step(size_t maxRefinements) {
   if (!m.started) return Status::Invalid("LodRefiner::Step before Start");
   size_t done = 0;
   const bool pixelStop = m.pixelStop();
-  while (done < maxRefinements && !m.stopped && !m.queue.empty()) {
+  while (done < maxRefinements && !m.stopped && (!m.queue.empty() || m.fillPending())) {
+    if (m.queue.empty()) {
+      bool swapped = false;
+      Status s = m.Fill(swapped);
+      if (!s.ok()) {
+        m.stopped = true;
+        return s;
+      }
+      if (!swapped) m.fillDone = true;
+      ++done;
+      continue;
+    }
     const QueueItem top = m.queue.top();
     m.queue.pop();
     // With a pixel threshold, a group is expanded only when one of its visible clusters (or a
@@ -418,7 +545,9 @@ Status LodRefiner::Step(size_t maxRefinements) {
   return Status::Ok();
 }
 
-bool LodRefiner::Done() const { return !impl_->started || impl_->stopped || impl_->queue.empty(); }
+bool LodRefiner::Done() const {
+  return !impl_->started || impl_->stopped || (impl_->queue.empty() && !impl_->fillPending());
+}
 
 const LodCut& LodRefiner::cut() const {
   impl_->UpdateStats();
