@@ -287,7 +287,9 @@ Status RefineLod(LodReader& reader, const LodView& view, LodCut& cut);
 
 // The cut's geometry as one mesh, vertices welded by global id (so a cut of level-0 nodes gives
 // back the input mesh's faces and vertex positions, and nodes of different levels share their
-// border vertices). includeCulled = false drops culled nodes.
+// border vertices). includeCulled = false drops culled nodes. A face that uses one vertex twice
+// (an input face whose corners the build's weld joined: no surface) is left out, so the mesh may
+// have fewer faces than cut.faces.
 // faceLevel / faceNode (optional): per output face, its node level / node id. attributes
 // (optional): per output vertex, the streams the file has (empty ones for a geometry-only file).
 Status ExtractCutMesh(LodReader& reader, const LodCut& cut, bool includeCulled, IndexedMesh& out,

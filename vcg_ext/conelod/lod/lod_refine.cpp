@@ -619,7 +619,11 @@ Status ExtractCutMesh(LodReader& reader, const LodCut& cut, bool includeCulled, 
       local[v] = ins.first->second;
     }
     for (const auto& t : g.faces) {
-      out.faces.push_back({local[t[0]], local[t[1]], local[t[2]]});
+      const std::array<uint32_t, 3> face = {local[t[0]], local[t[1]], local[t[2]]};
+      // A face of the input whose corners the build's weld joined: a point or a segment, no
+      // surface. MeshLab's filters assume there is none (vcglib's UpdateTopology asserts).
+      if (UsesAVertexTwice(face)) continue;
+      out.faces.push_back(face);
       if (faceLevel) faceLevel->push_back(level);
       if (faceNode) faceNode->push_back(id);
     }
