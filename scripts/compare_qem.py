@@ -42,7 +42,8 @@ COLUMNS = ["mesh", "faces_in", "target_pct", "asked", "level", "group_level", "g
            "cones_over_threshold", "mode",
            "meshlab_faces", "meshlab_exact", "meshlab_s", "meshlab_rms", "meshlab_max",
            "meshopt_faces", "meshopt_exact", "meshopt_s", "meshopt_rms", "meshopt_max",
-           "rms_ratio_meshlab", "rms_ratio_meshopt", "error"]
+           "rms_ratio_meshlab", "rms_ratio_meshopt", "meshopt_floor_faces", "meshopt_floor_nonmanifold_edges",
+           "input_nonmanifold_edges", "error"]
 
 
 class CaseError(Exception):
@@ -130,6 +131,7 @@ class Comparison:
         self.meshlab = Meshlab(tools["server"])
         self.has_auto = None  # whether this CLI takes --groups cone:auto: asked on the first mesh
         self.rows = []
+        self.nm_cache = {}  # path -> its non-manifold edges
 
     def detect_auto(self, mesh):
         """Feature detection across versions: a CLI without `cone:auto` refuses it as a usage error
@@ -208,7 +210,7 @@ class Comparison:
             return "FAILED: " + r["error"]
         return "%s -> %s faces, RMS %s / %s / %s (ours / MeshLab / meshopt), intact %s%%%s" % (
             r["asked"], r["ours_faces"], fmt(r["ours_rms"]), fmt(r["meshlab_rms"]), fmt(r["meshopt_rms"]),
-            fmt(r["intact_pct"], 1), ("; " + r["error"]) if r["error"] else "")
+            fmt(r["intact_pct"], 1), ("; " + r["error"]) if r["error"] else "") + floor_text(r)
 
     # -- one case ---------------------------------------------------------------------------------
     def case(self, mesh, name, work, faces_in, t, asked, src, group_counts, peers):
@@ -269,6 +271,19 @@ class Comparison:
                     row[tool + "_rms"], row[tool + "_max"] = p["rms"], p["max"]
                     if p["rms"] > 0:
                         row["rms_ratio_" + tool] = row["ours_rms"] / p["rms"]
+            if not row["target_reached"]:
+                # Our floor against meshoptimizer's: where it stops when asked for the target
+                # itself, and whether its result keeps the input's manifold edges (ours never
+                # makes a non-manifold edge).
+                try:
+                    key = ("meshopt", asked)
+                    if key not in peers:
+                        peers[key] = self.peer_meshopt(mesh, work, asked)
+                    row["meshopt_floor_faces"] = peers[key]["faces"]
+                    row["meshopt_floor_nonmanifold_edges"] = self.nonmanifold_edges(peers[key]["path"])
+                    row["input_nonmanifold_edges"] = self.nonmanifold_edges(mesh)
+                except CaseError as e:
+                    notes.append("meshopt's floor: %s" % e)
             row["status"] = "ok" if not notes else "peer issue"
             row["error"] = "; ".join(notes)
         except CaseError as e:
@@ -298,6 +313,16 @@ class Comparison:
             if ask in tried:
                 break
         return best
+
+    def nonmanifold_edges(self, path):
+        """Edges used by 3+ faces (`conelod info`), once per file."""
+        if path not in self.nm_cache:
+            rc, out, err, _, _ = run([self.tools["conelod"], "info", path, "--json"])
+            try:
+                self.nm_cache[path] = int(json.loads(out)["non_manifold_edges"])
+            except (ValueError, KeyError):
+                raise CaseError("conelod info failed (%d): %s" % (rc, last_line(err or out)))
+        return self.nm_cache[path]
 
     def peer_meshopt(self, mesh, work, n):
         path = os.path.join(work, "meshopt_%d.ply" % n)
@@ -385,6 +410,14 @@ def mesh_table(name, rows):
     return "\n".join(md) + "\n"
 
 
+def floor_text(r):
+    """Where meshopt_simplify stops when asked for the target, and its non-manifold edges."""
+    if not num(r.get("meshopt_floor_faces")):
+        return ""
+    return "; meshopt_simplify asked for %s stops at %s faces, with %s non-manifold edges (the input: %s)" % (
+        r["asked"], r["meshopt_floor_faces"], r["meshopt_floor_nonmanifold_edges"], r["input_nonmanifold_edges"])
+
+
 def overall(rows, a, has_auto):
     ok = [r for r in rows if r["status"] != "failed"]
     lines = ["## Overall\n"]
@@ -404,7 +437,8 @@ def overall(rows, a, has_auto):
         missed = [r for r in auto if r["status"] == "failed" or not r["ours_faces"] <= 1.01 * r["asked"]]
         lines.append("- `cone:auto`: target reached within 1 %% in %d of %d cases%s" % (
             len(auto) - len(missed), len(auto), "".join(
-                "\n  - %s %g%%: %s faces for %s asked" % (r["mesh"], r["target_pct"], r["ours_faces"] or "no", r["asked"])
+                "\n  - %s %g%%: %s faces for %s asked%s" % (
+                    r["mesh"], r["target_pct"], r["ours_faces"] or "no", r["asked"], floor_text(r))
                 for r in missed)))
         intact = [r for r in auto if num(r["intact_pct"]) and r["intact_pct"] >= 100.0]
         lines.append("- `cone:auto`: groups 100 %% intact in %d of %d cases" % (len(intact), len(auto)))

@@ -2620,7 +2620,8 @@ COMPARE_COLUMNS = ["mesh", "faces_in", "target_pct", "asked", "level", "group_le
                    "ours_faces", "reached_pct", "target_reached", "ours_s", "ours_rms", "ours_max", "intact_pct",
                    "cones_over_threshold", "mode", "meshlab_faces", "meshlab_exact", "meshlab_s", "meshlab_rms",
                    "meshlab_max", "meshopt_faces", "meshopt_exact", "meshopt_s", "meshopt_rms", "meshopt_max",
-                   "rms_ratio_meshlab", "rms_ratio_meshopt", "error"]
+                   "rms_ratio_meshlab", "rms_ratio_meshopt", "meshopt_floor_faces", "meshopt_floor_nonmanifold_edges",
+                   "input_nonmanifold_edges", "error"]
 
 
 @case
@@ -2684,6 +2685,22 @@ def compare_qem_smoke(c):
     assert "### couplingdown (3714 faces)" in summary and "## Overall" in summary, summary
     assert "peers at exactly our face count: 1 of 1 cases" in summary, summary
     assert os.path.getsize(os.path.join(out, "couplingdown.png")) > 1000
+    assert r["meshopt_floor_faces"] == "", r  # the target was reached: no floor to compare
+    # Stopped above the target (couplingdown's 2 %: a floor of ours), meshopt_simplify is asked for
+    # the target itself, and its result's non-manifold edges are counted beside the input's.
+    p = subprocess.run(["bash", os.path.join(c.source, "scripts", "compare_qem.sh"), "--meshes", "couplingdown",
+                        "--targets", "0.02", "--levels", "auto", "--samples", "1000", "--out", c.out("cmp3")],
+                       stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env, timeout=300)
+    log = p.stdout.decode(errors="replace")
+    assert p.returncode == 0, log
+    lines = open(os.path.join(c.out("cmp3"), "results.tsv")).read().splitlines()
+    r = dict(zip(lines[0].split("\t"), lines[1].split("\t")))
+    if r["target_reached"] == "no":
+        assert 0 < int(r["meshopt_floor_faces"]) < int(r["ours_faces"]), r
+        assert int(r["meshopt_floor_nonmanifold_edges"]) >= 0 and r["input_nonmanifold_edges"] == "0", r
+        assert "meshopt_simplify asked for 74 stops at" in open(os.path.join(c.out("cmp3"), "summary.md")).read()
+    else:
+        assert r["meshopt_floor_faces"] == "", r
     # A mesh that cannot be read is a failed row, not an aborted run.
     bad = c.out("bad.ply")
     with open(bad, "w") as f:
