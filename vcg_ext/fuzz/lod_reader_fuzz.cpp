@@ -1,7 +1,7 @@
 // ConeLOD — libFuzzer target for the .clod reader (lod_read.h): any byte string must open cleanly or be
 // refused with a Status, never crash, read out of bounds or allocate more than the input justifies.
-// Opened inputs are refined at two budgets, for two eyes, extracted (with their attribute streams,
-// version 5: one value per vertex, or the fuzzer stops), their texture image read, and their
+// Opened inputs are refined at two budgets, for two eyes, and by the error in model units, extracted (with their
+// attribute streams, version 5: one value per vertex, or the fuzzer stops), their texture image read, and their
 // geometry evicted.
 // Built and run by scripts/fuzz.sh (clang++ -fsanitize=fuzzer,address,undefined), with a seed
 // corpus written by `conelod lod build` from small generated meshes.
@@ -21,11 +21,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const vcg::Point3f c = info.box.Center();
   const double d = 3.0 * (info.box.Diag() + 1e-3);
   const vcg::Point3d eyes[2] = {vcg::Point3d(c[0], c[1], c[2] + d), vcg::Point3d(c[0] - d, c[1], c[2])};
-  for (int i = 0; i < 2; ++i) {
+  for (int i = 0; i < 3; ++i) {
     LodView view;
-    view.eye = eyes[i];
-    view.faceBudget = i == 0 ? size_t(info.inputFaces / 4) : size_t(1) << 40;
+    view.eye = eyes[i % 2];
+    view.faceBudget = i == 0 ? size_t(info.inputFaces / 4) : i == 1 ? size_t(1) << 40 : size_t(info.inputFaces / 3);
     view.cullBackFacing = i == 0;
+    // The third: by the error in model units (its gain reads the records below each group, and
+    // its fill undoes expansions: lod_refine.cpp).
+    if (i == 2) view.priority = LodPriority::ObjectError;
     LodCut cut;
     if (!RefineLod(*reader, view, cut).ok()) return 0;
     IndexedMesh mesh;
