@@ -178,22 +178,26 @@ struct LodRefiner::Impl {
     return Status::Ok();
   }
 
-  // ObjectError's priority of the group whose clusters are `siblings` (all in the cut): what its
-  // expansion gains for the cut's squared distance, summed over its surface, per face it adds:
-  // MeanError^2 x the sum of its clusters' radius squared / (its children's faces - its clusters').
-  // (The file's error alone, the largest distance accumulated by the max, put the dragon's 2 %
-  // cut at 2.03x our static collapse at its count: docs/lod_viewer.md.)
-  Status ObjectGain(const std::vector<uint32_t>& siblings, double& gain) {
+  // What expanding the group whose clusters are `siblings` gains for the cut's squared distance,
+  // summed over its surface: MeanError^2 x the sum of its clusters' radius squared.
+  Status ObjectWorth(const std::vector<uint32_t>& siblings, double& worth) {
     double mean = 0;
     Status s = MeanError(siblings[0], mean);
     if (!s.ok()) return s;
-    double area = 0, faces = 0;
-    for (uint32_t id : siblings) {
-      area += double(reader.node(id).radius) * double(reader.node(id).radius);
-      faces -= reader.node(id).faceCount;
-    }
-    for (uint32_t c : reader.node(siblings[0]).children) faces += reader.node(c).faceCount;
-    gain = mean * mean * area / std::max(1.0, faces);
+    double area = 0;
+    for (uint32_t id : siblings) area += double(reader.node(id).radius) * double(reader.node(id).radius);
+    worth = mean * mean * area;
+    return Status::Ok();
+  }
+
+  // ObjectError's priority of the group whose clusters are `siblings` (all in the cut): its
+  // ObjectWorth per face its expansion adds (its children's faces - its clusters').
+  // (The file's error alone, the largest distance accumulated by the max, put the dragon's 2 %
+  // cut at 2.03x our static collapse at its count: docs/lod_viewer.md.)
+  Status ObjectGain(const std::vector<uint32_t>& siblings, double& gain) {
+    Status s = ObjectWorth(siblings, gain);
+    if (!s.ok()) return s;
+    gain /= std::max(1.0, double(Added(siblings[0])));
     return Status::Ok();
   }
 
@@ -391,7 +395,7 @@ struct LodRefiner::Impl {
   // ObjectError, the queue empty below the budget: the cut changes by whole groups, and near the
   // top a group adds hundreds of faces, so what is left may fit no expansion. One expansion whose
   // children are all still in the cut is undone for a larger one that then fits and gains more in
-  // all (ObjectGain x the faces it adds): of those pairs, the one that brings the cut closest to
+  // all (ObjectWorth): of those pairs, the one that brings the cut closest to
   // its budget (ties: the smaller keys). The queue then goes on: the larger group's
   // children may fit what is left. Each swap adds faces, so swaps end; the cut stays one of the
   // DAG's cuts (watertight), and the choice depends on the file and the budget only.
@@ -399,24 +403,23 @@ struct LodRefiner::Impl {
     swapped = false;
     const int64_t slack = int64_t(view.faceBudget) - int64_t(cut.faces);
     if (slack <= 0) return Status::Ok();
-    std::vector<std::pair<int64_t, uint32_t>> open;  // (faces added, key) of the expandable groups
-    std::unordered_map<uint32_t, double> worth;      // key -> what its expansion gains in all
-    auto worthOf = [&](uint32_t key, double& w) {
-      const std::vector<uint32_t> siblings = reader.node(key).siblings;  // copied: loading may rehash
-      Status st = ObjectGain(siblings, w);
-      w *= double(std::max<int64_t>(1, Added(key)));
-      return st;
+    struct Open {
+      int64_t added;  // faces its expansion adds
+      uint32_t key;
+      double worth;  // ObjectWorth
+      bool operator<(const Open& o) const { return added != o.added ? added < o.added : key < o.key; }
     };
+    std::vector<Open> open;  // the groups that can be expanded
     for (const auto& kv : present) {
-      const LodNode& n = reader.node(kv.first);
-      if (kv.second != n.siblings.size() || state[kv.first] != kInCut) continue;
-      Status st = reader.LoadChildren(kv.first);
+      const uint32_t key = kv.first;
+      if (kv.second != reader.node(key).siblings.size() || state[key] != kInCut) continue;
+      Status st = reader.LoadChildren(key);
       if (!st.ok()) return st;
-      double w = 0;
-      st = worthOf(kv.first, w);
+      const std::vector<uint32_t> siblings = reader.node(key).siblings;  // copied: loading may rehash
+      double worth = 0;
+      st = ObjectWorth(siblings, worth);
       if (!st.ok()) return st;
-      worth[kv.first] = w;
-      open.push_back({Added(kv.first), kv.first});
+      open.push_back({Added(key), key, worth});
     }
     if (open.empty()) return Status::Ok();
     std::sort(open.begin(), open.end());
@@ -433,24 +436,25 @@ struct LodRefiner::Impl {
     for (uint32_t u : undoable) {
       const int64_t removed = Added(u);
       double lost = 0;
-      Status st = worthOf(u, lost);
+      const std::vector<uint32_t> siblings = reader.node(u).siblings;  // copied: loading may rehash
+      Status st = ObjectWorth(siblings, lost);
       if (!st.ok()) return st;
       const std::vector<uint32_t>& gone = reader.node(u).children;
       // Groups adding more than `removed` and at most `removed + slack`, largest first.
-      auto hi = std::upper_bound(open.begin(), open.end(), std::make_pair(removed + slack, UINT32_MAX));
+      auto hi = std::upper_bound(open.begin(), open.end(), Open{removed + slack, UINT32_MAX, 0});
       for (auto it = hi; it != open.begin();) {
         --it;
-        if (it->first <= removed) break;
-        const int64_t faces = int64_t(cut.faces) - removed + it->first;
-        if (faces <= bestFaces) break;               // the rest add fewer
-        if (worth.at(it->second) <= lost) continue;  // it would gain less than what is undone
-        bool disjoint = true;                        // the group's clusters stay in the cut once u is undone
-        for (uint32_t s : reader.node(it->second).siblings)
+        if (it->added <= removed) break;
+        const int64_t faces = int64_t(cut.faces) - removed + it->added;
+        if (faces <= bestFaces) break;    // the rest add fewer
+        if (it->worth <= lost) continue;  // it would gain less than what is undone
+        bool disjoint = true;             // the group's clusters stay in the cut once u is undone
+        for (uint32_t s : reader.node(it->key).siblings)
           disjoint = disjoint && std::find(gone.begin(), gone.end(), s) == gone.end();
         if (!disjoint) continue;
         bestFaces = faces;
         bestUndo = u;
-        bestExpand = it->second;
+        bestExpand = it->key;
       }
     }
     if (bestFaces == int64_t(cut.faces)) return Status::Ok();

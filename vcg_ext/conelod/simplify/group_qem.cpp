@@ -538,7 +538,7 @@ class GroupQemSimplifier {
   uint32_t stamp_ = 0;
   uint32_t epoch_ = 1;
   EntryHeap heap_;
-  size_t liveFaces_ = 0;  // live faces but the Flat ones: the result's face count
+  size_t liveFaces_ = 0;  // live faces but those that use a vertex twice: the result's face count
   GroupQemStats stats_;   // evaluations and refusals counted by evaluate()
   // Scratch (no allocation in the loop).
   std::vector<uint32_t> fanOther_, ring_, fanScratch_, fanParent_, queue_, edgeFaces_, opposite_, nbScratch_,
@@ -895,7 +895,7 @@ void GroupQemSimplifier::init(IndexedMesh* owned) {
   }
   faceDead_.assign(nf, 0);
   vs_.assign(nv, VertexState());
-  liveFaces_ = 0;  // what the result would have: faces that are not Flat
+  liveFaces_ = 0;  // what the result would have: faces that do not use a vertex twice
   for (const FaceRec& t : faces_) liveFaces_ += !UsesAVertexTwice(t);
   BuildFaceLists();
   for (uint32_t v = 0; v < nv; ++v) AnalyzeVertex(v);
