@@ -5,7 +5,10 @@ For each mesh: `conelod lod build` with the defaults (its seconds and bytes), th
 extract --priority error --no-cull --budget N`), and at the cut's face count the same input simplified
 statically by `conelod simplify --groups cone:auto` and by MeshLab's Quadric Edge Collapse
 Decimation (asked again until it lands on the count, scripts/compare_qem.py), and Nexus's cut
-(`nxsedit FILE.nxs -t N -p cut.ply`) when NXSBUILD and NXSEDIT name its tools. Errors as
+(`nxsedit FILE.nxs -t T -p cut.ply`) when NXSBUILD and NXSEDIT name its tools. nxsedit's -t bounds
+the faces of the cut and of the coarser nodes it replaced together, so its cut holds about half of T:
+T is searched (bisection) for the largest Nexus cut of at most the cut's faces, and our file is cut
+again to Nexus's count, so that "cut ÷ Nexus" compares the two at equal faces. Errors as
 scripts/compare_qem.py measures them: MeshLab's Hausdorff Distance both ways against the input
 (samples on vertices, edges and faces), the larger RMS of the two directions, % of the diagonal.
 
@@ -28,7 +31,7 @@ from meshdata import read_ply_elements  # noqa: E402
 
 COLUMNS = ["mesh", "faces_in", "budget_pct", "budget", "cut_faces", "fill_pct", "static_faces", "meshlab_faces",
            "nexus_faces", "cut_rms", "static_rms", "meshlab_rms", "nexus_rms", "cut_vs_static", "cut_vs_meshlab",
-           "cut_vs_nexus", "build_s", "file_bytes", "error"]
+           "cut_vs_nexus", "build_s", "file_bytes", "nexus_t", "cut_at_nexus_faces", "cut_at_nexus_rms", "error"]
 
 
 def far_eye(mesh):
@@ -106,13 +109,22 @@ class Fidelity:
         row["meshlab_faces"] = peer["faces"]
         results = [("cut", cut), ("static", static), ("meshlab", peer["path"])]
         if nxs:
-            path = os.path.join(work, "nexus_%s.ply" % tag)
-            rc, out, err, _, _ = run([self.nexus[1], nxs, "-t", str(n), "-p", path])
-            if rc == 0 and ply_face_count(path) > 0:
-                row["nexus_faces"] = ply_face_count(path)
-                results.append(("nexus", path))
+            found = self.nexus_cut(nxs, work, tag, n)
+            if isinstance(found, str):
+                row["error"] = found
             else:
-                row["error"] = "nxsedit failed (%d): %s" % (rc, last_line(err or out))
+                t, faces, path = found
+                row.update(nexus_t=t, nexus_faces=faces)
+                results.append(("nexus", path))
+                at = cut
+                if faces != n:  # our file cut again to Nexus's count
+                    at = os.path.join(work, "cut_at_nexus_%s.ply" % tag)
+                    j, _ = json_of([conelod, "lod", "extract", clod, "--eye", eye, "--budget", str(faces), "--priority",
+                                    "error", "--no-cull", "--json", "-o", at], "conelod lod extract")
+                    row["cut_at_nexus_faces"] = int(j["faces"])
+                    results.append(("cut_at_nexus", at))
+                else:
+                    row["cut_at_nexus_faces"] = n
         # Each result in a run of its own: MeshLab's Hausdorff can abort on one of them (a vcglib
         # grid assertion on the bunny's MeshLab QEM result at 6,893 faces), and a peer's abort
         # must not lose the others' figures.
@@ -124,9 +136,46 @@ class Fidelity:
                     raise
                 note = "%s not measured: %s" % (key, e)
                 row["error"] = note if not row["error"] else row["error"] + "; " + note
-        for key in ("static", "meshlab", "nexus"):
+        if row["nexus_faces"] != "" and row["cut_at_nexus_rms"] == "" and row["cut_at_nexus_faces"] == n:
+            row["cut_at_nexus_rms"] = row["cut_rms"]
+        for key in ("static", "meshlab"):
             if row[key + "_rms"] != "" and row[key + "_rms"] > 0:
                 row["cut_vs_" + key] = row["cut_rms"] / row[key + "_rms"]
+        if row["nexus_rms"] != "" and row["nexus_rms"] > 0 and row["cut_at_nexus_rms"] != "":
+            row["cut_vs_nexus"] = row["cut_at_nexus_rms"] / row["nexus_rms"]
+
+    def nexus_cut(self, nxs, work, tag, n):
+        """The largest cut nxsedit gives of at most n faces: (its -t, faces, path), or a message."""
+        cache = {}
+
+        def faces_at(t):
+            if t not in cache:
+                path = os.path.join(work, "nexus_%s_t%d.ply" % (tag, t))
+                rc, out, err, _, _ = run([self.nexus[1], nxs, "-t", str(t), "-p", path])
+                if rc != 0 or not os.path.exists(path):
+                    raise CaseError("nxsedit failed (%d): %s" % (rc, last_line(err or out)))
+                cache[t] = (ply_face_count(path), path)
+            return cache[t][0]
+
+        try:
+            lo, hi = 1, 8 * n  # faces_at(lo) <= n; the cut grows with -t
+            if faces_at(hi) <= n:
+                lo = hi
+            while hi - lo > max(1, n // 2000):
+                mid = (lo + hi) // 2
+                if faces_at(mid) <= n:
+                    lo = mid
+                else:
+                    hi = mid
+            faces = faces_at(lo)
+        except CaseError as e:
+            return str(e)
+        if faces == 0:
+            return "Nexus has no cut of at most %d faces (its coarsest nodes hold more)" % n
+        for t, (_, path) in cache.items():
+            if t != lo:
+                os.remove(path)
+        return lo, faces, cache[lo][1]
 
     @staticmethod
     def text(r):
@@ -135,7 +184,8 @@ class Fidelity:
         return "%s %g%%: budget %d, cut %s faces (%.1f %%), RMS cut %s / static %s / MeshLab %s%s%s" % (
             r["mesh"], r["budget_pct"], r["budget"], r["cut_faces"], r["fill_pct"], fmt(r["cut_rms"]),
             fmt(r["static_rms"]), fmt(r["meshlab_rms"]),
-            "" if r["nexus_rms"] == "" else " / Nexus %s" % fmt(r["nexus_rms"]),
+            "" if r["nexus_rms"] == "" else " / Nexus %s at %s faces (our cut there %s)" % (
+                fmt(r["nexus_rms"]), r["nexus_faces"], fmt(r["cut_at_nexus_rms"])),
             "" if not r["error"] else "; " + r["error"])
 
 
@@ -143,8 +193,9 @@ def table(name, faces_in, built, rows, nexus):
     out = ["### %s (%s faces): build %.2f s, %s bytes" % (name, "{:,}".format(faces_in), built["seconds"],
                                                            "{:,}".format(built["file_bytes"])), "",
            "| budget | cut faces (fill) | RMS: cut | static (cone:auto) | MeshLab QEM |%s cut ÷ static | "
-           "cut ÷ MeshLab |%s" % (" Nexus cut |" if nexus else "", " cut ÷ Nexus |" if nexus else ""),
-           "|---|---|---|---|---|---|---|" + ("---|---|" if nexus else "")]
+           "cut ÷ MeshLab |%s" % (" Nexus cut (faces) | our cut at Nexus's faces |" if nexus else "",
+                                  " cut ÷ Nexus, equal faces |" if nexus else ""),
+           "|---|---|---|---|---|---|---|" + ("---|---|---|" if nexus else "")]
     for r in rows:
         if r["cut_rms"] == "":
             out.append("| %g %% | failed: %s |" % (r["budget_pct"], r["error"]))
@@ -153,7 +204,11 @@ def table(name, faces_in, built, rows, nexus):
                  "%s (%.1f %%)" % ("{:,}".format(r["cut_faces"]), r["fill_pct"]), fmt(r["cut_rms"]),
                  fmt(r["static_rms"]), fmt(r["meshlab_rms"])]
         if nexus:
-            cells.append(fmt(r["nexus_rms"]))
+            if r["nexus_faces"] == "":
+                cells += ["— (%s)" % r["error"], "—"]
+            else:
+                cells += ["%s (%s)" % (fmt(r["nexus_rms"]), "{:,}".format(r["nexus_faces"])),
+                          "%s (%s)" % (fmt(r["cut_at_nexus_rms"]), "{:,}".format(r["cut_at_nexus_faces"]))]
         cells += [fmt(r["cut_vs_static"], 2), fmt(r["cut_vs_meshlab"], 2)]
         if nexus:
             cells.append(fmt(r["cut_vs_nexus"], 2))

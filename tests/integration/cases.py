@@ -2655,6 +2655,55 @@ def lod_fidelity_smoke(c):
 
 
 @case
+def lod_fidelity_nexus_smoke(c):
+    """scripts/lod_fidelity.py with NXSBUILD/NXSEDIT naming a stand-in for Nexus's tools whose cut
+    at -t T holds T / 2 faces rounded down to 40 (as nxsedit's -t also counts the nodes the cut
+    replaced), none under 200 (its roots): the script searches T for the largest cut within ours,
+    cuts our file again to that count and compares the two at equal faces."""
+    out = c.out("fidnx")
+    os.makedirs(out, exist_ok=True)
+    mesh = c.mesh("couplingdown.ply")
+    build = os.path.join(out, "nxsbuild")
+    with open(build, "w") as f:  # nxsbuild IN -o OUT: the "file" names its input
+        f.write('#!/bin/sh\necho "$1" > "$3"\n')
+    edit = os.path.join(out, "nxsedit")
+    with open(edit, "w") as f:  # nxsedit FILE -t T -p OUT: the input simplified to (T / 2) // 40 * 40 faces
+        f.write('#!/bin/sh\nn=$(( $3 / 2 / 40 * 40 ))\n'
+                'if [ $n -lt 200 ]; then printf "ply\\nformat ascii 1.0\\nelement vertex 0\\n'
+                'property float x\\nproperty float y\\nproperty float z\\nelement face 0\\n'
+                'property list uchar int vertex_indices\\nend_header\\n" > "$5"; exit 0; fi\n'
+                'exec "%s" simplify "$(cat "$1")" --groups cone:auto --target-faces $n -o "$5" > /dev/null\n' % c.cli)
+    os.chmod(build, 0o755)
+    os.chmod(edit, 0o755)
+    env = dict(os.environ, CONELOD_BUILD_DIR=c.build, NXSBUILD=build, NXSEDIT=edit)
+    p = subprocess.run([sys.executable, os.path.join(c.source, "scripts", "lod_fidelity.py"), mesh, "--budgets",
+                        "2,25", "--samples", "20000", "--out", os.path.join(out, "run")], stdout=subprocess.PIPE,
+                       stderr=subprocess.STDOUT, env=env, timeout=600)
+    log = p.stdout.decode(errors="replace")
+    assert p.returncode == 0, log
+    lines = open(os.path.join(out, "run", "results.tsv")).read().splitlines()
+    rows = [dict(zip(lines[0].split("\t"), l.split("\t"))) for l in lines[1:]]
+    assert len(rows) == 2, rows
+    small, r = rows
+    # 2 % (74 faces): no stand-in cut has so few faces; said so, the rest measured.
+    assert small["nexus_faces"] == "" and "no cut of at most" in small["error"], small
+    assert float(small["cut_rms"]) > 0, small
+    n = int(r["cut_faces"])
+    assert 0 < n <= 928, r
+    nx = int(r["nexus_faces"])
+    assert nx == n // 40 * 40 and nx < n, r  # the largest stand-in cut within ours
+    assert int(r["nexus_t"]) // 2 // 40 * 40 == nx, r
+    at = int(r["cut_at_nexus_faces"])
+    assert 0 < at <= nx, r
+    for col in ("nexus_rms", "cut_at_nexus_rms"):
+        assert float(r[col]) > 0, (col, r)
+    assert float(r["cut_at_nexus_rms"]) > float(r["cut_rms"]), r  # fewer faces, further from the input
+    assert abs(float(r["cut_vs_nexus"]) - float(r["cut_at_nexus_rms"]) / float(r["nexus_rms"])) < 1e-6, r
+    summary = open(os.path.join(out, "run", "summary.md")).read()
+    assert "our cut at Nexus's faces" in summary and "(%s)" % "{:,}".format(nx) in summary, summary
+
+
+@case
 def compare_qem_smoke(c):
     """scripts/compare_qem.sh on one small mesh, one target, one level: every column, both peers at
     exactly our face count, figures in the table and a plot."""
