@@ -8,6 +8,7 @@
 //                [--min-faces N] [--borders] [--locked-border-weight W] [--chunk-faces N] [--shuffle-faces S]
 //                [--no-merge-small-groups]
 //
+// The input is welded by position first (coincident vertices made one), as the CLI welds it.
 // "tree": the previous .clod levels (BuildConeHierarchy + BuildSimplifiedLevels with the defaults
 // `conelod lod build` used: every level keeps the normal-cone groups of its hierarchy level).
 // "dag": the cluster DAG's levels (BuildLodDag, the defaults of `conelod lod build` now: groups of
@@ -163,7 +164,9 @@ int main(int argc, char** argv) {
   }
   vcg::tri::Clean<QMesh>::RemoveUnreferencedVertex(qm);
   vcg::tri::Allocator<QMesh>::CompactEveryVector(qm);
-  conelod::IndexedMesh input = conelod::ToIndexedMesh(qm);
+  // Welded by position, as `conelod lod build` and `conelod simplify` weld it: the vrip dragon's
+  // 2,100 coincident pairs close its 4,270 border edges into one closed surface, whose DAG differs.
+  conelod::IndexedMesh input = conelod::WeldByPosition(conelod::ToIndexedMesh(qm)).mesh;
   const vcg::Box3d box = conelod::UsedVertexBox(input);
   const double diag = box.Diag();
   if (!cuts.empty() && shuffle > 0) ShuffleFaces(input, shuffle);  // the cuts of another build

@@ -60,6 +60,33 @@ inline IndexedMesh Sphere(int levels) {
   return m;
 }
 
+// A thin closed lens: two n x n grids over the unit square, bulging by +-h at the centre and
+// sharing their rim (the two layers meet back to back there, as a scan's layers where a crack was
+// welded, or a blade's two sides).
+inline IndexedMesh Lens(int n, float h) {
+  IndexedMesh m;
+  auto id = [n](int layer, int x, int y) -> uint32_t {
+    const bool rim = x == 0 || y == 0 || x == n || y == n;
+    return uint32_t((rim ? 0 : layer) * (n + 1) * (n + 1) + y * (n + 1) + x);
+  };
+  for (int layer = 0; layer < 2; ++layer)
+    for (int y = 0; y <= n; ++y)
+      for (int x = 0; x <= n; ++x) {
+        const float u = float(x) / n, v = float(y) / n;
+        const float z = (layer ? -h : h) * 16 * u * (1 - u) * v * (1 - v);
+        m.positions.emplace_back(u, v, z);
+      }
+  for (int layer = 0; layer < 2; ++layer)
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) {
+        uint32_t a = id(layer, x, y), b = id(layer, x + 1, y), c = id(layer, x + 1, y + 1), d = id(layer, x, y + 1);
+        if (layer) std::swap(b, d);  // the lower layer faces down
+        m.faces.push_back({a, b, c});
+        m.faces.push_back({a, c, d});
+      }
+  return m;
+}
+
 // An n x n grid of quads (2 triangles each) in the z = 0 plane, normals +z.
 inline IndexedMesh Grid(int n) {
   IndexedMesh m;

@@ -337,6 +337,8 @@ class GroupQemSimplifier {
   // Per face, the sides that add an edge quadric in init() (bit e: corner e to e + 1); after
   // every vertex's AnalyzeVertex.
   void SideMasks(BigVector<uint8_t>& mask);
+  bool Folded(uint32_t fa, uint32_t fb) const;  // faces_[fa], faces_[fb]
+  bool FoldAround(uint32_t u) const;
   bool interior(uint32_t v) const { return (vs_[v].info.flags & kClosed) && vs_[v].info.groups == 1; }
   bool interiorIn(uint32_t v, const std::vector<int>& layer) const;
   bool fixedVertex(uint32_t v, bool countSeams = true) const;
@@ -688,6 +690,42 @@ void GroupQemSimplifier::AnalyzeVertex(uint32_t v) {
   if (borderEnds > 0) vi.flags |= kBorderEdge;
 }
 
+// Two faces nearly back to back (normals more than 120 degrees apart: they meet at under 60
+// degrees). Their shared edge is the rim of a thin sheet or blade (a scan's two layers meeting
+// where a crack was welded, a fin, a collapsed slot): both faces' planes contain any move along
+// the sheet, so its vertices slide into the base at no cost, and a level simplified from the one
+// below (the LOD build, memoryless) eats such a sheet whole. As at a border, each face adds the
+// plane through the edge orthogonal to it (SideMasks).
+constexpr double kFoldCos = 0.5;
+
+bool GroupQemSimplifier::Folded(uint32_t fa, uint32_t fb) const {
+  const auto &a = faces_[fa], &b = faces_[fb];
+  const Point3d n1 = (pos_[a[1]] - pos_[a[0]]) ^ (pos_[a[2]] - pos_[a[0]]);
+  const Point3d n2 = (pos_[b[1]] - pos_[b[0]]) ^ (pos_[b[2]] - pos_[b[0]]);
+  const double d = n1 * n2;
+  return d < 0 && d * d > kFoldCos * kFoldCos * n1.SquaredNorm() * n2.SquaredNorm();
+}
+
+// Whether two faces around u are Folded (any two: SideMasks then checks the sides one by one).
+bool GroupQemSimplifier::FoldAround(uint32_t u) const {
+  const uint32_t* fl = facesBegin(u);
+  const uint32_t k = count_[u];
+  constexpr uint32_t kMax = 32;
+  if (k > kMax) return true;  // a fan this large: let SideMasks check the sides one by one
+  Point3d n[kMax];
+  double len2[kMax];
+  for (uint32_t i = 0; i < k; ++i) {
+    const auto& t = faces_[fl[i]];
+    n[i] = (pos_[t[1]] - pos_[t[0]]) ^ (pos_[t[2]] - pos_[t[0]]);
+    len2[i] = n[i].SquaredNorm();
+    for (uint32_t j = 0; j < i; ++j) {
+      const double d = n[i] * n[j];
+      if (d < 0 && d * d > kFoldCos * kFoldCos * len2[i] * len2[j]) return true;
+    }
+  }
+  return false;
+}
+
 void GroupQemSimplifier::SideMasks(BigVector<uint8_t>& mask) {
   const uint32_t nv = uint32_t(pos_.size());
   mask.assign(faces_.size(), 0);
@@ -695,8 +733,9 @@ void GroupQemSimplifier::SideMasks(BigVector<uint8_t>& mask) {
     const uint32_t k = count_[u];
     if (k == 0) continue;
     // One closed manifold fan (AnalyzeVertex, run before): two faces on every edge of u, so no
-    // border-like side, and without group constraints no contour side either.
-    if (!groupConstraints_ && (vs_[u].info.flags & kClosed)) continue;
+    // border-like side, and without group constraints no contour side either, unless two of its
+    // faces lie nearly back to back (a fold, below).
+    if (!groupConstraints_ && (vs_[u].info.flags & kClosed) && !(p_.foldPlanes && FoldAround(u))) continue;
     const uint32_t* fl = facesBegin(u);
     // The faces of u holding each neighbour x, in x's mark: base + count - 1, saturated at base + 2.
     const uint32_t base = stamp_ + 1;
@@ -721,9 +760,12 @@ void GroupQemSimplifier::SideMasks(BigVector<uint8_t>& mask) {
         if (t[size_t(e)] != u || w == u) continue;
         const uint32_t others = vs_[w].mark - base;  // 0, 1, or 2 for 2+
         bool side = others != 1;
-        if (!side && groupConstraints_)
+        if (!side && (groupConstraints_ || p_.foldPlanes))  // one other face: a group contour, or a fold
           for (uint32_t g = 0; g < k; ++g)
-            if (fl[g] != f && Contains(faces_[fl[g]], w)) side = faces_[fl[g]].group != t.group;
+            if (fl[g] != f && Contains(faces_[fl[g]], w)) {
+              side = (groupConstraints_ && faces_[fl[g]].group != t.group) || (p_.foldPlanes && Folded(f, fl[g]));
+              break;
+            }
         if (side) mask[f] |= uint8_t(1u << e);
       }
     }
@@ -918,7 +960,8 @@ void GroupQemSimplifier::init(IndexedMesh* owned) {
   // Quadrics: area-weighted face planes; border (and group-contour) edges add the plane through
   // the edge orthogonal to the face, weighted by boundaryWeight * length^2.
   // A non-manifold edge (3+ faces) is a feature line like a border: each of its faces adds the
-  // plane through the edge orthogonal to it, so that the line keeps its shape. Which sides do is
+  // plane through the edge orthogonal to it, so that the line keeps its shape; with foldPlanes, so
+  // does an edge whose two faces lie nearly back to back (Folded). Which sides do is
   // found vertex by vertex (SideMasks: the faces around a vertex lie together in memory) rather
   // than by a search of a corner's faces for every side (the dragon: a quarter of init()).
   BigVector<uint8_t> sideMask;
