@@ -3,7 +3,8 @@
 // filter's defaults) at the same face count.
 //
 //   lod_fidelity MESH.ply [--samples N] [--dag-only] [--cluster-faces N] [--group-clusters N] [--cone DEG]
-//                [--max-faces N] [--max-group-error F] [--fine-group-clusters N] [--level-ratio R]
+//                [--max-faces N] [--max-group-error F] [--fine-group-clusters N] [--large-fine-group-clusters N]
+//                [--level-ratio R]
 //                [--coarse-level-ratio R] [--top-group-clusters N] [--cuts P,P,...] [--no-peers]
 //                [--min-faces N] [--borders] [--locked-border-weight W] [--chunk-faces N] [--shuffle-faces S]
 //                [--no-merge-small-groups]
@@ -21,8 +22,10 @@
 // --max-group-error 1: the DAG without the cap on a group's collapse error (as before it had one).
 // --level-ratio R: each group of the fine levels simplified to R of its faces (conelod lod build
 // --level-ratio; 0.5); --coarse-level-ratio R: LodBuildParams::coarseLevelRatio (0.6; 0: the
-// level ratio at every level); --fine-group-clusters N / --top-group-clusters N: LodBuildParams'
-// (24 / 6; 0: --group-clusters [12] there); --locked-border-weight W: LodBuildParams::lockedBorderWeight;
+// level ratio at every level); --fine-group-clusters N / --large-fine-group-clusters N /
+// --top-group-clusters N: LodBuildParams'
+// (24 / 64 / 6; 0: --group-clusters [12] there, or no large ones); --locked-border-weight W:
+// LodBuildParams::lockedBorderWeight;
 // --no-merge-small-groups: LodBuildParams::mergeSmallGroups off.
 // --file [--precision E]: instead, the DAG's levels against the same levels read back from the .clod
 // file written from it (positions quantized with precision E, default kDefaultLodPrecision): per level
@@ -136,6 +139,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--cluster-faces")) dagParams.clusterFaces = size_t(std::atoi(argv[i + 1]));
     if (!std::strcmp(argv[i], "--group-clusters")) dagParams.groupClusters = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--fine-group-clusters")) dagParams.fineGroupClusters = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--large-fine-group-clusters")) dagParams.largeFineGroupClusters = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--max-group-error")) dagParams.maxGroupError = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--level-ratio")) dagParams.simplification.levelRatio = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--coarse-level-ratio")) dagParams.coarseLevelRatio = std::atof(argv[i + 1]);

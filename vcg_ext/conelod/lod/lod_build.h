@@ -46,6 +46,13 @@ struct LodBuildParams {
   // collapse at its count with 12 to 1.04-1.08x with 24 (the armadillo and the bunny); their
   // larger steps are taken only by cuts above about a quarter of the input.
   int fineGroupClusters = 24;
+  // Clusters per group on a fine level that still holds 32 groups of this many (262,144 faces at
+  // 128 faces a cluster, so on inputs of about half a million faces and more); 0: never. A view
+  // still chooses among many regions there, and the larger groups free more border: the welded
+  // dragon's 25 % cuts (mostly level 2) went from 1.10-1.16x our static collapse at their count to
+  // 1.07-1.10x over three builds, its file 6,944,244 -> 6,870,466 bytes; the bunny's and the
+  // armadillo's levels are under that size.
+  int largeFineGroupClusters = 64;
   // Clusters per group on the top levels (under the faces of 4 groups of groupClusters clusters:
   // 6,144 by default; or under topFaceShare of the input's faces); 0: groupClusters. Smaller
   // groups there refine the small cuts in smaller steps, so that they fill their budget (the

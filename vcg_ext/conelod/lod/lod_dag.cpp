@@ -739,9 +739,15 @@ bool UsesTopGroups(const LodBuildParams& params, uint64_t faces, uint64_t inputF
 }
 
 // The clusters gathered into one group on such a level (LodBuildParams): fineGroupClusters on the
-// fine levels, topGroupClusters on the top ones, else groupClusters.
+// fine levels (largeFineGroupClusters on those that hold 32 groups that large), topGroupClusters on
+// the top ones, else groupClusters. Of the level's faces and the input's only, so the same for
+// every chunk and thread.
 int GroupClustersOf(const LodBuildParams& params, uint64_t faces, uint64_t inputFaces) {
-  if (params.fineGroupClusters > 0 && !CoarseLevel(faces, inputFaces)) return params.fineGroupClusters;
+  if (params.fineGroupClusters > 0 && !CoarseLevel(faces, inputFaces)) {
+    const int large = params.largeFineGroupClusters;
+    if (large > params.fineGroupClusters && faces >= 32 * uint64_t(large) * params.clusterFaces) return large;
+    return params.fineGroupClusters;
+  }
   return UsesTopGroups(params, faces, inputFaces) ? params.topGroupClusters : params.groupClusters;
 }
 
@@ -1714,6 +1720,8 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
     return Status::Invalid("group clusters must lie in [2, 64]");
   if (params.fineGroupClusters != 0 && (params.fineGroupClusters < 2 || params.fineGroupClusters > 64))
     return Status::Invalid("fine group clusters must be 0 or lie in [2, 64]");
+  if (params.largeFineGroupClusters != 0 && (params.largeFineGroupClusters < 2 || params.largeFineGroupClusters > 64))
+    return Status::Invalid("large fine group clusters must be 0 or lie in [2, 64]");
   if (params.topGroupClusters != 0 && (params.topGroupClusters < 2 || params.topGroupClusters > 64))
     return Status::Invalid("top group clusters must be 0 or lie in [2, 64]");
   if (!(params.topFaceShare >= 0 && params.topFaceShare <= 1))

@@ -1725,6 +1725,38 @@ TEST(Lod, SmallGroupsJoinANeighbourBelowTheTop) {
 // 6 clusters on each coarse level above 6,144 faces (LodBuildParams::topFaceShare 0). With the top
 // also under 6 % of the input (topFaceShare 0.06, as the dragon's levels of 6,144-52,284 faces
 // were built) its levels of 6,144-7,864 faces are grouped by 6 at most.
+// LodBuildParams::largeFineGroupClusters: a fine level that holds 32 groups of 64 clusters gathers
+// groups that large (here clusters of 32 faces, so a level of 65,536 faces does); without it, or on
+// a smaller level, groups of fineGroupClusters (24; at most 3/2 of it once small ones join).
+TEST(Lod, LargeFineLevelsGatherLargerGroups) {
+  const IndexedMesh sphere = test::Sphere(7);
+  ASSERT_EQ(sphere.faces.size(), 131072u);
+  auto level0 = [&](const LodBuildParams& p, double& mean) {
+    LodDag dag;
+    EXPECT_TRUE(BuildLodDag(sphere, p, dag).ok());
+    std::map<int, int> size;
+    for (int g : dag.levels[0].clusterGroup) ++size[g];
+    int most = 0;
+    for (const auto& kv : size) most = std::max(most, kv.second);
+    mean = double(dag.levels[0].clusterGroup.size()) / double(size.size());
+    return most;
+  };
+  LodBuildParams p;
+  ASSERT_EQ(p.largeFineGroupClusters, 64);
+  p.clusterFaces = 32;
+  double mean = 0;
+  EXPECT_GT(level0(p, mean), 36);
+  EXPECT_GT(mean, 36.0);
+  p.largeFineGroupClusters = 0;
+  EXPECT_LE(level0(p, mean), 36);
+  p.largeFineGroupClusters = 64;
+  p.clusterFaces = 128;  // 32 groups of 64 clusters: 262,144 faces, more than the sphere's
+  EXPECT_LE(level0(p, mean), 36);
+  p.largeFineGroupClusters = 65;
+  LodDag dag;
+  EXPECT_FALSE(BuildLodDag(sphere, p, dag).ok());
+}
+
 TEST(Lod, TopGroupsAreSmallOnlyUnderAFaceCount) {
   const IndexedMesh sphere = test::Sphere(7);
   const size_t F = sphere.faces.size();
