@@ -339,6 +339,11 @@ class GroupQemSimplifier {
   void SideMasks(BigVector<uint8_t>& mask);
   bool Folded(uint32_t fa, uint32_t fb) const;  // faces_[fa], faces_[fb]
   bool FoldAround(uint32_t u) const;
+  // Twice the face's area times its unit normal (corners in order).
+  template <class Tri>
+  Point3d AreaNormal(const Tri& t) const {
+    return (pos_[t[1]] - pos_[t[0]]) ^ (pos_[t[2]] - pos_[t[0]]);
+  }
   bool interior(uint32_t v) const { return (vs_[v].info.flags & kClosed) && vs_[v].info.groups == 1; }
   bool interiorIn(uint32_t v, const std::vector<int>& layer) const;
   bool fixedVertex(uint32_t v, bool countSeams = true) const;
@@ -698,12 +703,15 @@ void GroupQemSimplifier::AnalyzeVertex(uint32_t v) {
 // plane through the edge orthogonal to it (SideMasks).
 constexpr double kFoldCos = 0.5;
 
-bool GroupQemSimplifier::Folded(uint32_t fa, uint32_t fb) const {
-  const auto &a = faces_[fa], &b = faces_[fb];
-  const Point3d n1 = (pos_[a[1]] - pos_[a[0]]) ^ (pos_[a[2]] - pos_[a[0]]);
-  const Point3d n2 = (pos_[b[1]] - pos_[b[0]]) ^ (pos_[b[2]] - pos_[b[0]]);
+// Whether two area normals point more than 120 degrees apart (without a root: d^2 against the
+// squared norms).
+bool BackToBack(const Point3d& n1, const Point3d& n2) {
   const double d = n1 * n2;
   return d < 0 && d * d > kFoldCos * kFoldCos * n1.SquaredNorm() * n2.SquaredNorm();
+}
+
+bool GroupQemSimplifier::Folded(uint32_t fa, uint32_t fb) const {
+  return BackToBack(AreaNormal(faces_[fa]), AreaNormal(faces_[fb]));
 }
 
 // Whether two faces around u are Folded (any two: SideMasks then checks the sides one by one).
@@ -713,15 +721,10 @@ bool GroupQemSimplifier::FoldAround(uint32_t u) const {
   constexpr uint32_t kMax = 32;
   if (k > kMax) return true;  // a fan this large: let SideMasks check the sides one by one
   Point3d n[kMax];
-  double len2[kMax];
   for (uint32_t i = 0; i < k; ++i) {
-    const auto& t = faces_[fl[i]];
-    n[i] = (pos_[t[1]] - pos_[t[0]]) ^ (pos_[t[2]] - pos_[t[0]]);
-    len2[i] = n[i].SquaredNorm();
-    for (uint32_t j = 0; j < i; ++j) {
-      const double d = n[i] * n[j];
-      if (d < 0 && d * d > kFoldCos * kFoldCos * len2[i] * len2[j]) return true;
-    }
+    n[i] = AreaNormal(faces_[fl[i]]);
+    for (uint32_t j = 0; j < i; ++j)
+      if (BackToBack(n[i], n[j])) return true;
   }
   return false;
 }
@@ -969,7 +972,7 @@ void GroupQemSimplifier::init(IndexedMesh* owned) {
   quadric_.assign(nv, Quadric());
   for (uint32_t f = 0; f < nf; ++f) {
     const auto& t = faces_[f];
-    const Point3d n = (pos_[t[1]] - pos_[t[0]]) ^ (pos_[t[2]] - pos_[t[0]]);
+    const Point3d n = AreaNormal(t);
     const double len = n.Norm();
     if (!(len > 0)) continue;
     const Point3d un = n / len;
@@ -1334,10 +1337,7 @@ void GroupQemSimplifier::seamPlace(uint32_t a, uint32_t b, const uint32_t e[2], 
   // Point quadrics in the two tangent directions, added to the geometric one.
   Point3d n(0, 0, 0);
   for (uint32_t v : {a, b})
-    for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f) {
-      const auto& t = faces_[*f];
-      n += (pos_[t[1]] - pos_[t[0]]) ^ (pos_[t[2]] - pos_[t[0]]);
-    }
+    for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f) n += AreaNormal(faces_[*f]);
   const double len = n.Norm();
   Quadric d = q;
   const double k = kSeamDrift * (q.w > 0 ? q.w : 1.0);
