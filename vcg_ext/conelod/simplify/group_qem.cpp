@@ -914,7 +914,9 @@ void GroupQemSimplifier::init(IndexedMesh* owned) {
   if (countGroups_) {
     groupFaces_.assign(1 + coarser_.size(), std::vector<int>());
     groupFaces_[0].assign(size_t(groups), 0);
-    for (size_t f = 0; f < nf; ++f) groupFaces_[0][size_t(dense[f])] += !UsesAVertexTwice(faces_[f]);
+    // (faces_ in the simplifier's order: its group is faces_[f].group, not dense[f], the input
+    // face f's; the two differ in the spatial order)
+    for (size_t f = 0; f < nf; ++f) groupFaces_[0][size_t(faces_[f].group)] += !UsesAVertexTwice(faces_[f]);
     coarserDense_.resize(coarser_.size());
     for (size_t l = 0; l < coarser_.size(); ++l) {
       const int n = DenseIds(*coarser_[l], coarserDense_[l]);
