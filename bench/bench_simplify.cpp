@@ -2,7 +2,7 @@
 // TriEdgeCollapseQuadric (what MeshLab's "Simplification: Quadric Edge Collapse Decimation" runs)
 // and meshoptimizer's meshopt_simplify, on the same mesh, in the same run, at the same targets.
 //
-//   bench_simplify [MESH.ply] [--benchmark_* options]
+//   bench_simplify [MESH.ply] [--level L] [--refresh-ratio R] [--benchmark_* options]
 //   (default mesh: the dragon in CONELOD_TEST_MESHES)
 //
 // Both sides time the whole work of their MeshLab filter on an already-loaded mesh:
@@ -51,6 +51,7 @@ std::vector<int> g_groups;            // normal-cone groups at g_level, per face
 conelod::IndexedMesh g_indexed;       // g_mesh as an indexed mesh
 conelod::GroupHierarchy g_hierarchy;  // its normal-cone hierarchy (default parameters)
 int g_level = 4;
+double g_refresh = conelod::kRefreshRatio;  // ours: GroupQemParams::refreshRatio (--refresh-ratio)
 std::string g_path;
 std::map<std::string, double> g_cpu;    // benchmark name -> CPU seconds per iteration
 std::map<std::string, size_t> g_faces;  // benchmark name -> faces reached
@@ -76,10 +77,13 @@ size_t RunVcg(QMesh& m, int targetFaces) { return conelod_bench::RunMeshLabQem(m
 size_t RunOurs(QMesh& m, int targetFaces, bool conditions, bool passes = false) {
   std::vector<size_t> faceOf;
   const conelod::IndexedMesh im = conelod::ToIndexedMesh(m, &faceOf);
-  conelod::GroupQemParams p;
-  p.targetFaces = size_t(targetFaces);
+  // The CLI's defaults, but no component removal nor flips (the bench times the collapse), and
+  // the order and the memoryless steps as asked.
+  conelod::GroupQemParams p = conelod::OneTargetParams(size_t(targetFaces));
+  p.removeComponents = p.flipToUnblock = false;
   p.condition1 = p.condition2 = conditions;
   p.passes = passes;
+  p.refreshRatio = g_refresh;
   conelod::GroupQemResult r;
   const conelod::Status s = conelod::SimplifyPreservingGroups(im, g_groups, p, r);
   if (!s.ok()) {
@@ -168,6 +172,8 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--level") && i + 1 < argc)
       g_level = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--refresh-ratio") && i + 1 < argc)
+      g_refresh = std::atof(argv[++i]);
     else if (std::strncmp(argv[i], "--benchmark", 11) == 0)
       rest.push_back(argv[i]);
     else

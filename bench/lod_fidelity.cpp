@@ -3,7 +3,8 @@
 // filter's defaults) at the same face count.
 //
 //   lod_fidelity MESH.ply [--samples N] [--dag-only] [--cluster-faces N] [--group-clusters N] [--cone DEG]
-//                [--max-faces N] [--max-group-error F] [--fine-group-clusters N] [--large-fine-group-clusters N]
+//                [--max-faces N] [--max-group-error F] [--lod-refresh-ratio R] [--fine-group-clusters N]
+//                [--large-fine-group-clusters N]
 //                [--level-ratio R]
 //                [--coarse-level-ratio R] [--top-group-clusters N] [--cuts P,P,...] [--no-peers]
 //                [--min-faces N] [--borders] [--locked-border-weight W] [--chunk-faces N] [--shuffle-faces S]
@@ -86,8 +87,7 @@ conelod::IndexedMesh Vcg(QMesh& input, size_t targetFaces) {
 
 // `conelod simplify --groups cone:auto --target-faces N` (the CLI's defaults): our static collapse.
 conelod::IndexedMesh Ours(const conelod::IndexedMesh& input, const conelod::GroupHierarchy& h, size_t targetFaces) {
-  conelod::GroupQemParams p;
-  p.targetFaces = targetFaces;
+  const conelod::GroupQemParams p = conelod::OneTargetParams(targetFaces);
   conelod::GroupQemResult r;
   if (!conelod::SimplifyPreservingGroups(input, h.level(conelod::AutoGroupLevel(h, targetFaces)).faceGroup, p, r).ok())
     return conelod::IndexedMesh();
@@ -141,6 +141,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--fine-group-clusters")) dagParams.fineGroupClusters = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--large-fine-group-clusters")) dagParams.largeFineGroupClusters = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--max-group-error")) dagParams.maxGroupError = std::atof(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--lod-refresh-ratio")) dagParams.refreshRatio = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--level-ratio")) dagParams.simplification.levelRatio = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--coarse-level-ratio")) dagParams.coarseLevelRatio = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--top-group-clusters")) dagParams.topGroupClusters = std::atoi(argv[i + 1]);

@@ -81,6 +81,9 @@ const char* kSimplifyUsage =
     "collapse order (one target): ranked passes as meshoptimizer's, then the greedy queue from\n"
     "  100000 faces, for the last eighth or after a stalled pass (default; --passes says the same);\n"
     "  --queue: one greedy queue throughout (the order before issue 25; --hierarchy: unless --passes)\n"
+    "  --refresh-ratio R [0.8; --hierarchy: 0]: memoryless steps, the quadrics built again from the\n"
+    "  faces left each time these fall to R times the last step's (0: the input's quadrics\n"
+    "  throughout; 0 by default with --max-error and --mode paper, whose bound is to the input)\n"
     "attributes (per-vertex colour, normals, texture coordinates in IN.ply): kept in OUT.ply (and in\n"
     "  every --hierarchy level, each from the one below) and interpolated at each new vertex\n"
     "  (Garland-Heckbert 1998 attribute planes); a texture, colour or normal seam vertex stays in\n"
@@ -101,11 +104,11 @@ int CmdSimplify(int argc, char** argv) {
   Args a(argc, argv,
          {"-o", "--target-faces", "--target-ratio", "--max-error", "--groups", "--quality-thr", "--boundary-weight",
           "--level-ratio", "--threads", "--faces-per-part", "--samples", "--mode", "--attribute-weight",
-          "--partition-above"},
+          "--partition-above", "--refresh-ratio"},
          {"--json", "--no-condition1", "--no-condition2", "--lock-boundaries", "--no-optimal-placement",
           "--preserve-boundary", "--no-preserve-normal", "--hierarchy", "--keep-cones", "--keep-components", "--passes",
           "--queue"});
-  GroupQemParams p;
+  GroupQemParams p = OneTargetParams(0);
   const int targetFaces = a.integer("--target-faces", 0);
   const double targetRatio = a.num("--target-ratio", 0);
   p.maxError = a.num("--max-error", 0);
@@ -129,18 +132,24 @@ int CmdSimplify(int argc, char** argv) {
   p.removeComponents = !a.has("--keep-components");
   // One target: passes, then the queue (issue 25); --hierarchy keeps the queue unless asked.
   p.passes = a.has("--hierarchy") ? a.has("--passes") : !a.has("--queue");
-  p.flipToUnblock = true;  // only where the target is not reached otherwise
+  // --hierarchy: each level is simplified from the one below, already a memoryless step (as the
+  // LOD file's levels), unless asked.
+  p.refreshRatio = a.num("--refresh-ratio", a.has("--hierarchy") ? 0.0 : p.refreshRatio);
   const std::string mode = a.str("--mode", "integrity");
   if (mode == "paper")
     p.mode = GroupMode::Paper;
   else if (mode != "integrity")
     return Fail(kUsage, "--mode must be integrity or paper (got '" + mode + "')");
+  // A --max-error bound and paper mode are to the input: its quadrics to the end, unless asked.
+  if (!a.has("--refresh-ratio") && (p.maxError > 0 || p.mode == GroupMode::Paper)) p.refreshRatio = 0;
   const bool hierarchy = a.has("--hierarchy");
   const bool json = a.has("--json");
   if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kSimplifyUsage);
   if (a.positional().size() != 1) return Fail(kUsage, std::string("expected one input mesh\n") + kSimplifyUsage);
   if (targetFaces < 0) return Fail(kUsage, "--target-faces must be >= 0");
   if (!(attributeWeight >= 0)) return Fail(kUsage, "--attribute-weight must be >= 0");
+  if (!(p.refreshRatio >= 0 && p.refreshRatio < 1))
+    return Fail(kUsage, "--refresh-ratio must be at least 0 and under 1 (0: the input's quadrics throughout)");
   if (!partsError.empty()) return Fail(kUsage, partsError);
   if (partitionAbove < 0) return Fail(kUsage, "--partition-above must be a whole number >= 0 (0: never in parts)");
   if (samples < 0 || samples > kMaxFaceSamples)

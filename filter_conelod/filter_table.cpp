@@ -548,8 +548,9 @@ std::vector<ParamSpec> GroupQemSpecs(const MeshDocument*, const MeshModel*) {
 
 Status ApplyGroupQem(FilterCall& c) {
   MeshModel& mm = *c.mesh;
-  conelod::GroupQemParams p;
-  p.targetFaces = FaceTarget(c.args, mm.cm.fn);
+  // As `conelod simplify` by default: passes then the queue, memoryless steps, components may go
+  // and flips unblock only where the target is not reached otherwise (issue 25).
+  conelod::GroupQemParams p = conelod::OneTargetParams(FaceTarget(c.args, mm.cm.fn));
   p.maxError = c.args.number("MaxErrorPerc") / 100.0;
   p.condition1 = c.args.flag("Condition1");
   p.condition2 = c.args.flag("Condition2");
@@ -557,8 +558,7 @@ Status ApplyGroupQem(FilterCall& c) {
   p.mode = c.args.integer("Mode") == 1 ? conelod::GroupMode::Paper : conelod::GroupMode::Integrity;
   p.keepCones = c.args.flag("KeepCones");
   p.removeComponents = !c.args.flag("KeepComponents");
-  p.passes = true;         // ranked passes, then the queue: as `conelod simplify` (issue 25)
-  p.flipToUnblock = true;  // as the CLI: only where the target is not reached otherwise
+  if (p.maxError > 0 || p.mode == conelod::GroupMode::Paper) p.refreshRatio = 0;  // their bound is to the input
   const double attributeWeight = c.args.number("AttributeWeight");
   if (!(attributeWeight >= 0) || !std::isfinite(attributeWeight))
     return Invalid(Label(c, "AttributeWeight") + " must be >= 0");

@@ -69,11 +69,8 @@ int main(int argc, char** argv) {
   }
   const IndexedMesh m = ToWeldedIndexedMesh(cm);
   cm.Clear();
-  GroupQemParams q;
-  q.targetFaces = std::max<size_t>(1, size_t(ratio * double(m.faces.size())));
-  q.removeComponents = true;  // as the CLI: components may go, ranked passes, flips to unblock
-  q.passes = true;
-  q.flipToUnblock = true;
+  // As the CLI: ranked passes, memoryless steps, components may go, flips to unblock.
+  GroupQemParams q = OneTargetParams(std::max<size_t>(1, size_t(ratio * double(m.faces.size()))));
   GroupHierarchy h;
   if (!BuildConeHierarchy(m, CollapseGroupingParams(q.targetFaces, true, 0), h).ok()) return 2;  // as cone:auto
   const int level = AutoGroupLevel(h, q.targetFaces);

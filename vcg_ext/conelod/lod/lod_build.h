@@ -84,6 +84,13 @@ struct LodBuildParams {
   // on without it (lod_dag.cpp). The dragon's levels under 16,000 faces: 0.39-0.47x MeshLab's QEM
   // at the same face count with 0.002, 0.41-0.70x with 0.004, 0.8-4.7x without a cap.
   double maxGroupError = 0.002;
+  // A group's collapse takes memoryless steps at this ratio (GroupQemParams::refreshRatio; the cap
+  // above is then to the surface of the step); 0 (the default): the level's quadrics to the
+  // group's end. At 0.85 a group simplified to 0.5 or 0.6 of its faces builds its quadrics again
+  // at 0.85 of them (and at 0.72 on the way to 0.5): the bunny's and the armadillo's cuts came
+  // closer to our one-piece collapse, the dragon's 2 % cut went further, and the bunny's 10 % cut
+  // filled 97.7 % of its budget (docs/lod_viewer.md, "Memoryless steps in the groups"): not on yet.
+  double refreshRatio = 0;
   // The positions' quantization (lod_read.h, LodGrid): no vertex moves by more than this fraction
   // of the diagonal of the box of the DAG's positions (kMinLodPrecision..kMaxLodPrecision).
   double precision = kDefaultLodPrecision;

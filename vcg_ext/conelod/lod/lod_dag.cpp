@@ -831,6 +831,7 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
   qem.targetFaces = std::max<size_t>(1, size_t(std::floor(double(local.faces.size()) * ratio)));
   qem.lockGroupBoundaries = false;
   qem.foldPlanes = true;  // each level from the one below: sheets' rims must keep their place (GroupQemParams)
+  qem.refreshRatio = params.refreshRatio;  // one memoryless step in a group (LodBuildParams)
   if (maxError > 0) qem.maxError = qem.maxError > 0 ? std::min(qem.maxError, maxError) : maxError;
   const std::vector<int> oneGroup(local.faces.size(), 0);
   // Attributes per face corner: its wedge's (without places one value per vertex, no seam).

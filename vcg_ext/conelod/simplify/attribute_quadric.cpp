@@ -95,36 +95,64 @@ Status AttributeQuadrics::Init(const IndexedMesh& mesh, const VertexAttributes& 
       wedges_[v] = uint8_t(distinct.size());
     }
   }
-  const size_t stride = 1 + 4 * size_t(channels_);
-  model_.assign(V * stride, 0.0);
+  model_.assign(V * (1 + 4 * size_t(channels_)), 0.0);
   for (uint32_t f = 0; f < F; ++f) {
     const auto& t = mesh.faces[f];
-    const Point3d p0 = Point3d::Construct(mesh.positions[t[0]]) - center_;
-    const Point3d p1 = Point3d::Construct(mesh.positions[t[1]]) - center_;
-    const Point3d p2 = Point3d::Construct(mesh.positions[t[2]]) - center_;
-    const Point3d e1 = p1 - p0, e2 = p2 - p0, n = e1 ^ e2;
-    const double n2 = n.SquaredNorm(), area = 0.5 * std::sqrt(n2);
-    // g = the gradient in the face's plane: g.e1 = s1 - s0, g.e2 = s2 - s0, g.n = 0, i.e.
-    // g = ((s1 - s0) (e2 x n) + (s2 - s0) (n x e1)) / |n|^2. A face without area: no gradient,
-    // and a tiny weight so that a vertex of degenerate faces only still has a model.
-    const double a = area > 0 ? area : 1e-30;
-    const bool flat = !(n2 > 0) || !std::isfinite(n2);
-    const Point3d u1 = flat ? Point3d(0, 0, 0) : (e2 ^ n) / n2, u2 = flat ? Point3d(0, 0, 0) : (n ^ e1) / n2;
-    for (uint32_t v : t) model_[v * stride] += a;
-    for (int c = 0; c < channels_; ++c) {
-      const double s0 = corner(f, 0)[c], s1 = corner(f, 1)[c], s2 = corner(f, 2)[c];
-      const Point3d g = flat ? Point3d(0, 0, 0) : u1 * (s1 - s0) + u2 * (s2 - s0);
-      const double d = flat ? (s0 + s1 + s2) / 3 : s0 - g * p0;
-      for (uint32_t v : t) {
-        double* m = model_.data() + v * stride + 1 + 4 * size_t(c);
-        m[0] += a * g[0];
-        m[1] += a * g[1];
-        m[2] += a * g[2];
-        m[3] += a * d;
-      }
-    }
+    const Point3d p[3] = {Point3d::Construct(mesh.positions[t[0]]) - center_,
+                          Point3d::Construct(mesh.positions[t[1]]) - center_,
+                          Point3d::Construct(mesh.positions[t[2]]) - center_};
+    AddFace(t, p, {corner(f, 0), corner(f, 1), corner(f, 2)});
   }
   return Status::Ok();
+}
+
+void AttributeQuadrics::AddFace(const std::array<uint32_t, 3>& t, const Point3d p[3],
+                                const std::array<const float*, 3>& value) {
+  const size_t stride = 1 + 4 * size_t(channels_);
+  const Point3d e1 = p[1] - p[0], e2 = p[2] - p[0], n = e1 ^ e2;
+  const double n2 = n.SquaredNorm(), area = 0.5 * std::sqrt(n2);
+  // g = the gradient in the face's plane: g.e1 = s1 - s0, g.e2 = s2 - s0, g.n = 0, i.e.
+  // g = ((s1 - s0) (e2 x n) + (s2 - s0) (n x e1)) / |n|^2. A face without area: no gradient,
+  // and a tiny weight so that a vertex of degenerate faces only still has a model.
+  const double a = area > 0 ? area : 1e-30;
+  const bool flat = !(n2 > 0) || !std::isfinite(n2);
+  const Point3d u1 = flat ? Point3d(0, 0, 0) : (e2 ^ n) / n2, u2 = flat ? Point3d(0, 0, 0) : (n ^ e1) / n2;
+  for (uint32_t v : t) model_[v * stride] += a;
+  for (int c = 0; c < channels_; ++c) {
+    const double s0 = value[0][c], s1 = value[1][c], s2 = value[2][c];
+    const Point3d g = flat ? Point3d(0, 0, 0) : u1 * (s1 - s0) + u2 * (s2 - s0);
+    const double d = flat ? (s0 + s1 + s2) / 3 : s0 - g * p[0];
+    for (uint32_t v : t) {
+      double* m = model_.data() + v * stride + 1 + 4 * size_t(c);
+      m[0] += a * g[0];
+      m[1] += a * g[1];
+      m[2] += a * g[2];
+      m[3] += a * d;
+    }
+  }
+}
+
+void AttributeQuadrics::Refresh(size_t faceCount, const FaceCorners& faces, const std::function<bool(uint32_t)>& live,
+                                const std::function<Point3d(uint32_t)>& pos) {
+  const size_t C = size_t(channels_), V = wedges_.size(), stride = 1 + 4 * C;
+  // What each plain vertex carries now: its model's best value at its place (Evaluate's, unclamped).
+  std::vector<float> value(V * C);
+  std::vector<Point3d> at(V);
+  for (uint32_t v = 0; v < V; ++v) {
+    if (!(model_[v * stride] > 0)) continue;  // dead, or no face
+    at[v] = pos(v) - center_;
+    if (!seam(v))
+      for (size_t c = 0; c < C; ++c) value[v * C + c] = float(predict(v, int(c), at[v]));
+  }
+  model_.assign(V * stride, 0.0);
+  for (uint32_t f = 0; f < faceCount; ++f) {
+    if (!live(f)) continue;
+    const auto& t = faces(f);
+    const Point3d p[3] = {at[t[0]], at[t[1]], at[t[2]]};
+    std::array<const float*, 3> s;
+    for (int k = 0; k < 3; ++k) s[size_t(k)] = seam(t[size_t(k)]) ? corner(f, k) : value.data() + t[size_t(k)] * C;
+    AddFace(t, p, s);
+  }
 }
 
 size_t AttributeQuadrics::seamVertices() const {

@@ -122,6 +122,13 @@ class AttributeQuadrics {
   void Reparameterize(uint32_t v, const vcg::Point3d& from, const vcg::Point3d& to, const uint32_t* faceList,
                       size_t count, const FaceCorners& faces, const std::function<vcg::Point3d(uint32_t)>& pos);
 
+  // A memoryless step (GroupQemParams::refreshRatio): every model built again, as Init builds them,
+  // from the live faces (live(f), f < faceCount) at their vertices' places (pos: input
+  // coordinates), each corner at the value it holds now (a seam vertex's own; a plain vertex's
+  // model at its place).
+  void Refresh(size_t faceCount, const FaceCorners& faces, const std::function<bool(uint32_t)>& live,
+               const std::function<vcg::Point3d(uint32_t)>& pos);
+
   // The attributes of corner k of face f, at vertex v now at p (input coordinates), into
   // out[channels()]: a seam vertex's corner value; otherwise s*(p), colours clamped to [0, 1],
   // normals made unit length.
@@ -136,6 +143,8 @@ class AttributeQuadrics {
 
  private:
   double predict(uint32_t v, int c, const vcg::Point3d& q) const;  // s*_c at q (centred)
+  // Adds face t's attribute planes (corners at p, centred, with values `value`) to its vertices' models.
+  void AddFace(const std::array<uint32_t, 3>& t, const vcg::Point3d p[3], const std::array<const float*, 3>& value);
   const float* corner(uint32_t f, int k) const { return corner_.data() + (3 * size_t(f) + size_t(k)) * channels_; }
   float* corner(uint32_t f, int k) { return corner_.data() + (3 * size_t(f) + size_t(k)) * channels_; }
   const float* valueAt(uint32_t f, uint32_t v, const FaceCorners& faces) const;

@@ -183,6 +183,7 @@ class EntryHeap {
     for (size_t i = n_ / 4 + 1; i-- > 0;)
       if (i < n_) SiftDown(i);
   }
+  void clear() { n_ = 0; }
   void release() {
     storage_.reset();
     h_ = nullptr;
@@ -337,6 +338,13 @@ class GroupQemSimplifier {
   // Per face, the sides that add an edge quadric in init() (bit e: corner e to e + 1); after
   // every vertex's AnalyzeVertex.
   void SideMasks(BigVector<uint8_t>& mask);
+  // The quadrics from the live faces (init(), and every memoryless step).
+  void BuildQuadrics();
+  // GroupQemParams::refreshRatio: at refreshAt_ live faces (0: never) the quadrics are built again
+  // from the live faces (returns true), and the next step is set.
+  size_t refreshAt_ = 0;
+  bool Refresh();
+  size_t NextStep(size_t faces) const;          // the live faces of the step after one at `faces` (0: none)
   bool Folded(uint32_t fa, uint32_t fb) const;  // faces_[fa], faces_[fb]
   bool FoldAround(uint32_t u) const;
   // Twice the face's area times its unit normal (corners in order).
@@ -962,6 +970,10 @@ void GroupQemSimplifier::init(IndexedMesh* owned) {
     }
   }
 
+  BuildQuadrics();
+}
+
+void GroupQemSimplifier::BuildQuadrics() {
   // Quadrics: area-weighted face planes; border (and group-contour) edges add the plane through
   // the edge orthogonal to the face, weighted by boundaryWeight * length^2.
   // A non-manifold edge (3+ faces) is a feature line like a border: each of its faces adds the
@@ -971,8 +983,10 @@ void GroupQemSimplifier::init(IndexedMesh* owned) {
   // than by a search of a corner's faces for every side (the dragon: a quarter of init()).
   BigVector<uint8_t> sideMask;
   if (p_.boundaryWeight > 0) SideMasks(sideMask);
-  quadric_.assign(nv, Quadric());
+  quadric_.assign(pos_.size(), Quadric());
+  const uint32_t nf = uint32_t(faces_.size());
   for (uint32_t f = 0; f < nf; ++f) {
+    if (faceDead_[f]) continue;
     const auto& t = faces_[f];
     const Point3d n = AreaNormal(t);
     const double len = n.Norm();
@@ -1817,6 +1831,7 @@ bool GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t targe
   };
   while (liveFaces_ > target) {
     if (liveFaces_ <= p_.queueFaces || (target > 0 && liveFaces_ - target <= liveFaces_ / 8)) return handOver(true);
+    Refresh();  // a memoryless step falls between two passes
     // Half the arrays dead: the next passes work on the live part, packed.
     if (compactable() && liveFaces_ <= faces_.size() / 2) Compact();
     const uint32_t nv = uint32_t(pos_.size());
@@ -2085,11 +2100,30 @@ void GroupQemSimplifier::Compact() {
   vertexInput_.resize(liveVertices);
 }
 
+bool GroupQemSimplifier::Refresh() {
+  if (refreshAt_ == 0 || liveFaces_ > refreshAt_) return false;
+  BuildQuadrics();
+  if (attributes_)
+    attributes_->Refresh(
+        faces_.size(), faceCorners_, [this](uint32_t f) { return !faceDead_[f]; },
+        [this](uint32_t v) { return inputPosition(pos_[v]); });
+  refreshAt_ = NextStep(liveFaces_);
+  return true;
+}
+
+size_t GroupQemSimplifier::NextStep(size_t faces) const {
+  // A step is taken only where a whole step follows it before the target (one for the last few
+  // collapses would queue every edge again for little: the dragon at 50 %, ratio 0.8, 100 ms).
+  const double at = double(faces) * p_.refreshRatio;
+  return at * p_.refreshRatio >= double(p_.targetFaces) ? size_t(at) : 0;
+}
+
 Status GroupQemSimplifier::run(const Progress& progress, GroupQemStats& stats) {
   stats.facesIn = facesIn_;
   const size_t target = p_.targetFaces;
   const double maxErrorSq = p_.maxError > 0 ? (p_.maxError * diag_) * (p_.maxError * diag_) : -1;
   stats.stop = GroupQemStats::Stop::NoMoreCollapses;
+  if (p_.refreshRatio > 0) refreshAt_ = NextStep(liveFaces_);
   // (the queue alone runs even at the target, as it always did: its first progress report may cancel)
   if (!passes_ || CollapseInPasses(progress, target, maxErrorSq, stats)) {
     // The passes leave most of the arrays dead: the queue works on the live part, packed.
@@ -2106,98 +2140,107 @@ void GroupQemSimplifier::CollapseInQueue(const Progress& progress, size_t target
   heap_.reserve(facesIn_ * 2);
   const uint32_t nv = uint32_t(pos_.size());
   const size_t toRemove = stats.facesIn > target ? stats.facesIn - target : 1;
-  for (uint32_t v = 0; v < nv; ++v) {
-    vs_[v].dropped = 0;
-    ++stamp_;
-    for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f)
-      for (uint32_t u : faces_[*f])
-        if (u > v && vs_[u].mark != stamp_) {
-          vs_[u].mark = stamp_;
-          if (frozen(v) || frozen(u)) continue;
-          heap_.append({lowerBound(v, u), v, u, epoch_ | kLazy});
-        }
-    // (after passes the bar stays where they left it)
-    if (progress && (v & 0xffff) == 0 &&
-        !progress(stats.collapses > 0
-                      ? 5 + int(93.0 * std::min(1.0, double(stats.facesIn - liveFaces_) / double(toRemove)))
-                      : int(5.0 * v / nv),
-                  "Group-preserving QEM: queueing edges")) {
-      stats.stop = GroupQemStats::Stop::Cancelled;
-      return;
-    }
-  }
-  heap_.heapify();
-
-  size_t nextReport = 0;
-  // Superseded entries (an endpoint survived a collapse since: most of those pushed) are dropped
-  // in one sequential sweep whenever the heap has grown by a quarter since the last sweep: a
-  // sweep costs a few nanoseconds per entry, popping one a walk from the root to a leaf, with a
-  // cache miss at each deep level (the dragon at 10 %: 3.3 M pops -> 1.2 M).
-  size_t compactFloor = heap_.size() + heap_.size() / 4 + 1024;
-  while (!heap_.empty()) {
-    if (liveFaces_ <= target) break;
-    const size_t done = stats.facesIn - liveFaces_;
-    if (progress && done >= nextReport) {
-      if (!progress(5 + int(93.0 * std::min(1.0, double(done) / double(toRemove))),
-                    "Group-preserving QEM: collapsing")) {
+  for (bool step = true; step;) {
+    step = false;
+    Refresh();
+    for (uint32_t v = 0; v < nv; ++v) {
+      vs_[v].dropped = 0;
+      ++stamp_;
+      for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f)
+        for (uint32_t u : faces_[*f])
+          if (u > v && vs_[u].mark != stamp_) {
+            vs_[u].mark = stamp_;
+            if (frozen(v) || frozen(u)) continue;
+            heap_.append({lowerBound(v, u), v, u, epoch_ | kLazy});
+          }
+      // (after passes the bar stays where they left it)
+      if (progress && (v & 0xffff) == 0 &&
+          !progress(stats.collapses > 0
+                        ? 5 + int(93.0 * std::min(1.0, double(stats.facesIn - liveFaces_) / double(toRemove)))
+                        : int(5.0 * v / nv),
+                    "Group-preserving QEM: queueing edges")) {
         stats.stop = GroupQemStats::Stop::Cancelled;
+        return;
+      }
+    }
+    heap_.heapify();
+
+    size_t nextReport = 0;
+    // Superseded entries (an endpoint survived a collapse since: most of those pushed) are dropped
+    // in one sequential sweep whenever the heap has grown by a quarter since the last sweep: a
+    // sweep costs a few nanoseconds per entry, popping one a walk from the root to a leaf, with a
+    // cache miss at each deep level (the dragon at 10 %: 3.3 M pops -> 1.2 M).
+    size_t compactFloor = heap_.size() + heap_.size() / 4 + 1024;
+    while (!heap_.empty()) {
+      if (liveFaces_ <= target) break;
+      if (refreshAt_ > 0 && liveFaces_ <= refreshAt_) {  // a memoryless step: every edge queued again
+        heap_.clear();
+        step = true;
         break;
       }
-      nextReport = done + std::max<size_t>(toRemove / 100, 1);
-    }
-    const HeapEntry top = heap_.pop();
-    if (!heap_.empty()) PrefetchVertices(heap_.top().a, heap_.top().b);  // most often the next one judged
-    const uint32_t a = top.a, b = top.b, kind = top.tag & kKindMask, ep = top.tag & kEpochMask;
-    if (vs_[a].dead || vs_[b].dead || ep < vs_[a].lastSurvive || ep < vs_[b].lastSurvive) continue;  // superseded
-    const bool fresh = ep >= vs_[a].touched && ep >= vs_[b].touched;
-    Candidate c;
-    if (fresh && kind == kJudged && !((vs_[a].info.flags | vs_[b].info.flags) & kNonManifold)) {
-      // nothing changed since it was judged: only place it again
-      // (and, in integrity mode, search again: a path found around the edge inside its group
-      // may have been cut since by a collapse elsewhere that this edge's faces kept whole)
-      if (integrity_ && !keepsGroupsWhole(a, b)) {
-        ++stats_.refusedCondition1;
+      const size_t done = stats.facesIn - liveFaces_;
+      if (progress && done >= nextReport) {
+        if (!progress(5 + int(93.0 * std::min(1.0, double(done) / double(toRemove))),
+                      "Group-preserving QEM: collapsing")) {
+          stats.stop = GroupQemStats::Stop::Cancelled;
+          break;
+        }
+        nextReport = done + std::max<size_t>(toRemove / 100, 1);
+      }
+      const HeapEntry top = heap_.pop();
+      if (!heap_.empty()) PrefetchVertices(heap_.top().a, heap_.top().b);  // most often the next one judged
+      const uint32_t a = top.a, b = top.b, kind = top.tag & kKindMask, ep = top.tag & kEpochMask;
+      if (vs_[a].dead || vs_[b].dead || ep < vs_[a].lastSurvive || ep < vs_[b].lastSurvive) continue;  // superseded
+      const bool fresh = ep >= vs_[a].touched && ep >= vs_[b].touched;
+      Candidate c;
+      if (fresh && kind == kJudged && !((vs_[a].info.flags | vs_[b].info.flags) & kNonManifold)) {
+        // nothing changed since it was judged: only place it again
+        // (and, in integrity mode, search again: a path found around the edge inside its group
+        // may have been cut since by a collapse elsewhere that this edge's faces kept whole)
+        if (integrity_ && !keepsGroupsWhole(a, b)) {
+          ++stats_.refusedCondition1;
+          vs_[a].dropped = vs_[b].dropped = 1;
+          continue;
+        }
+        c.verdict = CollapseVerdict::Allowed;
+        place(a, b, true, c);
+        if (attributes_ && (attributes_->seam(a) || attributes_->seam(b)) && !placeAtSeam(a, b, c)) {
+          vs_[a].dropped = vs_[b].dropped = 1;
+          continue;
+        }
+      } else {
+        c = evaluate(a, b);
+        if (c.verdict == CollapseVerdict::NotAnEdge) continue;
+        if (c.verdict != CollapseVerdict::Allowed) {  // queued again if a's or b's neighbourhood changes
+          vs_[a].dropped = vs_[b].dropped = 1;
+          continue;
+        }
+        // Costs change as the neighbourhood does: re-queue a collapse dearer than the next one.
+        if (!heap_.empty() && float(c.priority) > heap_.top().priority) {
+          heap_.push({ToFloat(c.priority), a, b, epoch_ | kJudged});
+          continue;
+        }
+      }
+      if (maxErrorSq >= 0 && c.error > maxErrorSq) {
         vs_[a].dropped = vs_[b].dropped = 1;
         continue;
       }
-      c.verdict = CollapseVerdict::Allowed;
-      place(a, b, true, c);
-      if (attributes_ && (attributes_->seam(a) || attributes_->seam(b)) && !placeAtSeam(a, b, c)) {
+      // GroupQemRegion::separation, checked here rather than in judge(): only for the collapses
+      // about to be made (the dragon's LOD build: 10 % of its CPU time in judge(), 2-3 % here).
+      if (separationSq_ > 0 && !keepsApart(a, b, c.position)) {
         vs_[a].dropped = vs_[b].dropped = 1;
         continue;
       }
-    } else {
-      c = evaluate(a, b);
-      if (c.verdict == CollapseVerdict::NotAnEdge) continue;
-      if (c.verdict != CollapseVerdict::Allowed) {  // queued again if a's or b's neighbourhood changes
-        vs_[a].dropped = vs_[b].dropped = 1;
-        continue;
+      collapse(c);
+      ++stats.collapses;
+      stats.maxCollapseError = std::max(stats.maxCollapseError, std::sqrt(c.error) / diag_);
+      if (heap_.size() > compactFloor) {
+        heap_.RemoveIf([&](const HeapEntry& h) {
+          const uint32_t e = h.tag & kEpochMask;
+          return vs_[h.a].dead || vs_[h.b].dead || e < vs_[h.a].lastSurvive || e < vs_[h.b].lastSurvive;
+        });
+        compactFloor = heap_.size() + heap_.size() / 4 + 1024;
       }
-      // Costs change as the neighbourhood does: re-queue a collapse dearer than the next one.
-      if (!heap_.empty() && float(c.priority) > heap_.top().priority) {
-        heap_.push({ToFloat(c.priority), a, b, epoch_ | kJudged});
-        continue;
-      }
-    }
-    if (maxErrorSq >= 0 && c.error > maxErrorSq) {
-      vs_[a].dropped = vs_[b].dropped = 1;
-      continue;
-    }
-    // GroupQemRegion::separation, checked here rather than in judge(): only for the collapses
-    // about to be made (the dragon's LOD build: 10 % of its CPU time in judge(), 2-3 % here).
-    if (separationSq_ > 0 && !keepsApart(a, b, c.position)) {
-      vs_[a].dropped = vs_[b].dropped = 1;
-      continue;
-    }
-    collapse(c);
-    ++stats.collapses;
-    stats.maxCollapseError = std::max(stats.maxCollapseError, std::sqrt(c.error) / diag_);
-    if (heap_.size() > compactFloor) {
-      heap_.RemoveIf([&](const HeapEntry& h) {
-        const uint32_t e = h.tag & kEpochMask;
-        return vs_[h.a].dead || vs_[h.b].dead || e < vs_[h.a].lastSurvive || e < vs_[h.b].lastSurvive;
-      });
-      compactFloor = heap_.size() + heap_.size() / 4 + 1024;
     }
   }
 }
@@ -2606,11 +2649,23 @@ Status CheckInput(const IndexedMesh& mesh, const std::vector<int>& faceGroup,
 
 }  // namespace
 
+GroupQemParams OneTargetParams(size_t targetFaces) {
+  GroupQemParams p;
+  p.targetFaces = targetFaces;
+  p.passes = true;
+  p.refreshRatio = kRefreshRatio;
+  p.removeComponents = true;
+  p.flipToUnblock = true;
+  return p;
+}
+
 Status ValidateParams(const GroupQemParams& p) {
   if (p.targetFaces == 0 && !(p.maxError > 0))
     return Status::Invalid("give a target: TargetFaceNum/TargetPerc (a face count) or a maximum error");
   if (!(p.maxError >= 0) || !std::isfinite(p.maxError)) return Status::Invalid("the maximum error must be >= 0");
   if (!(p.qualityThr >= 0 && p.qualityThr <= 1)) return Status::Invalid("QualityThr must be between 0 and 1");
+  if (!(p.refreshRatio >= 0 && p.refreshRatio < 1))
+    return Status::Invalid("the refresh ratio must be at least 0 and under 1 (0: the input's quadrics throughout)");
   if (!(p.boundaryWeight >= 0) || !std::isfinite(p.boundaryWeight))
     return Status::Invalid("BoundaryWeight must be >= 0");
   return Status::Ok();

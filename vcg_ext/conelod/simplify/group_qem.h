@@ -156,7 +156,27 @@ struct GroupQemParams {
   // passes: from this many live faces on the queue does the rest (a mesh this small from the
   // start runs the queue alone, output for output); 0: passes until the target is near or a stall.
   size_t queueFaces = 100000;
+  // Memoryless steps (Lindstrom & Turk's memoryless simplification, once per step rather than at
+  // every collapse): each time the live faces fall to this fraction of what they were at the last
+  // step (the input's at first), every vertex's quadric (and attribute model) is built again from
+  // the live faces, as init() builds them from the input's. A collapse's error then measures the
+  // distance to the mesh of the last step, not to the input; the error nonetheless spreads better
+  // (docs/group_qem.md, "Memoryless steps"; each LOD level is such a step). With passes a step
+  // falls between two passes; in the queue every edge is queued again. A step is taken only where
+  // a whole step follows it before the target. A maxError bound is then to the surface of the
+  // last step (the LOD build's cap: each of its levels starts from the level below anyway).
+  // 0: the input's quadrics to the end. OneTargetParams: kRefreshRatio (the CLI and the filter
+  // keep 0 with a maxError or in paper mode: their bound is to the input).
+  double refreshRatio = 0;
 };
+
+// `conelod simplify`'s and the filter's ratio (docs/group_qem.md: 0.5 and 0.7 gave less).
+constexpr double kRefreshRatio = 0.8;
+
+// What `conelod simplify` and the MeshLab filter run for one target unless told otherwise: ranked
+// passes then the queue, memoryless steps (kRefreshRatio), whole components may go when stuck,
+// edge flips unblock refused collapses.
+GroupQemParams OneTargetParams(size_t targetFaces);
 
 // Ok, or a message naming the bad parameter.
 Status ValidateParams(const GroupQemParams& p);

@@ -84,19 +84,26 @@ size_t ExpectLinearColours(const IndexedMesh& m, const AttributeQuadrics& aq, co
   return moved;
 }
 
+// With memoryless steps too (GroupQemParams::refreshRatio: the models built again from the faces
+// of the step, three times on the way to an eighth): the colour stays exactly linear.
 TEST(AttributeQuadric, ReproducesALinearColourAtEveryNewPosition) {
   const IndexedMesh m = BentGrid();
   const VertexAttributes colours = ColoursOf(m);
-  AttributeQuadrics aq;
-  ASSERT_TRUE(aq.Init(m, colours, Corners(m, colours), 1.0).ok());
-  GroupQemParams p;
-  p.targetFaces = m.faceCount() / 8;
-  p.condition1 = false;
-  GroupQemResult r;
-  ASSERT_TRUE(SimplifyPreservingGroups(m, std::vector<int>(m.faceCount(), 0), p, r, Progress(), {}, nullptr, &aq).ok());
-  ASSERT_LE(r.mesh.faceCount(), p.targetFaces);
-  const size_t moved = ExpectLinearColours(m, aq, r);
-  EXPECT_GT(moved, 0u) << "no vertex moved: the test would not tell interpolation from the survivor's colour";
+  for (double refresh : {0.0, 0.5}) {
+    SCOPED_TRACE(refresh);
+    AttributeQuadrics aq;
+    ASSERT_TRUE(aq.Init(m, colours, Corners(m, colours), 1.0).ok());
+    GroupQemParams p;
+    p.targetFaces = m.faceCount() / 8;
+    p.condition1 = false;
+    p.refreshRatio = refresh;
+    GroupQemResult r;
+    ASSERT_TRUE(
+        SimplifyPreservingGroups(m, std::vector<int>(m.faceCount(), 0), p, r, Progress(), {}, nullptr, &aq).ok());
+    ASSERT_LE(r.mesh.faceCount(), p.targetFaces);
+    const size_t moved = ExpectLinearColours(m, aq, r);
+    EXPECT_GT(moved, 0u) << "no vertex moved: the test would not tell interpolation from the survivor's colour";
+  }
 }
 
 // A grid cut along x = 0.5 into two texture charts, given per face corner (u = x left, x + 1
@@ -107,32 +114,37 @@ TEST(AttributeQuadric, KeepsTextureSeams) {
   VertexAttributes layout;
   layout.texCoords = true;
   const std::vector<float> corner = TwoChartCorners(m);
-  AttributeQuadrics aq;
-  ASSERT_TRUE(aq.Init(m, layout, corner, 1.0).ok());
-  EXPECT_EQ(aq.seamVertices(), size_t(kN + 1));
-  GroupQemParams p;
-  p.targetFaces = 16;
-  p.condition1 = false;
-  GroupQemResult r;
-  ASSERT_TRUE(SimplifyPreservingGroups(m, std::vector<int>(m.faceCount(), 0), p, r, Progress(), {}, nullptr, &aq).ok());
-  size_t seamLeft = 0;
-  for (size_t o = 0; o < r.mesh.positions.size(); ++o)
-    if (aq.seam(r.sourceVertex[o])) {
-      ++seamLeft;
-      EXPECT_EQ(r.mesh.positions[o], m.positions[r.sourceVertex[o]]) << "a seam vertex moved";
+  for (double refresh : {0.0, 0.5}) {  // with memoryless steps too (the models rebuilt around the seam)
+    SCOPED_TRACE(refresh);
+    AttributeQuadrics aq;
+    ASSERT_TRUE(aq.Init(m, layout, corner, 1.0).ok());
+    EXPECT_EQ(aq.seamVertices(), size_t(kN + 1));
+    GroupQemParams p;
+    p.targetFaces = 16;
+    p.condition1 = false;
+    p.refreshRatio = refresh;
+    GroupQemResult r;
+    ASSERT_TRUE(
+        SimplifyPreservingGroups(m, std::vector<int>(m.faceCount(), 0), p, r, Progress(), {}, nullptr, &aq).ok());
+    size_t seamLeft = 0;
+    for (size_t o = 0; o < r.mesh.positions.size(); ++o)
+      if (aq.seam(r.sourceVertex[o])) {
+        ++seamLeft;
+        EXPECT_EQ(r.mesh.positions[o], m.positions[r.sourceVertex[o]]) << "a seam vertex moved";
+      }
+    EXPECT_GE(seamLeft, 2u);
+    EXPECT_LT(seamLeft, size_t(kN + 1)) << "the seam was not simplified along itself";
+    for (size_t f = 0; f < r.mesh.faceCount(); ++f) {
+      int right = 0;
+      for (int k = 0; k < 3; ++k) {
+        const auto uv = At(aq, r, f, k);
+        const auto& q = r.mesh.positions[r.mesh.faces[f][size_t(k)]];
+        right += uv[0] >= 1;
+        EXPECT_NEAR(uv[0] - (uv[0] >= 1 ? 1 : 0), q[0], 1e-5) << "u does not follow x in its chart";
+        EXPECT_NEAR(uv[1], q[1], 1e-5);
+      }
+      EXPECT_TRUE(right == 0 || right == 3) << "face " << f << " has corners of both charts";
     }
-  EXPECT_GE(seamLeft, 2u);
-  EXPECT_LT(seamLeft, size_t(kN + 1)) << "the seam was not simplified along itself";
-  for (size_t f = 0; f < r.mesh.faceCount(); ++f) {
-    int right = 0;
-    for (int k = 0; k < 3; ++k) {
-      const auto uv = At(aq, r, f, k);
-      const auto& q = r.mesh.positions[r.mesh.faces[f][size_t(k)]];
-      right += uv[0] >= 1;
-      EXPECT_NEAR(uv[0] - (uv[0] >= 1 ? 1 : 0), q[0], 1e-5) << "u does not follow x in its chart";
-      EXPECT_NEAR(uv[1], q[1], 1e-5);
-    }
-    EXPECT_TRUE(right == 0 || right == 3) << "face " << f << " has corners of both charts";
   }
 }
 
