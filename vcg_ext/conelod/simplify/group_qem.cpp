@@ -1831,9 +1831,11 @@ bool GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t targe
   };
   while (liveFaces_ > target) {
     if (liveFaces_ <= p_.queueFaces || (target > 0 && liveFaces_ - target <= liveFaces_ / 8)) return handOver(true);
-    Refresh();  // a memoryless step falls between two passes
     // Half the arrays dead: the next passes work on the live part, packed.
     if (compactable() && liveFaces_ <= faces_.size() / 2) Compact();
+    // A memoryless step falls between two passes (after the packing: its sweep reads the live
+    // faces only; the packing keeps every order, so the sums are the same).
+    Refresh();
     const uint32_t nv = uint32_t(pos_.size());
     // Rank every live edge once, from its lower endpoint.
     ranked.reserve(3 * liveFaces_);
