@@ -648,6 +648,22 @@ def cli_simplify_refresh_ratio(c):
 
 
 @case
+def cli_simplify_parts_flat_faces(c):
+    """A face that uses a vertex twice joins nothing: the integrity search went through such a face
+    (u, w, w) from the faces at u to every face at w, so a collapse could leave a group in two pieces
+    that met only at w. The dragon subdivided once (tools/subdivide_ply: 3,485,656 faces, its
+    weld-flat faces split into more) at 2 %, in 4 parts on 2 threads, split one group before the
+    fix; now none splits or vanishes."""
+    sub = c.out("dragon_sub1.ply")
+    subprocess.run([os.path.join(c.build, "tools", "subdivide_ply"), c.mesh("stanford_dragon_vrip_binary.ply"), sub],
+                   check=True, capture_output=True, timeout=600)
+    r = json.loads(c.conelod("simplify", sub, "--groups", "cone:auto", "--target-ratio", "0.02", "--threads", "2",
+                             "-o", c.out("sub1_2.ply"), "--json").stdout)
+    assert r["parts"] == 4 and r["faces_in"] == 3485656 and r["target_reached"], r
+    assert r["groups_split"] == 0 and r["groups_vanished"] == 0, r
+
+
+@case
 def cli_simplify_in_parts(c):
     """A big simplification in parts (forced on the bunny with a small threshold): the same file on
     1 and 2 threads, every group whole, the target reached; below the threshold the file is the

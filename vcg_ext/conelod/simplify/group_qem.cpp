@@ -1505,6 +1505,7 @@ bool GroupQemSimplifier::keepsGroupsWholeAcross(uint32_t a, uint32_t b) {
         for (uint32_t v : {a, b})
           for (const uint32_t* g = facesBegin(v); g != facesEnd(v); ++g)
             if (faceMark_[*g] != faceStamp_ && groupIn(layer, *g) == G && Contains(faces_[*g], x) &&
+                !UsesAVertexTwice(faces_[*g]) &&
                 std::find(nbScratch_.begin(), nbScratch_.end(), *g) == nbScratch_.end())
               nbScratch_.push_back(*g);
       }
@@ -1522,7 +1523,9 @@ bool GroupQemSimplifier::keepsGroupsWholeAcross(uint32_t a, uint32_t b) {
           if (u == w) continue;
           for (int pass = 0; pass < (u == a ? 2 : 1); ++pass)
             for (const uint32_t* g = facesBegin(pass ? b : u); g != facesEnd(pass ? b : u); ++g) {
-              if (faceMark_[*g] == faceStamp_ || groupIn(layer, *g) != G || !has(faces_[*g], w)) continue;
+              if (faceMark_[*g] == faceStamp_ || groupIn(layer, *g) != G || !has(faces_[*g], w) ||
+                  UsesAVertexTwice(faces_[*g]))
+                continue;
               faceMark_[*g] = faceStamp_;
               queue_.push_back(*g);
               found += std::find(nbScratch_.begin(), nbScratch_.end(), *g) != nbScratch_.end();
@@ -1576,8 +1579,11 @@ bool GroupQemSimplifier::keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint
     if (removed > 0 && count[size_t(G)] <= removed) return false;  // its last faces
     uint32_t nb[4];
     int nn = 0;
+    // (A face that uses a vertex twice is no face of its group, and joins nothing: it is left
+    // out of the output, and MeasureGroupIntegrity does not count it.)
     const auto add = [&](uint32_t f) {
-      if (f != kNone && groupIn(layer, f) == G && std::find(nb, nb + nn, f) == nb + nn) nb[nn++] = f;
+      if (f != kNone && groupIn(layer, f) == G && !UsesAVertexTwice(faces_[f]) && std::find(nb, nb + nn, f) == nb + nn)
+        nb[nn++] = f;
     };
     // Only one of e0, e1 in G: its (at most two) faces of G next to it become adjacent.
     if (g0 != g1) continue;
@@ -1594,7 +1600,7 @@ bool GroupQemSimplifier::keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint
     fanScratch_.clear();
     for (uint32_t v : {a, b})
       for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f)
-        if (*f != e0 && *f != e1 && groupIn(layer, *f) == G) fanScratch_.push_back(*f);
+        if (*f != e0 && *f != e1 && groupIn(layer, *f) == G && !UsesAVertexTwice(faces_[*f])) fanScratch_.push_back(*f);
     const uint32_t k = uint32_t(fanScratch_.size());
     fanParent_.resize(k);
     for (uint32_t i = 0; i < k; ++i) fanParent_[i] = i;
@@ -1641,7 +1647,7 @@ bool GroupQemSimplifier::keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint
       return true;
     };
     const auto visit = [&](uint32_t f) {
-      if (f == kNone || faceMark_[f] == faceStamp_ || groupIn(layer, f) != G) return;
+      if (f == kNone || faceMark_[f] == faceStamp_ || groupIn(layer, f) != G || UsesAVertexTwice(faces_[f])) return;
       faceMark_[f] = faceStamp_;
       queue_.push_back(f);
     };
