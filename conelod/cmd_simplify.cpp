@@ -141,7 +141,7 @@ int CmdSimplify(int argc, char** argv) {
   else if (mode != "integrity")
     return Fail(kUsage, "--mode must be integrity or paper (got '" + mode + "')");
   // A --max-error bound and paper mode are to the input: its quadrics to the end, unless asked.
-  if (!a.has("--refresh-ratio") && (p.maxError > 0 || p.mode == GroupMode::Paper)) p.refreshRatio = 0;
+  if (!a.has("--refresh-ratio") && BoundToInput(p)) p.refreshRatio = 0;
   const bool hierarchy = a.has("--hierarchy");
   const bool json = a.has("--json");
   if (!a.ok()) return Fail(kUsage, a.error() + "\n" + kSimplifyUsage);

@@ -558,7 +558,7 @@ Status ApplyGroupQem(FilterCall& c) {
   p.mode = c.args.integer("Mode") == 1 ? conelod::GroupMode::Paper : conelod::GroupMode::Integrity;
   p.keepCones = c.args.flag("KeepCones");
   p.removeComponents = !c.args.flag("KeepComponents");
-  if (p.maxError > 0 || p.mode == conelod::GroupMode::Paper) p.refreshRatio = 0;  // their bound is to the input
+  if (conelod::BoundToInput(p)) p.refreshRatio = 0;  // as the CLI
   const double attributeWeight = c.args.number("AttributeWeight");
   if (!(attributeWeight >= 0) || !std::isfinite(attributeWeight))
     return Invalid(Label(c, "AttributeWeight") + " must be >= 0");

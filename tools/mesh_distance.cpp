@@ -58,8 +58,7 @@ int main(int argc, char** argv) {
       return 2;
     }
     std::printf("{\"file\": \"%s\", \"faces\": %zu, \"rms_pct\": %.6f, \"max_pct\": %.6f}\n", files[i],
-                result.faces.size(), 100 * std::max(h.ab.rms, h.ba.rms) / h.diagonal,
-                100 * std::max(h.ab.max, h.ba.max) / h.diagonal);
+                result.faces.size(), h.rmsPct(), h.maxPct());
   }
   return 0;
 }

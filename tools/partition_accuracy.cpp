@@ -27,7 +27,7 @@ namespace {
 double Rms(const IndexedMesh& input, const IndexedMesh& out, int samples) {
   HausdorffResult h;
   if (!SampledHausdorff(input, out, samples, h).ok() || h.diagonal <= 0) return -1;
-  return 100 * std::max(h.ab.rms, h.ba.rms) / h.diagonal;
+  return h.rmsPct();
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 // "Hausdorff Distance" filter does the same; this one runs without MeshLab, on IndexedMesh.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 
 #include "conelod/mesh/indexed_mesh.h"
@@ -33,6 +34,10 @@ struct HausdorffResult {
   SurfaceDistance ab, ba;
   double hausdorff = 0;
   double diagonal = 0;  // bounding-box diagonal of `a`, to report distances as a fraction of it
+  // The larger of the two directions' RMS and maximum, in % of `diagonal` (the comparisons'
+  // measure: scripts/compare_qem.sh's, MeshLab's Hausdorff Distance both ways).
+  double rmsPct() const { return 100 * std::max(ab.rms, ba.rms) / diagonal; }
+  double maxPct() const { return 100 * std::max(ab.max, ba.max) / diagonal; }
 };
 Status SampledHausdorff(const IndexedMesh& a, const IndexedMesh& b, int faceSamples, HausdorffResult& out);
 

@@ -341,9 +341,10 @@ class GroupQemSimplifier {
   // The quadrics from the live faces (init(), and every memoryless step).
   void BuildQuadrics();
   // GroupQemParams::refreshRatio: at refreshAt_ live faces (0: never) the quadrics are built again
-  // from the live faces (returns true), and the next step is set.
+  // from the live faces (Refresh, when StepDue), and the next step is set.
   size_t refreshAt_ = 0;
-  bool Refresh();
+  bool StepDue() const { return refreshAt_ > 0 && liveFaces_ <= refreshAt_; }
+  void Refresh();
   size_t NextStep(size_t faces) const;          // the live faces of the step after one at `faces` (0: none)
   bool Folded(uint32_t fa, uint32_t fb) const;  // faces_[fa], faces_[fb]
   bool FoldAround(uint32_t u) const;
@@ -453,6 +454,9 @@ class GroupQemSimplifier {
   bool keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint32_t e0, uint32_t e1, uint32_t n0a, uint32_t n0b,
                        uint32_t n1a, uint32_t n1b);
   int groupIn(int layer, uint32_t f) const { return layer < 0 ? faces_[f].group : coarserDense_[size_t(layer)][f]; }
+  // Whether f is a face of group G (in that grouping): a face that uses a vertex twice is none, and
+  // joins nothing (the output leaves it out; MeasureGroupIntegrity does not count it).
+  bool faceOf(int layer, uint32_t f, int G) const { return groupIn(layer, f) == G && !UsesAVertexTwice(faces_[f]); }
   // keepCones: the new normal (unnormalised, squared length lenSq) of face f stays in the cone
   // bound of its group in every grouping that has bounds.
   bool insideCones(uint32_t f, const Point3d& n, double lenSq) const {
@@ -1493,7 +1497,7 @@ bool GroupQemSimplifier::keepsGroupsWholeAcross(uint32_t a, uint32_t b) {
       for (size_t j = 0; j < i; ++j) seen |= groupIn(layer, edgeFaces_[j]) == G;
       if (seen) continue;
       int removed = 0;
-      for (uint32_t f : edgeFaces_) removed += groupIn(layer, f) == G && !UsesAVertexTwice(faces_[f]);
+      for (uint32_t f : edgeFaces_) removed += faceOf(layer, f, G);
       if (removed > 0 && count[size_t(G)] <= removed) return false;  // its last faces
       // G's faces next to its removed ones.
       ++faceStamp_;
@@ -1504,8 +1508,7 @@ bool GroupQemSimplifier::keepsGroupsWholeAcross(uint32_t a, uint32_t b) {
         const uint32_t x = Third(faces_[f], a, b);
         for (uint32_t v : {a, b})
           for (const uint32_t* g = facesBegin(v); g != facesEnd(v); ++g)
-            if (faceMark_[*g] != faceStamp_ && groupIn(layer, *g) == G && Contains(faces_[*g], x) &&
-                !UsesAVertexTwice(faces_[*g]) &&
+            if (faceMark_[*g] != faceStamp_ && faceOf(layer, *g, G) && Contains(faces_[*g], x) &&
                 std::find(nbScratch_.begin(), nbScratch_.end(), *g) == nbScratch_.end())
               nbScratch_.push_back(*g);
       }
@@ -1523,9 +1526,7 @@ bool GroupQemSimplifier::keepsGroupsWholeAcross(uint32_t a, uint32_t b) {
           if (u == w) continue;
           for (int pass = 0; pass < (u == a ? 2 : 1); ++pass)
             for (const uint32_t* g = facesBegin(pass ? b : u); g != facesEnd(pass ? b : u); ++g) {
-              if (faceMark_[*g] == faceStamp_ || groupIn(layer, *g) != G || !has(faces_[*g], w) ||
-                  UsesAVertexTwice(faces_[*g]))
-                continue;
+              if (faceMark_[*g] == faceStamp_ || !faceOf(layer, *g, G) || !has(faces_[*g], w)) continue;
               faceMark_[*g] = faceStamp_;
               queue_.push_back(*g);
               found += std::find(nbScratch_.begin(), nbScratch_.end(), *g) != nbScratch_.end();
@@ -1575,15 +1576,12 @@ bool GroupQemSimplifier::keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint
   for (int pass = 0; pass < 2; ++pass) {
     const int G = pass == 0 ? g0 : g1;
     if (G < 0 || (pass == 1 && G == g0)) continue;
-    const int removed = (g0 == G && !UsesAVertexTwice(faces_[e0])) + (g1 == G && !UsesAVertexTwice(faces_[e1]));
+    const int removed = faceOf(layer, e0, G) + (e1 != kNone && faceOf(layer, e1, G));
     if (removed > 0 && count[size_t(G)] <= removed) return false;  // its last faces
     uint32_t nb[4];
     int nn = 0;
-    // (A face that uses a vertex twice is no face of its group, and joins nothing: it is left
-    // out of the output, and MeasureGroupIntegrity does not count it.)
     const auto add = [&](uint32_t f) {
-      if (f != kNone && groupIn(layer, f) == G && !UsesAVertexTwice(faces_[f]) && std::find(nb, nb + nn, f) == nb + nn)
-        nb[nn++] = f;
+      if (f != kNone && faceOf(layer, f, G) && std::find(nb, nb + nn, f) == nb + nn) nb[nn++] = f;
     };
     // Only one of e0, e1 in G: its (at most two) faces of G next to it become adjacent.
     if (g0 != g1) continue;
@@ -1600,7 +1598,7 @@ bool GroupQemSimplifier::keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint
     fanScratch_.clear();
     for (uint32_t v : {a, b})
       for (const uint32_t* f = facesBegin(v); f != facesEnd(v); ++f)
-        if (*f != e0 && *f != e1 && groupIn(layer, *f) == G && !UsesAVertexTwice(faces_[*f])) fanScratch_.push_back(*f);
+        if (*f != e0 && *f != e1 && faceOf(layer, *f, G)) fanScratch_.push_back(*f);
     const uint32_t k = uint32_t(fanScratch_.size());
     fanParent_.resize(k);
     for (uint32_t i = 0; i < k; ++i) fanParent_[i] = i;
@@ -1647,7 +1645,7 @@ bool GroupQemSimplifier::keepsGroupWhole(int layer, uint32_t a, uint32_t b, uint
       return true;
     };
     const auto visit = [&](uint32_t f) {
-      if (f == kNone || faceMark_[f] == faceStamp_ || groupIn(layer, f) != G || UsesAVertexTwice(faces_[f])) return;
+      if (f == kNone || faceMark_[f] == faceStamp_ || !faceOf(layer, f, G)) return;
       faceMark_[f] = faceStamp_;
       queue_.push_back(f);
     };
@@ -2108,15 +2106,14 @@ void GroupQemSimplifier::Compact() {
   vertexInput_.resize(liveVertices);
 }
 
-bool GroupQemSimplifier::Refresh() {
-  if (refreshAt_ == 0 || liveFaces_ > refreshAt_) return false;
+void GroupQemSimplifier::Refresh() {
+  if (!StepDue()) return;
   BuildQuadrics();
   if (attributes_)
     attributes_->Refresh(
         faces_.size(), faceCorners_, [this](uint32_t f) { return !faceDead_[f]; },
         [this](uint32_t v) { return inputPosition(pos_[v]); });
   refreshAt_ = NextStep(liveFaces_);
-  return true;
 }
 
 size_t GroupQemSimplifier::NextStep(size_t faces) const {
@@ -2181,7 +2178,7 @@ void GroupQemSimplifier::CollapseInQueue(const Progress& progress, size_t target
     size_t compactFloor = heap_.size() + heap_.size() / 4 + 1024;
     while (!heap_.empty()) {
       if (liveFaces_ <= target) break;
-      if (refreshAt_ > 0 && liveFaces_ <= refreshAt_) {  // a memoryless step: every edge queued again
+      if (StepDue()) {  // a memoryless step: every edge queued again
         heap_.clear();
         step = true;
         break;

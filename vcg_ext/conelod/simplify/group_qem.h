@@ -177,6 +177,9 @@ constexpr double kRefreshRatio = 0.8;
 // passes then the queue, memoryless steps (kRefreshRatio), whole components may go when stuck,
 // edge flips unblock refused collapses.
 GroupQemParams OneTargetParams(size_t targetFaces);
+// Whether the run's bound is to the input (a maxError, or paper mode): the CLI and the filter then
+// keep the input's quadrics (refreshRatio 0) unless asked.
+inline bool BoundToInput(const GroupQemParams& p) { return p.maxError > 0 || p.mode == GroupMode::Paper; }
 
 // Ok, or a message naming the bad parameter.
 Status ValidateParams(const GroupQemParams& p);

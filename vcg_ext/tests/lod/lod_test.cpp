@@ -1661,8 +1661,7 @@ TEST(Lod, SheetRimsKeepTheirPlaceLevelAfterLevel) {
     level.faces = dag.levels[size_t(bound.first)].faces;
     HausdorffResult d;
     ASSERT_TRUE(SampledHausdorff(level, m, 50000, d).ok());
-    EXPECT_LE(100 * std::max(d.ab.rms, d.ba.rms) / d.diagonal, bound.second)
-        << "level " << bound.first << ", " << level.faces.size() << " faces";
+    EXPECT_LE(d.rmsPct(), bound.second) << "level " << bound.first << ", " << level.faces.size() << " faces";
   }
 }
 
