@@ -62,6 +62,21 @@ std::vector<float> At(const AttributeQuadrics& aq, const GroupQemResult& r, size
   aq.Evaluate(r.sourceFace[f], k, r.sourceVertex[o], vcg::Point3d(q[0], q[1], q[2]), out.data());
   return out;
 }
+// Every face of `r` (simplified with TwoChartCorners' texture coordinates) has its corners in one
+// chart, and each corner's (u, v) is its vertex's (x, y), u shifted by 1 in the right chart.
+void ExpectTwoChartsFollowPositions(const AttributeQuadrics& aq, const GroupQemResult& r) {
+  for (size_t f = 0; f < r.mesh.faceCount(); ++f) {
+    int right = 0;
+    for (int k = 0; k < 3; ++k) {
+      const auto uv = At(aq, r, f, k);
+      const auto& q = r.mesh.positions[r.mesh.faces[f][size_t(k)]];
+      right += uv[0] >= 1;
+      EXPECT_NEAR(uv[0] - (uv[0] >= 1 ? 1 : 0), q[0], 1e-5) << "u does not follow x in its chart";
+      EXPECT_NEAR(uv[1], q[1], 1e-5) << "v does not follow y";
+    }
+    EXPECT_TRUE(right == 0 || right == 3) << "face " << f << " has corners of both charts";
+  }
+}
 VertexAttributes ColoursOf(const IndexedMesh& m) {
   VertexAttributes a;
   a.colorChannels = 3;
@@ -134,17 +149,7 @@ TEST(AttributeQuadric, KeepsTextureSeams) {
       }
     EXPECT_GE(seamLeft, 2u);
     EXPECT_LT(seamLeft, size_t(kN + 1)) << "the seam was not simplified along itself";
-    for (size_t f = 0; f < r.mesh.faceCount(); ++f) {
-      int right = 0;
-      for (int k = 0; k < 3; ++k) {
-        const auto uv = At(aq, r, f, k);
-        const auto& q = r.mesh.positions[r.mesh.faces[f][size_t(k)]];
-        right += uv[0] >= 1;
-        EXPECT_NEAR(uv[0] - (uv[0] >= 1 ? 1 : 0), q[0], 1e-5) << "u does not follow x in its chart";
-        EXPECT_NEAR(uv[1], q[1], 1e-5);
-      }
-      EXPECT_TRUE(right == 0 || right == 3) << "face " << f << " has corners of both charts";
-    }
+    ExpectTwoChartsFollowPositions(aq, r);
   }
 }
 
@@ -249,17 +254,7 @@ TEST(AttributeQuadric, SeamVerticesSlideAlongTheirSeam) {
     slid += std::fabs(q[1] * kN - std::round(q[1] * kN)) > 1e-3f;
   }
   EXPECT_GT(slid, 0u) << "no seam vertex between two input vertices: no collapse slid along the seam";
-  for (size_t f = 0; f < r.mesh.faceCount(); ++f) {
-    int right = 0;
-    for (int k = 0; k < 3; ++k) {
-      const auto uv = At(aq, r, f, k);
-      const auto& q = r.mesh.positions[r.mesh.faces[f][size_t(k)]];
-      right += uv[0] >= 1;
-      EXPECT_NEAR(uv[0] - (uv[0] >= 1 ? 1 : 0), q[0], 1e-5) << "u does not follow x in its chart";
-      EXPECT_NEAR(uv[1], q[1], 1e-5) << "v does not follow y";
-    }
-    EXPECT_TRUE(right == 0 || right == 3) << "face " << f << " has corners of both charts";
-  }
+  ExpectTwoChartsFollowPositions(aq, r);
 }
 
 TEST(AttributeQuadric, SeamVerticesLeaveTheSeamOnlyWithSeamMoves) {
