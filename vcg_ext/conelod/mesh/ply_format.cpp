@@ -423,6 +423,13 @@ std::string TriangulatePolygon(const std::vector<std::array<float, 3>>& P, const
 
 namespace {
 
+// A whole number read as a double, for a message: 1e+30 where it is too large to be an integer.
+std::string WholeNumber(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.15g", v);
+  return text;
+}
+
 // An integer of an integer type code at p, in the host's byte order.
 int64_t NativeInteger(const char* p, int type) {
   switch (type) {
@@ -698,8 +705,8 @@ std::string ParsePlyImpl(const char* data, size_t size, const std::string& name,
                    ", which is not a whole number";
           }
           if (!(v >= 0 && v < double(mesh.positions.size())))
-            return file + "face " + std::to_string(r) + " uses vertex " + std::to_string((long long)v) +
-                   " but there are " + std::to_string(mesh.positions.size()) + " vertices";
+            return file + "face " + std::to_string(r) + " uses vertex " + WholeNumber(v) + " but there are " +
+                   std::to_string(mesh.positions.size()) + " vertices";
           corners.push_back(uint32_t(v));
         }
       }

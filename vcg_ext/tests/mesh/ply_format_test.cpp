@@ -337,6 +337,21 @@ TEST(PlyFormat, RefusesShortFacesAndBadIndices) {
   EXPECT_NE(Read(h + v + "3 0 1\n", m).find("ends early"), std::string::npos);
 }
 
+// Indices beyond any integer (the fuzzer's find: casting 1e300 to an integer is undefined) are
+// named as they were read.
+TEST(PlyFormat, NamesIndicesBeyondAnyInteger) {
+  PlyMesh m;
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uint double vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
+  std::string err = Read(head + "3 0 1 1e300\n", m);
+  EXPECT_NE(err.find("face 0 uses vertex 1e+300 but there are 3 vertices"), std::string::npos) << err;
+  err = Read(head + "3 0 1 -1e300\n", m);
+  EXPECT_NE(err.find("face 0 uses vertex -1e+300 but there are 3 vertices"), std::string::npos) << err;
+  err = Read(head + "3 0 1 4294967296\n", m);
+  EXPECT_NE(err.find("face 0 uses vertex 4294967296 but there are 3 vertices"), std::string::npos) << err;
+}
+
 TEST(PlyFormat, NamesOtherFormats) {
   PlyMesh m;
   for (const char* other : {"OFF\n3 1 0\n", "solid x\nfacet\n", "v 0 0 0\nf 1 2 3\n", "\x1f\x8b\x08\x00"})
