@@ -100,9 +100,9 @@ bool ParseMemory(const std::string& text, uint64_t& bytes) {
 
 int LodBuild(int argc, char** argv) {
   Args a(argc, argv,
-         With(kGroupingOptions,
-              {"-o", "--level-ratio", "--threads", "--faces-per-part", "--cluster-faces", "--group-clusters",
-               "--quality-thr", "--boundary-weight", "--precision", "--memory", "--attribute-weight"}),
+         With(kGroupingOptions, {"-o", "--level-ratio", "--threads", "--faces-per-part", "--cluster-faces",
+                                 "--group-clusters", "--quality-thr", "--boundary-weight", "--precision", "--memory",
+                                 "--attribute-weight", "--refresh-ratio"}),
          {"--json", "--strict-greedy", "--no-optimal-placement", "--preserve-boundary", "--no-preserve-normal",
           "--no-attributes"});
   LodBuildParams params;
@@ -115,6 +115,8 @@ int LodBuild(int argc, char** argv) {
   qem.optimalPlacement = !a.has("--no-optimal-placement");
   qem.preserveBoundary = a.has("--preserve-boundary");
   qem.preserveNormal = !a.has("--no-preserve-normal");
+  params.refreshRatio = a.num("--refresh-ratio", params.refreshRatio);
+  if (!(params.refreshRatio >= 0 && params.refreshRatio < 1)) return Fail(kUsage, "--refresh-ratio must be in [0, 1)");
   const double clusterFaces = a.num("--cluster-faces", double(params.clusterFaces));
   const double groupClusters = a.num("--group-clusters", double(params.groupClusters));
   if (!(clusterFaces >= 4 && clusterFaces <= 65536) || clusterFaces != std::floor(clusterFaces))
@@ -603,7 +605,8 @@ const char* kLodUsage =
     "  [0: one per core], and re-cut into the next level's clusters; at the top each connected\n"
     "  part is simplified as one group. Collapse options (as conelod simplify's, defaults in\n"
     "  brackets): --quality-thr Q [0.3] --no-optimal-placement --preserve-boundary\n"
-    "  --boundary-weight W [1] --no-preserve-normal.\n"
+    "  --boundary-weight W [1] --no-preserve-normal; --refresh-ratio R [0.8]: a group's collapse\n"
+    "  builds its quadrics again from its surface each time it is down to R of its faces (0: once).\n"
     "  Positions are quantized on one grid: none moves by more than E x the diagonal [5e-6];\n"
     "  the nodes' vertices and triangles are compressed (meshoptimizer's codecs).\n"
     "  --memory SIZE (512M, 2G; at least 16M): an input of more than SIZE / 2048 faces is split\n"

@@ -648,6 +648,32 @@ def cli_simplify_refresh_ratio(c):
 
 
 @case
+def cli_lod_refresh_ratio(c):
+    """The groups' memoryless steps in `conelod lod build`: the default is `--refresh-ratio 0.8` byte
+    for byte and differs from 0 (each group's collapse with its level's quadrics to its end); both
+    give the whole bunny back at full budget; a ratio outside [0, 1) is a usage error and writes
+    nothing."""
+    bunny = c.mesh("stanford_bunny_bun_zipper.ply")
+    files = {}
+    for extra in ([], ["--refresh-ratio", "0.8"], ["--refresh-ratio", "0"]):
+        out = c.out("refresh%d.clod" % len(files))
+        c.conelod("lod", "build", bunny, "-o", out, *extra)
+        files[" ".join(extra)] = out
+    data = {k: open(v, "rb").read() for k, v in files.items()}
+    assert data[""] == data["--refresh-ratio 0.8"]
+    assert data[""] != data["--refresh-ratio 0"], "the steps change nothing"
+    for clod in (files[""], files["--refresh-ratio 0"]):
+        full = c.out("full.ply")
+        r = json.loads(c.conelod("lod", "extract", clod, "--eye", "0,0.1,10", "--budget", "100%", "-o", full,
+                                 "--json").stdout)
+        assert r["faces"] == 69451, r
+    for bad in ("1", "-0.1", "x"):
+        out = c.out("bad.clod")
+        r = c.conelod("lod", "build", bunny, "-o", out, "--refresh-ratio", bad, expect=1)
+        assert "--refresh-ratio" in r.stderr.decode() and not os.path.exists(out), r.stderr.decode()
+
+
+@case
 def cli_simplify_parts_flat_faces(c):
     """A face that uses a vertex twice joins nothing: the integrity search went through such a face
     (u, w, w) from the faces at u to every face at w, so a collapse could leave a group in two pieces

@@ -85,12 +85,15 @@ struct LodBuildParams {
   // at the same face count with 0.002, 0.41-0.70x with 0.004, 0.8-4.7x without a cap.
   double maxGroupError = 0.002;
   // A group's collapse takes memoryless steps at this ratio (GroupQemParams::refreshRatio; the cap
-  // above is then to the surface of the step); 0 (the default): the level's quadrics to the
-  // group's end. At 0.85 a group simplified to 0.5 or 0.6 of its faces builds its quadrics again
-  // at 0.85 of them (and at 0.72 on the way to 0.5): the bunny's and the armadillo's cuts came
-  // closer to our one-piece collapse, the dragon's 2 % cut went further, and the bunny's 10 % cut
-  // filled 97.7 % of its budget (docs/lod_viewer.md, "Memoryless steps in the groups"): not on yet.
-  double refreshRatio = 0;
+  // above is then to the surface of the step; conelod lod build --refresh-ratio): a group simplified
+  // to 0.5 or 0.6 of its faces builds its quadrics again from its surface at 0.8 of them (and at
+  // 0.64 on the way to 0.5). Cuts of the bunny, the armadillo and the dragon at 2 / 5 / 10 / 25 %
+  // (bench/lod_fidelity --cuts): 1.10x our one-piece collapse at their counts in the geometric
+  // mean, 1.13x with 0 (the level's quadrics to the group's end); 0.85 and 0.9: 1.08x, but the
+  // bunny's screen-space cuts lose their view dependence at 30 % (BunnyLod,
+  // SmallBudgetsRefineWhereTheEyeLooks) and with 0.85 its 10 % cut fills 97.7 % of its budget
+  // (docs/lod_viewer.md, "Memoryless steps in the groups").
+  double refreshRatio = 0.8;
   // The positions' quantization (lod_read.h, LodGrid): no vertex moves by more than this fraction
   // of the diagonal of the box of the DAG's positions (kMinLodPrecision..kMaxLodPrecision).
   double precision = kDefaultLodPrecision;

@@ -15,7 +15,7 @@
 // wherever it is drawn. The refinement stops at the first group whose expansion does not fit the
 // face budget; by the error in model units (ObjectError) that group is passed over instead, and
 // the smaller groups further down the queue that fit fill what is left of the budget; once none
-// fits, an expansion is undone for a larger one that fits and gains more (Impl::Fill). Culling only
+// fits, expansions are undone for others that fit and gain more (Impl::Fill). Culling only
 // flags cut nodes as not drawn: it never changes the selection, so the drawn set is a subset of
 // a watertight cut whose other nodes face away.
 #include "conelod/lod/lod_read.h"
@@ -393,12 +393,13 @@ struct LodRefiner::Impl {
   }
 
   // ObjectError, the queue empty below the budget: the cut changes by whole groups, and near the
-  // top a group adds hundreds of faces, so what is left may fit no expansion. One expansion whose
-  // children are all still in the cut is undone for a larger one that then fits and gains more in
-  // all (ObjectWorth): of those pairs, the one that brings the cut closest to
-  // its budget (ties: the smaller keys). The queue then goes on: the larger group's
-  // children may fit what is left. Each swap adds faces, so swaps end; the cut stays one of the
-  // DAG's cuts (watertight), and the choice depends on the file and the budget only.
+  // top a group adds hundreds of faces, so what is left may fit no expansion. Expansions whose
+  // children are all still in the cut are undone for others that then fit and gain more in all
+  // (ObjectWorth): one undone for one or two expanded, or two undone for one larger. Of those
+  // moves, the one that brings the cut closest to its budget (ties: the first in the order of the
+  // keys). The queue then goes on: the new children may fit what is left. Each move adds faces, so
+  // moves end; the cut stays one of the DAG's cuts (watertight), and the choice depends on the
+  // file and the budget only.
   Status Fill(bool& swapped) {
     swapped = false;
     const int64_t slack = int64_t(view.faceBudget) - int64_t(cut.faces);
@@ -423,47 +424,98 @@ struct LodRefiner::Impl {
     }
     if (open.empty()) return Status::Ok();
     std::sort(open.begin(), open.end());
-    std::vector<uint32_t> undoable;
+    struct Undo {
+      uint32_t key;
+      int64_t removed;  // faces its undoing removes
+      double lost;      // ObjectWorth
+    };
+    std::vector<Undo> undoable;  // the expansions whose children are all in the cut
     for (uint32_t key : expanded) {
       if (state[key] != kRefined) continue;
       bool leaf = true;
       for (uint32_t c : reader.node(key).children) leaf = leaf && state[c] == kInCut;
-      if (leaf) undoable.push_back(key);
-    }
-    std::sort(undoable.begin(), undoable.end());
-    int64_t bestFaces = int64_t(cut.faces);
-    uint32_t bestUndo = 0, bestExpand = 0;
-    for (uint32_t u : undoable) {
-      const int64_t removed = Added(u);
+      if (!leaf) continue;
+      const std::vector<uint32_t> siblings = reader.node(key).siblings;  // copied: loading may rehash
       double lost = 0;
-      const std::vector<uint32_t> siblings = reader.node(u).siblings;  // copied: loading may rehash
       Status st = ObjectWorth(siblings, lost);
       if (!st.ok()) return st;
-      const std::vector<uint32_t>& gone = reader.node(u).children;
-      // Groups adding more than `removed` and at most `removed + slack`, largest first.
-      auto hi = std::upper_bound(open.begin(), open.end(), Open{removed + slack, UINT32_MAX, 0});
-      for (auto it = hi; it != open.begin();) {
+      undoable.push_back({key, Added(key), lost});
+    }
+    std::sort(undoable.begin(), undoable.end(), [](const Undo& x, const Undo& y) { return x.key < y.key; });
+    const int64_t before = int64_t(cut.faces);
+    int64_t bestFaces = before;
+    uint32_t bestUndo[2] = {kNone, kNone}, bestExpand[2] = {kNone, kNone};
+    std::vector<uint32_t> gone;  // the children the undoing removes
+    // The best groups to expand once `removed` faces (worth `lost`) are undone: one, then (with
+    // `pairs`) two, each adding at most `removed + slack` less the other.
+    auto consider = [&](int64_t removed, double lost, uint32_t u1, uint32_t u2, bool pairs) {
+      const auto hi = std::upper_bound(open.begin(), open.end(), Open{removed + slack, UINT32_MAX, 0});
+      auto take = [&](int64_t faces, uint32_t a, uint32_t b) {
+        bestFaces = faces;
+        bestUndo[0] = u1;
+        bestUndo[1] = u2;
+        bestExpand[0] = a;
+        bestExpand[1] = b;
+      };
+      for (auto it = hi; it != open.begin();) {  // largest first
         --it;
         if (it->added <= removed) break;
-        const int64_t faces = int64_t(cut.faces) - removed + it->added;
-        if (faces <= bestFaces) break;    // the rest add fewer
-        if (it->worth <= lost) continue;  // it would gain less than what is undone
-        bool disjoint = true;             // the group's clusters stay in the cut once u is undone
-        for (uint32_t s : reader.node(it->key).siblings)
-          disjoint = disjoint && std::find(gone.begin(), gone.end(), s) == gone.end();
-        if (!disjoint) continue;
-        bestFaces = faces;
-        bestUndo = u;
-        bestExpand = it->key;
+        const int64_t faces = before - removed + it->added;
+        if (faces <= bestFaces) break;                                // the rest add fewer
+        if (it->worth <= lost || !Disjoint(it->key, gone)) continue;  // gains less, or loses its clusters
+        take(faces, it->key, kNone);
+      }
+      if (!pairs) return;
+      for (auto a = hi; a != open.begin();) {
+        --a;
+        if (before - removed + 2 * a->added <= bestFaces) break;  // b adds at most what a adds
+        if (!Disjoint(a->key, gone)) continue;
+        const auto bEnd = std::upper_bound(open.begin(), a, Open{removed + slack - a->added, UINT32_MAX, 0});
+        for (auto b = bEnd; b != open.begin();) {
+          --b;
+          const int64_t faces = before - removed + a->added + b->added;
+          if (faces <= bestFaces) break;
+          if (a->worth + b->worth <= lost || !Disjoint(b->key, gone)) continue;
+          take(faces, a->key, b->key);
+        }
+      }
+    };
+    const int64_t mostAdded = open.back().added;
+    for (size_t i = 0; i < undoable.size(); ++i) {
+      const Undo& u = undoable[i];
+      gone = reader.node(u.key).children;
+      consider(u.removed, u.lost, u.key, kNone, true);
+      for (size_t j = i + 1; j < undoable.size(); ++j) {  // two undone for one larger
+        const Undo& w = undoable[j];
+        if (u.removed + w.removed >= mostAdded) continue;
+        gone = reader.node(u.key).children;
+        const std::vector<uint32_t>& more = reader.node(w.key).children;
+        gone.insert(gone.end(), more.begin(), more.end());
+        consider(u.removed + w.removed, u.lost + w.lost, u.key, w.key, false);
       }
     }
-    if (bestFaces == int64_t(cut.faces)) return Status::Ok();
-    Status st = Collapse(bestUndo);
-    if (!st.ok()) return st;
-    st = expand(bestExpand);
-    if (!st.ok()) return st;
+    if (bestFaces == before) return Status::Ok();
+    for (uint32_t u : bestUndo) {
+      if (u == kNone) continue;
+      Status st = Collapse(u);
+      if (!st.ok()) return st;
+    }
+    for (uint32_t e : bestExpand) {
+      if (e == kNone) continue;
+      Status st = expand(e);
+      if (!st.ok()) return st;
+    }
     swapped = true;
     return Status::Ok();
+  }
+
+  static constexpr uint32_t kNone = UINT32_MAX;
+
+  // Whether none of the clusters of group `key` is among `gone`.
+  bool Disjoint(uint32_t key, const std::vector<uint32_t>& gone) const {
+    for (uint32_t s : reader.node(key).siblings)
+      if (std::find(gone.begin(), gone.end(), s) != gone.end()) return false;
+    return true;
   }
 
   void UpdateStats() const {

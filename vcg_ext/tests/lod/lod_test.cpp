@@ -1392,10 +1392,10 @@ TEST_F(BunnyLod, ObjectErrorCutsFillTheirBudget) {
 
 // Near the top of the DAG one expansion adds hundreds of faces, so a greedy pass can end well
 // short of its budget with nothing left that fits. By the error in model units the refiner then
-// undoes one expansion for a larger one that fits and gains more (lod_refine.cpp, Fill): over
-// budgets of 2-30 % of the bunny, 12 cuts of 57 end below 98 % of their budget instead of 27 (the
-// 6 % cut at 99.8 % instead of 89.6 %), every cut within its budget, none with an edge used by
-// three faces.
+// undoes expansions for others that fit and gain more (lod_refine.cpp, Fill): over budgets of
+// 2-30 % of the bunny, 8 cuts of 57 end below 98 % of their budget; 12 when one expansion is only
+// undone for one (the 10 % cut at 97.96 %: BunnyLod.ObjectErrorCutsFillTheirBudget). Every cut
+// within its budget, none with an edge used by three faces.
 TEST_F(BunnyLod, ObjectErrorCutsSwapGroupsToFillTheirBudget) {
   auto r = Open();
   ASSERT_TRUE(r);
@@ -1411,7 +1411,7 @@ TEST_F(BunnyLod, ObjectErrorCutsSwapGroupsToFillTheirBudget) {
     EXPECT_EQ(CheckCut(*bunny_, *r, cut).overused, 0u);
     if (cut.faces * 100 < budget * 98) ++below;
   }
-  EXPECT_LE(below, 12);
+  EXPECT_LE(below, 8);
 }
 
 // By the error in model units the groups are expanded by what they gain for the cut's RMS
