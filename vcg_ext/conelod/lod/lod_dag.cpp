@@ -1707,7 +1707,8 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
   }
   {
     GroupQemParams q = params.simplification.qem;
-    q.targetFaces = 1;  // set per group
+    q.targetFaces = 1;                     // set per group
+    q.refreshRatio = params.refreshRatio;  // as SimplifyGroup sets it
     s = ValidateParams(q);
   }
   if (!s.ok()) return s;

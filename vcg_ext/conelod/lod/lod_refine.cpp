@@ -484,11 +484,12 @@ struct LodRefiner::Impl {
     for (size_t i = 0; i < undoable.size(); ++i) {
       const Undo& u = undoable[i];
       gone = reader.node(u.key).children;
+      const size_t own = gone.size();
       consider(u.removed, u.lost, u.key, kNone, true);
       for (size_t j = i + 1; j < undoable.size(); ++j) {  // two undone for one larger
         const Undo& w = undoable[j];
         if (u.removed + w.removed >= mostAdded) continue;
-        gone = reader.node(u.key).children;
+        gone.resize(own);  // u's children, then w's
         const std::vector<uint32_t>& more = reader.node(w.key).children;
         gone.insert(gone.end(), more.begin(), more.end());
         consider(u.removed + w.removed, u.lost + w.lost, u.key, w.key, false);

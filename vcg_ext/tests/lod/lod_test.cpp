@@ -1641,6 +1641,12 @@ TEST(Lod, FineGroupClustersGatherLargerGroupsOnTheFineLevels) {
     q.coarseLevelRatio = bad;
     EXPECT_FALSE(BuildLodDag(fine.mesh, q, dag).ok()) << bad;
   }
+  // And a memoryless steps' ratio out of [0, 1) (each group would otherwise stay as it is).
+  for (double bad : {-0.1, 1.0, std::numeric_limits<double>::quiet_NaN()}) {
+    q = LodBuildParams();
+    q.refreshRatio = bad;
+    EXPECT_FALSE(BuildLodDag(fine.mesh, q, dag).ok()) << bad;
+  }
 }
 
 // A thin closed lens (two layers meeting back to back along their rim, as a scan's layers where a
