@@ -4,7 +4,7 @@
 //
 //   lod_fidelity MESH.ply [--samples N] [--dag-only] [--cluster-faces N] [--group-clusters N] [--cone DEG]
 //                [--max-faces N] [--max-group-error F] [--lod-refresh-ratio R] [--fine-group-clusters N]
-//                [--large-fine-group-clusters N]
+//                [--large-fine-group-clusters N] [--large-group-clusters N] [--large-group-count K]
 //                [--level-ratio R]
 //                [--coarse-level-ratio R] [--top-group-clusters N] [--cuts P,P,...] [--no-peers]
 //                [--min-faces N] [--borders] [--locked-border-weight W] [--chunk-faces N] [--shuffle-faces S]
@@ -23,7 +23,9 @@
 // --max-group-error 1: the DAG without the cap on a group's collapse error (as before it had one).
 // --level-ratio R: each group of the fine levels simplified to R of its faces (conelod lod build
 // --level-ratio; 0.5); --coarse-level-ratio R: LodBuildParams::coarseLevelRatio (0.6; 0: the
-// level ratio at every level); --fine-group-clusters N / --large-fine-group-clusters N /
+// level ratio at every level); --large-group-clusters N / --large-group-count K:
+// LodBuildParams::largeGroupClusters / largeGroupCount (24 / 8; 0: off);
+// --fine-group-clusters N / --large-fine-group-clusters N /
 // --top-group-clusters N: LodBuildParams'
 // (24 / 64 / 6; 0: --group-clusters [12] there, or no large ones); --locked-border-weight W:
 // LodBuildParams::lockedBorderWeight;
@@ -139,6 +141,8 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--cluster-faces")) dagParams.clusterFaces = size_t(std::atoi(argv[i + 1]));
     if (!std::strcmp(argv[i], "--group-clusters")) dagParams.groupClusters = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--fine-group-clusters")) dagParams.fineGroupClusters = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--large-group-clusters")) dagParams.largeGroupClusters = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--large-group-count")) dagParams.largeGroupCount = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--large-fine-group-clusters")) dagParams.largeFineGroupClusters = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--max-group-error")) dagParams.maxGroupError = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--lod-refresh-ratio")) dagParams.refreshRatio = std::atof(argv[i + 1]);

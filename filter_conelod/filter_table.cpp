@@ -1267,7 +1267,8 @@ std::vector<ParamSpec> LodExportSpecs(const MeshDocument*, const MeshModel*) {
   p.push_back(IntParam("GroupClusters", d.groupClusters, "Clusters per group",
                        "Neighbouring clusters gathered into one group, simplified together with its outer "
                        "border locked and re-cut into the next level's clusters (24 on the levels above 3/8 of "
-                       "the input's faces, 64 on those of them with 262,144 faces or more, 6 on the top ones).",
+                       "the input's faces, 64 on those of them with 262,144 faces or more, 24 on the others with "
+                       "24,576 faces or more, 6 on the top ones).",
                        Between(2, 64)));
   p.push_back(FloatParam("LevelRatio", d.simplification.levelRatio, "Faces kept per level (0..1)",
                          "Each group of the fine levels (above 3/8 of the input's faces) is simplified to this "

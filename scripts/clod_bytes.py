@@ -30,7 +30,7 @@ def main():
     b = open(args[0], "rb").read()
     version, levels = struct.unpack_from("<II", b, 24)
     if version < 6:
-        sys.exit("clod_bytes.py: version %d: only versions 6 to 8 (the compact index)" % version)
+        sys.exit("clod_bytes.py: version %d: only versions 6 to 9 (the compact index)" % version)
     node_count = struct.unpack_from("<Q", b, 24 + 24)[0]
     hier, geos, index = struct.unpack_from("<QQQ", b, 24 + 64)
     first_id = []

@@ -61,8 +61,8 @@ build_fuzzer ply_reader_fuzz \
 # Seeds: an octahedron subdivided once and twice (32 and 128 faces, a sphere) and a bumpy variant,
 # with default and two-level hierarchies; the bumpy one also with vertex colour and normals
 # (attribute streams), and a sphere subdivided four times (2,048 faces), whose geometry streams
-# are deflated; all version 8 (range-coded positions). The stored files of the tests (versions 3
-# to 7) join them.
+# are deflated; all version 9 (range-coded positions, a typical distance per record). The stored
+# files of the tests (versions 3 to 8) join them.
 python3 - "$OUT/seeds" <<'PY'
 import math, sys
 def sphere(levels, bump):

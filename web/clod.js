@@ -8,7 +8,7 @@
 // ranges. Errors name the problem as the desktop reader's do.
 import { MeshoptDecoder } from './node_modules/meshoptimizer/meshopt_decoder.mjs';
 
-export const VERSION = 8;  // the newest read (8: range-coded positions; 7: deflated streams; 6: the compact index; 5: with attribute streams; 4, 3: geometry only)
+export const VERSION = 9;  // the newest read (9: a typical distance per record; 8: range-coded positions; 7: deflated streams; 6: the compact index; 5: with attribute streams; 4, 3: geometry only)
 const OLDEST_VERSION = 3;
 const CHUNK = 24;
 const HEADER_FIXED = 128;
@@ -19,6 +19,7 @@ const INDEX_ENTRY = 8;  // versions 3 to 5: u32 recordEnd, u32 geometryEnd
 const COMPACT_INDEX_VERSION = 6;  // varint entries, INDX data listing where each block starts
 const DEFLATE_VERSION = 7;  // each geometry stream deflated when that is smaller
 const CODED_POSITIONS_VERSION = 8;  // positions' residuals range-coded (lod_entropy.h)
+const TYPICAL_VERSION = 9;  // each record above level 0: its creator group's typical distance after the error
 const MAX_DEFLATE_RATIO = 1032;  // deflate's largest expansion (RFC 1951)
 const RECORD_FIXED = 26;  // the smallest record (version 4 at level 0): CRC, cone, sphere
 const GEOM_MIN = 5;
@@ -895,6 +896,8 @@ export class ClodReader {
       n.center = [d.f32(), d.f32(), d.f32()];
       n.radius = d.f32();
       n.error = v4 && level === 0 ? 0 : d.f32();
+      // (the typical distance orders the desktop refinement by error in model units; checked, kept)
+      n.typical = this.info.version >= TYPICAL_VERSION ? (level === 0 ? 0 : d.f32()) : -1;
       if (!v4) n.parentError = d.f32();
       const group = d.uv(), faces = d.uv(), vertices = d.uv(), children = d.uv();
       if (d.overrun || group > 0xffffffff || faces > 0xffffffff || vertices > 0xffffffff)
@@ -942,7 +945,8 @@ export class ClodReader {
       if (d.left() !== 0) throw new ClodError(bad + 'its size does not match its contents');
       if (![...n.center, n.radius].every(Number.isFinite) || !(n.radius >= 0))
         throw new ClodError(bad + 'non-finite or negative cone or sphere');
-      if (!(n.error >= 0) || !Number.isFinite(n.error) || (level === 0 && n.error !== 0))
+      if (!(n.error >= 0) || !Number.isFinite(n.error) || (level === 0 && n.error !== 0) ||
+          (this.info.version >= TYPICAL_VERSION && !(n.typical >= 0 && n.typical <= n.error)))
         throw new ClodError(bad + 'bad error bounds');
       if (n.groupHead && (!(n.parentError >= n.error) || (top ? n.parentError !== Infinity : !Number.isFinite(n.parentError))))
         throw new ClodError(bad + 'bad error bounds');

@@ -1842,7 +1842,7 @@ def cli_lod_round_trip(c):
     assert b["file_bytes"] == os.path.getsize(clod), b
     assert all(b["level_faces"][k] <= b["level_faces"][k - 1] for k in range(1, b["levels"])), b
     info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
-    assert info["faces"] == 69451 and info["nodes"] == b["nodes"] and info["version"] == 8, info
+    assert info["faces"] == 69451 and info["nodes"] == b["nodes"] and info["version"] == 9, info
     # Positions on one grid, within the bound asked for (--precision, default 5e-6 of the diagonal).
     assert 0 < b["quantization_error"] == info["quantization_error"] <= 5e-6 * 0.27, (b, info)
     human = c.conelod("lod", "info", clod).stdout.decode()
@@ -2274,8 +2274,8 @@ def cli_lod_bad_files(c):
     bad("magic.clod", b"XLOD" + data[4:], "wrong magic")
     bad("ply.clod", open(sphere, "rb").read(), "not a .clod file")
     version = bytearray(data)
-    version[24] = 9  # the version field (the header's checksum is checked after it)
-    bad("version.clod", bytes(version), "unsupported .clod version 9")
+    version[24] = 10  # the version field (the header's checksum is checked after it)
+    bad("version.clod", bytes(version), "unsupported .clod version 10")
     version[24] = 2  # files of the previous formats: named, with what to do
     bad("version2.clod", bytes(version), ".clod version 2 file (uncompressed")
     version[24] = 1
@@ -3162,7 +3162,7 @@ def cli_lod_attributes(c):
     assert r["attribute_conflicts"] == 0, r  # the seam's repeated vertices agree on colour and normal
     assert b"texture coordinates are stored without the image: cannot read its texture image" in p.stderr, p.stderr
     info = json.loads(c.conelod("lod", "info", clod, "--json").stdout)
-    assert info["version"] == 8 and info["colors"] and info["normals"] and info["texcoords"], info
+    assert info["version"] == 9 and info["colors"] and info["normals"] and info["texcoords"], info
     assert info["uv_min"] == [0, 0] and info["uv_max"] == [2, 1] and info["texture_bytes"] == 0, info
     text = c.conelod("lod", "info", clod).stdout.decode()
     assert "attributes per vertex: colour (RGBA8), normals (octahedral 2 x 16 bits)" in text, text
@@ -3215,7 +3215,7 @@ def cli_lod_attributes(c):
     p = c.conelod("lod", "build", src, "-o", noattr, "--no-attributes")
     assert b"texture coordinates" not in p.stderr, p.stderr
     assert open(plain, "rb").read() == open(noattr, "rb").read(), "--no-attributes is not the geometry-only file"
-    assert json.loads(c.conelod("lod", "info", plain, "--json").stdout)["version"] == 8
+    assert json.loads(c.conelod("lod", "info", plain, "--json").stdout)["version"] == 9
     assert os.path.getsize(clod) > os.path.getsize(plain)
     p = c.conelod("lod", "build", src, "-o", c.out("bad.clod"), "--attribute-weight", "-1", expect=1)
     assert b"--attribute-weight must be >= 0" in p.stderr and not os.path.exists(c.out("bad.clod")), p.stderr

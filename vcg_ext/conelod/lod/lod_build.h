@@ -53,6 +53,17 @@ struct LodBuildParams {
   // 1.07-1.10x over three builds, its file 6,944,244 -> 6,870,466 bytes; the bunny's and the
   // armadillo's levels are under that size.
   int largeFineGroupClusters = 64;
+  // Clusters per group on a coarse level (below the fine ones, above the top) that still holds
+  // largeGroupCount groups of this many (24,576 faces at 128 faces a cluster: inputs of more than
+  // about 65,000 faces); 0: never. As on the fine levels, larger groups lock a smaller share of
+  // their faces: the dragon's levels 3-7 went from 1.18-1.36x our static collapse at their counts
+  // (level 3, from groups of 12: 1.35x) to 1.05-1.11x, its 2 / 5 / 10 / 25 % cuts from 1.11 / 1.20
+  // / 1.10 / 1.16x to 1.08 / 1.09 / 1.07 / 1.16x (bench/lod_fidelity --cuts, ordered by the largest
+  // distance, version 8), the file 6,874,726 -> 6,816,609 bytes. On the levels where a view
+  // still has a few groups to choose among (under 8 of them) the groups stay small: with 24 on
+  // every coarse level the dragon's 2 % cut filled 95.6 % of its budget (99.4 % so).
+  int largeGroupClusters = 24;
+  int largeGroupCount = 8;
   // Clusters per group on the top levels (under the faces of 4 groups of groupClusters clusters:
   // 6,144 by default; or under topFaceShare of the input's faces); 0: groupClusters. Smaller
   // groups there refine the small cuts in smaller steps, so that they fill their budget (the
@@ -127,6 +138,10 @@ struct LodDag {
     std::vector<int> clusterCreator;  // per cluster: the group of the level below it was made from (-1 at level 0)
     std::vector<float> clusterError;  // per cluster: its error (the creator group's); 0 at level 0
     std::vector<float> groupError;    // per group of this level: error of the clusters made from it
+    // Per cluster above level 0: its creator group's typical distance (the geometric mean of the
+    // RMS and the largest distance from the group's vertices to its simplified faces, not
+    // accumulated; what the refinement by error in model units orders by); empty at level 0.
+    std::vector<float> clusterTypical;
     size_t clusterCount() const { return clusterGroup.size(); }
   };
   std::vector<Level> levels;

@@ -612,6 +612,97 @@ int KdChunks(const IndexedMesh& mesh, size_t cap, std::vector<uint32_t>& leaf) {
   return depth;
 }
 
+// The sum over `order`'s vertices of the squared distance to the nearest of `tri`'s faces, exact:
+// a uniform grid over the faces' and the vertices' box, each face in every cell its box meets,
+// each vertex searching shells of cells outwards until its nearest face so far is nearer than
+// any cell not searched.
+// Only the vertices whose index is a multiple of kSampleStride are measured.
+constexpr uint32_t kSampleStride = 4;
+template <class TriT, class NearT, class PosT>
+double SumSquaredDistances(const std::vector<TriT>& tri, const std::vector<NearT>& order, const PosT& positions) {
+  if (tri.empty() || order.empty()) return 0;
+  vcg::Box3d box;
+  double edge = 0;
+  for (const TriT& t : tri) {
+    for (const auto& q : t.p) box.Add(q);
+    edge += t.radius;
+  }
+  for (const NearT& n : order) box.Add(vcg::Point3d::Construct(positions[n.vertex]));
+  const vcg::Point3d dim = box.Dim();
+  double h = std::max(2 * edge / double(tri.size()), 1e-12 * (1 + dim.Norm()));
+  int n[3];
+  for (;;) {
+    uint64_t cells = 1;
+    for (int i = 0; i < 3; ++i) {
+      n[i] = std::max(1, int(std::min(1024.0, std::ceil(dim[i] / h))));
+      cells *= uint64_t(n[i]);
+    }
+    if (cells <= 4 * tri.size() + 64) break;
+    h *= 1.5;
+  }
+  auto cellOf = [&](double x, int i) { return std::max(0, std::min(n[i] - 1, int((x - box.min[i]) / h))); };
+  std::vector<uint32_t> start(size_t(n[0]) * n[1] * n[2] + 1, 0), items;
+  auto forCells = [&](const TriT& t, auto&& f) {
+    vcg::Box3d b;
+    for (const auto& q : t.p) b.Add(q);
+    const int x0 = cellOf(b.min[0], 0), x1 = cellOf(b.max[0], 0), y0 = cellOf(b.min[1], 1), y1 = cellOf(b.max[1], 1),
+              z0 = cellOf(b.min[2], 2), z1 = cellOf(b.max[2], 2);
+    for (int z = z0; z <= z1; ++z)
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) f(size_t(z) * n[1] * n[0] + size_t(y) * n[0] + size_t(x));
+  };
+  for (const TriT& t : tri) forCells(t, [&](size_t c) { ++start[c + 1]; });
+  for (size_t c = 1; c < start.size(); ++c) start[c] += start[c - 1];
+  items.resize(start.back());
+  {
+    std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+    for (uint32_t i = 0; i < uint32_t(tri.size()); ++i) forCells(tri[i], [&](size_t c) { items[fill[c]++] = i; });
+  }
+  std::vector<uint32_t> stamp(tri.size(), 0);
+  uint32_t mark = 0;
+  double sum = 0;
+  for (const NearT& v : order) {
+    if (v.vertex % kSampleStride) continue;
+    const vcg::Point3d p = vcg::Point3d::Construct(positions[v.vertex]);
+    const int c[3] = {cellOf(p[0], 0), cellOf(p[1], 1), cellOf(p[2], 2)};
+    double best = v.bound;
+    ++mark;
+    for (int r = 0;; ++r) {
+      bool inside = false;
+      for (int z = c[2] - r; z <= c[2] + r; ++z) {
+        if (z < 0 || z >= n[2]) continue;
+        for (int y = c[1] - r; y <= c[1] + r; ++y) {
+          if (y < 0 || y >= n[1]) continue;
+          const bool edgeZY = z == c[2] - r || z == c[2] + r || y == c[1] - r || y == c[1] + r;
+          for (int x = c[0] - r; x <= c[0] + r; x += (edgeZY || r == 0) ? 1 : 2 * r) {
+            if (x < 0 || x >= n[0]) continue;
+            inside = true;
+            const size_t cell = size_t(z) * n[1] * n[0] + size_t(y) * n[0] + size_t(x);
+            for (uint32_t k = start[cell]; k < start[cell + 1]; ++k) {
+              const uint32_t i = items[k];
+              if (stamp[i] == mark) continue;
+              stamp[i] = mark;
+              best = std::min(best, PointTriangleDistance2(p, tri[i].p[0], tri[i].p[1], tri[i].p[2]));
+            }
+          }
+        }
+      }
+      // The faces not visited lie in cells outside the cube of cells within r of p's: at least
+      // the distance from p to that cube's nearest wall away (a wall on the grid's edge has no
+      // cell beyond it).
+      if (!inside) break;
+      double wall = std::numeric_limits<double>::infinity();
+      for (int i = 0; i < 3; ++i) {
+        if (c[i] - r > 0) wall = std::min(wall, p[i] - (box.min[i] + double(c[i] - r) * h));
+        if (c[i] + r < n[i] - 1) wall = std::min(wall, box.min[i] + double(c[i] + r + 1) * h - p[i]);
+      }
+      if (best <= std::max(0.0, wall) * std::max(0.0, wall)) break;
+    }
+    sum += best;
+  }
+  return sum;
+}
+
 // One group simplified: its faces in the group's local vertex ids, the positions of the vertices
 // it made (local ids >= the group's input vertex count refer to them), its error.
 struct GroupResult {
@@ -622,7 +713,8 @@ struct GroupResult {
   // With places (texture seams): per new vertex, the local id of a vertex at its position (< the
   // input local count: that vertex's place; else a new vertex, the first made at that position).
   std::vector<uint32_t> newPlace;
-  double distance = 0;
+  double distance = 0;  // the largest distance from the group's vertices to its simplified faces
+  double typical = 0;   // sqrt(RMS distance x distance) (LodDag::Level::clusterTypical)
   bool ok = false;
   // The faces re-cut into the next level's clusters (RecutGroup): per face its cluster, numbered
   // within the group, and their count.
@@ -740,7 +832,8 @@ bool UsesTopGroups(const LodBuildParams& params, uint64_t faces, uint64_t inputF
 
 // The clusters gathered into one group on such a level (LodBuildParams): fineGroupClusters on the
 // fine levels (largeFineGroupClusters on those that hold 32 groups that large), topGroupClusters on
-// the top ones, else groupClusters. Of the level's faces and the input's only, so the same for
+// the top ones, else groupClusters (largeGroupClusters on those that hold largeGroupCount groups
+// that large). Of the level's faces and the input's only, so the same for
 // every chunk and thread.
 int GroupClustersOf(const LodBuildParams& params, uint64_t faces, uint64_t inputFaces) {
   if (params.fineGroupClusters > 0 && !CoarseLevel(faces, inputFaces)) {
@@ -748,7 +841,11 @@ int GroupClustersOf(const LodBuildParams& params, uint64_t faces, uint64_t input
     if (large > params.fineGroupClusters && faces >= 32 * uint64_t(large) * params.clusterFaces) return large;
     return params.fineGroupClusters;
   }
-  return UsesTopGroups(params, faces, inputFaces) ? params.topGroupClusters : params.groupClusters;
+  if (UsesTopGroups(params, faces, inputFaces)) return params.topGroupClusters;
+  const int large = params.largeGroupClusters;
+  if (large > params.groupClusters && faces >= uint64_t(params.largeGroupCount) * uint64_t(large) * params.clusterFaces)
+    return large;
+  return params.groupClusters;
 }
 
 // Whether such a level's small groups join their neighbours (MergeSmallGroups): on the levels of at
@@ -809,7 +906,7 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
   out.newPositions.clear();
   out.newPlace.clear();
   out.newAttributes = LodAttributes();
-  out.distance = 0;
+  out.distance = out.typical = 0;
   out.ok = true;
   if (keep) {  // the group stays as it is
     out.faces = wedgeFaces;
@@ -1057,6 +1154,12 @@ void SimplifyGroup(const std::vector<Face>& levelFaces, const std::vector<uint32
     worst2 = std::max(worst2, best);
   }
   out.distance = std::sqrt(worst2);
+  // The typical distance: the geometric mean of that maximum and the RMS distance over every
+  // kSampleStride-th vertex (a frozen one at 0). The maximum alone grows with the group's size
+  // and one far vertex; the RMS alone hides a spike (docs/lod_viewer.md, "Fidelity of cuts").
+  const uint32_t sampled = (W + kSampleStride - 1) / kSampleStride;
+  const double rms = sampled ? std::sqrt(SumSquaredDistances(tri, order, local.positions) / double(sampled)) : 0.0;
+  out.typical = std::min(out.distance, std::sqrt(rms * out.distance));
 }
 
 // A copy of `faces` with each vertex id replaced by its place (LodAttributes::place: the lowest
@@ -1311,6 +1414,7 @@ Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSp
     N.clusterGroup.assign(NC, -1);
     N.clusterCreator.resize(NC);
     N.clusterError.resize(NC);
+    N.clusterTypical.resize(NC);
     std::vector<uint32_t> nextNode(depth > 0 ? NC : 0);
     {
       ParallelChunks(size_t(G), threads, 1, [&](size_t b, size_t e, unsigned) {
@@ -1339,6 +1443,7 @@ Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSp
           for (uint32_t c = c0; c < c0 + r.clusters; ++c) {
             N.clusterCreator[c] = g;
             N.clusterError[c] = groupError[size_t(g)];
+            N.clusterTypical[c] = float(r.typical);
             if (depth > 0) nextNode[c] = groupNode[size_t(g)];
           }
           r = GroupResult();  // free it
@@ -1633,6 +1738,7 @@ Status StreamLevels(const LodBuildParams& params, const Progress& progress, LodS
             N.clusterGroup.resize(cluster, -1);
             N.clusterCreator.resize(cluster, groupBase + g);
             N.clusterError.resize(cluster, ef);
+            N.clusterTypical.resize(cluster, float(res.typical));
             nextNode.resize(cluster, clusterNode[c0]);
           }
           dag.positions.resize(id);
@@ -1724,6 +1830,10 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
     return Status::Invalid("fine group clusters must be 0 or lie in [2, 64]");
   if (params.largeFineGroupClusters != 0 && (params.largeFineGroupClusters < 2 || params.largeFineGroupClusters > 64))
     return Status::Invalid("large fine group clusters must be 0 or lie in [2, 64]");
+  if (params.largeGroupClusters != 0 && (params.largeGroupClusters < 2 || params.largeGroupClusters > 64))
+    return Status::Invalid("large group clusters must be 0 or lie in [2, 64]");
+  if (params.largeGroupCount < 1 || params.largeGroupCount > 1024)
+    return Status::Invalid("the large groups' count must lie in [1, 1024]");
   if (params.topGroupClusters != 0 && (params.topGroupClusters < 2 || params.topGroupClusters > 64))
     return Status::Invalid("top group clusters must be 0 or lie in [2, 64]");
   if (!(params.topFaceShare >= 0 && params.topFaceShare <= 1))
@@ -1875,6 +1985,7 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
     std::vector<std::vector<uint32_t>> clusterOf;  // per group: level 1's cluster of each face
     std::vector<uint32_t> clusters;                // per group: level 1's clusters in it
     std::vector<float> error;                      // per group
+    std::vector<float> typical;                    // per group
     Status status;
   };
   auto prepare = [&](ChunkWork& w) {
@@ -1944,6 +2055,7 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
         N.clusterGroup.push_back(-1);
         N.clusterCreator.push_back(groupBase + g);
         N.clusterError.push_back(ef);
+        N.clusterTypical.push_back(w.typical[size_t(g)]);
         nextNode.push_back(uint32_t(w.chunk));
       }
     }
@@ -2026,6 +2138,7 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
       }
       w.faces.resize(size_t(w.groups));
       w.error.resize(size_t(w.groups));
+      w.typical.resize(size_t(w.groups));
       w.clusterOf.resize(size_t(w.groups));
       w.clusters.resize(size_t(w.groups));
     }
@@ -2061,6 +2174,7 @@ Status BuildLodDagFromChunks(LodChunkedInput& in, const LodBuildParams& params, 
               faces[f][i] = x < V ? r.localToGlobal[x] : firstNew + (x - V);
             }
           w.error[g] = GroupErrorAbove(0.0, r.distance);  // level 0's clusters have error 0
+          w.typical[g] = float(r.typical);
           r = GroupResult();
           w.clusters[g] = GrowClusters(faces, dag.positions, params.clusterFaces, angle1, w.clusterOf[g]);
         }

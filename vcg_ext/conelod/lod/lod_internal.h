@@ -22,14 +22,16 @@ constexpr uint32_t kIndex = FourCC('I', 'N', 'D', 'X');  // the offset index, in
 constexpr uint32_t kIBlock = FourCC('I', 'B', 'L', 'K');
 constexpr uint32_t kTexture = FourCC('T', 'E', 'X', 'R');  // with texture coordinates: the image
 
-// 8: the positions' residuals range-coded with adaptive models (lod_entropy.h) instead of
+// 9: version 8 plus each record above level 0 holding its creator group's typical distance (f32 after the
+// error; LodNode::typical); 8: the positions' residuals range-coded with adaptive models (lod_entropy.h) instead of
 // meshoptimizer's vertex codec; 7: each geometry stream (positions, triangles, vertex ids, attributes) deflated when
 // that is smaller (a code per stream says which); 6: a compact offset index (varint sizes per entry, a table of where
 // each block starts) and the header's attributes field always present (0: geometry only): written; 5: version 4 plus
 // per-vertex attribute streams (colour, normals), the attributes field present; 4: a group's
 // parentError and parents in its first record only; 3: quantized, compressed nodes (5, 4, 3 are
 // still read); 2: float positions per level, refused by name; 1: the tree of groups, refused.
-constexpr uint32_t kVersion = 8;                // the newest version read, and the one written
+constexpr uint32_t kVersion = 9;                // the newest version read, and the one written
+constexpr uint32_t kTypicalVersion = 9;         // the first whose records hold the typical distance
 constexpr uint32_t kCodedPositionsVersion = 8;  // the first with range-coded positions (lod_entropy.h)
 constexpr uint32_t kDeflateVersion = 7;         // the first whose geometry streams may be deflated
 constexpr uint64_t kMaxDeflateRatio = 1032;     // deflate's largest expansion on inflating (RFC 1951)

@@ -59,6 +59,10 @@ struct LodNode {
   float error = 0;        // upper estimate of this node's deviation from the input, model units
                           // (its creator group's; 0 at level 0; the same for all siblings)
   float parentError = 0;  // its own group's error (>= error); +infinity for a root
+  // Version 9: its creator group's typical distance (LodDag::Level::clusterTypical; <= error, not
+  // accumulated; 0 at level 0); -1 in older files (the refinement then takes error less its
+  // children's largest).
+  float typical = -1;
 };
 
 // The one grid every position of a file is quantized on (version 3): coordinate c of a vertex is

@@ -498,6 +498,7 @@ struct LodReader::Impl {
       for (int j = 0; j < 3; ++j) n.center[j] = d.f32();
       n.radius = d.f32();
       n.error = v4 && level == 0 ? 0.f : d.f32();
+      if (info.version >= kTypicalVersion) n.typical = level == 0 ? 0.f : d.f32();
       if (!v4) n.parentError = d.f32();
       const uint64_t group = d.uv(), faces = d.uv(), vertices = d.uv(), children = d.uv();
       const bool top = level + 1 == levels.size();
@@ -551,7 +552,8 @@ struct LodReader::Impl {
           !(n.cone.halfAngle >= 0 || emptyCone) || !std::isfinite(n.cone.axis[0] + n.cone.axis[1] + n.cone.axis[2]) ||
           !std::isfinite(n.center[0] + n.center[1] + n.center[2]) || !(n.radius >= 0) || !std::isfinite(n.radius))
         return Status::Invalid(bad + "non-finite or negative cone or sphere");
-      if (!(n.error >= 0) || !std::isfinite(n.error) || (level == 0 && n.error != 0))
+      if (!(n.error >= 0) || !std::isfinite(n.error) || (level == 0 && n.error != 0) ||
+          (info.version >= kTypicalVersion && !(n.typical >= 0 && n.typical <= n.error)))
         return Status::Invalid(bad + "bad error bounds");
       if (n.vertexCount > uint64_t(3) * n.faceCount || n.faceCount > levels[level].faces || n.faceCount == 0 ||
           n.vertexCount == 0)

@@ -144,11 +144,14 @@ struct LodRefiner::Impl {
   }
 
   // The error of the group node `id` was made from, accumulated up the DAG by the mean instead of
-  // the max: its own distance (its error less the largest error of its clusters: what the bound
-  // grew by when it was simplified) plus the mean of its clusters' (weighted by their radius
-  // squared; 0 at level 0). The file's error adds the largest of its clusters', so a few far
-  // vertices deep below raise every group above them; this one follows the RMS distance of the
-  // levels (docs/lod_viewer.md, "Fidelity of cuts"). Loads the records below `id` (once: kept).
+  // the max: its own distance plus the mean of its clusters' (weighted by their radius squared; 0
+  // at level 0). Its own distance is the group's typical one (LodNode::typical: the geometric mean
+  // of the RMS and the largest distance of its vertices; version 9), in older files its error less
+  // the largest error of its clusters (what the bound grew by when it was simplified: the largest
+  // distance alone, which grows with the group's size and one far vertex). The file's error adds
+  // the largest of its clusters', so a few far vertices deep below raise every group above them;
+  // this one follows the RMS distance of the levels (docs/lod_viewer.md, "Fidelity of cuts").
+  // Loads the records below `id` (once: kept).
   Status MeanError(uint32_t id, double& out) {
     out = 0;
     if (reader.node(id).level == 0 || reader.node(id).children.empty()) return Status::Ok();
@@ -173,7 +176,9 @@ struct LodRefiner::Impl {
       sum += r2 * below;
       plain += below;
     }
-    out = std::max(0.0, error - largest) + (area > 0 ? sum / area : plain / double(children.size()));
+    const double typical = reader.node(id).typical;
+    const double own = typical >= 0 ? typical : std::max(0.0, error - largest);
+    out = own + (area > 0 ? sum / area : plain / double(children.size()));
     meanError[key] = out;
     return Status::Ok();
   }

@@ -163,7 +163,7 @@ struct NodeRecord {
   vcg::Point3f center;
   float radius = 0;
   uint32_t faceCount = 0, vertexCount = 0;
-  float error = 0, parentError = 0;
+  float error = 0, parentError = 0, typical = 0;
 };
 
 // Faces of each node of a level in node order (counting sort by node).
@@ -575,7 +575,8 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
       if (!s.ok()) return s;
       const auto& faces = level.faces();
       const auto& faceCluster = level.faceCluster();
-      if (faceCluster.size() != faces.size() || L.clusterCreator.size() != C || L.clusterError.size() != C || C == 0)
+      if (faceCluster.size() != faces.size() || L.clusterCreator.size() != C || L.clusterError.size() != C || C == 0 ||
+          (k > 0 && L.clusterTypical.size() != C))
         return Status::Invalid(bad);
       std::atomic<bool> badCluster(false), badVertex(false);
       blockSpan.assign((faces.size() + kSpanBlock - 1) / kSpanBlock, vcg::Box3f());
@@ -708,6 +709,7 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
               R.siblings.assign(1, uint32_t(firstId[k] + i));
             } else {
               const size_t cr = size_t(L.clusterCreator[c]);
+              R.typical = std::max(0.f, std::min(R.error, L.clusterTypical[c]));
               R.children.assign(byGroup.begin() + byGroupStart[cr], byGroup.begin() + byGroupStart[cr + 1]);
               R.siblings.assign(byCreator.begin() + byCreatorStart[cr], byCreator.begin() + byCreatorStart[cr + 1]);
               // A group's clusters have consecutive ids (the node order): the file stores the range.
@@ -886,7 +888,10 @@ Status WriteLodFileFrom(const LodDag& dag, const LodSpill* spill, size_t inputVe
       e.u16(angle);
       for (int i = 0; i < 3; ++i) e.f32(R.center[i]);
       e.f32(R.radius);
-      if (R.level > 0) e.f32(R.error);  // 0 at level 0
+      if (R.level > 0) {  // 0 at level 0
+        e.f32(R.error);
+        e.f32(R.typical);
+      }
       e.uv(R.group == LodNode::kNoGroup ? 0 : uint64_t(R.group) + 1);
       e.uv(R.faceCount);
       e.uv(R.vertexCount);

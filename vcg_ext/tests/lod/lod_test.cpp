@@ -264,7 +264,7 @@ TEST_F(TinyLod, HeaderAndNodeStructure) {
   const LodFileInfo& i = r->info();
   const size_t H = b.dag.levels.size();
   ASSERT_GE(H, 3u) << "the tiny sphere should give a DAG of several levels";
-  EXPECT_EQ(i.version, 8u);
+  EXPECT_EQ(i.version, 9u);
   EXPECT_EQ(i.levels, int(H));
   EXPECT_EQ(i.inputFaces, 128u);
   EXPECT_EQ(i.inputVertices, 66u);
@@ -518,9 +518,9 @@ TEST_F(TinyLod, BadFilesAreRefusedWithTheirReason) {
   }
   {  // wrong version (a valid checksum: a file from a future writer)
     std::vector<uint8_t> b = good;
-    b[kChunkHeaderBytes] = 9;
+    b[kChunkHeaderBytes] = 10;
     Rechecksum(b, 0);
-    EXPECT_TRUE(has(OpenError(b), "unsupported .clod version 9")) << OpenError(b);
+    EXPECT_TRUE(has(OpenError(b), "unsupported .clod version 10")) << OpenError(b);
     // Files of the previous versions: named, with what to do.
     b[kChunkHeaderBytes] = 2;
     Rechecksum(b, 0);
@@ -557,9 +557,17 @@ TEST_F(TinyLod, BadFilesAreRefusedWithTheirReason) {
     PutF32(b, rec + 4 + 6 + 16, -1.f);
     RechecksumBlob(b, rec, recBytes);
     EXPECT_TRUE(has(OpenError(b), "bad error bounds")) << OpenError(b);
+    b = good;  // version 9: the typical distance after the error, at most the error and not negative
+    PutF32(b, rec + 4 + 6 + 20, 2 * Decoder(good.data() + rec + 4 + 6 + 16, 4).f32() + 1.f);
+    RechecksumBlob(b, rec, recBytes);
+    EXPECT_TRUE(has(OpenError(b), "bad error bounds")) << OpenError(b);
     b = good;
-    ASSERT_EQ(b[rec + kRecordFixedBytes + 4], 0);  // a root's group (after its error): none
-    b[rec + kRecordFixedBytes + 4] = 1;
+    PutF32(b, rec + 4 + 6 + 20, -1.f);
+    RechecksumBlob(b, rec, recBytes);
+    EXPECT_TRUE(has(OpenError(b), "bad error bounds")) << OpenError(b);
+    b = good;
+    ASSERT_EQ(b[rec + kRecordFixedBytes + 8], 0);  // a root's group (after its errors): none
+    b[rec + kRecordFixedBytes + 8] = 1;
     RechecksumBlob(b, rec, recBytes);
     EXPECT_TRUE(has(OpenError(b), "a root with a group")) << OpenError(b);
   }
@@ -740,18 +748,20 @@ TEST(Lod, Version3FilesStillRead) {
   }
 }
 
-// Version 8 (range-coded positions) reads as the version 4 to 7 files of the same DAG: every
+// Version 9 (a typical distance per record) reads as the version 4 to 8 files of the same DAG: every
 // record, every node's geometry and attributes, the header's figures. They are stored: written by
 // main at 0d3679e (before version 6) with `conelod lod build` of data/sphere512.ply
 // (sphere512_v4b.clod) and of data/sphere512_color.ply, the same sphere with a colour and a normal
 // per vertex (sphere512_color_v5.clod), by main at 66bfa1b (version 6, before version 7:
 // sphere512_v6.clod, sphere512_color_v6.clod) and by main at 432a962 (version 7, before version
-// 8: sphere512_v7.clod, sphere512_color_v7.clod, `--precision 2e-5`), all at 2e-5; version 8 is
-// built here the way `conelod lod build --precision 2e-5` builds it.
+// 8: sphere512_v7.clod, sphere512_color_v7.clod, `--precision 2e-5`) and by main at cde0507
+// (version 8, before version 9: sphere512_v8.clod, sphere512_color_v8.clod, built with the
+// parameters below), all at 2e-5; version 9 is built here the same way.
 TEST(Lod, Version4And5FilesStillRead) {
   const std::string dir = std::string(CONELOD_SOURCE_DIR) + "/vcg_ext/tests/lod/data/";
-  for (const std::string file : {"sphere512_v4b.clod", "sphere512_v6.clod", "sphere512_v7.clod",
-                                 "sphere512_color_v5.clod", "sphere512_color_v6.clod", "sphere512_color_v7.clod"}) {
+  for (const std::string file :
+       {"sphere512_v4b.clod", "sphere512_v6.clod", "sphere512_v7.clod", "sphere512_v8.clod", "sphere512_color_v5.clod",
+        "sphere512_color_v6.clod", "sphere512_color_v7.clod", "sphere512_color_v8.clod"}) {
     SCOPED_TRACE(file);
     const std::string name = file.substr(0, file.rfind("_v"));
     const uint32_t oldVersion = uint32_t(file[file.rfind("_v") + 2] - '0');
@@ -768,7 +778,7 @@ TEST(Lod, Version4And5FilesStillRead) {
     for (const auto& n : ply.normals) at.normals.push_back(EncodeLodNormal(vcg::Point3f(n[0], n[1], n[2])));
     for (const auto& p : ply.positions) im.positions.emplace_back(p[0], p[1], p[2]);
     im.faces = ply.triangles;
-    const std::string path = TempPath(name + "_v8.clod");
+    const std::string path = TempPath(name + "_v9.clod");
     LodBuildParams params;
     params.precision = 2e-5;
     // The stored files' DAG: level ratio 0.5 and groups of 12 clusters at every level (main at
@@ -786,7 +796,7 @@ TEST(Lod, Version4And5FilesStillRead) {
     const LodFileInfo &io = ro->info(), &in = rn->info();
     EXPECT_EQ(io.version, oldVersion);
     EXPECT_EQ(oldVersion, oldVersion >= 6 ? oldVersion : at.empty() ? 4u : 5u);
-    EXPECT_EQ(in.version, 8u);
+    EXPECT_EQ(in.version, 9u);
     EXPECT_EQ(io.colors, in.colors);
     EXPECT_EQ(io.normals, in.normals);
     EXPECT_EQ(in.colors, !at.colors.empty());
@@ -796,9 +806,15 @@ TEST(Lod, Version4And5FilesStillRead) {
     EXPECT_EQ(io.grid.step, in.grid.step);
     // Version 6: the same bytes but for the header (version, attributes field) and the index, 8
     // bytes a node smaller than version 4 or 5; version 7: the deflated streams smaller again;
-    // version 8: the coded positions smaller again.
+    // version 8: the coded positions smaller again; version 9: 4 bytes more a node above level 0
+    // (its typical distance), the rest the same bytes.
     const size_t oldBytes = ReadBytes(old).size(), newBytes = ReadBytes(path).size();
-    EXPECT_LT(newBytes + (oldVersion >= 6 ? 0 : 5 * io.nodeCount), oldBytes);
+    const size_t typicalBytes = 4 * (in.nodeCount - in.levelNodes[0]);
+    if (oldVersion == 8)
+      EXPECT_EQ(newBytes, oldBytes + typicalBytes);
+    else
+      EXPECT_LT(newBytes + (oldVersion >= 6 ? 0 : 5 * io.nodeCount), oldBytes + typicalBytes);
+    size_t positiveTypical = 0;
     for (uint32_t id = 0; id < in.nodeCount; ++id) {
       ASSERT_TRUE(ro->LoadNode(id).ok());
       s = rn->LoadNode(id);
@@ -812,6 +828,10 @@ TEST(Lod, Version4And5FilesStillRead) {
       EXPECT_EQ(a.cone.axis, c.cone.axis);
       EXPECT_EQ(a.error, c.error);
       EXPECT_EQ(a.parentError, c.parentError) << id;
+      EXPECT_EQ(a.typical, -1.f);  // not in the older files
+      EXPECT_GE(c.typical, 0.f);
+      EXPECT_LE(c.typical, c.error);
+      positiveTypical += c.typical > 0;
       ASSERT_TRUE(ro->LoadGeometry(id).ok());
       s = rn->LoadGeometry(id);
       ASSERT_TRUE(s.ok()) << s.message;
@@ -824,6 +844,7 @@ TEST(Lod, Version4And5FilesStillRead) {
         EXPECT_EQ(ro->attributes(id)->normals, rn->attributes(id)->normals) << id;
       }
     }
+    EXPECT_GT(positiveTypical, in.levelNodes[1]);  // at least the simplified groups' above level 1
     std::remove(path.c_str());
   }
 }
@@ -1374,7 +1395,11 @@ TEST_F(BunnyLod, SmallBudgetsRefineWhereTheEyeLooks) {
 // By the error in model units a group too large for what is left of the budget is passed over
 // and smaller ones fill the rest (issue 29: the cut stopped at the first that did not fit, 82 %
 // of a 5 % budget), and the cut stays watertight. The 2 % cut fills too: the top levels' groups
-// of 6 clusters (LodBuildParams::topGroupClusters) refine in small steps (with 12: 82 %).
+// of 6 clusters (LodBuildParams::topGroupClusters) refine in small steps (with 12: 82 %). The 10 %
+// cut (6,803 faces of 6,945) stops 3 faces short of 98 %: its groups add about 600 faces each,
+// and the moves that would fill it undo more than they gain (lod_refine.cpp, Fill; ordered by the
+// typical distance of version 9; by the largest distance it filled 99.7 % at 1.11x our static
+// collapse against 1.08x now).
 TEST_F(BunnyLod, ObjectErrorCutsFillTheirBudget) {
   auto r = Open();
   ASSERT_TRUE(r);
@@ -1385,7 +1410,7 @@ TEST_F(BunnyLod, ObjectErrorCutsFillTheirBudget) {
     LodCut cut;
     ASSERT_TRUE(RefineLod(*r, v, cut).ok());
     EXPECT_LE(cut.faces, v.faceBudget);
-    EXPECT_GE(cut.faces, v.faceBudget * 98 / 100);
+    EXPECT_GE(cut.faces, v.faceBudget * (fraction == 0.1 ? 979 : 980) / 1000);
     EXPECT_EQ(CheckCut(*bunny_, *r, cut).overused, 0u);
   }
 }
@@ -1393,9 +1418,10 @@ TEST_F(BunnyLod, ObjectErrorCutsFillTheirBudget) {
 // Near the top of the DAG one expansion adds hundreds of faces, so a greedy pass can end well
 // short of its budget with nothing left that fits. By the error in model units the refiner then
 // undoes expansions for others that fit and gain more (lod_refine.cpp, Fill): over budgets of
-// 2-30 % of the bunny, 8 cuts of 57 end below 98 % of their budget; 12 when one expansion is only
-// undone for one (the 10 % cut at 97.96 %: BunnyLod.ObjectErrorCutsFillTheirBudget). Every cut
-// within its budget, none with an edge used by three faces.
+// 2-30 % of the bunny, 9 cuts of 57 end below 98 % of their budget (the 10 % cut at 97.96 %:
+// BunnyLod.ObjectErrorCutsFillTheirBudget); ordered by the largest distance (version 8's files), 8,
+// and 12 when one expansion was only undone for one. Every cut within its budget, none with an
+// edge used by three faces.
 TEST_F(BunnyLod, ObjectErrorCutsSwapGroupsToFillTheirBudget) {
   auto r = Open();
   ASSERT_TRUE(r);
@@ -1411,7 +1437,7 @@ TEST_F(BunnyLod, ObjectErrorCutsSwapGroupsToFillTheirBudget) {
     EXPECT_EQ(CheckCut(*bunny_, *r, cut).overused, 0u);
     if (cut.faces * 100 < budget * 98) ++below;
   }
-  EXPECT_LE(below, 8);
+  EXPECT_LE(below, 9);
 }
 
 // By the error in model units the groups are expanded by what they gain for the cut's RMS
@@ -1684,8 +1710,10 @@ TEST(Lod, SmallGroupsJoinANeighbourBelowTheTop) {
   // The clusters asked of a group on a level of that many faces (fine, top, else coarse).
   auto top = [](size_t faces) { return faces < 6144; };
   auto asked = [&](const LodBuildParams& p, size_t faces) {
+    const bool large = faces >= size_t(p.largeGroupCount) * size_t(p.largeGroupClusters) * p.clusterFaces;
     return 8 * faces > 3 * sphere.faces.size() ? p.fineGroupClusters
            : top(faces)                        ? p.topGroupClusters
+           : large                             ? p.largeGroupClusters
                                                : p.groupClusters;
   };
   // Per level: its faces, and its groups' count, the groups under half the clusters asked, the
@@ -1797,6 +1825,56 @@ TEST(Lod, TopGroupsAreSmallOnlyUnderAFaceCount) {
       EXPECT_LE(l.second, 6) << l.first << " faces, under 6 % of the input: groups of 6";
     }
   EXPECT_GE(inWindow, 1u);
+}
+
+// LodBuildParams::largeGroupClusters: a coarse level (under 3/8 of the input's faces, above the
+// top) that holds 8 groups of 24 clusters (24,576 faces at 128 faces a cluster) gathers groups of
+// 24 (at most 36 once small ones join); a smaller coarse level, or none with 0, groups of 12 (at
+// most 18). Out-of-range values are refused.
+TEST(Lod, LargeCoarseLevelsGatherLargerGroups) {
+  const IndexedMesh sphere = test::Sphere(7);
+  const size_t F = sphere.faces.size();
+  ASSERT_EQ(F, 131072u);
+  // Per coarse level below the top: its faces and the most clusters of one of its groups.
+  auto largestGroups = [&](const LodBuildParams& p) {
+    LodDag dag;
+    EXPECT_TRUE(BuildLodDag(sphere, p, dag).ok());
+    std::vector<std::pair<size_t, int>> out;
+    for (const LodDag::Level& L : dag.levels) {
+      if (8 * L.faces.size() > 3 * F || L.faces.size() < 6144 || L.clusterGroup.empty() || L.clusterGroup[0] < 0)
+        continue;
+      std::map<int, int> size;
+      for (int g : L.clusterGroup) ++size[g];
+      int most = 0;
+      for (const auto& kv : size) most = std::max(most, kv.second);
+      out.push_back({L.faces.size(), most});
+    }
+    return out;
+  };
+  LodBuildParams p;
+  ASSERT_EQ(p.largeGroupClusters, 24);
+  ASSERT_EQ(p.largeGroupCount, 8);
+  size_t large = 0, small = 0;
+  for (const auto& l : largestGroups(p)) {
+    if (l.first >= 24576) {
+      ++large;
+      EXPECT_GT(l.second, 18) << l.first << " faces: groups of 24";
+      EXPECT_LE(l.second, 36) << l.first << " faces";
+    } else {
+      ++small;
+      EXPECT_LE(l.second, 18) << l.first << " faces: groups of 12";
+    }
+  }
+  EXPECT_GE(large, 1u);
+  EXPECT_GE(small, 1u);
+  p.largeGroupClusters = 0;
+  for (const auto& l : largestGroups(p)) EXPECT_LE(l.second, 18) << l.first << " faces, off: groups of 12";
+  LodDag dag;
+  p.largeGroupClusters = 65;
+  EXPECT_FALSE(BuildLodDag(sphere, p, dag).ok());
+  p.largeGroupClusters = 24;
+  p.largeGroupCount = 0;
+  EXPECT_FALSE(BuildLodDag(sphere, p, dag).ok());
 }
 
 TEST(Lod, CancellingLeavesNoFile) {
@@ -2321,8 +2399,8 @@ TEST(LodAttributes, ColouredRoundTripIsExactAndCoarseLevelsInterpolate) {
   std::unique_ptr<LodReader> r, rp;
   ASSERT_TRUE(LodReader::Open(path, r).ok());
   ASSERT_TRUE(LodReader::Open(plain, rp).ok());
-  EXPECT_EQ(r->info().version, 8u);
-  EXPECT_EQ(rp->info().version, 8u);
+  EXPECT_EQ(r->info().version, 9u);
+  EXPECT_EQ(rp->info().version, 9u);
   EXPECT_TRUE(r->info().colors && r->info().normals);
   EXPECT_FALSE(rp->info().colors || rp->info().normals);
 
@@ -2602,7 +2680,7 @@ TEST(LodTexCoords, UvStreamRoundTripIsExactUpToTheQuantization) {
   std::unique_ptr<LodReader> r;
   ASSERT_TRUE(LodReader::Open(path, r).ok());
   const LodFileInfo& info = r->info();
-  EXPECT_EQ(info.version, 8u);
+  EXPECT_EQ(info.version, 9u);
   EXPECT_TRUE(info.texCoords);
   EXPECT_FALSE(info.colors || info.normals);
   EXPECT_EQ(info.textureName, "atlas.png");
