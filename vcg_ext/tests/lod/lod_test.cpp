@@ -548,24 +548,19 @@ TEST_F(TinyLod, BadFilesAreRefusedWithTheirReason) {
   ASSERT_EQ(parsed.entries.size(), size_t(OpenOk(good)->info().nodeCount));
   ASSERT_EQ(parsed.entries[0].record, rec);
   const size_t recBytes = parsed.entries[0].recordBytes;
-  {  // a root's record with a negative radius, then a negative error, then a group: checksum redone
+  {  // a root's record with a negative radius, then a negative error, then a typical distance over
+     // its error or negative (version 9), then a group: checksum redone
+    auto refused = [&](size_t at, float value, const char* message) {
+      std::vector<uint8_t> b = good;
+      PutF32(b, rec + at, value);
+      RechecksumBlob(b, rec, recBytes);
+      EXPECT_TRUE(has(OpenError(b), message)) << at << ": " << OpenError(b);
+    };
+    refused(4 + 6 + 12, -0.5f, "negative cone or sphere");
+    refused(4 + 6 + 16, -1.f, "bad error bounds");
+    refused(4 + 6 + 20, 2 * Decoder(good.data() + rec + 4 + 6 + 16, 4).f32() + 1.f, "bad error bounds");
+    refused(4 + 6 + 20, -1.f, "bad error bounds");
     std::vector<uint8_t> b = good;
-    PutF32(b, rec + 4 + 6 + 12, -0.5f);
-    RechecksumBlob(b, rec, recBytes);
-    EXPECT_TRUE(has(OpenError(b), "negative cone or sphere")) << OpenError(b);
-    b = good;
-    PutF32(b, rec + 4 + 6 + 16, -1.f);
-    RechecksumBlob(b, rec, recBytes);
-    EXPECT_TRUE(has(OpenError(b), "bad error bounds")) << OpenError(b);
-    b = good;  // version 9: the typical distance after the error, at most the error and not negative
-    PutF32(b, rec + 4 + 6 + 20, 2 * Decoder(good.data() + rec + 4 + 6 + 16, 4).f32() + 1.f);
-    RechecksumBlob(b, rec, recBytes);
-    EXPECT_TRUE(has(OpenError(b), "bad error bounds")) << OpenError(b);
-    b = good;
-    PutF32(b, rec + 4 + 6 + 20, -1.f);
-    RechecksumBlob(b, rec, recBytes);
-    EXPECT_TRUE(has(OpenError(b), "bad error bounds")) << OpenError(b);
-    b = good;
     ASSERT_EQ(b[rec + kRecordFixedBytes + 8], 0);  // a root's group (after its errors): none
     b[rec + kRecordFixedBytes + 8] = 1;
     RechecksumBlob(b, rec, recBytes);
@@ -1247,6 +1242,10 @@ class BunnyLod : public ::testing::Test {
     EXPECT_TRUE(s.ok()) << s.message;
     return r;
   }
+  // The cut of `fraction` of the bunny's faces by the error in model units (far eye, no culling):
+  // its RMS distance to the input ÷ our static collapse's at the cut's face count (the larger
+  // direction, 100,000 samples).
+  static double CutAgainstStatic(double fraction);
   static Built* bunny_;
 };
 Built* BunnyLod::bunny_ = nullptr;
@@ -1443,31 +1442,47 @@ TEST_F(BunnyLod, ObjectErrorCutsSwapGroupsToFillTheirBudget) {
 // By the error in model units the groups are expanded by what they gain for the cut's RMS
 // distance per face they add, their error accumulated up the DAG by the mean rather than the max
 // (lod_refine.cpp, MeanError; issue 29): the bunny's 5 % cut is closer to the input than our static
-// collapse to its face count (0.0501 % of the diagonal against 0.0512 %; by the file's error, the
-// largest distance accumulated by the max, it was 0.0520 %).
-TEST_F(BunnyLod, ObjectErrorCutIsAsCloseAsTheStaticCollapse) {
+// collapse (GroupQemParams' defaults) to its face count: 0.870x (by the file's error, the largest
+// distance accumulated by the max, it was 1.02x when this test was written).
+TEST_F(BunnyLod, ObjectErrorCutIsAsCloseAsTheStaticCollapse) { EXPECT_LE(CutAgainstStatic(0.05), 1.0); }
+
+// Ordered by the groups' typical distance (version 9: the geometric mean of the RMS and the
+// largest distance of each group's vertices; lod_refine.cpp, MeanError) the bunny's 10 % cut is
+// 0.873x this collapse at its count (6,803 faces); ordered by the largest distance alone, what a
+// version-8 file gives the order, 0.899x (6,924 faces).
+TEST_F(BunnyLod, ObjectErrorCutsOrderByTheTypicalDistance) {
+  const double ratio = CutAgainstStatic(0.10);
+  EXPECT_LE(ratio, 0.885);
+}
+
+double BunnyLod::CutAgainstStatic(double fraction) {
   auto r = Open();
-  ASSERT_TRUE(r);
-  LodView v = Eye(0, 0.1, 100, size_t(0.05 * 69451), false);
+  LodView v = Eye(0, 0.1, 100, size_t(fraction * 69451), false);
   v.priority = LodPriority::ObjectError;
   LodCut cut;
-  ASSERT_TRUE(RefineLod(*r, v, cut).ok());
   IndexedMesh m;
-  ASSERT_TRUE(ExtractCutMesh(*r, cut, true, m).ok());
   GroupHierarchy h;
-  ASSERT_TRUE(BuildConeHierarchy(bunny_->mesh, ConeGroupingParams(), h).ok());
+  if (!r || !RefineLod(*r, v, cut).ok() || !ExtractCutMesh(*r, cut, true, m).ok() ||
+      !BuildConeHierarchy(bunny_->mesh, ConeGroupingParams(), h).ok()) {
+    ADD_FAILURE() << "no cut of the bunny at " << fraction;
+    return 1e9;
+  }
   GroupQemParams p;
   p.targetFaces = m.faces.size();
   GroupQemResult ours;
-  ASSERT_TRUE(
-      SimplifyPreservingGroups(bunny_->mesh, h.level(AutoGroupLevel(h, p.targetFaces)).faceGroup, p, ours).ok());
+  if (!SimplifyPreservingGroups(bunny_->mesh, h.level(AutoGroupLevel(h, p.targetFaces)).faceGroup, p, ours).ok()) {
+    ADD_FAILURE() << "no static collapse of the bunny to " << p.targetFaces;
+    return 1e9;
+  }
   auto rms = [&](const IndexedMesh& x) {
     HausdorffResult d;
     EXPECT_TRUE(SampledHausdorff(x, bunny_->mesh, 100000, d).ok());
     return std::max(d.ab.rms, d.ba.rms);
   };
   const double cutRms = rms(m), staticRms = rms(ours.mesh);
-  EXPECT_LE(cutRms, staticRms) << cut.faces << " faces; static: " << ours.mesh.faces.size();
+  std::printf("bunny %.0f %% cut: %zu faces, RMS %.5f; static %zu faces, %.5f; ratio %.3f\n", 100 * fraction,
+              size_t(cut.faces), cutRms, ours.mesh.faces.size(), staticRms, cutRms / staticRms);
+  return cutRms / staticRms;
 }
 
 // The level ratio per level (LodBuildParams::coarseLevelRatio): levels 1 and 2 keep about half
@@ -1791,35 +1806,37 @@ TEST(Lod, LargeFineLevelsGatherLargerGroups) {
   EXPECT_FALSE(BuildLodDag(sphere, p, dag).ok());
 }
 
+// Per level of `mesh`'s DAG under 3/8 of its faces and of at least 6,144 (and not a root level):
+// its faces and the most clusters of one of its groups.
+std::vector<std::pair<size_t, int>> LargestCoarseGroups(const IndexedMesh& mesh, const LodBuildParams& p) {
+  LodDag dag;
+  EXPECT_TRUE(BuildLodDag(mesh, p, dag).ok());
+  std::vector<std::pair<size_t, int>> out;
+  for (const LodDag::Level& L : dag.levels) {
+    if (8 * L.faces.size() > 3 * mesh.faces.size() || L.faces.size() < 6144 || L.clusterGroup.empty() ||
+        L.clusterGroup[0] < 0)
+      continue;
+    std::map<int, int> size;
+    for (int g : L.clusterGroup) ++size[g];
+    int most = 0;
+    for (const auto& kv : size) most = std::max(most, kv.second);
+    out.push_back({L.faces.size(), most});
+  }
+  return out;
+}
+
 TEST(Lod, TopGroupsAreSmallOnlyUnderAFaceCount) {
   const IndexedMesh sphere = test::Sphere(7);
   const size_t F = sphere.faces.size();
   ASSERT_EQ(F, 131072u);
-  // Per level under 3/8 of the input's faces and of at least 6,144 (and not the top): its faces
-  // and the most clusters of one of its groups.
-  auto largestGroups = [&](const LodBuildParams& p) {
-    LodDag dag;
-    EXPECT_TRUE(BuildLodDag(sphere, p, dag).ok());
-    std::vector<std::pair<size_t, int>> out;
-    for (const LodDag::Level& L : dag.levels) {
-      if (8 * L.faces.size() > 3 * F || L.faces.size() < 6144 || L.clusterGroup.empty() || L.clusterGroup[0] < 0)
-        continue;
-      std::map<int, int> size;
-      for (int g : L.clusterGroup) ++size[g];
-      int most = 0;
-      for (const auto& kv : size) most = std::max(most, kv.second);
-      out.push_back({L.faces.size(), most});
-    }
-    return out;
-  };
   LodBuildParams p;
   ASSERT_EQ(p.topFaceShare, 0);
-  const auto byCount = largestGroups(p);
+  const auto byCount = LargestCoarseGroups(sphere, p);
   ASSERT_GE(byCount.size(), 3u);
   for (const auto& l : byCount) EXPECT_GT(l.second, 6) << l.first << " faces: groups of 12";
   p.topFaceShare = 0.06;
   size_t inWindow = 0;
-  for (const auto& l : largestGroups(p))
+  for (const auto& l : LargestCoarseGroups(sphere, p))
     if (double(l.first) < 0.06 * double(F)) {
       ++inWindow;
       EXPECT_LE(l.second, 6) << l.first << " faces, under 6 % of the input: groups of 6";
@@ -1832,30 +1849,12 @@ TEST(Lod, TopGroupsAreSmallOnlyUnderAFaceCount) {
 // 24 (at most 36 once small ones join); a smaller coarse level, or none with 0, groups of 12 (at
 // most 18). Out-of-range values are refused.
 TEST(Lod, LargeCoarseLevelsGatherLargerGroups) {
-  const IndexedMesh sphere = test::Sphere(7);
-  const size_t F = sphere.faces.size();
-  ASSERT_EQ(F, 131072u);
-  // Per coarse level below the top: its faces and the most clusters of one of its groups.
-  auto largestGroups = [&](const LodBuildParams& p) {
-    LodDag dag;
-    EXPECT_TRUE(BuildLodDag(sphere, p, dag).ok());
-    std::vector<std::pair<size_t, int>> out;
-    for (const LodDag::Level& L : dag.levels) {
-      if (8 * L.faces.size() > 3 * F || L.faces.size() < 6144 || L.clusterGroup.empty() || L.clusterGroup[0] < 0)
-        continue;
-      std::map<int, int> size;
-      for (int g : L.clusterGroup) ++size[g];
-      int most = 0;
-      for (const auto& kv : size) most = std::max(most, kv.second);
-      out.push_back({L.faces.size(), most});
-    }
-    return out;
-  };
+  const IndexedMesh sphere = test::Sphere(7);  // 131,072 faces
   LodBuildParams p;
   ASSERT_EQ(p.largeGroupClusters, 24);
   ASSERT_EQ(p.largeGroupCount, 8);
   size_t large = 0, small = 0;
-  for (const auto& l : largestGroups(p)) {
+  for (const auto& l : LargestCoarseGroups(sphere, p)) {
     if (l.first >= 24576) {
       ++large;
       EXPECT_GT(l.second, 18) << l.first << " faces: groups of 24";
@@ -1868,7 +1867,8 @@ TEST(Lod, LargeCoarseLevelsGatherLargerGroups) {
   EXPECT_GE(large, 1u);
   EXPECT_GE(small, 1u);
   p.largeGroupClusters = 0;
-  for (const auto& l : largestGroups(p)) EXPECT_LE(l.second, 18) << l.first << " faces, off: groups of 12";
+  for (const auto& l : LargestCoarseGroups(sphere, p))
+    EXPECT_LE(l.second, 18) << l.first << " faces, off: groups of 12";
   LodDag dag;
   p.largeGroupClusters = 65;
   EXPECT_FALSE(BuildLodDag(sphere, p, dag).ok());
