@@ -55,13 +55,14 @@ struct LodBuildParams {
   int largeFineGroupClusters = 64;
   // Clusters per group on a coarse level (below the fine ones, above the top) that still holds
   // largeGroupCount groups of this many (24,576 faces at 128 faces a cluster: inputs of more than
-  // about 65,000 faces); 0: never. As on the fine levels, larger groups lock a smaller share of
-  // their faces: the dragon's levels 3-7 went from 1.18-1.36x our static collapse at their counts
-  // (level 3, from groups of 12: 1.35x) to 1.05-1.11x, its 2 / 5 / 10 / 25 % cuts from 1.11 / 1.20
-  // / 1.10 / 1.16x to 1.08 / 1.09 / 1.07 / 1.16x (bench/lod_fidelity --cuts, ordered by the largest
-  // distance, version 8), the file 6,874,726 -> 6,816,609 bytes. On the levels where a view
-  // still has a few groups to choose among (under 8 of them) the groups stay small: with 24 on
-  // every coarse level the dragon's 2 % cut filled 95.6 % of its budget (99.4 % so).
+  // about 100,000 faces, whose level 2 is a quarter of them); 0: never. As on the fine levels, larger
+  // groups lock a smaller share of their faces: the dragon's levels 3-7 went from 1.18-1.36x our
+  // static collapse at their counts (level 3, from groups of 12: 1.35x) to 1.05-1.11x, its 2 / 5 / 10
+  // / 25 % cuts from 1.11 / 1.20 / 1.10 / 1.16x to 1.08 / 1.09 / 1.07 / 1.16x (bench/lod_fidelity
+  // --cuts, ordered by the largest distance, version 8), the file 6,874,726 -> 6,816,609 bytes. On
+  // the levels where a view still has a few groups to choose among (under 8 of them) the groups stay
+  // small: with 24 on every coarse level the dragon's 2 % cut filled 95.6 % of its budget (99.4 %
+  // so).
   int largeGroupClusters = 24;
   int largeGroupCount = 8;
   // Clusters per group on the top levels (under the faces of 4 groups of groupClusters clusters:
@@ -99,7 +100,8 @@ struct LodBuildParams {
   // above is then to the surface of the step; conelod lod build --refresh-ratio): a group simplified
   // to 0.5 or 0.6 of its faces builds its quadrics again from its surface at 0.8 of them (and at
   // 0.64 on the way to 0.5). Cuts of the bunny, the armadillo and the dragon at 2 / 5 / 10 / 25 %
-  // (bench/lod_fidelity --cuts): 1.10x our one-piece collapse at their counts in the geometric
+  // (bench/lod_fidelity --cuts, ordered by the largest distance and before largeGroupClusters, as
+  // in version 8): 1.10x our one-piece collapse at their counts in the geometric
   // mean, 1.13x with 0 (the level's quadrics to the group's end); 0.85 and 0.9: 1.08x, but the
   // bunny's screen-space cuts lose their view dependence at 30 % (BunnyLod,
   // SmallBudgetsRefineWhereTheEyeLooks) and with 0.85 its 10 % cut fills 97.7 % of its budget
