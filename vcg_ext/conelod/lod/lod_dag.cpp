@@ -836,16 +836,14 @@ bool UsesTopGroups(const LodBuildParams& params, uint64_t faces, uint64_t inputF
 // that large). Of the level's faces and the input's only, so the same for
 // every chunk and thread.
 int GroupClustersOf(const LodBuildParams& params, uint64_t faces, uint64_t inputFaces) {
-  if (params.fineGroupClusters > 0 && !CoarseLevel(faces, inputFaces)) {
-    const int large = params.largeFineGroupClusters;
-    if (large > params.fineGroupClusters && faces >= 32 * uint64_t(large) * params.clusterFaces) return large;
-    return params.fineGroupClusters;
-  }
+  // `large` where it is larger than `base` and the level holds `count` groups of it, else `base`.
+  auto largerWhereRoom = [&](int base, int large, uint64_t count) {
+    return large > base && faces >= count * uint64_t(large) * params.clusterFaces ? large : base;
+  };
+  if (params.fineGroupClusters > 0 && !CoarseLevel(faces, inputFaces))
+    return largerWhereRoom(params.fineGroupClusters, params.largeFineGroupClusters, 32);
   if (UsesTopGroups(params, faces, inputFaces)) return params.topGroupClusters;
-  const int large = params.largeGroupClusters;
-  if (large > params.groupClusters && faces >= uint64_t(params.largeGroupCount) * uint64_t(large) * params.clusterFaces)
-    return large;
-  return params.groupClusters;
+  return largerWhereRoom(params.groupClusters, params.largeGroupClusters, uint64_t(params.largeGroupCount));
 }
 
 // Whether such a level's small groups join their neighbours (MergeSmallGroups): on the levels of at
@@ -1826,16 +1824,14 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
     return Status::Invalid("cluster faces must lie in [4, 65536]");
   if (params.groupClusters < 2 || params.groupClusters > 64)
     return Status::Invalid("group clusters must lie in [2, 64]");
-  if (params.fineGroupClusters != 0 && (params.fineGroupClusters < 2 || params.fineGroupClusters > 64))
-    return Status::Invalid("fine group clusters must be 0 or lie in [2, 64]");
-  if (params.largeFineGroupClusters != 0 && (params.largeFineGroupClusters < 2 || params.largeFineGroupClusters > 64))
-    return Status::Invalid("large fine group clusters must be 0 or lie in [2, 64]");
-  if (params.largeGroupClusters != 0 && (params.largeGroupClusters < 2 || params.largeGroupClusters > 64))
-    return Status::Invalid("large group clusters must be 0 or lie in [2, 64]");
+  // The other clusters-per-group fields: 0 (off) or as groupClusters.
+  for (const auto& f :
+       {std::make_pair(params.fineGroupClusters, "fine"), std::make_pair(params.largeFineGroupClusters, "large fine"),
+        std::make_pair(params.largeGroupClusters, "large"), std::make_pair(params.topGroupClusters, "top")})
+    if (f.first != 0 && (f.first < 2 || f.first > 64))
+      return Status::Invalid(std::string(f.second) + " group clusters must be 0 or lie in [2, 64]");
   if (params.largeGroupCount < 1 || params.largeGroupCount > 1024)
     return Status::Invalid("the large groups' count must lie in [1, 1024]");
-  if (params.topGroupClusters != 0 && (params.topGroupClusters < 2 || params.topGroupClusters > 64))
-    return Status::Invalid("top group clusters must be 0 or lie in [2, 64]");
   if (!(params.topFaceShare >= 0 && params.topFaceShare <= 1))
     return Status::Invalid("the top levels' share of the input's faces must lie in [0, 1]");
   if (!(params.maxGroupError > 0 && params.maxGroupError <= 1))
