@@ -2,7 +2,7 @@
 // TriEdgeCollapseQuadric (what MeshLab's "Simplification: Quadric Edge Collapse Decimation" runs)
 // and meshoptimizer's meshopt_simplify, on the same mesh, in the same run, at the same targets.
 //
-//   bench_simplify [MESH.ply] [--level L] [--refresh-ratio R] [--benchmark_* options]
+//   bench_simplify [MESH.ply] [--level L] [--refresh-ratio R] [--queue-faces N] [--benchmark_* options]
 //   (default mesh: the dragon in CONELOD_TEST_MESHES)
 //
 // Both sides time the whole work of their MeshLab filter on an already-loaded mesh:
@@ -51,7 +51,8 @@ std::vector<int> g_groups;            // normal-cone groups at g_level, per face
 conelod::IndexedMesh g_indexed;       // g_mesh as an indexed mesh
 conelod::GroupHierarchy g_hierarchy;  // its normal-cone hierarchy (default parameters)
 int g_level = 4;
-double g_refresh = conelod::kRefreshRatio;  // ours: GroupQemParams::refreshRatio (--refresh-ratio)
+double g_refresh = conelod::kRefreshRatio;                   // ours: GroupQemParams::refreshRatio (--refresh-ratio)
+size_t g_queueFaces = conelod::GroupQemParams().queueFaces;  // ours: GroupQemParams::queueFaces (--queue-faces)
 std::string g_path;
 std::map<std::string, double> g_cpu;    // benchmark name -> CPU seconds per iteration
 std::map<std::string, size_t> g_faces;  // benchmark name -> faces reached
@@ -84,6 +85,7 @@ size_t RunOurs(QMesh& m, int targetFaces, bool conditions, bool passes = false) 
   p.condition1 = p.condition2 = conditions;
   p.passes = passes;
   p.refreshRatio = g_refresh;
+  p.queueFaces = g_queueFaces;
   conelod::GroupQemResult r;
   const conelod::Status s = conelod::SimplifyPreservingGroups(im, g_groups, p, r);
   if (!s.ok()) {
@@ -174,6 +176,8 @@ int main(int argc, char** argv) {
       g_level = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--refresh-ratio") && i + 1 < argc)
       g_refresh = std::atof(argv[++i]);
+    else if (!std::strcmp(argv[i], "--queue-faces") && i + 1 < argc)
+      g_queueFaces = size_t(std::atoll(argv[++i]));
     else if (std::strncmp(argv[i], "--benchmark", 11) == 0)
       rest.push_back(argv[i]);
     else

@@ -1794,13 +1794,12 @@ void GroupQemSimplifier::collapse(const Candidate& c) {
 // with if every collapse removed two faces) once a sixth of the pass's goal is done. A pass ends
 // at the target, or at a rank over the goal once that sixth is done. A pass without a collapse:
 // no allowed collapse is left. The passes hand over to the queue (CollapseInQueue, from the state
-// reached) at GroupQemParams::queueFaces live faces (100,000 by default: the queue's heap and the
-// mesh then fit the caches, some 100 bytes a face, and a mesh that small from the start runs the
-// queue alone, as before the passes), when the target is near (at most an eighth of the live faces left to
-// remove: a pass would rank every edge for a few collapses, and the last collapses decide the most
-// error) or when a pass stalls (under a sixth of its goal: the allowed collapses are dearer than
-// their ranks, as where topology or the groups leave little room), so that the run ends, and stops
-// at a floor, as the queue's.
+// reached) at a quarter of GroupQemParams::queueFaces live faces (25,000 by default; a mesh of at
+// most queueFaces faces from the start runs the queue alone, as before the passes), when the
+// target is near (at most an eighth of the live faces left to remove: a pass would rank every edge
+// for a few collapses, and the last collapses decide the most error) or when a pass stalls (under
+// a sixth of its goal: the allowed collapses are dearer than their ranks, as where topology or the
+// groups leave little room), so that the run ends, and stops at a floor, as the queue's.
 bool GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t target, double maxErrorSq,
                                           GroupQemStats& stats) {
   // 8 bytes: the edge is named by a side of a live face (3 f + s: from corner s to s + 1), read
@@ -1828,13 +1827,15 @@ bool GroupQemSimplifier::CollapseInPasses(const Progress& progress, size_t targe
     nextReport = done + std::max<size_t>(toRemove / 100, 1);
     return progress(5 + int(93.0 * std::min(1.0, double(done) / double(toRemove))), "Group-preserving QEM: collapsing");
   };
+  // GroupQemParams::queueFaces: the queue alone up to it, else the queue from a quarter of it.
+  const size_t handOverFaces = liveFaces_ <= p_.queueFaces ? p_.queueFaces : p_.queueFaces / 4;
   ranking_ = true;
   const auto handOver = [&](bool queue) {
     ranking_ = false;
     return queue;
   };
   while (liveFaces_ > target) {
-    if (liveFaces_ <= p_.queueFaces || (target > 0 && liveFaces_ - target <= liveFaces_ / 8)) return handOver(true);
+    if (liveFaces_ <= handOverFaces || (target > 0 && liveFaces_ - target <= liveFaces_ / 8)) return handOver(true);
     // Half the arrays dead: the next passes work on the live part, packed.
     if (compactable() && liveFaces_ <= faces_.size() / 2) Compact();
     // A memoryless step falls between two passes (after the packing: its sweep reads the live

@@ -153,8 +153,10 @@ struct GroupQemParams {
   // never ranked (the parts of partitioned_simplify.h run in passes). Ignored for a GroupQemRegion
   // with a separation (the LOD build keeps the queue).
   bool passes = false;
-  // passes: from this many live faces on the queue does the rest (a mesh this small from the
-  // start runs the queue alone, output for output); 0: passes until the target is near or a stall.
+  // passes: a mesh of at most this many faces runs the queue alone (output for output); a larger
+  // one hands over to the queue at a quarter of it (25,000 live faces by default: below that the
+  // passes cost the queue's accuracy nothing measurable on the dragons, and the queue's evaluations
+  // are dearer per collapse, docs/group_qem.md); 0: passes until the target is near or a stall.
   size_t queueFaces = 100000;
   // Memoryless steps (Lindstrom & Turk's memoryless simplification, once per step rather than at
   // every collapse): each time the live faces fall to this fraction of what they were at the last

@@ -794,7 +794,7 @@ TEST(Simplify, LockedContoursDoNotChange) {
 // GroupQemParams::passes: the same checks in another order. At the automatic level the bunny
 // (in passes down to the queue's tail: queueFaces 0) reaches every target with every group whole,
 // in a different mesh from the queue's, with a largest collapse error of the same size; res2's
-// non-manifold dragon scan (202,520 faces: passes, then the queue from 100,000) reaches 2 % too.
+// non-manifold dragon scan (202,520 faces: passes, then the queue from 25,000) reaches 2 % too.
 TEST(Passes, ReachTheTargetsWithEveryGroupWhole) {
   for (const char* name : {"stanford_bunny_bun_zipper.ply", "stanford_dragon_vrip_res2.ply"}) {
     SCOPED_TRACE(name);
@@ -816,6 +816,12 @@ TEST(Passes, ReachTheTargetsWithEveryGroupWhole) {
       EXPECT_GT(passes.stats.passes, 0u);
       EXPECT_GT(passes.stats.collapsesInPasses, 0u);
       EXPECT_LT(passes.stats.collapsesInPasses, passes.stats.collapses) << "the queue makes the last collapses";
+      // res2 at 2 %: the queue takes over at 25,000 live faces (a quarter of queueFaces), so it
+      // makes at most one collapse per face between there and the target (7,104; with the
+      // hand-over at 100,000 faces, 45,281).
+      if (m.faces.size() > p.queueFaces && ratio == 0.02) {
+        EXPECT_LT(passes.stats.collapses - passes.stats.collapsesInPasses, p.queueFaces / 4 - p.targetFaces);
+      }
       EXPECT_EQ(passes.stats.stop, GroupQemStats::Stop::TargetReached);
       EXPECT_LE(passes.mesh.faces.size(), p.targetFaces);
       EXPECT_GE(passes.mesh.faces.size() + 2, p.targetFaces);
