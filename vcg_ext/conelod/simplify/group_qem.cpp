@@ -38,7 +38,7 @@ constexpr uint32_t kIntegritySearchFaces = 256;
 // anchor) at this fraction of the squared distance in the tangent plane, added to the collapse's
 // error; its values then follow it inside their charts (GroupQemSimplifier::seamPlace and
 // collapse; chosen on the textured dragon, docs/attributes.md).
-constexpr double kSeamDrift = 0.01;
+constexpr double kSeamDrift = 0.02;
 
 // AnalyzeVertex counts the edge uses of a fan of at most this many faces among the fan's own
 // slots; a larger fan in the neighbours' marks.
