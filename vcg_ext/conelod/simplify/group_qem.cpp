@@ -37,7 +37,8 @@ constexpr uint32_t kIntegritySearchFaces = 256;
 // With attribute seam moves: a seam vertex may leave the place its corner values belong to (its
 // anchor) at this fraction of the squared distance in the tangent plane, added to the collapse's
 // error; its values then follow it inside their charts (GroupQemSimplifier::seamPlace and
-// collapse; chosen on the textured dragon, docs/attributes.md).
+// collapse; chosen on the textured dragon, docs/attributes.md). Under 0.02 a seam vertex drifts
+// across its seam far enough to stretch the texture (the integration tests' two-chart grid).
 constexpr double kSeamDrift = 0.02;
 
 // AnalyzeVertex counts the edge uses of a fan of at most this many faces among the fan's own
