@@ -387,6 +387,10 @@ class HierarchyBuilder {
     size_t arenaBegin = 0, arenaNext = 0, arenaEnd = 0, listBegin = 0, listEnd = 0;
     std::vector<std::pair<int, uint32_t>> appendLog;  // (unit, offset) of its region's lists
     long merges = 0;                                  // a chunk's, once done
+    // A chunk's faces alone, made once when it starts (singles[u - begin], valid while u is not
+    // stored): every unit its merges read lies in the chunk, and SingleUnit was a fifth of the
+    // build when made again at each read. Null: none (units are made when read).
+    const Unit* singles = nullptr;
   };
   // From the cached scores of u's list. Inlined: it is the core of a merge's neighbour updates.
   __attribute__((always_inline)) inline void setBest(int u, const MergeState& ms);
@@ -499,6 +503,15 @@ class HierarchyBuilder {
     SingleUnit(u, tmp);
     return tmp;
   }
+  // The same, taken from the faces alone that `ms` made (a chunk's) when u is one of them.
+  const Unit& unitOf(int u, Unit& tmp, const MergeState& ms) const {
+    if (!sparse_) return units_[size_t(u)];
+    const int s = slot_[size_t(u)];
+    if (s >= 0) return pool_[size_t(s)];
+    if (ms.singles && u >= ms.begin && u < ms.end) return ms.singles[u - ms.begin];
+    SingleUnit(u, tmp);
+    return tmp;
+  }
   // Unit u, stored first if it was not, in a slot that `ms` hands out.
   Unit& unit(int u, MergeState& ms) {
     if (!sparse_) return units_[size_t(u)];
@@ -511,7 +524,10 @@ class HierarchyBuilder {
       }
       s = ms.freeSlots.back();
       ms.freeSlots.pop_back();
-      SingleUnit(u, pool_[size_t(s)]);
+      if (ms.singles && u >= ms.begin && u < ms.end)
+        pool_[size_t(s)] = ms.singles[u - ms.begin];
+      else
+        SingleUnit(u, pool_[size_t(s)]);
     }
     return pool_[size_t(s)];
   }
@@ -811,7 +827,7 @@ bool HierarchyBuilder::MergeUnits(int u, int p, MergeState& ms) {
 
   Unit& a = unit(u, ms);
   Unit bAlone;
-  const Unit& b = unitOf(p, bAlone);
+  const Unit& b = unitOf(p, bAlone, ms);
   Chain& ac = chains_[size_t(u)];
   Chain& bc = chains_[size_t(p)];
   const NormalCone ca = a.cone(), cb = b.cone();
@@ -878,7 +894,7 @@ bool HierarchyBuilder::MergeUnits(int u, int p, MergeState& ms) {
       Prefetch(arena_.data() + lw.nbOffset);  // for the update below, now that its offset is here
       tree_.prefetch(w);
       Unit wAlone;
-      mergedList.push_back({w, evaluate(a, unitOf(w, wAlone))});
+      mergedList.push_back({w, evaluate(a, unitOf(w, wAlone, ms))});
     }
   }
   const int count = int(mergedList.size());
@@ -1043,8 +1059,15 @@ bool HierarchyBuilder::MergeChunks(int round, int minGroups, long mergesSoFar, l
   std::atomic<bool> stop(false);
   std::atomic<size_t> nextChunk(0);
   auto work = [&](unsigned) {
+    BigVector<Unit> singles;  // this thread's chunk's faces alone (MergeState::singles)
     for (size_t c; !stop.load(std::memory_order_relaxed) && (c = nextChunk.fetch_add(1)) < chunks;) {
       MergeState& ms = state[c];
+      if (sparse_) {
+        if (singles.size() < size_t(ms.end - ms.begin)) singles.resize(size_t(ms.end - ms.begin));
+        for (int u = ms.begin; u < ms.end; ++u)
+          if (alive(u) && slot_[size_t(u)] < 0) SingleUnit(u, singles[size_t(u - ms.begin)]);
+        ms.singles = singles.data();
+      }
       int units = 0;  // alive in the chunk
       for (int u = ms.begin; u < ms.end; ++u) {
         if (!alive(u)) continue;
@@ -1089,6 +1112,7 @@ bool HierarchyBuilder::MergeChunks(int round, int minGroups, long mergesSoFar, l
       }
       done.fetch_add(merges & 0xFFF, std::memory_order_relaxed);
       ms.merges = merges;
+      ms.singles = nullptr;
       ms.scratch = ConeScratch();
       ms.list = std::vector<Neighbour>();
     }
@@ -1639,18 +1663,26 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     }
   });
   if (scoreNow) {
-    ParallelChunks(size_t(nf), threads_, kFaceChunk, [&](size_t begin, size_t end, unsigned) {
-      for (int f = int(begin); f < int(end); ++f) {
-        Unit uAlone, wAlone;
-        const Unit& u = unitOf(f, uAlone);
-        for (Neighbour* nb = nbBegin(f); nb != nbEnd(f); ++nb) {
-          const int w = nb->id;
-          if (w >= f) continue;
-          nb->score = evaluate(unitOf(w, wAlone), u);
-          setEntryScore(w, f, nb->score);
-        }
-      }
-    });
+    // Sparse: a block's faces alone are made once, and read from there by the pairs within it
+    // (most pairs: neighbouring faces of a scan have neighbouring indices).
+    ParallelItems<BigVector<Unit>>(
+        (size_t(nf) + kFaceChunk - 1) / kFaceChunk, threads_, [&](size_t item, BigVector<Unit>& block) {
+          const int begin = int(item * kFaceChunk), end = int(std::min(size_t(nf), (item + 1) * kFaceChunk));
+          if (sparse_) {
+            block.resize(kFaceChunk);
+            for (int f = begin; f < end; ++f) SingleUnit(f, block[size_t(f - begin)]);
+          }
+          for (int f = begin; f < end; ++f) {
+            Unit uAlone, wAlone;
+            const Unit& u = sparse_ ? block[size_t(f - begin)] : unitOf(f, uAlone);
+            for (Neighbour* nb = nbBegin(f); nb != nbEnd(f); ++nb) {
+              const int w = nb->id;
+              if (w >= f) continue;
+              nb->score = evaluate(sparse_ && w >= begin ? block[size_t(w - begin)] : unitOf(w, wAlone), u);
+              setEntryScore(w, f, nb->score);
+            }
+          }
+        });
   }
   if (progress_ && !progress_(0, "grouping faces by normal cones")) return Status::Cancelled();
   stages.Mark("grouping: units, first scores");
