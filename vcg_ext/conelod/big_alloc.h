@@ -151,4 +151,23 @@ bool operator!=(const BigAlloc<T>&, const BigAlloc<U>&) {
 template <class T>
 using BigVector = std::vector<T, BigAlloc<T>>;
 
+// Gives the whole pages of a vector's unused capacity back to the system (Linux: madvise
+// MADV_DONTNEED), keeping its size, capacity and data: a vector shrunk in place (resize) then holds
+// only the memory of its elements, without the copy of shrink_to_fit, and pages it grows into
+// again come back zeroed (no element lives there). Only pages wholly inside [end of the elements,
+// end of the capacity) are touched, so an allocator's records around the block are not.
+template <class V>
+void ReleaseUnusedCapacity(V& v) {
+#ifdef __linux__
+  using T = typename V::value_type;
+  constexpr uintptr_t kPage = 4096;
+  const uintptr_t begin = reinterpret_cast<uintptr_t>(v.data() + v.size());
+  const uintptr_t end = reinterpret_cast<uintptr_t>(v.data()) + v.capacity() * sizeof(T);
+  const uintptr_t first = (begin + kPage - 1) / kPage * kPage, last = end / kPage * kPage;
+  if (v.data() && last > first) madvise(reinterpret_cast<void*>(first), last - first, MADV_DONTNEED);
+#else
+  (void)v;
+#endif
+}
+
 }  // namespace conelod

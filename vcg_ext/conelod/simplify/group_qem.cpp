@@ -2106,6 +2106,19 @@ void GroupQemSimplifier::Compact() {
   start_.resize(liveVertices);
   count_.resize(liveVertices);
   vertexInput_.resize(liveVertices);
+  // The dead part's memory goes back to the system (the capacity stays: the face lists grow into
+  // refs_'s again), so that what the run holds from here on is the live part's.
+  ReleaseUnusedCapacity(refs_);
+  ReleaseUnusedCapacity(faces_);
+  ReleaseUnusedCapacity(faceMark_);
+  ReleaseUnusedCapacity(faceInput_);
+  ReleaseUnusedCapacity(faceDead_);
+  ReleaseUnusedCapacity(pos_);
+  ReleaseUnusedCapacity(quadric_);
+  ReleaseUnusedCapacity(vs_);
+  ReleaseUnusedCapacity(start_);
+  ReleaseUnusedCapacity(count_);
+  ReleaseUnusedCapacity(vertexInput_);
 }
 
 void GroupQemSimplifier::Refresh() {
