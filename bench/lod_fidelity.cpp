@@ -148,6 +148,7 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--lod-refresh-ratio")) dagParams.refreshRatio = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--level-ratio")) dagParams.simplification.levelRatio = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--coarse-level-ratio")) dagParams.coarseLevelRatio = std::atof(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--top-level-ratio")) dagParams.topLevelRatio = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--top-group-clusters")) dagParams.topGroupClusters = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--top-face-share")) dagParams.topFaceShare = std::atof(argv[i + 1]);
     if (!std::strcmp(argv[i], "--locked-border-weight")) dagParams.lockedBorderWeight = std::atof(argv[i + 1]);

@@ -804,9 +804,14 @@ float GroupErrorAbove(double maxBelow, double distance) {
 // input's faces: level 2 (about a quarter of them) and above.
 bool CoarseLevel(uint64_t faces, uint64_t inputFaces) { return 8 * faces <= 3 * inputFaces; }
 
-// The fraction of its faces each group of such a level is simplified to (LodBuildParams).
-double LevelRatioOf(const LodBuildParams& params, uint64_t faces, uint64_t inputFaces) {
+bool UsesTopGroups(const LodBuildParams& params, uint64_t faces, uint64_t inputFaces);
+// The fraction of its faces each group of such a level is simplified to (LodBuildParams): the top
+// levels' ratio on the top levels (not once the top goes in whole parts), the coarse levels' on
+// the coarse ones, levelRatio on the others (at least levelRatio everywhere).
+double LevelRatioOf(const LodBuildParams& params, uint64_t faces, uint64_t inputFaces, bool wholeParts = false) {
   const double r = params.simplification.levelRatio;
+  if (!wholeParts && params.topLevelRatio > 0 && UsesTopGroups(params, faces, inputFaces))
+    return std::max(r, params.topLevelRatio);
   return CoarseLevel(faces, inputFaces) ? std::max(r, params.coarseLevelRatio) : r;
 }
 
@@ -1288,7 +1293,7 @@ Status BuildLevels(const LodBuildParams& params, const Progress& progress, LodSp
     std::vector<int> group;
     const int per = GroupClustersOf(params, L.faces.size(), inputFaces);
     const bool merge = MergesSmallGroups(params, L.faces.size(), inputFaces);
-    const double ratio = LevelRatioOf(params, L.faces.size(), inputFaces);
+    const double ratio = LevelRatioOf(params, L.faces.size(), inputFaces, wholeParts);
     LodDag::Level topology;  // with places: L's faces by place
     if (wedges) {
       topology.faces = byPlace(L.faces);
@@ -1820,6 +1825,8 @@ Status BuildDag(const IndexedMesh& mesh, IndexedMesh* owned, const LodBuildParam
     return Status::Invalid("the level ratio must lie in (0, 1)");
   if (!(params.coarseLevelRatio == 0 || (params.coarseLevelRatio > 0 && params.coarseLevelRatio < 1)))
     return Status::Invalid("the coarse levels' ratio must be 0 or lie in (0, 1)");
+  if (!(params.topLevelRatio == 0 || (params.topLevelRatio > 0 && params.topLevelRatio < 1)))
+    return Status::Invalid("the top levels' ratio must be 0 or lie in (0, 1)");
   if (params.clusterFaces < 4 || params.clusterFaces > 65536)
     return Status::Invalid("cluster faces must lie in [4, 65536]");
   if (params.groupClusters < 2 || params.groupClusters > 64)
