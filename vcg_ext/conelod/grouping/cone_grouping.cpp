@@ -387,10 +387,12 @@ class HierarchyBuilder {
     size_t arenaBegin = 0, arenaNext = 0, arenaEnd = 0, listBegin = 0, listEnd = 0;
     std::vector<std::pair<int, uint32_t>> appendLog;  // (unit, offset) of its region's lists
     long merges = 0;                                  // a chunk's, once done
-    // A chunk's faces alone, made once when it starts (singles[u - begin], valid while u is not
-    // stored): every unit its merges read lies in the chunk, and SingleUnit was a fifth of the
-    // build when made again at each read. Null: none (units are made when read).
+    // A chunk's faces alone, made once when it starts (MakeSingles; singles[u - begin], valid
+    // while u is not stored): every unit its merges read lies in the chunk, and SingleUnit was a
+    // fifth of the build when made again at each read. Null: none (units are made when read).
     const Unit* singles = nullptr;
+    // u's unit as made there, or null (no singles, or u outside [begin, end)).
+    const Unit* single(int u) const { return singles && u >= begin && u < end ? singles + (u - begin) : nullptr; }
   };
   // From the cached scores of u's list. Inlined: it is the core of a merge's neighbour updates.
   __attribute__((always_inline)) inline void setBest(int u, const MergeState& ms);
@@ -495,22 +497,20 @@ class HierarchyBuilder {
   static constexpr size_t kSlotBlock = 256;
   size_t unitCount() const { return chains_.size(); }
   void SingleUnit(int f, Unit& u) const;
-  // Unit u as stored, or made into `tmp` (a face alone at level 1).
-  const Unit& unitOf(int u, Unit& tmp) const {
+  // Unit u as stored, or a face alone at level 1: as `ms` made it (a chunk's), else made into `tmp`.
+  const Unit& unitOf(int u, Unit& tmp, const MergeState* ms = nullptr) const {
     if (!sparse_) return units_[size_t(u)];
     const int s = slot_[size_t(u)];
     if (s >= 0) return pool_[size_t(s)];
+    if (const Unit* made = ms ? ms->single(u) : nullptr) return *made;
     SingleUnit(u, tmp);
     return tmp;
   }
-  // The same, taken from the faces alone that `ms` made (a chunk's) when u is one of them.
-  const Unit& unitOf(int u, Unit& tmp, const MergeState& ms) const {
-    if (!sparse_) return units_[size_t(u)];
-    const int s = slot_[size_t(u)];
-    if (s >= 0) return pool_[size_t(s)];
-    if (ms.singles && u >= ms.begin && u < ms.end) return ms.singles[u - ms.begin];
-    SingleUnit(u, tmp);
-    return tmp;
+  // The faces alone among the live units of [begin, end) into out[u - begin] (out grown to fit).
+  void MakeSingles(int begin, int end, BigVector<Unit>& out) const {
+    if (out.size() < size_t(end - begin)) out.resize(size_t(end - begin));
+    for (int u = begin; u < end; ++u)
+      if (alive(u) && slot_[size_t(u)] < 0) SingleUnit(u, out[size_t(u - begin)]);
   }
   // Unit u, stored first if it was not, in a slot that `ms` hands out.
   Unit& unit(int u, MergeState& ms) {
@@ -524,8 +524,8 @@ class HierarchyBuilder {
       }
       s = ms.freeSlots.back();
       ms.freeSlots.pop_back();
-      if (ms.singles && u >= ms.begin && u < ms.end)
-        pool_[size_t(s)] = ms.singles[u - ms.begin];
+      if (const Unit* made = ms.single(u))
+        pool_[size_t(s)] = *made;
       else
         SingleUnit(u, pool_[size_t(s)]);
     }
@@ -827,7 +827,7 @@ bool HierarchyBuilder::MergeUnits(int u, int p, MergeState& ms) {
 
   Unit& a = unit(u, ms);
   Unit bAlone;
-  const Unit& b = unitOf(p, bAlone, ms);
+  const Unit& b = unitOf(p, bAlone, &ms);
   Chain& ac = chains_[size_t(u)];
   Chain& bc = chains_[size_t(p)];
   const NormalCone ca = a.cone(), cb = b.cone();
@@ -894,7 +894,7 @@ bool HierarchyBuilder::MergeUnits(int u, int p, MergeState& ms) {
       Prefetch(arena_.data() + lw.nbOffset);  // for the update below, now that its offset is here
       tree_.prefetch(w);
       Unit wAlone;
-      mergedList.push_back({w, evaluate(a, unitOf(w, wAlone, ms))});
+      mergedList.push_back({w, evaluate(a, unitOf(w, wAlone, &ms))});
     }
   }
   const int count = int(mergedList.size());
@@ -1063,9 +1063,7 @@ bool HierarchyBuilder::MergeChunks(int round, int minGroups, long mergesSoFar, l
     for (size_t c; !stop.load(std::memory_order_relaxed) && (c = nextChunk.fetch_add(1)) < chunks;) {
       MergeState& ms = state[c];
       if (sparse_) {
-        if (singles.size() < size_t(ms.end - ms.begin)) singles.resize(size_t(ms.end - ms.begin));
-        for (int u = ms.begin; u < ms.end; ++u)
-          if (alive(u) && slot_[size_t(u)] < 0) SingleUnit(u, singles[size_t(u - ms.begin)]);
+        MakeSingles(ms.begin, ms.end, singles);
         ms.singles = singles.data();
       }
       int units = 0;  // alive in the chunk
@@ -1668,10 +1666,7 @@ Status HierarchyBuilder::run(GroupHierarchy& out) {
     ParallelItems<BigVector<Unit>>(
         (size_t(nf) + kFaceChunk - 1) / kFaceChunk, threads_, [&](size_t item, BigVector<Unit>& block) {
           const int begin = int(item * kFaceChunk), end = int(std::min(size_t(nf), (item + 1) * kFaceChunk));
-          if (sparse_) {
-            block.resize(kFaceChunk);
-            for (int f = begin; f < end; ++f) SingleUnit(f, block[size_t(f - begin)]);
-          }
+          if (sparse_) MakeSingles(begin, end, block);
           for (int f = begin; f < end; ++f) {
             Unit uAlone, wAlone;
             const Unit& u = sparse_ ? block[size_t(f - begin)] : unitOf(f, uAlone);

@@ -804,17 +804,6 @@ float GroupErrorAbove(double maxBelow, double distance) {
 // input's faces: level 2 (about a quarter of them) and above.
 bool CoarseLevel(uint64_t faces, uint64_t inputFaces) { return 8 * faces <= 3 * inputFaces; }
 
-bool UsesTopGroups(const LodBuildParams& params, uint64_t faces, uint64_t inputFaces);
-// The fraction of its faces each group of such a level is simplified to (LodBuildParams): the top
-// levels' ratio on the top levels (not once the top goes in whole parts), the coarse levels' on
-// the coarse ones, levelRatio on the others (at least levelRatio everywhere).
-double LevelRatioOf(const LodBuildParams& params, uint64_t faces, uint64_t inputFaces, bool wholeParts = false) {
-  const double r = params.simplification.levelRatio;
-  if (!wholeParts && params.topLevelRatio > 0 && UsesTopGroups(params, faces, inputFaces))
-    return std::max(r, params.topLevelRatio);
-  return CoarseLevel(faces, inputFaces) ? std::max(r, params.coarseLevelRatio) : r;
-}
-
 // Chunks built side by side (a wave, `lod build --memory`): as many as three quarters of what the
 // budget leaves after the `fixed` bytes that stay allow, at `perChunk` bytes a chunk in flight; at
 // least 1. The budget's process share (kLodMinMemoryBytes) counts as fixed too, but for a budget
@@ -833,6 +822,16 @@ bool UsesTopGroups(const LodBuildParams& params, uint64_t faces, uint64_t inputF
   const bool top = double(faces) < params.topFaceShare * double(inputFaces) ||
                    faces < 4 * uint64_t(params.groupClusters) * params.clusterFaces;
   return params.topGroupClusters > 0 && top;
+}
+
+// The fraction of its faces each group of such a level is simplified to (LodBuildParams): the top
+// levels' ratio on the top levels (not once the top goes in whole parts), the coarse levels' on
+// the coarse ones, levelRatio on the others (at least levelRatio everywhere).
+double LevelRatioOf(const LodBuildParams& params, uint64_t faces, uint64_t inputFaces, bool wholeParts = false) {
+  const double r = params.simplification.levelRatio;
+  if (!wholeParts && params.topLevelRatio > 0 && UsesTopGroups(params, faces, inputFaces))
+    return std::max(r, params.topLevelRatio);
+  return CoarseLevel(faces, inputFaces) ? std::max(r, params.coarseLevelRatio) : r;
 }
 
 // The clusters gathered into one group on such a level (LodBuildParams): fineGroupClusters on the
